@@ -1,0 +1,126 @@
+//! host-sim: workstation tools for de-resonator, on the same `no_std` core the firmware runs.
+
+mod device_file;
+mod report;
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Args, Parser, Subcommand};
+use de_resonator::{Device, DeviceParams, Tuner, DEFAULT_MARGIN, REFERENCE_DEVICE};
+
+/// Safe region and bias tuning of a dielectric elastomer resonator.
+///
+/// A static bias voltage sets the resonator's natural frequency; too much voltage and the
+/// membrane fails. `safe` shows where the loading branch fails first and the frequencies
+/// reachable before it; `tune` finds the bias for a target frequency. Without a command,
+/// `safe` runs on the built-in reference device (MODEL.md §9).
+///
+/// Exit status: 0 on success, 2 when the target cannot be reached or the device is invalid
+/// (one line on stderr says why, nothing on stdout).
+#[derive(Parser, Debug)]
+#[command(name = "host-sim", version, about, long_about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Show the safe region: f at zero bias, the first failure on the loading branch
+    /// (mode, volts, stretch, f there) and the tunable range within the margin.
+    Safe {
+        #[command(flatten)]
+        common: Common,
+    },
+    /// Find the smallest bias (volts) that sets the natural frequency to a target,
+    /// at most (1 − margin) times the limit voltage.
+    Tune {
+        /// Target natural frequency, Hz.
+        #[arg(long, value_name = "HZ")]
+        target_hz: f64,
+        #[command(flatten)]
+        common: Common,
+    },
+}
+
+#[derive(Args, Debug)]
+struct Common {
+    /// Device file (TOML, SI units, flat keys; absent keys take the reference device's
+    /// values, an absent `jlim` means neo-Hookean). Default: the built-in reference device.
+    #[arg(long, value_name = "FILE")]
+    device: Option<PathBuf>,
+    /// Voltage margin: the bias may not exceed (1 − margin) × the limit voltage.
+    #[arg(long, value_name = "M", default_value_t = DEFAULT_MARGIN)]
+    margin: f64,
+    /// Print one JSON object on stdout instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+impl Default for Common {
+    fn default() -> Self {
+        Self {
+            device: None,
+            margin: DEFAULT_MARGIN,
+            json: false,
+        }
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli.command.unwrap_or(Command::Safe {
+        common: Common::default(),
+    })) {
+        Ok(out) => {
+            println!("{out}");
+            ExitCode::SUCCESS
+        }
+        Err(message) => {
+            eprintln!("error: {message}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+/// Run a command; `Err` is the one-line reason for exit status 2.
+fn run(command: Command) -> Result<String, String> {
+    match command {
+        Command::Safe { common } => {
+            let (tuner, name) = tuner(&common)?;
+            let range = tuner
+                .tunable_range(common.margin)
+                .map_err(|e| e.to_string())?;
+            Ok(report::safe(&name, &tuner, &range, common.margin, common.json))
+        }
+        Command::Tune { target_hz, common } => {
+            let (tuner, name) = tuner(&common)?;
+            let range = tuner
+                .tunable_range(common.margin)
+                .map_err(|e| e.to_string())?;
+            let bias = tuner
+                .tune(target_hz, common.margin)
+                .map_err(|e| format!("{e} (margin {})", common.margin))?;
+            Ok(report::tune(
+                &name,
+                &tuner,
+                &range,
+                common.margin,
+                target_hz,
+                &bias,
+                common.json,
+            ))
+        }
+    }
+}
+
+/// The device named on the command line (or the reference), validated, with its limit found.
+fn tuner(common: &Common) -> Result<(Tuner<f64>, String), String> {
+    let (params, name): (DeviceParams<f64>, String) = match &common.device {
+        Some(path) => (device_file::load(path)?, path.display().to_string()),
+        None => (REFERENCE_DEVICE, "reference device (built in)".into()),
+    };
+    let device = Device::new(params).map_err(|e| format!("{name}: {e}"))?;
+    Ok((Tuner::new(device), name))
+}

@@ -1,0 +1,336 @@
+//! Device parameters in SI units, their validation, and the dimensionless model they give
+//! (MODEL.md §§1–4, §9).
+
+use core::fmt;
+
+use crate::material::Gent;
+use crate::real::Real;
+
+/// Vacuum permittivity ε0 in F/m (CODATA 2018).
+pub const VACUUM_PERMITTIVITY: f64 = 8.854_187_812_8e-12;
+
+/// The parameters of a resonator, SI units (MODEL.md §1). Field names are the device file's keys.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct DeviceParams<T> {
+    /// μ, Pa.
+    pub shear_modulus: T,
+    /// Gent limit Jlim; `None` for neo-Hookean.
+    pub jlim: Option<T>,
+    /// εr; ε = εr·ε0.
+    pub relative_permittivity: T,
+    /// ρ, kg/m³.
+    pub density: T,
+    /// E_B, V/m.
+    pub breakdown_field: T,
+    /// H, m (undeformed).
+    pub thickness: T,
+    /// L1A, m: the active membrane, with electrodes.
+    pub length_active: T,
+    /// L1B, m: the passive membrane.
+    pub length_passive: T,
+    /// L2, m.
+    pub width: T,
+    /// m, kg: both bars together.
+    pub bar_mass: T,
+    /// λ1p.
+    pub prestretch_1: T,
+    /// λ2p.
+    pub prestretch_2: T,
+    /// c, N·s: viscous damping of MODEL.md §4.
+    pub damping: T,
+}
+
+/// The reference device of MODEL.md §9 (VHB-4910-like).
+pub const REFERENCE_DEVICE: DeviceParams<f64> = DeviceParams {
+    shear_modulus: 45.0e3,
+    jlim: Some(120.0),
+    relative_permittivity: 4.7,
+    density: 960.0,
+    breakdown_field: 100.0e6,
+    thickness: 1.0e-3,
+    length_active: 20.0e-3,
+    length_passive: 20.0e-3,
+    width: 40.0e-3,
+    bar_mass: 2.0e-3,
+    prestretch_1: 2.0,
+    prestretch_2: 2.0,
+    damping: 0.0,
+};
+
+/// A parameter, named as in the device file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Field {
+    ShearModulus,
+    Jlim,
+    RelativePermittivity,
+    Density,
+    BreakdownField,
+    Thickness,
+    LengthActive,
+    LengthPassive,
+    Width,
+    BarMass,
+    Prestretch1,
+    Prestretch2,
+    Damping,
+}
+
+impl Field {
+    /// The device file's key for this field.
+    pub fn key(self) -> &'static str {
+        match self {
+            Field::ShearModulus => "shear_modulus",
+            Field::Jlim => "jlim",
+            Field::RelativePermittivity => "relative_permittivity",
+            Field::Density => "density",
+            Field::BreakdownField => "breakdown_field",
+            Field::Thickness => "thickness",
+            Field::LengthActive => "length_active",
+            Field::LengthPassive => "length_passive",
+            Field::Width => "width",
+            Field::BarMass => "bar_mass",
+            Field::Prestretch1 => "prestretch_1",
+            Field::Prestretch2 => "prestretch_2",
+            Field::Damping => "damping",
+        }
+    }
+}
+
+/// What is wrong with a field.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Problem {
+    /// NaN or infinite (also: too large for the float type in use).
+    NotFinite,
+    /// Must be > 0.
+    NotPositive,
+    /// Must be ≥ 0.
+    Negative,
+    /// At zero bias membrane B has no tension in direction 1: needs λ1p²·λ2p > 1.
+    NoTension1AtZeroBias,
+    /// At zero bias the membranes have no tension in direction 2: needs λ2p²·λ1p > 1.
+    NoTension2AtZeroBias,
+    /// The pre-stretch already reaches the stretch limit: needs I1(λ1p, λ2p) < Jlim.
+    StretchLimitAtZeroBias,
+    /// The parameters are finite but a derived scale (mass, voltage or time scale) is not.
+    DerivedNotFinite,
+}
+
+/// A bad device parameter: which field, and what is wrong with it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ParamError {
+    pub field: Field,
+    pub problem: Problem,
+}
+
+impl fmt::Display for ParamError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let why = match self.problem {
+            Problem::NotFinite => "is NaN, infinite or too large",
+            Problem::NotPositive => "must be greater than zero",
+            Problem::Negative => "must not be negative",
+            Problem::NoTension1AtZeroBias => {
+                "leaves membrane B slack in direction 1 at zero bias \
+                 (needs prestretch_1^2 * prestretch_2 > 1)"
+            }
+            Problem::NoTension2AtZeroBias => {
+                "leaves the membranes slack in direction 2 at zero bias \
+                 (needs prestretch_2^2 * prestretch_1 > 1)"
+            }
+            Problem::StretchLimitAtZeroBias => {
+                "is already reached by the pre-stretch (needs I1(prestretch) < jlim)"
+            }
+            Problem::DerivedNotFinite => "gives a derived scale that is not finite",
+        };
+        write!(f, "device parameter `{}` {}", self.field.key(), why)
+    }
+}
+
+/// A validated device: the dimensionless model of MODEL.md §4 and the scales back to SI.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Device<T> {
+    params: DeviceParams<T>,
+    material: Gent<T>,
+    /// L1A/L1B.
+    length_ratio: T,
+    /// Volts per unit of Φ̄ = (Φ/H)·√(ε/μ): H·√(μ/ε).
+    volts_per_unit: T,
+    /// Angular frequency per unit of dimensionless ω: 1/T0 = √(μ·L2·H/M), rad/s.
+    rad_per_s_per_unit: T,
+    /// Breakdown field in units of √(μ/ε).
+    breakdown_field_dimless: T,
+    /// c·T0/M.
+    damping_dimless: T,
+}
+
+impl<T: Real> DeviceParams<T> {
+    /// The same parameters in another float type (values too large for it become infinite,
+    /// which validation then rejects).
+    pub fn cast<U: Real>(&self) -> DeviceParams<U> {
+        let c = |x: T| U::of(x.to_f64());
+        DeviceParams {
+            shear_modulus: c(self.shear_modulus),
+            jlim: self.jlim.map(c),
+            relative_permittivity: c(self.relative_permittivity),
+            density: c(self.density),
+            breakdown_field: c(self.breakdown_field),
+            thickness: c(self.thickness),
+            length_active: c(self.length_active),
+            length_passive: c(self.length_passive),
+            width: c(self.width),
+            bar_mass: c(self.bar_mass),
+            prestretch_1: c(self.prestretch_1),
+            prestretch_2: c(self.prestretch_2),
+            damping: c(self.damping),
+        }
+    }
+
+    /// Effective mass M = m·L1A + ρ·L2·H·L1A·L1/3 (MODEL.md §4), kg·m.
+    pub fn effective_mass(&self) -> T {
+        let l1 = self.length_active + self.length_passive;
+        self.bar_mass * self.length_active
+            + self.density * self.width * self.thickness * self.length_active * l1 / T::of(3.0)
+    }
+
+    /// ε = εr·ε0, F/m.
+    pub fn permittivity(&self) -> T {
+        self.relative_permittivity * T::of(VACUUM_PERMITTIVITY)
+    }
+}
+
+impl<T: Real> Device<T> {
+    /// Validate the parameters and build the model; the first bad field is named.
+    pub fn new(params: DeviceParams<T>) -> Result<Self, ParamError> {
+        let p = &params;
+        let err = |field, problem| Err(ParamError { field, problem });
+        let strictly_positive = [
+            (Field::ShearModulus, p.shear_modulus),
+            (Field::RelativePermittivity, p.relative_permittivity),
+            (Field::Density, p.density),
+            (Field::BreakdownField, p.breakdown_field),
+            (Field::Thickness, p.thickness),
+            (Field::LengthActive, p.length_active),
+            (Field::LengthPassive, p.length_passive),
+            (Field::Width, p.width),
+            (Field::Prestretch1, p.prestretch_1),
+            (Field::Prestretch2, p.prestretch_2),
+        ];
+        let non_negative = [(Field::BarMass, p.bar_mass), (Field::Damping, p.damping)];
+        for (field, value) in strictly_positive {
+            if !value.is_finite() {
+                return err(field, Problem::NotFinite);
+            }
+            if !(value > T::zero()) {
+                return err(field, Problem::NotPositive);
+            }
+        }
+        for (field, value) in non_negative {
+            if !value.is_finite() {
+                return err(field, Problem::NotFinite);
+            }
+            if !(value >= T::zero()) {
+                return err(field, Problem::Negative);
+            }
+        }
+        let material = match p.jlim {
+            None => Gent::neo_hookean(),
+            Some(jlim) if !jlim.is_finite() => return err(Field::Jlim, Problem::NotFinite),
+            Some(jlim) if !(jlim > T::zero()) => return err(Field::Jlim, Problem::NotPositive),
+            Some(jlim) => Gent::with_jlim(jlim),
+        };
+
+        // Zero bias: both membranes at (λ1p, λ2p) must be taut and below the stretch limit.
+        let (l1p, l2p) = (p.prestretch_1, p.prestretch_2);
+        if !(l1p * l1p * l2p > T::one()) {
+            return err(Field::Prestretch1, Problem::NoTension1AtZeroBias);
+        }
+        if !(l2p * l2p * l1p > T::one()) {
+            return err(Field::Prestretch2, Problem::NoTension2AtZeroBias);
+        }
+        if !(material.lock_up_margin(l1p, l2p) > T::zero()) {
+            return err(Field::Jlim, Problem::StretchLimitAtZeroBias);
+        }
+
+        let mu = p.shear_modulus;
+        let eps = p.permittivity();
+        let mass = p.effective_mass();
+        let volts_per_unit = p.thickness * (mu / eps).sqrt();
+        let rad_per_s_per_unit = (mu * p.width * p.thickness / mass).sqrt();
+        let breakdown_field_dimless = p.breakdown_field * (eps / mu).sqrt();
+        let damping_dimless = p.damping / (mass * rad_per_s_per_unit);
+        let length_ratio = p.length_active / p.length_passive;
+        // Finite inputs can still overflow a scale (f32 on the target): name the likeliest cause.
+        let derived = [
+            (Field::Thickness, volts_per_unit),
+            (Field::BarMass, rad_per_s_per_unit),
+            (Field::BreakdownField, breakdown_field_dimless),
+            (Field::LengthActive, length_ratio),
+        ];
+        for (field, value) in derived {
+            if !value.is_finite() || !(value > T::zero()) {
+                return err(field, Problem::DerivedNotFinite);
+            }
+        }
+        if !damping_dimless.is_finite() {
+            return err(Field::Damping, Problem::DerivedNotFinite);
+        }
+        Ok(Self {
+            params,
+            material,
+            length_ratio,
+            volts_per_unit,
+            rad_per_s_per_unit,
+            breakdown_field_dimless,
+            damping_dimless,
+        })
+    }
+
+    /// The parameters this device was built from.
+    pub fn params(&self) -> &DeviceParams<T> {
+        &self.params
+    }
+
+    /// The membrane material.
+    pub fn material(&self) -> &Gent<T> {
+        &self.material
+    }
+
+    /// λ1p.
+    pub fn prestretch_1(&self) -> T {
+        self.params.prestretch_1
+    }
+
+    /// λ2p.
+    pub fn prestretch_2(&self) -> T {
+        self.params.prestretch_2
+    }
+
+    /// L1A/L1B.
+    pub fn length_ratio(&self) -> T {
+        self.length_ratio
+    }
+
+    /// Volts per unit of the dimensionless voltage Φ̄ = (Φ/H)·√(ε/μ).
+    pub fn volts_per_unit(&self) -> T {
+        self.volts_per_unit
+    }
+
+    /// Rad/s per unit of dimensionless angular frequency (1/T0, MODEL.md §4).
+    pub fn rad_per_s_per_unit(&self) -> T {
+        self.rad_per_s_per_unit
+    }
+
+    /// Breakdown field E_B in units of √(μ/ε).
+    pub fn breakdown_field_dimless(&self) -> T {
+        self.breakdown_field_dimless
+    }
+
+    /// Dimensionless damping c̄ = c·T0/M (MODEL.md §4).
+    pub fn damping_dimless(&self) -> T {
+        self.damping_dimless
+    }
+}

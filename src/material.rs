@@ -1,0 +1,106 @@
+//! Ideal dielectric with Gent elasticity (MODEL.md §3), in units of the shear modulus μ.
+//!
+//! Every stress and stiffness here is divided by μ, so the numbers stay near 1 in `f32`.
+//! Neo-Hookean is the Gent model with `Jlim = ∞`, held as `1/Jlim = 0`.
+
+use crate::real::Real;
+
+/// Gent hyperelastic material, dimensionless (stresses over μ).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Gent<T> {
+    /// `1/Jlim`; zero for neo-Hookean.
+    inv_jlim: T,
+}
+
+/// Second derivatives of the free energy over μ with respect to (λ1, λ2).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hessian<T> {
+    pub d11: T,
+    pub d12: T,
+    pub d22: T,
+}
+
+impl<T: Real> Hessian<T> {
+    /// Positive-definiteness margin: `min(d11, det)`, positive exactly when definite.
+    pub fn definiteness(&self) -> T {
+        let det = self.d11 * self.d22 - self.d12 * self.d12;
+        self.d11.min(det)
+    }
+}
+
+impl<T: Real> Gent<T> {
+    /// Neo-Hookean (`Jlim = ∞`).
+    pub fn neo_hookean() -> Self {
+        Self { inv_jlim: T::zero() }
+    }
+
+    /// Gent with the given `Jlim` (> 0; the caller validates).
+    pub fn with_jlim(jlim: T) -> Self {
+        Self {
+            inv_jlim: T::one() / jlim,
+        }
+    }
+
+    /// `1/Jlim` (zero for neo-Hookean).
+    pub fn inv_jlim(&self) -> T {
+        self.inv_jlim
+    }
+
+    /// First invariant `I1 = λ1² + λ2² + λ1⁻²λ2⁻²` of an incompressible membrane.
+    pub fn first_invariant(l1: T, l2: T) -> T {
+        l1 * l1 + l2 * l2 + T::one() / (l1 * l1 * l2 * l2)
+    }
+
+    /// Gent softening factor `1 − (I1 − 3)/Jlim` (1 for neo-Hookean).
+    fn softening(&self, l1: T, l2: T) -> T {
+        T::one() - (Self::first_invariant(l1, l2) - T::of(3.0)) * self.inv_jlim
+    }
+
+    /// Free energy `Ws/μ` (MODEL.md §3).
+    pub fn energy(&self, l1: T, l2: T) -> T {
+        if self.inv_jlim == T::zero() {
+            (Self::first_invariant(l1, l2) - T::of(3.0)) * T::of(0.5)
+        } else {
+            -self.softening(l1, l2).ln() / (T::of(2.0) * self.inv_jlim)
+        }
+    }
+
+    /// Nominal stress `s1/μ = ∂(Ws/μ)/∂λ1` (MODEL.md §3).
+    pub fn stress_1(&self, l1: T, l2: T) -> T {
+        (l1 - T::one() / (l1 * l1 * l1 * l2 * l2)) / self.softening(l1, l2)
+    }
+
+    /// Nominal stress `s2/μ = ∂(Ws/μ)/∂λ2` (MODEL.md §3).
+    pub fn stress_2(&self, l1: T, l2: T) -> T {
+        self.stress_1(l2, l1)
+    }
+
+    /// Hessian of `Ws/μ` in (λ1, λ2): `∂²I1/2g + (∂I1)(∂I1)/(2·Jlim·g²)`.
+    pub fn hessian(&self, l1: T, l2: T) -> Hessian<T> {
+        let g = self.softening(l1, l2);
+        let inv_l1 = T::one() / l1;
+        let inv_l2 = T::one() / l2;
+        let c = inv_l1 * inv_l1 * inv_l2 * inv_l2; // λ1⁻²λ2⁻²
+        // Half-derivatives of I1: ∂I1/∂λi / 2.
+        let h1 = l1 - c * inv_l1;
+        let h2 = l2 - c * inv_l2;
+        let lock = T::of(2.0) * self.inv_jlim / (g * g);
+        Hessian {
+            d11: (T::one() + T::of(3.0) * c * inv_l1 * inv_l1) / g + lock * h1 * h1,
+            d12: T::of(2.0) * c * inv_l1 * inv_l2 / g + lock * h1 * h2,
+            d22: (T::one() + T::of(3.0) * c * inv_l2 * inv_l2) / g + lock * h2 * h2,
+        }
+    }
+
+    /// Stiffness `s1'/μ = ∂²(Ws/μ)/∂λ1²`.
+    pub fn stiffness_1(&self, l1: T, l2: T) -> T {
+        self.hessian(l1, l2).d11
+    }
+
+    /// Stretch-limit margin `1 − I1/Jlim`: the check `I1 < Jlim` of MODEL.md §6.6
+    /// (always 1 for neo-Hookean).
+    pub fn lock_up_margin(&self, l1: T, l2: T) -> T {
+        T::one() - Self::first_invariant(l1, l2) * self.inv_jlim
+    }
+}

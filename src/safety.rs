@@ -1,0 +1,202 @@
+//! The safe region: the six failure checks of MODEL.md §6 and the limit of the loading branch.
+
+use core::fmt;
+
+use crate::device::Device;
+use crate::real::Real;
+use crate::roots::bisect;
+use crate::statics::Equilibrium;
+
+/// A way the resonator fails (MODEL.md §6), in the order the checks are listed there.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum FailureMode {
+    /// §6.1: ω² ≤ 0, the device loses stability.
+    DeviceInstability,
+    /// §6.2: electromechanical instability of A (Hessian not positive definite).
+    Emi,
+    /// §6.3: membrane B slack in direction 1.
+    LossOfTension1,
+    /// §6.4: membrane A slack in direction 2.
+    LossOfTension2a,
+    /// §6.4: membrane B slack in direction 2.
+    LossOfTension2b,
+    /// §6.5: the field in A reaches the breakdown field.
+    Breakdown,
+    /// §6.6: I1 reaches Jlim in A or B.
+    StretchLimit,
+}
+
+impl FailureMode {
+    /// All modes, in the order of MODEL.md §6 (and of [`Margins::values`]).
+    pub const ALL: [FailureMode; 7] = [
+        FailureMode::DeviceInstability,
+        FailureMode::Emi,
+        FailureMode::LossOfTension1,
+        FailureMode::LossOfTension2a,
+        FailureMode::LossOfTension2b,
+        FailureMode::Breakdown,
+        FailureMode::StretchLimit,
+    ];
+
+    /// The stable machine name (`emi`, `loss_of_tension_1`, ...), as in JSON output.
+    pub fn name(self) -> &'static str {
+        match self {
+            FailureMode::DeviceInstability => "device_instability",
+            FailureMode::Emi => "emi",
+            FailureMode::LossOfTension1 => "loss_of_tension_1",
+            FailureMode::LossOfTension2a => "loss_of_tension_2a",
+            FailureMode::LossOfTension2b => "loss_of_tension_2b",
+            FailureMode::Breakdown => "breakdown",
+            FailureMode::StretchLimit => "stretch_limit",
+        }
+    }
+
+    /// What the mode means, for people.
+    pub fn description(self) -> &'static str {
+        match self {
+            FailureMode::DeviceInstability => "device instability (natural frequency falls to zero)",
+            FailureMode::Emi => "electromechanical instability of the active membrane",
+            FailureMode::LossOfTension1 => "loss of tension in direction 1 (passive membrane slack)",
+            FailureMode::LossOfTension2a => "loss of tension in direction 2 (active membrane)",
+            FailureMode::LossOfTension2b => "loss of tension in direction 2 (passive membrane)",
+            FailureMode::Breakdown => "electrical breakdown of the active membrane",
+            FailureMode::StretchLimit => "stretch limit (I1 reaches Jlim)",
+        }
+    }
+}
+
+impl fmt::Display for FailureMode {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// How far a state is from each failure: each value is positive exactly when its check holds.
+/// Dimensionless (stresses over μ, fields over √(μ/ε)).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Margins<T> {
+    /// One value per mode, in the order of [`FailureMode::ALL`].
+    pub values: [T; 7],
+}
+
+impl<T: Real> Margins<T> {
+    /// The first check (in MODEL.md order) that fails; NaN counts as a failure.
+    pub fn first_failure(&self) -> Option<FailureMode> {
+        FailureMode::ALL
+            .into_iter()
+            .zip(self.values)
+            .find(|(_, v)| !(*v > T::zero()))
+            .map(|(mode, _)| mode)
+    }
+
+    /// The margin of one check.
+    pub fn of(&self, mode: FailureMode) -> T {
+        self.values[mode as usize]
+    }
+}
+
+impl<T: Real> Device<T> {
+    /// The six checks of MODEL.md §6 at stretch λ under the dimensionless bias Φ̄²
+    /// (on or off equilibrium: the dynamic monitor uses the same checks).
+    pub fn margins(&self, stretch: T, bias_dimless_squared: T) -> Margins<T> {
+        let m = self.material();
+        let l = stretch;
+        let l2p = self.prestretch_2();
+        let lb = self.passive_stretch(l);
+        let p2 = bias_dimless_squared;
+        // §6.2: Hessian of Ws/μ − ½Φ̄²λ1²λ2² at (λ, λ2p).
+        let mut h = m.hessian(l, l2p);
+        h.d11 = h.d11 - p2 * l2p * l2p;
+        h.d22 = h.d22 - p2 * l * l;
+        h.d12 = h.d12 - T::of(2.0) * p2 * l * l2p;
+        // §6.5: E/√(μ/ε) = Φ̄·λ·λ2p; squared, so a NaN bias stays NaN.
+        let field_squared = p2 * (l * l2p).squared();
+        Margins {
+            values: [
+                self.stiffness_dimless(l, p2),
+                h.definiteness(),
+                m.stress_1(lb, l2p),
+                l2p * m.stress_2(l, l2p) - field_squared,
+                l2p * m.stress_2(lb, l2p),
+                self.breakdown_field_dimless().squared() - field_squared,
+                m.lock_up_margin(l, l2p).min(m.lock_up_margin(lb, l2p)),
+            ],
+        }
+    }
+
+    /// The checks at the equilibrium of the loading branch at stretch λ.
+    pub fn margins_on_branch(&self, stretch: T) -> Margins<T> {
+        self.margins(stretch, self.bias_dimless_squared(stretch))
+    }
+
+    /// The last stretch of the loading branch worth scanning: there λB = ½·λ2p^(−1/2), so
+    /// membrane B is slack (s1(λB) < 0) and at least one check has failed.
+    pub fn branch_end_stretch(&self) -> T {
+        let slack_b = T::of(0.5) / self.prestretch_2().sqrt();
+        self.prestretch_1() + (self.prestretch_1() - slack_b) / self.length_ratio()
+    }
+}
+
+/// The limit of the loading branch: the first check to fail as the bias rises from zero.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Limit<T> {
+    pub mode: FailureMode,
+    /// The last safe equilibrium: stretch, volts and natural frequency at the limit.
+    pub at: Equilibrium<T>,
+}
+
+/// Grid points of the scan that brackets the limit before bisection refines it.
+pub const LIMIT_SCAN_POINTS: usize = 128;
+
+impl<T: Real> Limit<T> {
+    /// Find the limit of the loading branch from λ1p, to full precision: a scan brackets the
+    /// first failure, then each check failing at the bracket's end is bisected on its own.
+    /// A check that fails and recovers inside one grid cell (1/128 of the branch) is missed.
+    pub fn of(device: &Device<T>) -> Self {
+        let start = device.prestretch_1();
+        let end = device.branch_end_stretch();
+        let at = |i: usize| {
+            start + (end - start) * T::of(i as f64) / T::of(LIMIT_SCAN_POINTS as f64)
+        };
+        let mut safe = start;
+        for i in 0..=LIMIT_SCAN_POINTS {
+            let l = at(i);
+            let margins = device.margins_on_branch(l);
+            if margins.first_failure().is_none() {
+                safe = l;
+                continue;
+            }
+            if i == 0 {
+                // Unsafe already at zero bias: the limit is zero volts.
+                return Self::at_stretch(device, start, margins.first_failure());
+            }
+            // The earliest crossing among the checks that fail at l.
+            let mut first: Option<(T, FailureMode)> = None;
+            for mode in FailureMode::ALL {
+                if margins.of(mode) > T::zero() {
+                    continue;
+                }
+                let (crossing, _) =
+                    bisect(safe, l, |x| device.margins_on_branch(x).of(mode) > T::zero());
+                if first.is_none_or(|(best, _)| crossing < best) {
+                    first = Some((crossing, mode));
+                }
+            }
+            if let Some((stretch, mode)) = first {
+                return Self::at_stretch(device, stretch, Some(mode));
+            }
+        }
+        // Unreachable for a validated device (B is slack at the scan's end); stay safe.
+        Self::at_stretch(device, safe, Some(FailureMode::LossOfTension1))
+    }
+
+    fn at_stretch(device: &Device<T>, stretch: T, mode: Option<FailureMode>) -> Self {
+        Self {
+            mode: mode.unwrap_or(FailureMode::DeviceInstability),
+            at: device.equilibrium(stretch),
+        }
+    }
+}
