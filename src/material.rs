@@ -93,6 +93,18 @@ impl<T: Real> Gent<T> {
         }
     }
 
+    /// Hessian of the free energy under voltage control, `F/μ = Ws/μ − ½·Φ̄²·λ1²·λ2²`
+    /// (MODEL.md §6.2), with Φ̄ = (Φ/H)·√(ε/μ).
+    pub fn hessian_under_bias(&self, l1: T, l2: T, bias_dimless_squared: T) -> Hessian<T> {
+        let p2 = bias_dimless_squared;
+        let h = self.hessian(l1, l2);
+        Hessian {
+            d11: h.d11 - p2 * l2 * l2,
+            d12: h.d12 - T::of(2.0) * p2 * l1 * l2,
+            d22: h.d22 - p2 * l1 * l1,
+        }
+    }
+
     /// Stiffness `s1'/μ = ∂²(Ws/μ)/∂λ1²`.
     pub fn stiffness_1(&self, l1: T, l2: T) -> T {
         self.hessian(l1, l2).d11

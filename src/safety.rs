@@ -106,17 +106,12 @@ impl<T: Real> Device<T> {
         let l2p = self.prestretch_2();
         let lb = self.passive_stretch(l);
         let p2 = bias_dimless_squared;
-        // §6.2: Hessian of Ws/μ − ½Φ̄²λ1²λ2² at (λ, λ2p).
-        let mut h = m.hessian(l, l2p);
-        h.d11 = h.d11 - p2 * l2p * l2p;
-        h.d22 = h.d22 - p2 * l * l;
-        h.d12 = h.d12 - T::of(2.0) * p2 * l * l2p;
         // §6.5: E/√(μ/ε) = Φ̄·λ·λ2p; squared, so a NaN bias stays NaN.
         let field_squared = p2 * (l * l2p).squared();
         Margins {
             values: [
                 self.stiffness_dimless(l, p2),
-                h.definiteness(),
+                m.hessian_under_bias(l, l2p, p2).definiteness(),
                 m.stress_1(lb, l2p),
                 l2p * m.stress_2(l, l2p) - field_squared,
                 l2p * m.stress_2(lb, l2p),

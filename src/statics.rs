@@ -28,8 +28,8 @@ fn two_pi<T: Real>() -> T {
 impl<T: Real> Device<T> {
     /// λB = (L1·λ1p − L1A·λ)/L1B, the passive membrane's stretch (MODEL.md §2).
     pub fn passive_stretch(&self, stretch: T) -> T {
-        let r = self.length_ratio();
-        self.prestretch_1() * (T::one() + r) - r * stretch
+        // Written so that λ = λ1p gives λB = λ1p exactly (and Φ = 0, not a rounding NaN).
+        self.prestretch_1() + self.length_ratio() * (self.prestretch_1() - stretch)
     }
 
     /// Φ̄² = (s̄1(λ) − s̄1(λB))/(λ·λ2p²): the squared dimensionless bias that holds λ.
@@ -84,17 +84,16 @@ impl<T: Real> Device<T> {
     /// `[λ1p, max_stretch]` where Φ(λ) rises: the largest stretch whose bias does not exceed
     /// `volts` (to one unit in the last place). `None` if `volts` is NaN or above Φ(max_stretch).
     pub fn stretch_for_bias(&self, volts: T, max_stretch: T) -> Option<T> {
-        let target = (volts / self.volts_per_unit()).squared();
+        // Compared as `bias_volts` computes them, so Φ(max_stretch) itself is accepted.
+        let volts = volts.abs();
         let start = self.prestretch_1();
-        if !target.is_finite() || !(self.bias_dimless_squared(max_stretch) >= target) {
+        if !(volts <= self.bias_volts(max_stretch)) {
             return None;
         }
-        if !(max_stretch > start) || target == T::zero() {
+        if !(max_stretch > start) || volts == T::zero() {
             return Some(start);
         }
-        let (below, _) = bisect(start, max_stretch, |l| {
-            self.bias_dimless_squared(l) < target
-        });
+        let (below, _) = bisect(start, max_stretch, |l| self.bias_volts(l) < volts);
         Some(below)
     }
 }

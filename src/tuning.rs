@@ -114,7 +114,7 @@ impl<T: Real> Tuner<T> {
             return Err(TuneError::InvalidMargin { margin });
         }
         let volts = (T::one() - margin) * self.limit.at.volts;
-        // `None` only when rounding puts `volts` above Φ(λlimit): then the limit itself.
+        // Never `None`: (1 − margin)·Φlimit ≤ Φlimit = Φ(λlimit), compared as computed.
         Ok(self
             .device
             .stretch_for_bias(volts, self.limit.at.stretch)
