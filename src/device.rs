@@ -5,6 +5,7 @@ use core::fmt;
 
 use crate::material::Gent;
 use crate::real::Real;
+use crate::safety::FailureMode;
 
 /// Vacuum permittivity ε0 in F/m (CODATA 2018).
 pub const VACUUM_PERMITTIVITY: f64 = 8.854_187_812_8e-12;
@@ -114,8 +115,14 @@ pub enum Problem {
     NoTension2AtZeroBias,
     /// The pre-stretch already reaches the stretch limit: needs I1(λ1p, λ2p) < Jlim.
     StretchLimitAtZeroBias,
-    /// The parameters are finite but a derived scale (mass, voltage or time scale) is not.
-    DerivedNotFinite,
+    /// A check of MODEL.md §6 already fails at zero bias (a guard behind the specific checks
+    /// above; the field named is the likeliest cause).
+    UnsafeAtZeroBias { mode: FailureMode },
+    /// The parameters are finite but, together, give a scale that is zero or not finite.
+    DerivedNotFinite {
+        /// The scale, e.g. `H·√(μ/ε)`.
+        scale: &'static str,
+    },
 }
 
 /// A bad device parameter: which field, and what is wrong with it.
@@ -143,7 +150,22 @@ impl fmt::Display for ParamError {
             Problem::StretchLimitAtZeroBias => {
                 "is already reached by the pre-stretch (needs I1(prestretch) < jlim)"
             }
-            Problem::DerivedNotFinite => "gives a derived scale that is not finite",
+            Problem::UnsafeAtZeroBias { mode } => {
+                return write!(
+                    f,
+                    "device parameter `{}`: the device already fails at zero bias by {}",
+                    self.field.key(),
+                    mode.description()
+                );
+            }
+            Problem::DerivedNotFinite { scale } => {
+                return write!(
+                    f,
+                    "device parameter `{}` is out of proportion with the others: \
+                     the scale {scale} is zero or not finite",
+                    self.field.key()
+                );
+            }
         };
         write!(f, "device parameter `{}` {}", self.field.key(), why)
     }
@@ -255,30 +277,31 @@ impl<T: Real> Device<T> {
             return err(Field::Jlim, Problem::StretchLimitAtZeroBias);
         }
 
-        let mu = p.shear_modulus;
-        let eps = p.permittivity();
+        // Square roots taken apart, so that μ/ε does not overflow before its root is taken.
+        let (sqrt_mu, sqrt_eps) = (p.shear_modulus.sqrt(), p.permittivity().sqrt());
         let mass = p.effective_mass();
-        let volts_per_unit = p.thickness * (mu / eps).sqrt();
-        let rad_per_s_per_unit = (mu * p.width * p.thickness / mass).sqrt();
-        let breakdown_field_dimless = p.breakdown_field * (eps / mu).sqrt();
+        let volts_per_unit = p.thickness * sqrt_mu / sqrt_eps;
+        let rad_per_s_per_unit = sqrt_mu * (p.width * p.thickness / mass).sqrt();
+        let breakdown_field_dimless = p.breakdown_field * sqrt_eps / sqrt_mu;
         let damping_dimless = p.damping / (mass * rad_per_s_per_unit);
         let length_ratio = p.length_active / p.length_passive;
-        // Finite inputs can still overflow a scale (f32 on the target): name the likeliest cause.
         let derived = [
-            (Field::Thickness, volts_per_unit),
-            (Field::BarMass, rad_per_s_per_unit),
-            (Field::BreakdownField, breakdown_field_dimless),
-            (Field::LengthActive, length_ratio),
+            (Field::ShearModulus, "H·√(μ/ε)", volts_per_unit),
+            // Squared, so that ω² in rad²/s² is finite too.
+            (Field::Density, "μ·L2·H/M", rad_per_s_per_unit.squared()),
+            (Field::BreakdownField, "E_B·√(ε/μ)", breakdown_field_dimless),
+            (Field::LengthPassive, "L1A/L1B", length_ratio),
         ];
-        for (field, value) in derived {
+        for (field, scale, value) in derived {
             if !value.is_finite() || !(value > T::zero()) {
-                return err(field, Problem::DerivedNotFinite);
+                return err(field, Problem::DerivedNotFinite { scale });
             }
         }
         if !damping_dimless.is_finite() {
-            return err(Field::Damping, Problem::DerivedNotFinite);
+            let scale = "c·T0/M";
+            return err(Field::Damping, Problem::DerivedNotFinite { scale });
         }
-        Ok(Self {
+        let device = Self {
             params,
             material,
             length_ratio,
@@ -286,7 +309,17 @@ impl<T: Real> Device<T> {
             rad_per_s_per_unit,
             breakdown_field_dimless,
             damping_dimless,
-        })
+        };
+        if let Some(mode) = device.margins(l1p, T::zero()).first_failure() {
+            let field = match mode {
+                FailureMode::LossOfTension2a | FailureMode::LossOfTension2b => Field::Prestretch2,
+                FailureMode::Breakdown => Field::BreakdownField,
+                FailureMode::StretchLimit => Field::Jlim,
+                _ => Field::Prestretch1,
+            };
+            return err(field, Problem::UnsafeAtZeroBias { mode });
+        }
+        Ok(device)
     }
 
     /// The parameters this device was built from.

@@ -32,7 +32,9 @@ impl<T: Real> Hessian<T> {
 impl<T: Real> Gent<T> {
     /// Neo-Hookean (`Jlim = ∞`).
     pub fn neo_hookean() -> Self {
-        Self { inv_jlim: T::zero() }
+        Self {
+            inv_jlim: T::zero(),
+        }
     }
 
     /// Gent with the given `Jlim` (> 0; the caller validates).
@@ -82,7 +84,7 @@ impl<T: Real> Gent<T> {
         let inv_l1 = T::one() / l1;
         let inv_l2 = T::one() / l2;
         let c = inv_l1 * inv_l1 * inv_l2 * inv_l2; // λ1⁻²λ2⁻²
-        // Half-derivatives of I1: ∂I1/∂λi / 2.
+                                                   // Half-derivatives of I1: ∂I1/∂λi / 2.
         let h1 = l1 - c * inv_l1;
         let h2 = l2 - c * inv_l2;
         let lock = T::of(2.0) * self.inv_jlim / (g * g);

@@ -55,9 +55,13 @@ impl FailureMode {
     /// What the mode means, for people.
     pub fn description(self) -> &'static str {
         match self {
-            FailureMode::DeviceInstability => "device instability (natural frequency falls to zero)",
+            FailureMode::DeviceInstability => {
+                "device instability (natural frequency falls to zero)"
+            }
             FailureMode::Emi => "electromechanical instability of the active membrane",
-            FailureMode::LossOfTension1 => "loss of tension in direction 1 (passive membrane slack)",
+            FailureMode::LossOfTension1 => {
+                "loss of tension in direction 1 (passive membrane slack)"
+            }
             FailureMode::LossOfTension2a => "loss of tension in direction 2 (active membrane)",
             FailureMode::LossOfTension2b => "loss of tension in direction 2 (passive membrane)",
             FailureMode::Breakdown => "electrical breakdown of the active membrane",
@@ -106,8 +110,9 @@ impl<T: Real> Device<T> {
         let l2p = self.prestretch_2();
         let lb = self.passive_stretch(l);
         let p2 = bias_dimless_squared;
-        // §6.5: E/√(μ/ε) = Φ̄·λ·λ2p; squared, so a NaN bias stays NaN.
+        // §6.5: E/√(μ/ε) = Φ̄·λ·λ2p (a negative Φ̄² gives NaN, which fails).
         let field_squared = p2 * (l * l2p).squared();
+        let field = p2.sqrt() * l * l2p;
         Margins {
             values: [
                 self.stiffness_dimless(l, p2),
@@ -115,7 +120,7 @@ impl<T: Real> Device<T> {
                 m.stress_1(lb, l2p),
                 l2p * m.stress_2(l, l2p) - field_squared,
                 l2p * m.stress_2(lb, l2p),
-                self.breakdown_field_dimless().squared() - field_squared,
+                self.breakdown_field_dimless() - field,
                 m.lock_up_margin(l, l2p).min(m.lock_up_margin(lb, l2p)),
             ],
         }
@@ -126,11 +131,29 @@ impl<T: Real> Device<T> {
         self.margins(stretch, self.bias_dimless_squared(stretch))
     }
 
-    /// The last stretch of the loading branch worth scanning: there λB = ½·λ2p^(−1/2), so
-    /// membrane B is slack (s1(λB) < 0) and at least one check has failed.
-    pub fn branch_end_stretch(&self) -> T {
-        let slack_b = T::of(0.5) / self.prestretch_2().sqrt();
-        self.prestretch_1() + (self.prestretch_1() - slack_b) / self.length_ratio()
+    /// A stretch at which some check has surely failed on the loading branch: the least of
+    /// three bounds, so the scan for the limit stays fine even on extreme geometries.
+    /// - B slack: λB = ½·λ2p^(−1/2) gives s1(λB) < 0.
+    /// - Stretch limit (Gent): I1 > λ² ≥ Jlim at λ = √Jlim.
+    /// - Breakdown: for λ ≥ λ1p, (E/√(μ/ε))² = λ·(s̄1(λ) − s̄1(λB)) ≥ λ·(λ − k) with
+    ///   k = λ1p⁻³λ2p⁻² + s̄1(λ1p) (λB ≤ λ1p, and Gent stiffens while I1 < Jlim + 3);
+    ///   this passes Ē_B² at λ = (k + √(k² + 4Ē_B²))/2.
+    pub fn scan_end_stretch(&self) -> T {
+        let (l1p, l2p) = (self.prestretch_1(), self.prestretch_2());
+        let two = T::of(2.0);
+        let slack_b = T::of(0.5) / l2p.sqrt();
+        let b_slack = l1p + (l1p - slack_b) / self.length_ratio();
+        let inv_jlim = self.material().inv_jlim();
+        let locked = if inv_jlim > T::zero() {
+            (T::one() / inv_jlim).sqrt()
+        } else {
+            b_slack
+        };
+        let k = T::one() / (l1p * l1p * l1p * l2p * l2p) + self.material().stress_1(l1p, l2p);
+        let eb = self.breakdown_field_dimless();
+        let broken = (k + (k * k + two * two * eb * eb).sqrt()) / two * T::of(1.001);
+        // Never below λ1p: a device past a bound at zero bias fails at the scan's first point.
+        b_slack.min(locked).min(broken).max(l1p)
     }
 }
 
@@ -149,13 +172,13 @@ pub const LIMIT_SCAN_POINTS: usize = 128;
 impl<T: Real> Limit<T> {
     /// Find the limit of the loading branch from λ1p, to full precision: a scan brackets the
     /// first failure, then each check failing at the bracket's end is bisected on its own.
-    /// A check that fails and recovers inside one grid cell (1/128 of the branch) is missed.
+    /// A check that fails and recovers inside one grid cell (1/128 of [λ1p, scan end]) is
+    /// missed.
     pub fn of(device: &Device<T>) -> Self {
         let start = device.prestretch_1();
-        let end = device.branch_end_stretch();
-        let at = |i: usize| {
-            start + (end - start) * T::of(i as f64) / T::of(LIMIT_SCAN_POINTS as f64)
-        };
+        let end = device.scan_end_stretch();
+        let at =
+            |i: usize| start + (end - start) * T::of(i as f64) / T::of(LIMIT_SCAN_POINTS as f64);
         let mut safe = start;
         for i in 0..=LIMIT_SCAN_POINTS {
             let l = at(i);
@@ -164,33 +187,31 @@ impl<T: Real> Limit<T> {
                 safe = l;
                 continue;
             }
-            if i == 0 {
-                // Unsafe already at zero bias: the limit is zero volts.
-                return Self::at_stretch(device, start, margins.first_failure());
-            }
-            // The earliest crossing among the checks that fail at l.
+            // The earliest crossing among the checks that fail at l (never at i = 0: a valid
+            // device is safe at zero bias).
             let mut first: Option<(T, FailureMode)> = None;
             for mode in FailureMode::ALL {
                 if margins.of(mode) > T::zero() {
                     continue;
                 }
-                let (crossing, _) =
-                    bisect(safe, l, |x| device.margins_on_branch(x).of(mode) > T::zero());
+                let (crossing, _) = bisect(safe, l, |x| {
+                    device.margins_on_branch(x).of(mode) > T::zero()
+                });
                 if first.is_none_or(|(best, _)| crossing < best) {
                     first = Some((crossing, mode));
                 }
             }
             if let Some((stretch, mode)) = first {
-                return Self::at_stretch(device, stretch, Some(mode));
+                return Self::at_stretch(device, stretch, mode);
             }
         }
-        // Unreachable for a validated device (B is slack at the scan's end); stay safe.
-        Self::at_stretch(device, safe, Some(FailureMode::LossOfTension1))
+        // Unreachable (a check has failed by the scan's end); stay on the safe side.
+        Self::at_stretch(device, safe, FailureMode::LossOfTension1)
     }
 
-    fn at_stretch(device: &Device<T>, stretch: T, mode: Option<FailureMode>) -> Self {
+    fn at_stretch(device: &Device<T>, stretch: T, mode: FailureMode) -> Self {
         Self {
-            mode: mode.unwrap_or(FailureMode::DeviceInstability),
+            mode,
             at: device.equilibrium(stretch),
         }
     }

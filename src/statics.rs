@@ -63,9 +63,9 @@ impl<T: Real> Device<T> {
 
     /// f = ω/2π, Hz, about the equilibrium at λ; zero where ω² ≤ 0 (at or past a fold).
     pub fn natural_frequency_hz(&self, stretch: T) -> T {
-        let w2 = self.omega_squared(stretch);
+        let w2 = self.stiffness_dimless(stretch, self.bias_dimless_squared(stretch));
         if w2 > T::zero() {
-            w2.sqrt() / two_pi()
+            w2.sqrt() * self.rad_per_s_per_unit() / two_pi()
         } else {
             T::zero()
         }

@@ -40,11 +40,9 @@ impl<T: Real> fmt::Display for TuneError<T> {
                 "target frequency {} Hz is not a finite positive number",
                 target_hz.to_f64()
             ),
-            TuneError::InvalidMargin { margin } => write!(
-                f,
-                "voltage margin {} is outside [0, 1)",
-                margin.to_f64()
-            ),
+            TuneError::InvalidMargin { margin } => {
+                write!(f, "voltage margin {} is outside [0, 1)", margin.to_f64())
+            }
             TuneError::OutOfRange {
                 target_hz,
                 low_hz,

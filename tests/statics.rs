@@ -48,7 +48,9 @@ fn neo_hookean_zero_bias_frequency_in_closed_form() {
             ..neo_hookean_reference()
         };
         let mass = m * la + p.density * p.width * p.thickness * la * (la + lb) / 3.0;
-        let omega2 = p.shear_modulus * p.width * p.thickness
+        let omega2 = p.shear_modulus
+            * p.width
+            * p.thickness
             * (1.0 + 3.0 / (l1p.powi(4) * l2p * l2p))
             * (1.0 + la / lb)
             / mass;
@@ -95,10 +97,9 @@ fn no_fold_while_b_is_taut() {
         for k in 1..=4000 {
             let l = start + (end - start) * f64::from(k) / 4000.0;
             let below_lock_up = p.jlim.is_none_or(|j| {
-                first_invariant(l, p.prestretch_2).max(first_invariant(
-                    passive_stretch(&p, l),
-                    p.prestretch_2,
-                )) < j
+                first_invariant(l, p.prestretch_2)
+                    .max(first_invariant(passive_stretch(&p, l), p.prestretch_2))
+                    < j
             });
             if !below_lock_up {
                 break;
@@ -124,7 +125,10 @@ fn equilibrium_and_frequency_match_the_force_law() {
             assert!((volts * volts - bias_squared(&p, l)).abs() <= 1e-12 * volts * volts);
             let residual = acceleration(&p, l, volts);
             let scale = p.width * p.thickness * p.shear_modulus / effective_mass(&p);
-            assert!(residual.abs() < 1e-12 * scale, "force {residual} at λ = {l}");
+            assert!(
+                residual.abs() < 1e-12 * scale,
+                "force {residual} at λ = {l}"
+            );
             assert!(rel(d.omega_squared(l), omega_squared_fd(&p, l, volts)) < 1e-7);
         }
     }

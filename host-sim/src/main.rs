@@ -92,7 +92,13 @@ fn run(command: Command) -> Result<String, String> {
             let range = tuner
                 .tunable_range(common.margin)
                 .map_err(|e| e.to_string())?;
-            Ok(report::safe(&name, &tuner, &range, common.margin, common.json))
+            Ok(report::safe(
+                &name,
+                &tuner,
+                &range,
+                common.margin,
+                common.json,
+            ))
         }
         Command::Tune { target_hz, common } => {
             let (tuner, name) = tuner(&common)?;
