@@ -73,6 +73,25 @@ impl<T: Real> Gent<T> {
         (l1 - T::one() / (l1 * l1 * l1 * l2 * l2)) / self.softening(l1, l2)
     }
 
+    /// `s̄1(a, λ2) − s̄1(b, λ2)` without subtracting two near-equal stresses: every term
+    /// carries the factor `a − b`, which the caller passes in (it can often form it exactly).
+    /// Used for Φ̄²(λ), where a plain difference loses f32 digits at small bias.
+    pub fn stress_1_difference(&self, a: T, b: T, a_minus_b: T, l2: T) -> T {
+        let inv_l2_sq = T::one() / (l2 * l2);
+        let ab = a * b;
+        // h(x) = x − x⁻³λ2⁻²:  h(a) − h(b) = (a − b)·[1 + λ2⁻²·(a² + ab + b²)/(a³b³)]
+        let dh = a_minus_b * (T::one() + inv_l2_sq * (a * a + ab + b * b) / (ab * ab * ab));
+        if self.inv_jlim == T::zero() {
+            return dh;
+        }
+        // I1(a) − I1(b) = (a − b)·(a + b)·(1 − λ2⁻²/(a²b²)), and with g = 1 − (I1 − 3)/Jlim,
+        // h(a)/g(a) − h(b)/g(b) = [(h(a) − h(b))·g(b) + h(b)·(I1(a) − I1(b))/Jlim]/(g(a)·g(b)).
+        let di1 = a_minus_b * (a + b) * (T::one() - inv_l2_sq / (ab * ab));
+        let (ga, gb) = (self.softening(a, l2), self.softening(b, l2));
+        let hb = b - inv_l2_sq / (b * b * b);
+        (dh * gb + hb * di1 * self.inv_jlim) / (ga * gb)
+    }
+
     /// Nominal stress `s2/μ = ∂(Ws/μ)/∂λ2` (MODEL.md §3).
     pub fn stress_2(&self, l1: T, l2: T) -> T {
         self.stress_1(l2, l1)
@@ -116,5 +135,48 @@ impl<T: Real> Gent<T> {
     /// (always 1 for neo-Hookean).
     pub fn lock_up_margin(&self, l1: T, l2: T) -> T {
         T::one() - Self::first_invariant(l1, l2) * self.inv_jlim
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The factored difference is the plain difference where the plain one is accurate.
+    #[test]
+    fn stress_difference_matches_plain_subtraction() {
+        for material in [Gent::neo_hookean(), Gent::with_jlim(30.0)] {
+            for (a, b, l2) in [(2.5, 1.5, 2.0), (1.2, 0.8, 3.0), (3.0, 2.9, 1.1)] {
+                let plain = material.stress_1(a, l2) - material.stress_1(b, l2);
+                let factored = material.stress_1_difference(a, b, a - b, l2);
+                assert!(
+                    (plain - factored).abs() < 1e-13 * plain.abs(),
+                    "{a} {b} {l2}"
+                );
+            }
+        }
+    }
+
+    /// At small bias (a − b ≪ a) the f32 factored difference keeps its digits: checked
+    /// against the f64 plain difference, which still has ~9 digits there.
+    #[test]
+    fn stress_difference_in_f32_at_small_separation() {
+        for jlim in [None, Some(30.0)] {
+            let (m32, m64) = match jlim {
+                None => (Gent::<f32>::neo_hookean(), Gent::<f64>::neo_hookean()),
+                Some(j) => (Gent::with_jlim(j as f32), Gent::with_jlim(j)),
+            };
+            let (a, d, l2) = (2.0f64, 1e-4f64, 2.0f64);
+            let exact = m64.stress_1(a + d, l2) - m64.stress_1(a - d, l2);
+            let f32_value = m32.stress_1_difference((a + d) as f32, (a - d) as f32, 2e-4, 2.0);
+            let plain_f32 = m32.stress_1((a + d) as f32, 2.0) - m32.stress_1((a - d) as f32, 2.0);
+            let err = (f64::from(f32_value) - exact).abs() / exact;
+            let plain_err = (f64::from(plain_f32) - exact).abs() / exact;
+            assert!(err < 1e-6, "{err}");
+            assert!(
+                plain_err > 10.0 * err,
+                "plain {plain_err} vs factored {err}"
+            );
+        }
     }
 }

@@ -33,11 +33,14 @@ impl<T: Real> Device<T> {
     }
 
     /// Φ̄² = (s̄1(λ) − s̄1(λB))/(λ·λ2p²): the squared dimensionless bias that holds λ.
+    /// The stress difference is taken factored, with λ − λB = (1 + L1A/L1B)·(λ − λ1p).
     pub fn bias_dimless_squared(&self, stretch: T) -> T {
-        let m = self.material();
         let l2p = self.prestretch_2();
-        (m.stress_1(stretch, l2p) - m.stress_1(self.passive_stretch(stretch), l2p))
-            / (stretch * l2p * l2p)
+        let apart = (T::one() + self.length_ratio()) * (stretch - self.prestretch_1());
+        let difference =
+            self.material()
+                .stress_1_difference(stretch, self.passive_stretch(stretch), apart, l2p);
+        difference / (stretch * l2p * l2p)
     }
 
     /// Φ(λ), V, on the loading branch (NaN beyond a fold, where no bias holds λ).

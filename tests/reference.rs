@@ -47,9 +47,9 @@ fn f32_accuracy() {
     let rel = |x: f32, published: f64| (f64::from(x) - published).abs() / published;
     assert!(rel(t.zero_bias().natural_frequency_hz, 45.952_724_764_627) < 1e-6);
     assert_eq!(t.limit().mode, FailureMode::Emi);
-    assert!(rel(t.limit().at.volts, 9854.730_029_141_74) < 1e-6);
+    assert!(rel(t.limit().at.volts, 9_854.730_029_141_74) < 1e-6);
     assert!(rel(t.limit().at.stretch, 2.362_543_066_935_44) < 1e-6);
     assert!(rel(t.limit().at.natural_frequency_hz, 42.729_240_919_424) < 1e-6);
     let bias = t.tune(44.0, 0.0).unwrap();
-    assert!(rel(bias.volts, 7449.876_000_673_07) < 5e-6);
+    assert!(rel(bias.volts, 7_449.876_000_673_07) < 5e-6);
 }

@@ -31,7 +31,8 @@ pub fn parse(text: &str) -> Result<DeviceParams<f64>, String> {
         let message = e.message().trim().replace('\n', " ");
         match e.span() {
             Some(span) => {
-                let line = text[..span.start.min(text.len())].lines().count().max(1);
+                let before = text.get(..span.start).unwrap_or(text);
+                let line = before.matches('\n').count() + 1;
                 format!("line {line}: {message}")
             }
             None => message,
@@ -79,6 +80,12 @@ mod tests {
                 ..REFERENCE_DEVICE
             }
         );
+    }
+
+    #[test]
+    fn the_shipped_reference_file_is_the_built_in_device() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../devices/reference.toml");
+        assert_eq!(load(&path).unwrap(), REFERENCE_DEVICE);
     }
 
     #[test]

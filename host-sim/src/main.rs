@@ -37,7 +37,7 @@ enum Command {
     /// at most (1 − margin) times the limit voltage.
     Tune {
         /// Target natural frequency, Hz.
-        #[arg(long, value_name = "HZ")]
+        #[arg(long, value_name = "HZ", allow_negative_numbers = true)]
         target_hz: f64,
         #[command(flatten)]
         common: Common,
@@ -51,7 +51,7 @@ struct Common {
     #[arg(long, value_name = "FILE")]
     device: Option<PathBuf>,
     /// Voltage margin: the bias may not exceed (1 − margin) × the limit voltage.
-    #[arg(long, value_name = "M", default_value_t = DEFAULT_MARGIN)]
+    #[arg(long, value_name = "M", default_value_t = DEFAULT_MARGIN, allow_negative_numbers = true)]
     margin: f64,
     /// Print one JSON object on stdout instead of text.
     #[arg(long)]

@@ -1,0 +1,195 @@
+//! The `host-sim` command line, run as a user runs it.
+
+use std::io::Write;
+use std::process::{Command, Output};
+
+use serde_json::Value;
+
+fn host_sim(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .args(args)
+        .output()
+        .expect("host-sim runs")
+}
+
+fn json(args: &[&str]) -> Value {
+    let out = host_sim(args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("one JSON object on stdout")
+}
+
+/// A device file in a temporary directory, removed when dropped.
+struct DeviceFile(std::path::PathBuf);
+
+impl DeviceFile {
+    fn new(name: &str, text: &str) -> Self {
+        let dir = std::env::temp_dir().join(format!("host-sim-cli-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join(name);
+        std::fs::File::create(&path)
+            .unwrap()
+            .write_all(text.as_bytes())
+            .unwrap();
+        Self(path)
+    }
+    fn path(&self) -> &str {
+        self.0.to_str().unwrap()
+    }
+}
+
+impl Drop for DeviceFile {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.0);
+    }
+}
+
+/// Rounds to the published figure at its number of decimals.
+fn rounds_to(v: &Value, published: f64, decimals: i32) {
+    let x = v.as_f64().expect("a number");
+    assert!(
+        (x - published).abs() <= 0.5 * 10f64.powi(-decimals),
+        "{x} vs {published}"
+    );
+}
+
+/// The reference device's published figures (issue 2) through the JSON interface.
+#[test]
+fn safe_json_on_the_reference_device() {
+    let v = json(&["safe", "--json"]);
+    rounds_to(&v["zero_bias_frequency_hz"], 45.9527, 4);
+    assert_eq!(v["limit"]["mode"], "emi");
+    rounds_to(&v["limit"]["volts"], 9854.73, 2);
+    rounds_to(&v["limit"]["stretch"], 2.36254, 5);
+    rounds_to(&v["limit"]["natural_frequency_hz"], 42.7292, 4);
+    let range = v["tunable_range_hz"].as_array().unwrap();
+    assert_eq!(range.len(), 2);
+    assert!(range[0].as_f64() < range[1].as_f64());
+    assert!(v.get("bias_volts").is_none());
+}
+
+#[test]
+fn tune_json_with_no_margin() {
+    let v = json(&["tune", "--target-hz", "44", "--margin", "0", "--json"]);
+    rounds_to(&v["bias_volts"], 7449.88, 2);
+    for key in [
+        "bias_volts",
+        "stretch",
+        "natural_frequency_hz",
+        "zero_bias_frequency_hz",
+        "tunable_range_hz",
+        "limit",
+    ] {
+        assert!(v.get(key).is_some(), "missing {key}");
+    }
+    rounds_to(&v["natural_frequency_hz"], 44.0, 9);
+}
+
+/// A neo-Hookean device from a file: f at zero bias in closed form (MODEL.md §5),
+/// ω² = μ·L2·H·(1 + 3λ1p⁻⁴λ2p⁻²)·(1 + L1A/L1B)/M.
+#[test]
+fn device_file_changes_the_device() {
+    let file = DeviceFile::new(
+        "neo.toml",
+        "# neo-Hookean: no jlim\nprestretch_1 = 3.0\nprestretch_2 = 1.5\nlength_passive = 0.01\n",
+    );
+    let v = json(&["safe", "--device", file.path(), "--json"]);
+    let (mu, w, h, la, lb, m, rho): (f64, f64, f64, f64, f64, f64, f64) =
+        (45e3, 0.04, 1e-3, 0.02, 0.01, 2e-3, 960.0);
+    let mass = m * la + rho * w * h * la * (la + lb) / 3.0;
+    let omega2 = mu * w * h * (1.0 + 3.0 / (81.0 * 2.25)) * (1.0 + la / lb) / mass;
+    let f0 = omega2.sqrt() / std::f64::consts::TAU;
+    let got = v["zero_bias_frequency_hz"].as_f64().unwrap();
+    assert!((got - f0).abs() < 1e-9 * f0, "{got} vs {f0}");
+}
+
+/// Exit status 2, one line on stderr with the range, nothing on stdout.
+#[test]
+fn unreachable_target() {
+    let range = json(&["safe", "--json"])["tunable_range_hz"].clone();
+    for args in [
+        &["tune", "--target-hz", "50", "--json"][..],
+        &["tune", "--target-hz", "50"][..],
+    ] {
+        let out = host_sim(args);
+        assert_eq!(out.status.code(), Some(2));
+        assert!(out.stdout.is_empty());
+        let err = String::from_utf8(out.stderr).unwrap();
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(err.contains("tunable range"), "{err}");
+        assert!(
+            err.contains(&range[1].to_string()),
+            "{err} lacks {}",
+            range[1]
+        );
+    }
+}
+
+#[test]
+fn nan_target_and_bad_margin() {
+    for args in [
+        &["tune", "--target-hz", "NaN"][..],
+        &["tune", "--target-hz", "inf"][..],
+        &["tune", "--target-hz", "44", "--margin", "1.5"][..],
+        &["safe", "--margin", "-0.1"][..],
+        &["tune", "--target-hz", "-44"][..],
+    ] {
+        let out = host_sim(args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        assert!(out.stdout.is_empty());
+        assert_eq!(String::from_utf8(out.stderr).unwrap().lines().count(), 1);
+    }
+}
+
+#[test]
+fn bad_device_files() {
+    let cases = [
+        (
+            "unknown.toml",
+            "thickness = 1e-3\nshear_modulos = 4e4\n",
+            "shear_modulos",
+        ),
+        ("negative.toml", "thickness = -1e-3\n", "thickness"),
+        ("slack.toml", "prestretch_1 = 0.3\n", "prestretch_1"),
+        ("locked.toml", "jlim = 8.0\n", "jlim"),
+        ("nan.toml", "width = nan\n", "width"),
+        ("syntax.toml", "width = \n", "line 1"),
+    ];
+    for (name, text, expected) in cases {
+        let file = DeviceFile::new(name, text);
+        let out = host_sim(&["safe", "--device", file.path(), "--json"]);
+        assert_eq!(out.status.code(), Some(2), "{name}");
+        assert!(out.stdout.is_empty());
+        let err = String::from_utf8(out.stderr).unwrap();
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(err.contains(expected) && err.contains(name), "{err}");
+    }
+    let out = host_sim(&["safe", "--device", "/nonexistent/device.toml"]);
+    assert_eq!(out.status.code(), Some(2));
+}
+
+#[test]
+fn no_arguments_runs_safe_on_the_reference_device() {
+    let out = host_sim(&[]);
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(
+        text.contains("reference device") && text.contains("9854.73 V"),
+        "{text}"
+    );
+}
+
+#[test]
+fn help_explains_the_commands() {
+    let text = String::from_utf8(host_sim(&["--help"]).stdout).unwrap();
+    for word in ["safe", "tune", "Exit status"] {
+        assert!(text.contains(word), "{text}");
+    }
+    let text = String::from_utf8(host_sim(&["tune", "--help"]).stdout).unwrap();
+    for word in ["--target-hz", "--device", "--margin", "--json"] {
+        assert!(text.contains(word), "{text}");
+    }
+}
