@@ -19,14 +19,7 @@ fn devices() -> Vec<DeviceParams<f64>> {
             jlim: Some(40.0),
             ..REFERENCE_DEVICE
         },
-        DeviceParams {
-            prestretch_1: 1.34,
-            prestretch_2: 1.86,
-            length_active: 0.0278,
-            length_passive: 0.0166,
-            jlim: None,
-            ..REFERENCE_DEVICE
-        },
+        non_monotone_device(),
     ]
 }
 

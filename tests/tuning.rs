@@ -7,18 +7,6 @@ use common::*;
 use de_resonator::{Device, DeviceParams, TuneError, Tuner, REFERENCE_DEVICE};
 use proptest::prelude::*;
 
-/// f(Φ) first falls, then rises past f0 (neo-Hookean, limit `emi`).
-fn non_monotone() -> DeviceParams<f64> {
-    DeviceParams {
-        prestretch_1: 1.34,
-        prestretch_2: 1.86,
-        length_active: 0.0278,
-        length_passive: 0.0166,
-        jlim: None,
-        ..REFERENCE_DEVICE
-    }
-}
-
 /// f(Φ) rises with the bias.
 fn rising() -> DeviceParams<f64> {
     DeviceParams {
@@ -49,7 +37,7 @@ fn first_crossing(p: &DeviceParams<f64>, target: f64, max_stretch: f64) -> (f64,
 
 #[test]
 fn non_monotone_device_takes_the_smallest_bias() {
-    let p = non_monotone();
+    let p = non_monotone_device();
     let t = tuner(p);
     let range = t.tunable_range(0.05).unwrap();
     let zero = t.zero_bias().natural_frequency_hz;
@@ -99,7 +87,7 @@ fn rising_device_tunes_upwards_only() {
 
 #[test]
 fn ends_of_the_range_are_reachable() {
-    for p in [REFERENCE_DEVICE, non_monotone(), rising()] {
+    for p in [REFERENCE_DEVICE, non_monotone_device(), rising()] {
         let t = tuner(p);
         let range = t.tunable_range(0.05).unwrap();
         for target in [range.low_hz, range.high_hz] {

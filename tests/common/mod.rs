@@ -95,3 +95,15 @@ pub fn neo_hookean_reference() -> DeviceParams<f64> {
         ..de_resonator::REFERENCE_DEVICE
     }
 }
+
+/// A neo-Hookean device whose f(Φ) first falls, then rises past f0 (limit `emi`).
+pub fn non_monotone_device() -> DeviceParams<f64> {
+    DeviceParams {
+        prestretch_1: 1.34,
+        prestretch_2: 1.86,
+        length_active: 0.0278,
+        length_passive: 0.0166,
+        jlim: None,
+        ..de_resonator::REFERENCE_DEVICE
+    }
+}
