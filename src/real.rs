@@ -25,6 +25,7 @@ pub trait Real:
     fn sqrt(self) -> Self;
     fn ln(self) -> Self;
     fn abs(self) -> Self;
+    fn sin(self) -> Self;
     fn is_finite(self) -> bool;
 
     /// Zero.
@@ -74,6 +75,9 @@ impl Real for f64 {
     fn abs(self) -> Self {
         libm::fabs(self)
     }
+    fn sin(self) -> Self {
+        libm::sin(self)
+    }
     fn is_finite(self) -> bool {
         f64::is_finite(self)
     }
@@ -95,6 +99,9 @@ impl Real for f32 {
     }
     fn abs(self) -> Self {
         libm::fabsf(self)
+    }
+    fn sin(self) -> Self {
+        libm::sinf(self)
     }
     fn is_finite(self) -> bool {
         f32::is_finite(self)

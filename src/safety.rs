@@ -216,3 +216,53 @@ impl<T: Real> Limit<T> {
         }
     }
 }
+
+/// A check that failed along a trajectory.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Crossing<T> {
+    pub mode: FailureMode,
+    /// The step at which it was first seen.
+    pub tick: u64,
+    pub stretch: T,
+}
+
+/// The dynamic safety monitor: the six checks of MODEL.md §6 at every observed state
+/// λ(t), Φ(t), remembering the first crossing (MODEL.md §6, last paragraph).
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Monitor<T> {
+    first: Option<Crossing<T>>,
+}
+
+impl<T: Real> Monitor<T> {
+    pub fn new() -> Self {
+        Self { first: None }
+    }
+
+    /// Check one state; returns the failing check, if any, and keeps the first one seen.
+    pub fn observe(
+        &mut self,
+        device: &Device<T>,
+        tick: u64,
+        stretch: T,
+        bias_dimless_squared: T,
+    ) -> Option<FailureMode> {
+        let mode = device
+            .margins(stretch, bias_dimless_squared)
+            .first_failure()?;
+        if self.first.is_none() {
+            self.first = Some(Crossing {
+                mode,
+                tick,
+                stretch,
+            });
+        }
+        Some(mode)
+    }
+
+    /// The first crossing seen, if any.
+    pub fn first_crossing(&self) -> Option<Crossing<T>> {
+        self.first
+    }
+}

@@ -1,0 +1,422 @@
+//! Dynamics (MODEL.md §4, §7): the equation of motion under Φ(t) = Φdc + Φac·sin(Ωt), and
+//! fixed-step integrators a microcontroller can afford, one step at a time, behind a guard
+//! that refuses a step too large to be stable. Dimensionless time τ = t/T0 throughout.
+
+use core::fmt;
+
+use crate::device::Device;
+use crate::real::Real;
+
+/// The voltage Φ(τ) = Φ̄dc + Φ̄ac·sin(Ω̄τ), dimensionless (Φ̄ = (Φ/H)·√(ε/μ), Ω̄ = Ω·T0).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Drive<T> {
+    pub bias: T,
+    pub ac: T,
+    pub omega: T,
+}
+
+impl<T: Real> Drive<T> {
+    /// A drive in volts and hertz for `device`.
+    pub fn from_volts(device: &Device<T>, bias_volts: T, ac_volts: T, drive_hz: T) -> Self {
+        let v = device.volts_per_unit();
+        Self {
+            bias: bias_volts / v,
+            ac: ac_volts / v,
+            omega: T::of(core::f64::consts::TAU) * drive_hz / device.rad_per_s_per_unit(),
+        }
+    }
+
+    /// A constant voltage.
+    pub fn constant(device: &Device<T>, volts: T) -> Self {
+        Self::from_volts(device, volts, T::zero(), T::zero())
+    }
+
+    /// Φ̄² at dimensionless time τ.
+    pub fn bias_dimless_squared_at(&self, tau: T) -> T {
+        (self.bias + self.ac * (self.omega * tau).sin()).squared()
+    }
+
+    /// The least Φ̄² the drive reaches (where the stiffness is largest).
+    pub fn least_bias_dimless_squared(&self) -> T {
+        let gap = self.bias.abs() - self.ac.abs();
+        if gap > T::zero() {
+            gap.squared()
+        } else {
+            T::zero()
+        }
+    }
+}
+
+/// Stretch and its rate dλ/dτ.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct State<T> {
+    pub stretch: T,
+    /// dλ/dτ; dλ/dt = velocity·(1/T0).
+    pub velocity: T,
+}
+
+impl<T: Real> Device<T> {
+    /// The elastic and electric part of λ'' (MODEL.md §4, dimensionless):
+    /// s̄1(λB) − s̄1(λ) + Φ̄²·λ·λ2p².
+    pub fn restoring_acceleration(&self, stretch: T, bias_dimless_squared: T) -> T {
+        let m = self.material();
+        let l2p = self.prestretch_2();
+        m.stress_1(self.passive_stretch(stretch), l2p) - m.stress_1(stretch, l2p)
+            + bias_dimless_squared * stretch * l2p * l2p
+    }
+
+    /// λ'' = restoring − c̄·λ' (MODEL.md §4, dimensionless).
+    pub fn acceleration(&self, state: State<T>, bias_dimless_squared: T) -> T {
+        self.restoring_acceleration(state.stretch, bias_dimless_squared)
+            - self.damping_dimless() * state.velocity
+    }
+}
+
+/// A fixed-step method.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Method {
+    /// Classical fourth-order Runge–Kutta: four force evaluations a step.
+    Rk4,
+    /// Velocity Verlet (second order, symplectic when undamped; damping taken implicitly).
+    Verlet,
+    /// Implicit midpoint (second order, A-stable), Newton on the velocity increment.
+    ImplicitMidpoint,
+}
+
+impl Method {
+    pub const ALL: [Method; 3] = [Method::Rk4, Method::Verlet, Method::ImplicitMidpoint];
+
+    /// The method's name on the command line and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Rk4 => "rk4",
+            Method::Verlet => "verlet",
+            Method::ImplicitMidpoint => "implicit-midpoint",
+        }
+    }
+
+    /// The largest stable h·ω for an oscillator of angular frequency ω (RK4 reaches 2√2 on
+    /// the imaginary axis; 2.8 keeps a little room). `None`: stable for any step.
+    pub fn stability_limit(self) -> Option<f64> {
+        match self {
+            Method::Rk4 => Some(2.8),
+            Method::Verlet => Some(2.0),
+            Method::ImplicitMidpoint => None,
+        }
+    }
+}
+
+/// Why the integrator will not take, or could not finish, a step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum StepError<T> {
+    /// The step is NaN, infinite or not positive.
+    InvalidStep { step_seconds: T },
+    /// The stretch range to guard is empty, NaN, or leaves a membrane at zero stretch.
+    InvalidRange { low: T, high: T },
+    /// Too large a step for the method at the stiffest state of the guarded range.
+    Unstable {
+        method: Method,
+        step_seconds: T,
+        max_step_seconds: T,
+    },
+    /// The state left the stretch range the guard was sized for.
+    LeftGuardedRange { tick: u64, stretch: T },
+    /// The implicit method's Newton iteration did not converge.
+    NewtonFailed { tick: u64 },
+    /// The state became NaN or infinite.
+    NonFinite { tick: u64 },
+}
+
+impl<T: Real> fmt::Display for StepError<T> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            StepError::InvalidStep { step_seconds } => {
+                write!(
+                    f,
+                    "step {} s is not a finite positive number",
+                    step_seconds.to_f64()
+                )
+            }
+            StepError::InvalidRange { low, high } => write!(
+                f,
+                "stretch range [{}, {}] is not a valid range of positive stretches",
+                low.to_f64(),
+                high.to_f64()
+            ),
+            StepError::Unstable {
+                method,
+                step_seconds,
+                max_step_seconds,
+            } => write!(
+                f,
+                "step {} s is unstable for {}: the stiffest reachable state allows at most {} s",
+                step_seconds.to_f64(),
+                method.name(),
+                max_step_seconds.to_f64()
+            ),
+            StepError::LeftGuardedRange { tick, stretch } => write!(
+                f,
+                "stretch {} at tick {} left the range the step was checked for",
+                stretch.to_f64(),
+                tick
+            ),
+            StepError::NewtonFailed { tick } => {
+                write!(f, "implicit step did not converge at tick {tick}")
+            }
+            StepError::NonFinite { tick } => {
+                write!(f, "state became NaN or infinite at tick {tick}")
+            }
+        }
+    }
+}
+
+/// Most substeps a subdivided step may take.
+pub const MAX_SUBSTEPS: u32 = 1 << 16;
+
+/// Points at which the guard samples the stiffness across the stretch range.
+const GUARD_POINTS: usize = 64;
+
+/// Integrates one device under one drive with one method and a fixed step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Integrator<T> {
+    device: Device<T>,
+    drive: Drive<T>,
+    method: Method,
+    /// Dimensionless step of one substep.
+    substep: T,
+    substeps: u32,
+    step_seconds: T,
+    range: (T, T),
+    tick: u64,
+    state: State<T>,
+}
+
+/// The largest stable step in seconds for `method` on `device` under `drive`, while the
+/// stretch stays in `range`: from the largest local stiffness ω_loc² = −∂λ''/∂λ there (at
+/// the least Φ̄² the drive reaches, where it is stiffest). `None`: any step is stable.
+pub fn max_stable_step_seconds<T: Real>(
+    device: &Device<T>,
+    drive: &Drive<T>,
+    method: Method,
+    range: (T, T),
+) -> Option<T> {
+    let limit = T::of(method.stability_limit()?);
+    let p2 = drive.least_bias_dimless_squared();
+    let mut stiffest = T::zero();
+    for i in 0..=GUARD_POINTS {
+        let l = range.0 + (range.1 - range.0) * T::of(i as f64) / T::of(GUARD_POINTS as f64);
+        let k = device.stiffness_dimless(l, p2);
+        // NaN stiffness (outside the model) counts as infinitely stiff.
+        stiffest = if k.is_finite() {
+            stiffest.max(k)
+        } else {
+            T::of(f64::INFINITY)
+        };
+    }
+    let omega_max = stiffest.sqrt() * device.rad_per_s_per_unit();
+    Some(limit / omega_max)
+}
+
+impl<T: Real> Integrator<T> {
+    /// Set up an integration from `start` with steps of `step_seconds`, guarded for
+    /// stretches in `range`. A step too large for stability is refused, or, with
+    /// `subdivide`, split into the fewest equal substeps that are stable.
+    pub fn new(
+        device: Device<T>,
+        drive: Drive<T>,
+        method: Method,
+        step_seconds: T,
+        range: (T, T),
+        start: State<T>,
+        subdivide: bool,
+    ) -> Result<Self, StepError<T>> {
+        if !(step_seconds.is_finite() && step_seconds > T::zero()) {
+            return Err(StepError::InvalidStep { step_seconds });
+        }
+        let lowest_b = device.passive_stretch(range.1);
+        if !(range.0 > T::zero()
+            && range.1 >= range.0
+            && range.1.is_finite()
+            && lowest_b > T::zero())
+        {
+            return Err(StepError::InvalidRange {
+                low: range.0,
+                high: range.1,
+            });
+        }
+        let mut substeps = 1u32;
+        if let Some(max_step) = max_stable_step_seconds(&device, &drive, method, range) {
+            if !(step_seconds < max_step) {
+                let needed = step_seconds / max_step;
+                if !subdivide || !(needed < T::of(f64::from(MAX_SUBSTEPS))) {
+                    return Err(StepError::Unstable {
+                        method,
+                        step_seconds,
+                        max_step_seconds: max_step,
+                    });
+                }
+                // The fewest equal substeps each below the limit.
+                while !(step_seconds / T::of(f64::from(substeps)) < max_step) {
+                    substeps += 1;
+                }
+            }
+        }
+        let step = step_seconds * device.rad_per_s_per_unit();
+        Ok(Self {
+            device,
+            drive,
+            method,
+            substep: step / T::of(f64::from(substeps)),
+            substeps,
+            step_seconds,
+            range,
+            tick: 0,
+            state: start,
+        })
+    }
+
+    pub fn state(&self) -> State<T> {
+        self.state
+    }
+
+    /// Steps taken so far.
+    pub fn tick(&self) -> u64 {
+        self.tick
+    }
+
+    /// Substeps per step (1 unless the step was subdivided).
+    pub fn substeps(&self) -> u32 {
+        self.substeps
+    }
+
+    /// t = tick·h, s.
+    pub fn time_seconds(&self) -> T {
+        T::of(self.tick as f64) * self.step_seconds
+    }
+
+    pub fn device(&self) -> &Device<T> {
+        &self.device
+    }
+
+    pub fn drive(&self) -> &Drive<T> {
+        &self.drive
+    }
+
+    /// Φ̄² now (at t = tick·h), for the monitor.
+    pub fn bias_dimless_squared(&self) -> T {
+        self.drive.bias_dimless_squared_at(self.tau(0))
+    }
+
+    /// Dimensionless time of substep `j` of the current tick.
+    fn tau(&self, j: u32) -> T {
+        T::of((self.tick as f64) * f64::from(self.substeps) + f64::from(j)) * self.substep
+    }
+
+    /// Advance one step. On error the state stays at the last good one.
+    pub fn step(&mut self) -> Result<State<T>, StepError<T>> {
+        let mut s = self.state;
+        for j in 0..self.substeps {
+            let tau = self.tau(j);
+            s = match self.method {
+                Method::Rk4 => self.rk4(s, tau),
+                Method::Verlet => self.verlet(s, tau),
+                Method::ImplicitMidpoint => self.implicit_midpoint(s, tau)?,
+            };
+        }
+        let tick = self.tick + 1;
+        if !(s.stretch.is_finite() && s.velocity.is_finite()) {
+            return Err(StepError::NonFinite { tick });
+        }
+        if !(s.stretch >= self.range.0 && s.stretch <= self.range.1) {
+            return Err(StepError::LeftGuardedRange {
+                tick,
+                stretch: s.stretch,
+            });
+        }
+        self.state = s;
+        self.tick = tick;
+        Ok(s)
+    }
+
+    fn accel(&self, s: State<T>, tau: T) -> T {
+        self.device
+            .acceleration(s, self.drive.bias_dimless_squared_at(tau))
+    }
+
+    fn rk4(&self, s: State<T>, tau: T) -> State<T> {
+        let h = self.substep;
+        let half = h * T::of(0.5);
+        let at = |s: State<T>, dl: T, dv: T, k: T| State {
+            stretch: s.stretch + k * dl,
+            velocity: s.velocity + k * dv,
+        };
+        let (l1, v1) = (s.velocity, self.accel(s, tau));
+        let s2 = at(s, l1, v1, half);
+        let (l2, v2) = (s2.velocity, self.accel(s2, tau + half));
+        let s3 = at(s, l2, v2, half);
+        let (l3, v3) = (s3.velocity, self.accel(s3, tau + half));
+        let s4 = at(s, l3, v3, h);
+        let (l4, v4) = (s4.velocity, self.accel(s4, tau + h));
+        let two = T::of(2.0);
+        let sixth = h / T::of(6.0);
+        State {
+            stretch: s.stretch + sixth * (l1 + two * (l2 + l3) + l4),
+            velocity: s.velocity + sixth * (v1 + two * (v2 + v3) + v4),
+        }
+    }
+
+    fn verlet(&self, s: State<T>, tau: T) -> State<T> {
+        let h = self.substep;
+        let half = h * T::of(0.5);
+        let d = &self.device;
+        let c = d.damping_dimless();
+        let force = |l, t| d.restoring_acceleration(l, self.drive.bias_dimless_squared_at(t));
+        let v_half = s.velocity + half * (force(s.stretch, tau) - c * s.velocity);
+        let stretch = s.stretch + h * v_half;
+        // Damping at the end of the step taken implicitly: stable for any c ≥ 0.
+        let velocity = (v_half + half * force(stretch, tau + h)) / (T::one() + half * c);
+        State { stretch, velocity }
+    }
+
+    /// y₁ = y₀ + h·f((y₀ + y₁)/2): solved for the velocity increment Δv, with
+    /// λ₁ = λ₀ + h·(v₀ + Δv/2), by Newton on G(Δv) = Δv − h·a(λ_mid, v_mid).
+    fn implicit_midpoint(&self, s: State<T>, tau: T) -> Result<State<T>, StepError<T>> {
+        let h = self.substep;
+        let half = h * T::of(0.5);
+        let d = &self.device;
+        let c = d.damping_dimless();
+        let p2 = self.drive.bias_dimless_squared_at(tau + half);
+        let mid = |dv: T| State {
+            stretch: s.stretch + half * (s.velocity + dv * T::of(0.5)),
+            velocity: s.velocity + dv * T::of(0.5),
+        };
+        let mut dv = h * d.acceleration(s, p2);
+        for _ in 0..12 {
+            let m = mid(dv);
+            let g = dv - h * d.acceleration(m, p2);
+            // G' = 1 + h·(k·h/4 + c/2), k = −∂a/∂λ the local stiffness.
+            let slope = T::one()
+                + h * (d.stiffness_dimless(m.stretch, p2) * h * T::of(0.25) + c * T::of(0.5));
+            if !(slope > T::zero()) {
+                break;
+            }
+            let change = g / slope;
+            dv = dv - change;
+            let scale = dv.abs().max(s.velocity.abs()).max(h * T::EPSILON);
+            if change.abs() <= T::of(16.0) * T::EPSILON * scale {
+                return Ok(State {
+                    stretch: s.stretch + h * (s.velocity + dv * T::of(0.5)),
+                    velocity: s.velocity + dv,
+                });
+            }
+        }
+        Err(StepError::NewtonFailed {
+            tick: self.tick + 1,
+        })
+    }
+}
