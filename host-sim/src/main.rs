@@ -2,22 +2,25 @@
 
 mod device_file;
 mod report;
+mod simulate;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand};
 use de_resonator::{Device, DeviceParams, Tuner, DEFAULT_MARGIN, REFERENCE_DEVICE};
+use simulate::{Choice, Scene, Start};
 
-/// Safe region and bias tuning of a dielectric elastomer resonator.
+/// Safe region, bias tuning and dynamics of a dielectric elastomer resonator.
 ///
 /// A static bias voltage sets the resonator's natural frequency; too much voltage and the
 /// membrane fails. `safe` shows where the loading branch fails first and the frequencies
-/// reachable before it; `tune` finds the bias for a target frequency. Without a command,
+/// reachable before it; `tune` finds the bias for a target frequency; `simulate`
+/// integrates the motion under a drive and reports any dynamic crossing of a limit. Without a command,
 /// `safe` runs on the built-in reference device (MODEL.md §9).
 ///
-/// Exit status: 0 on success, 2 when the target cannot be reached or the device is invalid
-/// (one line on stderr says why, nothing on stdout).
+/// Exit status: 0 on success, 2 when the target cannot be reached, the device or a
+/// setting is invalid, or a step is unstable (one line on stderr says why, nothing on stdout).
 #[derive(Parser, Debug)]
 #[command(name = "host-sim", version, about, long_about)]
 struct Cli {
@@ -41,6 +44,48 @@ enum Command {
         target_hz: f64,
         #[command(flatten)]
         common: Common,
+    },
+    /// Integrate the motion from rest under Φ(t) = bias + ac·sin(2π·f·t), watched by the
+    /// dynamic safety monitor (the six checks of MODEL.md §6 at every step).
+    Simulate {
+        /// Static bias, V.
+        #[arg(long, value_name = "V", allow_negative_numbers = true)]
+        bias_volts: f64,
+        /// AC amplitude, V.
+        #[arg(
+            long,
+            value_name = "A",
+            default_value_t = 0.0,
+            allow_negative_numbers = true
+        )]
+        ac_volts: f64,
+        /// AC drive frequency, Hz.
+        #[arg(long, value_name = "F", default_value_t = 0.0)]
+        drive_hz: f64,
+        /// Viscous damping c, N·s (overrides the device's).
+        #[arg(long, value_name = "C")]
+        damping: Option<f64>,
+        /// Simulated time, s.
+        #[arg(long, value_name = "S", allow_negative_numbers = true)]
+        duration: f64,
+        /// Start at rest at the bias's equilibrium, or at the pre-stretch with the voltage
+        /// switched on at t = 0.
+        #[arg(long, value_enum, default_value_t = Start::Equilibrium)]
+        start: Start,
+        /// `reference` (adaptive DOP853, rtol = atol = 1e-12, f64) or a core fixed-step
+        /// method: rk4, verlet, implicit-midpoint, each with -f32 (as on the target) or -f64.
+        #[arg(long, value_name = "M", default_value = "reference")]
+        method: String,
+        /// Step, s (the reference's output spacing). Default: 1/64 of the small-oscillation
+        /// period at zero bias.
+        #[arg(long, value_name = "H", allow_negative_numbers = true)]
+        step: Option<f64>,
+        #[arg(long, value_name = "FILE")]
+        /// Device file (as for `safe`).
+        device: Option<PathBuf>,
+        /// Print one JSON object on stdout instead of text.
+        #[arg(long)]
+        json: bool,
     },
 }
 
@@ -118,15 +163,57 @@ fn run(command: Command) -> Result<String, String> {
                 common.json,
             ))
         }
+        Command::Simulate {
+            bias_volts,
+            ac_volts,
+            drive_hz,
+            damping,
+            duration,
+            start,
+            method,
+            step,
+            device,
+            json,
+        } => {
+            let (mut params, name) = params(&device)?;
+            if let Some(c) = damping {
+                params.damping = c;
+            }
+            let choice = Choice::parse(&method)?;
+            let checked = Device::new(params).map_err(|e| format!("{name}: {e}"))?;
+            let step =
+                step.unwrap_or(1.0 / (64.0 * checked.natural_frequency_hz(checked.prestretch_1())));
+            let scene = Scene {
+                params,
+                bias_volts,
+                ac_volts,
+                drive_hz,
+                duration_seconds: duration,
+                start,
+            };
+            let outcome = simulate::simulate(&scene, choice, step)?;
+            Ok(report::simulation(
+                &name,
+                &choice.name(),
+                step,
+                &outcome,
+                json,
+            ))
+        }
     }
+}
+
+/// The device parameters named on the command line, or the reference device, and a name.
+fn params(device: &Option<PathBuf>) -> Result<(DeviceParams<f64>, String), String> {
+    Ok(match device {
+        Some(path) => (device_file::load(path)?, path.display().to_string()),
+        None => (REFERENCE_DEVICE, "reference device (built in)".into()),
+    })
 }
 
 /// The device named on the command line (or the reference), validated, with its limit found.
 fn tuner(common: &Common) -> Result<(Tuner<f64>, String), String> {
-    let (params, name): (DeviceParams<f64>, String) = match &common.device {
-        Some(path) => (device_file::load(path)?, path.display().to_string()),
-        None => (REFERENCE_DEVICE, "reference device (built in)".into()),
-    };
+    let (params, name) = params(&common.device)?;
     let device = Device::new(params).map_err(|e| format!("{name}: {e}"))?;
     Ok((Tuner::new(device), name))
 }

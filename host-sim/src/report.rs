@@ -1,6 +1,8 @@
 //! What `safe` and `tune` print: a JSON object for tools, or a short text for people.
 
 use de_resonator::{Equilibrium, TunableRange, Tuner};
+
+use crate::simulate::Outcome;
 use serde_json::{json, Value};
 
 /// The keys `safe` and `tune` share: zero-bias frequency, limit, tunable range.
@@ -93,6 +95,48 @@ pub fn tune(
             sig(bias.volts),
             sig(bias.stretch),
             sig(bias.natural_frequency_hz),
+        )
+    }
+}
+
+/// The output of `host-sim simulate`.
+pub fn simulation(name: &str, method: &str, step: f64, out: &Outcome, as_json: bool) -> String {
+    let first_limit = out
+        .first_limit
+        .map(|(mode, time)| json!({"mode": mode.name(), "time": time}));
+    if as_json {
+        json!({
+            "method": method,
+            "step_seconds": step,
+            "steps": out.samples.len().saturating_sub(1),
+            "final": {
+                "stretch": out.final_stretch,
+                "velocity": out.final_velocity_per_second,
+            },
+            "min_stretch": out.min_stretch,
+            "max_stretch": out.max_stretch,
+            "first_limit": first_limit,
+            "run_seconds": out.run_seconds,
+        })
+        .to_string()
+    } else {
+        let limit = match out.first_limit {
+            Some((mode, time)) => format!("{} at t = {} s", mode.description(), sig(time)),
+            None => "none crossed".into(),
+        };
+        format!(
+            "device          {name}\n\
+             method          {method}, step {} s, {} steps in {} ms\n\
+             final           stretch {}, velocity {} 1/s\n\
+             stretch range   {} .. {}\n\
+             first limit     {limit}",
+            sig(step),
+            out.samples.len().saturating_sub(1),
+            sig(out.run_seconds * 1e3),
+            sig(out.final_stretch),
+            sig(out.final_velocity_per_second),
+            sig(out.min_stretch),
+            sig(out.max_stretch),
         )
     }
 }

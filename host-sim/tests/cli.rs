@@ -193,3 +193,115 @@ fn help_explains_the_commands() {
         assert!(text.contains(word), "{text}");
     }
 }
+
+/// Fixed-step core methods converge to the reference on a driven scene: RK4's error falls
+/// 16-fold when its step halves (fourth order), and f32 and Verlet stay close.
+#[test]
+fn simulate_core_methods_converge_to_the_reference() {
+    let scene = |step: &'static str, method: &'static str| {
+        let v = json(&[
+            "simulate",
+            "--bias-volts",
+            "7000",
+            "--ac-volts",
+            "500",
+            "--drive-hz",
+            "40",
+            "--duration",
+            "0.2",
+            "--step",
+            step,
+            "--method",
+            method,
+            "--json",
+        ]);
+        assert!(v["first_limit"].is_null());
+        v["final"]["stretch"].as_f64().unwrap()
+    };
+    let reference = scene("0.0001", "reference");
+    let coarse = (scene("0.0001", "rk4-f64") - reference).abs();
+    let fine = (scene("0.00005", "rk4-f64") - reference).abs();
+    let ratio = coarse / fine;
+    assert!(
+        (12.0..20.0).contains(&ratio),
+        "RK4 error ratio {ratio}: {coarse} → {fine}"
+    );
+    for (method, tolerance) in [("rk4-f32", 1e-4), ("verlet-f64", 1e-3)] {
+        let got = scene("0.0001", method);
+        assert!(
+            (got - reference).abs() < tolerance,
+            "{method}: {got} vs {reference}"
+        );
+    }
+}
+
+/// A voltage step from the pre-stretch to 95% of the limit voltage crosses EMI dynamically
+/// (tests/dynamics.rs derives why from the energy turning point); half of it does not.
+#[test]
+fn simulate_reports_a_dynamic_crossing() {
+    let limit = json(&["safe", "--json"])["limit"]["volts"]
+        .as_f64()
+        .unwrap();
+    for (fraction, crosses) in [(0.95, true), (0.5, false)] {
+        let volts = (fraction * limit).to_string();
+        for method in ["reference", "rk4-f32"] {
+            let v = json(&[
+                "simulate",
+                "--bias-volts",
+                &volts,
+                "--start",
+                "prestretch",
+                "--duration",
+                "0.03",
+                "--step",
+                "1e-5",
+                "--method",
+                method,
+                "--json",
+            ]);
+            assert_eq!(
+                !v["first_limit"].is_null(),
+                crosses,
+                "{method} {fraction}: {v}"
+            );
+            if crosses {
+                assert_eq!(v["first_limit"]["mode"], "emi");
+                assert!(v["first_limit"]["time"].as_f64().unwrap() > 0.0);
+            }
+        }
+    }
+}
+
+#[test]
+fn simulate_refuses_unstable_steps_and_unknown_methods() {
+    for args in [
+        &[
+            "simulate",
+            "--bias-volts",
+            "7000",
+            "--duration",
+            "0.1",
+            "--method",
+            "verlet-f64",
+            "--step",
+            "0.01",
+        ][..],
+        &[
+            "simulate",
+            "--bias-volts",
+            "7000",
+            "--duration",
+            "0.1",
+            "--method",
+            "euler",
+        ][..],
+        &["simulate", "--bias-volts", "7000", "--duration", "-1"][..],
+        &["simulate", "--bias-volts", "1e6", "--duration", "0.1"][..],
+    ] {
+        let out = host_sim(args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        assert!(out.stdout.is_empty());
+        let err = String::from_utf8(out.stderr).unwrap();
+        assert_eq!(err.lines().count(), 1, "{err}");
+    }
+}
