@@ -3,6 +3,7 @@
 mod device_file;
 mod report;
 mod simulate;
+mod stress;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -87,6 +88,16 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Run the stiff and extreme cases (near the EMI limit, passive membrane near slack,
+    /// Gent lock-up, a very light bar, a large AC amplitude, a fast voltage step) with every
+    /// core method in f32 and f64 at several steps, against the reference. Each run is
+    /// `stable`, `refused` (by the guard), `stopped` (a typed error), or `failed_silently`,
+    /// which must never happen: exit status 1 if any run did.
+    Stress {
+        /// Print one JSON object on stdout instead of the table.
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 #[derive(Args, Debug)]
@@ -115,12 +126,19 @@ impl Default for Common {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    match run(cli.command.unwrap_or(Command::Safe {
+    let command = cli.command.unwrap_or(Command::Safe {
         common: Common::default(),
-    })) {
-        Ok(out) => {
+    });
+    match run(command) {
+        Ok((out, failure)) => {
             println!("{out}");
-            ExitCode::SUCCESS
+            match failure {
+                None => ExitCode::SUCCESS,
+                Some(message) => {
+                    eprintln!("error: {message}");
+                    ExitCode::from(1)
+                }
+            }
         }
         Err(message) => {
             eprintln!("error: {message}");
@@ -129,21 +147,17 @@ fn main() -> ExitCode {
     }
 }
 
-/// Run a command; `Err` is the one-line reason for exit status 2.
-fn run(command: Command) -> Result<String, String> {
+/// Run a command: what to print, and a failure to report with exit status 1 (a stress run
+/// that failed silently). `Err` is the one-line reason for exit status 2.
+fn run(command: Command) -> Result<(String, Option<String>), String> {
     match command {
         Command::Safe { common } => {
             let (tuner, name) = tuner(&common)?;
             let range = tuner
                 .tunable_range(common.margin)
                 .map_err(|e| e.to_string())?;
-            Ok(report::safe(
-                &name,
-                &tuner,
-                &range,
-                common.margin,
-                common.json,
-            ))
+            let text = report::safe(&name, &tuner, &range, common.margin, common.json);
+            Ok((text, None))
         }
         Command::Tune { target_hz, common } => {
             let (tuner, name) = tuner(&common)?;
@@ -153,7 +167,7 @@ fn run(command: Command) -> Result<String, String> {
             let bias = tuner
                 .tune(target_hz, common.margin)
                 .map_err(|e| format!("{e} (margin {})", common.margin))?;
-            Ok(report::tune(
+            let text = report::tune(
                 &name,
                 &tuner,
                 &range,
@@ -161,7 +175,8 @@ fn run(command: Command) -> Result<String, String> {
                 target_hz,
                 &bias,
                 common.json,
-            ))
+            );
+            Ok((text, None))
         }
         Command::Simulate {
             bias_volts,
@@ -191,13 +206,20 @@ fn run(command: Command) -> Result<String, String> {
                 duration_seconds: duration,
                 start,
             };
-            let outcome = simulate::simulate(&scene, choice, step)?;
-            Ok(report::simulation(
-                &name,
-                &choice.name(),
-                step,
-                &outcome,
-                json,
+            let outcome = simulate::simulate(&scene, choice, step).map_err(|e| e.to_string())?;
+            let text = report::simulation(&name, &choice.name(), step, &outcome, json);
+            Ok((text, None))
+        }
+        Command::Stress { json } => {
+            let (report, silent) = stress::run()?;
+            let text = if json {
+                report.to_string()
+            } else {
+                stress::table(&report)
+            };
+            Ok((
+                text,
+                silent.then(|| "a stress run failed silently".to_string()),
             ))
         }
     }

@@ -5,7 +5,7 @@
 use std::time::Instant;
 
 use de_resonator::{
-    Device, DeviceParams, Drive, FailureMode, Integrator, Method, Monitor, Real, State, Tuner,
+    Device, DeviceParams, Drive, FailureMode, Integrator, Method, Monitor, Real, State, StepError,
 };
 use differential_equations::prelude::*;
 
@@ -86,6 +86,8 @@ pub struct Outcome {
     pub first_limit: Option<(FailureMode, f64)>,
     /// Stretch at t = k·step, k = 0, 1, ...
     pub samples: Vec<f64>,
+    /// Why the run ended before its duration (after a crossing the monitor reported).
+    pub stopped: Option<String>,
     pub run_seconds: f64,
 }
 
@@ -105,27 +107,49 @@ impl Scene {
         }
     }
 
-    /// The stretches a core method is guarded for: the safe span of the branch on both
-    /// sides of the pre-stretch and beyond the limit, while B stays taut.
+    /// The stretches a core method is guarded for: from half of A's slack stretch
+    /// λ2p^(−1/2) (A far in compression) up to `scan_end_stretch` (B likewise), the span in
+    /// which the model is defined. The guard sizes the step for the stiffest state there.
     fn guarded_range(device: &Device<f64>) -> (f64, f64) {
-        let limit = Tuner::new(*device).limit().at.stretch;
-        let l1p = device.prestretch_1();
-        let span = limit - l1p;
-        let high = (limit + span).min(device.scan_end_stretch());
-        ((l1p - span).max(0.5 * l1p), high.max(limit))
+        let slack_a = 0.5 / device.prestretch_2().sqrt();
+        (
+            slack_a.min(device.prestretch_1()),
+            device.scan_end_stretch(),
+        )
+    }
+}
+
+/// Why a run gave no outcome.
+#[derive(Clone, Debug, PartialEq)]
+pub enum RunError {
+    /// The stability guard refused the step.
+    Refused(String),
+    /// Bad settings, or the integration stopped with a typed error before any crossing.
+    Failed(String),
+}
+
+impl std::fmt::Display for RunError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RunError::Refused(why) | RunError::Failed(why) => f.write_str(why),
+        }
+    }
+}
+
+impl From<String> for RunError {
+    fn from(why: String) -> Self {
+        RunError::Failed(why)
     }
 }
 
 /// Run a scene with a method and a step (seconds; the reference samples at this spacing).
-pub fn simulate(scene: &Scene, choice: Choice, step_seconds: f64) -> Result<Outcome, String> {
+pub fn simulate(scene: &Scene, choice: Choice, step_seconds: f64) -> Result<Outcome, RunError> {
     if !(scene.duration_seconds.is_finite() && scene.duration_seconds > 0.0) {
-        return Err(format!(
-            "duration {} s must be positive",
-            scene.duration_seconds
-        ));
+        let why = format!("duration {} s must be positive", scene.duration_seconds);
+        return Err(why.into());
     }
     if !(step_seconds.is_finite() && step_seconds > 0.0) {
-        return Err(format!("step {step_seconds} s must be positive"));
+        return Err(format!("step {step_seconds} s must be positive").into());
     }
     let steps = (scene.duration_seconds / step_seconds).round().max(1.0) as u64;
     let device = Device::new(scene.params).map_err(|e| e.to_string())?;
@@ -157,6 +181,7 @@ fn outcome(samples: Vec<f64>, last_velocity: f64) -> Outcome {
         max_stretch: max,
         first_limit: None,
         samples,
+        stopped: None,
         run_seconds: 0.0,
     }
 }
@@ -167,7 +192,7 @@ fn core<T: Real>(
     start: f64,
     step_seconds: f64,
     steps: u64,
-) -> Result<Outcome, String> {
+) -> Result<Outcome, RunError> {
     let params = scene.params.cast::<T>();
     let device = Device::new(params).map_err(|e| e.to_string())?;
     let range = Scene::guarded_range(&Device::new(scene.params).map_err(|e| e.to_string())?);
@@ -189,7 +214,11 @@ fn core<T: Real>(
         },
         false,
     )
-    .map_err(|e| e.to_string())?;
+    .map_err(|e| match e {
+        StepError::Unstable { .. } => RunError::Refused(e.to_string()),
+        _ => RunError::Failed(e.to_string()),
+    })?;
+    let mut stopped = None;
     let mut monitor = Monitor::new();
     let mut samples = Vec::with_capacity(steps as usize + 1);
     samples.push(start);
@@ -198,8 +227,9 @@ fn core<T: Real>(
         if let Err(e) = it.step() {
             // Past the guarded range the model is no longer trusted: stop, say why.
             if monitor.first_crossing().is_none() {
-                return Err(e.to_string());
+                return Err(RunError::Failed(e.to_string()));
             }
+            stopped = Some(e.to_string());
             break;
         }
         let s = it.state();
@@ -208,6 +238,7 @@ fn core<T: Real>(
     }
     let velocity = it.state().velocity.to_f64() * device.rad_per_s_per_unit().to_f64();
     let mut out = outcome(samples, velocity);
+    out.stopped = stopped;
     out.first_limit = monitor
         .first_crossing()
         .map(|c| (c.mode, c.tick as f64 * step_seconds));

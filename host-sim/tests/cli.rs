@@ -305,3 +305,40 @@ fn simulate_refuses_unstable_steps_and_unknown_methods() {
         assert_eq!(err.lines().count(), 1, "{err}");
     }
 }
+
+/// The stiff and extreme cases: no run fails silently; the guard refuses the steps past
+/// every explicit method's stability limit (2 steps a period), and each case has a step at
+/// which RK4 in f32 runs stable or stops after the monitor saw a crossing.
+#[test]
+fn stress_never_fails_silently() {
+    let v = json(&["stress", "--json"]);
+    assert_eq!(v["summary"]["failed_silently"], 0, "{}", v["summary"]);
+    let cases = v["cases"].as_array().unwrap();
+    let names: Vec<_> = cases.iter().map(|c| c["case"].as_str().unwrap()).collect();
+    assert_eq!(
+        names,
+        [
+            "near_emi_limit",
+            "passive_near_slack",
+            "gent_lock_up",
+            "light_bar",
+            "large_ac",
+            "fast_step"
+        ]
+    );
+    for case in cases {
+        let runs = case["runs"].as_array().unwrap();
+        for run in runs {
+            let explicit = !run["method"].as_str().unwrap().starts_with("implicit");
+            if explicit && run["steps_per_period"] == 2.0 {
+                assert_eq!(run["verdict"], "refused", "{run}");
+            }
+        }
+        assert!(
+            runs.iter().any(|r| r["method"] == "rk4-f32"
+                && (r["verdict"] == "stable" || r["verdict"] == "stopped_after_crossing")),
+            "{}",
+            case["case"]
+        );
+    }
+}
