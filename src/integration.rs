@@ -177,6 +177,12 @@ impl<T: Real> fmt::Display for StepError<T> {
 /// Most substeps a subdivided step may take.
 pub const MAX_SUBSTEPS: u32 = 1 << 16;
 
+/// Newton iterations of the implicit midpoint step before it gives up.
+const NEWTON_ITERATIONS: usize = 40;
+
+/// Halvings of a Newton step while the residual does not fall.
+const LINE_SEARCH_HALVINGS: usize = 20;
+
 /// Points at which the guard samples the stiffness across the stretch range.
 const GUARD_POINTS: usize = 64;
 
@@ -395,20 +401,32 @@ impl<T: Real> Integrator<T> {
             stretch: s.stretch + half * (s.velocity + dv * T::of(0.5)),
             velocity: s.velocity + dv * T::of(0.5),
         };
+        let residual = |dv: T| dv - h * d.acceleration(mid(dv), p2);
         let mut dv = h * d.acceleration(s, p2);
-        for _ in 0..12 {
-            let m = mid(dv);
-            let g = dv - h * d.acceleration(m, p2);
+        let mut g = residual(dv);
+        for _ in 0..NEWTON_ITERATIONS {
             // G' = 1 + h·(k·h/4 + c/2), k = −∂a/∂λ the local stiffness.
-            let slope = T::one()
-                + h * (d.stiffness_dimless(m.stretch, p2) * h * T::of(0.25) + c * T::of(0.5));
+            let k = d.stiffness_dimless(mid(dv).stretch, p2);
+            let slope = T::one() + h * (k * h * T::of(0.25) + c * T::of(0.5));
             if !(slope > T::zero()) {
                 break;
             }
-            let change = g / slope;
+            // Newton step, halved until |G| falls (a large step on a stiff, curved force
+            // overshoots otherwise).
+            let mut change = g / slope;
+            let mut next = residual(dv - change);
+            for _ in 0..LINE_SEARCH_HALVINGS {
+                if next.abs() < g.abs() {
+                    break;
+                }
+                change = change * T::of(0.5);
+                next = residual(dv - change);
+            }
             dv = dv - change;
-            let scale = dv.abs().max(s.velocity.abs()).max(h * T::EPSILON);
-            if change.abs() <= T::of(16.0) * T::EPSILON * scale {
+            g = next;
+            // Accelerations are O(1) in these units, so h is the least scale of Δv.
+            let scale = dv.abs().max(s.velocity.abs()).max(h);
+            if change.abs() <= T::of(16.0) * T::EPSILON * scale || g == T::zero() {
                 return Ok(State {
                     stretch: s.stretch + h * (s.velocity + dv * T::of(0.5)),
                     velocity: s.velocity + dv,
