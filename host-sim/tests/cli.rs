@@ -12,6 +12,16 @@ fn host_sim(args: &[&str]) -> Output {
         .expect("host-sim runs")
 }
 
+/// Exit status 2, nothing on stdout, one line on stderr: returns that line.
+fn refused(args: &[&str]) -> String {
+    let out = host_sim(args);
+    assert_eq!(out.status.code(), Some(2), "{args:?}");
+    assert!(out.stdout.is_empty(), "{args:?}");
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(err.lines().count(), 1, "{err}");
+    err
+}
+
 fn json(args: &[&str]) -> Value {
     let out = host_sim(args);
     assert!(
@@ -114,11 +124,7 @@ fn unreachable_target() {
         &["tune", "--target-hz", "50", "--json"][..],
         &["tune", "--target-hz", "50"][..],
     ] {
-        let out = host_sim(args);
-        assert_eq!(out.status.code(), Some(2));
-        assert!(out.stdout.is_empty());
-        let err = String::from_utf8(out.stderr).unwrap();
-        assert_eq!(err.lines().count(), 1, "{err}");
+        let err = refused(args);
         assert!(err.contains("tunable range"), "{err}");
         assert!(
             err.contains(&range[1].to_string()),
@@ -137,10 +143,7 @@ fn nan_target_and_bad_margin() {
         &["safe", "--margin", "-0.1"][..],
         &["tune", "--target-hz", "-44"][..],
     ] {
-        let out = host_sim(args);
-        assert_eq!(out.status.code(), Some(2), "{args:?}");
-        assert!(out.stdout.is_empty());
-        assert_eq!(String::from_utf8(out.stderr).unwrap().lines().count(), 1);
+        refused(args);
     }
 }
 
@@ -160,11 +163,7 @@ fn bad_device_files() {
     ];
     for (name, text, expected) in cases {
         let file = DeviceFile::new(name, text);
-        let out = host_sim(&["safe", "--device", file.path(), "--json"]);
-        assert_eq!(out.status.code(), Some(2), "{name}");
-        assert!(out.stdout.is_empty());
-        let err = String::from_utf8(out.stderr).unwrap();
-        assert_eq!(err.lines().count(), 1, "{err}");
+        let err = refused(&["safe", "--device", file.path(), "--json"]);
         assert!(err.contains(expected) && err.contains(name), "{err}");
     }
     let out = host_sim(&["safe", "--device", "/nonexistent/device.toml"]);
@@ -274,35 +273,19 @@ fn simulate_reports_a_dynamic_crossing() {
 
 #[test]
 fn simulate_refuses_unstable_steps_and_unknown_methods() {
-    for args in [
-        &[
-            "simulate",
-            "--bias-volts",
+    for (bias, duration, extra) in [
+        (
             "7000",
-            "--duration",
             "0.1",
-            "--method",
-            "verlet-f64",
-            "--step",
-            "0.01",
-        ][..],
-        &[
-            "simulate",
-            "--bias-volts",
-            "7000",
-            "--duration",
-            "0.1",
-            "--method",
-            "euler",
-        ][..],
-        &["simulate", "--bias-volts", "7000", "--duration", "-1"][..],
-        &["simulate", "--bias-volts", "1e6", "--duration", "0.1"][..],
+            &["--method", "verlet-f64", "--step", "0.01"][..],
+        ),
+        ("7000", "0.1", &["--method", "euler"][..]),
+        ("7000", "-1", &[][..]),
+        ("1e6", "0.1", &[][..]),
     ] {
-        let out = host_sim(args);
-        assert_eq!(out.status.code(), Some(2), "{args:?}");
-        assert!(out.stdout.is_empty());
-        let err = String::from_utf8(out.stderr).unwrap();
-        assert_eq!(err.lines().count(), 1, "{err}");
+        let mut args = vec!["simulate", "--bias-volts", bias, "--duration", duration];
+        args.extend(extra);
+        refused(&args);
     }
 }
 
