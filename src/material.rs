@@ -108,7 +108,7 @@ impl<T: Real> Gent<T> {
         let h2 = l2 - c * inv_l2;
         let lock = T::of(2.0) * self.inv_jlim / (g * g);
         Hessian {
-            d11: (T::one() + T::of(3.0) * c * inv_l1 * inv_l1) / g + lock * h1 * h1,
+            d11: self.stiffness_1(l1, l2),
             d12: T::of(2.0) * c * inv_l1 * inv_l2 / g + lock * h1 * h2,
             d22: (T::one() + T::of(3.0) * c * inv_l2 * inv_l2) / g + lock * h2 * h2,
         }
@@ -128,7 +128,12 @@ impl<T: Real> Gent<T> {
 
     /// Stiffness `s1'/μ = ∂²(Ws/μ)/∂λ1²`.
     pub fn stiffness_1(&self, l1: T, l2: T) -> T {
-        self.hessian(l1, l2).d11
+        // d11 of `hessian` alone: it is on the hot paths (every frequency, every Newton step).
+        let g = self.softening(l1, l2);
+        let inv_l1_sq = T::one() / (l1 * l1);
+        let c = inv_l1_sq / (l2 * l2); // λ1⁻²λ2⁻²
+        let h1 = l1 - c / l1;
+        (T::one() + T::of(3.0) * c * inv_l1_sq) / g + T::of(2.0) * self.inv_jlim * h1 * h1 / (g * g)
     }
 
     /// Stretch-limit margin `1 − I1/Jlim`: the check `I1 < Jlim` of MODEL.md §6.6
