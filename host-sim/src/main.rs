@@ -1,9 +1,13 @@
 //! host-sim: workstation tools for de-resonator, on the same `no_std` core the firmware runs.
 
 mod device_file;
+mod plot;
+mod precision;
 mod report;
 mod simulate;
 mod stress;
+mod sweep;
+mod work;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -94,7 +98,100 @@ enum Command {
     /// `stable`, `refused` (by the guard), `stopped` (a typed error), or `failed_silently`,
     /// which must never happen: exit status 1 if any run did.
     Stress {
+        /// Device the cases are built on (as for `safe`). Default: the reference device.
+        #[arg(long, value_name = "FILE")]
+        device: Option<PathBuf>,
         /// Print one JSON object on stdout instead of the table.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Error against run time (a work-precision study): every core method in f32 and f64 at
+    /// 8 to 512 steps a period against the reference (DOP853, 1e-12), on three scenes (a small
+    /// oscillation about a tuned bias, a large parametric drive, a bias near the limit).
+    /// Writes work-precision.csv and work-precision.svg (log-log) into --out; prints a table.
+    Report {
+        /// Folder for the CSV and the plot (created if needed).
+        #[arg(long, value_name = "DIR", default_value = "out/report")]
+        out: PathBuf,
+        /// Device file (as for `safe`).
+        #[arg(long, value_name = "FILE")]
+        device: Option<PathBuf>,
+        /// Print one JSON object on stdout instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Frequency response under parametric drive Φ = bias + ac·sin(2π·f·t) (MODEL.md §7):
+    /// one run from rest per drive frequency, the amplitude once settled, and the peaks
+    /// (expected near f0/2, f0 and 2·f0, f0 the small-oscillation frequency at the bias).
+    /// Writes sweep.csv and sweep.svg into --out.
+    Sweep {
+        /// Static bias, V.
+        #[arg(
+            long,
+            value_name = "V",
+            default_value_t = 6000.0,
+            allow_negative_numbers = true
+        )]
+        bias_volts: f64,
+        /// AC amplitude, V.
+        #[arg(
+            long,
+            value_name = "A",
+            default_value_t = 2000.0,
+            allow_negative_numbers = true
+        )]
+        ac_volts: f64,
+        /// Quality factor Q of the small oscillation at the bias: sets the damping
+        /// c = M·ω0/Q (M the effective mass of MODEL.md §4). 0 keeps the device's damping.
+        #[arg(
+            long,
+            value_name = "Q",
+            default_value_t = 200.0,
+            allow_negative_numbers = true
+        )]
+        quality: f64,
+        /// Lowest drive frequency, as a multiple of f0.
+        #[arg(
+            long,
+            value_name = "R",
+            default_value_t = 0.3,
+            allow_negative_numbers = true
+        )]
+        from_ratio: f64,
+        /// Highest drive frequency, as a multiple of f0.
+        #[arg(
+            long,
+            value_name = "R",
+            default_value_t = 2.4,
+            allow_negative_numbers = true
+        )]
+        to_ratio: f64,
+        /// Drive frequencies, evenly spaced.
+        #[arg(long, value_name = "N", default_value_t = 211)]
+        points: usize,
+        /// Run length per drive frequency, in periods of f0 (the last quarter is measured).
+        #[arg(
+            long,
+            value_name = "N",
+            default_value_t = 400.0,
+            allow_negative_numbers = true
+        )]
+        periods: f64,
+        /// RK4 steps (f64) per period of the faster of the drive and f0.
+        #[arg(
+            long,
+            value_name = "N",
+            default_value_t = 48.0,
+            allow_negative_numbers = true
+        )]
+        steps_per_period: f64,
+        /// Folder for sweep.csv and sweep.svg (created if needed).
+        #[arg(long, value_name = "DIR", default_value = "out/sweep")]
+        out: PathBuf,
+        /// Device file (as for `safe`).
+        #[arg(long, value_name = "FILE")]
+        device: Option<PathBuf>,
+        /// Print one JSON object on stdout instead of text.
         #[arg(long)]
         json: bool,
     },
@@ -210,8 +307,9 @@ fn run(command: Command) -> Result<(String, Option<String>), String> {
             let text = report::simulation(&name, &choice.name(), step, &outcome, json);
             Ok((text, None))
         }
-        Command::Stress { json } => {
-            let (report, silent) = stress::run()?;
+        Command::Stress { device, json } => {
+            let (params, name) = params(&device)?;
+            let (report, silent) = stress::run(params).map_err(|e| format!("{name}: {e}"))?;
             let text = if json {
                 report.to_string()
             } else {
@@ -221,6 +319,50 @@ fn run(command: Command) -> Result<(String, Option<String>), String> {
                 text,
                 silent.then(|| "a stress run failed silently".to_string()),
             ))
+        }
+        Command::Report { out, device, json } => {
+            let (params, name) = params(&device)?;
+            let text = report::work_precision(&name, params, &out, json)
+                .map_err(|e| format!("{name}: {e}"))?;
+            Ok((text, None))
+        }
+        Command::Sweep {
+            bias_volts,
+            ac_volts,
+            quality,
+            from_ratio,
+            to_ratio,
+            points,
+            periods,
+            steps_per_period,
+            out,
+            device,
+            json,
+        } => {
+            let (mut params, name) = params(&device)?;
+            if !(quality.is_finite() && quality >= 0.0) {
+                return Err(format!(
+                    "quality {quality}: need Q > 0 (or 0 for the device's damping)"
+                ));
+            }
+            let mut sweep = sweep::Sweep {
+                params,
+                bias_volts,
+                ac_volts,
+                ratios: (from_ratio, to_ratio),
+                points,
+                periods,
+                steps_per_period,
+            };
+            let (_, _, natural_hz) =
+                sweep::operating_point(&sweep).map_err(|e| format!("{name}: {e}"))?;
+            if quality > 0.0 {
+                params.damping =
+                    params.effective_mass() * std::f64::consts::TAU * natural_hz / quality;
+                sweep.params = params;
+            }
+            let text = report::sweep(&name, &sweep, quality, &out, json)?;
+            Ok((text, None))
         }
     }
 }

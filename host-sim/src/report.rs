@@ -1,7 +1,10 @@
 //! What `safe` and `tune` print: a JSON object for tools, or a short text for people.
 
-use de_resonator::{Equilibrium, TunableRange, Tuner};
+use std::path::Path;
 
+use de_resonator::{Equilibrium, FailureMode, TunableRange, Tuner};
+
+use crate::plot::{svg, Panel, Series};
 use crate::simulate::Outcome;
 use serde_json::{json, Value};
 
@@ -101,9 +104,7 @@ pub fn tune(
 
 /// The output of `host-sim simulate`.
 pub fn simulation(name: &str, method: &str, step: f64, out: &Outcome, as_json: bool) -> String {
-    let first_limit = out
-        .first_limit
-        .map(|(mode, time)| json!({"mode": mode.name(), "time": time}));
+    let first_limit = first_limit_json(out.first_limit);
     if as_json {
         json!({
             "method": method,
@@ -138,5 +139,304 @@ pub fn simulation(name: &str, method: &str, step: f64, out: &Outcome, as_json: b
             sig(out.min_stretch),
             sig(out.max_stretch),
         )
+    }
+}
+
+/// Write `text` to `dir/file`, creating `dir`; the path written, or why not.
+pub fn write_file(dir: &Path, file: &str, text: &str) -> Result<String, String> {
+    std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    let path = dir.join(file);
+    std::fs::write(&path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    Ok(path.display().to_string())
+}
+
+/// The first limit of a run as JSON: null, or {mode, time}.
+fn first_limit_json(first: Option<(FailureMode, f64)>) -> Value {
+    first.map_or(
+        Value::Null,
+        |(mode, time)| json!({"mode": mode.name(), "time": time}),
+    )
+}
+
+/// Run `host-sim sweep`, write sweep.csv and sweep.svg into `dir`, and say what it found.
+pub fn sweep(
+    name: &str,
+    sweep: &crate::sweep::Sweep,
+    quality: f64,
+    dir: &Path,
+    as_json: bool,
+) -> Result<String, String> {
+    let response = crate::sweep::run(sweep)?;
+    let f0 = response.natural_frequency_hz;
+    let mut csv = String::from("drive_hz,ratio,amplitude,first_limit,first_limit_time,stopped\n");
+    for p in &response.points {
+        let (mode, time) = p
+            .first_limit
+            .map_or((String::new(), String::new()), |(m, t)| {
+                (m.name().into(), t.to_string())
+            });
+        csv += &format!(
+            "{},{},{},{mode},{time},{}\n",
+            p.drive_hz,
+            p.drive_hz / f0,
+            p.amplitude,
+            p.stopped.is_some()
+        );
+    }
+    let panel = Panel {
+        title: format!(
+            "Response: {:.0} V bias, {:.0} V AC, Q {quality}",
+            sweep.bias_volts, sweep.ac_volts
+        ),
+        x_label: "drive frequency / f0".into(),
+        y_label: "amplitude (stretch)".into(),
+        log_y: true,
+        series: vec![Series {
+            name: format!("f0 = {} Hz", sig(f0)),
+            points: response
+                .points
+                .iter()
+                .map(|p| (p.drive_hz / f0, p.amplitude))
+                .collect(),
+        }],
+        guides: vec![
+            (0.5, "f0/2".into()),
+            (1.0, "f0".into()),
+            (2.0, "2 f0".into()),
+        ],
+        ..Panel::default()
+    };
+    let csv_path = write_file(dir, "sweep.csv", &csv)?;
+    let svg_path = write_file(dir, "sweep.svg", &svg(&[panel]))?;
+    let crossed = response
+        .points
+        .iter()
+        .filter(|p| p.first_limit.is_some())
+        .count();
+    if as_json {
+        let points: Vec<Value> = response
+            .points
+            .iter()
+            .map(|p| {
+                json!({
+                    "drive_hz": p.drive_hz,
+                    "amplitude": p.amplitude,
+                    "first_limit": first_limit_json(p.first_limit),
+                    "stopped": p.stopped,
+                })
+            })
+            .collect();
+        let peaks: Vec<Value> = response
+            .peaks
+            .iter()
+            .map(|p| {
+                json!({
+                    "drive_hz": p.drive_hz,
+                    "amplitude": p.amplitude,
+                    "ratio": p.drive_hz / f0,
+                    "prominence": p.prominence,
+                })
+            })
+            .collect();
+        return Ok(json!({
+            "bias_volts": sweep.bias_volts,
+            "ac_volts": sweep.ac_volts,
+            "quality": quality,
+            "damping": sweep.params.damping,
+            "natural_frequency_hz": f0,
+            "peaks": peaks,
+            "points": points,
+            "crossed_limit": crossed,
+            "csv": csv_path,
+            "plot": svg_path,
+        })
+        .to_string());
+    }
+    let mut text = format!(
+        "device          {name}\n\
+         drive           {} V bias + {} V AC, Q {} (c = {} N·s)\n\
+         f0 at the bias  {} Hz\n\
+         peaks           drive Hz    ratio   amplitude\n",
+        sig(sweep.bias_volts),
+        sig(sweep.ac_volts),
+        sig(quality),
+        sig(sweep.params.damping),
+        sig(f0),
+    );
+    for p in &response.peaks {
+        text += &format!(
+            "                {:>9}  {:>7}   {}\n",
+            sig(p.drive_hz),
+            format!("{:.3}", p.drive_hz / f0),
+            sig(p.amplitude)
+        );
+    }
+    text += &format!(
+        "limits          {crossed} of {} drive frequencies crossed a limit of MODEL.md §6\n\
+         wrote           {csv_path}, {svg_path}",
+        response.points.len()
+    );
+    Ok(text)
+}
+
+/// Run `host-sim report`: the work-precision study; write work-precision.csv and .svg into
+/// `dir`; a table per scene for people, or one JSON object.
+pub fn work_precision(
+    name: &str,
+    params: de_resonator::DeviceParams<f64>,
+    dir: &Path,
+    as_json: bool,
+) -> Result<String, String> {
+    use crate::precision::{reference, rows, studies};
+    let studies = studies(params)?;
+    let references = crate::work::map("reference", &studies, reference)
+        .into_iter()
+        .collect::<Result<Vec<_>, _>>()?;
+    // Timed runs one at a time: run times measured side by side must not share the cores.
+    let mut all = Vec::new();
+    for (study, reference) in studies.iter().zip(&references) {
+        all.extend(crate::work::map(study.name, &[()], |_| rows(study, reference)).concat());
+    }
+    let mut csv = String::from(
+        "scene,method,steps_per_period,step_seconds,status,final_relative_error,max_error,\
+         phase_error_rad,run_seconds_per_simulated_second\n",
+    );
+    for r in &all {
+        csv += &format!(
+            "{},{},{},{},{},{},{},{},{}\n",
+            r.scene,
+            r.method,
+            r.steps_per_period,
+            r.step_seconds,
+            r.status,
+            r.final_relative_error,
+            r.max_error,
+            r.phase_error_rad,
+            r.run_seconds_per_simulated_second
+        );
+    }
+    let panels: Vec<Panel> = studies
+        .iter()
+        .map(|study| {
+            let mut series: Vec<Series> = Vec::new();
+            for r in all
+                .iter()
+                .filter(|r| r.scene == study.name && r.status == "ok")
+            {
+                let point = (r.run_seconds_per_simulated_second, r.max_error);
+                match series.iter_mut().find(|s| s.name == r.method) {
+                    Some(s) => s.points.push(point),
+                    None => series.push(Series {
+                        name: r.method.clone(),
+                        points: vec![point],
+                    }),
+                }
+            }
+            Panel {
+                title: study.name.into(),
+                x_label: "run time per simulated second, s".into(),
+                y_label: "max stretch error".into(),
+                log_x: true,
+                log_y: true,
+                series,
+                guides: Vec::new(),
+            }
+        })
+        .collect();
+    let csv_path = write_file(dir, "work-precision.csv", &csv)?;
+    let svg_path = write_file(dir, "work-precision.svg", &svg(&panels))?;
+    let floor = references.iter().map(|r| r.floor).fold(0.0, f64::max);
+    if as_json {
+        let scenes: Vec<Value> = studies
+            .iter()
+            .zip(&references)
+            .map(|(s, r)| {
+                json!({
+                    "name": s.name,
+                    "what": s.what,
+                    "bias_volts": s.scene.bias_volts,
+                    "ac_volts": s.scene.ac_volts,
+                    "drive_hz": s.scene.drive_hz,
+                    "base_hz": s.base_hz,
+                    "duration_seconds": s.scene.duration_seconds,
+                    "reference_floor": r.floor,
+                })
+            })
+            .collect();
+        let rows: Vec<Value> = all
+            .iter()
+            .map(|r| {
+                json!({
+                    "scene": r.scene,
+                    "method": r.method,
+                    "steps_per_period": r.steps_per_period,
+                    "step_seconds": r.step_seconds,
+                    "status": r.status,
+                    "final_relative_error": finite(r.final_relative_error),
+                    "max_error": finite(r.max_error),
+                    "phase_error_rad": finite(r.phase_error_rad),
+                    "run_seconds_per_simulated_second": finite(r.run_seconds_per_simulated_second),
+                })
+            })
+            .collect();
+        return Ok(json!({
+            "reference": {"method": "dop853", "tolerance": 1e-12, "floor": floor,
+                          "floor_is": "largest stretch difference against tolerance 1e-13"},
+            "scenes": scenes,
+            "rows": rows,
+            "csv": csv_path,
+            "plot": svg_path,
+        })
+        .to_string());
+    }
+    let mut text = format!(
+        "device  {name}\n\
+         reference: DOP853 at 1e-12; its error floor (against 1e-13) is {floor:.1e} in stretch\n\
+         max error in stretch at 16 / 64 / 256 steps a period; run time per simulated second at 64\n"
+    );
+    for study in &studies {
+        text += &format!("\n{}: {}\n", study.name, study.what);
+        text += &format!(
+            "  {:<24}{:>10}{:>10}{:>10}{:>13}\n",
+            "method", "16", "64", "256", "s/sim s"
+        );
+        let mut methods: Vec<&str> = Vec::new();
+        for r in all.iter().filter(|r| r.scene == study.name) {
+            if !methods.contains(&r.method.as_str()) {
+                methods.push(&r.method);
+            }
+        }
+        for method in methods {
+            let at = |n: u32| {
+                all.iter().find(|r| {
+                    r.scene == study.name && r.method == method && r.steps_per_period == n
+                })
+            };
+            let cell = |n: u32| match at(n) {
+                Some(r) if r.status == "ok" => format!("{:.1e}", r.max_error),
+                Some(r) => r.status.to_string(),
+                None => "-".into(),
+            };
+            let time = at(64).filter(|r| r.status == "ok").map_or("-".into(), |r| {
+                format!("{:.1e}", r.run_seconds_per_simulated_second)
+            });
+            text += &format!(
+                "  {method:<24}{:>10}{:>10}{:>10}{time:>13}\n",
+                cell(16),
+                cell(64),
+                cell(256)
+            );
+        }
+    }
+    text += &format!("\nwrote {csv_path}, {svg_path}");
+    Ok(text)
+}
+
+/// A number for JSON: null when not finite (JSON has no NaN).
+fn finite(x: f64) -> Value {
+    if x.is_finite() {
+        json!(x)
+    } else {
+        Value::Null
     }
 }

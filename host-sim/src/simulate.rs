@@ -12,6 +12,19 @@ use differential_equations::prelude::*;
 /// Relative and absolute tolerance of the reference integrator.
 pub const REFERENCE_TOLERANCE: f64 = 1e-12;
 
+/// Tolerance of the stiff reference (BDF, orders 1 to 5): tighter costs many tiny steps.
+pub const STIFF_REFERENCE_TOLERANCE: f64 = 1e-10;
+
+/// An adaptive f64 reference solver from `differential-equations`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Solver {
+    /// Dormand–Prince 8(5,3), explicit: the reference for non-stiff scenes.
+    Dop853,
+    /// Backward differentiation formulas, implicit: for stiff scenes (a very light bar,
+    /// a membrane near slack), where DOP853's step is bound by stability, not accuracy.
+    Bdf,
+}
+
 /// How the simulation starts, from rest.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Start {
@@ -26,6 +39,8 @@ pub enum Start {
 pub enum Choice {
     /// Adaptive DOP853 at rtol = atol = 1e-12, f64.
     Reference,
+    /// Adaptive BDF at rtol = atol = 1e-10, f64: the stiff reference.
+    ReferenceBdf,
     /// A core fixed-step method, in f32 (as on the target) or f64.
     Core { method: Method, single: bool },
 }
@@ -34,7 +49,7 @@ impl Choice {
     /// Every method by name: `reference`, and `rk4`, `verlet`, `implicit-midpoint` with
     /// `-f32` or `-f64`.
     pub fn all() -> Vec<Choice> {
-        let mut all = vec![Choice::Reference];
+        let mut all = vec![Choice::Reference, Choice::ReferenceBdf];
         for method in Method::ALL {
             for single in [true, false] {
                 all.push(Choice::Core { method, single });
@@ -43,9 +58,18 @@ impl Choice {
         all
     }
 
+    /// The core's fixed-step methods only, f32 then f64 for each.
+    pub fn core() -> Vec<Choice> {
+        Choice::all()
+            .into_iter()
+            .filter(|c| matches!(c, Choice::Core { .. }))
+            .collect()
+    }
+
     pub fn name(&self) -> String {
         match self {
             Choice::Reference => "reference".into(),
+            Choice::ReferenceBdf => "reference-bdf".into(),
             Choice::Core { method, single } => {
                 format!("{}-{}", method.name(), if *single { "f32" } else { "f64" })
             }
@@ -86,6 +110,8 @@ pub struct Outcome {
     pub first_limit: Option<(FailureMode, f64)>,
     /// Stretch at t = k·step, k = 0, 1, ...
     pub samples: Vec<f64>,
+    /// dλ/dt at the same times, 1/s.
+    pub velocities: Vec<f64>,
     /// Why the run ended before its duration (after a crossing the monitor reported).
     pub stopped: Option<String>,
     pub run_seconds: f64,
@@ -110,7 +136,7 @@ impl Scene {
     /// The stretches a core method is guarded for: from half of A's slack stretch
     /// λ2p^(−1/2) (A far in compression) up to `scan_end_stretch` (B likewise), the span in
     /// which the model is defined. The guard sizes the step for the stiffest state there.
-    fn guarded_range(device: &Device<f64>) -> (f64, f64) {
+    pub fn guarded_range(device: &Device<f64>) -> (f64, f64) {
         let slack_a = 0.5 / device.prestretch_2().sqrt();
         (
             slack_a.min(device.prestretch_1()),
@@ -156,7 +182,8 @@ pub fn simulate(scene: &Scene, choice: Choice, step_seconds: f64) -> Result<Outc
     let start = scene.start_stretch(&device)?;
     let started = Instant::now();
     let mut outcome = match choice {
-        Choice::Reference => reference(scene, &device, start, step_seconds, steps)?,
+        Choice::Reference => reference(scene, &device, start, step_seconds, steps, Solver::Dop853)?,
+        Choice::ReferenceBdf => reference(scene, &device, start, step_seconds, steps, Solver::Bdf)?,
         Choice::Core {
             method,
             single: true,
@@ -171,16 +198,17 @@ pub fn simulate(scene: &Scene, choice: Choice, step_seconds: f64) -> Result<Outc
 }
 
 /// The samples' min, max and last state into an outcome.
-fn outcome(samples: Vec<f64>, last_velocity: f64) -> Outcome {
+fn outcome(samples: Vec<f64>, velocities: Vec<f64>) -> Outcome {
     let min = samples.iter().copied().fold(f64::INFINITY, f64::min);
     let max = samples.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     Outcome {
         final_stretch: *samples.last().unwrap_or(&f64::NAN),
-        final_velocity_per_second: last_velocity,
+        final_velocity_per_second: *velocities.last().unwrap_or(&f64::NAN),
         min_stretch: min,
         max_stretch: max,
         first_limit: None,
         samples,
+        velocities,
         stopped: None,
         run_seconds: 0.0,
     }
@@ -220,8 +248,11 @@ fn core<T: Real>(
     })?;
     let mut stopped = None;
     let mut monitor = Monitor::new();
+    let scale = device.rad_per_s_per_unit().to_f64();
     let mut samples = Vec::with_capacity(steps as usize + 1);
+    let mut velocities = Vec::with_capacity(steps as usize + 1);
     samples.push(start);
+    velocities.push(0.0);
     monitor.observe(&device, 0, T::of(start), it.bias_dimless_squared());
     for _ in 0..steps {
         if let Err(e) = it.step() {
@@ -234,10 +265,10 @@ fn core<T: Real>(
         }
         let s = it.state();
         samples.push(s.stretch.to_f64());
+        velocities.push(s.velocity.to_f64() * scale);
         monitor.observe(&device, it.tick(), s.stretch, it.bias_dimless_squared());
     }
-    let velocity = it.state().velocity.to_f64() * device.rad_per_s_per_unit().to_f64();
-    let mut out = outcome(samples, velocity);
+    let mut out = outcome(samples, velocities);
     out.stopped = stopped;
     out.first_limit = monitor
         .first_crossing()
@@ -262,13 +293,23 @@ impl ODE<f64, [f64; 2]> for Motion<'_> {
             .device
             .acceleration(state, self.drive.bias_dimless_squared_at(tau));
     }
+
+    /// ∂(λ', λ'')/∂(λ, λ'): the local stiffness of MODEL.md §5 and the damping, exact.
+    fn jacobian(&self, tau: f64, y: &[f64; 2], j: &mut Matrix<f64>) {
+        let p2 = self.drive.bias_dimless_squared_at(tau);
+        j[(0, 0)] = 0.0;
+        j[(0, 1)] = 1.0;
+        j[(1, 0)] = -self.device.stiffness_dimless(y[0], p2);
+        j[(1, 1)] = -self.device.damping_dimless();
+    }
 }
 
 /// Integrate `device` under `drive` from `y0` over dimensionless `[0, tau_end]`, output every
-/// `dtau`, with DOP853 at `tolerance`. Each output interval is a solve of its own: the
+/// `dtau`, with `solver` at `tolerance`. Each output interval is a solve of its own: the
 /// crate's dense output (`even`) was measured 5.6e-8 off between steps, far above the
 /// 1e-12 tolerance, so no sample comes from interpolation.
-pub fn dop853(
+pub fn solve(
+    solver: Solver,
     device: &Device<f64>,
     drive: Drive<f64>,
     y0: [f64; 2],
@@ -283,10 +324,21 @@ pub fn dop853(
     let mut y = y0;
     for k in 0..intervals {
         let (t0, t1) = (k as f64 * dtau, (k + 1) as f64 * dtau);
-        let solution = IVP::ode(&motion, t0, t1, y)
-            .method(ExplicitRungeKutta::dop853().rtol(tolerance).atol(tolerance))
-            .solve()
-            .map_err(|e| format!("reference integrator failed at τ = {t0}: {e:?}"))?;
+        let problem = IVP::ode(&motion, t0, t1, y);
+        let solution = match solver {
+            Solver::Dop853 => problem
+                .method(ExplicitRungeKutta::dop853().rtol(tolerance).atol(tolerance))
+                .solve(),
+            Solver::Bdf => problem
+                .method(
+                    BackwardDifferentiationFormula::adaptive()
+                        .rtol(tolerance)
+                        .atol(tolerance)
+                        .max_steps(10_000_000),
+                )
+                .solve(),
+        }
+        .map_err(|e| format!("reference integrator failed at τ = {t0}: {e:?}"))?;
         y = *solution
             .y
             .last()
@@ -302,25 +354,33 @@ fn reference(
     start: f64,
     step_seconds: f64,
     steps: u64,
+    solver: Solver,
 ) -> Result<Outcome, String> {
     let drive = Drive::from_volts(device, scene.bias_volts, scene.ac_volts, scene.drive_hz);
     let scale = device.rad_per_s_per_unit();
     let dtau = step_seconds * scale;
-    let ys = dop853(
+    let tolerance = match solver {
+        Solver::Dop853 => REFERENCE_TOLERANCE,
+        Solver::Bdf => STIFF_REFERENCE_TOLERANCE,
+    };
+    let ys = solve(
+        solver,
         device,
         drive,
         [start, 0.0],
         steps as f64 * dtau,
         dtau,
-        REFERENCE_TOLERANCE,
+        tolerance,
     )?;
     let mut monitor = Monitor::new();
     for (k, y) in ys.iter().enumerate() {
         let tau = k as f64 * dtau;
         monitor.observe(device, k as u64, y[0], drive.bias_dimless_squared_at(tau));
     }
-    let velocity = ys.last().map_or(f64::NAN, |y| y[1] * scale);
-    let mut out = outcome(ys.iter().map(|y| y[0]).collect(), velocity);
+    let mut out = outcome(
+        ys.iter().map(|y| y[0]).collect(),
+        ys.iter().map(|y| y[1] * scale).collect(),
+    );
     out.first_limit = monitor
         .first_crossing()
         .map(|c| (c.mode, c.tick as f64 * step_seconds));
@@ -343,7 +403,8 @@ mod tests {
         let period = std::f64::consts::TAU / omega;
         let dt = period / 50.0;
         let drive = Drive::constant(&device, 0.0);
-        let ys = dop853(
+        let ys = solve(
+            Solver::Dop853,
             &device,
             drive,
             [2.0 + a, 0.0],
@@ -369,7 +430,10 @@ mod tests {
         let device = Device::new(REFERENCE_DEVICE).unwrap();
         let scale = device.rad_per_s_per_unit();
         let drive = Drive::from_volts(&device, 7000.0, 1500.0, 30.0);
-        let run = |tol| dop853(&device, drive, [2.1, 0.0], 0.5 * scale, 0.01 * scale, tol).unwrap();
+        let run = |tol| {
+            let (y0, end, every) = ([2.1, 0.0], 0.5 * scale, 0.01 * scale);
+            solve(Solver::Dop853, &device, drive, y0, end, every, tol).unwrap()
+        };
         let (a, b) = (run(1e-12), run(1e-13));
         let worst = a
             .iter()
@@ -377,6 +441,35 @@ mod tests {
             .map(|(x, y)| (x[0] - y[0]).abs())
             .fold(0.0, f64::max);
         assert!(worst < 1e-10, "{worst}");
+    }
+
+    /// The stiff reference (BDF at 1e-10) against DOP853 at 1e-12 on a driven scene and on a
+    /// light bar (ω 30 times the reference's): a second method agreeing to its tolerance.
+    #[test]
+    fn bdf_agrees_with_dop853() {
+        let light = DeviceParams {
+            bar_mass: 0.0,
+            density: 9.6,
+            ..REFERENCE_DEVICE
+        };
+        for (params, bias, ac, hz, seconds) in [
+            (REFERENCE_DEVICE, 7000.0, 1500.0, 30.0, 0.5),
+            (light, 5000.0, 500.0, 1000.0, 0.02),
+        ] {
+            let device = Device::new(params).unwrap();
+            let scale = device.rad_per_s_per_unit();
+            let drive = Drive::from_volts(&device, bias, ac, hz);
+            let y0 = [device.stretch_for_bias(bias, 3.0).unwrap(), 0.0];
+            let (end, every) = (seconds * scale, seconds / 50.0 * scale);
+            let stiff = solve(Solver::Bdf, &device, drive, y0, end, every, 1e-10).unwrap();
+            let accurate = solve(Solver::Dop853, &device, drive, y0, end, every, 1e-12).unwrap();
+            let swing = accurate.iter().map(|y| y[0]).fold(0.0, f64::max)
+                - accurate.iter().map(|y| y[0]).fold(f64::INFINITY, f64::min);
+            assert!(swing > 1e-3, "the scene moves: {swing}");
+            for (a, b) in stiff.iter().zip(&accurate) {
+                assert!((a[0] - b[0]).abs() < 1e-6 * swing, "{} vs {}", a[0], b[0]);
+            }
+        }
     }
 
     #[test]

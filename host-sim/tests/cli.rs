@@ -325,3 +325,129 @@ fn stress_never_fails_silently() {
         );
     }
 }
+
+/// A fresh output folder for a command that writes files.
+fn out_dir(name: &str) -> String {
+    let dir = std::env::temp_dir().join(format!("host-sim-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir.to_str().unwrap().to_string()
+}
+
+/// The frequency response of MODEL.md §7 on the reference device: resonance where the drive
+/// meets the natural frequency f0 at the bias (Φ·Φ forcing at Ω), at f0/2 (the Φac² term
+/// forces at 2Ω) and at 2·f0 (principal parametric resonance, the stiffness pumped at Ω).
+#[test]
+fn sweep_finds_resonance_at_half_one_and_twice_f0() {
+    let dir = out_dir("sweep");
+    let v = json(&["sweep", "--out", &dir, "--json"]);
+    // f0 at 6000 V, from the core's statics (tested against an independent force law).
+    let device = de_resonator::Device::new(de_resonator::REFERENCE_DEVICE).unwrap();
+    let stretch = device.stretch_for_bias(6000.0, 3.0).unwrap();
+    let f0 = device.natural_frequency_hz(stretch);
+    assert!((v["natural_frequency_hz"].as_f64().unwrap() - f0).abs() < 1e-9 * f0);
+    let ratios: Vec<f64> = v["peaks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["drive_hz"].as_f64().unwrap() / f0)
+        .collect();
+    for expected in [0.5, 1.0, 2.0] {
+        assert!(
+            ratios
+                .iter()
+                .any(|r| (r - expected).abs() < 0.05 * expected),
+            "no peak near {expected}·f0 in {ratios:?}"
+        );
+    }
+    // Nothing else stands out.
+    assert_eq!(ratios.len(), 3, "{ratios:?}");
+    let csv = std::fs::read_to_string(v["csv"].as_str().unwrap()).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 211);
+    let svg = std::fs::read_to_string(v["plot"].as_str().unwrap()).unwrap();
+    assert!(svg.starts_with("<svg"));
+}
+
+/// Parametric resonance at 2·f0 has a threshold (Mathieu, with damping): the stiffness
+/// ω̄² − Φ̄²λ2p² is pumped with relative depth h = 2·Φ̄dc·Φ̄ac·λ2p²/ω̄², and the rest state
+/// grows only when h > 2/Q. At twice the threshold amplitude a peak shows at 2·f0; at half
+/// of it none does.
+#[test]
+fn parametric_resonance_needs_the_mathieu_threshold() {
+    let device = de_resonator::Device::new(de_resonator::REFERENCE_DEVICE).unwrap();
+    let (bias, quality) = (6000.0, 50.0);
+    let stretch = device.stretch_for_bias(bias, 3.0).unwrap();
+    let l2p = 2.0;
+    let dc = bias / device.volts_per_unit();
+    let omega2 = device.stiffness_dimless(stretch, dc * dc);
+    let threshold_volts =
+        (2.0 / quality) * omega2 / (2.0 * dc * l2p * l2p) * device.volts_per_unit();
+    assert!(
+        threshold_volts > 1000.0 && threshold_volts < 3000.0,
+        "{threshold_volts}"
+    );
+    let peaks_near_two = |ac: f64| {
+        let dir = out_dir(&format!("mathieu-{ac}"));
+        let v = json(&[
+            "sweep",
+            "--bias-volts",
+            "6000",
+            "--ac-volts",
+            &ac.to_string(),
+            "--quality",
+            "50",
+            "--from-ratio",
+            "1.9",
+            "--to-ratio",
+            "2.1",
+            "--points",
+            "41",
+            "--out",
+            &dir,
+            "--json",
+        ]);
+        let f0 = v["natural_frequency_hz"].as_f64().unwrap();
+        v["peaks"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|p| (p["drive_hz"].as_f64().unwrap() / f0 - 2.0).abs() < 0.05)
+            .count()
+    };
+    assert!(peaks_near_two(2.0 * threshold_volts) >= 1);
+    assert_eq!(peaks_near_two(0.5 * threshold_volts), 0);
+}
+
+/// The work-precision study: the reference's floor is stated and tiny, RK4's error falls
+/// 16-fold and Verlet's 4-fold per halving of the step (orders 4 and 2) in f64, and f32 RK4
+/// at 64 steps a period keeps the phase within 2e-3 rad.
+#[test]
+fn report_measures_error_against_run_time() {
+    let dir = out_dir("report");
+    let v = json(&["report", "--out", &dir, "--json"]);
+    assert_eq!(v["reference"]["tolerance"], 1e-12);
+    let floor = v["reference"]["floor"].as_f64().unwrap();
+    assert!(floor > 0.0 && floor < 1e-10, "{floor}");
+    let rows = v["rows"].as_array().unwrap();
+    let row = |scene: &str, method: &str, n: u64| {
+        rows.iter()
+            .find(|r| r["scene"] == scene && r["method"] == method && r["steps_per_period"] == n)
+            .unwrap_or_else(|| panic!("{scene} {method} {n}"))
+    };
+    let error = |scene, method, n| row(scene, method, n)["max_error"].as_f64().unwrap();
+    let rk4 = error("small_oscillation", "rk4-f64", 32) / error("small_oscillation", "rk4-f64", 64);
+    assert!((10.0..26.0).contains(&rk4), "RK4 ratio {rk4}");
+    let verlet = error("small_oscillation", "verlet-f64", 64)
+        / error("small_oscillation", "verlet-f64", 128);
+    assert!((3.0..5.5).contains(&verlet), "Verlet ratio {verlet}");
+    for scene in ["small_oscillation", "parametric", "near_limit"] {
+        let phase = row(scene, "rk4-f32", 64)["phase_error_rad"]
+            .as_f64()
+            .unwrap();
+        assert!(phase < 2e-3, "{scene}: {phase}");
+        let time = row(scene, "rk4-f64", 64)["run_seconds_per_simulated_second"].as_f64();
+        assert!(time.unwrap() > 0.0);
+    }
+    assert_eq!(rows.len(), 3 * 6 * 7);
+    let csv = std::fs::read_to_string(v["csv"].as_str().unwrap()).unwrap();
+    assert_eq!(csv.lines().count(), 1 + rows.len());
+}
