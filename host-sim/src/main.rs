@@ -1,20 +1,12 @@
 //! host-sim: workstation tools for de-resonator, on the same `no_std` core the firmware runs.
 
-mod device_file;
-mod plot;
-mod precision;
-mod report;
-mod simulate;
-mod stress;
-mod sweep;
-mod work;
-
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand};
 use de_resonator::{Device, DeviceParams, Tuner, DEFAULT_MARGIN, REFERENCE_DEVICE};
-use simulate::{Choice, Scene, Start};
+use host_sim::simulate::{self, Choice, Scene, Start};
+use host_sim::{device_file, report, stress, sweep};
 
 /// Safe region, bias tuning and dynamics of a dielectric elastomer resonator.
 ///

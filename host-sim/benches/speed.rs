@@ -1,0 +1,140 @@
+//! Host speed, side by side in one run (criterion): `cargo bench -p host-sim`.
+//!
+//! - `rk4_step`: one step of the core's RK4 in f32 (as on the target) and f64, against a
+//!   baseline, a textbook RK4 on the same right-hand side with none of the integrator's
+//!   checks (range guard, finiteness, tick time). Goal: f32 under 150 ns.
+//! - `one_second`: one simulated second of the reference device (6000 V bias, 600 V AC at
+//!   0.9·f0) by the reference DOP853 at 1e-10 (goal under 2 ms), by BDF at 1e-10, and by the
+//!   core's RK4 in f64 at 64 steps a period.
+
+use std::hint::black_box;
+
+use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
+use de_resonator::{Device, Drive, Integrator, Method, Real, State, REFERENCE_DEVICE};
+use host_sim::simulate::{solve, Scene, Solver};
+
+const BIAS_VOLTS: f64 = 6000.0;
+const AC_VOLTS: f64 = 600.0;
+
+/// The reference device at the bench's bias: the device, the equilibrium stretch, f0 (Hz).
+fn operating_point() -> (Device<f64>, f64, f64) {
+    let device = Device::new(REFERENCE_DEVICE).expect("reference device");
+    let stretch = device
+        .stretch_for_bias(BIAS_VOLTS, device.scan_end_stretch())
+        .expect("equilibrium");
+    (device, stretch, device.natural_frequency_hz(stretch))
+}
+
+fn integrator<T: Real>(method: Method) -> Integrator<T> {
+    let (device64, stretch, f0) = operating_point();
+    let device = Device::new(REFERENCE_DEVICE.cast::<T>()).expect("reference device");
+    let drive = Drive::from_volts(&device, T::of(BIAS_VOLTS), T::of(AC_VOLTS), T::of(0.9 * f0));
+    let range = Scene::guarded_range(&device64);
+    let start = State {
+        stretch: T::of(stretch),
+        velocity: T::zero(),
+    };
+    let step = T::of(1.0 / (64.0 * f0));
+    Integrator::new(
+        device,
+        drive,
+        method,
+        step,
+        (T::of(range.0), T::of(range.1)),
+        start,
+        false,
+    )
+    .expect("a stable step")
+}
+
+/// Textbook RK4 on the same equation of motion, no checks: the baseline.
+fn textbook_rk4(
+    device: &Device<f64>,
+    drive: &Drive<f64>,
+    s: State<f64>,
+    tau: f64,
+    h: f64,
+) -> State<f64> {
+    let f = |s: State<f64>, t: f64| {
+        let a = device.acceleration(s, drive.bias_dimless_squared_at(t));
+        (s.velocity, a)
+    };
+    let at = |s: State<f64>, k: (f64, f64), c: f64| State {
+        stretch: s.stretch + c * k.0,
+        velocity: s.velocity + c * k.1,
+    };
+    let k1 = f(s, tau);
+    let k2 = f(at(s, k1, 0.5 * h), tau + 0.5 * h);
+    let k3 = f(at(s, k2, 0.5 * h), tau + 0.5 * h);
+    let k4 = f(at(s, k3, h), tau + h);
+    State {
+        stretch: s.stretch + h / 6.0 * (k1.0 + 2.0 * k2.0 + 2.0 * k3.0 + k4.0),
+        velocity: s.velocity + h / 6.0 * (k1.1 + 2.0 * k2.1 + 2.0 * k3.1 + k4.1),
+    }
+}
+
+fn rk4_step(c: &mut Criterion) {
+    // Every measured step starts from the same fresh state: stepping on for the hundreds of
+    // millions of iterations criterion runs would push the drive phase τ·Ω past 1e6 rad,
+    // where libm's argument reduction for sin takes its slow path.
+    let mut group = c.benchmark_group("rk4_step");
+    fn one<T: Real>(b: &mut criterion::Bencher, method: Method) {
+        let fresh = integrator::<T>(method);
+        b.iter_batched_ref(|| fresh, |it| black_box(it.step()), BatchSize::SmallInput)
+    }
+    group.bench_function("core_f32", |b| one::<f32>(b, Method::Rk4));
+    group.bench_function("core_f64", |b| one::<f64>(b, Method::Rk4));
+    group.bench_function("verlet_f32", |b| one::<f32>(b, Method::Verlet));
+    group.bench_function("implicit_midpoint_f32", |b| {
+        one::<f32>(b, Method::ImplicitMidpoint)
+    });
+    let (device, stretch, f0) = operating_point();
+    let drive = Drive::from_volts(&device, BIAS_VOLTS, AC_VOLTS, 0.9 * f0);
+    let h = device.rad_per_s_per_unit() / (64.0 * f0);
+    let state = State {
+        stretch,
+        velocity: 0.0,
+    };
+    group.bench_function("baseline_textbook_f64", |b| {
+        b.iter(|| textbook_rk4(&device, &drive, black_box(state), black_box(h), h))
+    });
+    group.finish();
+}
+
+fn one_second(c: &mut Criterion) {
+    let (device, stretch, f0) = operating_point();
+    let drive = Drive::from_volts(&device, BIAS_VOLTS, AC_VOLTS, 0.9 * f0);
+    let end = device.rad_per_s_per_unit();
+    let y0 = [stretch, 0.0];
+    let mut group = c.benchmark_group("one_second");
+    group.bench_function("reference_dop853_1e-10", |b| {
+        b.iter(|| {
+            solve(
+                Solver::Dop853,
+                &device,
+                drive,
+                black_box(y0),
+                end,
+                end,
+                1e-10,
+            )
+        })
+    });
+    group.bench_function("reference_bdf_1e-10", |b| {
+        b.iter(|| solve(Solver::Bdf, &device, drive, black_box(y0), end, end, 1e-10))
+    });
+    let steps = (64.0 * f0).round() as u64;
+    group.bench_function("core_rk4_f64_64_per_period", |b| {
+        b.iter(|| {
+            let mut it = integrator::<f64>(Method::Rk4);
+            for _ in 0..steps {
+                let _ = black_box(it.step());
+            }
+            it.state()
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, rk4_step, one_second);
+criterion_main!(benches);
