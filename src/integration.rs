@@ -129,6 +129,11 @@ pub enum StepError<T> {
     NewtonFailed { tick: u64 },
     /// The state became NaN or infinite.
     NonFinite { tick: u64 },
+    /// A new drive reaches below the least Φ̄² the step was guarded for (stiffer states).
+    DriveNotGuarded {
+        least_bias_dimless_squared: T,
+        guarded_bias_dimless_squared: T,
+    },
 }
 
 impl<T: Real> fmt::Display for StepError<T> {
@@ -167,6 +172,15 @@ impl<T: Real> fmt::Display for StepError<T> {
             StepError::NewtonFailed { tick } => {
                 write!(f, "implicit step did not converge at tick {tick}")
             }
+            StepError::DriveNotGuarded {
+                least_bias_dimless_squared,
+                guarded_bias_dimless_squared,
+            } => write!(
+                f,
+                "new drive reaches Φ̄² = {}, below the {} the step was checked for",
+                least_bias_dimless_squared.to_f64(),
+                guarded_bias_dimless_squared.to_f64()
+            ),
             StepError::NonFinite { tick } => {
                 write!(f, "state became NaN or infinite at tick {tick}")
             }
@@ -198,6 +212,8 @@ pub struct Integrator<T> {
     substeps: u32,
     step_seconds: T,
     range: (T, T),
+    /// The least Φ̄² the step was checked at (the stiffest); a new drive must not go below.
+    guarded_bias_dimless_squared: T,
     tick: u64,
     state: State<T>,
 }
@@ -283,9 +299,24 @@ impl<T: Real> Integrator<T> {
             substeps,
             step_seconds,
             range,
+            guarded_bias_dimless_squared: drive.least_bias_dimless_squared(),
             tick: 0,
             state: start,
         })
+    }
+
+    /// Change the drive from the next step on (a bias ramp, the AC switched on), keeping
+    /// state and time. Refused if it reaches a lower Φ̄² than the step was checked for.
+    pub fn set_drive(&mut self, drive: Drive<T>) -> Result<(), StepError<T>> {
+        let least = drive.least_bias_dimless_squared();
+        if !(least >= self.guarded_bias_dimless_squared) {
+            return Err(StepError::DriveNotGuarded {
+                least_bias_dimless_squared: least,
+                guarded_bias_dimless_squared: self.guarded_bias_dimless_squared,
+            });
+        }
+        self.drive = drive;
+        Ok(())
     }
 
     pub fn state(&self) -> State<T> {

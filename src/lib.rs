@@ -2,24 +2,31 @@
 //!
 //! `no_std`, no allocation, no panics on any input. Generic over the float type: `f32` on
 //! the target, `f64` on the host. Data flows one way: [`device`] parameters → [`statics`]
-//! model → [`safety`] and [`tuning`] decisions; [`integration`] steps the dynamics. Equations cite `MODEL.md` sections.
+//! model → [`safety`] and [`tuning`] decisions → [`controller`] → [`drive`]; [`integration`]
+//! steps the dynamics; [`table`] reads and writes tuning tables. Equations cite `MODEL.md` sections.
 #![no_std]
 #![forbid(unsafe_code)]
 // Checks are written `!(x > 0)` on purpose: NaN must fail them, and that form says so.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod controller;
 pub mod device;
+pub mod drive;
 pub mod integration;
 pub mod material;
 pub mod real;
 pub mod roots;
 pub mod safety;
 pub mod statics;
+pub mod table;
 pub mod tuning;
 
+pub use controller::{Boot, Controller, Event, Fault, Output, Phase, Plan, Setting, Settings};
 pub use device::{Device, DeviceParams, Field, ParamError, Problem, REFERENCE_DEVICE};
+pub use drive::{Amplifier, CodeError, Dac8551, DacCode, DacError, PowerMode};
 pub use integration::{Drive, Integrator, Method, State, StepError};
 pub use real::Real;
 pub use safety::{Crossing, FailureMode, Limit, Margins, Monitor};
 pub use statics::Equilibrium;
+pub use table::{Table, TableError};
 pub use tuning::{TunableRange, TuneError, Tuner, DEFAULT_MARGIN};

@@ -131,6 +131,14 @@ impl<T: Real> Device<T> {
         self.margins(stretch, self.bias_dimless_squared(stretch))
     }
 
+    /// The stretches in which the model is defined and dynamics are guarded: from half of
+    /// A's slack stretch λ2p^(−1/2) (A far in compression; λ1p if lower) up to
+    /// `scan_end_stretch` (B likewise). Integrators size their step for the stiffest state here.
+    pub fn model_range(&self) -> (T, T) {
+        let slack_a = T::of(0.5) / self.prestretch_2().sqrt();
+        (slack_a.min(self.prestretch_1()), self.scan_end_stretch())
+    }
+
     /// A stretch at which some check has surely failed on the loading branch: the least of
     /// three bounds, so the scan for the limit stays fine even on extreme geometries.
     /// - B slack: λB = ½·λ2p^(−1/2) gives s1(λB) < 0.

@@ -11,7 +11,7 @@ use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
 use de_resonator::{Device, Drive, Integrator, Method, Real, State, REFERENCE_DEVICE};
-use host_sim::simulate::{solve, Scene, Solver};
+use host_sim::simulate::{solve, Solver};
 
 const BIAS_VOLTS: f64 = 6000.0;
 const AC_VOLTS: f64 = 600.0;
@@ -29,7 +29,7 @@ fn integrator<T: Real>(method: Method) -> Integrator<T> {
     let (device64, stretch, f0) = operating_point();
     let device = Device::new(REFERENCE_DEVICE.cast::<T>()).expect("reference device");
     let drive = Drive::from_volts(&device, T::of(BIAS_VOLTS), T::of(AC_VOLTS), T::of(0.9 * f0));
-    let range = Scene::guarded_range(&device64);
+    let range = device64.model_range();
     let start = State {
         stretch: T::of(stretch),
         velocity: T::zero(),

@@ -2,6 +2,7 @@
 //! studies and their reports), used by the `host-sim` binary and its benchmarks.
 
 pub mod device_file;
+pub mod lut;
 pub mod plot;
 pub mod precision;
 pub mod report;

@@ -6,7 +6,7 @@ use std::process::ExitCode;
 use clap::{Args, Parser, Subcommand};
 use de_resonator::{Device, DeviceParams, Tuner, DEFAULT_MARGIN, REFERENCE_DEVICE};
 use host_sim::simulate::{self, Choice, Scene, Start};
-use host_sim::{device_file, report, stress, sweep};
+use host_sim::{device_file, lut, report, stress, sweep};
 
 /// Safe region, bias tuning and dynamics of a dielectric elastomer resonator.
 ///
@@ -96,6 +96,23 @@ enum Command {
         /// Print one JSON object on stdout instead of the table.
         #[arg(long)]
         json: bool,
+    },
+    /// Write the tuning table the firmware flashes: bias against natural frequency from zero
+    /// bias to (1 − margin)·limit, evenly spaced in bias², with the device parameters, the
+    /// margin, the measured interpolation error and a CRC-32 (layout: the core's `table`
+    /// module, README). Prints the interpolation error against the direct solve.
+    Lut {
+        /// Output file.
+        #[arg(long, value_name = "FILE")]
+        out: PathBuf,
+        /// Number of points.
+        #[arg(long, value_name = "N", default_value_t = lut::DEFAULT_POINTS)]
+        points: usize,
+        /// `bin` (for flashing) or `csv` (for people).
+        #[arg(long, value_enum, default_value_t = LutFormat::Bin)]
+        format: LutFormat,
+        #[command(flatten)]
+        common: Common,
     },
     /// Error against run time (a work-precision study): every core method in f32 and f64 at
     /// 8 to 512 steps a period against the reference (DOP853, 1e-12), on three scenes (a small
@@ -187,6 +204,13 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+}
+
+/// How `lut` writes the table.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum LutFormat {
+    Bin,
+    Csv,
 }
 
 #[derive(Args, Debug)]
@@ -311,6 +335,24 @@ fn run(command: Command) -> Result<(String, Option<String>), String> {
                 text,
                 silent.then(|| "a stress run failed silently".to_string()),
             ))
+        }
+        Command::Lut {
+            out,
+            points,
+            format,
+            common,
+        } => {
+            let (params, name) = params(&common.device)?;
+            let made =
+                lut::make(params, common.margin, points).map_err(|e| format!("{name}: {e}"))?;
+            let written: &[u8] = match format {
+                LutFormat::Bin => &made.bytes,
+                LutFormat::Csv => &lut::csv(&made).into_bytes(),
+            };
+            std::fs::write(&out, written)
+                .map_err(|e| format!("cannot write {}: {e}", out.display()))?;
+            let text = report::lut(&name, &made, common.margin, &out, common.json);
+            Ok((text, None))
         }
         Command::Report { out, device, json } => {
             let (params, name) = params(&device)?;

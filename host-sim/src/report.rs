@@ -440,3 +440,44 @@ fn finite(x: f64) -> Value {
         Value::Null
     }
 }
+
+/// What `host-sim lut` says about the table it wrote.
+pub fn lut(name: &str, made: &crate::lut::Made, margin: f64, out: &Path, as_json: bool) -> String {
+    let first = made.points.first().copied().unwrap_or((f32::NAN, f32::NAN));
+    let last = made.points.last().copied().unwrap_or((f32::NAN, f32::NAN));
+    if as_json {
+        return json!({
+            "file": out.display().to_string(),
+            "points": made.points.len(),
+            "bytes": made.bytes.len(),
+            "crc32": format!("{:#010x}", made.crc),
+            "margin": margin,
+            "frequency_hz": [first.0, last.0],
+            "bias_volts": [first.1, last.1],
+            "interpolation_error": {
+                "frequency": made.errors.frequency,
+                "worst_hz": made.errors.worst_hz,
+                "volts_of_top": made.errors.volts,
+            },
+        })
+        .to_string();
+    }
+    format!(
+        "device          {name}\n\
+         table           {} points, {} bytes, CRC-32 {:#010x} -> {}\n\
+         covers          {} Hz at {} V .. {} Hz at {} V (margin {margin})\n\
+         interpolation   f at the table's bias within {:.2e} of the target (worst at {} Hz);\n\
+         \x20               bias within {:.2e} of the top bias from the direct solve",
+        made.points.len(),
+        made.bytes.len(),
+        made.crc,
+        out.display(),
+        sig(f64::from(first.0)),
+        sig(f64::from(first.1)),
+        sig(f64::from(last.0)),
+        sig(f64::from(last.1)),
+        made.errors.frequency,
+        sig(made.errors.worst_hz),
+        made.errors.volts,
+    )
+}

@@ -132,17 +132,6 @@ impl Scene {
                 }),
         }
     }
-
-    /// The stretches a core method is guarded for: from half of A's slack stretch
-    /// λ2p^(−1/2) (A far in compression) up to `scan_end_stretch` (B likewise), the span in
-    /// which the model is defined. The guard sizes the step for the stiffest state there.
-    pub fn guarded_range(device: &Device<f64>) -> (f64, f64) {
-        let slack_a = 0.5 / device.prestretch_2().sqrt();
-        (
-            slack_a.min(device.prestretch_1()),
-            device.scan_end_stretch(),
-        )
-    }
 }
 
 /// Why a run gave no outcome.
@@ -223,7 +212,9 @@ fn core<T: Real>(
 ) -> Result<Outcome, RunError> {
     let params = scene.params.cast::<T>();
     let device = Device::new(params).map_err(|e| e.to_string())?;
-    let range = Scene::guarded_range(&Device::new(scene.params).map_err(|e| e.to_string())?);
+    let range = Device::new(scene.params)
+        .map_err(|e| e.to_string())?
+        .model_range();
     let drive = Drive::from_volts(
         &device,
         T::of(scene.bias_volts),

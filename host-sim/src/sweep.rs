@@ -125,7 +125,7 @@ pub fn respond(
     let drive = Drive::from_volts(device, sweep.bias_volts, sweep.ac_volts, drive_hz);
     let step = 1.0 / (sweep.steps_per_period * natural_hz.max(drive_hz));
     let steps = (sweep.periods / (natural_hz * step)).ceil() as u64;
-    let range = crate::simulate::Scene::guarded_range(device);
+    let range = device.model_range();
     let state = State {
         stretch: start,
         velocity: 0.0,

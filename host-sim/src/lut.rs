@@ -1,0 +1,119 @@
+//! `host-sim lut`: the tuning table the firmware flashes (layout in the core's `table`
+//! module), from the f64 model, with its interpolation error against the direct solve.
+
+use de_resonator::table::{self, Table};
+use de_resonator::{DeviceParams, Tuner};
+
+/// Points in a table unless asked otherwise.
+pub const DEFAULT_POINTS: usize = 64;
+
+/// Interpolation error is checked at this many points inside every interval.
+const CHECKS_PER_INTERVAL: usize = 8;
+
+/// A table made, with what was measured on it.
+pub struct Made {
+    pub bytes: Vec<u8>,
+    /// (frequency Hz, bias V) as stored.
+    pub points: Vec<(f32, f32)>,
+    /// The table against the f64 direct solve.
+    pub errors: Errors,
+    pub crc: u32,
+}
+
+/// Make the table of `points` points for `params` up to (1 − margin)·limit less the
+/// `HEADROOM` the f32 firmware needs: evenly spaced in
+/// Φ² (f − f(0) ∝ Φ² near zero bias), so Φ² linear in f interpolates well everywhere.
+pub fn make(params: DeviceParams<f64>, margin: f64, points: usize) -> Result<Made, String> {
+    if !(2..=table::MAX_POINTS).contains(&points) {
+        return Err(format!("{points} points: need 2 to {}", table::MAX_POINTS));
+    }
+    let device = de_resonator::Device::new(params).map_err(|e| e.to_string())?;
+    let tuner = Tuner::new(device);
+    let top = tuner
+        .max_bias(table::table_margin(margin))
+        .map_err(|e| e.to_string())?;
+    let mut stored = vec![(0.0f32, 0.0f32); points];
+    table::fill(&device, &top, &mut stored).map_err(|e| e.to_string())?;
+    // The f32 table is checked against the f64 direct solve, the table's error in its
+    // header being found from the table itself: write once with 0, measure, write again.
+    let params32 = params.cast::<f32>();
+    let mut bytes = vec![0u8; table::table_bytes(points)];
+    table::write(&mut bytes, &params32, margin as f32, 0.0, &stored).map_err(|e| e.to_string())?;
+    let errors = {
+        let t = Table::parse(&bytes).map_err(|e| e.to_string())?;
+        interpolation_error(&t, &tuner, table::table_margin(margin))?
+    };
+    let error = errors.frequency as f32;
+    table::write(&mut bytes, &params32, margin as f32, error, &stored)
+        .map_err(|e| e.to_string())?;
+    let crc = u32::from_le_bytes(bytes[bytes.len() - 4..].try_into().unwrap_or([0; 4]));
+    Ok(Made {
+        bytes,
+        points: stored,
+        errors,
+        crc,
+    })
+}
+
+/// How far the table's bias is from the direct solve, at `CHECKS_PER_INTERVAL` points inside
+/// every interval and at the points themselves: the largest relative error of the natural
+/// frequency the table's bias gives (f64 model) against the target, where it is, and the
+/// largest bias difference as a fraction of the top bias. Near zero bias, dΦ/df is unbounded
+/// (f − f(0) ∝ Φ²), so the bias difference there is set by f32's rounding of f, not by the
+/// interpolation; the frequency error is the one that matters and is well conditioned.
+fn interpolation_error(t: &Table, tuner: &Tuner<f64>, margin: f64) -> Result<Errors, String> {
+    let device = tuner.device();
+    let top = tuner.max_bias(margin).map_err(|e| e.to_string())?;
+    // The f64 range: the f32 end points may round just outside it.
+    let range = tuner.tunable_range(margin).map_err(|e| e.to_string())?;
+    let mut errors = Errors {
+        frequency: 0.0,
+        worst_hz: f64::NAN,
+        volts: 0.0,
+    };
+    for k in 0..t.points() - 1 {
+        let (f0, f1) = (f64::from(t.point(k).0), f64::from(t.point(k + 1).0));
+        for j in 0..=CHECKS_PER_INTERVAL {
+            let hz32 = (f0 + (f1 - f0) * j as f64 / CHECKS_PER_INTERVAL as f64) as f32;
+            let hz = f64::from(hz32);
+            let (low, high) = t.range_hz();
+            if !(hz32 >= low && hz32 <= high && hz >= range.low_hz && hz <= range.high_hz) {
+                continue;
+            }
+            let table_volts = f64::from(t.bias_volts(hz32).map_err(|e| e.to_string())?);
+            let solved = tuner
+                .tune(hz, margin)
+                .map_err(|e| format!("direct solve at {hz} Hz: {e}"))?;
+            let stretch = device
+                .stretch_for_bias(table_volts, top.stretch)
+                .ok_or_else(|| format!("no equilibrium at the table's {table_volts} V"))?;
+            let error = (device.natural_frequency_hz(stretch) - hz).abs() / hz;
+            if error > errors.frequency {
+                errors.frequency = error;
+                errors.worst_hz = hz;
+            }
+            let volts = (table_volts - solved.volts).abs() / top.volts;
+            errors.volts = errors.volts.max(volts);
+        }
+    }
+    Ok(errors)
+}
+
+/// A table's measured errors.
+pub struct Errors {
+    /// Largest relative error of the natural frequency at the table's bias.
+    pub frequency: f64,
+    /// Where it is, Hz.
+    pub worst_hz: f64,
+    /// Largest bias difference from the direct solve, as a fraction of the top bias.
+    pub volts: f64,
+}
+
+/// The table as CSV for people: a header comment, then frequency and bias per line.
+pub fn csv(made: &Made) -> String {
+    let mut out = String::from("natural_frequency_hz,bias_volts\n");
+    for (hz, volts) in &made.points {
+        out += &format!("{hz},{volts}\n");
+    }
+    out
+}

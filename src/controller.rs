@@ -1,0 +1,511 @@
+//! The resonator's controller, sans IO: the same code on the chip and in host-sim.
+//!
+//! `Controller::start` checks everything before anything is driven: the device parameters,
+//! the settings, the tuning table (CRC, order, made for this device, inside the safe region),
+//! the bias for the target from the table against the core's direct solve (MODEL.md §7), and
+//! the whole plan (ramp at a bounded slew rate, hold, AC drive) run through the fixed-step
+//! model under the safety monitor (MODEL.md §6). Then `tick`, at a fixed rate, gives the DAC
+//! code for that tick; every code passes one final check against the safe limit. A fault of
+//! any kind gives code 0 from then on, and says what happened once.
+
+use core::f32::consts::TAU;
+use core::fmt;
+
+use crate::device::{Device, DeviceParams, ParamError};
+use crate::drive::{Amplifier, CodeError, DacCode};
+use crate::integration::{Drive, Integrator, Method, State, StepError};
+use crate::real::Real;
+use crate::safety::{FailureMode, Monitor};
+use crate::table::{Table, TableError};
+use crate::tuning::{TuneError, Tuner};
+
+/// What the controller is asked to do, and how.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Settings {
+    /// The natural frequency to tune to, Hz.
+    pub target_hz: f32,
+    /// Voltage margin: every commanded voltage stays at most (1 − margin)·Φlimit.
+    pub margin: f32,
+    /// Bias ramp rate, V/s.
+    pub slew_volts_per_second: f32,
+    /// The controller's fixed rate, Hz.
+    pub tick_hz: f32,
+    /// Hold at the bias before the AC drive starts, s.
+    pub settle_seconds: f32,
+    /// AC drive amplitude, V (0: none).
+    pub ac_volts: f32,
+    /// AC drive frequency, Hz.
+    pub ac_hz: f32,
+    /// How long the model follows the AC drive after it starts, s.
+    pub check_seconds: f32,
+    /// Largest relative difference allowed between the natural frequency at the table's bias
+    /// and at the direct solve's (the two biases differ by the table's interpolation).
+    pub agreement: f32,
+}
+
+impl Settings {
+    /// Defaults for a target: 5% margin, 10 kV/s, 1 kHz, 0.25 s hold, no AC, 0.5 s of
+    /// model after the AC starts, table and solve within 1e-4 in frequency.
+    pub const fn for_target(target_hz: f32) -> Self {
+        Self {
+            target_hz,
+            margin: 0.05,
+            slew_volts_per_second: 10_000.0,
+            tick_hz: 1_000.0,
+            settle_seconds: 0.25,
+            ac_volts: 0.0,
+            ac_hz: 0.0,
+            check_seconds: 0.5,
+            agreement: 1e-4,
+        }
+    }
+}
+
+/// A setting, for errors.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Setting {
+    SlewVoltsPerSecond,
+    TickHz,
+    SettleSeconds,
+    AcVolts,
+    AcHz,
+    CheckSeconds,
+    Agreement,
+}
+
+/// The longest plan, in ticks (about 18 hours at 1 kHz before the AC starts).
+pub const MAX_PLAN_TICKS: f32 = 6.4e7;
+
+/// Why the controller will not drive, or stopped driving. Each leaves the output at 0 V.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Fault {
+    /// The device parameters are invalid, or not safe at zero bias.
+    Device(ParamError),
+    /// A setting is NaN, out of range, or makes the plan too long.
+    Setting { setting: Setting, value: f32 },
+    /// The tuning table is corrupted, out of order, for another device, or misses the target.
+    Table(TableError),
+    /// The direct solve cannot reach the target (out of range, bad target or margin).
+    Tune(TuneError<f32>),
+    /// The natural frequencies at the table's bias and at the direct solve's differ by more
+    /// than the agreement.
+    Disagree {
+        table_volts: f32,
+        table_hz: f32,
+        solved_volts: f32,
+        solved_hz: f32,
+    },
+    /// A voltage of the plan or the table is above the safe maximum.
+    AboveSafe { volts: f32, max_volts: f32 },
+    /// The model run of the plan crossed a limit (ramp too fast, AC too strong).
+    PlanCrosses { mode: FailureMode, seconds: f32 },
+    /// The model run of the plan could not go on (left the model's range, NaN).
+    PlanFailed(StepError<f32>),
+    /// The amplifier cannot give a voltage of the plan.
+    Amplifier(CodeError),
+    /// A commanded voltage failed the final check (never expected: a guard of last resort).
+    Gate { volts: f32, max_volts: f32 },
+    /// A sensor sample is NaN or infinite.
+    Sensor { value: f32 },
+    /// The measured motion crossed a limit of MODEL.md §6.
+    Limit { mode: FailureMode, tick: u32 },
+    /// The DAC bus failed (reported by the IO side).
+    Bus,
+}
+
+impl fmt::Display for Fault {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Fault::Device(e) => write!(f, "device: {e}"),
+            Fault::Setting { setting, value } => {
+                write!(f, "setting {setting:?} = {value} is invalid")
+            }
+            Fault::Table(e) => write!(f, "table: {e}"),
+            Fault::Tune(e) => write!(f, "tuning: {e}"),
+            Fault::Disagree {
+                table_volts,
+                table_hz,
+                solved_volts,
+                solved_hz,
+            } => write!(
+                f,
+                "table gives {table_volts} V ({table_hz} Hz), the direct solve {solved_volts} V \
+                 ({solved_hz} Hz): they disagree"
+            ),
+            Fault::AboveSafe { volts, max_volts } => {
+                write!(f, "{volts} V is above the safe maximum {max_volts} V")
+            }
+            Fault::PlanCrosses { mode, seconds } => write!(
+                f,
+                "the plan crosses a limit in the model at {seconds} s: {}",
+                mode.description()
+            ),
+            Fault::PlanFailed(e) => write!(f, "the model run of the plan stopped: {e}"),
+            Fault::Amplifier(e) => write!(f, "amplifier: {e}"),
+            Fault::Gate { volts, max_volts } => {
+                write!(
+                    f,
+                    "final check refused {volts} V (safe maximum {max_volts} V)"
+                )
+            }
+            Fault::Sensor { value } => write!(f, "sensor sample {value} is not a number"),
+            Fault::Limit { mode, tick } => {
+                write!(f, "measured motion at tick {tick}: {}", mode.description())
+            }
+            Fault::Bus => write!(f, "DAC bus error"),
+        }
+    }
+}
+
+/// What `start` found.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Boot {
+    /// The bias the controller drives, from the direct solve, V.
+    pub bias_volts: f32,
+    /// The table's interpolated bias for the target, V.
+    pub table_volts: f32,
+    /// The first failure on the loading branch and its voltage.
+    pub limit_mode: FailureMode,
+    pub limit_volts: f32,
+    /// (1 − margin)·limit: no command goes above it, V.
+    pub max_volts: f32,
+    /// The model run of the plan: the stretch range it swept, and the ticks it ran.
+    pub plan_stretch: (f32, f32),
+    pub plan_ticks: u32,
+}
+
+/// The plan: ramp to the bias, hold, then the AC drive; the voltage at every tick.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Plan {
+    pub bias_volts: f32,
+    /// Bias step per tick on the ramp, V.
+    pub ramp_volts_per_tick: f32,
+    /// The tick at which the AC starts.
+    pub ac_tick: u32,
+    pub ac_volts: f32,
+    /// AC phase advance per tick, in units of 2π/2³²: the phase is an exact integer, so it
+    /// neither drifts nor loses precision however long the drive runs.
+    pub ac_phase_step: u32,
+}
+
+impl Plan {
+    /// The voltage at tick `k`.
+    pub fn volts(&self, k: u32) -> f32 {
+        let ramp = self.ramp_volts_per_tick * k as f32;
+        if k < self.ac_tick {
+            return ramp.min(self.bias_volts);
+        }
+        let phase = (k - self.ac_tick).wrapping_mul(self.ac_phase_step);
+        let angle = phase as f32 * (TAU / 4_294_967_296.0);
+        self.bias_volts + self.ac_volts * Real::sin(angle)
+    }
+
+    /// The highest voltage the plan reaches, V.
+    pub fn peak_volts(&self) -> f32 {
+        self.bias_volts + self.ac_volts
+    }
+}
+
+/// Where the controller is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Phase {
+    Ramping,
+    Holding,
+    Driving,
+    Faulted,
+}
+
+/// Something that happened at a tick, said once.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Event {
+    /// The ramp reached the bias.
+    AtBias { volts: f32 },
+    /// The AC drive started.
+    DriveOn,
+    /// A fault: from now on 0 V.
+    Fault(Fault),
+}
+
+/// One tick's output: the DAC code, the voltage it gives, and what happened.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Output {
+    pub code: DacCode,
+    pub volts: f32,
+    pub event: Option<Event>,
+}
+
+/// The controller, between ticks.
+#[derive(Clone, Copy, Debug)]
+pub struct Controller {
+    device: Device<f32>,
+    amplifier: Amplifier,
+    plan: Plan,
+    max_volts: f32,
+    tick: u32,
+    phase: Phase,
+    monitor: Monitor<f32>,
+}
+
+fn positive(setting: Setting, value: f32) -> Result<f32, Fault> {
+    if value.is_finite() && value > 0.0 {
+        Ok(value)
+    } else {
+        Err(Fault::Setting { setting, value })
+    }
+}
+
+fn non_negative(setting: Setting, value: f32) -> Result<f32, Fault> {
+    if value.is_finite() && value >= 0.0 {
+        Ok(value)
+    } else {
+        Err(Fault::Setting { setting, value })
+    }
+}
+
+impl Controller {
+    /// Check everything and make the plan; refuse with the first fault found.
+    pub fn start(
+        params: DeviceParams<f32>,
+        table: &[u8],
+        amplifier: Amplifier,
+        settings: Settings,
+    ) -> Result<(Self, Boot), Fault> {
+        let device = Device::new(params).map_err(Fault::Device)?;
+        let tick_hz = positive(Setting::TickHz, settings.tick_hz)?;
+        let slew = positive(Setting::SlewVoltsPerSecond, settings.slew_volts_per_second)?;
+        let settle = non_negative(Setting::SettleSeconds, settings.settle_seconds)?;
+        let ac_volts = non_negative(Setting::AcVolts, settings.ac_volts)?;
+        let ac_hz = non_negative(Setting::AcHz, settings.ac_hz)?;
+        let check = non_negative(Setting::CheckSeconds, settings.check_seconds)?;
+        let agreement = positive(Setting::Agreement, settings.agreement)?;
+        if !(ac_hz < 0.5 * tick_hz) {
+            return Err(Fault::Setting {
+                setting: Setting::AcHz,
+                value: ac_hz,
+            });
+        }
+
+        let table = Table::parse(table).map_err(Fault::Table)?;
+        table.check_device(&params).map_err(Fault::Table)?;
+        let tuner = Tuner::new(device);
+        let limit = tuner.limit();
+        let max_volts = tuner.max_bias(settings.margin).map_err(Fault::Tune)?.volts;
+        if !(table.max_volts() <= max_volts) {
+            return Err(Fault::AboveSafe {
+                volts: table.max_volts(),
+                max_volts,
+            });
+        }
+        let table_volts = table.bias_volts(settings.target_hz).map_err(Fault::Table)?;
+        let solved = tuner
+            .tune(settings.target_hz, settings.margin)
+            .map_err(Fault::Tune)?;
+        let bias_volts = solved.volts;
+        let table_hz = device
+            .stretch_for_bias(table_volts, limit.at.stretch)
+            .map(|stretch| device.natural_frequency_hz(stretch))
+            .unwrap_or(f32::NAN);
+        let solved_hz = solved.natural_frequency_hz;
+        if !((table_hz - solved_hz).abs() <= agreement * solved_hz) {
+            return Err(Fault::Disagree {
+                table_volts,
+                table_hz,
+                solved_volts: bias_volts,
+                solved_hz,
+            });
+        }
+
+        let ramp_ticks = bias_volts / slew * tick_hz;
+        let ac_tick = libm::ceilf(ramp_ticks) + settle * tick_hz;
+        let check_ticks = check * tick_hz;
+        if !(ac_tick + check_ticks < MAX_PLAN_TICKS) {
+            return Err(Fault::Setting {
+                setting: Setting::SlewVoltsPerSecond,
+                value: slew,
+            });
+        }
+        let ac_volts = if ac_hz > 0.0 { ac_volts } else { 0.0 };
+        let plan = Plan {
+            bias_volts,
+            ramp_volts_per_tick: slew / tick_hz,
+            ac_tick: ac_tick as u32,
+            ac_volts,
+            ac_phase_step: ((ac_hz / tick_hz) as f64 * 4_294_967_296.0) as u32,
+        };
+        if !(plan.peak_volts() <= max_volts) {
+            return Err(Fault::AboveSafe {
+                volts: plan.peak_volts(),
+                max_volts,
+            });
+        }
+        amplifier
+            .code(plan.peak_volts())
+            .map_err(Fault::Amplifier)?;
+        let plan_ticks = plan.ac_tick + check_ticks as u32 + 1;
+        let plan_stretch = check_plan(&device, &plan, tick_hz, plan_ticks)?;
+
+        let controller = Controller {
+            device,
+            amplifier,
+            plan,
+            max_volts,
+            tick: 0,
+            phase: Phase::Ramping,
+            monitor: Monitor::new(),
+        };
+        let boot = Boot {
+            bias_volts,
+            table_volts,
+            limit_mode: limit.mode,
+            limit_volts: limit.at.volts,
+            max_volts,
+            plan_stretch,
+            plan_ticks,
+        };
+        Ok((controller, boot))
+    }
+
+    pub fn phase(&self) -> Phase {
+        self.phase
+    }
+
+    pub fn plan(&self) -> &Plan {
+        &self.plan
+    }
+
+    /// Ticks so far.
+    pub fn ticks(&self) -> u32 {
+        self.tick
+    }
+
+    /// One tick: the code to write now. `measured_stretch` is the sensor's λ, if there is
+    /// one; the monitor checks it against MODEL.md §6 at this tick's voltage.
+    pub fn tick(&mut self, measured_stretch: Option<f32>) -> Output {
+        if self.phase == Phase::Faulted {
+            return self.zero(None);
+        }
+        let k = self.tick;
+        self.tick = self.tick.saturating_add(1);
+        let volts = self.plan.volts(k);
+        let code = match self.gate(volts) {
+            Ok(code) => code,
+            Err(fault) => return self.fault(fault),
+        };
+        if let Some(stretch) = measured_stretch {
+            if !stretch.is_finite() {
+                return self.fault(Fault::Sensor { value: stretch });
+            }
+            let p = volts / self.device.volts_per_unit();
+            self.monitor
+                .observe(&self.device, u64::from(k), stretch, p * p);
+            if let Some(crossing) = self.monitor.first_crossing() {
+                return self.fault(Fault::Limit {
+                    mode: crossing.mode,
+                    tick: k,
+                });
+            }
+        }
+        let event = match self.phase {
+            Phase::Ramping if volts >= self.plan.bias_volts => {
+                self.phase = Phase::Holding;
+                Some(Event::AtBias { volts })
+            }
+            Phase::Holding if k >= self.plan.ac_tick && self.plan.ac_volts > 0.0 => {
+                self.phase = Phase::Driving;
+                Some(Event::DriveOn)
+            }
+            _ => None,
+        };
+        Output {
+            code,
+            volts: self.amplifier.volts(code),
+            event,
+        }
+    }
+
+    /// The IO side reports a fault (a DAC bus error): 0 V from now on.
+    pub fn fault(&mut self, fault: Fault) -> Output {
+        let first = self.phase != Phase::Faulted;
+        self.phase = Phase::Faulted;
+        self.zero(first.then_some(Event::Fault(fault)))
+    }
+
+    fn zero(&self, event: Option<Event>) -> Output {
+        Output {
+            code: DacCode(0),
+            volts: 0.0,
+            event,
+        }
+    }
+
+    /// The final check every code passes: the voltage is a number in [0, max], and so is
+    /// what its code gives.
+    fn gate(&self, volts: f32) -> Result<DacCode, Fault> {
+        let refuse = Fault::Gate {
+            volts,
+            max_volts: self.max_volts,
+        };
+        if !(volts >= 0.0 && volts <= self.max_volts) {
+            return Err(refuse);
+        }
+        let code = self.amplifier.code(volts).map_err(Fault::Amplifier)?;
+        if !(self.amplifier.volts(code) <= self.max_volts) {
+            return Err(refuse);
+        }
+        Ok(code)
+    }
+}
+
+/// Run the plan through the model (RK4, f32, one step a tick, subdivided for stability)
+/// from rest at the pre-stretch, with the monitor at every tick. The stretch range swept, or
+/// the crossing.
+fn check_plan(
+    device: &Device<f32>,
+    plan: &Plan,
+    tick_hz: f32,
+    ticks: u32,
+) -> Result<(f32, f32), Fault> {
+    let start = State {
+        stretch: device.prestretch_1(),
+        velocity: 0.0,
+    };
+    let mut model = Integrator::new(
+        *device,
+        Drive::constant(device, 0.0),
+        Method::Rk4,
+        1.0 / tick_hz,
+        device.model_range(),
+        start,
+        true,
+    )
+    .map_err(Fault::PlanFailed)?;
+    let mut monitor = Monitor::new();
+    let (mut low, mut high) = (f32::INFINITY, f32::NEG_INFINITY);
+    for k in 0..ticks {
+        let volts = plan.volts(k);
+        let p = volts / device.volts_per_unit();
+        let stretch = model.state().stretch;
+        monitor.observe(device, u64::from(k), stretch, p * p);
+        if let Some(crossing) = monitor.first_crossing() {
+            return Err(Fault::PlanCrosses {
+                mode: crossing.mode,
+                seconds: k as f32 / tick_hz,
+            });
+        }
+        low = low.min(stretch);
+        high = high.max(stretch);
+        model
+            .set_drive(Drive::constant(device, volts))
+            .map_err(Fault::PlanFailed)?;
+        model.step().map_err(Fault::PlanFailed)?;
+    }
+    Ok((low, high))
+}

@@ -1,0 +1,454 @@
+//! The tuning table, the DAC driver and the sans-IO controller, on the host: what the
+//! firmware runs, with every kind of bad input the firmware must survive.
+
+use de_resonator::table::{self, Table, TableError};
+use de_resonator::{
+    Amplifier, CodeError, Controller, Dac8551, DacCode, DacError, Device, Event, Fault, Phase,
+    Settings, Tuner, REFERENCE_DEVICE,
+};
+use embedded_hal_mock::eh1::spi::{Mock, Transaction};
+use proptest::prelude::*;
+
+/// The reference device as the firmware has it (f32), and a 64-point table for it made by
+/// the f64 model, as `host-sim lut` makes it.
+fn reference_table() -> Vec<u8> {
+    let device = Device::new(REFERENCE_DEVICE).unwrap();
+    let tuner = Tuner::new(device);
+    let top = tuner.max_bias(table::table_margin(0.05)).unwrap();
+    let mut points = vec![(0.0f32, 0.0f32); 64];
+    table::fill(&device, &top, &mut points).unwrap();
+    let mut bytes = vec![0u8; table::table_bytes(points.len())];
+    let params = REFERENCE_DEVICE.cast::<f32>();
+    table::write(&mut bytes, &params, 0.05, 0.0, &points).unwrap();
+    bytes
+}
+
+/// 0..10 kV over the full scale: a 2.5 V reference and an amplifier gain of 4000.
+fn amplifier() -> Amplifier {
+    Amplifier::new(2.5, 4000.0).unwrap()
+}
+
+/// Recompute the CRC after editing a table, so the edit reaches the later checks.
+fn reseal(bytes: &mut [u8]) {
+    let body = bytes.len() - 4;
+    let crc = table::crc32(&bytes[..body]);
+    bytes[body..].copy_from_slice(&crc.to_le_bytes());
+}
+
+fn start(settings: Settings) -> Result<Controller, Fault> {
+    let params = REFERENCE_DEVICE.cast::<f32>();
+    Controller::start(params, &reference_table(), amplifier(), settings).map(|(c, _)| c)
+}
+
+#[test]
+fn table_interpolation_is_exact_where_bias_squared_is_linear_in_f() {
+    // Φ² = 1e6·(50 − f): the layout's interpolation reproduces it between points.
+    let points: Vec<(f32, f32)> = (0..5)
+        .map(|k| {
+            let f = 50.0 - k as f32;
+            (f, (1e6 * (50.0 - f)).sqrt())
+        })
+        .collect();
+    let mut bytes = vec![0u8; table::table_bytes(5)];
+    table::write(&mut bytes, &REFERENCE_DEVICE.cast(), 0.05, 0.0, &points).unwrap();
+    let t = Table::parse(&bytes).unwrap();
+    for f in [49.5f32, 48.25, 46.1, 50.0, 46.0] {
+        let expected = (1e6 * (50.0 - f64::from(f))).sqrt();
+        let got = f64::from(t.bias_volts(f).unwrap());
+        assert!(
+            (got - expected).abs() < 1e-5 * 2000.0,
+            "{f}: {got} vs {expected}"
+        );
+    }
+    assert_eq!(t.range_hz(), (46.0, 50.0));
+    assert_eq!(t.params(), REFERENCE_DEVICE.cast());
+}
+
+#[test]
+fn corrupted_tables_are_refused_with_the_reason() {
+    let good = reference_table();
+    assert!(Table::parse(&good).is_ok());
+
+    let mut flipped = good.clone();
+    flipped[100] ^= 0x01;
+    assert!(matches!(
+        Table::parse(&flipped),
+        Err(TableError::BadCrc { .. })
+    ));
+
+    assert!(matches!(
+        Table::parse(&good[..good.len() - 1]),
+        Err(TableError::WrongLength { .. })
+    ));
+    assert!(matches!(
+        Table::parse(&good[..10]),
+        Err(TableError::TooShort { bytes: 10 })
+    ));
+    assert!(matches!(
+        Table::parse(&[]),
+        Err(TableError::TooShort { bytes: 0 })
+    ));
+
+    let mut magic = good.clone();
+    magic[0] = b'X';
+    assert_eq!(Table::parse(&magic), Err(TableError::BadMagic));
+
+    // A NaN bias in point 5, correctly sealed: only the value check can catch it.
+    let mut nan = good.clone();
+    let at = table::HEADER_BYTES + table::POINT_BYTES * 5 + 4;
+    nan[at..at + 4].copy_from_slice(&f32::NAN.to_le_bytes());
+    reseal(&mut nan);
+    assert_eq!(Table::parse(&nan), Err(TableError::NotFinite { index: 5 }));
+
+    // Points 7 and 8 swapped, sealed: not monotone at 8.
+    let mut swapped = good.clone();
+    let p7 = table::HEADER_BYTES + table::POINT_BYTES * 7;
+    let (a, b) = (p7, p7 + table::POINT_BYTES);
+    let seven: Vec<u8> = swapped[a..b].to_vec();
+    swapped.copy_within(b..b + table::POINT_BYTES, a);
+    swapped[b..b + table::POINT_BYTES].copy_from_slice(&seven);
+    reseal(&mut swapped);
+    assert_eq!(
+        Table::parse(&swapped),
+        Err(TableError::NotMonotone { index: 8 })
+    );
+
+    // A count that does not match the length.
+    let mut count = good.clone();
+    count[6] = 63;
+    reseal(&mut count);
+    assert!(matches!(
+        Table::parse(&count),
+        Err(TableError::WrongLength { .. })
+    ));
+}
+
+#[test]
+fn the_controller_refuses_a_bad_table_and_a_table_for_another_device() {
+    let params = REFERENCE_DEVICE.cast::<f32>();
+    let settings = Settings::for_target(44.0);
+    let mut bad = reference_table();
+    bad[200] ^= 0x80;
+    let fault = Controller::start(params, &bad, amplifier(), settings).unwrap_err();
+    assert!(
+        matches!(fault, Fault::Table(TableError::BadCrc { .. })),
+        "{fault}"
+    );
+
+    let other = de_resonator::DeviceParams {
+        shear_modulus: 46e3,
+        ..params
+    };
+    let fault = Controller::start(other, &reference_table(), amplifier(), settings).unwrap_err();
+    assert_eq!(fault, Fault::Table(TableError::OtherDevice { field: 0 }));
+}
+
+/// The published figure (issue 2): 44 Hz takes 7449.88 V on the reference device. The
+/// controller's f32 solve and the table's interpolation both land there.
+#[test]
+fn boot_tunes_the_reference_device_to_44_hz() {
+    let params = REFERENCE_DEVICE.cast::<f32>();
+    let (_, boot) = Controller::start(
+        params,
+        &reference_table(),
+        amplifier(),
+        Settings::for_target(44.0),
+    )
+    .unwrap();
+    assert!(
+        (boot.bias_volts - 7449.88).abs() < 0.02,
+        "{}",
+        boot.bias_volts
+    );
+    assert!(
+        (boot.table_volts - 7449.88).abs() < 0.5,
+        "{}",
+        boot.table_volts
+    );
+    assert!(
+        (boot.limit_volts - 9854.73).abs() < 0.05,
+        "{}",
+        boot.limit_volts
+    );
+    assert!((boot.max_volts - 0.95 * 9854.73).abs() < 0.05);
+    // The slow ramp stays near the static branch: no swing past the equilibrium's stretch
+    // (2.19319 at 44 Hz) by more than a little.
+    assert!(
+        boot.plan_stretch.0 >= 2.0 - 1e-6 && boot.plan_stretch.1 < 2.21,
+        "{:?}",
+        boot.plan_stretch
+    );
+}
+
+#[test]
+fn ticks_ramp_at_the_slew_rate_hold_then_drive_and_never_exceed_the_limit() {
+    let settings = Settings {
+        ac_volts: 100.0,
+        ac_hz: 40.0,
+        ..Settings::for_target(44.0)
+    };
+    let mut c = start(settings).unwrap();
+    let amp = amplifier();
+    let per_tick = settings.slew_volts_per_second / settings.tick_hz;
+    let max = 0.95 * 9854.73;
+    let (mut previous, mut at_bias, mut drive_on) = (0.0f32, None, None);
+    for k in 0..3000u32 {
+        let out = c.tick(None);
+        assert_eq!(out.volts, amp.volts(out.code));
+        assert!(
+            out.volts >= 0.0 && out.volts <= max,
+            "tick {k}: {}",
+            out.volts
+        );
+        if at_bias.is_none() {
+            assert!(out.volts - previous <= per_tick + 0.2, "tick {k}: slew");
+        }
+        match out.event {
+            Some(Event::AtBias { .. }) => at_bias = Some(k),
+            Some(Event::DriveOn) => drive_on = Some(k),
+            Some(Event::Fault(f)) => panic!("fault at {k}: {f}"),
+            None => {}
+        }
+        previous = out.volts;
+    }
+    // 7449.88 V at 10 V a tick: at bias on tick 745 (7450 V ≥ 7449.88); the AC 250 ticks
+    // (0.25 s) later.
+    assert_eq!(at_bias, Some(745));
+    assert_eq!(drive_on, Some(995));
+    assert_eq!(c.phase(), Phase::Driving);
+    // The AC swings ±100 V about the bias, at the code resolution (10000/65536 V).
+    let swing: Vec<f32> = (0..100).map(|_| c.tick(None).volts).collect();
+    let hi = swing.iter().cloned().fold(f32::MIN, f32::max);
+    let lo = swing.iter().cloned().fold(f32::MAX, f32::min);
+    assert!(
+        (hi - 7549.88).abs() < 0.5 && (lo - 7349.88).abs() < 0.5,
+        "{lo} {hi}"
+    );
+}
+
+#[test]
+fn faults_at_run_time_give_zero_volts_and_say_so_once() {
+    let mut c = start(Settings::for_target(44.0)).unwrap();
+    for _ in 0..100 {
+        assert!(c.tick(Some(2.0)).volts > 0.0 || c.ticks() == 1);
+    }
+    let out = c.tick(Some(f32::NAN));
+    assert_eq!(out.code, DacCode(0));
+    assert!(matches!(
+        out.event,
+        Some(Event::Fault(Fault::Sensor { .. }))
+    ));
+    let after = c.tick(Some(2.0));
+    assert_eq!((after.code, after.event), (DacCode(0), None));
+
+    // A measured stretch where B has gone slack (λ = 3.9: λB = 0.1): a limit, 0 V.
+    let mut c = start(Settings::for_target(44.0)).unwrap();
+    c.tick(None);
+    let out = c.tick(Some(3.9));
+    assert!(
+        matches!(out.event, Some(Event::Fault(Fault::Limit { .. }))),
+        "{out:?}"
+    );
+    assert_eq!(out.code, DacCode(0));
+
+    // The IO side reports a bus error.
+    let mut c = start(Settings::for_target(44.0)).unwrap();
+    c.tick(None);
+    let out = c.fault(Fault::Bus);
+    assert_eq!(
+        (out.code, out.event),
+        (DacCode(0), Some(Event::Fault(Fault::Bus)))
+    );
+    assert_eq!(c.tick(None).code, DacCode(0));
+}
+
+#[test]
+fn bad_targets_and_settings_are_refused_before_anything_is_driven() {
+    for target in [f32::NAN, f32::INFINITY, -44.0, 0.0, 50.0, 42.0] {
+        let fault = start(Settings::for_target(target)).unwrap_err();
+        assert!(
+            matches!(
+                fault,
+                Fault::Table(TableError::OutOfRange { .. }) | Fault::Tune(_)
+            ),
+            "{target}: {fault}"
+        );
+    }
+    let base = Settings::for_target(44.0);
+    for settings in [
+        Settings {
+            tick_hz: f32::NAN,
+            ..base
+        },
+        Settings {
+            slew_volts_per_second: 0.0,
+            ..base
+        },
+        Settings {
+            slew_volts_per_second: 1e-3,
+            ..base
+        },
+        Settings {
+            agreement: -1.0,
+            ..base
+        },
+        Settings {
+            ac_hz: 600.0,
+            ac_volts: 1.0,
+            ..base
+        },
+        Settings {
+            settle_seconds: f32::INFINITY,
+            ..base
+        },
+    ] {
+        let fault = start(settings).unwrap_err();
+        assert!(matches!(fault, Fault::Setting { .. }), "{fault}");
+    }
+    // The AC would take the peak past (1 − margin)·limit.
+    let fault = start(Settings {
+        ac_volts: 2000.0,
+        ac_hz: 40.0,
+        ..base
+    })
+    .unwrap_err();
+    assert!(matches!(fault, Fault::AboveSafe { .. }), "{fault}");
+    // A margin the table was not made for: its top bias is above the safe maximum.
+    let fault = start(Settings {
+        margin: 0.1,
+        ..Settings::for_target(44.5)
+    })
+    .unwrap_err();
+    assert!(matches!(fault, Fault::AboveSafe { .. }), "{fault}");
+    // An amplifier that cannot reach the bias.
+    let params = REFERENCE_DEVICE.cast::<f32>();
+    let small = Amplifier::new(2.5, 1000.0).unwrap();
+    let fault = Controller::start(params, &reference_table(), small, base).unwrap_err();
+    assert!(
+        matches!(fault, Fault::Amplifier(CodeError::OutOfRange { .. })),
+        "{fault}"
+    );
+    // Parameters that are not safe at zero bias (B slack: λ1p below its slack stretch).
+    let slack = de_resonator::DeviceParams {
+        prestretch_1: 0.6,
+        ..params
+    };
+    let fault = Controller::start(slack, &reference_table(), amplifier(), base).unwrap_err();
+    assert!(matches!(fault, Fault::Device(_)), "{fault}");
+}
+
+/// An AC drive at the natural frequency, statically safe (peak below the safe maximum) but
+/// undamped: the swing grows every period until it crosses a limit. The model run of the
+/// plan finds it, and the controller refuses; the same AC off resonance is accepted.
+#[test]
+fn a_plan_that_crosses_dynamically_is_refused_by_the_model_check() {
+    let off = Settings {
+        ac_volts: 1800.0,
+        ac_hz: 20.0,
+        ..Settings::for_target(44.0)
+    };
+    let accepted = start(off);
+    assert!(accepted.is_ok(), "{:?}", accepted.err());
+    let resonant = Settings { ac_hz: 44.0, ..off };
+    let fault = start(resonant).unwrap_err();
+    assert!(matches!(fault, Fault::PlanCrosses { .. }), "{fault}");
+}
+
+#[test]
+fn dac8551_frames_follow_the_datasheet() {
+    // 24 bits: 6 don't-care, PD1 PD0, 16 data bits, MSB first.
+    let expectations = [
+        Transaction::transaction_start(),
+        Transaction::write_vec(vec![0x00, 0x12, 0x34]),
+        Transaction::transaction_end(),
+        Transaction::transaction_start(),
+        Transaction::write_vec(vec![0x01, 0x00, 0x00]),
+        Transaction::transaction_end(),
+    ];
+    let mut dac = Dac8551::new(Mock::new(&expectations));
+    dac.write(DacCode(0x1234)).unwrap();
+    dac.power_down().unwrap();
+    dac.release().done();
+}
+
+/// A bus that fails every transfer (embedded-hal-mock 0.11 cannot fail an SPI write).
+struct BrokenBus;
+
+impl embedded_hal::spi::ErrorType for BrokenBus {
+    type Error = embedded_hal::spi::ErrorKind;
+}
+
+impl embedded_hal::spi::SpiDevice for BrokenBus {
+    fn transaction(
+        &mut self,
+        _: &mut [embedded_hal::spi::Operation<'_, u8>],
+    ) -> Result<(), Self::Error> {
+        Err(embedded_hal::spi::ErrorKind::Other)
+    }
+}
+
+#[test]
+fn dac_bus_errors_are_typed() {
+    let mut dac = Dac8551::new(BrokenBus);
+    assert_eq!(
+        dac.write(DacCode(0xFFFF)),
+        Err(DacError::Bus(embedded_hal::spi::ErrorKind::Other))
+    );
+    assert!(dac.power_down().is_err());
+}
+
+#[test]
+fn codes_round_down_and_refuse_what_the_amplifier_cannot_give() {
+    let amp = amplifier();
+    assert_eq!(amp.max_volts(), 10_000.0 * 65535.0 / 65536.0);
+    for code in [0u16, 1, 1234, 32768, 65535] {
+        assert_eq!(amp.code(amp.volts(DacCode(code))), Ok(DacCode(code)));
+    }
+    // Just below a step: the lower code.
+    let v = amp.volts(DacCode(1000));
+    assert_eq!(amp.code(v - 0.01), Ok(DacCode(999)));
+    for bad in [f32::NAN, -0.1, 10_000.0, f32::INFINITY] {
+        assert!(matches!(amp.code(bad), Err(CodeError::OutOfRange { .. })));
+    }
+    assert!(Amplifier::new(f32::NAN, 1.0).is_err());
+    assert!(Amplifier::new(2.5, 0.0).is_err());
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+
+    /// Any settings and target, however wrong: no panic; if the controller starts, no tick
+    /// ever commands more than (1 − margin)·limit, and the code gives the volts reported.
+    #[test]
+    fn no_input_makes_the_controller_exceed_the_limit(
+        target in prop_oneof![42.5f32..46.5, Just(f32::NAN), any::<f32>()],
+        margin in prop_oneof![0.0f32..0.3, any::<f32>()],
+        slew in prop_oneof![100.0f32..1e6, any::<f32>()],
+        ac_volts in prop_oneof![0.0f32..3000.0, any::<f32>()],
+        ac_hz in prop_oneof![0.0f32..200.0, any::<f32>()],
+        corrupt in proptest::option::of(68usize..580),
+    ) {
+        let mut bytes = reference_table();
+        if let Some(at) = corrupt {
+            bytes[at] ^= 0x04;
+        }
+        let settings = Settings {
+            margin,
+            slew_volts_per_second: slew,
+            ac_volts,
+            ac_hz,
+            check_seconds: 0.2,
+            ..Settings::for_target(target)
+        };
+        let params = REFERENCE_DEVICE.cast::<f32>();
+        if let Ok((mut c, boot)) = Controller::start(params, &bytes, amplifier(), settings) {
+            prop_assert!(corrupt.is_none());
+            prop_assert!(boot.max_volts <= (1.0 - margin) * 9854.74);
+            for _ in 0..2000 {
+                let out = c.tick(None);
+                prop_assert!(out.volts >= 0.0 && out.volts <= boot.max_volts);
+                prop_assert_eq!(out.volts, amplifier().volts(out.code));
+            }
+        }
+    }
+}
