@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Every check CI runs, from a fresh machine: installs what it needs, then formats, lints
-# (host and Cortex-M4F target), builds the core for the target, and runs all tests.
+# (host and Cortex-M4F target), builds the core for the target, runs all tests, and runs the
+# firmware under QEMU (installing qemu-system-arm and defmt-print when missing).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -11,6 +12,18 @@ step "toolchain (rust-toolchain.toml) and the $TARGET target"
 rustup show active-toolchain
 rustup component add clippy rustfmt
 rustup target add "$TARGET"
+
+step "QEMU (qemu-system-arm) and defmt-print for the firmware runs"
+if ! command -v qemu-system-arm >/dev/null; then
+    SUDO=$([ "$(id -u)" = 0 ] || echo sudo)
+    $SUDO apt-get update -qq
+    $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq qemu-system-arm
+fi
+qemu-system-arm --version | head -1
+if ! command -v defmt-print >/dev/null; then
+    cargo install --locked defmt-print --version 1.2.0
+fi
+defmt-print --version
 
 step "format"
 cargo fmt --all -- --check
@@ -27,3 +40,6 @@ cargo build --locked -p de-resonator --target "$TARGET" --release --features def
 
 step "tests (core integration tests, host-sim unit and CLI tests)"
 cargo test --locked --workspace
+
+step "firmware under QEMU: the reference run and the on-target checks against expected logs"
+scripts/firmware.sh
