@@ -1,0 +1,115 @@
+//! Instruction counts on the target: run under QEMU with `-icount shift=0`
+//! (`QEMU_ICOUNT=1 cargo run --release --bin count`), where virtual time advances one
+//! nanosecond per instruction, so SysTick at the 168 MHz core clock counts one tick per
+//! 168/1000 instructions... i.e. instructions = ticks × 1000/168. Each figure is an average
+//! over repeated calls, loop overhead included.
+#![no_std]
+#![no_main]
+
+use core::hint::black_box;
+
+use cortex_m::peripheral::syst::SystClkSource;
+use cortex_m::peripheral::SYST;
+use de_resonator::{
+    Controller, Device, Drive, Integrator, Method, State, Table, Tuner, REFERENCE_DEVICE,
+};
+use de_resonator_firmware::{amplifier, device, exit, settings, TABLE};
+
+/// Instructions per call of `f`, averaged over `n` calls.
+fn count(n: u32, mut f: impl FnMut()) -> u32 {
+    let start = SYST::get_current();
+    for _ in 0..n {
+        f();
+    }
+    let end = SYST::get_current();
+    let ticks = start.wrapping_sub(end) & 0x00FF_FFFF;
+    (ticks as f32 * (1000.0 / 168.0) / n as f32) as u32
+}
+
+fn integrator(method: Method) -> Option<Integrator<f32>> {
+    let dev = Device::new(REFERENCE_DEVICE.cast::<f32>()).ok()?;
+    let drive = Drive::from_volts(&dev, 7450.0, 100.0, 40.0);
+    let start = State {
+        stretch: dev.stretch_for_bias(7450.0, dev.scan_end_stretch())?,
+        velocity: 0.0,
+    };
+    // One step of the method itself: 0.9 of the guard's largest stable step (no substeps).
+    let range = dev.model_range();
+    let step = de_resonator::integration::max_stable_step_seconds(&dev, &drive, method, range)
+        .map_or(1e-3, |h| 0.9 * h);
+    Integrator::new(dev, drive, method, step, range, start, false).ok()
+}
+
+#[cortex_m_rt::entry]
+fn main() -> ! {
+    let Some(peripherals) = cortex_m::Peripherals::take() else {
+        exit(1)
+    };
+    let mut syst = peripherals.SYST;
+    syst.set_clock_source(SystClkSource::Core);
+    syst.set_reload(0x00FF_FFFF);
+    syst.clear_current();
+    syst.enable_counter();
+
+    let n = count(1000, || cortex_m::asm::nop());
+    defmt::info!("calibration, an empty loop with one nop: {=u32} instructions", n);
+    for method in [Method::Rk4, Method::Verlet, Method::ImplicitMidpoint] {
+        let Some(mut it) = integrator(method) else {
+            exit(1)
+        };
+        let n = count(1000, || {
+            let _ = black_box(it.step());
+        });
+        defmt::info!("{=str} step: {=u32} instructions", method.name(), n);
+    }
+    let Ok(dev) = Device::new(REFERENCE_DEVICE.cast::<f32>()) else {
+        exit(1)
+    };
+    let n = count(4, || {
+        let tuner = Tuner::new(black_box(dev));
+        let _ = black_box(tuner.tune(black_box(44.0), 0.05));
+    });
+    defmt::info!(
+        "tuning solve (limit + bias for 44 Hz): {=u32} instructions",
+        n
+    );
+    let tuner = Tuner::new(dev);
+    let n = count(16, || {
+        let _ = black_box(tuner.tune(black_box(44.0), 0.05));
+    });
+    defmt::info!("bias solve with the limit known: {=u32} instructions", n);
+    let Ok(table) = Table::parse(TABLE) else {
+        exit(1)
+    };
+    let n = count(1000, || {
+        let _ = black_box(table.bias_volts(black_box(44.0)));
+    });
+    defmt::info!("table lookup: {=u32} instructions", n);
+    let n = count(8, || {
+        let _ = black_box(Table::parse(black_box(TABLE)));
+    });
+    defmt::info!("table check (CRC, order): {=u32} instructions", n);
+    let Ok(amp) = amplifier() else { exit(1) };
+    let Ok((mut c, _)) = Controller::start(device(), TABLE, amp, settings()) else {
+        exit(1)
+    };
+    let n = count(1000, || {
+        let _ = black_box(c.tick(None));
+    });
+    defmt::info!("controller tick: {=u32} instructions", n);
+    let n = count(1000, || {
+        let _ = black_box(c.tick(Some(black_box(2.1))));
+    });
+    defmt::info!(
+        "controller tick with a sensor sample: {=u32} instructions",
+        n
+    );
+    let n = count(1, || {
+        let _ = black_box(Controller::start(device(), TABLE, amp, settings()));
+    });
+    defmt::info!(
+        "controller boot (all checks, plan in the model): {=u32} instructions",
+        n
+    );
+    exit(0)
+}
