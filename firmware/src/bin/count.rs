@@ -52,7 +52,10 @@ fn main() -> ! {
     syst.enable_counter();
 
     let n = count(1000, || cortex_m::asm::nop());
-    defmt::info!("calibration, an empty loop with one nop: {=u32} instructions", n);
+    defmt::info!(
+        "calibration, an empty loop with one nop: {=u32} instructions",
+        n
+    );
     for method in [Method::Rk4, Method::Verlet, Method::ImplicitMidpoint] {
         let Some(mut it) = integrator(method) else {
             exit(1)
