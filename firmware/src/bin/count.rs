@@ -51,7 +51,7 @@ fn main() -> ! {
     syst.clear_current();
     syst.enable_counter();
 
-    let n = count(1000, || cortex_m::asm::nop());
+    let n = count(1000, cortex_m::asm::nop);
     defmt::info!(
         "calibration, an empty loop with one nop: {=u32} instructions",
         n
