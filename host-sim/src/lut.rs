@@ -71,12 +71,12 @@ fn interpolation_error(t: &Table, tuner: &Tuner<f64>, margin: f64) -> Result<Err
         worst_hz: f64::NAN,
         volts: 0.0,
     };
+    let (low, high) = t.range_hz();
     for k in 0..t.points() - 1 {
         let (f0, f1) = (f64::from(t.point(k).0), f64::from(t.point(k + 1).0));
         for j in 0..=CHECKS_PER_INTERVAL {
             let hz32 = (f0 + (f1 - f0) * j as f64 / CHECKS_PER_INTERVAL as f64) as f32;
             let hz = f64::from(hz32);
-            let (low, high) = t.range_hz();
             if !(hz32 >= low && hz32 <= high && hz >= range.low_hz && hz <= range.high_hz) {
                 continue;
             }

@@ -211,55 +211,53 @@ fn errors(
     (final_relative_error, max_error, phase)
 }
 
-/// Every core method at every step on one study.
-pub fn rows(study: &Study, reference: &Reference) -> Vec<Row> {
+/// One core method at every step on one study.
+pub fn rows(study: &Study, reference: &Reference, choice: Choice) -> Vec<Row> {
     let mut rows = Vec::new();
-    for choice in Choice::core() {
-        for n in STEPS_PER_PERIOD {
-            let step = 1.0 / (f64::from(n) * study.base_hz);
-            let mut row = Row {
-                scene: study.name,
-                method: choice.name(),
-                steps_per_period: n,
-                step_seconds: step,
-                status: "ok",
-                final_relative_error: f64::NAN,
-                max_error: f64::NAN,
-                phase_error_rad: f64::NAN,
-                run_seconds_per_simulated_second: f64::NAN,
-            };
-            let mut fastest = f64::INFINITY;
-            let mut spent = 0.0;
-            let mut last = None;
-            while spent < 0.02 {
-                let started = Instant::now();
-                let result = simulate(&study.scene, choice, step);
-                let took = started.elapsed().as_secs_f64();
-                spent += took;
-                fastest = fastest.min(took);
-                match result {
-                    Ok(out) => last = Some(out),
-                    Err(RunError::Refused(_)) => {
-                        row.status = "refused";
-                        break;
-                    }
-                    Err(RunError::Failed(_)) => {
-                        row.status = "stopped";
-                        break;
-                    }
+    for n in STEPS_PER_PERIOD {
+        let step = 1.0 / (f64::from(n) * study.base_hz);
+        let mut row = Row {
+            scene: study.name,
+            method: choice.name(),
+            steps_per_period: n,
+            step_seconds: step,
+            status: "ok",
+            final_relative_error: f64::NAN,
+            max_error: f64::NAN,
+            phase_error_rad: f64::NAN,
+            run_seconds_per_simulated_second: f64::NAN,
+        };
+        let mut fastest = f64::INFINITY;
+        let mut spent = 0.0;
+        let mut last = None;
+        while spent < 0.02 {
+            let started = Instant::now();
+            let result = simulate(&study.scene, choice, step);
+            let took = started.elapsed().as_secs_f64();
+            spent += took;
+            fastest = fastest.min(took);
+            match result {
+                Ok(out) => last = Some(out),
+                Err(RunError::Refused(_)) => {
+                    row.status = "refused";
+                    break;
                 }
-            }
-            if let Some(out) = last.filter(|_| row.status == "ok") {
-                if out.stopped.is_some() {
+                Err(RunError::Failed(_)) => {
                     row.status = "stopped";
-                } else {
-                    (row.final_relative_error, row.max_error, row.phase_error_rad) =
-                        errors(study, reference, &out, n);
-                    row.run_seconds_per_simulated_second = fastest / study.scene.duration_seconds;
+                    break;
                 }
             }
-            rows.push(row);
         }
+        if let Some(out) = last.filter(|_| row.status == "ok") {
+            if out.stopped.is_some() {
+                row.status = "stopped";
+            } else {
+                (row.final_relative_error, row.max_error, row.phase_error_rad) =
+                    errors(study, reference, &out, n);
+                row.run_seconds_per_simulated_second = fastest / study.scene.duration_seconds;
+            }
+        }
+        rows.push(row);
     }
     rows
 }

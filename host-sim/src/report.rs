@@ -293,10 +293,16 @@ pub fn work_precision(
         .into_iter()
         .collect::<Result<Vec<_>, _>>()?;
     // Timed runs one at a time: run times measured side by side must not share the cores.
+    let methods = crate::simulate::Choice::core();
+    let bar = crate::work::bar("timing", studies.len() * methods.len());
     let mut all = Vec::new();
     for (study, reference) in studies.iter().zip(&references) {
-        all.extend(crate::work::map(study.name, &[()], |_| rows(study, reference)).concat());
+        for &choice in &methods {
+            all.extend(rows(study, reference, choice));
+            bar.inc(1);
+        }
     }
+    bar.finish_and_clear();
     let mut csv = String::from(
         "scene,method,steps_per_period,step_seconds,status,final_relative_error,max_error,\
          phase_error_rad,run_seconds_per_simulated_second\n",

@@ -138,85 +138,83 @@ pub fn run(base: DeviceParams<f64>) -> Result<(Value, bool), String> {
 /// One case: its JSON row, and whether any run failed silently.
 fn run_case(case: &Case) -> Result<(Value, bool), String> {
     let mut silent = false;
-    {
-        let device = Device::new(case.params).map_err(|e| format!("{}: {e}", case.name))?;
-        let tuner = Tuner::new(device);
-        let limit = tuner.limit().at.volts;
-        let bias = case.bias_of_limit * limit;
-        let at_bias = device
-            .stretch_for_bias(bias, tuner.limit().at.stretch)
-            .ok_or("bias above the limit")?;
-        let f0 = device.natural_frequency_hz(at_bias);
-        let period = 1.0 / f0;
-        let scene = Scene {
-            params: case.params,
-            bias_volts: bias,
-            ac_volts: case.ac_of_limit * limit,
-            drive_hz: f0,
-            duration_seconds: PERIODS * period,
-            start: case.start,
-        };
-        let solver = if case.stiff {
-            Choice::ReferenceBdf
-        } else {
-            Choice::Reference
-        };
-        let reference = simulate(&scene, solver, period / 64.0)
-            .map_err(|e| format!("{}: reference: {e}", case.name))?;
-        // A run has failed silently if its error exceeds the whole swing of the motion (and
-        // 1e-4 in stretch, for scenes that barely move).
-        let swing = (reference.max_stretch - reference.min_stretch).max(1e-4);
-        let mut runs = Vec::new();
-        for choice in Choice::core() {
-            for per_period in STEPS_PER_PERIOD {
-                let (verdict, error, caught) = match simulate(&scene, choice, period / per_period) {
-                    Err(RunError::Refused(_)) => ("refused", None, None),
-                    Err(RunError::Failed(_)) => ("stopped", None, None),
-                    Ok(out) if out.stopped.is_some() => (
-                        "stopped_after_crossing",
-                        None,
-                        Some(out.first_limit.is_some()),
-                    ),
-                    Ok(out) => {
-                        let error = (out.final_stretch - reference.final_stretch).abs() / swing;
-                        let fine = error.is_finite() && error <= 1.0;
-                        let crossed = out.first_limit.is_some();
-                        let verdict = if !fine {
-                            "failed_silently"
-                        } else if reference.first_limit.is_some() && !crossed {
-                            "missed_crossing"
-                        } else {
-                            "stable"
-                        };
-                        silent |= !fine;
-                        (verdict, Some(error), Some(crossed))
-                    }
-                };
-                runs.push(json!({
-                    "method": choice.name(),
-                    "steps_per_period": per_period,
-                    "verdict": verdict,
-                    "final_error_over_swing": error,
-                    "monitor_crossed": caught,
-                }));
-            }
+    let device = Device::new(case.params).map_err(|e| format!("{}: {e}", case.name))?;
+    let tuner = Tuner::new(device);
+    let limit = tuner.limit().at.volts;
+    let bias = case.bias_of_limit * limit;
+    let at_bias = device
+        .stretch_for_bias(bias, tuner.limit().at.stretch)
+        .ok_or("bias above the limit")?;
+    let f0 = device.natural_frequency_hz(at_bias);
+    let period = 1.0 / f0;
+    let scene = Scene {
+        params: case.params,
+        bias_volts: bias,
+        ac_volts: case.ac_of_limit * limit,
+        drive_hz: f0,
+        duration_seconds: PERIODS * period,
+        start: case.start,
+    };
+    let solver = if case.stiff {
+        Choice::ReferenceBdf
+    } else {
+        Choice::Reference
+    };
+    let reference = simulate(&scene, solver, period / 64.0)
+        .map_err(|e| format!("{}: reference: {e}", case.name))?;
+    // A run has failed silently if its error exceeds the whole swing of the motion (and
+    // 1e-4 in stretch, for scenes that barely move).
+    let swing = (reference.max_stretch - reference.min_stretch).max(1e-4);
+    let mut runs = Vec::new();
+    for choice in Choice::core() {
+        for per_period in STEPS_PER_PERIOD {
+            let (verdict, error, caught) = match simulate(&scene, choice, period / per_period) {
+                Err(RunError::Refused(_)) => ("refused", None, None),
+                Err(RunError::Failed(_)) => ("stopped", None, None),
+                Ok(out) if out.stopped.is_some() => (
+                    "stopped_after_crossing",
+                    None,
+                    Some(out.first_limit.is_some()),
+                ),
+                Ok(out) => {
+                    let error = (out.final_stretch - reference.final_stretch).abs() / swing;
+                    let fine = error.is_finite() && error <= 1.0;
+                    let crossed = out.first_limit.is_some();
+                    let verdict = if !fine {
+                        "failed_silently"
+                    } else if reference.first_limit.is_some() && !crossed {
+                        "missed_crossing"
+                    } else {
+                        "stable"
+                    };
+                    silent |= !fine;
+                    (verdict, Some(error), Some(crossed))
+                }
+            };
+            runs.push(json!({
+                "method": choice.name(),
+                "steps_per_period": per_period,
+                "verdict": verdict,
+                "final_error_over_swing": error,
+                "monitor_crossed": caught,
+            }));
         }
-        let row = json!({
-            "case": case.name,
-            "what": case.what,
-            "natural_frequency_hz": f0,
-            "bias_volts": bias,
-            "reference": {
-                "method": solver.name(),
-                "run_seconds": reference.run_seconds,
-                "min_stretch": reference.min_stretch,
-                "max_stretch": reference.max_stretch,
-                "first_limit": reference.first_limit.map(|(m, t)| json!({"mode": m.name(), "time": t})),
-            },
-            "runs": runs,
-        });
-        Ok((row, silent))
     }
+    let row = json!({
+        "case": case.name,
+        "what": case.what,
+        "natural_frequency_hz": f0,
+        "bias_volts": bias,
+        "reference": {
+            "method": solver.name(),
+            "run_seconds": reference.run_seconds,
+            "min_stretch": reference.min_stretch,
+            "max_stretch": reference.max_stretch,
+            "first_limit": reference.first_limit.map(|(m, t)| json!({"mode": m.name(), "time": t})),
+        },
+        "runs": runs,
+    });
+    Ok((row, silent))
 }
 
 /// A short table for people: one line a case and method, verdicts by steps per period.

@@ -31,7 +31,7 @@ pub struct Point {
     /// The first check of MODEL.md §6 that failed along the run, and when (s).
     pub first_limit: Option<(FailureMode, f64)>,
     /// Why the run ended early (after the monitor's crossing: the motion left the range in
-    /// which the model is defined); the amplitude is then over what was run.
+    /// which the model is defined); the amplitude is then half that range.
     pub stopped: Option<String>,
 }
 
@@ -153,9 +153,9 @@ pub fn respond(
         }
     }
     if stopped.is_some() {
-        // Over the run until it left the model's range: the swing it had reached.
-        low = low.min(range.0);
-        high = high.max(range.1);
+        // It left the range in which the model is defined: count it as spanning that range,
+        // so every such run has the same amplitude, at least any swing the model can follow.
+        (low, high) = (range.0, range.1);
     }
     Ok(Point {
         drive_hz,

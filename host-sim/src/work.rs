@@ -6,12 +6,18 @@ use std::sync::Mutex;
 
 use indicatif::{ProgressBar, ProgressStyle};
 
-/// `job` applied to every item, in order, on all cores, with a progress bar titled `what`.
-pub fn map<I: Sync, O: Send>(what: &str, items: &[I], job: impl Fn(&I) -> O + Sync) -> Vec<O> {
-    let bar = ProgressBar::new(items.len() as u64).with_message(what.to_string());
+/// A progress bar of `len` jobs titled `what`, on stderr (hidden when it is not a terminal).
+pub fn bar(what: &str, len: usize) -> ProgressBar {
+    let bar = ProgressBar::new(len as u64).with_message(what.to_string());
     if let Ok(style) = ProgressStyle::with_template("{msg:>10} [{bar:40}] {pos}/{len} {eta}") {
         bar.set_style(style.progress_chars("=> "));
     }
+    bar
+}
+
+/// `job` applied to every item, in order, on all cores, with a progress bar titled `what`.
+pub fn map<I: Sync, O: Send>(what: &str, items: &[I], job: impl Fn(&I) -> O + Sync) -> Vec<O> {
+    let bar = bar(what, items.len());
     let next = AtomicUsize::new(0);
     let done: Mutex<Vec<Option<O>>> = Mutex::new(items.iter().map(|_| None).collect());
     let workers = std::thread::available_parallelism().map_or(1, |n| n.get());

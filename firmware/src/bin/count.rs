@@ -68,6 +68,19 @@ fn main() -> ! {
     let Ok(dev) = Device::new(REFERENCE_DEVICE.cast::<f32>()) else {
         exit(1)
     };
+    let drive = Drive::from_volts(&dev, 7450.0, 100.0, 40.0);
+    let state = State {
+        stretch: 2.19,
+        velocity: 0.01,
+    };
+    let n = count(1000, || {
+        let _ = black_box(dev.acceleration(black_box(state), black_box(0.05)));
+    });
+    defmt::info!("equation of motion, one evaluation: {=u32} instructions", n);
+    let n = count(1000, || {
+        let _ = black_box(drive.bias_dimless_squared_at(black_box(12.5)));
+    });
+    defmt::info!("drive, one evaluation (sinf): {=u32} instructions", n);
     let n = count(4, || {
         let tuner = Tuner::new(black_box(dev));
         let _ = black_box(tuner.tune(black_box(44.0), 0.05));
@@ -96,15 +109,23 @@ fn main() -> ! {
     let Ok((mut c, _)) = Controller::start(device(), TABLE, amp, settings()) else {
         exit(1)
     };
+    let n = count(500, || {
+        let _ = black_box(c.tick(None));
+    });
+    defmt::info!("controller tick on the ramp: {=u32} instructions", n);
+    // On to the AC drive (tick 995 with the reference settings), where each tick takes a sine.
+    while c.phase() != de_resonator::Phase::Driving {
+        c.tick(None);
+    }
     let n = count(1000, || {
         let _ = black_box(c.tick(None));
     });
-    defmt::info!("controller tick: {=u32} instructions", n);
+    defmt::info!("controller tick with the AC drive: {=u32} instructions", n);
     let n = count(1000, || {
-        let _ = black_box(c.tick(Some(black_box(2.1))));
+        let _ = black_box(c.tick(Some(black_box(2.19))));
     });
     defmt::info!(
-        "controller tick with a sensor sample: {=u32} instructions",
+        "controller tick with the AC drive and a sensor sample: {=u32} instructions",
         n
     );
     let n = count(1, || {
