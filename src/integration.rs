@@ -34,7 +34,24 @@ impl<T: Real> Drive<T> {
 
     /// Φ̄² at dimensionless time τ.
     pub fn bias_dimless_squared_at(&self, tau: T) -> T {
-        (self.bias + self.ac * (self.omega * tau).sin()).squared()
+        self.bias_dimless_squared_at_angle(self.omega * tau)
+    }
+
+    /// Φ̄² where the AC phase Ω̄τ is `angle`.
+    pub fn bias_dimless_squared_at_angle(&self, angle: T) -> T {
+        (self.bias + self.ac * angle.sin()).squared()
+    }
+
+    /// All three numbers finite.
+    pub fn is_finite(&self) -> bool {
+        self.bias.is_finite() && self.ac.is_finite() && self.omega.is_finite()
+    }
+
+    /// The AC phase advance over a dimensionless time `dtau`, in units of 2π/2⁶⁴ (wrapping).
+    fn phase_step(&self, dtau: T) -> u64 {
+        let turns = self.omega.to_f64() * dtau.to_f64() / core::f64::consts::TAU;
+        let fraction = turns - libm::floor(turns);
+        (fraction * 18_446_744_073_709_551_616.0) as u64
     }
 
     /// The least Φ̄² the drive reaches (where the stiffness is largest).
@@ -115,6 +132,8 @@ impl Method {
 pub enum StepError<T> {
     /// The step is NaN, infinite or not positive.
     InvalidStep { step_seconds: T },
+    /// The drive's bias, AC amplitude or frequency is NaN or infinite.
+    InvalidDrive { drive: Drive<T> },
     /// The stretch range to guard is empty, NaN, or leaves a membrane at zero stretch.
     InvalidRange { low: T, high: T },
     /// Too large a step for the method at the stiffest state of the guarded range.
@@ -146,6 +165,13 @@ impl<T: Real> fmt::Display for StepError<T> {
                     step_seconds.to_f64()
                 )
             }
+            StepError::InvalidDrive { drive } => write!(
+                f,
+                "drive (bias {}, AC {}, Ω̄ {}) is not finite",
+                drive.bias.to_f64(),
+                drive.ac.to_f64(),
+                drive.omega.to_f64()
+            ),
             StepError::InvalidRange { low, high } => write!(
                 f,
                 "stretch range [{}, {}] is not a valid range of positive stretches",
@@ -215,6 +241,11 @@ pub struct Integrator<T> {
     /// The least Φ̄² the step was checked at (the stiffest); a new drive must not go below.
     guarded_bias_dimless_squared: T,
     tick: u64,
+    /// The AC phase at the start of the next step and its advance per half substep, in
+    /// units of 2π/2⁶⁴: an exact wrapping count, so the phase neither drifts nor loses
+    /// precision over long runs, and costs no float work per step.
+    phase: u64,
+    phase_per_half_substep: u64,
     state: State<T>,
 }
 
@@ -260,6 +291,9 @@ impl<T: Real> Integrator<T> {
         if !(step_seconds.is_finite() && step_seconds > T::zero()) {
             return Err(StepError::InvalidStep { step_seconds });
         }
+        if !drive.is_finite() {
+            return Err(StepError::InvalidDrive { drive });
+        }
         let lowest_b = device.passive_stretch(range.1);
         if !(range.0 > T::zero()
             && range.1 >= range.0
@@ -291,29 +325,39 @@ impl<T: Real> Integrator<T> {
             }
         }
         let step = step_seconds * device.rad_per_s_per_unit();
+        let substep = step / T::of(f64::from(substeps));
         Ok(Self {
             device,
             drive,
             method,
-            substep: step / T::of(f64::from(substeps)),
+            substep,
             substeps,
             step_seconds,
             range,
             guarded_bias_dimless_squared: drive.least_bias_dimless_squared(),
             tick: 0,
+            phase: 0,
+            phase_per_half_substep: drive.phase_step(substep * T::of(0.5)),
             state: start,
         })
     }
 
     /// Change the drive from the next step on (a bias ramp, the AC switched on), keeping
-    /// state and time. Refused if it reaches a lower Φ̄² than the step was checked for.
+    /// state, time and the AC phase (it runs on continuously, at the new frequency).
+    /// Refused if it reaches a lower Φ̄² than the step was checked for.
     pub fn set_drive(&mut self, drive: Drive<T>) -> Result<(), StepError<T>> {
+        if !drive.is_finite() {
+            return Err(StepError::InvalidDrive { drive });
+        }
         let least = drive.least_bias_dimless_squared();
         if !(least >= self.guarded_bias_dimless_squared) {
             return Err(StepError::DriveNotGuarded {
                 least_bias_dimless_squared: least,
                 guarded_bias_dimless_squared: self.guarded_bias_dimless_squared,
             });
+        }
+        if drive.omega != self.drive.omega {
+            self.phase_per_half_substep = drive.phase_step(self.substep * T::of(0.5));
         }
         self.drive = drive;
         Ok(())
@@ -348,24 +392,26 @@ impl<T: Real> Integrator<T> {
 
     /// Φ̄² now (at t = tick·h), for the monitor.
     pub fn bias_dimless_squared(&self) -> T {
-        self.drive.bias_dimless_squared_at(self.tau(0))
+        self.bias_dimless_squared_at_phase(self.phase)
     }
 
-    /// Dimensionless time of substep `j` of the current tick.
-    fn tau(&self, j: u32) -> T {
-        T::of((self.tick as f64) * f64::from(self.substeps) + f64::from(j)) * self.substep
+    fn bias_dimless_squared_at_phase(&self, phase: u64) -> T {
+        self.drive
+            .bias_dimless_squared_at_angle(T::angle_of_phase(phase))
     }
 
-    /// Advance one step. On error the state stays at the last good one.
+    /// Advance one step. On error the state and the phase stay at the last good ones.
     pub fn step(&mut self) -> Result<State<T>, StepError<T>> {
         let mut s = self.state;
-        for j in 0..self.substeps {
-            let tau = self.tau(j);
+        let mut phase = self.phase;
+        let half = self.phase_per_half_substep;
+        for _ in 0..self.substeps {
             s = match self.method {
-                Method::Rk4 => self.rk4(s, tau),
-                Method::Verlet => self.verlet(s, tau),
-                Method::ImplicitMidpoint => self.implicit_midpoint(s, tau)?,
+                Method::Rk4 => self.rk4(s, phase),
+                Method::Verlet => self.verlet(s, phase),
+                Method::ImplicitMidpoint => self.implicit_midpoint(s, phase)?,
             };
+            phase = phase.wrapping_add(half).wrapping_add(half);
         }
         let tick = self.tick + 1;
         if !(s.stretch.is_finite() && s.velocity.is_finite()) {
@@ -379,10 +425,12 @@ impl<T: Real> Integrator<T> {
         }
         self.state = s;
         self.tick = tick;
+        self.phase = phase;
         Ok(s)
     }
 
-    fn rk4(&self, s: State<T>, tau: T) -> State<T> {
+    /// One RK4 substep from AC phase `phase`.
+    fn rk4(&self, s: State<T>, phase: u64) -> State<T> {
         let h = self.substep;
         let half = h * T::of(0.5);
         let at = |s: State<T>, dl: T, dv: T, k: T| State {
@@ -390,8 +438,10 @@ impl<T: Real> Integrator<T> {
             velocity: s.velocity + k * dv,
         };
         // The drive at the step's start, middle and end: three sines, not four.
-        let p2 = |t| self.drive.bias_dimless_squared_at(t);
-        let (start, middle, end) = (p2(tau), p2(tau + half), p2(tau + h));
+        let p2 = |p| self.bias_dimless_squared_at_phase(p);
+        let mid_phase = phase.wrapping_add(self.phase_per_half_substep);
+        let end_phase = mid_phase.wrapping_add(self.phase_per_half_substep);
+        let (start, middle, end) = (p2(phase), p2(mid_phase), p2(end_phase));
         let a = |s| self.device.acceleration(s, start);
         let (l1, v1) = (s.velocity, a(s));
         let s2 = at(s, l1, v1, half);
@@ -408,27 +458,32 @@ impl<T: Real> Integrator<T> {
         }
     }
 
-    fn verlet(&self, s: State<T>, tau: T) -> State<T> {
+    /// One velocity Verlet substep from AC phase `phase`.
+    fn verlet(&self, s: State<T>, phase: u64) -> State<T> {
         let h = self.substep;
         let half = h * T::of(0.5);
         let d = &self.device;
         let c = d.damping_dimless();
-        let force = |l, t| d.restoring_acceleration(l, self.drive.bias_dimless_squared_at(t));
-        let v_half = s.velocity + half * (force(s.stretch, tau) - c * s.velocity);
+        let force = |l, p| d.restoring_acceleration(l, self.bias_dimless_squared_at_phase(p));
+        let end_phase = phase
+            .wrapping_add(self.phase_per_half_substep)
+            .wrapping_add(self.phase_per_half_substep);
+        let v_half = s.velocity + half * (force(s.stretch, phase) - c * s.velocity);
         let stretch = s.stretch + h * v_half;
         // Damping at the end of the step taken implicitly: stable for any c ≥ 0.
-        let velocity = (v_half + half * force(stretch, tau + h)) / (T::one() + half * c);
+        let velocity = (v_half + half * force(stretch, end_phase)) / (T::one() + half * c);
         State { stretch, velocity }
     }
 
     /// y₁ = y₀ + h·f((y₀ + y₁)/2): solved for the velocity increment Δv, with
     /// λ₁ = λ₀ + h·(v₀ + Δv/2), by Newton on G(Δv) = Δv − h·a(λ_mid, v_mid).
-    fn implicit_midpoint(&self, s: State<T>, tau: T) -> Result<State<T>, StepError<T>> {
+    fn implicit_midpoint(&self, s: State<T>, phase: u64) -> Result<State<T>, StepError<T>> {
         let h = self.substep;
         let half = h * T::of(0.5);
         let d = &self.device;
         let c = d.damping_dimless();
-        let p2 = self.drive.bias_dimless_squared_at(tau + half);
+        let p2 =
+            self.bias_dimless_squared_at_phase(phase.wrapping_add(self.phase_per_half_substep));
         let mid = |dv: T| State {
             stretch: s.stretch + half * (s.velocity + dv * T::of(0.5)),
             velocity: s.velocity + dv * T::of(0.5),

@@ -27,6 +27,8 @@ pub trait Real:
     fn abs(self) -> Self;
     fn sin(self) -> Self;
     fn is_finite(self) -> bool;
+    /// The angle of a phase given in units of 2π/2⁶⁴ (a wrapping turn counter), in [−π, π).
+    fn angle_of_phase(phase: u64) -> Self;
 
     /// Zero.
     fn zero() -> Self {
@@ -81,6 +83,9 @@ impl Real for f64 {
     fn is_finite(self) -> bool {
         f64::is_finite(self)
     }
+    fn angle_of_phase(phase: u64) -> Self {
+        (phase as i64) as f64 * (core::f64::consts::TAU / 18_446_744_073_709_551_616.0)
+    }
 }
 
 impl Real for f32 {
@@ -100,10 +105,53 @@ impl Real for f32 {
     fn abs(self) -> Self {
         libm::fabsf(self)
     }
+    /// An f32 kernel for |x| ≤ 8192 (the drive's phases): libm's `sinf` reduces in f64,
+    /// which the Cortex-M4F's FPU does in software (2,000 instructions a call).
     fn sin(self) -> Self {
-        libm::sinf(self)
+        sin_f32(self)
     }
     fn is_finite(self) -> bool {
         f32::is_finite(self)
+    }
+    fn angle_of_phase(phase: u64) -> Self {
+        // The top 32 bits resolve 1.5e-9 rad, finer than f32 near π.
+        ((phase >> 32) as u32 as i32) as f32 * (core::f32::consts::TAU / 4_294_967_296.0)
+    }
+}
+
+/// Largest |x| the f32 sine reduces itself; beyond it the three-part π/4 loses accuracy.
+const SIN_F32_REDUCED_UP_TO: f32 = 8192.0;
+
+/// sin x in f32: x reduced by π/4 in three parts (Cody–Waite; the first two hold few enough
+/// bits that k·part is exact for k < 2¹⁶), then a minimax polynomial for sin or cos on
+/// [−π/4, π/4]. Error below 2.5e-7 absolute for |x| ≤ 8192; libm `sinf` beyond (and for NaN).
+fn sin_f32(x: f32) -> f32 {
+    const FOUR_OVER_PI: f32 = 1.273_239_5;
+    // π/4 = PART_1 + PART_2 + PART_3.
+    const PART_1: f32 = 0.785_156_25;
+    const PART_2: f32 = 2.418_756_5e-4;
+    const PART_3: f32 = 3.774_895e-8;
+    let size = libm::fabsf(x);
+    if !(size <= SIN_F32_REDUCED_UP_TO) {
+        return libm::sinf(x);
+    }
+    // Octant j rounded up to even, so the reduced angle lies in [−π/4, π/4].
+    let mut j = (size * FOUR_OVER_PI) as u32;
+    j += j & 1;
+    let k = j as f32;
+    let r = ((size - k * PART_1) - k * PART_2) - k * PART_3;
+    let r2 = r * r;
+    // Quadrant q = j/2 (mod 4): sin, cos, −sin, −cos of r.
+    let q = (j >> 1) & 3;
+    let value = if q & 1 == 0 {
+        ((-1.951_529_6e-4 * r2 + 8.332_161e-3) * r2 - 1.666_665_5e-1) * r2 * r + r
+    } else {
+        ((2.443_315_7e-5 * r2 - 1.388_731_6e-3) * r2 + 4.166_664_6e-2) * r2 * r2 - 0.5 * r2 + 1.0
+    };
+    let negative = (q >= 2) != (x < 0.0);
+    if negative {
+        -value
+    } else {
+        value
     }
 }

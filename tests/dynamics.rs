@@ -240,6 +240,105 @@ fn bad_steps_and_ranges_are_refused() {
     }
 }
 
+/// A drive with a NaN or infinite number is refused, at the start and on a change.
+#[test]
+fn non_finite_drives_are_refused() {
+    let d = reference();
+    let good = Drive::from_volts(&d, 6000.0, 500.0, 40.0);
+    let mut it = Integrator::new(d, good, Method::Rk4, 1e-4, RANGE, at_rest(2.0), false).unwrap();
+    for bad in [
+        Drive {
+            bias: f64::NAN,
+            ..good
+        },
+        Drive {
+            ac: f64::INFINITY,
+            ..good
+        },
+        Drive {
+            omega: f64::NAN,
+            ..good
+        },
+    ] {
+        assert!(matches!(
+            Integrator::new(d, bad, Method::Rk4, 1e-4, RANGE, at_rest(2.0), false),
+            Err(StepError::InvalidDrive { .. })
+        ));
+        assert!(matches!(
+            it.set_drive(bad),
+            Err(StepError::InvalidDrive { .. })
+        ));
+    }
+}
+
+/// The integrator's AC phase (an integer turn count) is Ω̄·τ at every tick of a long run, and
+/// runs on continuously when the drive frequency changes: Ω̄₁·τ₁ + Ω̄₂·(τ − τ₁).
+#[test]
+fn drive_phase_is_exact_over_long_runs_and_continuous_across_a_change() {
+    let d = reference();
+    let h = 1e-4;
+    let h_dimless = h * d.rad_per_s_per_unit();
+    let first = Drive::from_volts(&d, 6000.0, 300.0, 40.0);
+    let second = Drive::from_volts(&d, 6000.0, 300.0, 77.7);
+    let rest = at_rest(d.stretch_for_bias(6000.0, d.scan_end_stretch()).unwrap());
+    let mut it = Integrator::new(d, first, Method::Verlet, h, RANGE, rest, false).unwrap();
+    let switch = 150_000u64;
+    for n in 1..=300_000u64 {
+        if n == switch + 1 {
+            it.set_drive(second).unwrap();
+        }
+        it.step().unwrap();
+        let angle = if n <= switch {
+            first.omega * n as f64 * h_dimless
+        } else {
+            first.omega * switch as f64 * h_dimless + second.omega * (n - switch) as f64 * h_dimless
+        };
+        if n % 10_000 == 0 {
+            let expected = first.bias_dimless_squared_at_angle(angle);
+            let got = it.bias_dimless_squared();
+            assert!(
+                (got - expected).abs() <= 1e-9 * expected,
+                "tick {n}: Φ̄² {got} against {expected}"
+            );
+        }
+    }
+}
+
+/// The f32 sine kernel (its own range reduction, for the target) against f64 `sin` of the
+/// same f32 input.
+#[test]
+fn f32_sine_agrees_with_f64() {
+    use de_resonator::Real;
+    let mut worst = 0.0f64;
+    let mut x = -8192.0f32;
+    while x <= 8192.0 {
+        let err = (f64::from(Real::sin(x)) - f64::from(x).sin()).abs();
+        worst = worst.max(err);
+        x += 0.003_1;
+    }
+    assert!(worst < 2.5e-7, "worst error {worst:e} in [-8192, 8192]");
+    // Beyond its own range it defers to libm, which reduces exactly.
+    for x in [8192.5f32, -1.0e5, 3.0e7, f32::MAX] {
+        let err = (f64::from(Real::sin(x)) - f64::from(x).sin()).abs();
+        assert!(err < 1e-7, "sin({x}) off by {err:e}");
+    }
+    assert!(Real::sin(f32::NAN).is_nan() && Real::sin(f32::INFINITY).is_nan());
+    assert_eq!(Real::sin(0.0f32), 0.0);
+    // The phase conversion: a quarter turn is π/2, three quarters wrap to −π/2.
+    assert_eq!(
+        <f32 as Real>::angle_of_phase(1 << 62),
+        core::f32::consts::FRAC_PI_2
+    );
+    assert_eq!(
+        <f32 as Real>::angle_of_phase(3 << 62),
+        -core::f32::consts::FRAC_PI_2
+    );
+    assert_eq!(
+        <f64 as Real>::angle_of_phase(1 << 62),
+        core::f64::consts::FRAC_PI_2
+    );
+}
+
 /// A state that leaves the guarded range stops the integration with an error, keeping the
 /// last good state.
 #[test]

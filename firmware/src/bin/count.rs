@@ -80,7 +80,7 @@ fn main() -> ! {
     let n = count(1000, || {
         let _ = black_box(drive.bias_dimless_squared_at(black_box(12.5)));
     });
-    defmt::info!("drive, one evaluation (sinf): {=u32} instructions", n);
+    defmt::info!("drive, one evaluation (sine): {=u32} instructions", n);
     let n = count(4, || {
         let tuner = Tuner::new(black_box(dev));
         let _ = black_box(tuner.tune(black_box(44.0), 0.05));
