@@ -15,7 +15,29 @@ cd firmware
 step "firmware: fmt, clippy ($(rustc --version))"
 cargo fmt -- --check
 cargo clippy --locked --release --bins -- -D warnings
-cargo clippy --locked --release --bins --no-default-features --features rtt -- -D warnings
+cargo clippy --locked --release --bins --no-default-features --features rtt,solver,dynamics \
+    -- -D warnings
+
+# The feature sets, smallest first: each must run the reference job to status 0.
+tiers=(qemu qemu,solver qemu,solver,dynamics qemu,solver,dynamics,log-semihosting)
+names=("table only" "+ solver" "+ dynamics" "+ defmt")
+step "feature sets: clippy, run in QEMU (status 0), flash and static RAM"
+printf '%-12s %-40s %8s %8s\n' "set" "features" "flash" "RAM"
+for i in "${!tiers[@]}"; do
+    f="${tiers[$i]}"
+    cargo clippy --locked --release -q --bin firmware --no-default-features --features "$f" \
+        -- -D warnings
+    cargo run --locked --release -q --bin firmware --no-default-features --features "$f" \
+        >"../target/tier.log" 2>&1 || { cat ../target/tier.log; echo "[$f] failed" >&2; exit 1; }
+    # Flash: code, read-only data and the initial values of .data; RAM: .data and .bss (the
+    # stack comes on top: see the count binary).
+    size -A target/thumbv7em-none-eabihf/release/firmware | awk -v n="${names[$i]}" -v f="$f" '
+        $1 ~ /^\.(vector_table|text|rodata)$/ { flash += $2 }
+        $1 == ".data" { flash += $2; ram += $2 }
+        $1 ~ /^\.(bss|uninit)$/ { ram += $2 }
+        END { printf "%-12s %-40s %8d %8d\n", n, f, flash, ram
+              if (flash > 48 * 1024 || ram > 8 * 1024) { print "over 48 KB / 8 KB" > "/dev/stderr"; exit 1 } }'
+done
 
 for bin in firmware check; do
     step "run $bin in QEMU"

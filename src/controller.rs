@@ -1,12 +1,18 @@
 //! The resonator's controller, sans IO: the same code on the chip and in host-sim.
 //!
-//! `Controller::start` checks everything before anything is driven: the device parameters,
-//! the settings, the tuning table (CRC, order, made for this device, inside the safe region),
-//! the bias for the target from the table against the core's direct solve (MODEL.md §7), and
-//! the whole plan (ramp at a bounded slew rate, hold, AC drive) run through the fixed-step
-//! model under the safety monitor (MODEL.md §6). Then `tick`, at a fixed rate, gives the DAC
-//! code for that tick; every code passes one final check against the safe limit. A fault of
-//! any kind gives code 0 from then on, and says what happened once.
+//! `Controller::start` checks everything before anything is driven, in three stages a
+//! firmware can also take one by one (leaving out, and not linking, what it does not need):
+//! - `from_table`: the device parameters, the settings, the tuning table (CRC, order, made
+//!   for this device); the bias for the target from the table, and commands capped below the
+//!   table's top, which its maker put at (1 − margin)·limit;
+//! - `cross_check`: the limit and the bias by the core's direct solve on the chip (MODEL.md
+//!   §6–§7), which must agree with the table; the cap becomes (1 − margin)·limit;
+//! - `check_plan`: the whole plan (ramp at a bounded slew rate, hold, AC drive) run through
+//!   the fixed-step model under the safety monitor (MODEL.md §6).
+//!
+//! Then `tick`, at a fixed rate, gives the DAC code for that tick; every code passes one
+//! final check against the cap. A fault of any kind gives code 0 from then on, and says what
+//! happened once.
 
 use core::f32::consts::TAU;
 use core::fmt;
@@ -15,7 +21,7 @@ use crate::device::{Device, DeviceParams, ParamError};
 use crate::drive::{Amplifier, CodeError, DacCode};
 use crate::integration::{Drive, Integrator, Method, State, StepError};
 use crate::real::Real;
-use crate::safety::{FailureMode, Monitor};
+use crate::safety::{FailureMode, Limit, Monitor};
 use crate::table::{Table, TableError};
 use crate::tuning::{TuneError, Tuner};
 
@@ -160,22 +166,24 @@ impl fmt::Display for Fault {
     }
 }
 
-/// What `start` found.
+/// What the boot stages found.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Boot {
-    /// The bias the controller drives, from the direct solve, V.
+    /// The bias the controller drives (the direct solve's once cross-checked), V.
     pub bias_volts: f32,
     /// The table's interpolated bias for the target, V.
     pub table_volts: f32,
-    /// The first failure on the loading branch and its voltage.
-    pub limit_mode: FailureMode,
-    pub limit_volts: f32,
-    /// (1 − margin)·limit: no command goes above it, V.
+    /// The table's highest bias, V.
+    pub table_top_volts: f32,
+    /// The cap: no command goes above it, V.
     pub max_volts: f32,
-    /// The model run of the plan: the stretch range it swept, and the ticks it ran.
-    pub plan_stretch: (f32, f32),
+    /// The first failure on the loading branch, found on the chip (`cross_check`).
+    pub limit: Option<Limit<f32>>,
+    /// The ticks of the plan up to the end of its model check.
     pub plan_ticks: u32,
+    /// The stretch range the model run of the plan swept (`check_plan`).
+    pub plan_stretch: Option<(f32, f32)>,
 }
 
 /// The plan: ramp to the bias, hold, then the AC drive; the voltage at every tick.
@@ -194,6 +202,17 @@ pub struct Plan {
 }
 
 impl Plan {
+    /// No voltage at all (before a plan is made).
+    const fn idle() -> Self {
+        Self {
+            bias_volts: 0.0,
+            ramp_volts_per_tick: 0.0,
+            ac_tick: 0,
+            ac_volts: 0.0,
+            ac_phase_step: 0,
+        }
+    }
+
     /// The voltage at tick `k`.
     pub fn volts(&self, k: u32) -> f32 {
         let ramp = self.ramp_volts_per_tick * k as f32;
@@ -247,6 +266,8 @@ pub struct Output {
 pub struct Controller {
     device: Device<f32>,
     amplifier: Amplifier,
+    /// Checked by `from_table`.
+    settings: Settings,
     plan: Plan,
     max_volts: f32,
     tick: u32,
@@ -271,8 +292,22 @@ fn non_negative(setting: Setting, value: f32) -> Result<f32, Fault> {
 }
 
 impl Controller {
-    /// Check everything and make the plan; refuse with the first fault found.
+    /// Every check: `from_table`, then `cross_check`, then `check_plan`.
     pub fn start(
+        params: DeviceParams<f32>,
+        table: &[u8],
+        amplifier: Amplifier,
+        settings: Settings,
+    ) -> Result<(Self, Boot), Fault> {
+        let (controller, boot) = Self::from_table(params, table, amplifier, settings)?;
+        let (controller, boot) = controller.cross_check(boot)?;
+        controller.check_plan(boot)
+    }
+
+    /// Check the device, the settings and the table, and plan from the table alone: the bias
+    /// by interpolation, commands capped at the table's top scaled to the settings' margin,
+    /// top·min(1, (1 − margin)/(1 − table margin)), which is at most (1 − margin)·limit.
+    pub fn from_table(
         params: DeviceParams<f32>,
         table: &[u8],
         amplifier: Amplifier,
@@ -280,97 +315,142 @@ impl Controller {
     ) -> Result<(Self, Boot), Fault> {
         let device = Device::new(params).map_err(Fault::Device)?;
         let tick_hz = positive(Setting::TickHz, settings.tick_hz)?;
-        let slew = positive(Setting::SlewVoltsPerSecond, settings.slew_volts_per_second)?;
-        let settle = non_negative(Setting::SettleSeconds, settings.settle_seconds)?;
-        let ac_volts = non_negative(Setting::AcVolts, settings.ac_volts)?;
+        positive(Setting::SlewVoltsPerSecond, settings.slew_volts_per_second)?;
+        non_negative(Setting::SettleSeconds, settings.settle_seconds)?;
+        non_negative(Setting::AcVolts, settings.ac_volts)?;
         let ac_hz = non_negative(Setting::AcHz, settings.ac_hz)?;
-        let check = non_negative(Setting::CheckSeconds, settings.check_seconds)?;
-        let agreement = positive(Setting::Agreement, settings.agreement)?;
+        non_negative(Setting::CheckSeconds, settings.check_seconds)?;
+        positive(Setting::Agreement, settings.agreement)?;
         if !(ac_hz < 0.5 * tick_hz) {
             return Err(Fault::Setting {
                 setting: Setting::AcHz,
                 value: ac_hz,
             });
         }
+        if !(settings.margin >= 0.0 && settings.margin < 1.0) {
+            return Err(Fault::Tune(TuneError::InvalidMargin {
+                margin: settings.margin,
+            }));
+        }
 
         let table = Table::parse(table).map_err(Fault::Table)?;
         table.check_device(&params).map_err(Fault::Table)?;
-        let tuner = Tuner::new(device);
-        let limit = tuner.limit();
-        let max_volts = tuner.max_bias(settings.margin).map_err(Fault::Tune)?.volts;
-        if !(table.max_volts() <= max_volts) {
-            return Err(Fault::AboveSafe {
-                volts: table.max_volts(),
-                max_volts,
-            });
-        }
+        let top = table.max_volts();
+        let max_volts = top * ((1.0 - settings.margin) / (1.0 - table.margin())).min(1.0);
         let table_volts = table.bias_volts(settings.target_hz).map_err(Fault::Table)?;
-        let solved = tuner
-            .tune(settings.target_hz, settings.margin)
-            .map_err(Fault::Tune)?;
-        let bias_volts = solved.volts;
-        let table_hz = device
-            .stretch_for_bias(table_volts, limit.at.stretch)
-            .map(|stretch| device.natural_frequency_hz(stretch))
-            .unwrap_or(f32::NAN);
-        let solved_hz = solved.natural_frequency_hz;
-        if !((table_hz - solved_hz).abs() <= agreement * solved_hz) {
-            return Err(Fault::Disagree {
-                table_volts,
-                table_hz,
-                solved_volts: bias_volts,
-                solved_hz,
-            });
-        }
-
-        let ramp_ticks = bias_volts / slew * tick_hz;
-        let ac_tick = libm::ceilf(ramp_ticks) + settle * tick_hz;
-        let check_ticks = check * tick_hz;
-        if !(ac_tick + check_ticks < MAX_PLAN_TICKS) {
-            return Err(Fault::Setting {
-                setting: Setting::SlewVoltsPerSecond,
-                value: slew,
-            });
-        }
-        let ac_volts = if ac_hz > 0.0 { ac_volts } else { 0.0 };
-        let plan = Plan {
-            bias_volts,
-            ramp_volts_per_tick: slew / tick_hz,
-            ac_tick: ac_tick as u32,
-            ac_volts,
-            ac_phase_step: ((ac_hz / tick_hz) as f64 * 4_294_967_296.0) as u32,
-        };
-        if !(plan.peak_volts() <= max_volts) {
-            return Err(Fault::AboveSafe {
-                volts: plan.peak_volts(),
-                max_volts,
-            });
-        }
-        amplifier
-            .code(plan.peak_volts())
-            .map_err(Fault::Amplifier)?;
-        let plan_ticks = plan.ac_tick + check_ticks as u32 + 1;
-        let plan_stretch = check_plan(&device, &plan, tick_hz, plan_ticks)?;
-
-        let controller = Controller {
+        let mut controller = Controller {
             device,
             amplifier,
-            plan,
+            settings,
+            plan: Plan::idle(),
             max_volts,
             tick: 0,
             phase: Phase::Ramping,
             monitor: Monitor::new(),
         };
+        let plan_ticks = controller.set_plan(table_volts)?;
         let boot = Boot {
-            bias_volts,
+            bias_volts: table_volts,
             table_volts,
-            limit_mode: limit.mode,
-            limit_volts: limit.at.volts,
+            table_top_volts: top,
             max_volts,
-            plan_stretch,
+            limit: None,
             plan_ticks,
+            plan_stretch: None,
         };
         Ok((controller, boot))
+    }
+
+    /// Find the limit and the bias on the chip by the direct solve: the table's top must lie
+    /// below (1 − margin)·limit, and the natural frequencies at the two biases must agree.
+    /// The controller then drives the solve's bias, capped at (1 − margin)·limit.
+    pub fn cross_check(mut self, boot: Boot) -> Result<(Self, Boot), Fault> {
+        let settings = self.settings;
+        let tuner = Tuner::new(self.device);
+        let limit = tuner.limit();
+        let max_volts = tuner.max_bias(settings.margin).map_err(Fault::Tune)?.volts;
+        if !(boot.table_top_volts <= max_volts) {
+            return Err(Fault::AboveSafe {
+                volts: boot.table_top_volts,
+                max_volts,
+            });
+        }
+        let solved = tuner
+            .tune(settings.target_hz, settings.margin)
+            .map_err(Fault::Tune)?;
+        let table_hz = self
+            .device
+            .stretch_for_bias(boot.table_volts, limit.at.stretch)
+            .map(|stretch| self.device.natural_frequency_hz(stretch))
+            .unwrap_or(f32::NAN);
+        let solved_hz = solved.natural_frequency_hz;
+        if !((table_hz - solved_hz).abs() <= settings.agreement * solved_hz) {
+            return Err(Fault::Disagree {
+                table_volts: boot.table_volts,
+                table_hz,
+                solved_volts: solved.volts,
+                solved_hz,
+            });
+        }
+        self.max_volts = max_volts;
+        let plan_ticks = self.set_plan(solved.volts)?;
+        let boot = Boot {
+            bias_volts: solved.volts,
+            max_volts,
+            limit: Some(*limit),
+            plan_ticks,
+            ..boot
+        };
+        Ok((self, boot))
+    }
+
+    /// Run the whole plan through the model (f32 RK4 under the monitor, from rest at the
+    /// pre-stretch) and refuse it if a limit is crossed on the way.
+    pub fn check_plan(self, boot: Boot) -> Result<(Self, Boot), Fault> {
+        let stretch = check_plan(
+            &self.device,
+            &self.plan,
+            self.settings.tick_hz,
+            boot.plan_ticks,
+        )?;
+        let boot = Boot {
+            plan_stretch: Some(stretch),
+            ..boot
+        };
+        Ok((self, boot))
+    }
+
+    /// Plan a ramp to `bias_volts`, the hold and the AC drive, under the cap; the ticks up to
+    /// the end of the model check.
+    fn set_plan(&mut self, bias_volts: f32) -> Result<u32, Fault> {
+        let s = self.settings;
+        let ramp_ticks = bias_volts / s.slew_volts_per_second * s.tick_hz;
+        let ac_tick = libm::ceilf(ramp_ticks) + s.settle_seconds * s.tick_hz;
+        let check_ticks = s.check_seconds * s.tick_hz;
+        if !(ac_tick + check_ticks < MAX_PLAN_TICKS) {
+            return Err(Fault::Setting {
+                setting: Setting::SlewVoltsPerSecond,
+                value: s.slew_volts_per_second,
+            });
+        }
+        let plan = Plan {
+            bias_volts,
+            ramp_volts_per_tick: s.slew_volts_per_second / s.tick_hz,
+            ac_tick: ac_tick as u32,
+            ac_volts: if s.ac_hz > 0.0 { s.ac_volts } else { 0.0 },
+            ac_phase_step: ((s.ac_hz / s.tick_hz) as f64 * 4_294_967_296.0) as u32,
+        };
+        if !(plan.peak_volts() <= self.max_volts) {
+            return Err(Fault::AboveSafe {
+                volts: plan.peak_volts(),
+                max_volts: self.max_volts,
+            });
+        }
+        self.amplifier
+            .code(plan.peak_volts())
+            .map_err(Fault::Amplifier)?;
+        self.plan = plan;
+        Ok(plan.ac_tick + check_ticks as u32 + 1)
     }
 
     pub fn phase(&self) -> Phase {

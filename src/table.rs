@@ -9,7 +9,7 @@
 //! | 4 | 2 | version, u16 = 1 |
 //! | 6 | 2 | N, the number of points, u16, 2..=1024 |
 //! | 8 | 52 | the 13 device parameters in `DeviceParams` order (`jlim` 0 = neo-Hookean) |
-//! | 60 | 4 | the voltage margin the table was made with |
+//! | 60 | 4 | the voltage margin m the table was made with: its top bias ≤ (1 − m)·limit |
 //! | 64 | 4 | the largest relative error of f at the table's bias, as the host measured it |
 //! | 68 | 8·N | points (frequency Hz, bias V), bias strictly rising, frequency strictly monotone |
 //! | 68 + 8·N | 4 | CRC-32 (IEEE 802.3) of every byte before it, u32 |

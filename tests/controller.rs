@@ -165,19 +165,71 @@ fn boot_tunes_the_reference_device_to_44_hz() {
         "{}",
         boot.table_volts
     );
-    assert!(
-        (boot.limit_volts - 9854.73).abs() < 0.05,
-        "{}",
-        boot.limit_volts
-    );
+    let limit_volts = boot.limit.unwrap().at.volts;
+    assert!((limit_volts - 9854.73).abs() < 0.05, "{limit_volts}");
     assert!((boot.max_volts - 0.95 * 9854.73).abs() < 0.05);
     // The slow ramp stays near the static branch: no swing past the equilibrium's stretch
     // (2.19319 at 44 Hz) by more than a little.
-    assert!(
-        boot.plan_stretch.0 >= 2.0 - 1e-6 && boot.plan_stretch.1 < 2.21,
-        "{:?}",
-        boot.plan_stretch
-    );
+    let (low, high) = boot.plan_stretch.unwrap();
+    assert!(low >= 2.0 - 1e-6 && high < 2.21, "{low} .. {high}");
+}
+
+/// The table-only stage (a firmware without the solver): the bias is the table's, and the
+/// cap stays below (1 − margin)·limit of the f64 solve for the settings' margin, also when it
+/// is larger than the table's. A target whose bias lies above that cap is refused.
+#[test]
+fn table_only_boot_stays_below_the_limit_for_any_margin() {
+    let params = REFERENCE_DEVICE.cast::<f32>();
+    let limit = Tuner::new(Device::new(REFERENCE_DEVICE).unwrap())
+        .limit()
+        .at
+        .volts;
+    let table = reference_table();
+    for margin in [0.0f32, 0.05, 0.1, 0.2] {
+        let settings = Settings {
+            margin,
+            ..Settings::for_target(45.0)
+        };
+        let (c, boot) = Controller::from_table(params, &table, amplifier(), settings).unwrap();
+        let cap = (1.0 - f64::from(margin)) * limit;
+        assert!(
+            f64::from(boot.max_volts) <= cap,
+            "margin {margin}: {boot:?}"
+        );
+        assert!(boot.limit.is_none() && boot.plan_stretch.is_none());
+        assert_eq!(boot.bias_volts, boot.table_volts);
+        assert_eq!(c.plan().bias_volts, boot.table_volts);
+    }
+    // 43 Hz needs 8.8 kV or so, above 0.8 of the 9.85 kV limit.
+    let f43 = Tuner::new(Device::new(REFERENCE_DEVICE).unwrap())
+        .tune(43.0, 0.0)
+        .unwrap()
+        .volts;
+    assert!(f43 > 0.8 * limit);
+    let settings = Settings {
+        margin: 0.2,
+        ..Settings::for_target(43.0)
+    };
+    let fault = Controller::from_table(params, &table, amplifier(), settings).unwrap_err();
+    assert!(matches!(fault, Fault::AboveSafe { .. }), "{fault:?}");
+}
+
+/// The stages taken one by one give what `start` gives.
+#[test]
+fn stages_one_by_one_are_start() {
+    let params = REFERENCE_DEVICE.cast::<f32>();
+    let settings = Settings {
+        ac_volts: 100.0,
+        ac_hz: 40.0,
+        ..Settings::for_target(44.0)
+    };
+    let table = reference_table();
+    let (all, boot_all) = Controller::start(params, &table, amplifier(), settings).unwrap();
+    let (c, boot) = Controller::from_table(params, &table, amplifier(), settings).unwrap();
+    let (c, boot) = c.cross_check(boot).unwrap();
+    let (c, boot) = c.check_plan(boot).unwrap();
+    assert_eq!(boot, boot_all);
+    assert_eq!(c.plan(), all.plan());
 }
 
 #[test]
@@ -418,8 +470,8 @@ fn codes_round_down_and_refuse_what_the_amplifier_cannot_give() {
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(48))]
 
-    /// Any settings and target, however wrong: no panic; if the controller starts, no tick
-    /// ever commands more than (1 − margin)·limit, and the code gives the volts reported.
+    /// Any settings, target and corruption, however wrong: no panic; if the controller starts
+    /// (on every check, or on the table alone), no tick ever commands more than (1 − margin)·limit, and the code gives the volts reported.
     #[test]
     fn no_input_makes_the_controller_exceed_the_limit(
         target in prop_oneof![42.5f32..46.5, Just(f32::NAN), any::<f32>()],
@@ -442,7 +494,10 @@ proptest! {
             ..Settings::for_target(target)
         };
         let params = REFERENCE_DEVICE.cast::<f32>();
-        if let Ok((mut c, boot)) = Controller::start(params, &bytes, amplifier(), settings) {
+        // Every check, and the table alone (a firmware without the solver and the model).
+        let all = Controller::start(params, &bytes, amplifier(), settings);
+        let table_only = Controller::from_table(params, &bytes, amplifier(), settings);
+        for (mut c, boot) in [all, table_only].into_iter().flatten() {
             prop_assert!(corrupt.is_none());
             prop_assert!(boot.max_volts <= (1.0 - margin) * 9854.74);
             for _ in 0..2000 {

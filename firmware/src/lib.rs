@@ -1,12 +1,12 @@
 //! Board glue shared by the firmware's binaries: the defmt transport, exit codes, the panic
-//! and HardFault handlers, the DAC bus, and the device, table and settings flashed with it.
-//! The logic is in the `de-resonator` core; nothing here decides a voltage.
+//! and HardFault handlers, the stack meter, the DAC bus, and the device, table and settings
+//! flashed with it. The logic is in the `de-resonator` core; nothing here decides a voltage.
 #![no_std]
 
 use cortex_m as _;
 #[cfg(feature = "rtt")]
 use defmt_rtt as _;
-#[cfg(feature = "qemu")]
+#[cfg(feature = "log-semihosting")]
 use defmt_semihosting as _;
 
 use de_resonator::{Amplifier, DeviceParams, Settings, REFERENCE_DEVICE};
@@ -50,6 +50,7 @@ pub fn exit(code: i32) -> ! {
     }
 }
 
+#[cfg(feature = "defmt")]
 #[defmt::panic_handler]
 fn defmt_panic() -> ! {
     exit(101)
@@ -57,18 +58,78 @@ fn defmt_panic() -> ! {
 
 #[panic_handler]
 fn panic(_: &core::panic::PanicInfo) -> ! {
+    #[cfg(feature = "defmt")]
     defmt::error!("panic");
     exit(101)
 }
 
 #[cortex_m_rt::exception]
 unsafe fn HardFault(frame: &cortex_m_rt::ExceptionFrame) -> ! {
+    #[cfg(feature = "defmt")]
     defmt::error!(
         "HardFault at pc {=u32:#x}, lr {=u32:#x}",
         frame.pc(),
         frame.lr()
     );
+    let _ = frame;
     exit(102)
+}
+
+/// The stack's high-water mark, by painting: `paint` fills the free stack below the caller
+/// with a pattern, `used_below` finds the lowest word that lost it. Runtime glue (raw
+/// memory); only valid while no interrupt handler runs (none does in these binaries).
+pub mod stack {
+    use core::ptr::{addr_of, read_volatile, write_volatile};
+
+    const PAINT: u32 = 0xC0DE_CAFE;
+    /// Left unpainted below `paint`'s own stack pointer.
+    const SLACK_BYTES: u32 = 16;
+
+    extern "C" {
+        /// End of the statics, start of the stack's room (cortex-m-rt's link.x).
+        static __sheap: u32;
+        /// The top of RAM, where the stack starts.
+        static _stack_start: u32;
+    }
+
+    /// Where the stack starts (only the symbol's address is taken).
+    pub fn top() -> u32 {
+        addr_of!(_stack_start) as u32
+    }
+
+    /// The lowest address the stack may reach (only the symbol's address is taken).
+    fn bottom() -> u32 {
+        addr_of!(__sheap) as u32
+    }
+
+    /// The stack pointer now.
+    pub fn pointer() -> u32 {
+        cortex_m::register::msp::read()
+    }
+
+    /// Paint the free stack from the end of the statics to just below this call's frame.
+    #[inline(never)]
+    pub fn paint() {
+        let sp = pointer();
+        let mut at = bottom();
+        while at + SLACK_BYTES < sp {
+            // SAFETY: [__sheap, sp − slack) is RAM no one uses: below the live stack (no
+            // interrupts run), above the statics.
+            unsafe { write_volatile(at as *mut u32, PAINT) };
+            at += 4;
+        }
+    }
+
+    /// Bytes of stack used below the address `mark` since `paint` (called with the stack
+    /// pointer at or above `mark`).
+    pub fn used_below(mark: u32) -> u32 {
+        let mut at = bottom();
+        // SAFETY: reads of the painted RAM, between the statics and `mark`.
+        while at < mark && unsafe { read_volatile(at as *const u32) } == PAINT {
+            at += 4;
+        }
+        mark - at
+    }
 }
 
 /// The DAC's SPI bus as QEMU has it: no DAC on the board, so frames are counted and the

@@ -11,9 +11,9 @@ use core::hint::black_box;
 use cortex_m::peripheral::syst::SystClkSource;
 use cortex_m::peripheral::SYST;
 use de_resonator::{
-    Controller, Device, Drive, Integrator, Method, State, Table, Tuner, REFERENCE_DEVICE,
+    Controller, Dac8551, Device, Drive, Integrator, Method, State, Table, Tuner, REFERENCE_DEVICE,
 };
-use de_resonator_firmware::{amplifier, device, exit, settings, TABLE};
+use de_resonator_firmware::{amplifier, device, exit, settings, stack, RecordingBus, TABLE};
 
 /// Instructions per call of `f`, averaged over `n` calls.
 fn count(n: u32, mut f: impl FnMut()) -> u32 {
@@ -42,6 +42,7 @@ fn integrator(method: Method) -> Option<Integrator<f32>> {
 
 #[cortex_m_rt::entry]
 fn main() -> ! {
+    stack::paint();
     let Some(peripherals) = cortex_m::Peripherals::take() else {
         exit(1)
     };
@@ -135,5 +136,40 @@ fn main() -> ! {
         "controller boot (all checks, plan in the model): {=u32} instructions",
         n
     );
+
+    defmt::info!(
+        "stack, deepest over all of the above, from the top of RAM: {=u32} bytes",
+        stack::used_below(stack::top())
+    );
+    // Stack high-water of each boot stage and of a tick with its DAC frame, from here.
+    let Ok((c, boot)) = deepest("boot from the table", || {
+        Controller::from_table(device(), TABLE, amp, settings())
+    }) else {
+        exit(1)
+    };
+    let Ok((c, boot)) = deepest("cross-check by the direct solve", || c.cross_check(boot)) else {
+        exit(1)
+    };
+    let Ok((mut c, _)) = deepest("plan run through the model", || c.check_plan(boot)) else {
+        exit(1)
+    };
+    let mut dac = Dac8551::new(RecordingBus::new(None));
+    let _ = deepest("controller tick and its DAC frame", || {
+        let out = c.tick(Some(2.19));
+        black_box(dac.write(out.code))
+    });
     exit(0)
+}
+
+/// Run `f` on a freshly painted stack and log the most stack it used below this frame.
+fn deepest<R>(what: &str, f: impl FnOnce() -> R) -> R {
+    let mark = stack::pointer();
+    stack::paint();
+    let result = black_box(f());
+    defmt::info!(
+        "stack for {=str}: {=u32} bytes",
+        what,
+        stack::used_below(mark)
+    );
+    result
 }
