@@ -48,11 +48,18 @@ pub struct Settings {
     /// Largest relative difference allowed between the natural frequency at the table's bias
     /// and at the direct solve's (the two biases differ by the table's interpolation).
     pub agreement: f32,
+    /// Largest difference between the amplifier's monitored output and the last command,
+    /// V, for more than `AMPLIFIER_TICKS` ticks in a row (a saturated or failed amplifier).
+    pub amplifier_tolerance_volts: f32,
+    /// Bit-identical sensor samples in a row that mean a stuck sensor (0: no such check; a
+    /// real sensor's noise never repeats that long).
+    pub stuck_samples: u32,
 }
 
 impl Settings {
     /// Defaults for a target: 5% margin, 10 kV/s, 1 kHz, 0.25 s hold, no AC, 0.5 s of
-    /// model after the AC starts, table and solve within 1e-4 in frequency.
+    /// model after the AC starts, table and solve within 1e-4 in frequency, the amplifier
+    /// within 200 V of its command, 100 equal sensor samples in a row a stuck sensor.
     pub const fn for_target(target_hz: f32) -> Self {
         Self {
             target_hz,
@@ -64,6 +71,8 @@ impl Settings {
             ac_hz: 0.0,
             check_seconds: 0.5,
             agreement: 1e-4,
+            amplifier_tolerance_volts: 200.0,
+            stuck_samples: 100,
         }
     }
 }
@@ -79,6 +88,37 @@ pub enum Setting {
     AcHz,
     CheckSeconds,
     Agreement,
+    AmplifierToleranceVolts,
+}
+
+/// Ticks in a row the amplifier may be off its command before it is a fault (its bandwidth
+/// and slew limit lag a step by a tick or two).
+pub const AMPLIFIER_TICKS: u32 = 3;
+
+/// What the IO side measured this tick, if anything.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Inputs {
+    /// The displacement sensor's stretch λ.
+    pub stretch: Option<f32>,
+    /// The amplifier's monitor output, V.
+    pub amplifier_volts: Option<f32>,
+}
+
+impl Inputs {
+    /// Nothing measured.
+    pub const NONE: Inputs = Inputs {
+        stretch: None,
+        amplifier_volts: None,
+    };
+
+    /// A stretch sample only.
+    pub const fn stretch(stretch: f32) -> Self {
+        Inputs {
+            stretch: Some(stretch),
+            amplifier_volts: None,
+        }
+    }
 }
 
 /// The longest plan, in ticks (about 18 hours at 1 kHz before the AC starts).
@@ -114,8 +154,15 @@ pub enum Fault {
     Amplifier(CodeError),
     /// A commanded voltage failed the final check (never expected: a guard of last resort).
     Gate { volts: f32, max_volts: f32 },
-    /// A sensor sample is NaN or infinite.
+    /// A sensor sample (stretch or amplifier monitor) is NaN or infinite.
     Sensor { value: f32 },
+    /// The stretch sensor gave the same sample `samples` times in a row.
+    SensorStuck { samples: u32, value: f32 },
+    /// The amplifier's output stayed off the command for `AMPLIFIER_TICKS` ticks.
+    AmplifierDisagrees {
+        commanded_volts: f32,
+        measured_volts: f32,
+    },
     /// The measured motion crossed a limit of MODEL.md §6.
     Limit { mode: FailureMode, tick: u32 },
     /// The DAC bus failed (reported by the IO side).
@@ -158,6 +205,17 @@ impl fmt::Display for Fault {
                 )
             }
             Fault::Sensor { value } => write!(f, "sensor sample {value} is not a number"),
+            Fault::SensorStuck { samples, value } => {
+                write!(f, "stretch sensor stuck at {value} for {samples} samples")
+            }
+            Fault::AmplifierDisagrees {
+                commanded_volts,
+                measured_volts,
+            } => write!(
+                f,
+                "amplifier gives {measured_volts} V for a command of {commanded_volts} V \
+                 (saturated or failed)"
+            ),
             Fault::Limit { mode, tick } => {
                 write!(f, "measured motion at tick {tick}: {}", mode.description())
             }
@@ -273,6 +331,13 @@ pub struct Controller {
     tick: u32,
     phase: Phase,
     monitor: Monitor<f32>,
+    /// The voltage commanded at the last tick, V.
+    last_volts: f32,
+    /// Ticks in a row the amplifier has been off its command.
+    amplifier_off_ticks: u32,
+    /// The last stretch sample and how many times in a row it came.
+    last_stretch: f32,
+    same_stretch: u32,
 }
 
 fn positive(setting: Setting, value: f32) -> Result<f32, Fault> {
@@ -321,6 +386,10 @@ impl Controller {
         let ac_hz = non_negative(Setting::AcHz, settings.ac_hz)?;
         non_negative(Setting::CheckSeconds, settings.check_seconds)?;
         positive(Setting::Agreement, settings.agreement)?;
+        positive(
+            Setting::AmplifierToleranceVolts,
+            settings.amplifier_tolerance_volts,
+        )?;
         if !(ac_hz < 0.5 * tick_hz) {
             return Err(Fault::Setting {
                 setting: Setting::AcHz,
@@ -347,6 +416,10 @@ impl Controller {
             tick: 0,
             phase: Phase::Ramping,
             monitor: Monitor::new(),
+            last_volts: 0.0,
+            amplifier_off_ticks: 0,
+            last_stretch: f32::NAN,
+            same_stretch: 0,
         };
         let plan_ticks = controller.set_plan(table_volts)?;
         let boot = Boot {
@@ -466,11 +539,15 @@ impl Controller {
         self.tick
     }
 
-    /// One tick: the code to write now. `measured_stretch` is the sensor's λ, if there is
-    /// one; the monitor checks it against MODEL.md §6 at this tick's voltage.
-    pub fn tick(&mut self, measured_stretch: Option<f32>) -> Output {
+    /// One tick: the code to write now. `inputs` are this tick's measurements: the stretch
+    /// is checked against MODEL.md §6 at this tick's voltage by the monitor, and for a stuck
+    /// sensor; the amplifier's output against the last command.
+    pub fn tick(&mut self, inputs: Inputs) -> Output {
         if self.phase == Phase::Faulted {
             return self.zero(None);
+        }
+        if let Some(fault) = self.check_amplifier(inputs.amplifier_volts) {
+            return self.fault(fault);
         }
         let k = self.tick;
         self.tick = self.tick.saturating_add(1);
@@ -479,9 +556,13 @@ impl Controller {
             Ok(code) => code,
             Err(fault) => return self.fault(fault),
         };
-        if let Some(stretch) = measured_stretch {
+        self.last_volts = self.amplifier.volts(code);
+        if let Some(stretch) = inputs.stretch {
             if !stretch.is_finite() {
                 return self.fault(Fault::Sensor { value: stretch });
+            }
+            if let Some(fault) = self.check_stuck(stretch) {
+                return self.fault(fault);
             }
             let p = volts / self.device.volts_per_unit();
             self.monitor
@@ -509,6 +590,38 @@ impl Controller {
             volts: self.amplifier.volts(code),
             event,
         }
+    }
+
+    /// The amplifier's monitored output against the last command.
+    fn check_amplifier(&mut self, measured: Option<f32>) -> Option<Fault> {
+        let measured = measured?;
+        if !measured.is_finite() {
+            return Some(Fault::Sensor { value: measured });
+        }
+        if (measured - self.last_volts).abs() <= self.settings.amplifier_tolerance_volts {
+            self.amplifier_off_ticks = 0;
+            return None;
+        }
+        self.amplifier_off_ticks += 1;
+        (self.amplifier_off_ticks > AMPLIFIER_TICKS).then_some(Fault::AmplifierDisagrees {
+            commanded_volts: self.last_volts,
+            measured_volts: measured,
+        })
+    }
+
+    /// The same stretch sample too many times in a row.
+    fn check_stuck(&mut self, stretch: f32) -> Option<Fault> {
+        if stretch.to_bits() == self.last_stretch.to_bits() {
+            self.same_stretch += 1;
+        } else {
+            self.same_stretch = 1;
+            self.last_stretch = stretch;
+        }
+        let limit = self.settings.stuck_samples;
+        (limit > 0 && self.same_stretch >= limit).then_some(Fault::SensorStuck {
+            samples: self.same_stretch,
+            value: stretch,
+        })
     }
 
     /// The IO side reports a fault (a DAC bus error): 0 V from now on.

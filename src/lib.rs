@@ -21,7 +21,9 @@ pub mod statics;
 pub mod table;
 pub mod tuning;
 
-pub use controller::{Boot, Controller, Event, Fault, Output, Phase, Plan, Setting, Settings};
+pub use controller::{
+    Boot, Controller, Event, Fault, Inputs, Output, Phase, Plan, Setting, Settings,
+};
 pub use device::{Device, DeviceParams, Field, ParamError, Problem, REFERENCE_DEVICE};
 pub use drive::{Amplifier, CodeError, Dac8551, DacCode, DacError, PowerMode};
 pub use integration::{Drive, Integrator, Method, State, StepError};

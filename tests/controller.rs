@@ -3,8 +3,8 @@
 
 use de_resonator::table::{self, Table, TableError};
 use de_resonator::{
-    Amplifier, CodeError, Controller, Dac8551, DacCode, DacError, Device, Event, Fault, Phase,
-    Settings, Tuner, REFERENCE_DEVICE,
+    Amplifier, CodeError, Controller, Dac8551, DacCode, DacError, Device, Event, Fault, Inputs,
+    Phase, Settings, Tuner, REFERENCE_DEVICE,
 };
 use embedded_hal_mock::eh1::spi::{Mock, Transaction};
 use proptest::prelude::*;
@@ -245,7 +245,7 @@ fn ticks_ramp_at_the_slew_rate_hold_then_drive_and_never_exceed_the_limit() {
     let max = 0.95 * 9854.73;
     let (mut previous, mut at_bias, mut drive_on) = (0.0f32, None, None);
     for k in 0..3000u32 {
-        let out = c.tick(None);
+        let out = c.tick(Inputs::NONE);
         assert_eq!(out.volts, amp.volts(out.code));
         assert!(
             out.volts >= 0.0 && out.volts <= max,
@@ -269,7 +269,7 @@ fn ticks_ramp_at_the_slew_rate_hold_then_drive_and_never_exceed_the_limit() {
     assert_eq!(drive_on, Some(995));
     assert_eq!(c.phase(), Phase::Driving);
     // The AC swings ±100 V about the bias, at the code resolution (10000/65536 V).
-    let swing: Vec<f32> = (0..100).map(|_| c.tick(None).volts).collect();
+    let swing: Vec<f32> = (0..100).map(|_| c.tick(Inputs::NONE).volts).collect();
     let hi = swing.iter().cloned().fold(f32::MIN, f32::max);
     let lo = swing.iter().cloned().fold(f32::MAX, f32::min);
     assert!(
@@ -281,38 +281,79 @@ fn ticks_ramp_at_the_slew_rate_hold_then_drive_and_never_exceed_the_limit() {
 #[test]
 fn faults_at_run_time_give_zero_volts_and_say_so_once() {
     let mut c = start(Settings::for_target(44.0)).unwrap();
-    // Samples at the pre-stretch while the ramp starts: safe, no event.
-    for _ in 0..100 {
-        assert_eq!(c.tick(Some(2.0)).event, None);
+    // Samples near the pre-stretch while the ramp starts: safe, no event.
+    for k in 0..100 {
+        let stretch = 2.0 + 1e-6 * k as f32;
+        assert_eq!(c.tick(Inputs::stretch(stretch)).event, None);
     }
-    let out = c.tick(Some(f32::NAN));
+    let out = c.tick(Inputs::stretch(f32::NAN));
     assert_eq!(out.code, DacCode(0));
     assert!(matches!(
         out.event,
         Some(Event::Fault(Fault::Sensor { .. }))
     ));
-    let after = c.tick(Some(2.0));
+    let after = c.tick(Inputs::stretch(2.0));
     assert_eq!((after.code, after.event), (DacCode(0), None));
 
     // A measured stretch where B has gone slack (λ = 3.9: λB = 0.1): a limit, 0 V.
     let mut c = start(Settings::for_target(44.0)).unwrap();
-    c.tick(None);
-    let out = c.tick(Some(3.9));
+    c.tick(Inputs::NONE);
+    let out = c.tick(Inputs::stretch(3.9));
     assert!(
         matches!(out.event, Some(Event::Fault(Fault::Limit { .. }))),
         "{out:?}"
     );
     assert_eq!(out.code, DacCode(0));
 
+    // A stuck sensor: the same sample `stuck_samples` times in a row.
+    let mut c = start(Settings::for_target(44.0)).unwrap();
+    for _ in 1..100 {
+        assert_eq!(c.tick(Inputs::stretch(2.0)).event, None);
+    }
+    let out = c.tick(Inputs::stretch(2.0));
+    assert_eq!(out.code, DacCode(0));
+    assert!(
+        matches!(
+            out.event,
+            Some(Event::Fault(Fault::SensorStuck { samples: 100, .. }))
+        ),
+        "{out:?}"
+    );
+
+    // An amplifier that follows its command is fine; one stuck below it (saturated at 3 kV)
+    // is a fault once it has been off for more than AMPLIFIER_TICKS ticks.
+    let mut c = start(Settings::for_target(44.0)).unwrap();
+    let mut last = 0.0f32;
+    let mut faulted_at = None;
+    for k in 0..1000u32 {
+        let monitored = last.min(3000.0);
+        let out = c.tick(Inputs {
+            stretch: None,
+            amplifier_volts: Some(monitored),
+        });
+        if let Some(Event::Fault(fault)) = out.event {
+            assert!(
+                matches!(fault, Fault::AmplifierDisagrees { .. }),
+                "{fault:?}"
+            );
+            faulted_at = Some((k, last));
+            break;
+        }
+        last = out.volts;
+    }
+    let (k, commanded) = faulted_at.expect("a saturated amplifier must be a fault");
+    // At 10 V a tick the command passes 3200 V at tick 320; 3 ticks of grace after that.
+    assert!(commanded > 3200.0 && k <= 325, "tick {k}, {commanded} V");
+
     // The IO side reports a bus error.
     let mut c = start(Settings::for_target(44.0)).unwrap();
-    c.tick(None);
+    c.tick(Inputs::NONE);
     let out = c.fault(Fault::Bus);
     assert_eq!(
         (out.code, out.event),
         (DacCode(0), Some(Event::Fault(Fault::Bus)))
     );
-    assert_eq!(c.tick(None).code, DacCode(0));
+    assert_eq!(c.tick(Inputs::NONE).code, DacCode(0));
 }
 
 #[test]
@@ -501,7 +542,7 @@ proptest! {
             prop_assert!(corrupt.is_none());
             prop_assert!(boot.max_volts <= (1.0 - margin) * 9854.74);
             for _ in 0..2000 {
-                let out = c.tick(None);
+                let out = c.tick(Inputs::NONE);
                 prop_assert!(out.volts >= 0.0 && out.volts <= boot.max_volts);
                 prop_assert_eq!(out.volts, amplifier().volts(out.code));
             }

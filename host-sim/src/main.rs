@@ -11,13 +11,16 @@ use host_sim::{device_file, lut, report, stress, sweep};
 /// Safe region, bias tuning and dynamics of a dielectric elastomer resonator.
 ///
 /// A static bias voltage sets the resonator's natural frequency; too much voltage and the
-/// membrane fails. `safe` shows where the loading branch fails first and the frequencies
-/// reachable before it; `tune` finds the bias for a target frequency; `simulate`
-/// integrates the motion under a drive and reports any dynamic crossing of a limit. Without a command,
-/// `safe` runs on the built-in reference device (MODEL.md §9).
+/// membrane fails. `run` runs a scene: the firmware's controller tunes and drives a full
+/// simulation of the plant. `safe` shows where the loading branch fails first and the
+/// frequencies reachable before it; `tune` finds the bias for a target frequency; `simulate`
+/// integrates the motion under a drive and reports any dynamic crossing of a limit. Without
+/// a command, `run` runs the built-in reference scene (scenes/reference.toml).
 ///
-/// Exit status: 0 on success, 2 when the target cannot be reached, the device or a
-/// setting is invalid, or a step is unstable (one line on stderr says why, nothing on stdout).
+/// Exit status: 0 on success; 1 when a run failed (a scene's plant left its safe region, a
+/// stress run failed silently); 2 when the target cannot be reached, the device, a scene or
+/// a setting is invalid, or a step is unstable (one line on stderr says why, nothing on
+/// stdout).
 #[derive(Parser, Debug)]
 #[command(name = "host-sim", version, about, long_about)]
 struct Cli {
@@ -27,6 +30,21 @@ struct Cli {
 
 #[derive(Subcommand, Debug)]
 enum Command {
+    /// Run a scene: the firmware's controller (the core's, unchanged) tunes and drives the
+    /// full plant simulator through its DAC driver, reading the simulated sensor; host-sim
+    /// checks the true plant against MODEL.md §6 at every tick. Prints a short report and
+    /// writes what the scene asks for (a plot, the time history) into --out/<scene name>.
+    /// Without a scene: the built-in reference scene (scenes/reference.toml).
+    Run {
+        /// Scene file (TOML; see scenes/ and the README).
+        scene: Option<PathBuf>,
+        /// Folder for the scene's files (a subfolder per scene).
+        #[arg(long, value_name = "DIR", default_value = "out/run")]
+        out: PathBuf,
+        /// Print one JSON object on stdout instead of text.
+        #[arg(long)]
+        json: bool,
+    },
     /// Show the safe region: f at zero bias, the first failure on the loading branch
     /// (mode, volts, stretch, f there) and the tunable range within the margin.
     Safe {
@@ -239,8 +257,10 @@ impl Default for Common {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let command = cli.command.unwrap_or(Command::Safe {
-        common: Common::default(),
+    let command = cli.command.unwrap_or(Command::Run {
+        scene: None,
+        out: PathBuf::from("out/run"),
+        json: false,
     });
     match run(command) {
         Ok((out, failure)) => {
@@ -264,6 +284,27 @@ fn main() -> ExitCode {
 /// that failed silently). `Err` is the one-line reason for exit status 2.
 fn run(command: Command) -> Result<(String, Option<String>), String> {
     match command {
+        Command::Run { scene, out, json } => {
+            let scene = match scene {
+                Some(path) => host_sim::scene::load(&path)?,
+                None => host_sim::scene::parse(host_sim::scene::REFERENCE)
+                    .map_err(|e| format!("built-in reference scene: {e}"))?,
+            };
+            if !json {
+                eprintln!(
+                    "running scene {} ({} s)...",
+                    scene.name, scene.run.duration_seconds
+                );
+            }
+            let run = scene.run.run()?;
+            let files = report::run_files(&host_sim::scene::out_dir(&out, &scene), &scene, &run)?;
+            let text = report::run(&scene, &run, &files, json);
+            // A plant that left its true safe region fails the run.
+            let failure = run
+                .plant_crossing
+                .map(|(mode, t)| format!("the plant crossed {} at {t} s", mode.name()));
+            Ok((text, failure))
+        }
         Command::Safe { common } => {
             let (tuner, name) = tuner(&common)?;
             let range = tuner

@@ -54,7 +54,12 @@ impl Axis {
         if log {
             (low, high) = (low.floor(), high.ceil().max(low.floor() + 1.0));
         } else {
-            let pad = 0.05 * (high - low).max(1e-300);
+            // A flat line gets a range around it (a zero span has no ticks).
+            let pad = if high - low > 1e-9 * high.abs().max(low.abs()) {
+                0.05 * (high - low)
+            } else {
+                0.1 * high.abs().max(1.0)
+            };
             (low, high) = (low - pad, high + pad);
         }
         Axis { low, high, log }

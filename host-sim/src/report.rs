@@ -4,7 +4,9 @@ use std::path::Path;
 
 use de_resonator::{Equilibrium, FailureMode, TunableRange, Tuner};
 
+use crate::hil::Run;
 use crate::plot::{svg, Panel, Series};
+use crate::scene::Scene;
 use crate::simulate::Outcome;
 use serde_json::{json, Value};
 
@@ -486,4 +488,149 @@ pub fn lut(name: &str, made: &crate::lut::Made, margin: f64, out: &Path, as_json
         sig(made.errors.worst_hz),
         made.errors.volts,
     )
+}
+
+/// Write what a scene asked for (history CSV, plot) into `dir`; the paths written.
+pub fn run_files(dir: &Path, scene: &Scene, run: &Run) -> Result<Vec<String>, String> {
+    let mut written = Vec::new();
+    if scene.history {
+        let mut csv = String::from("time_s,stretch,membrane_volts\n");
+        for (t, l, v) in &run.history {
+            csv.push_str(&format!("{t},{l},{v}\n"));
+        }
+        written.push(write_file(dir, "history.csv", &csv)?);
+    }
+    if scene.plot && !run.history.is_empty() {
+        let series = |name: &str, pick: fn(&(f64, f64, f64)) -> f64| Series {
+            name: name.into(),
+            points: run.history.iter().map(|h| (h.0, pick(h))).collect(),
+        };
+        let guides: Vec<(f64, String)> = run
+            .events
+            .iter()
+            .map(|e| {
+                (
+                    e.seconds,
+                    e.what.split(',').next().unwrap_or("").to_string(),
+                )
+            })
+            .collect();
+        let panels = [
+            Panel {
+                title: format!("{}: stretch of A", scene.name),
+                x_label: "time, s".into(),
+                y_label: "stretch λ".into(),
+                series: vec![series("plant", |h| h.1)],
+                guides: guides.clone(),
+                ..Panel::default()
+            },
+            Panel {
+                title: "voltage on the membrane".into(),
+                x_label: "time, s".into(),
+                y_label: "V".into(),
+                series: vec![series("amplifier output", |h| h.2)],
+                guides,
+                ..Panel::default()
+            },
+        ];
+        written.push(write_file(dir, "run.svg", &svg(&panels))?);
+    }
+    Ok(written)
+}
+
+/// What `host-sim run` prints: a short report a person reads at a glance, or JSON.
+pub fn run(scene: &Scene, run: &Run, files: &[String], as_json: bool) -> String {
+    let target = f64::from(scene.run.settings.target_hz);
+    let f = run.natural_frequency_hz;
+    let error = (f - target) / target;
+    let bias = run.boot.map(|b| f64::from(b.bias_volts));
+    let margin = run
+        .limit
+        .map(|(mode, volts)| (mode, volts, 1.0 - run_bias(run) / volts));
+    if as_json {
+        return json!({
+            "scene": scene.name,
+            "description": scene.description,
+            "simulated_seconds": scene.run.duration_seconds,
+            "ticks": run.ticks,
+            "target_hz": target,
+            "bias_volts": bias,
+            "refused": run.refused.map(|f| f.to_string()),
+            "fault": run.fault.map(|f| f.to_string()),
+            "natural_frequency_hz": finite(f),
+            "relative_error": finite(error),
+            "limit": margin.map(|(mode, volts, m)| json!({
+                "mode": mode.name(), "volts": volts, "margin": m,
+            })),
+            "plant_crossing": first_limit_json(run.plant_crossing),
+            "final_membrane_volts": run.final_membrane_volts,
+            "events": run.events.iter().map(|e| json!({"time": e.seconds, "what": e.what}))
+                .collect::<Vec<_>>(),
+            "run_seconds": run.run_seconds,
+            "files": files,
+        })
+        .to_string();
+    }
+    let mut text = format!(
+        "scene           {} ({} s simulated, controller at {} Hz)\n\
+         target          {} Hz\n",
+        scene.name,
+        sig(scene.run.duration_seconds),
+        scene.run.settings.tick_hz,
+        sig(target),
+    );
+    match (run.refused, run.fault) {
+        (Some(fault), _) => text.push_str(&format!("refused         {fault}: 0 V throughout\n")),
+        (None, Some(fault)) => text.push_str(&format!(
+            "fault           {fault}\n\
+             \x20               output {:.1} V at the end\n",
+            run.final_membrane_volts
+        )),
+        (None, None) => {
+            text.push_str(&format!(
+                "bias            {} V\n\
+                 natural freq    {} Hz in the plant at that bias: error {:+.1e} ({:+.4}%)\n",
+                sig(bias.unwrap_or(f64::NAN)),
+                sig(f),
+                error,
+                100.0 * error
+            ));
+            if let Some((mode, volts, m)) = margin {
+                text.push_str(&format!(
+                    "margin          {:.1}% below the plant's limit ({}, {} V)\n",
+                    100.0 * m,
+                    mode.name(),
+                    sig(volts)
+                ));
+            }
+        }
+    }
+    text.push_str(&match run.plant_crossing {
+        None => format!(
+            "plant safe      yes: no check of MODEL.md §6 failed at any of {} ticks\n",
+            run.ticks
+        ),
+        Some((mode, t)) => format!(
+            "plant safe      NO: {} at {} s ({})\n",
+            mode.name(),
+            sig(t),
+            mode.description()
+        ),
+    });
+    for e in &run.events {
+        text.push_str(&format!("  {:>8.3} s     {}\n", e.seconds, e.what));
+    }
+    text.push_str(&format!("run time        {:.3} s", run.run_seconds));
+    for file in files {
+        text.push_str(&format!("\nwrote           {file}"));
+    }
+    text
+}
+
+/// The bias the plant holds at the end: the controller's, or 0 V after a fault.
+fn run_bias(run: &Run) -> f64 {
+    match (run.fault, run.boot) {
+        (None, Some(boot)) => f64::from(boot.bias_volts),
+        _ => 0.0,
+    }
 }

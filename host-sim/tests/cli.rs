@@ -170,21 +170,39 @@ fn bad_device_files() {
     assert_eq!(out.status.code(), Some(2));
 }
 
+/// The main job: no arguments run the built-in reference scene, print the short report and
+/// write its plot under out/run/reference (here in a scratch directory).
 #[test]
-fn no_arguments_runs_safe_on_the_reference_device() {
-    let out = host_sim(&[]);
-    assert!(out.status.success());
-    let text = String::from_utf8(out.stdout).unwrap();
+fn no_arguments_run_the_reference_scene() {
+    let dir = std::env::temp_dir().join(format!("host-sim-main-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .current_dir(&dir)
+        .output()
+        .expect("host-sim runs");
     assert!(
-        text.contains("reference device") && text.contains("9854.73 V"),
-        "{text}"
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
     );
+    let text = String::from_utf8(out.stdout).unwrap();
+    for word in [
+        "reference",
+        "target",
+        "44.0000 Hz",
+        "plant safe      yes",
+        "run time",
+    ] {
+        assert!(text.contains(word), "{word}: {text}");
+    }
+    assert!(dir.join("out/run/reference/run.svg").is_file());
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
 fn help_explains_the_commands() {
     let text = String::from_utf8(host_sim(&["--help"]).stdout).unwrap();
-    for word in ["safe", "tune", "Exit status"] {
+    for word in ["run", "safe", "tune", "Exit status"] {
         assert!(text.contains(word), "{text}");
     }
     let text = String::from_utf8(host_sim(&["tune", "--help"]).stdout).unwrap();

@@ -6,7 +6,8 @@
 
 use de_resonator::table::TableError;
 use de_resonator::{
-    Controller, Dac8551, DacCode, Device, Event, Fault, Settings, Tuner, REFERENCE_DEVICE,
+    Controller, Dac8551, DacCode, Device, Event, Fault, Inputs, Settings, Tuner,
+    REFERENCE_DEVICE,
 };
 use de_resonator_firmware::{amplifier, device, exit, settings, RecordingBus, TABLE};
 
@@ -120,12 +121,12 @@ fn main() -> ! {
         let mut dac = Dac8551::new(RecordingBus::new(Some(10)));
         let mut zeroed = false;
         for _ in 0..20 {
-            let out = c.tick(None);
+            let out = c.tick(Inputs::NONE);
             if dac.write(out.code).is_err() {
                 let after = c.fault(Fault::Bus);
                 zeroed = after.code == DacCode(0)
                     && matches!(after.event, Some(Event::Fault(Fault::Bus)))
-                    && c.tick(None).code == DacCode(0);
+                    && c.tick(Inputs::NONE).code == DacCode(0);
                 break;
             }
         }
@@ -133,8 +134,8 @@ fn main() -> ! {
     }
     // A NaN sensor sample: the fault and 0 V.
     if let Ok(mut c) = start(TABLE, settings()) {
-        c.tick(None);
-        let out = c.tick(Some(f32::NAN));
+        c.tick(Inputs::NONE);
+        let out = c.tick(Inputs::stretch(f32::NAN));
         check(
             "NaN sensor: fault and 0 V",
             out.code == DacCode(0) && matches!(out.event, Some(Event::Fault(Fault::Sensor { .. }))),

@@ -11,7 +11,8 @@ use core::hint::black_box;
 use cortex_m::peripheral::syst::SystClkSource;
 use cortex_m::peripheral::SYST;
 use de_resonator::{
-    Controller, Dac8551, Device, Drive, Integrator, Method, State, Table, Tuner, REFERENCE_DEVICE,
+    Controller, Dac8551, Device, Drive, Inputs, Integrator, Method, State, Table, Tuner,
+    REFERENCE_DEVICE,
 };
 use de_resonator_firmware::{amplifier, device, exit, settings, stack, RecordingBus, TABLE};
 
@@ -111,19 +112,22 @@ fn main() -> ! {
         exit(1)
     };
     let n = count(500, || {
-        let _ = black_box(c.tick(None));
+        let _ = black_box(c.tick(Inputs::NONE));
     });
     defmt::info!("controller tick on the ramp: {=u32} instructions", n);
     // On to the AC drive (tick 995 with the reference settings), where each tick takes a sine.
     while c.phase() != de_resonator::Phase::Driving {
-        c.tick(None);
+        c.tick(Inputs::NONE);
     }
     let n = count(1000, || {
-        let _ = black_box(c.tick(None));
+        let _ = black_box(c.tick(Inputs::NONE));
     });
     defmt::info!("controller tick with the AC drive: {=u32} instructions", n);
+    let mut sample = 2.19f32;
     let n = count(1000, || {
-        let _ = black_box(c.tick(Some(black_box(2.19))));
+        // Samples that differ, as a real sensor's do (equal ones in a row mean stuck).
+        sample += 1e-6;
+        let _ = black_box(c.tick(Inputs::stretch(black_box(sample))));
     });
     defmt::info!(
         "controller tick with the AC drive and a sensor sample: {=u32} instructions",
@@ -155,7 +159,7 @@ fn main() -> ! {
     };
     let mut dac = Dac8551::new(RecordingBus::new(None));
     let _ = deepest("controller tick and its DAC frame", || {
-        let out = c.tick(Some(2.19));
+        let out = c.tick(Inputs::stretch(2.19));
         black_box(dac.write(out.code))
     });
     exit(0)

@@ -7,7 +7,7 @@
 #![no_std]
 #![no_main]
 
-use de_resonator::{Boot, Controller, Dac8551, DacCode, Event, Fault};
+use de_resonator::{Boot, Controller, Dac8551, DacCode, Event, Fault, Inputs};
 use de_resonator_firmware::{amplifier, device, exit, settings, RecordingBus, TABLE};
 
 /// Ticks run under QEMU (2 s at 1 kHz).
@@ -49,7 +49,7 @@ fn main() -> ! {
     let _ = boot;
     let mut highest = DacCode(0);
     for _ in 0..RUN_TICKS {
-        let out = controller.tick(None);
+        let out = controller.tick(Inputs::NONE);
         highest = highest.max(out.code);
         if dac.write(out.code).is_err() {
             controller.fault(Fault::Bus);

@@ -1,0 +1,311 @@
+//! Hardware in the loop, on the host: the core's `Controller` (the firmware's, unchanged) at
+//! its own rate, its DAC frames through the real `Dac8551` driver into a simulated DAC on a
+//! simulated `SpiDevice`, the amplifier and the membrane in the plant simulator, and the
+//! sensor sampling the plant back. Every tick host-sim checks the true plant against §6.
+
+use std::time::Instant;
+
+use de_resonator::drive::PowerMode;
+use de_resonator::{
+    Amplifier, Boot, Controller, Dac8551, DeviceParams, Event, FailureMode, Fault, Inputs, Settings,
+};
+use embedded_hal::spi::{ErrorKind, ErrorType, Operation, SpiDevice};
+
+use crate::plant::{self, Plant, PlantSolver, Vector};
+
+/// The DAC8551 as its datasheet has it: 24-bit frames (PD1 PD0, then the code MSB first),
+/// VOUT = VREF·code/65536, 0 V when powered down. Its bus fails after `fail_after` frames.
+pub struct SimulatedDac {
+    pub reference_volts: f64,
+    pub output_volts: f64,
+    pub frames: u64,
+    pub fail_after: Option<u64>,
+}
+
+impl ErrorType for SimulatedDac {
+    type Error = ErrorKind;
+}
+
+impl SpiDevice for SimulatedDac {
+    fn transaction(&mut self, operations: &mut [Operation<'_, u8>]) -> Result<(), ErrorKind> {
+        if self.fail_after.is_some_and(|n| self.frames >= n) {
+            return Err(ErrorKind::Other);
+        }
+        for op in operations {
+            let Operation::Write(bytes) = op else {
+                return Err(ErrorKind::Other);
+            };
+            let [mode, high, low] =
+                <[u8; 3]>::try_from(&bytes[..]).map_err(|_| ErrorKind::Other)?;
+            self.frames += 1;
+            let code = u16::from_be_bytes([high, low]);
+            self.output_volts = if mode & 0b11 == PowerMode::Normal as u8 {
+                self.reference_volts * f64::from(code) / 65536.0
+            } else {
+                0.0
+            };
+        }
+        Ok(())
+    }
+}
+
+/// The displacement sensor: what it reads of λ.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sensor {
+    /// Standard deviation of its Gaussian noise, in stretch.
+    pub noise: f64,
+    /// Its quantum, in stretch (0: none).
+    pub resolution: f64,
+    /// A sample every this many controller ticks.
+    pub every_ticks: u32,
+    /// From this time on it repeats its last reading (a stuck sensor), s.
+    pub stuck_after_seconds: Option<f64>,
+    /// Whether the controller also reads the amplifier's monitor output.
+    pub amplifier_monitor: bool,
+}
+
+/// SplitMix64 and Box–Muller: reproducible noise from a seed.
+struct Noise(u64);
+
+impl Noise {
+    fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    fn uniform(&mut self) -> f64 {
+        ((self.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    }
+
+    fn gaussian(&mut self) -> f64 {
+        let (u, v) = (self.uniform(), self.uniform());
+        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+    }
+}
+
+/// A whole loop: the controller's side (what it is told), the plant's, and the run.
+#[derive(Clone, Debug)]
+pub struct Loop {
+    /// The device the controller is told about (its table is made from it).
+    pub nominal: DeviceParams<f64>,
+    pub plant: Plant,
+    pub solver: PlantSolver,
+    pub tolerance: f64,
+    pub dac_reference_volts: f64,
+    pub settings: Settings,
+    pub sensor: Option<Sensor>,
+    /// The DAC bus fails from this time on, s.
+    pub bus_fails_after_seconds: Option<f64>,
+    pub duration_seconds: f64,
+    pub seed: u64,
+    /// Keep the time history (t, λ, volts on the membrane) at every tick.
+    pub history: bool,
+}
+
+/// Something the controller said, and when.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Said {
+    pub seconds: f64,
+    pub what: String,
+}
+
+/// What a loop run gives.
+#[derive(Clone, Debug)]
+pub struct Run {
+    pub boot: Option<Boot>,
+    /// Why the controller refused to start.
+    pub refused: Option<Fault>,
+    pub events: Vec<Said>,
+    /// The fault that stopped the drive, if any.
+    pub fault: Option<Fault>,
+    /// The first check of §6 the true plant failed, and when (s): must stay `None`.
+    pub plant_crossing: Option<(FailureMode, f64)>,
+    /// The last commanded and applied voltages, V.
+    pub final_command_volts: f64,
+    pub final_membrane_volts: f64,
+    /// The plant's natural frequency at its static equilibrium under the controller's bias
+    /// (networks frozen), Hz; NaN if there is none.
+    pub natural_frequency_hz: f64,
+    /// The true plant's voltage limit above that equilibrium (networks frozen) and its mode.
+    pub limit: Option<(FailureMode, f64)>,
+    pub history: Vec<(f64, f64, f64)>,
+    pub ticks: u64,
+    pub run_seconds: f64,
+}
+
+impl Loop {
+    /// The amplifier the controller is told about: the DAC's reference times the gain.
+    fn amplifier(&self) -> Result<Amplifier, String> {
+        Amplifier::new(
+            self.dac_reference_volts as f32,
+            self.plant.amplifier.gain as f32,
+        )
+        .map_err(|e| format!("amplifier: {e}"))
+    }
+
+    /// Run the loop for its duration.
+    pub fn run(&self) -> Result<Run, String> {
+        let made = crate::lut::make(
+            self.nominal,
+            f64::from(self.settings.margin),
+            crate::lut::DEFAULT_POINTS,
+        )?;
+        let started = Instant::now();
+        let tick_seconds = 1.0 / f64::from(self.settings.tick_hz);
+        let ticks = (self.duration_seconds / tick_seconds).round() as u64;
+        // The driver borrows the bus for each write, as firmware sharing a bus would.
+        let mut bus = SimulatedDac {
+            reference_volts: self.dac_reference_volts,
+            output_volts: 0.0,
+            frames: 0,
+            fail_after: None,
+        };
+        let mut run = Run {
+            boot: None,
+            refused: None,
+            events: Vec::new(),
+            fault: None,
+            plant_crossing: None,
+            final_command_volts: 0.0,
+            final_membrane_volts: 0.0,
+            natural_frequency_hz: f64::NAN,
+            limit: None,
+            history: Vec::new(),
+            ticks: 0,
+            run_seconds: 0.0,
+        };
+        let mut y = self.plant.at_rest();
+        let mut controller = match Controller::start(
+            self.nominal.cast(),
+            &made.bytes,
+            self.amplifier()?,
+            self.settings,
+        ) {
+            Ok((c, boot)) => {
+                run.boot = Some(boot);
+                Some(c)
+            }
+            Err(fault) => {
+                run.refused = Some(fault);
+                let _ = Dac8551::new(&mut bus).power_down();
+                None
+            }
+        };
+        let mut noise = Noise(self.seed);
+        let mut reading = f64::NAN;
+        let gain = self.plant.amplifier.gain;
+        // The amplifier's enable line: the IO side drops it on any fault, so the output goes
+        // to 0 V even when the DAC can no longer be written (a dead bus keeps its last code).
+        let mut enabled = true;
+        for k in 0..ticks {
+            let t = k as f64 * tick_seconds;
+            if self.bus_fails_after_seconds.is_some_and(|at| t >= at) && bus.fail_after.is_none() {
+                bus.fail_after = Some(bus.frames);
+            }
+            let amplifier_input = |bus: &SimulatedDac, enabled: bool| {
+                if enabled {
+                    gain * bus.output_volts
+                } else {
+                    0.0
+                }
+            };
+            let membrane_volts = self.plant.volts(&y, amplifier_input(&bus, enabled));
+            if let Some(c) = controller.as_mut() {
+                let inputs = self.inputs(&mut noise, &mut reading, k, t, &y, membrane_volts);
+                let out = c.tick(inputs);
+                run.final_command_volts = f64::from(out.volts);
+                let out = if Dac8551::new(&mut bus).write(out.code).is_err() {
+                    c.fault(Fault::Bus)
+                } else {
+                    out
+                };
+                if matches!(out.event, Some(Event::Fault(_))) {
+                    enabled = false;
+                    let _ = Dac8551::new(&mut bus).power_down();
+                }
+                run.final_command_volts = f64::from(out.volts);
+                self.said(&mut run, t, out.event);
+            }
+            let input = amplifier_input(&bus, enabled);
+            y = plant::advance(
+                &self.plant,
+                self.solver,
+                self.tolerance,
+                y,
+                t,
+                t + tick_seconds,
+                input,
+            )?;
+            let volts = self.plant.volts(&y, input);
+            if run.plant_crossing.is_none() {
+                if let Some(mode) = self.plant.first_failure(&y, volts) {
+                    run.plant_crossing = Some((mode, t + tick_seconds));
+                }
+            }
+            if self.history {
+                run.history.push((t + tick_seconds, y[0], volts));
+            }
+            run.final_membrane_volts = volts;
+            run.ticks = k + 1;
+        }
+        run.run_seconds = started.elapsed().as_secs_f64();
+        let bias = controller
+            .as_ref()
+            .filter(|_| run.fault.is_none())
+            .map_or(0.0, |c| f64::from(c.plan().bias_volts));
+        if let Some(rest) = self.plant.equilibrium(&y, bias) {
+            run.natural_frequency_hz = self.plant.natural_frequency_hz(&rest, bias);
+            run.limit = self.plant.limit_volts(&rest, bias);
+        }
+        Ok(run)
+    }
+
+    /// This tick's measurements.
+    fn inputs(
+        &self,
+        noise: &mut Noise,
+        reading: &mut f64,
+        k: u64,
+        t: f64,
+        y: &Vector,
+        membrane_volts: f64,
+    ) -> Inputs {
+        let Some(sensor) = self.sensor else {
+            return Inputs::NONE;
+        };
+        let due = k.is_multiple_of(u64::from(sensor.every_ticks.max(1)));
+        let stuck = sensor.stuck_after_seconds.is_some_and(|at| t >= at) && reading.is_finite();
+        let stretch = if !due {
+            None
+        } else if stuck {
+            Some(*reading as f32)
+        } else {
+            let mut x = y[0] + sensor.noise * noise.gaussian();
+            if sensor.resolution > 0.0 {
+                x = (x / sensor.resolution).round() * sensor.resolution;
+            }
+            *reading = x;
+            Some(x as f32)
+        };
+        Inputs {
+            stretch,
+            amplifier_volts: sensor.amplifier_monitor.then_some(membrane_volts as f32),
+        }
+    }
+
+    fn said(&self, run: &mut Run, seconds: f64, event: Option<Event>) {
+        let Some(event) = event else { return };
+        let what = match event {
+            Event::AtBias { volts } => format!("at bias, {volts} V"),
+            Event::DriveOn => "AC drive on".to_string(),
+            Event::Fault(fault) => {
+                run.fault = Some(fault);
+                format!("fault, 0 V: {fault}")
+            }
+        };
+        run.events.push(Said { seconds, what });
+    }
+}

@@ -1,0 +1,386 @@
+//! The plant: the resonator as it is, not as the controller is told it is. MODEL.md §§2–6
+//! written out again in SI units and f64, with the extras of §8 a scene switches on: viscous
+//! damping, viscoelastic networks (Zhao–Koh–Suo, several branches), and the amplifier's
+//! bandwidth, slew limit and rail. Its safety checks (§6, with the networks' stresses) are
+//! the truth host-sim holds the controller to.
+
+use de_resonator::{DeviceParams, FailureMode};
+use differential_equations::prelude::*;
+
+/// Most viscoelastic branches a plant may have.
+pub const MAX_BRANCHES: usize = 3;
+
+/// State: λ, dλ/dt (1/s), the amplifier's output (V), then ξ1A, ξ2A, ξ1B, ξ2B per branch.
+pub const STATE: usize = 3 + 4 * MAX_BRANCHES;
+
+pub type Vector = [f64; STATE];
+
+/// One viscoelastic branch: a network of shear modulus `modulus` (Pa) in series with a
+/// dashpot; relaxation time η/μβ in seconds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Branch {
+    pub modulus: f64,
+    pub relaxation_seconds: f64,
+}
+
+/// The amplifier between the DAC and the membrane.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AmplifierModel {
+    /// Volts out per volt in.
+    pub gain: f64,
+    /// −3 dB bandwidth, Hz (infinite: the output follows at once).
+    pub bandwidth_hz: f64,
+    /// Largest |dV/dt|, V/s (infinite: none).
+    pub slew_volts_per_second: f64,
+    /// The highest output it can give, V (saturation).
+    pub rail_volts: f64,
+}
+
+/// The plant: the elastic device (its own parameters), the branches and the amplifier.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Plant {
+    pub params: DeviceParams<f64>,
+    pub branches: Vec<Branch>,
+    pub amplifier: AmplifierModel,
+}
+
+/// ε0, F/m (CODATA 2018).
+const VACUUM_PERMITTIVITY: f64 = 8.854_187_812_8e-12;
+
+/// Gent nominal stresses (s1, s2) of MODEL.md §3, Pa, and I1 (NaN past lock-up).
+fn gent(p: &DeviceParams<f64>, l1: f64, l2: f64) -> (f64, f64, f64) {
+    let i1 = l1 * l1 + l2 * l2 + 1.0 / (l1 * l1 * l2 * l2);
+    let factor = match p.jlim {
+        Some(jlim) => {
+            let d = 1.0 - (i1 - 3.0) / jlim;
+            if d > 0.0 {
+                1.0 / d
+            } else {
+                f64::NAN
+            }
+        }
+        None => 1.0,
+    };
+    let s1 = p.shear_modulus * (l1 - 1.0 / (l1 * l1 * l1 * l2 * l2)) * factor;
+    let s2 = p.shear_modulus * (l2 - 1.0 / (l1 * l1 * l2 * l2 * l2)) * factor;
+    (s1, s2, i1)
+}
+
+/// A network's nominal stresses (s1, s2) at stretches (λ1, λ2) over viscous ones (ξ1, ξ2):
+/// ∂/∂λ of (μβ/2)·((λ1/ξ1)² + (λ2/ξ2)² + (ξ1ξ2/λ1λ2)² − 3).
+fn network(modulus: f64, l1: f64, l2: f64, x1: f64, x2: f64) -> (f64, f64) {
+    let c = (x1 * x2 / (l1 * l2)).powi(2);
+    (
+        modulus * (l1 / (x1 * x1) - c / l1),
+        modulus * (l2 / (x2 * x2) - c / l2),
+    )
+}
+
+/// dξ1/dt, dξ2/dt of one branch (MODEL.md §8).
+fn flow(b: &Branch, l1: f64, l2: f64, x1: f64, x2: f64) -> (f64, f64) {
+    let rate = 1.0 / (6.0 * b.relaxation_seconds);
+    let (a1, a2) = ((l1 / x1).powi(2), (l2 / x2).powi(2));
+    let c = (x1 * x2 / (l1 * l2)).powi(2);
+    (
+        x1 * rate * (2.0 * a1 - a2 - c),
+        x2 * rate * (2.0 * a2 - a1 - c),
+    )
+}
+
+impl Plant {
+    /// M = m·L1A + ρ·L2·H·L1A·L1/3 (MODEL.md §4), kg.
+    pub fn mass(&self) -> f64 {
+        let p = &self.params;
+        let l1 = p.length_active + p.length_passive;
+        p.bar_mass * p.length_active
+            + p.density * p.width * p.thickness * p.length_active * l1 / 3.0
+    }
+
+    fn permittivity(&self) -> f64 {
+        self.params.relative_permittivity * VACUUM_PERMITTIVITY
+    }
+
+    /// λB from λ (MODEL.md §2).
+    pub fn passive_stretch(&self, stretch: f64) -> f64 {
+        let p = &self.params;
+        let l1 = p.length_active + p.length_passive;
+        (l1 * p.prestretch_1 - p.length_active * stretch) / p.length_passive
+    }
+
+    /// Total nominal stresses (s1, s2) of membrane A (`active`) or B at stretch λ1, with
+    /// the networks at the viscous stretches in `y`.
+    fn stresses(&self, y: &Vector, l1: f64, active: bool) -> (f64, f64) {
+        let l2 = self.params.prestretch_2;
+        let (mut s1, mut s2, _) = gent(&self.params, l1, l2);
+        for (k, b) in self.branches.iter().enumerate() {
+            let at = 3 + 4 * k + if active { 0 } else { 2 };
+            let (n1, n2) = network(b.modulus, l1, l2, y[at], y[at + 1]);
+            s1 += n1;
+            s2 += n2;
+        }
+        (s1, s2)
+    }
+
+    /// λ'' at state `y` under `volts` on A (MODEL.md §4 with the networks), 1/s².
+    fn acceleration(&self, y: &Vector, volts: f64) -> f64 {
+        let p = &self.params;
+        let (l, v) = (y[0], y[1]);
+        let e0 = volts / p.thickness;
+        let (sa, _) = self.stresses(y, l, true);
+        let (sb, _) = self.stresses(y, self.passive_stretch(l), false);
+        let electric = self.permittivity() * e0 * e0 * l * p.prestretch_2 * p.prestretch_2;
+        (p.width * p.thickness * (sb - sa + electric) - p.damping * v) / self.mass()
+    }
+
+    /// The amplifier's dV/dt toward `input` volts (before the rail).
+    fn amplifier_rate(&self, out: f64, input: f64) -> f64 {
+        let a = &self.amplifier;
+        let target = input.min(a.rail_volts);
+        let rate = (target - out) * std::f64::consts::TAU * a.bandwidth_hz;
+        rate.clamp(-a.slew_volts_per_second, a.slew_volts_per_second)
+    }
+
+    /// Whether the amplifier's output is a state (finite bandwidth or slew).
+    fn amplifier_has_state(&self) -> bool {
+        self.amplifier.bandwidth_hz.is_finite() || self.amplifier.slew_volts_per_second.is_finite()
+    }
+
+    /// The state at rest at the pre-stretch, networks relaxed, amplifier at 0 V.
+    pub fn at_rest(&self) -> Vector {
+        let mut y = [0.0; STATE];
+        y[0] = self.params.prestretch_1;
+        for k in 0..MAX_BRANCHES {
+            let at = 3 + 4 * k;
+            y[at] = self.params.prestretch_1;
+            y[at + 1] = self.params.prestretch_2;
+            y[at + 2] = self.params.prestretch_1;
+            y[at + 3] = self.params.prestretch_2;
+        }
+        y
+    }
+
+    /// The voltage on the membrane in state `y` with `input` volts at the amplifier's input.
+    pub fn volts(&self, y: &Vector, input: f64) -> f64 {
+        if self.amplifier_has_state() {
+            y[2]
+        } else {
+            input.min(self.amplifier.rail_volts)
+        }
+    }
+
+    /// The local stiffness −∂λ''/∂λ with the networks frozen (central difference), 1/s².
+    fn stiffness(&self, y: &Vector, volts: f64) -> f64 {
+        let h = 1e-6 * y[0].abs().max(1.0);
+        let (mut up, mut down) = (*y, *y);
+        up[0] += h;
+        down[0] -= h;
+        up[1] = 0.0;
+        down[1] = 0.0;
+        -(self.acceleration(&up, volts) - self.acceleration(&down, volts)) / (2.0 * h)
+    }
+
+    /// The natural frequency of small oscillations about state `y` (networks frozen, as they
+    /// are over a period when their relaxation is slow), Hz; NaN where unstable.
+    pub fn natural_frequency_hz(&self, y: &Vector, volts: f64) -> f64 {
+        self.stiffness(y, volts).sqrt() / std::f64::consts::TAU
+    }
+
+    /// The six checks of MODEL.md §6 at state `y` under `volts`, with the networks' stresses
+    /// (frozen): the first that fails, if any.
+    pub fn first_failure(&self, y: &Vector, volts: f64) -> Option<FailureMode> {
+        let p = &self.params;
+        let l = y[0];
+        let lb = self.passive_stretch(l);
+        let l2 = p.prestretch_2;
+        let eps = self.permittivity();
+        let e0 = volts / p.thickness;
+        if !(lb > 0.0 && l > 0.0) {
+            return Some(FailureMode::LossOfTension1);
+        }
+        if !(self.stiffness(y, volts) > 0.0) {
+            return Some(FailureMode::DeviceInstability);
+        }
+        // EMI of A: the Hessian of W − ½ε·E0²·λ1²λ2² in (λ1, λ2), by differences of the
+        // analytic stresses.
+        let h = 1e-6;
+        let s = |a: f64, b: f64| {
+            let mut z = *y;
+            z[0] = a;
+            self.stresses_2d(&z, a, b)
+        };
+        let (s1p, s2p) = s(l + h, l2);
+        let (s1m, s2m) = s(l - h, l2);
+        let (t1p, t2p) = s(l, l2 + h);
+        let (t1m, t2m) = s(l, l2 - h);
+        let e2 = eps * e0 * e0;
+        let h11 = (s1p - s1m) / (2.0 * h) - e2 * l2 * l2;
+        let h22 = (t2p - t2m) / (2.0 * h) - e2 * l * l;
+        let h12 = 0.5 * ((t1p - t1m) / (2.0 * h) + (s2p - s2m) / (2.0 * h)) - 2.0 * e2 * l * l2;
+        if !(h11 > 0.0 && h11 * h22 - h12 * h12 > 0.0) {
+            return Some(FailureMode::Emi);
+        }
+        let (sb1, sb2) = self.stresses(y, lb, false);
+        if !(sb1 > 0.0) {
+            return Some(FailureMode::LossOfTension1);
+        }
+        let (_, sa2) = self.stresses(y, l, true);
+        let field = volts * l * l2 / p.thickness;
+        if !(l2 * sa2 - eps * field * field > 0.0) {
+            return Some(FailureMode::LossOfTension2a);
+        }
+        if !(l2 * sb2 > 0.0) {
+            return Some(FailureMode::LossOfTension2b);
+        }
+        if !(field < p.breakdown_field) {
+            return Some(FailureMode::Breakdown);
+        }
+        let (_, _, ia) = gent(p, l, l2);
+        let (_, _, ib) = gent(p, lb, l2);
+        if let Some(jlim) = p.jlim {
+            if !(ia - 3.0 < jlim && ib - 3.0 < jlim) {
+                return Some(FailureMode::StretchLimit);
+            }
+        }
+        None
+    }
+
+    /// The static equilibrium under `volts` nearest state `y`, the networks frozen at their
+    /// viscous stretches in `y` (Newton on λ'' = 0 from y's stretch); `None` if it fails.
+    pub fn equilibrium(&self, y: &Vector, volts: f64) -> Option<Vector> {
+        let mut z = *y;
+        z[1] = 0.0;
+        for _ in 0..100 {
+            let a = self.acceleration(&z, volts);
+            let k = self.stiffness(&z, volts);
+            if !(k > 0.0) {
+                return None;
+            }
+            let change = a / k;
+            z[0] += change;
+            if change.abs() < 1e-14 * z[0] {
+                return Some(z);
+            }
+        }
+        None
+    }
+
+    /// The voltage above `volts` at which the equilibrium (networks frozen, followed from
+    /// `y`) first fails a check of §6, and the check: steps of 1%, then bisection.
+    pub fn limit_volts(&self, y: &Vector, volts: f64) -> Option<(FailureMode, f64)> {
+        let fails = |v: f64, from: &Vector| match self.equilibrium(from, v) {
+            Some(z) => self.first_failure(&z, v).map(|m| (m, z)),
+            None => Some((FailureMode::DeviceInstability, *from)),
+        };
+        let mut safe = (volts.max(1.0), *y);
+        for _ in 0..400 {
+            let next = safe.0 * 1.01;
+            match fails(next, &safe.1) {
+                None => {
+                    let z = self.equilibrium(&safe.1, next)?;
+                    safe = (next, z);
+                }
+                Some(_) => {
+                    let (mut low, mut high) = (safe.0, next);
+                    for _ in 0..60 {
+                        let mid = 0.5 * (low + high);
+                        match fails(mid, &safe.1) {
+                            None => low = mid,
+                            Some(_) => high = mid,
+                        }
+                    }
+                    let (mode, _) = fails(high, &safe.1)?;
+                    return Some((mode, low));
+                }
+            }
+        }
+        None
+    }
+
+    /// Total stresses of A at (λ1, λ2) for the Hessian: λ2 free here, the networks of A at
+    /// their viscous stretches.
+    fn stresses_2d(&self, y: &Vector, l1: f64, l2: f64) -> (f64, f64) {
+        let (mut s1, mut s2, _) = gent(&self.params, l1, l2);
+        for (k, b) in self.branches.iter().enumerate() {
+            let at = 3 + 4 * k;
+            let (n1, n2) = network(b.modulus, l1, l2, y[at], y[at + 1]);
+            s1 += n1;
+            s2 += n2;
+        }
+        (s1, s2)
+    }
+}
+
+/// The plant's equations over one controller tick, with the amplifier's input held (the
+/// DAC holds its code between ticks).
+pub struct Motion<'a> {
+    pub plant: &'a Plant,
+    /// The amplifier's input, V (DAC output × nothing: the gain is applied here).
+    pub input_volts: f64,
+}
+
+impl ODE<f64, Vector> for Motion<'_> {
+    fn diff(&self, _t: f64, y: &Vector, dydt: &mut Vector) {
+        let plant = self.plant;
+        let volts = plant.volts(y, self.input_volts);
+        *dydt = [0.0; STATE];
+        dydt[0] = y[1];
+        dydt[1] = plant.acceleration(y, volts);
+        if plant.amplifier_has_state() {
+            dydt[2] = plant.amplifier_rate(y[2], self.input_volts);
+        }
+        let l2 = plant.params.prestretch_2;
+        let lb = plant.passive_stretch(y[0]);
+        for (k, b) in plant.branches.iter().enumerate() {
+            let at = 3 + 4 * k;
+            let (a1, a2) = flow(b, y[0], l2, y[at], y[at + 1]);
+            let (b1, b2) = flow(b, lb, l2, y[at + 2], y[at + 3]);
+            dydt[at] = a1;
+            dydt[at + 1] = a2;
+            dydt[at + 2] = b1;
+            dydt[at + 3] = b2;
+        }
+    }
+}
+
+/// How the plant is integrated.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum PlantSolver {
+    /// Adaptive DOP853 (explicit): non-stiff plants.
+    Dop853,
+    /// Adaptive BDF (implicit): stiff plants (short relaxation times, light bars).
+    Bdf,
+}
+
+/// Advance `y` over `[t0, t1]` with the amplifier's input held at `input_volts`.
+pub fn advance(
+    plant: &Plant,
+    solver: PlantSolver,
+    tolerance: f64,
+    y: Vector,
+    t0: f64,
+    t1: f64,
+    input_volts: f64,
+) -> Result<Vector, String> {
+    let motion = Motion { plant, input_volts };
+    let problem = IVP::ode(&motion, t0, t1, y);
+    let solution = match solver {
+        PlantSolver::Dop853 => problem
+            .method(ExplicitRungeKutta::dop853().rtol(tolerance).atol(tolerance))
+            .solve(),
+        PlantSolver::Bdf => problem
+            .method(
+                BackwardDifferentiationFormula::adaptive()
+                    .rtol(tolerance)
+                    .atol(tolerance)
+                    .max_steps(1_000_000),
+            )
+            .solve(),
+    }
+    .map_err(|e| format!("the plant's integration failed at t = {t0} s: {e:?}"))?;
+    solution
+        .y
+        .last()
+        .copied()
+        .ok_or_else(|| format!("the plant's integration gave no state at t = {t1} s"))
+}

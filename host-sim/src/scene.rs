@@ -1,0 +1,385 @@
+//! Scenes: a TOML file names the device the controller is told about, the plant as it is
+//! (mismatch and the extras of MODEL.md §8), the amplifier, the sensor, the controller's
+//! settings, faults to inject, and what to output. `host-sim run [SCENE]`.
+
+use std::path::{Path, PathBuf};
+
+use de_resonator::{DeviceParams, Settings};
+use serde::Deserialize;
+
+use crate::hil::{Loop, Sensor};
+use crate::plant::{AmplifierModel, Branch, Plant, PlantSolver, MAX_BRANCHES};
+
+/// The reference scene, built in: the main job.
+pub const REFERENCE: &str = include_str!("../../scenes/reference.toml");
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneFile {
+    name: String,
+    #[serde(default)]
+    description: String,
+    #[serde(default = "ten")]
+    duration_seconds: f64,
+    #[serde(default)]
+    seed: u64,
+    /// The device the controller is told about: device-file keys (none: the reference).
+    #[serde(default)]
+    device: toml::Table,
+    #[serde(default)]
+    plant: PlantFile,
+    #[serde(default)]
+    amplifier: AmplifierFile,
+    sensor: Option<SensorFile>,
+    controller: ControllerFile,
+    #[serde(default)]
+    faults: FaultsFile,
+    #[serde(default)]
+    output: OutputFile,
+}
+
+fn ten() -> f64 {
+    10.0
+}
+fn one() -> f64 {
+    1.0
+}
+fn infinite() -> f64 {
+    f64::INFINITY
+}
+
+/// The plant against the nominal device: scale factors, extras.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PlantFile {
+    #[serde(default = "one")]
+    shear_modulus_scale: f64,
+    #[serde(default = "one")]
+    permittivity_scale: f64,
+    #[serde(default = "one")]
+    bar_mass_scale: f64,
+    #[serde(default = "one")]
+    prestretch_scale: f64,
+    /// `vhb-4910`: the equilibrium modulus and three branches of MODEL.md §9.
+    preset: Option<String>,
+    /// Viscous damping c, N·s; or a quality factor at the target frequency.
+    damping: Option<f64>,
+    quality_factor: Option<f64>,
+    #[serde(default)]
+    branches: Vec<BranchFile>,
+    #[serde(default = "dop853")]
+    solver: PlantSolver,
+    #[serde(default = "tolerance")]
+    tolerance: f64,
+}
+
+impl Default for PlantFile {
+    fn default() -> Self {
+        toml::from_str("").unwrap_or_else(|_| unreachable!("every key has a default"))
+    }
+}
+
+fn dop853() -> PlantSolver {
+    PlantSolver::Dop853
+}
+fn tolerance() -> f64 {
+    1e-10
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BranchFile {
+    modulus: f64,
+    relaxation_seconds: f64,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct AmplifierFile {
+    #[serde(default = "reference_volts")]
+    dac_reference_volts: f64,
+    #[serde(default = "gain")]
+    gain: f64,
+    #[serde(default = "infinite")]
+    bandwidth_hz: f64,
+    #[serde(default = "infinite")]
+    slew_volts_per_second: f64,
+    #[serde(default = "infinite")]
+    rail_volts: f64,
+}
+
+impl Default for AmplifierFile {
+    fn default() -> Self {
+        toml::from_str("").unwrap_or_else(|_| unreachable!("every key has a default"))
+    }
+}
+
+fn reference_volts() -> f64 {
+    2.5
+}
+fn gain() -> f64 {
+    4000.0
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SensorFile {
+    #[serde(default)]
+    noise: f64,
+    #[serde(default)]
+    resolution: f64,
+    #[serde(default = "one_tick")]
+    every_ticks: u32,
+    stuck_after_seconds: Option<f64>,
+    #[serde(default)]
+    amplifier_monitor: bool,
+}
+
+fn one_tick() -> u32 {
+    1
+}
+
+/// The controller's settings (core `Settings`); absent keys take `Settings::for_target`'s.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ControllerFile {
+    target_hz: f32,
+    margin: Option<f32>,
+    slew_volts_per_second: Option<f32>,
+    tick_hz: Option<f32>,
+    settle_seconds: Option<f32>,
+    ac_volts: Option<f32>,
+    ac_hz: Option<f32>,
+    check_seconds: Option<f32>,
+    agreement: Option<f32>,
+    amplifier_tolerance_volts: Option<f32>,
+    stuck_samples: Option<u32>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FaultsFile {
+    dac_bus_fails_after_seconds: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct OutputFile {
+    /// The time history as CSV (t, stretch, volts).
+    #[serde(default)]
+    history: bool,
+    /// A plot of the run (SVG).
+    #[serde(default = "yes")]
+    plot: bool,
+}
+
+impl Default for OutputFile {
+    fn default() -> Self {
+        toml::from_str("").unwrap_or_else(|_| unreachable!("every key has a default"))
+    }
+}
+
+fn yes() -> bool {
+    true
+}
+
+/// A scene, ready to run.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub name: String,
+    pub description: String,
+    pub run: Loop,
+    /// Write the time history as CSV.
+    pub history: bool,
+    /// Write a plot of the run.
+    pub plot: bool,
+}
+
+/// The VHB 4910 data of MODEL.md §9 (Wang et al. 2016): equilibrium modulus, branches.
+const VHB_4910: (f64, [(f64, f64); 3]) = (15e3, [(26.1e3, 0.61), (26.5e3, 6.6), (10.8e3, 61.0)]);
+
+/// Parse a scene's text. Errors are one line.
+pub fn parse(text: &str) -> Result<Scene, String> {
+    let file: SceneFile = toml::from_str(text).map_err(|e| {
+        let message = e.message().trim().replace('\n', " ");
+        match e.span() {
+            Some(span) => {
+                let line = text.get(..span.start).unwrap_or(text).matches('\n').count() + 1;
+                format!("line {line}: {message}")
+            }
+            None => message,
+        }
+    })?;
+    // No [device]: the reference device; else a device file's keys (absent jlim: neo-Hookean).
+    let nominal = if file.device.is_empty() {
+        de_resonator::REFERENCE_DEVICE
+    } else {
+        let text = toml::to_string(&file.device).map_err(|e| e.to_string())?;
+        crate::device_file::parse(&text).map_err(|e| format!("[device]: {e}"))?
+    };
+    let plant = plant(&nominal, &file)?;
+    let c = &file.controller;
+    let base = Settings::for_target(c.target_hz);
+    let settings = Settings {
+        target_hz: c.target_hz,
+        margin: c.margin.unwrap_or(base.margin),
+        slew_volts_per_second: c
+            .slew_volts_per_second
+            .unwrap_or(base.slew_volts_per_second),
+        tick_hz: c.tick_hz.unwrap_or(base.tick_hz),
+        settle_seconds: c.settle_seconds.unwrap_or(base.settle_seconds),
+        ac_volts: c.ac_volts.unwrap_or(base.ac_volts),
+        ac_hz: c.ac_hz.unwrap_or(base.ac_hz),
+        check_seconds: c.check_seconds.unwrap_or(base.check_seconds),
+        agreement: c.agreement.unwrap_or(base.agreement),
+        amplifier_tolerance_volts: c
+            .amplifier_tolerance_volts
+            .unwrap_or(base.amplifier_tolerance_volts),
+        stuck_samples: c.stuck_samples.unwrap_or(base.stuck_samples),
+    };
+    if !(settings.tick_hz.is_finite() && settings.tick_hz > 0.0) {
+        return Err(format!(
+            "[controller] tick_hz {} must be positive",
+            settings.tick_hz
+        ));
+    }
+    if !(file.duration_seconds.is_finite() && file.duration_seconds > 0.0) {
+        return Err(format!(
+            "duration_seconds {} must be positive",
+            file.duration_seconds
+        ));
+    }
+    let sensor = file.sensor.as_ref().map(|s| Sensor {
+        noise: s.noise,
+        resolution: s.resolution,
+        every_ticks: s.every_ticks,
+        stuck_after_seconds: s.stuck_after_seconds,
+        amplifier_monitor: s.amplifier_monitor,
+    });
+    if let Some(s) = &sensor {
+        if !(s.noise >= 0.0 && s.resolution >= 0.0 && s.every_ticks >= 1) {
+            return Err("[sensor] noise and resolution must be ≥ 0, every_ticks ≥ 1".into());
+        }
+    }
+    Ok(Scene {
+        name: file.name.clone(),
+        description: file.description.clone(),
+        history: file.output.history,
+        plot: file.output.plot,
+        run: Loop {
+            nominal,
+            plant,
+            solver: file.plant.solver,
+            tolerance: file.plant.tolerance,
+            dac_reference_volts: file.amplifier.dac_reference_volts,
+            settings,
+            sensor,
+            bus_fails_after_seconds: file.faults.dac_bus_fails_after_seconds,
+            duration_seconds: file.duration_seconds,
+            seed: file.seed,
+            history: file.output.history || file.output.plot,
+        },
+    })
+}
+
+/// The plant: the nominal device scaled, with the extras.
+fn plant(nominal: &DeviceParams<f64>, file: &SceneFile) -> Result<Plant, String> {
+    let p = &file.plant;
+    for (key, v) in [
+        ("shear_modulus_scale", p.shear_modulus_scale),
+        ("permittivity_scale", p.permittivity_scale),
+        ("bar_mass_scale", p.bar_mass_scale),
+        ("prestretch_scale", p.prestretch_scale),
+    ] {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(format!("[plant] {key} = {v} must be positive"));
+        }
+    }
+    let mut params = DeviceParams {
+        shear_modulus: nominal.shear_modulus * p.shear_modulus_scale,
+        relative_permittivity: nominal.relative_permittivity * p.permittivity_scale,
+        bar_mass: nominal.bar_mass * p.bar_mass_scale,
+        prestretch_1: nominal.prestretch_1 * p.prestretch_scale,
+        prestretch_2: nominal.prestretch_2 * p.prestretch_scale,
+        ..*nominal
+    };
+    let mut branches: Vec<Branch> = p
+        .branches
+        .iter()
+        .map(|b| Branch {
+            modulus: b.modulus,
+            relaxation_seconds: b.relaxation_seconds,
+        })
+        .collect();
+    match p.preset.as_deref() {
+        None => {}
+        Some("vhb-4910") => {
+            params.shear_modulus = VHB_4910.0 * p.shear_modulus_scale;
+            branches.extend(
+                VHB_4910
+                    .1
+                    .iter()
+                    .map(|&(modulus, relaxation_seconds)| Branch {
+                        modulus,
+                        relaxation_seconds,
+                    }),
+            );
+        }
+        Some(other) => {
+            return Err(format!(
+                "[plant] preset `{other}`: the one preset is vhb-4910"
+            ))
+        }
+    }
+    if branches.len() > MAX_BRANCHES {
+        return Err(format!("[plant] at most {MAX_BRANCHES} branches"));
+    }
+    for b in &branches {
+        let positive = |x: f64| x.is_finite() && x > 0.0;
+        if !(positive(b.modulus) && positive(b.relaxation_seconds)) {
+            return Err("[plant] a branch needs a positive modulus and relaxation time".into());
+        }
+    }
+    let a = &file.amplifier;
+    let amplifier = AmplifierModel {
+        gain: a.gain,
+        bandwidth_hz: a.bandwidth_hz,
+        slew_volts_per_second: a.slew_volts_per_second,
+        rail_volts: a.rail_volts,
+    };
+    if !(a.gain > 0.0
+        && a.bandwidth_hz > 0.0
+        && a.slew_volts_per_second > 0.0
+        && a.rail_volts > 0.0)
+    {
+        return Err("[amplifier] gain, bandwidth, slew and rail must be positive".into());
+    }
+    let mut plant = Plant {
+        params,
+        branches,
+        amplifier,
+    };
+    plant.params.damping = match (p.damping, p.quality_factor) {
+        (Some(_), Some(_)) => return Err("[plant] give damping or quality_factor, not both".into()),
+        (Some(c), None) => c,
+        (None, Some(q)) if q.is_finite() && q > 0.0 => {
+            plant.mass() * std::f64::consts::TAU * f64::from(file.controller.target_hz) / q
+        }
+        (None, Some(q)) => return Err(format!("[plant] quality_factor {q} must be positive")),
+        (None, None) => nominal.damping,
+    };
+    de_resonator::Device::new(plant.params).map_err(|e| format!("[plant]: {e}"))?;
+    Ok(plant)
+}
+
+/// Load a scene file.
+pub fn load(path: &Path) -> Result<Scene, String> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| format!("cannot read scene {}: {e}", path.display()))?;
+    parse(&text).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// Where a scene's files go.
+pub fn out_dir(base: &Path, scene: &Scene) -> PathBuf {
+    base.join(&scene.name)
+}

@@ -1,0 +1,95 @@
+//! Scenes: the firmware's controller against the full plant simulator (issue 5's musts), and
+//! the plant simulator against the core where they describe the same device.
+
+use std::path::Path;
+
+use de_resonator::{Device, FailureMode, Fault, Tuner, REFERENCE_DEVICE};
+use host_sim::hil::Run;
+use host_sim::plant::{AmplifierModel, Plant};
+use host_sim::scene;
+
+fn run(file: &str) -> Run {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../scenes")
+        .join(file);
+    let mut s = scene::load(&path).unwrap();
+    s.run.history = false;
+    s.run.run().unwrap()
+}
+
+/// An ideal amplifier: the plant is the core's model exactly.
+fn elastic_reference() -> Plant {
+    Plant {
+        params: REFERENCE_DEVICE,
+        branches: Vec::new(),
+        amplifier: AmplifierModel {
+            gain: 4000.0,
+            bandwidth_hz: f64::INFINITY,
+            slew_volts_per_second: f64::INFINITY,
+            rail_volts: f64::INFINITY,
+        },
+    }
+}
+
+/// The plant's own statics and §6 checks (written out again in SI units, with finite
+/// differences for the stiffness and the Hessian) against the published figures of the
+/// reference device: 44 Hz at 7449.88 V, the limit EMI at 9854.73 V.
+#[test]
+fn plant_statics_and_limit_match_the_published_figures() {
+    let plant = elastic_reference();
+    let rest = plant.at_rest();
+    let at = plant.equilibrium(&rest, 7449.88).unwrap();
+    let f = plant.natural_frequency_hz(&at, 7449.88);
+    assert!((f - 44.0).abs() < 44.0 * 1e-6, "{f}");
+    let zero = plant.natural_frequency_hz(&rest, 0.0);
+    let core = Tuner::new(Device::new(REFERENCE_DEVICE).unwrap()).zero_bias();
+    assert!(
+        (zero - core.natural_frequency_hz).abs() < 1e-6 * zero,
+        "{zero}"
+    );
+    let (mode, volts) = plant.limit_volts(&rest, 1000.0).unwrap();
+    assert_eq!(mode, FailureMode::Emi);
+    assert!((volts - 9854.73).abs() < 0.01, "{volts}");
+}
+
+/// No mismatch: the controller's bias gives the target within 0.1% in the plant, and the
+/// plant stays inside its safe region throughout.
+#[test]
+fn reference_scene_tunes_within_a_tenth_of_a_percent() {
+    let r = run("reference.toml");
+    assert!(r.refused.is_none() && r.fault.is_none(), "{r:?}");
+    let error = (r.natural_frequency_hz - 44.0) / 44.0;
+    assert!(error.abs() < 1e-3, "{error}");
+    assert_eq!(r.plant_crossing, None);
+    assert_eq!(r.ticks, 10_000);
+    // The bias stays below the plant's own limit by about the 5% margin or more.
+    let (_, limit) = r.limit.unwrap();
+    assert!(r.boot.unwrap().bias_volts as f64 <= 0.95 * limit);
+}
+
+/// Each fault: the controller reports it, the output ends at 0 V, nothing crosses a limit.
+#[test]
+fn fault_scenes_end_at_zero_volts_and_safe() {
+    type IsKind = fn(&Fault) -> bool;
+    let cases: [(&str, IsKind); 3] = [
+        ("fault-sensor-stuck.toml", |f| {
+            matches!(f, Fault::SensorStuck { .. })
+        }),
+        ("fault-amplifier-saturated.toml", |f| {
+            matches!(f, Fault::AmplifierDisagrees { .. })
+        }),
+        ("fault-dac-bus.toml", |f| matches!(f, Fault::Bus)),
+    ];
+    for (file, kind) in cases {
+        let r = run(file);
+        let fault = r.fault.unwrap_or_else(|| panic!("{file}: no fault"));
+        assert!(kind(&fault), "{file}: {fault:?}");
+        assert!(
+            r.final_membrane_volts.abs() < 1.0,
+            "{file}: {}",
+            r.final_membrane_volts
+        );
+        assert_eq!(r.final_command_volts, 0.0, "{file}");
+        assert_eq!(r.plant_crossing, None, "{file}");
+    }
+}
