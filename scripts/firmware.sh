@@ -17,6 +17,7 @@ cargo fmt -- --check
 cargo clippy --locked --release --bins -- -D warnings
 cargo clippy --locked --release --bins --no-default-features --features rtt,solver,dynamics \
     -- -D warnings
+cargo clippy --locked --release --bins --features trim -- -D warnings
 
 # The feature sets, smallest first: each must run the reference job to status 0.
 tiers=(qemu qemu,solver qemu,solver,dynamics qemu,solver,dynamics,log-semihosting)

@@ -23,6 +23,9 @@ use crate::integration::{Drive, Integrator, Method, State, StepError};
 use crate::real::Real;
 use crate::safety::{FailureMode, Limit, Monitor};
 use crate::table::{Table, TableError};
+#[cfg(feature = "trim")]
+use crate::trim::{estimate_shear_modulus, ring_frequency_hz};
+use crate::trim::{TrimError, MAX_WINDOW};
 use crate::tuning::{TuneError, Tuner};
 
 /// What the controller is asked to do, and how.
@@ -54,7 +57,28 @@ pub struct Settings {
     /// Bit-identical sensor samples in a row that mean a stuck sensor (0: no such check; a
     /// real sensor's noise never repeats that long).
     pub stuck_samples: u32,
+    /// Closed-loop trim: the relative frequency error to reach (0: no trim). Needs the
+    /// stretch sensor and the `cross_check` stage (the model is re-solved on the chip).
+    pub trim_tolerance: f32,
+    /// The ring measured after each pulse, s (at most `MAX_WINDOW` ticks).
+    pub trim_window_seconds: f32,
+    /// The pulse's drop below the bias, V, for half a period of the target.
+    pub trim_pulse_volts: f32,
+    /// The first bias the trim measures at, as a fraction of the nominal cap at most: a
+    /// plant softer than the model by a factor r has its limit √r lower, so a fraction p
+    /// covers plants down to r = p².
+    pub trim_probe_fraction: f32,
 }
+
+/// Most trims (measure, estimate, retune) before the controller gives up.
+pub const MAX_TRIMS: u8 = 8;
+
+/// The trim's window in the controller: none without the `trim` feature (saves 2 KB).
+const WINDOW: usize = if cfg!(feature = "trim") {
+    MAX_WINDOW
+} else {
+    0
+};
 
 impl Settings {
     /// Defaults for a target: 5% margin, 10 kV/s, 1 kHz, 0.25 s hold, no AC, 0.5 s of
@@ -73,6 +97,10 @@ impl Settings {
             agreement: 1e-4,
             amplifier_tolerance_volts: 200.0,
             stuck_samples: 100,
+            trim_tolerance: 0.0,
+            trim_window_seconds: 0.5,
+            trim_pulse_volts: 200.0,
+            trim_probe_fraction: 0.5,
         }
     }
 }
@@ -89,6 +117,10 @@ pub enum Setting {
     CheckSeconds,
     Agreement,
     AmplifierToleranceVolts,
+    TrimTolerance,
+    TrimWindowSeconds,
+    TrimPulseVolts,
+    TrimProbeFraction,
 }
 
 /// Ticks in a row the amplifier may be off its command before it is a fault (its bandwidth
@@ -167,6 +199,8 @@ pub enum Fault {
     Limit { mode: FailureMode, tick: u32 },
     /// The DAC bus failed (reported by the IO side).
     Bus,
+    /// The trim could not measure, estimate or converge.
+    Trim(TrimError),
 }
 
 impl fmt::Display for Fault {
@@ -220,6 +254,7 @@ impl fmt::Display for Fault {
                 write!(f, "measured motion at tick {tick}: {}", mode.description())
             }
             Fault::Bus => write!(f, "DAC bus error"),
+            Fault::Trim(e) => write!(f, "trim: {e}"),
         }
     }
 }
@@ -244,14 +279,22 @@ pub struct Boot {
     pub plan_stretch: Option<(f32, f32)>,
 }
 
-/// The plan: ramp to the bias, hold, then the AC drive; the voltage at every tick.
+/// The plan: ramp from a voltage to the bias, hold (with the trim's pulse, if any), then the
+/// AC drive; the voltage at every tick.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Plan {
+    /// Where the ramp starts: the tick and the voltage there.
+    pub start_tick: u32,
+    pub start_volts: f32,
     pub bias_volts: f32,
-    /// Bias step per tick on the ramp, V.
+    /// Bias step per tick on the ramp (up or down), V.
     pub ramp_volts_per_tick: f32,
-    /// The tick at which the AC starts.
+    /// Ticks [from, to) at which the voltage drops by `pulse_volts` (the trim's ping; a drop
+    /// is always toward safety).
+    pub pulse_ticks: (u32, u32),
+    pub pulse_volts: f32,
+    /// The tick at which the AC starts (`u32::MAX`: not planned yet).
     pub ac_tick: u32,
     pub ac_volts: f32,
     /// AC phase advance per tick, in units of 2π/2³²: the phase is an exact integer, so it
@@ -263,19 +306,38 @@ impl Plan {
     /// No voltage at all (before a plan is made).
     const fn idle() -> Self {
         Self {
+            start_tick: 0,
+            start_volts: 0.0,
             bias_volts: 0.0,
             ramp_volts_per_tick: 0.0,
+            pulse_ticks: (0, 0),
+            pulse_volts: 0.0,
             ac_tick: 0,
             ac_volts: 0.0,
             ac_phase_step: 0,
         }
     }
 
+    /// The ramp's voltage at tick `k` (the bias once it is reached).
+    pub fn ramp_volts(&self, k: u32) -> f32 {
+        let step = self.ramp_volts_per_tick * k.saturating_sub(self.start_tick) as f32;
+        if self.bias_volts >= self.start_volts {
+            (self.start_volts + step).min(self.bias_volts)
+        } else {
+            (self.start_volts - step).max(self.bias_volts)
+        }
+    }
+
     /// The voltage at tick `k`.
     pub fn volts(&self, k: u32) -> f32 {
-        let ramp = self.ramp_volts_per_tick * k as f32;
         if k < self.ac_tick {
-            return ramp.min(self.bias_volts);
+            let ramp = self.ramp_volts(k);
+            let (from, to) = self.pulse_ticks;
+            return if k >= from && k < to {
+                (ramp - self.pulse_volts).max(0.0)
+            } else {
+                ramp
+            };
         }
         let phase = (k - self.ac_tick).wrapping_mul(self.ac_phase_step);
         let angle = phase as f32 * (TAU / 4_294_967_296.0);
@@ -284,7 +346,7 @@ impl Plan {
 
     /// The highest voltage the plan reaches, V.
     pub fn peak_volts(&self) -> f32 {
-        self.bias_volts + self.ac_volts
+        self.start_volts.max(self.bias_volts) + self.ac_volts
     }
 }
 
@@ -294,6 +356,8 @@ impl Plan {
 pub enum Phase {
     Ramping,
     Holding,
+    /// The trim's pulse and the ring after it, measured.
+    Measuring,
     Driving,
     Faulted,
 }
@@ -306,6 +370,14 @@ pub enum Event {
     AtBias { volts: f32 },
     /// The AC drive started.
     DriveOn,
+    /// The trim measured the natural frequency at the bias and re-estimated μ; the next bias
+    /// is the one its estimate gives for the target (equal to `bias_volts` once converged).
+    Trimmed {
+        bias_volts: f32,
+        measured_hz: f32,
+        shear_modulus: f32,
+        next_bias_volts: f32,
+    },
     /// A fault: from now on 0 V.
     Fault(Fault),
 }
@@ -338,6 +410,26 @@ pub struct Controller {
     /// The last stretch sample and how many times in a row it came.
     last_stretch: f32,
     same_stretch: u32,
+    /// The tick the hold at the bias ends.
+    hold_until: u32,
+    trim: Trim,
+}
+
+/// The trim's state: the model as estimated so far and the window being measured.
+#[derive(Clone, Copy, Debug)]
+#[cfg_attr(not(feature = "trim"), allow(dead_code))]
+struct Trim {
+    /// The device as estimated (μ re-estimated; the rest as told).
+    params: DeviceParams<f32>,
+    /// Whether the bias held is the one the estimate gives for the target.
+    tuned: bool,
+    /// Trims done.
+    count: u8,
+    /// Converged (or no trim asked): the AC may start.
+    done: bool,
+    /// The first tick of the window, and the samples in it (NaN: no sample that tick).
+    window_from: u32,
+    window: [f32; WINDOW],
 }
 
 fn positive(setting: Setting, value: f32) -> Result<f32, Fault> {
@@ -390,6 +482,29 @@ impl Controller {
             Setting::AmplifierToleranceVolts,
             settings.amplifier_tolerance_volts,
         )?;
+        let trim = non_negative(Setting::TrimTolerance, settings.trim_tolerance)?;
+        if trim > 0.0 && !cfg!(feature = "trim") {
+            // Built without the trim: asking for it is an error, not a silent no.
+            return Err(Fault::Setting {
+                setting: Setting::TrimTolerance,
+                value: trim,
+            });
+        }
+        non_negative(Setting::TrimPulseVolts, settings.trim_pulse_volts)?;
+        let window = positive(Setting::TrimWindowSeconds, settings.trim_window_seconds)?;
+        if trim > 0.0 && !(window * tick_hz <= WINDOW as f32) {
+            return Err(Fault::Setting {
+                setting: Setting::TrimWindowSeconds,
+                value: window,
+            });
+        }
+        let probe = positive(Setting::TrimProbeFraction, settings.trim_probe_fraction)?;
+        if !(probe <= 1.0) {
+            return Err(Fault::Setting {
+                setting: Setting::TrimProbeFraction,
+                value: probe,
+            });
+        }
         if !(ac_hz < 0.5 * tick_hz) {
             return Err(Fault::Setting {
                 setting: Setting::AcHz,
@@ -420,6 +535,15 @@ impl Controller {
             amplifier_off_ticks: 0,
             last_stretch: f32::NAN,
             same_stretch: 0,
+            hold_until: 0,
+            trim: Trim {
+                params,
+                tuned: true,
+                count: 0,
+                done: settings.trim_tolerance == 0.0,
+                window_from: 0,
+                window: [f32::NAN; WINDOW],
+            },
         };
         let plan_ticks = controller.set_plan(table_volts)?;
         let boot = Boot {
@@ -495,8 +619,15 @@ impl Controller {
 
     /// Plan a ramp to `bias_volts`, the hold and the AC drive, under the cap; the ticks up to
     /// the end of the model check.
-    fn set_plan(&mut self, bias_volts: f32) -> Result<u32, Fault> {
+    fn set_plan(&mut self, tuned_volts: f32) -> Result<u32, Fault> {
         let s = self.settings;
+        // With trim, measure first at a probe bias low enough for a softer plant.
+        let bias_volts = if self.trim.done {
+            tuned_volts
+        } else {
+            tuned_volts.min(s.trim_probe_fraction * self.max_volts)
+        };
+        self.trim.tuned = bias_volts == tuned_volts;
         let ramp_ticks = bias_volts / s.slew_volts_per_second * s.tick_hz;
         let ac_tick = libm::ceilf(ramp_ticks) + s.settle_seconds * s.tick_hz;
         let check_ticks = s.check_seconds * s.tick_hz;
@@ -507,9 +638,17 @@ impl Controller {
             });
         }
         let plan = Plan {
+            start_tick: 0,
+            start_volts: 0.0,
             bias_volts,
             ramp_volts_per_tick: s.slew_volts_per_second / s.tick_hz,
-            ac_tick: ac_tick as u32,
+            pulse_ticks: (0, 0),
+            pulse_volts: 0.0,
+            ac_tick: if self.trim.done {
+                ac_tick as u32
+            } else {
+                u32::MAX
+            },
             ac_volts: if s.ac_hz > 0.0 { s.ac_volts } else { 0.0 },
             ac_phase_step: ((s.ac_hz / s.tick_hz) as f64 * 4_294_967_296.0) as u32,
         };
@@ -523,7 +662,8 @@ impl Controller {
             .code(plan.peak_volts())
             .map_err(Fault::Amplifier)?;
         self.plan = plan;
-        Ok(plan.ac_tick + check_ticks as u32 + 1)
+        // Without trim the model check covers the AC; with it, the ramp and the hold.
+        Ok(ac_tick as u32 + check_ticks as u32 + 1)
     }
 
     pub fn phase(&self) -> Phase {
@@ -575,14 +715,26 @@ impl Controller {
             }
         }
         let event = match self.phase {
-            Phase::Ramping if volts >= self.plan.bias_volts => {
+            Phase::Ramping if self.plan.ramp_volts(k) == self.plan.bias_volts => {
                 self.phase = Phase::Holding;
+                let settle = self.settings.settle_seconds * self.settings.tick_hz;
+                self.hold_until = k.saturating_add(settle as u32);
                 Some(Event::AtBias { volts })
+            }
+            #[cfg(feature = "trim")]
+            Phase::Holding if !self.trim.done && k >= self.hold_until => {
+                self.start_measuring(k);
+                None
             }
             Phase::Holding if k >= self.plan.ac_tick && self.plan.ac_volts > 0.0 => {
                 self.phase = Phase::Driving;
                 Some(Event::DriveOn)
             }
+            #[cfg(feature = "trim")]
+            Phase::Measuring => match self.measure(k, inputs.stretch) {
+                Ok(event) => event,
+                Err(fault) => return self.fault(fault),
+            },
             _ => None,
         };
         Output {
@@ -590,6 +742,96 @@ impl Controller {
             volts: self.amplifier.volts(code),
             event,
         }
+    }
+
+    /// Pulse now; measure the ring from the pulse's end.
+    #[cfg(feature = "trim")]
+    fn start_measuring(&mut self, k: u32) {
+        let s = self.settings;
+        let pulse = libm::roundf(0.5 * s.tick_hz / s.target_hz).max(1.0) as u32;
+        let from = k.saturating_add(1);
+        self.plan.pulse_ticks = (from, from.saturating_add(pulse));
+        self.plan.pulse_volts = s.trim_pulse_volts;
+        self.trim.window_from = from.saturating_add(pulse);
+        self.trim.window = [f32::NAN; WINDOW];
+        self.phase = Phase::Measuring;
+    }
+
+    /// Record this tick's sample; at the window's end, estimate μ and retune, or finish.
+    #[cfg(feature = "trim")]
+    fn measure(&mut self, k: u32, stretch: Option<f32>) -> Result<Option<Event>, Fault> {
+        let s = self.settings;
+        let len = (s.trim_window_seconds * s.tick_hz) as usize;
+        let Some(at) = k.checked_sub(self.trim.window_from) else {
+            return Ok(None);
+        };
+        let at = at as usize;
+        if let (Some(x), Some(slot)) = (stretch, self.trim.window.get_mut(at)) {
+            *slot = x;
+        }
+        if at + 1 < len {
+            return Ok(None);
+        }
+        let bias_volts = self.plan.bias_volts;
+        let window = self.trim.window.get(..len).unwrap_or(&self.trim.window);
+        let measured_hz = ring_frequency_hz(window, s.tick_hz).map_err(Fault::Trim)?;
+        let mu = estimate_shear_modulus(&self.trim.params, bias_volts, measured_hz)
+            .map_err(Fault::Trim)?;
+        self.trim.params.shear_modulus = mu;
+        self.trim.count += 1;
+        let converged =
+            self.trim.tuned && (measured_hz - s.target_hz).abs() <= s.trim_tolerance * s.target_hz;
+        let mut next_bias_volts = bias_volts;
+        if converged {
+            self.trim.done = true;
+            self.plan.ac_tick = k.saturating_add(1);
+            self.phase = Phase::Holding;
+        } else if self.trim.count >= MAX_TRIMS {
+            return Err(Fault::Trim(TrimError::NotConverged {
+                measured_hz,
+                target_hz: s.target_hz,
+            }));
+        } else {
+            next_bias_volts = self.retune(k)?;
+        }
+        Ok(Some(Event::Trimmed {
+            bias_volts,
+            measured_hz,
+            shear_modulus: mu,
+            next_bias_volts,
+        }))
+    }
+
+    /// The estimated device's cap and bias for the target; ramp there from the bias now.
+    #[cfg(feature = "trim")]
+    fn retune(&mut self, k: u32) -> Result<f32, Fault> {
+        let s = self.settings;
+        let device = Device::new(self.trim.params).map_err(Fault::Device)?;
+        let tuner = Tuner::new(device);
+        let max_volts = tuner.max_bias(s.margin).map_err(Fault::Tune)?.volts;
+        let bias_volts = tuner
+            .tune(s.target_hz, s.margin)
+            .map_err(Fault::Tune)?
+            .volts;
+        let from = self.plan.bias_volts;
+        if !(from <= max_volts && bias_volts + s.ac_volts <= max_volts) {
+            return Err(Fault::AboveSafe {
+                volts: from.max(bias_volts + s.ac_volts),
+                max_volts,
+            });
+        }
+        self.device = device;
+        self.max_volts = max_volts;
+        self.trim.tuned = true;
+        self.plan = Plan {
+            start_tick: k.saturating_add(1),
+            start_volts: from,
+            bias_volts,
+            pulse_ticks: (0, 0),
+            ..self.plan
+        };
+        self.phase = Phase::Ramping;
+        Ok(bias_volts)
     }
 
     /// The amplifier's monitored output against the last command.

@@ -19,6 +19,7 @@ pub mod roots;
 pub mod safety;
 pub mod statics;
 pub mod table;
+pub mod trim;
 pub mod tuning;
 
 pub use controller::{
@@ -31,4 +32,5 @@ pub use real::Real;
 pub use safety::{Crossing, FailureMode, Limit, Margins, Monitor};
 pub use statics::Equilibrium;
 pub use table::{Table, TableError};
+pub use trim::TrimError;
 pub use tuning::{TunableRange, TuneError, Tuner, DEFAULT_MARGIN};

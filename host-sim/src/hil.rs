@@ -123,6 +123,8 @@ pub struct Run {
     pub fault: Option<Fault>,
     /// The first check of §6 the true plant failed, and when (s): must stay `None`.
     pub plant_crossing: Option<(FailureMode, f64)>,
+    /// The bias the controller holds at the end (0 after a fault or a refusal), V.
+    pub bias_volts: f64,
     /// The last commanded and applied voltages, V.
     pub final_command_volts: f64,
     pub final_membrane_volts: f64,
@@ -169,6 +171,7 @@ impl Loop {
             events: Vec::new(),
             fault: None,
             plant_crossing: None,
+            bias_volts: 0.0,
             final_command_volts: 0.0,
             final_membrane_volts: 0.0,
             natural_frequency_hz: f64::NAN,
@@ -256,6 +259,7 @@ impl Loop {
             .as_ref()
             .filter(|_| run.fault.is_none())
             .map_or(0.0, |c| f64::from(c.plan().bias_volts));
+        run.bias_volts = bias;
         if let Some(rest) = self.plant.equilibrium(&y, bias) {
             run.natural_frequency_hz = self.plant.natural_frequency_hz(&rest, bias);
             run.limit = self.plant.limit_volts(&rest, bias);
@@ -301,6 +305,16 @@ impl Loop {
         let what = match event {
             Event::AtBias { volts } => format!("at bias, {volts} V"),
             Event::DriveOn => "AC drive on".to_string(),
+            Event::Trimmed {
+                bias_volts,
+                measured_hz,
+                shear_modulus,
+                next_bias_volts,
+            } => format!(
+                "trim: {measured_hz:.4} Hz measured at {bias_volts:.1} V, μ estimated \
+                 {:.2} kPa, next bias {next_bias_volts:.1} V",
+                shear_modulus / 1e3
+            ),
             Event::Fault(fault) => {
                 run.fault = Some(fault);
                 format!("fault, 0 V: {fault}")

@@ -543,10 +543,9 @@ pub fn run(scene: &Scene, run: &Run, files: &[String], as_json: bool) -> String 
     let target = f64::from(scene.run.settings.target_hz);
     let f = run.natural_frequency_hz;
     let error = (f - target) / target;
-    let bias = run.boot.map(|b| f64::from(b.bias_volts));
     let margin = run
         .limit
-        .map(|(mode, volts)| (mode, volts, 1.0 - run_bias(run) / volts));
+        .map(|(mode, volts)| (mode, volts, 1.0 - run.bias_volts / volts));
     if as_json {
         return json!({
             "scene": scene.name,
@@ -554,7 +553,8 @@ pub fn run(scene: &Scene, run: &Run, files: &[String], as_json: bool) -> String 
             "simulated_seconds": scene.run.duration_seconds,
             "ticks": run.ticks,
             "target_hz": target,
-            "bias_volts": bias,
+            "bias_volts": run.bias_volts,
+            "nominal_bias_volts": run.boot.map(|b| b.bias_volts),
             "refused": run.refused.map(|f| f.to_string()),
             "fault": run.fault.map(|f| f.to_string()),
             "natural_frequency_hz": finite(f),
@@ -590,7 +590,7 @@ pub fn run(scene: &Scene, run: &Run, files: &[String], as_json: bool) -> String 
             text.push_str(&format!(
                 "bias            {} V\n\
                  natural freq    {} Hz in the plant at that bias: error {:+.1e} ({:+.4}%)\n",
-                sig(bias.unwrap_or(f64::NAN)),
+                sig(run.bias_volts),
                 sig(f),
                 error,
                 100.0 * error
@@ -625,12 +625,4 @@ pub fn run(scene: &Scene, run: &Run, files: &[String], as_json: bool) -> String 
         text.push_str(&format!("\nwrote           {file}"));
     }
     text
-}
-
-/// The bias the plant holds at the end: the controller's, or 0 V after a fault.
-fn run_bias(run: &Run) -> f64 {
-    match (run.fault, run.boot) {
-        (None, Some(boot)) => f64::from(boot.bias_volts),
-        _ => 0.0,
-    }
 }

@@ -154,6 +154,10 @@ struct ControllerFile {
     agreement: Option<f32>,
     amplifier_tolerance_volts: Option<f32>,
     stuck_samples: Option<u32>,
+    trim_tolerance: Option<f32>,
+    trim_window_seconds: Option<f32>,
+    trim_pulse_volts: Option<f32>,
+    trim_probe_fraction: Option<f32>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -236,6 +240,10 @@ pub fn parse(text: &str) -> Result<Scene, String> {
             .amplifier_tolerance_volts
             .unwrap_or(base.amplifier_tolerance_volts),
         stuck_samples: c.stuck_samples.unwrap_or(base.stuck_samples),
+        trim_tolerance: c.trim_tolerance.unwrap_or(base.trim_tolerance),
+        trim_window_seconds: c.trim_window_seconds.unwrap_or(base.trim_window_seconds),
+        trim_pulse_volts: c.trim_pulse_volts.unwrap_or(base.trim_pulse_volts),
+        trim_probe_fraction: c.trim_probe_fraction.unwrap_or(base.trim_probe_fraction),
     };
     if !(settings.tick_hz.is_finite() && settings.tick_hz > 0.0) {
         return Err(format!(

@@ -64,7 +64,7 @@ fn reference_scene_tunes_within_a_tenth_of_a_percent() {
     assert_eq!(r.ticks, 10_000);
     // The bias stays below the plant's own limit by about the 5% margin or more.
     let (_, limit) = r.limit.unwrap();
-    assert!(r.boot.unwrap().bias_volts as f64 <= 0.95 * limit);
+    assert!(r.bias_volts <= 0.95 * limit);
 }
 
 /// Each fault: the controller reports it, the output ends at 0 V, nothing crosses a limit.
@@ -91,5 +91,38 @@ fn fault_scenes_end_at_zero_volts_and_safe() {
         );
         assert_eq!(r.final_command_volts, 0.0, "{file}");
         assert_eq!(r.plant_crossing, None, "{file}");
+    }
+}
+
+/// ±20% μ mismatch: the trim measures the ring, re-estimates μ and retunes; the plant ends
+/// within 0.5% of the target (the trim's own tolerance is 0.1%), never outside its true
+/// safe region. The estimate lands on the plant's μ.
+#[test]
+fn mismatch_scenes_trim_within_half_a_percent() {
+    for (file, target, mu) in [
+        ("mismatch-soft.toml", 29.5, 0.8 * 45e3),
+        ("mismatch-stiff.toml", 32.5, 1.2 * 45e3),
+    ] {
+        let r = run(file);
+        assert!(r.refused.is_none() && r.fault.is_none(), "{file}: {r:?}");
+        let error = (r.natural_frequency_hz - target) / target;
+        assert!(error.abs() < 5e-3, "{file}: {error}");
+        assert_eq!(r.plant_crossing, None, "{file}");
+        let estimates: Vec<&str> = r
+            .events
+            .iter()
+            .filter(|e| e.what.starts_with("trim"))
+            .map(|e| e.what.as_str())
+            .collect();
+        assert!(estimates.len() >= 2, "{file}: {estimates:?}");
+        let last = estimates.last().unwrap();
+        let kpa: f64 = last
+            .split("estimated ")
+            .nth(1)
+            .and_then(|x| x.split(' ').next())
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!((kpa * 1e3 / mu - 1.0).abs() < 1e-3, "{file}: {last}");
     }
 }

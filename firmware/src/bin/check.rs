@@ -6,8 +6,7 @@
 
 use de_resonator::table::TableError;
 use de_resonator::{
-    Controller, Dac8551, DacCode, Device, Event, Fault, Inputs, Settings, Tuner,
-    REFERENCE_DEVICE,
+    Controller, Dac8551, DacCode, Device, Event, Fault, Inputs, Settings, Tuner, REFERENCE_DEVICE,
 };
 use de_resonator_firmware::{amplifier, device, exit, settings, RecordingBus, TABLE};
 

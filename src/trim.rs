@@ -1,0 +1,163 @@
+//! Closed-loop trim (beyond the paper): measure the natural frequency the plant actually
+//! has, from the ring-down after a short voltage pulse, and re-estimate its shear modulus μ
+//! so that the model's f at the applied bias (MODEL.md §5) is the one measured.
+
+use core::fmt;
+
+use crate::device::{Device, DeviceParams};
+use crate::roots::bisect;
+use crate::safety::Limit;
+
+/// Most samples a measurement window may hold (0.5 s at 1 kHz; 2 KB of the controller).
+pub const MAX_WINDOW: usize = 512;
+
+/// Fewest crossings (both ways) a ring must show to be measured (three periods).
+pub const MIN_CROSSINGS: usize = 6;
+
+/// The estimate of μ is searched within this factor of the nominal, both ways.
+pub const MODULUS_RANGE: f32 = 4.0;
+
+/// Why a trim step failed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum TrimError {
+    /// The window held too few crossings of its trend line: no ring (sensor missing or
+    /// stuck, or the plant did not respond to the pulse).
+    NoRing { crossings: u16 },
+    /// No μ within `MODULUS_RANGE` of the nominal gives the measured frequency at the bias.
+    NoEstimate { measured_hz: f32, volts: f32 },
+    /// After the most trims allowed, the frequency is still off the target.
+    NotConverged { measured_hz: f32, target_hz: f32 },
+}
+
+impl fmt::Display for TrimError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            TrimError::NoRing { crossings } => write!(
+                f,
+                "no ring to measure after the pulse ({crossings} crossings): sensor or plant not \
+                 responding"
+            ),
+            TrimError::NoEstimate { measured_hz, volts } => write!(
+                f,
+                "no shear modulus within {MODULUS_RANGE}x of the nominal gives {measured_hz} Hz \
+                 at {volts} V"
+            ),
+            TrimError::NotConverged {
+                measured_hz,
+                target_hz,
+            } => write!(
+                f,
+                "trim did not converge: {measured_hz} Hz measured for a target of {target_hz} Hz"
+            ),
+        }
+    }
+}
+
+/// The frequency of the ring in `samples` (one per tick, NaN where there was none), Hz.
+/// The trend (creep, drift) is taken off by a least-squares line; the crossings of zero, both
+/// ways, are found by linear interpolation; f = 1/(2·slope) of the least-squares line
+/// through crossing time against crossing number. The line's error (a ring is never quite
+/// orthogonal to it: 1e-3 of f over 14 periods, measured) shifts upward and downward
+/// crossings in opposite directions, and the slope fit averages that out.
+pub fn ring_frequency_hz(samples: &[f32], tick_hz: f32) -> Result<f32, TrimError> {
+    let (mut n, mut st, mut sy, mut stt, mut sty) = line_sums(samples.iter().copied());
+    let det = n * stt - st * st;
+    if !(n >= 3.0 && det > 0.0) {
+        return Err(TrimError::NoRing { crossings: 0 });
+    }
+    let slope = (n * sty - st * sy) / det;
+    let offset = (sy - slope * st) / n;
+    let middle = samples.len() as f32 * 0.5;
+    // Crossing number against crossing time, summed as they come.
+    (n, st, sy, stt, sty) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    let mut previous: Option<(usize, f32)> = None;
+    for (k, &y) in samples.iter().enumerate() {
+        if !y.is_finite() {
+            continue;
+        }
+        let r = y - (offset + slope * (k as f32 - middle));
+        if let Some((j, p)) = previous {
+            if (p < 0.0) != (r < 0.0) {
+                let at = j as f32 + (k - j) as f32 * (-p / (r - p)) - middle;
+                st += n;
+                sy += at;
+                stt += n * n;
+                sty += n * at;
+                n += 1.0;
+            }
+        }
+        previous = Some((k, r));
+    }
+    let det = n * stt - st * st;
+    if !(n >= MIN_CROSSINGS as f32 && det > 0.0) {
+        return Err(TrimError::NoRing {
+            crossings: n.min(f32::from(u16::MAX)) as u16,
+        });
+    }
+    let ticks_per_crossing = (n * sty - st * sy) / det;
+    Ok(tick_hz / (2.0 * ticks_per_crossing))
+}
+
+/// Sums for a least-squares line through (k − middle, y_k) over the finite samples:
+/// (n, Σt, Σy, Σt², Σty), about the window's middle (well conditioned in f32).
+fn line_sums(samples: impl Iterator<Item = f32> + Clone) -> (f32, f32, f32, f32, f32) {
+    let middle = samples.clone().count() as f32 * 0.5;
+    let mut sums = (0.0f32, 0.0f32, 0.0f32, 0.0f32, 0.0f32);
+    for (k, y) in samples.enumerate() {
+        if y.is_finite() {
+            let t = k as f32 - middle;
+            sums.0 += 1.0;
+            sums.1 += t;
+            sums.2 += y;
+            sums.3 += t * t;
+            sums.4 += t * y;
+        }
+    }
+    sums
+}
+
+/// The natural frequency the model gives at `volts` on the loading branch before its limit,
+/// Hz (NaN if `volts` is past the limit: beyond it a soft device finds far equilibria,
+/// stiffened by lock-up, that would fool the search).
+fn model_hz(params: &DeviceParams<f32>, volts: f32) -> f32 {
+    let Ok(d) = Device::new(*params) else {
+        return f32::NAN;
+    };
+    let limit = Limit::of(&d);
+    if !(volts <= limit.at.volts) {
+        return f32::NAN;
+    }
+    d.stretch_for_bias(volts, limit.at.stretch)
+        .map_or(f32::NAN, |l| d.natural_frequency_hz(l))
+}
+
+/// The shear modulus μ for which the model with `params` (otherwise as they are) has the
+/// natural frequency `measured_hz` at `volts`: bisection within `MODULUS_RANGE` of the
+/// given μ. At a fixed bias f rises with μ (the bias's effect falls as 1/μ), so one root;
+/// a μ too soft to hold the bias below its limit counts as too low.
+pub fn estimate_shear_modulus(
+    params: &DeviceParams<f32>,
+    volts: f32,
+    measured_hz: f32,
+) -> Result<f32, TrimError> {
+    let with = |mu: f32| DeviceParams {
+        shear_modulus: mu,
+        ..*params
+    };
+    let (low, high) = (
+        params.shear_modulus / MODULUS_RANGE,
+        params.shear_modulus * MODULUS_RANGE,
+    );
+    // Too soft to hold the bias counts as "below": the frequency there is NaN or low.
+    let below_or_none = |mu: f32| {
+        let f = model_hz(&with(mu), volts);
+        !(f >= measured_hz)
+    };
+    let bracketed = below_or_none(low) && !below_or_none(high);
+    if !(measured_hz.is_finite() && measured_hz > 0.0 && bracketed) {
+        return Err(TrimError::NoEstimate { measured_hz, volts });
+    }
+    let (_, mu) = bisect(low, high, below_or_none);
+    Ok(mu)
+}

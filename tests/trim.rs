@@ -1,0 +1,92 @@
+//! Closed-loop trim: the ring's frequency from sensor samples, and μ from a frequency.
+
+use de_resonator::trim::{estimate_shear_modulus, ring_frequency_hz, MAX_WINDOW};
+use de_resonator::{Device, DeviceParams, TrimError, REFERENCE_DEVICE};
+
+/// A damped ring with drift and a little noise, sampled at 1 kHz: its frequency back within
+/// 1e-4 (the crossings of a damped sine are evenly spaced at its frequency).
+#[test]
+fn ring_frequency_of_a_damped_drifting_sine() {
+    for hz in [28.3f32, 44.0, 61.7] {
+        let mut seed = 12345u32;
+        let samples: Vec<f32> = (0..500)
+            .map(|k| {
+                let t = k as f32 / 1000.0;
+                seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                let noise = (seed >> 8) as f32 / (1u32 << 24) as f32 - 0.5;
+                2.2 + 2e-4 * t
+                    + 3e-3 * (-t / 1.5).exp() * (std::f32::consts::TAU * hz * t + 0.3).sin()
+                    + 2e-6 * noise
+            })
+            .collect();
+        let f = ring_frequency_hz(&samples, 1000.0).unwrap();
+        assert!((f - hz).abs() < 1e-4 * hz, "{f} for {hz}");
+    }
+}
+
+/// No ring, no frequency: a flat or missing signal is an error, never a number.
+#[test]
+fn no_ring_is_an_error() {
+    let flat = [2.2f32; 300];
+    assert!(matches!(
+        ring_frequency_hz(&flat, 1000.0),
+        Err(TrimError::NoRing { .. })
+    ));
+    let missing = [f32::NAN; MAX_WINDOW];
+    assert!(matches!(
+        ring_frequency_hz(&missing, 1000.0),
+        Err(TrimError::NoRing { crossings: 0 })
+    ));
+}
+
+/// μ from a frequency: a device with μ scaled by 0.8 or 1.2 has some f at a bias (the core's
+/// statics); from the nominal μ the estimate finds the scaled one again.
+#[test]
+fn shear_modulus_is_recovered_from_the_frequency() {
+    let nominal: DeviceParams<f32> = REFERENCE_DEVICE.cast();
+    for (scale, volts) in [
+        (0.8f32, 3000.0f32),
+        (1.2, 3000.0),
+        (1.2, 9000.0),
+        (0.8, 7000.0),
+    ] {
+        let plant = DeviceParams {
+            shear_modulus: nominal.shear_modulus * scale,
+            ..nominal
+        };
+        let d = Device::new(plant).unwrap();
+        let l = d.stretch_for_bias(volts, d.scan_end_stretch()).unwrap();
+        let f = d.natural_frequency_hz(l);
+        let mu = estimate_shear_modulus(&nominal, volts, f).unwrap();
+        assert!(
+            (mu / plant.shear_modulus - 1.0).abs() < 2e-4,
+            "{scale} at {volts} V: {mu}"
+        );
+    }
+    // A soft μ finds a far equilibrium past its limit, stiffened by lock-up (41 Hz at μ/4
+    // here, where μ gives 32.5): the search must not take it. The wide-range device of
+    // scenes/mismatch-stiff.toml, at its trimmed bias.
+    let wide = DeviceParams {
+        jlim: Some(120.0),
+        prestretch_1: 1.5,
+        prestretch_2: 3.0,
+        length_passive: 0.06,
+        ..nominal
+    };
+    let truth = DeviceParams {
+        shear_modulus: 54e3,
+        ..wide
+    };
+    let d = Device::new(truth).unwrap();
+    let f = d.natural_frequency_hz(d.stretch_for_bias(7957.8, 3.0).unwrap());
+    let mu = estimate_shear_modulus(&wide, 7957.8, f).unwrap();
+    assert!((mu / 54e3 - 1.0).abs() < 2e-4, "{mu}");
+    assert!(matches!(
+        estimate_shear_modulus(&nominal, 3000.0, f32::NAN),
+        Err(TrimError::NoEstimate { .. })
+    ));
+    assert!(matches!(
+        estimate_shear_modulus(&nominal, 3000.0, 1000.0),
+        Err(TrimError::NoEstimate { .. })
+    ));
+}
