@@ -68,10 +68,16 @@ pub struct Settings {
     /// plant softer than the model by a factor r has its limit √r lower, so a fraction p
     /// covers plants down to r = p².
     pub trim_probe_fraction: f32,
+    /// Trim again after this long of AC drive, s (0: once): for a plant that drifts, as a
+    /// viscoelastic membrane creeps. The AC pauses while the ring is measured.
+    pub trim_every_seconds: f32,
 }
 
 /// Most trims (measure, estimate, retune) before the controller gives up.
 pub const MAX_TRIMS: u8 = 8;
+
+/// Largest change of the bias a secant step may make, as a fraction of the bias.
+pub const TRIM_SECANT_STEP: f32 = 0.1;
 
 /// The trim's window in the controller: none without the `trim` feature (saves 2 KB).
 const WINDOW: usize = if cfg!(feature = "trim") {
@@ -101,6 +107,7 @@ impl Settings {
             trim_window_seconds: 0.5,
             trim_pulse_volts: 200.0,
             trim_probe_fraction: 0.5,
+            trim_every_seconds: 0.0,
         }
     }
 }
@@ -121,6 +128,7 @@ pub enum Setting {
     TrimWindowSeconds,
     TrimPulseVolts,
     TrimProbeFraction,
+    TrimEverySeconds,
 }
 
 /// Ticks in a row the amplifier may be off its command before it is a fault (its bandwidth
@@ -370,6 +378,8 @@ pub enum Event {
     AtBias { volts: f32 },
     /// The AC drive started.
     DriveOn,
+    /// The AC drive paused, to trim again.
+    DriveOff,
     /// The trim measured the natural frequency at the bias and re-estimated μ; the next bias
     /// is the one its estimate gives for the target (equal to `bias_volts` once converged).
     Trimmed {
@@ -427,6 +437,10 @@ struct Trim {
     count: u8,
     /// Converged (or no trim asked): the AC may start.
     done: bool,
+    /// The last measurement: (bias², measured f), for the secant step.
+    previous: Option<(f32, f32)>,
+    /// The tick of the next trim while driving (`u32::MAX`: none).
+    next_trim: u32,
     /// The first tick of the window, and the samples in it (NaN: no sample that tick).
     window_from: u32,
     window: [f32; WINDOW],
@@ -498,6 +512,7 @@ impl Controller {
                 value: window,
             });
         }
+        non_negative(Setting::TrimEverySeconds, settings.trim_every_seconds)?;
         let probe = positive(Setting::TrimProbeFraction, settings.trim_probe_fraction)?;
         if !(probe <= 1.0) {
             return Err(Fault::Setting {
@@ -541,6 +556,8 @@ impl Controller {
                 tuned: true,
                 count: 0,
                 done: settings.trim_tolerance == 0.0,
+                previous: None,
+                next_trim: u32::MAX,
                 window_from: 0,
                 window: [f32::NAN; WINDOW],
             },
@@ -731,6 +748,11 @@ impl Controller {
                 Some(Event::DriveOn)
             }
             #[cfg(feature = "trim")]
+            Phase::Driving if k >= self.trim.next_trim => {
+                self.pause_for_trim(k);
+                Some(Event::DriveOff)
+            }
+            #[cfg(feature = "trim")]
             Phase::Measuring => match self.measure(k, inputs.stretch) {
                 Ok(event) => event,
                 Err(fault) => return self.fault(fault),
@@ -755,6 +777,21 @@ impl Controller {
         self.trim.window_from = from.saturating_add(pulse);
         self.trim.window = [f32::NAN; WINDOW];
         self.phase = Phase::Measuring;
+    }
+
+    /// Pause the AC and trim again from the bias held (the old secant pair is stale: the
+    /// plant has drifted since).
+    #[cfg(feature = "trim")]
+    fn pause_for_trim(&mut self, k: u32) {
+        self.plan.ac_tick = u32::MAX;
+        self.trim.done = false;
+        self.trim.tuned = true;
+        self.trim.count = 0;
+        self.trim.previous = None;
+        self.trim.next_trim = u32::MAX;
+        let settle = self.settings.settle_seconds * self.settings.tick_hz;
+        self.hold_until = k.saturating_add(settle as u32);
+        self.phase = Phase::Holding;
     }
 
     /// Record this tick's sample; at the window's end, estimate μ and retune, or finish.
@@ -786,13 +823,17 @@ impl Controller {
             self.trim.done = true;
             self.plan.ac_tick = k.saturating_add(1);
             self.phase = Phase::Holding;
+            if s.trim_every_seconds > 0.0 {
+                let every = (s.trim_every_seconds * s.tick_hz) as u32;
+                self.trim.next_trim = k.saturating_add(every.max(1));
+            }
         } else if self.trim.count >= MAX_TRIMS {
             return Err(Fault::Trim(TrimError::NotConverged {
                 measured_hz,
                 target_hz: s.target_hz,
             }));
         } else {
-            next_bias_volts = self.retune(k)?;
+            next_bias_volts = self.retune(k, measured_hz)?;
         }
         Ok(Some(Event::Trimmed {
             bias_volts,
@@ -802,18 +843,37 @@ impl Controller {
         }))
     }
 
-    /// The estimated device's cap and bias for the target; ramp there from the bias now.
+    /// The next bias: by the secant through the last two measurements in (Φ², f) once there
+    /// are two (it needs no model, so it converges where μ alone cannot describe the plant,
+    /// as with viscoelastic networks), else the estimated device's bias for the target. The
+    /// cap becomes the estimated device's (1 − margin)·limit. Then ramp there from the bias
+    /// now.
     #[cfg(feature = "trim")]
-    fn retune(&mut self, k: u32) -> Result<f32, Fault> {
+    fn retune(&mut self, k: u32, measured_hz: f32) -> Result<f32, Fault> {
         let s = self.settings;
         let device = Device::new(self.trim.params).map_err(Fault::Device)?;
         let tuner = Tuner::new(device);
         let max_volts = tuner.max_bias(s.margin).map_err(Fault::Tune)?.volts;
-        let bias_volts = tuner
-            .tune(s.target_hz, s.margin)
-            .map_err(Fault::Tune)?
-            .volts;
         let from = self.plan.bias_volts;
+        let squared = from * from;
+        let secant = self.trim.previous.and_then(|(p2, pf)| {
+            let next = squared + (s.target_hz - measured_hz) * (squared - p2) / (measured_hz - pf);
+            // A trust region: a drifting plant (creep) makes a poor secant, and a wild step
+            // up is what the model's region cannot vouch for.
+            let step = TRIM_SECANT_STEP * from;
+            let volts = libm::sqrtf(next).clamp(from - step, from + step);
+            (volts > 0.0 && volts + s.ac_volts <= max_volts).then_some(volts)
+        });
+        self.trim.previous = Some((squared, measured_hz));
+        let bias_volts = match secant {
+            Some(volts) => volts,
+            None => {
+                tuner
+                    .tune(s.target_hz, s.margin)
+                    .map_err(Fault::Tune)?
+                    .volts
+            }
+        };
         if !(from <= max_volts && bias_volts + s.ac_volts <= max_volts) {
             return Err(Fault::AboveSafe {
                 volts: from.max(bias_volts + s.ac_volts),

@@ -259,7 +259,9 @@ fn ticks_ramp_at_the_slew_rate_hold_then_drive_and_never_exceed_the_limit() {
             Some(Event::AtBias { .. }) => at_bias = Some(k),
             Some(Event::DriveOn) => drive_on = Some(k),
             Some(Event::Fault(f)) => panic!("fault at {k}: {f}"),
-            Some(e @ Event::Trimmed { .. }) => panic!("no trim was asked for: {e:?}"),
+            Some(e @ (Event::Trimmed { .. } | Event::DriveOff)) => {
+                panic!("no trim was asked for: {e:?}")
+            }
             None => {}
         }
         previous = out.volts;

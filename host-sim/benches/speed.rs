@@ -136,5 +136,17 @@ fn one_second(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, rk4_step, one_second);
+/// The main job's scene: 10 s of the reference scene, the controller in the loop at 1 kHz
+/// against the plant (DOP853 at 1e-10 between ticks); goal under 0.5 s.
+fn reference_scene(c: &mut Criterion) {
+    let scene = host_sim::scene::parse(host_sim::scene::REFERENCE).expect("reference scene");
+    let mut g = c.benchmark_group("scene");
+    g.sample_size(10);
+    g.bench_function("reference_10s_controller_in_loop", |b| {
+        b.iter(|| black_box(scene.run.run().expect("runs")))
+    });
+    g.finish();
+}
+
+criterion_group!(benches, rk4_step, one_second, reference_scene);
 criterion_main!(benches);

@@ -305,6 +305,7 @@ impl Loop {
         let what = match event {
             Event::AtBias { volts } => format!("at bias, {volts} V"),
             Event::DriveOn => "AC drive on".to_string(),
+            Event::DriveOff => "AC drive paused, to trim again".to_string(),
             Event::Trimmed {
                 bias_volts,
                 measured_hz,

@@ -605,6 +605,16 @@ pub fn run(scene: &Scene, run: &Run, files: &[String], as_json: bool) -> String 
             }
         }
     }
+    // The frequency freezes the networks over a period: say when a branch is faster.
+    for b in &scene.run.plant.branches {
+        if b.relaxation_seconds * target < 10.0 {
+            text.push_str(&format!(
+                "note            a branch relaxes in {} s, under 10 periods: the natural \
+                 frequency above (networks frozen) does not hold for it\n",
+                sig(b.relaxation_seconds)
+            ));
+        }
+    }
     text.push_str(&match run.plant_crossing {
         None => format!(
             "plant safe      yes: no check of MODEL.md §6 failed at any of {} ticks\n",

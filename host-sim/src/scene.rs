@@ -158,6 +158,7 @@ struct ControllerFile {
     trim_window_seconds: Option<f32>,
     trim_pulse_volts: Option<f32>,
     trim_probe_fraction: Option<f32>,
+    trim_every_seconds: Option<f32>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -244,6 +245,7 @@ pub fn parse(text: &str) -> Result<Scene, String> {
         trim_window_seconds: c.trim_window_seconds.unwrap_or(base.trim_window_seconds),
         trim_pulse_volts: c.trim_pulse_volts.unwrap_or(base.trim_pulse_volts),
         trim_probe_fraction: c.trim_probe_fraction.unwrap_or(base.trim_probe_fraction),
+        trim_every_seconds: c.trim_every_seconds.unwrap_or(base.trim_every_seconds),
     };
     if !(settings.tick_hz.is_finite() && settings.tick_hz > 0.0) {
         return Err(format!(

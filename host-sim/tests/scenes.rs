@@ -126,3 +126,24 @@ fn mismatch_scenes_trim_within_half_a_percent() {
         assert!((kpa * 1e3 / mu - 1.0).abs() < 1e-3, "{file}: {last}");
     }
 }
+
+/// The viscoelastic VHB plant: within 0.5% at the end of the run after trimming (again every
+/// second, as it creeps), never outside its true safe region.
+#[test]
+fn viscoelastic_scene_trims_within_half_a_percent() {
+    let r = run("viscoelastic-vhb.toml");
+    assert!(r.refused.is_none() && r.fault.is_none(), "{r:?}");
+    let error = (r.natural_frequency_hz - 47.0) / 47.0;
+    assert!(error.abs() < 5e-3, "{error}");
+    assert_eq!(r.plant_crossing, None);
+    assert!(r.events.iter().any(|e| e.what.contains("paused")));
+}
+
+/// The stiff plant (a 0.2 ms branch) integrates with BDF through the whole run, safely.
+#[test]
+fn stiff_scene_runs_with_bdf() {
+    let r = run("stiff-relaxation.toml");
+    assert!(r.refused.is_none() && r.fault.is_none(), "{r:?}");
+    assert_eq!(r.ticks, 2000);
+    assert_eq!(r.plant_crossing, None);
+}
