@@ -733,9 +733,7 @@ impl Controller {
         }
         let event = match self.phase {
             Phase::Ramping if self.plan.ramp_volts(k) == self.plan.bias_volts => {
-                self.phase = Phase::Holding;
-                let settle = self.settings.settle_seconds * self.settings.tick_hz;
-                self.hold_until = k.saturating_add(settle as u32);
+                self.hold_from(k);
                 Some(Event::AtBias { volts })
             }
             #[cfg(feature = "trim")]
@@ -761,7 +759,7 @@ impl Controller {
         };
         Output {
             code,
-            volts: self.amplifier.volts(code),
+            volts: self.last_volts,
             event,
         }
     }
@@ -789,6 +787,11 @@ impl Controller {
         self.trim.count = 0;
         self.trim.previous = None;
         self.trim.next_trim = u32::MAX;
+        self.hold_from(k);
+    }
+
+    /// Hold the bias from tick `k` for the settle time.
+    fn hold_from(&mut self, k: u32) {
         let settle = self.settings.settle_seconds * self.settings.tick_hz;
         self.hold_until = k.saturating_add(settle as u32);
         self.phase = Phase::Holding;

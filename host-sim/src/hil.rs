@@ -11,7 +11,8 @@ use de_resonator::{
 };
 use embedded_hal::spi::{ErrorKind, ErrorType, Operation, SpiDevice};
 
-use crate::plant::{self, Plant, PlantSolver, Vector};
+use crate::plant::{self, Plant, Vector};
+use crate::simulate::Solver;
 
 /// The DAC8551 as its datasheet has it: 24-bit frames (PD1 PD0, then the code MSB first),
 /// VOUT = VREF·code/65536, 0 V when powered down. Its bus fails after `fail_after` frames.
@@ -92,7 +93,7 @@ pub struct Loop {
     /// The device the controller is told about (its table is made from it).
     pub nominal: DeviceParams<f64>,
     pub plant: Plant,
-    pub solver: PlantSolver,
+    pub solver: Solver,
     pub tolerance: f64,
     pub dac_reference_volts: f64,
     pub settings: Settings,
@@ -136,6 +137,33 @@ pub struct Run {
     pub history: Vec<(f64, f64, f64)>,
     pub ticks: u64,
     pub run_seconds: f64,
+}
+
+impl Run {
+    /// Record what the controller said at `seconds`, and the fault if it is one.
+    fn said(&mut self, seconds: f64, event: Option<Event>) {
+        let Some(event) = event else { return };
+        let what = match event {
+            Event::AtBias { volts } => format!("at bias, {volts} V"),
+            Event::DriveOn => "AC drive on".to_string(),
+            Event::DriveOff => "AC drive paused, to trim again".to_string(),
+            Event::Trimmed {
+                bias_volts,
+                measured_hz,
+                shear_modulus,
+                next_bias_volts,
+            } => format!(
+                "trim: {measured_hz:.4} Hz measured at {bias_volts:.1} V, μ estimated \
+                 {:.2} kPa, next bias {next_bias_volts:.1} V",
+                shear_modulus / 1e3
+            ),
+            Event::Fault(fault) => {
+                self.fault = Some(fault);
+                format!("fault, 0 V: {fault}")
+            }
+        };
+        self.events.push(Said { seconds, what });
+    }
 }
 
 impl Loop {
@@ -203,23 +231,22 @@ impl Loop {
         // The amplifier's enable line: the IO side drops it on any fault, so the output goes
         // to 0 V even when the DAC can no longer be written (a dead bus keeps its last code).
         let mut enabled = true;
+        let amplifier_input = |bus: &SimulatedDac, enabled: bool| {
+            if enabled {
+                gain * bus.output_volts
+            } else {
+                0.0
+            }
+        };
         for k in 0..ticks {
             let t = k as f64 * tick_seconds;
             if self.bus_fails_after_seconds.is_some_and(|at| t >= at) && bus.fail_after.is_none() {
                 bus.fail_after = Some(bus.frames);
             }
-            let amplifier_input = |bus: &SimulatedDac, enabled: bool| {
-                if enabled {
-                    gain * bus.output_volts
-                } else {
-                    0.0
-                }
-            };
             let membrane_volts = self.plant.volts(&y, amplifier_input(&bus, enabled));
             if let Some(c) = controller.as_mut() {
                 let inputs = self.inputs(&mut noise, &mut reading, k, t, &y, membrane_volts);
                 let out = c.tick(inputs);
-                run.final_command_volts = f64::from(out.volts);
                 let out = if Dac8551::new(&mut bus).write(out.code).is_err() {
                     c.fault(Fault::Bus)
                 } else {
@@ -230,7 +257,7 @@ impl Loop {
                     let _ = Dac8551::new(&mut bus).power_down();
                 }
                 run.final_command_volts = f64::from(out.volts);
-                self.said(&mut run, t, out.event);
+                run.said(t, out.event);
             }
             let input = amplifier_input(&bus, enabled);
             y = plant::advance(
@@ -298,29 +325,5 @@ impl Loop {
             stretch,
             amplifier_volts: sensor.amplifier_monitor.then_some(membrane_volts as f32),
         }
-    }
-
-    fn said(&self, run: &mut Run, seconds: f64, event: Option<Event>) {
-        let Some(event) = event else { return };
-        let what = match event {
-            Event::AtBias { volts } => format!("at bias, {volts} V"),
-            Event::DriveOn => "AC drive on".to_string(),
-            Event::DriveOff => "AC drive paused, to trim again".to_string(),
-            Event::Trimmed {
-                bias_volts,
-                measured_hz,
-                shear_modulus,
-                next_bias_volts,
-            } => format!(
-                "trim: {measured_hz:.4} Hz measured at {bias_volts:.1} V, μ estimated \
-                 {:.2} kPa, next bias {next_bias_volts:.1} V",
-                shear_modulus / 1e3
-            ),
-            Event::Fault(fault) => {
-                run.fault = Some(fault);
-                format!("fault, 0 V: {fault}")
-            }
-        };
-        run.events.push(Said { seconds, what });
     }
 }

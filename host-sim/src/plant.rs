@@ -7,6 +7,8 @@
 use de_resonator::{DeviceParams, FailureMode};
 use differential_equations::prelude::*;
 
+use crate::simulate::Solver;
+
 /// Most viscoelastic branches a plant may have.
 pub const MAX_BRANCHES: usize = 3;
 
@@ -107,10 +109,9 @@ impl Plant {
         (l1 * p.prestretch_1 - p.length_active * stretch) / p.length_passive
     }
 
-    /// Total nominal stresses (s1, s2) of membrane A (`active`) or B at stretch λ1, with
-    /// the networks at the viscous stretches in `y`.
-    fn stresses(&self, y: &Vector, l1: f64, active: bool) -> (f64, f64) {
-        let l2 = self.params.prestretch_2;
+    /// Total nominal stresses (s1, s2) of membrane A (`active`) or B at stretches (λ1, λ2),
+    /// with the networks at the viscous stretches in `y`.
+    fn stresses(&self, y: &Vector, l1: f64, l2: f64, active: bool) -> (f64, f64) {
         let (mut s1, mut s2, _) = gent(&self.params, l1, l2);
         for (k, b) in self.branches.iter().enumerate() {
             let at = 3 + 4 * k + if active { 0 } else { 2 };
@@ -126,8 +127,9 @@ impl Plant {
         let p = &self.params;
         let (l, v) = (y[0], y[1]);
         let e0 = volts / p.thickness;
-        let (sa, _) = self.stresses(y, l, true);
-        let (sb, _) = self.stresses(y, self.passive_stretch(l), false);
+        let l2 = p.prestretch_2;
+        let (sa, _) = self.stresses(y, l, l2, true);
+        let (sb, _) = self.stresses(y, self.passive_stretch(l), l2, false);
         let electric = self.permittivity() * e0 * e0 * l * p.prestretch_2 * p.prestretch_2;
         (p.width * p.thickness * (sb - sa + electric) - p.damping * v) / self.mass()
     }
@@ -203,11 +205,7 @@ impl Plant {
         // EMI of A: the Hessian of W − ½ε·E0²·λ1²λ2² in (λ1, λ2), by differences of the
         // analytic stresses.
         let h = 1e-6;
-        let s = |a: f64, b: f64| {
-            let mut z = *y;
-            z[0] = a;
-            self.stresses_2d(&z, a, b)
-        };
+        let s = |a: f64, b: f64| self.stresses(y, a, b, true);
         let (s1p, s2p) = s(l + h, l2);
         let (s1m, s2m) = s(l - h, l2);
         let (t1p, t2p) = s(l, l2 + h);
@@ -219,11 +217,11 @@ impl Plant {
         if !(h11 > 0.0 && h11 * h22 - h12 * h12 > 0.0) {
             return Some(FailureMode::Emi);
         }
-        let (sb1, sb2) = self.stresses(y, lb, false);
+        let (sb1, sb2) = self.stresses(y, lb, l2, false);
         if !(sb1 > 0.0) {
             return Some(FailureMode::LossOfTension1);
         }
-        let (_, sa2) = self.stresses(y, l, true);
+        let (_, sa2) = self.stresses(y, l, l2, true);
         let field = volts * l * l2 / p.thickness;
         if !(l2 * sa2 - eps * field * field > 0.0) {
             return Some(FailureMode::LossOfTension2a);
@@ -267,46 +265,30 @@ impl Plant {
     /// The voltage above `volts` at which the equilibrium (networks frozen, followed from
     /// `y`) first fails a check of §6, and the check: steps of 1%, then bisection.
     pub fn limit_volts(&self, y: &Vector, volts: f64) -> Option<(FailureMode, f64)> {
-        let fails = |v: f64, from: &Vector| match self.equilibrium(from, v) {
-            Some(z) => self.first_failure(&z, v).map(|m| (m, z)),
-            None => Some((FailureMode::DeviceInstability, *from)),
+        // The safe equilibrium at `v` followed from `from`, or the check that fails there.
+        let check = |v: f64, from: &Vector| match self.equilibrium(from, v) {
+            Some(z) => self.first_failure(&z, v).map_or(Ok(z), Err),
+            None => Err(FailureMode::DeviceInstability),
         };
-        let mut safe = (volts.max(1.0), *y);
+        let (mut low, mut at) = (volts.max(1.0), *y);
         for _ in 0..400 {
-            let next = safe.0 * 1.01;
-            match fails(next, &safe.1) {
-                None => {
-                    let z = self.equilibrium(&safe.1, next)?;
-                    safe = (next, z);
-                }
-                Some(_) => {
-                    let (mut low, mut high) = (safe.0, next);
+            let next = low * 1.01;
+            match check(next, &at) {
+                Ok(z) => (low, at) = (next, z),
+                Err(mut mode) => {
+                    let mut high = next;
                     for _ in 0..60 {
                         let mid = 0.5 * (low + high);
-                        match fails(mid, &safe.1) {
-                            None => low = mid,
-                            Some(_) => high = mid,
+                        match check(mid, &at) {
+                            Ok(_) => low = mid,
+                            Err(m) => (high, mode) = (mid, m),
                         }
                     }
-                    let (mode, _) = fails(high, &safe.1)?;
                     return Some((mode, low));
                 }
             }
         }
         None
-    }
-
-    /// Total stresses of A at (λ1, λ2) for the Hessian: λ2 free here, the networks of A at
-    /// their viscous stretches.
-    fn stresses_2d(&self, y: &Vector, l1: f64, l2: f64) -> (f64, f64) {
-        let (mut s1, mut s2, _) = gent(&self.params, l1, l2);
-        for (k, b) in self.branches.iter().enumerate() {
-            let at = 3 + 4 * k;
-            let (n1, n2) = network(b.modulus, l1, l2, y[at], y[at + 1]);
-            s1 += n1;
-            s2 += n2;
-        }
-        (s1, s2)
     }
 }
 
@@ -342,45 +324,17 @@ impl ODE<f64, Vector> for Motion<'_> {
     }
 }
 
-/// How the plant is integrated.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum PlantSolver {
-    /// Adaptive DOP853 (explicit): non-stiff plants.
-    Dop853,
-    /// Adaptive BDF (implicit): stiff plants (short relaxation times, light bars).
-    Bdf,
-}
-
 /// Advance `y` over `[t0, t1]` with the amplifier's input held at `input_volts`.
 pub fn advance(
     plant: &Plant,
-    solver: PlantSolver,
+    solver: Solver,
     tolerance: f64,
     y: Vector,
     t0: f64,
     t1: f64,
     input_volts: f64,
 ) -> Result<Vector, String> {
-    let motion = Motion { plant, input_volts };
-    let problem = IVP::ode(&motion, t0, t1, y);
-    let solution = match solver {
-        PlantSolver::Dop853 => problem
-            .method(ExplicitRungeKutta::dop853().rtol(tolerance).atol(tolerance))
-            .solve(),
-        PlantSolver::Bdf => problem
-            .method(
-                BackwardDifferentiationFormula::adaptive()
-                    .rtol(tolerance)
-                    .atol(tolerance)
-                    .max_steps(1_000_000),
-            )
-            .solve(),
-    }
-    .map_err(|e| format!("the plant's integration failed at t = {t0} s: {e:?}"))?;
-    solution
-        .y
-        .last()
-        .copied()
-        .ok_or_else(|| format!("the plant's integration gave no state at t = {t1} s"))
+    solver
+        .advance(&Motion { plant, input_volts }, t0, t1, y, tolerance)
+        .map_err(|e| format!("the plant's integration at t = {t0} s: {e}"))
 }

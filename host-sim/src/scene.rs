@@ -8,7 +8,8 @@ use de_resonator::{DeviceParams, Settings};
 use serde::Deserialize;
 
 use crate::hil::{Loop, Sensor};
-use crate::plant::{AmplifierModel, Branch, Plant, PlantSolver, MAX_BRANCHES};
+use crate::plant::{AmplifierModel, Branch, Plant, MAX_BRANCHES};
+use crate::simulate::Solver;
 
 /// The reference scene, built in: the main job.
 pub const REFERENCE: &str = include_str!("../../scenes/reference.toml");
@@ -68,7 +69,7 @@ struct PlantFile {
     #[serde(default)]
     branches: Vec<BranchFile>,
     #[serde(default = "dop853")]
-    solver: PlantSolver,
+    solver: Solver,
     #[serde(default = "tolerance")]
     tolerance: f64,
 }
@@ -79,8 +80,8 @@ impl Default for PlantFile {
     }
 }
 
-fn dop853() -> PlantSolver {
-    PlantSolver::Dop853
+fn dop853() -> Solver {
+    Solver::Dop853
 }
 fn tolerance() -> f64 {
     1e-10

@@ -15,8 +15,9 @@ pub const REFERENCE_TOLERANCE: f64 = 1e-12;
 /// Tolerance of the stiff reference (BDF, orders 1 to 5): tighter costs many tiny steps.
 pub const STIFF_REFERENCE_TOLERANCE: f64 = 1e-10;
 
-/// An adaptive f64 reference solver from `differential-equations`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// An adaptive f64 solver from `differential-equations` (in scenes: `dop853` or `bdf`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum Solver {
     /// Dormand–Prince 8(5,3), explicit: the reference for non-stiff scenes.
     Dop853,
@@ -315,8 +316,27 @@ pub fn solve(
     let mut y = y0;
     for k in 0..intervals {
         let (t0, t1) = (k as f64 * dtau, (k + 1) as f64 * dtau);
-        let problem = IVP::ode(&motion, t0, t1, y);
-        let solution = match solver {
+        y = solver
+            .advance(&motion, t0, t1, y, tolerance)
+            .map_err(|e| format!("reference integrator at τ = {t0}: {e}"))?;
+        ys.push(y);
+    }
+    Ok(ys)
+}
+
+impl Solver {
+    /// Advance `y` of `ode` from `t0` to `t1` at `tolerance` (relative and absolute): the
+    /// state at `t1`.
+    pub fn advance<Y: differential_equations::traits::State<f64>, F: ODE<f64, Y>>(
+        self,
+        ode: &F,
+        t0: f64,
+        t1: f64,
+        y: Y,
+        tolerance: f64,
+    ) -> Result<Y, String> {
+        let problem = IVP::ode(ode, t0, t1, y);
+        let solution = match self {
             Solver::Dop853 => problem
                 .method(ExplicitRungeKutta::dop853().rtol(tolerance).atol(tolerance))
                 .solve(),
@@ -329,14 +349,13 @@ pub fn solve(
                 )
                 .solve(),
         }
-        .map_err(|e| format!("reference integrator failed at τ = {t0}: {e:?}"))?;
-        y = *solution
+        .map_err(|e| format!("failed: {e:?}"))?;
+        solution
             .y
             .last()
-            .ok_or("reference integrator returned no state")?;
-        ys.push(y);
+            .cloned()
+            .ok_or_else(|| "no state returned".to_string())
     }
-    Ok(ys)
 }
 
 fn reference(
