@@ -11,8 +11,9 @@
 //!   the fixed-step model under the safety monitor (MODEL.md §6).
 //!
 //! Then `tick`, at a fixed rate, gives the DAC code for that tick; every code passes one
-//! final check against the cap. A fault of any kind gives code 0 from then on, and says what
-//! happened once.
+//! final check against the cap. The cap is fixed at boot from the device flashed, at most
+//! (1 − margin)·Φlimit: nothing measured ever raises it (a trim may only lower it). A fault
+//! of any kind gives code 0 from then on, and says what happened once.
 
 use core::f32::consts::TAU;
 use core::fmt;
@@ -196,6 +197,9 @@ pub enum Fault {
     Gate { volts: f32, max_volts: f32 },
     /// A sensor sample (stretch or amplifier monitor) is NaN or infinite.
     Sensor { value: f32 },
+    /// A stretch sample no device could give: the bars more than a frame's length outside
+    /// the frame (see `Device::plausible_stretch`).
+    SensorImplausible { value: f32, low: f32, high: f32 },
     /// The stretch sensor gave the same sample `samples` times in a row.
     SensorStuck { samples: u32, value: f32 },
     /// The amplifier's output stayed off the command for `AMPLIFIER_TICKS` ticks.
@@ -247,6 +251,11 @@ impl fmt::Display for Fault {
                 )
             }
             Fault::Sensor { value } => write!(f, "sensor sample {value} is not a number"),
+            Fault::SensorImplausible { value, low, high } => write!(
+                f,
+                "stretch sample {value} is outside ({low}, {high}), where no device can be: \
+                 sensor fault"
+            ),
             Fault::SensorStuck { samples, value } => {
                 write!(f, "stretch sensor stuck at {value} for {samples} samples")
             }
@@ -367,6 +376,9 @@ pub enum Phase {
     /// The trim's pulse and the ring after it, measured.
     Measuring,
     Driving,
+    /// The trim found the plant needs a bias above the ceiling fixed at boot: the bias holds
+    /// where it is, no AC, no further trim (said once by `Event::AboveCeiling`).
+    Held,
     Faulted,
 }
 
@@ -387,6 +399,14 @@ pub enum Event {
         measured_hz: f32,
         shear_modulus: f32,
         next_bias_volts: f32,
+    },
+    /// The trim's next bias (with the AC on top) would be `needed_volts`, above the ceiling
+    /// fixed at boot from the device flashed: the controller holds the present bias instead
+    /// (`Phase::Held`). A plant stiffer than the device flashed is not driven past that
+    /// device's limit on the strength of a measurement.
+    AboveCeiling {
+        needed_volts: f32,
+        ceiling_volts: f32,
     },
     /// A fault: from now on 0 V.
     Fault(Fault),
@@ -409,7 +429,14 @@ pub struct Controller {
     /// Checked by `from_table`.
     settings: Settings,
     plan: Plan,
+    /// The cap in force: the ceiling, or lower after a trim found a softer plant, V.
     max_volts: f32,
+    /// The cap fixed at boot from the device flashed, at most (1 − margin)·Φlimit, V.
+    /// Nothing measured raises it.
+    ceiling_volts: f32,
+    /// The device flashed: the monitor checks every sample against it (and against the
+    /// trim's estimate, when there is one), whatever the trim estimates.
+    flashed: Device<f32>,
     tick: u32,
     phase: Phase,
     monitor: Monitor<f32>,
@@ -423,6 +450,15 @@ pub struct Controller {
     /// The tick the hold at the bias ends.
     hold_until: u32,
     trim: Trim,
+}
+
+/// What a retune decided.
+#[cfg(feature = "trim")]
+enum Retune {
+    /// Ramp to this bias and measure again.
+    To { bias_volts: f32 },
+    /// The bias (and AC) needed lies above the ceiling: hold.
+    AboveCeiling { needed_volts: f32 },
 }
 
 /// The trim's state: the model as estimated so far and the window being measured.
@@ -520,7 +556,8 @@ impl Controller {
                 value: probe,
             });
         }
-        if !(ac_hz < 0.5 * tick_hz) {
+        // Below Nyquist; and AC volts without a frequency would drive nothing, silently.
+        if !(ac_hz < 0.5 * tick_hz) || (settings.ac_volts > 0.0 && ac_hz == 0.0) {
             return Err(Fault::Setting {
                 setting: Setting::AcHz,
                 value: ac_hz,
@@ -543,6 +580,8 @@ impl Controller {
             settings,
             plan: Plan::idle(),
             max_volts,
+            ceiling_volts: max_volts,
+            flashed: device,
             tick: 0,
             phase: Phase::Ramping,
             monitor: Monitor::new(),
@@ -575,17 +614,18 @@ impl Controller {
         Ok((controller, boot))
     }
 
-    /// Find the limit and the bias on the chip by the direct solve: the table's top must lie
-    /// below (1 − margin)·limit, and the natural frequencies at the two biases must agree.
-    /// The controller then drives the solve's bias, capped at (1 − margin)·limit.
+    /// Find the limit and the bias on the chip by the direct solve: the table's cap (its top,
+    /// scaled down to a larger margin than the table's) must lie below (1 − margin)·limit,
+    /// and the natural frequencies at the two biases must agree. The controller then drives
+    /// the solve's bias, capped at (1 − margin)·limit.
     pub fn cross_check(mut self, boot: Boot) -> Result<(Self, Boot), Fault> {
         let settings = self.settings;
         let tuner = Tuner::new(self.device);
         let limit = tuner.limit();
         let max_volts = tuner.max_bias(settings.margin).map_err(Fault::Tune)?.volts;
-        if !(boot.table_top_volts <= max_volts) {
+        if !(boot.max_volts <= max_volts) {
             return Err(Fault::AboveSafe {
-                volts: boot.table_top_volts,
+                volts: boot.max_volts,
                 max_volts,
             });
         }
@@ -594,8 +634,8 @@ impl Controller {
             .map_err(Fault::Tune)?;
         let table_hz = self
             .device
-            .stretch_for_bias(boot.table_volts, limit.at.stretch)
-            .map(|stretch| self.device.natural_frequency_hz(stretch))
+            .offset_for_bias(boot.table_volts, limit.at.offset)
+            .map(|offset| self.device.natural_frequency_hz_at(offset))
             .unwrap_or(f32::NAN);
         let solved_hz = solved.natural_frequency_hz;
         if !((table_hz - solved_hz).abs() <= settings.agreement * solved_hz) {
@@ -607,6 +647,7 @@ impl Controller {
             });
         }
         self.max_volts = max_volts;
+        self.ceiling_volts = max_volts;
         let plan_ticks = self.set_plan(solved.volts)?;
         let boot = Boot {
             bias_volts: solved.volts,
@@ -669,22 +710,51 @@ impl Controller {
             ac_volts: if s.ac_hz > 0.0 { s.ac_volts } else { 0.0 },
             ac_phase_step: ((s.ac_hz / s.tick_hz) as f64 * 4_294_967_296.0) as u32,
         };
-        if !(plan.peak_volts() <= self.max_volts) {
-            return Err(Fault::AboveSafe {
-                volts: plan.peak_volts(),
-                max_volts: self.max_volts,
-            });
-        }
-        self.amplifier
-            .code(plan.peak_volts())
-            .map_err(Fault::Amplifier)?;
+        self.check_range(&plan, tuned_volts)?;
+        // The amplifier must give the highest voltage: the ramp's, or the AC's on the bias.
+        let peak_volts = plan.peak_volts().max(tuned_volts + plan.ac_volts);
+        self.amplifier.code(peak_volts).map_err(Fault::Amplifier)?;
         self.plan = plan;
         // Without trim the model check covers the AC; with it, the ramp and the hold.
         Ok(ac_tick as u32 + check_ticks as u32 + 1)
     }
 
+    /// The plan's whole voltage range against [0, cap], before anything is driven: the ramp
+    /// and the bias below the cap (else `AboveSafe`), and the AC about the bias it will ride
+    /// on (`ac_bias_volts`: the tuned bias, also while a trim probes lower) neither below
+    /// 0 V (the amplifier is unipolar) nor above the cap (else a `Setting` fault naming the
+    /// AC amplitude).
+    fn check_range(&self, plan: &Plan, ac_bias_volts: f32) -> Result<(), Fault> {
+        let bias_peak = plan.start_volts.max(plan.bias_volts);
+        if !(bias_peak <= self.max_volts && plan.bias_volts >= 0.0) {
+            return Err(Fault::AboveSafe {
+                volts: bias_peak,
+                max_volts: self.max_volts,
+            });
+        }
+        let ac = plan.ac_volts;
+        let ac_peak = ac_bias_volts.max(plan.bias_volts) + ac;
+        if !(ac_bias_volts - ac >= 0.0 && ac_peak <= self.max_volts) {
+            return Err(Fault::Setting {
+                setting: Setting::AcVolts,
+                value: ac,
+            });
+        }
+        Ok(())
+    }
+
     pub fn phase(&self) -> Phase {
         self.phase
+    }
+
+    /// The cap fixed at boot from the device flashed, V: no command ever goes above it.
+    pub fn ceiling_volts(&self) -> f32 {
+        self.ceiling_volts
+    }
+
+    /// The cap in force now (the ceiling, or lower after a trim found a softer plant), V.
+    pub fn max_volts(&self) -> f32 {
+        self.max_volts
     }
 
     pub fn plan(&self) -> &Plan {
@@ -715,20 +785,8 @@ impl Controller {
         };
         self.last_volts = self.amplifier.volts(code);
         if let Some(stretch) = inputs.stretch {
-            if !stretch.is_finite() {
-                return self.fault(Fault::Sensor { value: stretch });
-            }
-            if let Some(fault) = self.check_stuck(stretch) {
+            if let Some(fault) = self.check_stretch(k, stretch, volts) {
                 return self.fault(fault);
-            }
-            let p = volts / self.device.volts_per_unit();
-            self.monitor
-                .observe(&self.device, u64::from(k), stretch, p * p);
-            if let Some(crossing) = self.monitor.first_crossing() {
-                return self.fault(Fault::Limit {
-                    mode: crossing.mode,
-                    tick: k,
-                });
             }
         }
         let event = match self.phase {
@@ -836,7 +894,15 @@ impl Controller {
                 target_hz: s.target_hz,
             }));
         } else {
-            next_bias_volts = self.retune(k, measured_hz)?;
+            match self.retune(k, measured_hz)? {
+                Retune::To { bias_volts } => next_bias_volts = bias_volts,
+                Retune::AboveCeiling { needed_volts } => {
+                    return Ok(Some(Event::AboveCeiling {
+                        needed_volts,
+                        ceiling_volts: self.ceiling_volts,
+                    }));
+                }
+            }
         }
         Ok(Some(Event::Trimmed {
             bias_volts,
@@ -852,11 +918,16 @@ impl Controller {
     /// cap becomes the estimated device's (1 − margin)·limit. Then ramp there from the bias
     /// now.
     #[cfg(feature = "trim")]
-    fn retune(&mut self, k: u32, measured_hz: f32) -> Result<f32, Fault> {
+    fn retune(&mut self, k: u32, measured_hz: f32) -> Result<Retune, Fault> {
         let s = self.settings;
         let device = Device::new(self.trim.params).map_err(Fault::Device)?;
         let tuner = Tuner::new(device);
-        let max_volts = tuner.max_bias(s.margin).map_err(Fault::Tune)?.volts;
+        // The estimate may lower the cap (a softer plant), never raise it past the ceiling.
+        let max_volts = tuner
+            .max_bias(s.margin)
+            .map_err(Fault::Tune)?
+            .volts
+            .min(self.ceiling_volts);
         let from = self.plan.bias_volts;
         let squared = from * from;
         let secant = self.trim.previous.and_then(|(p2, pf)| {
@@ -877,24 +948,66 @@ impl Controller {
                     .volts
             }
         };
-        if !(from <= max_volts && bias_volts + s.ac_volts <= max_volts) {
+        if !(from <= max_volts) {
             return Err(Fault::AboveSafe {
-                volts: from.max(bias_volts + s.ac_volts),
+                volts: from,
                 max_volts,
             });
         }
-        self.device = device;
-        self.max_volts = max_volts;
-        self.trim.tuned = true;
-        self.plan = Plan {
+        let needed_volts = bias_volts + s.ac_volts;
+        if !(needed_volts <= max_volts) && max_volts == self.ceiling_volts {
+            // The estimate asks for more than the device flashed allows: say so, and hold.
+            self.phase = Phase::Held;
+            return Ok(Retune::AboveCeiling { needed_volts });
+        }
+        let plan = Plan {
             start_tick: k.saturating_add(1),
             start_volts: from,
             bias_volts,
             pulse_ticks: (0, 0),
             ..self.plan
         };
+        let cap = self.max_volts;
+        self.max_volts = max_volts;
+        if let Err(fault) = self.check_range(&plan, bias_volts) {
+            self.max_volts = cap;
+            return Err(fault);
+        }
+        self.device = device;
+        self.trim.tuned = true;
+        self.plan = plan;
         self.phase = Phase::Ramping;
-        Ok(bias_volts)
+        Ok(Retune::To { bias_volts })
+    }
+
+    /// A stretch sample: a number (`Sensor`), one a device could give (`SensorImplausible`),
+    /// not stuck, and inside MODEL.md §6 at this tick's voltage for the device flashed and
+    /// for the trim's estimate of it (`Limit`; a state outside the model is loss of tension
+    /// 1).
+    fn check_stretch(&mut self, k: u32, stretch: f32, volts: f32) -> Option<Fault> {
+        if !stretch.is_finite() {
+            return Some(Fault::Sensor { value: stretch });
+        }
+        let (low, high) = self.flashed.plausible_stretch();
+        if !(stretch > low && stretch < high) {
+            return Some(Fault::SensorImplausible {
+                value: stretch,
+                low,
+                high,
+            });
+        }
+        if let Some(fault) = self.check_stuck(stretch) {
+            return Some(fault);
+        }
+        let devices = [self.flashed, self.device];
+        let count = if self.device == self.flashed { 1 } else { 2 };
+        for device in devices.iter().take(count) {
+            let p = volts / device.volts_per_unit();
+            if let Some(mode) = self.monitor.observe(device, u64::from(k), stretch, p * p) {
+                return Some(Fault::Limit { mode, tick: k });
+            }
+        }
+        None
     }
 
     /// The amplifier's monitored output against the last command.

@@ -22,10 +22,11 @@ pub struct Hessian<T> {
 }
 
 impl<T: Real> Hessian<T> {
-    /// Positive-definiteness margin: `min(d11, det)`, positive exactly when definite.
+    /// Positive-definiteness margin: `min(d11, det)`, positive exactly when definite (NaN,
+    /// and so failing, when either part is NaN).
     pub fn definiteness(&self) -> T {
         let det = self.d11 * self.d22 - self.d12 * self.d12;
-        self.d11.min(det)
+        self.d11.min_margin(det)
     }
 }
 
@@ -81,14 +82,35 @@ impl<T: Real> Gent<T> {
         let ab = a * b;
         // h(x) = x − x⁻³λ2⁻²:  h(a) − h(b) = (a − b)·[1 + λ2⁻²·(a² + ab + b²)/(a³b³)]
         let dh = a_minus_b * (T::one() + inv_l2_sq * (a * a + ab + b * b) / (ab * ab * ab));
+        let hb = b - inv_l2_sq / (b * b * b);
+        self.softened_difference(a, b, a_minus_b, l2, dh, hb)
+    }
+
+    /// `s̄2(a, λ2) − s̄2(b, λ2)` (λ1 = a against λ1 = b at the same λ2), factored by `a − b`
+    /// like [`Gent::stress_1_difference`]: for checks near the pre-stretch in f32.
+    pub fn stress_2_difference(&self, a: T, b: T, a_minus_b: T, l2: T) -> T {
+        let inv_l2_cubed = T::one() / (l2 * l2 * l2);
+        let ab = a * b;
+        // h(x) = λ2 − λ2⁻³x⁻²:  h(a) − h(b) = λ2⁻³·(a − b)·(a + b)/(a²b²)
+        let dh = inv_l2_cubed * a_minus_b * (a + b) / (ab * ab);
+        let hb = l2 - inv_l2_cubed / (b * b);
+        self.softened_difference(a, b, a_minus_b, l2, dh, hb)
+    }
+
+    /// `I1(a, λ2) − I1(b, λ2) = (a − b)·(a + b)·(1 − λ2⁻²/(a²b²))`, factored by `a − b`.
+    pub fn first_invariant_difference(a: T, b: T, a_minus_b: T, l2: T) -> T {
+        let ab = a * b;
+        a_minus_b * (a + b) * (T::one() - T::one() / (l2 * l2 * ab * ab))
+    }
+
+    /// `h(a)/g(a) − h(b)/g(b)` from `dh = h(a) − h(b)` and `h(b)`, with the Gent factor
+    /// g = 1 − (I1 − 3)/Jlim: `[dh·g(b) + h(b)·(I1(a) − I1(b))/Jlim]/(g(a)·g(b))`.
+    fn softened_difference(&self, a: T, b: T, a_minus_b: T, l2: T, dh: T, hb: T) -> T {
         if self.inv_jlim == T::zero() {
             return dh;
         }
-        // I1(a) − I1(b) = (a − b)·(a + b)·(1 − λ2⁻²/(a²b²)), and with g = 1 − (I1 − 3)/Jlim,
-        // h(a)/g(a) − h(b)/g(b) = [(h(a) − h(b))·g(b) + h(b)·(I1(a) − I1(b))/Jlim]/(g(a)·g(b)).
-        let di1 = a_minus_b * (a + b) * (T::one() - inv_l2_sq / (ab * ab));
+        let di1 = Self::first_invariant_difference(a, b, a_minus_b, l2);
         let (ga, gb) = (self.softening(a, l2), self.softening(b, l2));
-        let hb = b - inv_l2_sq / (b * b * b);
         (dh * gb + hb * di1 * self.inv_jlim) / (ga * gb)
     }
 

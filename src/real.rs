@@ -27,6 +27,8 @@ pub trait Real:
     fn abs(self) -> Self;
     fn sin(self) -> Self;
     fn is_finite(self) -> bool;
+    /// The largest value below this one (NaN stays NaN, −∞ stays −∞).
+    fn next_down(self) -> Self;
     /// The angle of a phase given in units of 2π/2⁶⁴ (a wrapping turn counter), in [−π, π).
     fn angle_of_phase(phase: u64) -> Self;
 
@@ -38,7 +40,8 @@ pub trait Real:
     fn one() -> Self {
         Self::of(1.0)
     }
-    /// The smaller of two values (the other one when either is NaN).
+    /// The smaller of two values; `self` when either is NaN (for ordinary arithmetic, not
+    /// for safety margins: see [`Real::min_margin`]).
     fn min(self, other: Self) -> Self {
         if other < self {
             other
@@ -46,7 +49,23 @@ pub trait Real:
             self
         }
     }
-    /// The larger of two values.
+    /// The smaller of two safety margins, NaN when either is NaN: a margin with an undefined
+    /// part must fail its check (`!(m > 0)`), never pass on the other part.
+    fn min_margin(self, other: Self) -> Self {
+        if self.is_nan() || other.is_nan() {
+            Self::of(f64::NAN)
+        } else if other < self {
+            other
+        } else {
+            self
+        }
+    }
+    /// Whether the value is NaN.
+    #[allow(clippy::eq_op)]
+    fn is_nan(self) -> bool {
+        self != self
+    }
+    /// The larger of two values; `self` when either is NaN.
     fn max(self, other: Self) -> Self {
         if other > self {
             other
@@ -83,6 +102,9 @@ impl Real for f64 {
     fn is_finite(self) -> bool {
         f64::is_finite(self)
     }
+    fn next_down(self) -> Self {
+        f64::next_down(self)
+    }
     fn angle_of_phase(phase: u64) -> Self {
         (phase as i64) as f64 * (core::f64::consts::TAU / 18_446_744_073_709_551_616.0)
     }
@@ -112,6 +134,9 @@ impl Real for f32 {
     }
     fn is_finite(self) -> bool {
         f32::is_finite(self)
+    }
+    fn next_down(self) -> Self {
+        f32::next_down(self)
     }
     fn angle_of_phase(phase: u64) -> Self {
         // The top 32 bits resolve 1.5e-9 rad, finer than f32 near π.

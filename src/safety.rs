@@ -3,6 +3,7 @@
 use core::fmt;
 
 use crate::device::Device;
+use crate::material::Gent;
 use crate::real::Real;
 use crate::roots::bisect;
 use crate::statics::Equilibrium;
@@ -97,14 +98,39 @@ impl<T: Real> Margins<T> {
 
     /// The margin of one check.
     pub fn of(&self, mode: FailureMode) -> T {
-        self.values[mode as usize]
+        self.values
+            .get(mode as usize)
+            .copied()
+            .unwrap_or(T::of(f64::NAN))
+    }
+
+    /// A state outside the model: loss of tension 1 at −1, every other margin undefined.
+    pub fn outside_model() -> Self {
+        let mut values = [T::of(f64::NAN); 7];
+        if let Some(tension) = values.get_mut(FailureMode::LossOfTension1 as usize) {
+            *tension = -T::one();
+        }
+        Self { values }
     }
 }
 
 impl<T: Real> Device<T> {
+    /// Whether the model is defined at stretch λ: both membranes have length, λ > 0 and
+    /// λB > 0 (MODEL.md §6.3). Outside it, stresses are not stresses (s1 of a negative
+    /// stretch comes out positive), so no check may pass there.
+    pub fn in_model(&self, stretch: T) -> bool {
+        stretch > T::zero() && self.passive_stretch(stretch) > T::zero()
+    }
+
     /// The six checks of MODEL.md §6 at stretch λ under the dimensionless bias Φ̄²
-    /// (on or off equilibrium: the dynamic monitor uses the same checks).
+    /// (on or off equilibrium: the dynamic monitor uses the same checks). §6.3 checks the
+    /// tension in direction 1 of both B and A (A's less the electrostatic stress: the two
+    /// differ along a trajectory by the bars' inertia). Outside the model (see
+    /// [`Device::in_model`]) loss of tension 1 is −1 and every other margin NaN: none holds.
     pub fn margins(&self, stretch: T, bias_dimless_squared: T) -> Margins<T> {
+        if !self.in_model(stretch) {
+            return Margins::outside_model();
+        }
         let m = self.material();
         let l = stretch;
         let l2p = self.prestretch_2();
@@ -113,22 +139,70 @@ impl<T: Real> Device<T> {
         // §6.5: E/√(μ/ε) = Φ̄·λ·λ2p (a negative Φ̄² gives NaN, which fails).
         let field_squared = p2 * (l * l2p).squared();
         let field = p2.sqrt() * l * l2p;
+        let tension_1a = m.stress_1(l, l2p) - p2 * l * l2p * l2p;
         Margins {
             values: [
                 self.stiffness_dimless(l, p2),
                 m.hessian_under_bias(l, l2p, p2).definiteness(),
-                m.stress_1(lb, l2p),
+                m.stress_1(lb, l2p).min_margin(tension_1a),
                 l2p * m.stress_2(l, l2p) - field_squared,
                 l2p * m.stress_2(lb, l2p),
                 self.breakdown_field_dimless() - field,
-                m.lock_up_margin(l, l2p).min(m.lock_up_margin(lb, l2p)),
+                m.lock_up_margin(l, l2p)
+                    .min_margin(m.lock_up_margin(lb, l2p)),
             ],
         }
     }
 
+    /// The first check (in MODEL.md order) that fails at stretch λ under Φ̄²; loss of
+    /// tension 1 for a state outside the model.
+    pub fn first_failure(&self, stretch: T, bias_dimless_squared: T) -> Option<FailureMode> {
+        if !self.in_model(stretch) {
+            return Some(FailureMode::LossOfTension1);
+        }
+        self.margins(stretch, bias_dimless_squared).first_failure()
+    }
+
     /// The checks at the equilibrium of the loading branch at stretch λ.
     pub fn margins_on_branch(&self, stretch: T) -> Margins<T> {
-        self.margins(stretch, self.bias_dimless_squared(stretch))
+        self.margins_on_branch_at(stretch - self.prestretch_1())
+    }
+
+    /// The checks at the equilibrium at the offset δ = λ − λ1p on the loading branch. Each
+    /// stress and invariant is its value at the pre-stretch plus a difference factored by
+    /// δ, so a limit just past the pre-stretch is found to f32's relative precision in δ,
+    /// not to one unit of λ's last place. On the branch A's tension in direction 1 equals
+    /// B's (that is the equilibrium, MODEL.md §5), so B's stands for both.
+    pub fn margins_on_branch_at(&self, offset: T) -> Margins<T> {
+        let m = self.material();
+        let (l1p, l2p) = (self.prestretch_1(), self.prestretch_2());
+        let l = l1p + offset;
+        let passive_offset = -self.length_ratio() * offset;
+        let lb = l1p + passive_offset;
+        if !self.in_model(l) {
+            return Margins::outside_model();
+        }
+        let p2 = self.bias_dimless_squared_at(offset);
+        let (s1_0, s2_0) = (m.stress_1(l1p, l2p), m.stress_2(l1p, l2p));
+        let s1_b = s1_0 + m.stress_1_difference(lb, l1p, passive_offset, l2p);
+        let s2_a = s2_0 + m.stress_2_difference(l, l1p, offset, l2p);
+        let s2_b = s2_0 + m.stress_2_difference(lb, l1p, passive_offset, l2p);
+        let i1_0 = Gent::first_invariant(l1p, l2p);
+        let lock = |d: T, x: T| {
+            T::one() - (i1_0 + Gent::first_invariant_difference(x, l1p, d, l2p)) * m.inv_jlim()
+        };
+        let field_squared = p2 * (l * l2p).squared();
+        Margins {
+            values: [
+                self.stiffness_dimless(l, p2),
+                m.hessian_under_bias(l, l2p, p2).definiteness(),
+                s1_b,
+                l2p * s2_a - field_squared,
+                l2p * s2_b,
+                self.breakdown_field_dimless() - p2.sqrt() * l * l2p,
+                lock(offset, l).min_margin(lock(passive_offset, lb)),
+            ],
+        }
     }
 
     /// The stretches in which the model is defined and dynamics are guarded: from half of
@@ -137,6 +211,15 @@ impl<T: Real> Device<T> {
     pub fn model_range(&self) -> (T, T) {
         let slack_a = T::of(0.5) / self.prestretch_2().sqrt();
         (slack_a.min(self.prestretch_1()), self.scan_end_stretch())
+    }
+
+    /// The stretches a displacement sensor can plausibly report, as an open interval: the
+    /// bars at most one frame length (L1·λ1p) outside the frame, λ in (−λfull, 2·λfull) with
+    /// λfull = L1·λ1p/L1A (where λB = 0). Inside it, a state outside the model is loss of
+    /// tension 1 (the monitor); outside it, no device could be there: a sensor fault.
+    pub fn plausible_stretch(&self) -> (T, T) {
+        let full = self.prestretch_1() * (T::one() + T::one() / self.length_ratio());
+        (-full, full + full)
     }
 
     /// A stretch at which some check has surely failed on the loading branch: the least of
@@ -183,44 +266,43 @@ impl<T: Real> Limit<T> {
     /// A check that fails and recovers inside one grid cell (1/128 of [λ1p, scan end]) is
     /// missed.
     pub fn of(device: &Device<T>) -> Self {
-        let start = device.prestretch_1();
-        let end = device.scan_end_stretch();
-        let at =
-            |i: usize| start + (end - start) * T::of(i as f64) / T::of(LIMIT_SCAN_POINTS as f64);
-        let mut safe = start;
+        // Scanned and bisected in the offset δ = λ − λ1p (see `margins_on_branch_at`).
+        let end = device.scan_end_stretch() - device.prestretch_1();
+        let at = |i: usize| end * T::of(i as f64) / T::of(LIMIT_SCAN_POINTS as f64);
+        let mut safe = T::zero();
         for i in 0..=LIMIT_SCAN_POINTS {
-            let l = at(i);
-            let margins = device.margins_on_branch(l);
+            let d = at(i);
+            let margins = device.margins_on_branch_at(d);
             if margins.first_failure().is_none() {
-                safe = l;
+                safe = d;
                 continue;
             }
-            // The earliest crossing among the checks that fail at l (never at i = 0: a valid
+            // The earliest crossing among the checks that fail at d (never at i = 0: a valid
             // device is safe at zero bias).
             let mut first: Option<(T, FailureMode)> = None;
             for mode in FailureMode::ALL {
                 if margins.of(mode) > T::zero() {
                     continue;
                 }
-                let (crossing, _) = bisect(safe, l, |x| {
-                    device.margins_on_branch(x).of(mode) > T::zero()
+                let (crossing, _) = bisect(safe, d, |x| {
+                    device.margins_on_branch_at(x).of(mode) > T::zero()
                 });
                 if first.is_none_or(|(best, _)| crossing < best) {
                     first = Some((crossing, mode));
                 }
             }
-            if let Some((stretch, mode)) = first {
-                return Self::at_stretch(device, stretch, mode);
+            if let Some((offset, mode)) = first {
+                return Self::at_offset(device, offset, mode);
             }
         }
         // Unreachable (a check has failed by the scan's end); stay on the safe side.
-        Self::at_stretch(device, safe, FailureMode::LossOfTension1)
+        Self::at_offset(device, safe, FailureMode::LossOfTension1)
     }
 
-    fn at_stretch(device: &Device<T>, stretch: T, mode: FailureMode) -> Self {
+    fn at_offset(device: &Device<T>, offset: T, mode: FailureMode) -> Self {
         Self {
             mode,
-            at: device.equilibrium(stretch),
+            at: device.equilibrium_at(offset),
         }
     }
 }
@@ -256,9 +338,7 @@ impl<T: Real> Monitor<T> {
         stretch: T,
         bias_dimless_squared: T,
     ) -> Option<FailureMode> {
-        let mode = device
-            .margins(stretch, bias_dimless_squared)
-            .first_failure()?;
+        let mode = device.first_failure(stretch, bias_dimless_squared)?;
         if self.first.is_none() {
             self.first = Some(Crossing {
                 mode,

@@ -350,14 +350,14 @@ pub fn fill<T: Real>(
     for (k, point) in out.iter_mut().enumerate() {
         let squared = top.volts * top.volts * T::of(k as f64) / T::of(last as f64);
         let volts = squared.sqrt();
-        let stretch = if k == last {
-            Some(top.stretch)
+        let offset = if k == last {
+            Some(top.offset)
         } else {
-            device.stretch_for_bias(volts, top.stretch)
+            device.offset_for_bias(volts, top.offset)
         };
         let index = k.min(usize::from(u16::MAX)) as u16;
-        let hz = stretch
-            .map(|l| device.natural_frequency_hz(l))
+        let hz = offset
+            .map(|d| device.natural_frequency_hz_at(d))
             .ok_or(TableError::NotFinite { index })?;
         *point = (hz.to_f64() as f32, volts.to_f64() as f32);
     }

@@ -128,8 +128,8 @@ fn model_hz(params: &DeviceParams<f32>, volts: f32) -> f32 {
     if !(volts <= limit.at.volts) {
         return f32::NAN;
     }
-    d.stretch_for_bias(volts, limit.at.stretch)
-        .map_or(f32::NAN, |l| d.natural_frequency_hz(l))
+    d.offset_for_bias(volts, limit.at.offset)
+        .map_or(f32::NAN, |offset| d.natural_frequency_hz_at(offset))
 }
 
 /// The shear modulus μ for which the model with `params` (otherwise as they are) has the

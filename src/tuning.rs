@@ -68,7 +68,7 @@ pub struct TunableRange<T> {
     pub max_bias: Equilibrium<T>,
 }
 
-/// One stretch of the branch on which f is monotone.
+/// One stretch of the branch on which f is monotone, in offsets δ = λ − λ1p.
 #[derive(Clone, Copy, Debug)]
 struct Piece<T> {
     start: T,
@@ -103,7 +103,7 @@ impl<T: Real> Tuner<T> {
 
     /// The equilibrium at zero bias.
     pub fn zero_bias(&self) -> Equilibrium<T> {
-        self.device.equilibrium(self.device.prestretch_1())
+        self.device.equilibrium_at(T::zero())
     }
 
     /// The equilibrium at the highest bias the margin allows, (1 − margin)·Φlimit.
@@ -112,11 +112,11 @@ impl<T: Real> Tuner<T> {
             return Err(TuneError::InvalidMargin { margin });
         }
         let volts = (T::one() - margin) * self.limit.at.volts;
-        // Never `None`: (1 − margin)·Φlimit ≤ Φlimit = Φ(λlimit), compared as computed.
+        // Never `None`: (1 − margin)·Φlimit ≤ Φlimit = Φ(δlimit), compared as computed.
         Ok(self
             .device
-            .stretch_for_bias(volts, self.limit.at.stretch)
-            .map_or(self.limit.at, |stretch| self.device.equilibrium(stretch)))
+            .offset_for_bias(volts, self.limit.at.offset)
+            .map_or(self.limit.at, |offset| self.device.equilibrium_at(offset)))
     }
 
     /// The range of natural frequencies reachable between zero bias and the margin.
@@ -124,7 +124,7 @@ impl<T: Real> Tuner<T> {
         let max_bias = self.max_bias(margin)?;
         let mut low_hz = self.zero_bias().natural_frequency_hz;
         let mut high_hz = low_hz;
-        self.for_each_piece(max_bias.stretch, |piece| {
+        self.for_each_piece(max_bias.offset, |piece| {
             low_hz = low_hz.min(piece.f_end);
             high_hz = high_hz.max(piece.f_end);
             false
@@ -144,14 +144,14 @@ impl<T: Real> Tuner<T> {
         }
         let max_bias = self.max_bias(margin)?;
         let mut found = None;
-        self.for_each_piece(max_bias.stretch, |p| {
+        self.for_each_piece(max_bias.offset, |p| {
             let (lo, hi) = (p.f_start.min(p.f_end), p.f_start.max(p.f_end));
             if !(target_hz >= lo && target_hz <= hi) {
                 return false;
             }
             let rising = p.f_end >= p.f_start;
-            let f = |l| self.device.natural_frequency_hz(l);
-            let (a, b) = bisect(p.start, p.end, |l| (f(l) < target_hz) == rising);
+            let f = |d| self.device.natural_frequency_hz_at(d);
+            let (a, b) = bisect(p.start, p.end, |d| (f(d) < target_hz) == rising);
             found = Some(if (f(b) - target_hz).abs() < (f(a) - target_hz).abs() {
                 b
             } else {
@@ -160,7 +160,7 @@ impl<T: Real> Tuner<T> {
             true
         });
         match found {
-            Some(stretch) => Ok(self.device.equilibrium(stretch)),
+            Some(offset) => Ok(self.device.equilibrium_at(offset)),
             None => {
                 let range = self.tunable_range(margin)?;
                 Err(TuneError::OutOfRange {
@@ -172,14 +172,12 @@ impl<T: Real> Tuner<T> {
         }
     }
 
-    /// Visit the monotone pieces of f on `[λ1p, max_stretch]` in order of rising stretch,
-    /// until `visit` returns true.
-    fn for_each_piece(&self, max_stretch: T, mut visit: impl FnMut(&Piece<T>) -> bool) {
-        let f = |l| self.device.natural_frequency_hz(l);
-        let start = self.device.prestretch_1();
-        let x = |i: usize| {
-            start + (max_stretch - start) * T::of(i as f64) / T::of(TUNING_SCAN_POINTS as f64)
-        };
+    /// Visit the monotone pieces of f on offsets `[0, max_offset]` (δ = λ − λ1p) in order
+    /// of rising stretch, until `visit` returns true.
+    fn for_each_piece(&self, max_offset: T, mut visit: impl FnMut(&Piece<T>) -> bool) {
+        let f = |d| self.device.natural_frequency_hz_at(d);
+        let start = T::zero();
+        let x = |i: usize| max_offset * T::of(i as f64) / T::of(TUNING_SCAN_POINTS as f64);
         let mut piece_start = (start, f(start));
         let (mut before, mut prev) = (start, piece_start);
         let mut rising: Option<bool> = None;

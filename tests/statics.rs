@@ -132,15 +132,25 @@ fn stretch_for_bias_inverts_bias_volts() {
     for p in devices() {
         let d = Device::new(p).unwrap();
         let limit = Tuner::new(d).limit().at;
+        // The limit's volts are those of its offset δ, which is finer than its stretch (the
+        // stretch is rounded toward λ1p): the stretch form reaches Φ(limit.stretch).
+        let top = d.bias_volts(limit.stretch);
+        assert!(top <= limit.volts && top >= limit.volts * (1.0 - 1e-12));
         for k in 0..=10 {
-            let volts = limit.volts * f64::from(k) / 10.0;
+            let volts = top * f64::from(k) / 10.0;
             let l = d.stretch_for_bias(volts, limit.stretch).unwrap();
             assert!((d.bias_volts(l) - volts).abs() <= 1e-9 * limit.volts);
             assert!(d.bias_volts(l) <= volts);
             // Sign of the voltage does not matter.
             assert_eq!(d.stretch_for_bias(-volts, limit.stretch), Some(l));
+            // The offset form reaches the limit's own volts.
+            let volts = limit.volts * f64::from(k) / 10.0;
+            let offset = d.offset_for_bias(volts, limit.offset).unwrap();
+            assert!((d.bias_volts_at(offset) - volts).abs() <= 1e-9 * limit.volts);
+            assert!(d.bias_volts_at(offset) <= volts && offset <= limit.offset);
         }
         assert_eq!(d.stretch_for_bias(limit.volts * 1.01, limit.stretch), None);
+        assert_eq!(d.offset_for_bias(limit.volts * 1.01, limit.offset), None);
         assert_eq!(d.stretch_for_bias(f64::NAN, limit.stretch), None);
         assert_eq!(d.stretch_for_bias(f64::INFINITY, limit.stretch), None);
     }

@@ -128,6 +128,8 @@ pub struct Run {
     pub bias_volts: f64,
     /// The last commanded and applied voltages, V.
     pub final_command_volts: f64,
+    /// The highest voltage commanded at any tick, V.
+    pub max_command_volts: f64,
     pub final_membrane_volts: f64,
     /// The plant's natural frequency at its static equilibrium under the controller's bias
     /// (networks frozen), Hz; NaN if there is none.
@@ -156,6 +158,13 @@ impl Run {
                 "trim: {measured_hz:.4} Hz measured at {bias_volts:.1} V, μ estimated \
                  {:.2} kPa, next bias {next_bias_volts:.1} V",
                 shear_modulus / 1e3
+            ),
+            Event::AboveCeiling {
+                needed_volts,
+                ceiling_volts,
+            } => format!(
+                "trim needs {needed_volts:.1} V, above the ceiling {ceiling_volts:.1} V of the \
+                 device flashed: holding the bias"
             ),
             Event::Fault(fault) => {
                 self.fault = Some(fault);
@@ -201,6 +210,7 @@ impl Loop {
             plant_crossing: None,
             bias_volts: 0.0,
             final_command_volts: 0.0,
+            max_command_volts: 0.0,
             final_membrane_volts: 0.0,
             natural_frequency_hz: f64::NAN,
             limit: None,
@@ -257,6 +267,7 @@ impl Loop {
                     let _ = Dac8551::new(&mut bus).power_down();
                 }
                 run.final_command_volts = f64::from(out.volts);
+                run.max_command_volts = run.max_command_volts.max(f64::from(out.volts));
                 run.said(t, out.event);
             }
             let input = amplifier_input(&bus, enabled);

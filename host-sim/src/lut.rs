@@ -85,10 +85,10 @@ fn interpolation_error(t: &Table, tuner: &Tuner<f64>, margin: f64) -> Result<Err
                 .tune(hz, margin)
                 .map_err(|e| format!("direct solve at {hz} Hz: {e}"))?;
             // Up to the limit, not the top: the top point's f32 volts may round above it.
-            let stretch = device
-                .stretch_for_bias(table_volts, tuner.limit().at.stretch)
+            let offset = device
+                .offset_for_bias(table_volts, tuner.limit().at.offset)
                 .ok_or_else(|| format!("no equilibrium at the table's {table_volts} V"))?;
-            let error = (device.natural_frequency_hz(stretch) - hz).abs() / hz;
+            let error = (device.natural_frequency_hz_at(offset) - hz).abs() / hz;
             if error > errors.frequency {
                 errors.frequency = error;
                 errors.worst_hz = hz;

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use de_resonator::{Device, FailureMode, Fault, Tuner, REFERENCE_DEVICE};
+use de_resonator::{Device, DeviceParams, FailureMode, Fault, Tuner, REFERENCE_DEVICE};
 use host_sim::hil::Run;
 use host_sim::plant::{AmplifierModel, Plant};
 use host_sim::scene;
@@ -101,7 +101,7 @@ fn fault_scenes_end_at_zero_volts_and_safe() {
 fn mismatch_scenes_trim_within_half_a_percent() {
     for (file, target, mu) in [
         ("mismatch-soft.toml", 29.5, 0.8 * 45e3),
-        ("mismatch-stiff.toml", 32.5, 1.2 * 45e3),
+        ("mismatch-stiff.toml", 33.0, 1.2 * 45e3),
     ] {
         let r = run(file);
         assert!(r.refused.is_none() && r.fault.is_none(), "{file}: {r:?}");
@@ -125,6 +125,49 @@ fn mismatch_scenes_trim_within_half_a_percent() {
             .unwrap();
         assert!((kpa * 1e3 / mu - 1.0).abs() < 1e-3, "{file}: {last}");
     }
+}
+
+/// A plant 20% stiffer than the device flashed, asked for a target it reaches only above
+/// that device's ceiling, (1 − m)·Φlimit: the trim says what it would need (the plant's own
+/// bias for the target, by the f64 solve on the true parameters, plus the AC) and holds the
+/// bias it has. No command ever goes above the ceiling; nothing faults; the plant is safe.
+#[test]
+fn a_stiffer_plant_never_lifts_the_ceiling() {
+    let r = run("mismatch-stiff-ceiling.toml");
+    assert!(r.refused.is_none() && r.fault.is_none(), "{r:?}");
+    let nominal = DeviceParams {
+        shear_modulus: 45e3,
+        jlim: Some(120.0),
+        prestretch_1: 1.5,
+        prestretch_2: 3.0,
+        length_passive: 0.06,
+        ..REFERENCE_DEVICE
+    };
+    let ceiling = 0.95 * Tuner::new(Device::new(nominal).unwrap()).limit().at.volts;
+    let plant = DeviceParams {
+        shear_modulus: 1.2 * 45e3,
+        ..nominal
+    };
+    let needed = Tuner::new(Device::new(plant).unwrap())
+        .tune(32.5, 0.05)
+        .unwrap()
+        .volts
+        + 100.0;
+    assert!(needed > ceiling, "{needed} {ceiling}");
+    let said = r
+        .events
+        .iter()
+        .find(|e| e.what.starts_with("trim needs"))
+        .unwrap_or_else(|| panic!("no hold: {:?}", r.events));
+    let asked: f64 = said.what["trim needs ".len()..]
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!((asked / needed - 1.0).abs() < 2e-3, "{asked} vs {needed}");
+    assert!(r.bias_volts <= ceiling && r.max_command_volts <= ceiling);
+    assert_eq!(r.plant_crossing, None);
 }
 
 /// The viscoelastic VHB plant: within 0.5% at the end of the run after trimming (again every
