@@ -11,11 +11,14 @@
 //! | 8 | 52 | the 13 device parameters in `DeviceParams` order (`jlim` 0 = neo-Hookean) |
 //! | 60 | 4 | the voltage margin m the table was made with: its top bias ≤ (1 − m)·limit |
 //! | 64 | 4 | the largest relative error of f at the table's bias, as the host measured it |
-//! | 68 | 8·N | points (frequency Hz, bias V), bias strictly rising, frequency strictly monotone |
+//! | 68 | 8·N | points (frequency Hz, bias V), bias strictly rising; frequency turns at most `MAX_TURNS` times |
 //! | 68 + 8·N | 4 | CRC-32 (IEEE 802.3) of every byte before it, u32 |
 //!
 //! Between points the bias is interpolated as Φ² linear in f: Φ² enters the model linearly
 //! (MODEL.md §5), so near zero bias, where f − f(0) ∝ Φ², this is exact to first order.
+//! f(Φ) need not be monotone (MODEL.md §5): the lookup takes the first interval, in rising
+//! bias, that holds the target, which is the smallest bias (MODEL.md §7), as `Tuner::tune`
+//! takes; the maker puts f's turning points in as points, so extrema are not cut off.
 
 use core::fmt;
 
@@ -33,6 +36,9 @@ pub const HEADER_BYTES: usize = 68;
 pub const POINT_BYTES: usize = 8;
 /// The most points a table may hold.
 pub const MAX_POINTS: usize = 1024;
+/// The most times the frequency column may change direction: f(Φ) of MODEL.md §5 turns
+/// once or twice at most on the devices tried; more is corruption.
+pub const MAX_TURNS: usize = 4;
 
 /// A table stops this fraction below (1 − margin)·Φlimit: the firmware computes the limit
 /// again in f32, which was within 7e-4 of f64 on every device tried (README, Accuracy), and
@@ -67,7 +73,8 @@ pub enum TableError {
     BadCrc { stored: u32, computed: u32 },
     /// A header value or a point is NaN, infinite, or not positive where it must be.
     NotFinite { index: u16 },
-    /// Point `index` does not continue the strictly rising bias and monotone frequency.
+    /// Point `index` does not continue the strictly rising bias, or is the frequency's
+    /// turn past `MAX_TURNS`.
     NotMonotone { index: u16 },
     /// The table was made for other device parameters (field index in `DeviceParams` order).
     OtherDevice { field: u8 },
@@ -102,9 +109,11 @@ impl fmt::Display for TableError {
             TableError::NotFinite { index } => {
                 write!(f, "table value {index} is NaN, infinite or not positive")
             }
-            TableError::NotMonotone { index } => {
-                write!(f, "table point {index} breaks the monotone order")
-            }
+            TableError::NotMonotone { index } => write!(
+                f,
+                "table point {index} breaks the order (bias strictly rising, frequency turning \
+                 at most {MAX_TURNS} times)"
+            ),
             TableError::OtherDevice { field } => {
                 write!(
                     f,
@@ -158,12 +167,22 @@ fn param_values(p: &DeviceParams<f32>) -> [f32; 13] {
     ]
 }
 
-fn f32_at(bytes: &[u8], offset: usize) -> f32 {
+/// The four bytes at `offset` (zeros past the end: callers check the length first).
+fn word_at(bytes: &[u8], offset: usize) -> [u8; 4] {
     let mut word = [0u8; 4];
-    if let Some(src) = bytes.get(offset..offset + 4) {
+    if let Some(src) = bytes.get(offset..offset.saturating_add(4)) {
         word.copy_from_slice(src);
     }
-    f32::from_le_bytes(word)
+    word
+}
+
+fn f32_at(bytes: &[u8], offset: usize) -> f32 {
+    f32::from_le_bytes(word_at(bytes, offset))
+}
+
+fn u16_at(bytes: &[u8], offset: usize) -> u16 {
+    let [a, b, _, _] = word_at(bytes, offset);
+    u16::from_le_bytes([a, b])
 }
 
 /// A checked table, borrowed from flash or a buffer.
@@ -175,19 +194,19 @@ pub struct Table<'a> {
 
 impl<'a> Table<'a> {
     /// Check a table's bytes: magic, version, count, length, CRC, every value finite and
-    /// positive, bias strictly rising and frequency strictly monotone.
+    /// positive, bias strictly rising, the frequency turning at most `MAX_TURNS` times.
     pub fn parse(bytes: &'a [u8]) -> Result<Self, TableError> {
         if bytes.len() < table_bytes(0) {
             return Err(TableError::TooShort { bytes: bytes.len() });
         }
-        if bytes[0..4] != MAGIC {
+        if bytes.get(0..4) != Some(&MAGIC[..]) {
             return Err(TableError::BadMagic);
         }
-        let version = u16::from_le_bytes([bytes[4], bytes[5]]);
+        let version = u16_at(bytes, 4);
         if version != VERSION {
             return Err(TableError::UnsupportedVersion { version });
         }
-        let count = u16::from_le_bytes([bytes[6], bytes[7]]);
+        let count = u16_at(bytes, 6);
         let points = usize::from(count);
         if !(2..=MAX_POINTS).contains(&points) {
             return Err(TableError::BadCount { points: count });
@@ -200,13 +219,8 @@ impl<'a> Table<'a> {
             });
         }
         let body = expected - 4;
-        let stored = u32::from_le_bytes([
-            bytes[body],
-            bytes[body + 1],
-            bytes[body + 2],
-            bytes[body + 3],
-        ]);
-        let computed = crc32(&bytes[..body]);
+        let stored = u32::from_le_bytes(word_at(bytes, body));
+        let computed = crc32(bytes.get(..body).unwrap_or(&[]));
         if stored != computed {
             return Err(TableError::BadCrc { stored, computed });
         }
@@ -222,20 +236,26 @@ impl<'a> Table<'a> {
         if !(table.margin() < 1.0) {
             return Err(TableError::NotFinite { index: 13 });
         }
-        let falling = table.point(1).0 < table.point(0).0;
+        let mut previous: Option<(f32, f32)> = None;
+        let mut rising: Option<bool> = None;
+        let mut turns = 0;
         for k in 0..points {
             let (hz, volts) = table.point(k);
             let index = k as u16;
             if !(hz.is_finite() && hz > 0.0 && volts.is_finite() && volts >= 0.0) {
                 return Err(TableError::NotFinite { index });
             }
-            if k > 0 {
-                let (hz0, volts0) = table.point(k - 1);
-                let monotone = if falling { hz < hz0 } else { hz > hz0 };
-                if !(volts > volts0 && monotone) {
+            if let Some((hz0, volts0)) = previous {
+                let step = (hz != hz0).then_some(hz > hz0);
+                if rising.is_some() && step.is_some() && step != rising {
+                    turns += 1;
+                }
+                rising = step.or(rising);
+                if !(volts > volts0) || turns > MAX_TURNS {
                     return Err(TableError::NotMonotone { index });
                 }
             }
+            previous = Some((hz, volts));
         }
         Ok(table)
     }
@@ -275,7 +295,11 @@ impl<'a> Table<'a> {
     pub fn check_device(&self, params: &DeviceParams<f32>) -> Result<(), TableError> {
         let ours = param_values(&self.params());
         let theirs = param_values(params);
-        match (0..13).find(|&k| ours[k].to_bits() != theirs[k].to_bits()) {
+        match ours
+            .iter()
+            .zip(theirs.iter())
+            .position(|(a, b)| a.to_bits() != b.to_bits())
+        {
             Some(field) => Err(TableError::OtherDevice { field: field as u8 }),
             None => Ok(()),
         }
@@ -292,19 +316,22 @@ impl<'a> Table<'a> {
         f32_at(self.bytes, 64)
     }
 
-    /// The table's frequency range, (low, high) Hz.
+    /// The table's frequency range, (low, high) Hz: the least and greatest of its points.
     pub fn range_hz(&self) -> (f32, f32) {
-        let (a, b) = (self.point(0).0, self.point(self.points - 1).0);
-        (a.min(b), a.max(b))
+        (0..self.points).fold((f32::INFINITY, f32::NEG_INFINITY), |(low, high), k| {
+            let hz = self.point(k).0;
+            (low.min(hz), high.max(hz))
+        })
     }
 
     /// The highest bias in the table, V.
     pub fn max_volts(&self) -> f32 {
-        self.point(self.points - 1).1
+        self.point(self.points.saturating_sub(1)).1
     }
 
-    /// The bias for a target frequency: Φ² interpolated linearly in f between the two
-    /// points that bracket it (binary search).
+    /// The bias for a target frequency: the first interval, in rising bias, whose two points
+    /// bracket the target (the smallest bias, MODEL.md §7), with Φ² interpolated linearly in
+    /// f between them.
     pub fn bias_volts(&self, target_hz: f32) -> Result<f32, TableError> {
         let (low_hz, high_hz) = self.range_hz();
         if !(target_hz >= low_hz && target_hz <= high_hz) {
@@ -314,51 +341,71 @@ impl<'a> Table<'a> {
                 high_hz,
             });
         }
-        let falling = self.point(1).0 < self.point(0).0;
-        // Invariant: the target lies between points lo and hi.
-        let (mut lo, mut hi) = (0, self.points - 1);
-        while hi - lo > 1 {
-            let mid = (lo + hi) / 2;
-            let past = if falling {
-                self.point(mid).0 < target_hz
-            } else {
-                self.point(mid).0 > target_hz
-            };
-            if past {
-                hi = mid;
-            } else {
-                lo = mid;
+        let mut previous = self.point(0);
+        for k in 1..self.points {
+            let (f1, v1) = self.point(k);
+            let (f0, v0) = previous;
+            if target_hz >= f0.min(f1) && target_hz <= f0.max(f1) {
+                // f0 = f1 only when the target is that frequency: take the lower bias.
+                let t = if f1 == f0 {
+                    0.0
+                } else {
+                    (target_hz - f0) / (f1 - f0)
+                };
+                let squared = v0 * v0 + t * (v1 * v1 - v0 * v0);
+                return Ok(Real::sqrt(squared.max(0.0)));
             }
+            previous = (f1, v1);
         }
-        let (f0, v0) = self.point(lo);
-        let (f1, v1) = self.point(hi);
-        let t = (target_hz - f0) / (f1 - f0);
-        let squared = v0 * v0 + t * (v1 * v1 - v0 * v0);
-        Ok(Real::sqrt(squared.max(0.0)))
+        // Unreachable: the range is the points' own, so some interval holds the target.
+        Err(TableError::OutOfRange {
+            target_hz,
+            low_hz,
+            high_hz,
+        })
     }
 }
 
 /// Fill `out` with table points (frequency Hz, bias V) from zero bias up to `top` (the
-/// highest allowed equilibrium, `Tuner::max_bias`), evenly spaced in Φ². A point whose
-/// equilibrium cannot be found is reported as `NotFinite` at its index.
+/// highest allowed equilibrium, `Tuner::max_bias`): f's turning points below `top`
+/// (`Tuner::for_each_turning_point`, in rising bias) and, around them, points evenly spaced
+/// in Φ². A point whose equilibrium cannot be found is reported as `NotFinite` at its index.
 pub fn fill<T: Real>(
     device: &Device<T>,
     top: &Equilibrium<T>,
+    turns: &[Equilibrium<T>],
     out: &mut [(f32, f32)],
 ) -> Result<(), TableError> {
-    let last = out.len().saturating_sub(1).max(1);
-    for (k, point) in out.iter_mut().enumerate() {
-        let squared = top.volts * top.volts * T::of(k as f64) / T::of(last as f64);
-        let volts = squared.sqrt();
-        let offset = if k == last {
-            Some(top.offset)
-        } else {
-            device.offset_for_bias(volts, top.offset)
+    let below_top = |turn: &&Equilibrium<T>| turn.volts < top.volts;
+    let grid = out.len().saturating_sub(turns.iter().filter(below_top).count());
+    if grid < 2 {
+        return Err(TableError::BadCount {
+            points: out.len().min(usize::from(u16::MAX)) as u16,
+        });
+    }
+    let last = grid - 1;
+    // Grid point k: Φ² = (k/last)·Φtop², the last one the top itself.
+    let grid_point = |k: usize| {
+        if k >= last {
+            return Some((top.natural_frequency_hz, top.volts));
+        }
+        let volts = (top.volts * top.volts * T::of(k as f64) / T::of(last as f64)).sqrt();
+        let offset = device.offset_for_bias(volts, top.offset)?;
+        Some((device.natural_frequency_hz_at(offset), volts))
+    };
+    let mut turns = turns.iter().filter(below_top).peekable();
+    let mut k = 0;
+    for (index, point) in out.iter_mut().enumerate() {
+        let next = grid_point(k);
+        let turn = turns.next_if(|turn| next.is_none_or(|(_, volts)| turn.volts < volts));
+        let (hz, volts) = match turn {
+            Some(turn) => (turn.natural_frequency_hz, turn.volts),
+            None => {
+                k += 1;
+                let index = index.min(usize::from(u16::MAX)) as u16;
+                next.ok_or(TableError::NotFinite { index })?
+            }
         };
-        let index = k.min(usize::from(u16::MAX)) as u16;
-        let hz = offset
-            .map(|d| device.natural_frequency_hz_at(d))
-            .ok_or(TableError::NotFinite { index })?;
         *point = (hz.to_f64() as f32, volts.to_f64() as f32);
     }
     Ok(())
@@ -383,23 +430,21 @@ pub fn write(
     let Some(out) = out.get_mut(..needed) else {
         return Err(TableError::BufferTooSmall { needed });
     };
-    out[0..4].copy_from_slice(&MAGIC);
-    out[4..6].copy_from_slice(&VERSION.to_le_bytes());
-    out[6..8].copy_from_slice(&(points.len() as u16).to_le_bytes());
-    let header = param_values(params)
+    let header = MAGIC
         .into_iter()
-        .chain([margin, interpolation_error]);
-    for (k, v) in header.enumerate() {
-        out[8 + 4 * k..12 + 4 * k].copy_from_slice(&v.to_le_bytes());
+        .chain(VERSION.to_le_bytes())
+        .chain((points.len() as u16).to_le_bytes());
+    let values = param_values(params)
+        .into_iter()
+        .chain([margin, interpolation_error])
+        .chain(points.iter().flat_map(|&(hz, volts)| [hz, volts]))
+        .flat_map(f32::to_le_bytes);
+    let (body, crc_bytes) = out.split_at_mut(needed - 4);
+    for (slot, byte) in body.iter_mut().zip(header.chain(values)) {
+        *slot = byte;
     }
-    for (k, (hz, volts)) in points.iter().enumerate() {
-        let at = HEADER_BYTES + POINT_BYTES * k;
-        out[at..at + 4].copy_from_slice(&hz.to_le_bytes());
-        out[at + 4..at + 8].copy_from_slice(&volts.to_le_bytes());
-    }
-    let body = needed - 4;
-    let crc = crc32(&out[..body]);
-    out[body..needed].copy_from_slice(&crc.to_le_bytes());
+    let crc = crc32(body);
+    crc_bytes.copy_from_slice(&crc.to_le_bytes());
     Table::parse(out)?;
     Ok(needed)
 }

@@ -136,6 +136,24 @@ impl<T: Real> Tuner<T> {
         })
     }
 
+    /// The turning points of f (its interior extrema) on the branch up to the margin's
+    /// highest bias, in order of rising bias: a table holds them as points, so that its
+    /// range and its lookup near an extremum follow the model.
+    pub fn for_each_turning_point(
+        &self,
+        margin: T,
+        mut visit: impl FnMut(Equilibrium<T>),
+    ) -> Result<(), TuneError<T>> {
+        let max_bias = self.max_bias(margin)?;
+        self.for_each_piece(max_bias.offset, |piece| {
+            if piece.end < max_bias.offset && piece.end > T::zero() {
+                visit(self.device.equilibrium_at(piece.end));
+            }
+            false
+        });
+        Ok(())
+    }
+
     /// The smallest bias on the loading branch, within the margin, whose natural frequency
     /// is `target_hz`.
     pub fn tune(&self, target_hz: T, margin: T) -> Result<Equilibrium<T>, TuneError<T>> {

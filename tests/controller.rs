@@ -16,7 +16,7 @@ fn reference_table() -> Vec<u8> {
     let tuner = Tuner::new(device);
     let top = tuner.max_bias(table::table_margin(0.05)).unwrap();
     let mut points = vec![(0.0f32, 0.0f32); 64];
-    table::fill(&device, &top, &mut points).unwrap();
+    table::fill(&device, &top, &[], &mut points).unwrap();
     let mut bytes = vec![0u8; table::table_bytes(points.len())];
     let params = REFERENCE_DEVICE.cast::<f32>();
     table::write(&mut bytes, &params, 0.05, 0.0, &points).unwrap();

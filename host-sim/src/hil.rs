@@ -190,7 +190,7 @@ impl Loop {
         let made = crate::lut::make(
             self.nominal,
             f64::from(self.settings.margin),
-            crate::lut::DEFAULT_POINTS,
+            None,
         )?;
         let started = Instant::now();
         let tick_seconds = 1.0 / f64::from(self.settings.tick_hz);

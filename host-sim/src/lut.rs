@@ -4,8 +4,14 @@
 use de_resonator::table::{self, Table};
 use de_resonator::{DeviceParams, Tuner};
 
-/// Points in a table unless asked otherwise.
+/// Points a table starts with when its size is not asked for; doubled (up to
+/// `table::MAX_POINTS`) until the interpolation error is at most `TARGET_ERROR`.
 pub const DEFAULT_POINTS: usize = 64;
+
+/// The interpolation error a table is made to (when its size is not asked for): a tenth of
+/// the controller's default agreement between table and solve (1e-4), so that every table
+/// `lut` makes boots with the default settings.
+pub const TARGET_ERROR: f64 = 1e-5;
 
 /// Interpolation error is checked at this many points inside every interval.
 const CHECKS_PER_INTERVAL: usize = 8;
@@ -20,10 +26,26 @@ pub struct Made {
     pub crc: u32,
 }
 
-/// Make the table of `points` points for `params` up to (1 − margin)·limit less the
-/// `HEADROOM` the f32 firmware needs: evenly spaced in
-/// Φ² (f − f(0) ∝ Φ² near zero bias), so Φ² linear in f interpolates well everywhere.
-pub fn make(params: DeviceParams<f64>, margin: f64, points: usize) -> Result<Made, String> {
+/// Make the table for `params` up to (1 − margin)·limit less the `HEADROOM` the f32
+/// firmware needs: `points` points, or (`None`) the fewest of 64, 128, … 1024 whose
+/// interpolation error is at most `TARGET_ERROR`.
+pub fn make(params: DeviceParams<f64>, margin: f64, points: Option<usize>) -> Result<Made, String> {
+    if let Some(points) = points {
+        return make_with(params, margin, points);
+    }
+    let mut points = DEFAULT_POINTS;
+    loop {
+        let made = make_with(params, margin, points)?;
+        if made.errors.frequency <= TARGET_ERROR || points >= table::MAX_POINTS {
+            return Ok(made);
+        }
+        points = (2 * points).min(table::MAX_POINTS);
+    }
+}
+
+/// The table of `points` points: f's turning points and, around them, points evenly spaced
+/// in Φ² (f − f(0) ∝ Φ² near zero bias), so Φ² linear in f interpolates well everywhere.
+fn make_with(params: DeviceParams<f64>, margin: f64, points: usize) -> Result<Made, String> {
     if !(2..=table::MAX_POINTS).contains(&points) {
         return Err(format!("{points} points: need 2 to {}", table::MAX_POINTS));
     }
@@ -32,8 +54,12 @@ pub fn make(params: DeviceParams<f64>, margin: f64, points: usize) -> Result<Mad
     let top = tuner
         .max_bias(table::table_margin(margin))
         .map_err(|e| e.to_string())?;
+    let mut turns = Vec::new();
+    tuner
+        .for_each_turning_point(table::table_margin(margin), |turn| turns.push(turn))
+        .map_err(|e| e.to_string())?;
     let mut stored = vec![(0.0f32, 0.0f32); points];
-    table::fill(&device, &top, &mut stored).map_err(|e| e.to_string())?;
+    table::fill(&device, &top, &turns, &mut stored).map_err(|e| e.to_string())?;
     // The f32 table is checked against the f64 direct solve, the table's error in its
     // header being found from the table itself: write once with 0, measure, write again.
     let params32 = params.cast::<f32>();

@@ -123,9 +123,10 @@ enum Command {
         /// Output file.
         #[arg(long, value_name = "FILE")]
         out: PathBuf,
-        /// Number of points.
-        #[arg(long, value_name = "N", default_value_t = lut::DEFAULT_POINTS)]
-        points: usize,
+        /// Number of points (2 to 1024). Default: the fewest of 64, 128, … 1024 that
+        /// interpolate within 1e-5 in frequency.
+        #[arg(long, value_name = "N")]
+        points: Option<usize>,
         /// `bin` (for flashing) or `csv` (for people).
         #[arg(long, value_enum, default_value_t = LutFormat::Bin)]
         format: LutFormat,
