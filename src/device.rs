@@ -187,6 +187,20 @@ pub struct Device<T> {
     breakdown_field_dimless: T,
     /// c·T0/M.
     damping_dimless: T,
+    /// s̄1, s̄2 and I1 at the pre-stretch: the checks near λ1p are these plus a factored
+    /// difference (`Device::margins_on_branch_at`).
+    at_prestretch: AtPrestretch<T>,
+}
+
+/// Stresses over μ and the first invariant of a membrane at the pre-stretch (λ1p, λ2p),
+/// computed in f64 whatever `T`: near-slack devices (λ1p·λ2p² close to 1) have s̄2 there as
+/// a cancellation f32 cannot resolve, and every check near λ1p starts from these values.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct AtPrestretch<T> {
+    pub stress_1: T,
+    pub stress_2: T,
+    pub first_invariant: T,
 }
 
 impl<T: Real> DeviceParams<T> {
@@ -301,9 +315,20 @@ impl<T: Real> Device<T> {
             let scale = "c·T0/M";
             return err(Field::Damping, Problem::DerivedNotFinite { scale });
         }
+        let (a, b) = (l1p.to_f64(), l2p.to_f64());
+        let wide = match p.jlim {
+            None => Gent::<f64>::neo_hookean(),
+            Some(jlim) => Gent::with_jlim(jlim.to_f64()),
+        };
+        let at_prestretch = AtPrestretch {
+            stress_1: T::of(wide.stress_1(a, b)),
+            stress_2: T::of(wide.stress_2(a, b)),
+            first_invariant: T::of(Gent::<f64>::first_invariant(a, b)),
+        };
         let device = Self {
             params,
             material,
+            at_prestretch,
             length_ratio,
             volts_per_unit,
             rad_per_s_per_unit,
@@ -360,6 +385,11 @@ impl<T: Real> Device<T> {
     /// Breakdown field E_B in units of √(μ/ε).
     pub fn breakdown_field_dimless(&self) -> T {
         self.breakdown_field_dimless
+    }
+
+    /// s̄1, s̄2 and I1 at the pre-stretch, computed in f64.
+    pub fn at_prestretch(&self) -> &AtPrestretch<T> {
+        &self.at_prestretch
     }
 
     /// Dimensionless damping c̄ = c·T0/M (MODEL.md §4).

@@ -6,6 +6,15 @@
 //! steps the dynamics; [`table`] reads and writes tuning tables. Equations cite `MODEL.md` sections.
 #![no_std]
 #![forbid(unsafe_code)]
+// "No panic on any input" checked by the compiler: no unwrap, expect, panic or indexing in
+// the library. Crate attributes rather than `[lints]` in Cargo.toml, which would bind the
+// tests too (they unwrap to fail loudly).
+#![deny(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::indexing_slicing
+)]
 // Checks are written `!(x > 0)` on purpose: NaN must fail them, and that form says so.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 

@@ -183,11 +183,11 @@ impl<T: Real> Device<T> {
             return Margins::outside_model();
         }
         let p2 = self.bias_dimless_squared_at(offset);
-        let (s1_0, s2_0) = (m.stress_1(l1p, l2p), m.stress_2(l1p, l2p));
-        let s1_b = s1_0 + m.stress_1_difference(lb, l1p, passive_offset, l2p);
-        let s2_a = s2_0 + m.stress_2_difference(l, l1p, offset, l2p);
-        let s2_b = s2_0 + m.stress_2_difference(lb, l1p, passive_offset, l2p);
-        let i1_0 = Gent::first_invariant(l1p, l2p);
+        let zero = self.at_prestretch();
+        let s1_b = zero.stress_1 + m.stress_1_difference(lb, l1p, passive_offset, l2p);
+        let s2_a = zero.stress_2 + m.stress_2_difference(l, l1p, offset, l2p);
+        let s2_b = zero.stress_2 + m.stress_2_difference(lb, l1p, passive_offset, l2p);
+        let i1_0 = zero.first_invariant;
         let lock = |d: T, x: T| {
             T::one() - (i1_0 + Gent::first_invariant_difference(x, l1p, d, l2p)) * m.inv_jlim()
         };

@@ -377,7 +377,9 @@ pub fn fill<T: Real>(
     out: &mut [(f32, f32)],
 ) -> Result<(), TableError> {
     let below_top = |turn: &&Equilibrium<T>| turn.volts < top.volts;
-    let grid = out.len().saturating_sub(turns.iter().filter(below_top).count());
+    let grid = out
+        .len()
+        .saturating_sub(turns.iter().filter(below_top).count());
     if grid < 2 {
         return Err(TableError::BadCount {
             points: out.len().min(usize::from(u16::MAX)) as u16,

@@ -1,10 +1,12 @@
 //! The tuning table, the DAC driver and the sans-IO controller, on the host: what the
 //! firmware runs, with every kind of bad input the firmware must survive.
 
+mod common;
+
 use de_resonator::table::{self, Table, TableError};
 use de_resonator::{
-    Amplifier, CodeError, Controller, Dac8551, DacCode, DacError, Device, Event, Fault, Inputs,
-    Phase, Setting, Settings, Tuner, REFERENCE_DEVICE,
+    Amplifier, CodeError, Controller, Dac8551, DacCode, DacError, Device, DeviceParams, Event,
+    Fault, Inputs, Phase, Setting, Settings, Tuner, REFERENCE_DEVICE,
 };
 use embedded_hal_mock::eh1::spi::{Mock, Transaction};
 use proptest::prelude::*;
@@ -167,7 +169,8 @@ fn boot_tunes_the_reference_device_to_44_hz() {
     );
     let limit_volts = boot.limit.unwrap().at.volts;
     assert!((limit_volts - 9854.73).abs() < 0.05, "{limit_volts}");
-    assert!((boot.max_volts - 0.95 * 9854.73).abs() < 0.05);
+    // The cap: (1 − margin)·(1 − F32_GUARD)·Φlimit, the guard keeping f32 below f64.
+    assert!((boot.max_volts - 0.95 * (1.0 - 1e-5) * 9854.73).abs() < 0.05);
     // The slow ramp stays near the static branch: no swing past the equilibrium's stretch
     // (2.19319 at 44 Hz) by more than a little.
     let (low, high) = boot.plan_stretch.unwrap();
@@ -448,6 +451,156 @@ fn a_plan_that_crosses_dynamically_is_refused_by_the_model_check() {
     let resonant = Settings { ac_hz: 44.0, ..off };
     let fault = start(resonant).unwrap_err();
     assert!(matches!(fault, Fault::PlanCrosses { .. }), "{fault}");
+}
+
+/// Issue 12.1. A plant 20% stiffer than the device flashed (the core's f64 model of the
+/// plant's own parameters, Q = 200, its stretch the sensor), and a target it reaches only
+/// above the flashed device's ceiling. The trim measures the stiffer plant and says what it
+/// would need (the plant's own bias for the target, by the f64 solve, plus the AC); no tick
+/// ever commands more than (1 − margin)·Φlimit of the device flashed; the bias holds.
+#[cfg(feature = "trim")]
+#[test]
+fn a_trim_on_a_stiffer_plant_never_lifts_the_ceiling() {
+    use de_resonator::{Drive, Integrator, Method, State};
+    let nominal = common::wide_range_device();
+    let mut plant = DeviceParams {
+        shear_modulus: 1.2 * nominal.shear_modulus,
+        ..nominal
+    };
+    let plant_tuner = Tuner::new(Device::new(plant).unwrap());
+    let f0 = plant_tuner.zero_bias().natural_frequency_hz;
+    plant.damping = plant.effective_mass() * std::f64::consts::TAU * f0 / 200.0;
+    let ceiling = 0.95 * Tuner::new(Device::new(nominal).unwrap()).limit().at.volts;
+    let needed = plant_tuner.tune(32.5, 0.05).unwrap().volts + 100.0;
+    assert!(needed > ceiling);
+
+    let settings = Settings {
+        ac_volts: 100.0,
+        ac_hz: 29.0,
+        trim_tolerance: 1e-3,
+        ..Settings::for_target(32.5)
+    };
+    let table = common::made_table(nominal, 0.05, 64);
+    let (mut c, _) = Controller::start(nominal.cast(), &table, amplifier(), settings).unwrap();
+    let device = Device::new(plant).unwrap();
+    let rest = State {
+        stretch: plant.prestretch_1,
+        velocity: 0.0,
+    };
+    let drive = |volts: f32| Drive::constant(&device, f64::from(volts));
+    let mut model = Integrator::new(
+        device,
+        drive(0.0),
+        Method::Rk4,
+        1e-3,
+        device.model_range(),
+        rest,
+        true,
+    )
+    .unwrap();
+    let mut held = None;
+    for k in 0..4000 {
+        let out = c.tick(Inputs::stretch(model.state().stretch as f32));
+        assert!(f64::from(out.volts) <= ceiling, "tick {k}: {} V", out.volts);
+        match out.event {
+            Some(Event::AboveCeiling {
+                needed_volts,
+                ceiling_volts,
+            }) => held = Some((needed_volts, ceiling_volts)),
+            Some(Event::Fault(f)) => panic!("tick {k}: {f}"),
+            _ => {}
+        }
+        model.set_drive(drive(out.volts)).unwrap();
+        model.step().unwrap();
+    }
+    let (asked, said_ceiling) = held.expect("the trim must say it needs more");
+    assert!(
+        (f64::from(asked) / needed - 1.0).abs() < 2e-3,
+        "{asked} vs {needed}"
+    );
+    assert!(f64::from(said_ceiling) <= ceiling);
+    assert_eq!(c.phase(), Phase::Held);
+    assert!(c.max_volts() <= c.ceiling_volts());
+}
+
+/// Issue 12.3. An AC amplitude above the bias would command below 0 V (a target at f0 has
+/// no bias at all; the amplifier is unipolar): refused before anything is driven, as a
+/// setting fault naming the AC amplitude. The same AC on a bias that holds it is accepted.
+#[test]
+fn a_plan_below_zero_volts_is_a_setting_fault() {
+    let f0 = Tuner::new(Device::new(REFERENCE_DEVICE).unwrap())
+        .zero_bias()
+        .natural_frequency_hz as f32;
+    // f − f0 ∝ Φ² near zero bias: 1e-4 Hz below f0 takes about 50 V here.
+    for target in [f0, f0 - 1e-4] {
+        let fault = start(Settings {
+            ac_volts: 100.0,
+            ac_hz: 40.0,
+            ..Settings::for_target(target)
+        })
+        .unwrap_err();
+        assert_eq!(
+            fault,
+            Fault::Setting {
+                setting: Setting::AcVolts,
+                value: 100.0
+            },
+            "{target} Hz"
+        );
+    }
+    let accepted = start(Settings {
+        ac_volts: 100.0,
+        ac_hz: 40.0,
+        ..Settings::for_target(45.5)
+    });
+    assert!(accepted.is_ok(), "{:?}", accepted.err());
+    // AC volts without a frequency would drive nothing: refused, naming the frequency.
+    let fault = start(Settings {
+        ac_volts: 100.0,
+        ..Settings::for_target(44.0)
+    })
+    .unwrap_err();
+    assert!(
+        matches!(
+            fault,
+            Fault::Setting {
+                setting: Setting::AcHz,
+                ..
+            }
+        ),
+        "{fault}"
+    );
+}
+
+/// Issue 12.4. A controller margin above the table's boots on every stage: the table's top
+/// is scaled down to it, top·(1 − m)/(1 − m_table), which lies below (1 − m)·Φlimit of the
+/// f64 solve (the table keeps its headroom), and the bias is the solve's.
+#[test]
+fn a_larger_margin_than_the_tables_scales_its_top() {
+    let limit = Tuner::new(Device::new(REFERENCE_DEVICE).unwrap())
+        .limit()
+        .at
+        .volts;
+    let table = reference_table();
+    let top = Table::parse(&table).unwrap().max_volts();
+    for margin in [0.1f32, 0.2, 0.3] {
+        let settings = Settings {
+            margin,
+            ..Settings::for_target(45.0)
+        };
+        let params = REFERENCE_DEVICE.cast::<f32>();
+        let (c, boot) = Controller::start(params, &table, amplifier(), settings).unwrap();
+        let scaled = top * (1.0 - margin) / 0.95;
+        let cap = (1.0 - f64::from(margin)) * limit;
+        assert!(f64::from(boot.max_volts) <= cap, "{margin}: {boot:?}");
+        assert!(f64::from(c.ceiling_volts()) <= cap);
+        assert!(scaled <= boot.max_volts, "{margin}: {scaled} {boot:?}");
+        let solved = Tuner::new(Device::new(REFERENCE_DEVICE).unwrap())
+            .tune(45.0, f64::from(margin))
+            .unwrap()
+            .volts;
+        assert!((f64::from(boot.bias_volts) / solved - 1.0).abs() < 1e-5);
+    }
 }
 
 #[test]

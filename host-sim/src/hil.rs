@@ -187,11 +187,7 @@ impl Loop {
 
     /// Run the loop for its duration.
     pub fn run(&self) -> Result<Run, String> {
-        let made = crate::lut::make(
-            self.nominal,
-            f64::from(self.settings.margin),
-            None,
-        )?;
+        let made = crate::lut::make(self.nominal, f64::from(self.settings.margin), None)?;
         let started = Instant::now();
         let tick_seconds = 1.0 / f64::from(self.settings.tick_hz);
         let ticks = (self.duration_seconds / tick_seconds).round() as u64;

@@ -107,3 +107,33 @@ pub fn non_monotone_device() -> DeviceParams<f64> {
         ..de_resonator::REFERENCE_DEVICE
     }
 }
+
+/// A tuning table for `p` as `host-sim lut` makes it (the core's writer: f's turning points
+/// and points evenly spaced in Φ², up to (1 − margin)·limit less the headroom).
+pub fn made_table(p: DeviceParams<f64>, margin: f64, points: usize) -> Vec<u8> {
+    use de_resonator::{table, Device, Tuner};
+    let tuner = Tuner::new(Device::new(p).unwrap());
+    let m = table::table_margin(margin);
+    let top = tuner.max_bias(m).unwrap();
+    let mut turns = Vec::new();
+    tuner
+        .for_each_turning_point(m, |turn| turns.push(turn))
+        .unwrap();
+    let mut stored = vec![(0.0f32, 0.0f32); points];
+    table::fill(tuner.device(), &top, &turns, &mut stored).unwrap();
+    let mut bytes = vec![0u8; table::table_bytes(points)];
+    table::write(&mut bytes, &p.cast(), margin as f32, 0.0, &stored).unwrap();
+    bytes
+}
+
+/// The wide-range device of the mismatch scenes (f0 34.5 Hz, limit `emi` at 8395.67 V).
+pub fn wide_range_device() -> DeviceParams<f64> {
+    DeviceParams {
+        shear_modulus: 45e3,
+        jlim: Some(120.0),
+        prestretch_1: 1.5,
+        prestretch_2: 3.0,
+        length_passive: 0.06,
+        ..de_resonator::REFERENCE_DEVICE
+    }
+}
