@@ -523,6 +523,41 @@ fn a_trim_on_a_stiffer_plant_never_lifts_the_ceiling() {
     assert!(c.max_volts() <= c.ceiling_volts());
 }
 
+/// Issue 12.2. A stretch sample no device can give (the bars more than a frame's length
+/// outside the frame: the reference device's frame holds λ up to L1·λ1p/L1A = 4) is a
+/// sensor fault; one past the far end but within reach of a sensor's noise (λB ≤ 0) is loss
+/// of tension 1. Both give 0 V at once.
+#[test]
+fn samples_outside_the_model_or_any_device_are_refused() {
+    for (sample, implausible) in [
+        (1e6f32, true),
+        (8.0, true),
+        (-4.0, true),
+        (f32::MAX, true),
+        (4.0, false),
+        (4.5, false),
+        (-0.5, false),
+        (0.0, false),
+    ] {
+        let mut c = start(Settings::for_target(44.0)).unwrap();
+        c.tick(Inputs::NONE);
+        let out = c.tick(Inputs::stretch(sample));
+        assert_eq!(out.code, DacCode(0), "{sample}");
+        match out.event {
+            Some(Event::Fault(Fault::SensorImplausible { value, low, high })) => {
+                assert!(implausible, "{sample}");
+                assert_eq!((value, low, high), (sample, -4.0, 8.0));
+            }
+            Some(Event::Fault(Fault::Limit { mode, .. })) => {
+                assert!(!implausible, "{sample}");
+                assert_eq!(mode, de_resonator::FailureMode::LossOfTension1, "{sample}");
+            }
+            other => panic!("{sample}: {other:?}"),
+        }
+        assert_eq!(c.phase(), Phase::Faulted);
+    }
+}
+
 /// Issue 12.3. An AC amplitude above the bias would command below 0 V (a target at f0 has
 /// no bias at all; the amplifier is unipolar): refused before anything is driven, as a
 /// setting fault naming the AC amplitude. The same AC on a bias that holds it is accepted.

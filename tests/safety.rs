@@ -218,3 +218,131 @@ fn nan_state_is_not_safe() {
     assert!(d.margins(f64::NAN, 0.0).first_failure().is_some());
     assert!(d.margins(2.1, f64::NAN).first_failure().is_some());
 }
+
+/// Issue 12.2. A state with λB ≤ 0 (the bars at or past the far end: λ ≥ L1·λ1p/L1A) is
+/// outside the model: loss of tension 1, never "no check failed" (s1 of a negative stretch
+/// comes out positive), for the margins, the first failure and the monitor alike; and a
+/// state with no length left in A (λ ≤ 0) the same.
+#[test]
+fn states_outside_the_model_are_loss_of_tension_1() {
+    let p = REFERENCE_DEVICE;
+    let d = Device::new(p).unwrap();
+    let full = length_1(&p) * p.prestretch_1 / p.length_active;
+    assert_eq!(passive_stretch(&p, full), 0.0);
+    for stretch in [full, full + 0.5, 2.0 * full, 0.0, -1.0, f64::NAN] {
+        for bias in [0.0, 0.1] {
+            assert!(!d.in_model(stretch), "{stretch}");
+            assert_eq!(
+                d.first_failure(stretch, bias),
+                Some(FailureMode::LossOfTension1),
+                "{stretch}"
+            );
+            assert!(d.margins(stretch, bias).first_failure().is_some());
+            let mut monitor = de_resonator::Monitor::new();
+            assert_eq!(
+                monitor.observe(&d, 0, stretch, bias),
+                Some(FailureMode::LossOfTension1)
+            );
+        }
+    }
+}
+
+/// Issue 12.2, MODEL.md §6.3: along a trajectory A's own tension in direction 1,
+/// s1(λ) − ε(Φ/H)²·λ·λ2p², is checked as well as B's. A state off the branch with A short
+/// (λ = 0.8) and B taut (λB = 3.2), under a voltage 5% past the one that takes A's tension
+/// to zero: every other check holds (by the plain-SI stresses here), and the first failure
+/// is loss of tension 1.
+#[test]
+fn active_membrane_slack_in_direction_1_is_loss_of_tension_1() {
+    let p = REFERENCE_DEVICE;
+    let d = Device::new(p).unwrap();
+    let (l, l2p) = (0.8, p.prestretch_2);
+    let lb = passive_stretch(&p, l);
+    assert!(s1(&p, lb, l2p) > 0.0 && s1(&p, l, l2p) > 0.0);
+    // ε(Φ/H)²·λ·λ2p² = 1.05·s1(λ): A is in compression along 1.
+    let field_squared = 1.05 * s1(&p, l, l2p) / (permittivity(&p) * l * l2p * l2p);
+    let volts = field_squared.sqrt() * p.thickness;
+    let bias = (volts / d.volts_per_unit()).powi(2);
+    let tension_a = s1(&p, l, l2p) - permittivity(&p) * field_squared * l * l2p * l2p;
+    assert!(tension_a < 0.0);
+    let margins = d.margins(l, bias);
+    for mode in FailureMode::ALL {
+        if mode != FailureMode::LossOfTension1 {
+            assert!(margins.of(mode) > 0.0, "{mode}: {margins:?}");
+        }
+    }
+    let expected = tension_a / p.shear_modulus;
+    let got = margins.of(FailureMode::LossOfTension1);
+    assert!((got - expected).abs() < 1e-9, "{got} vs {expected}");
+    assert_eq!(d.first_failure(l, bias), Some(FailureMode::LossOfTension1));
+}
+
+/// Issue 12.6. The f32 limit (as on the chip) against the f64 limit of the same device (the
+/// f32 parameters, as flashed), on random devices of which two in three have their limit
+/// just past the pre-stretch (breakdown, or loss of tension 2a on a nearly slack membrane):
+/// within 1e-6 in volts, the controller's guard (1e-5) well above it.
+#[test]
+fn f32_limits_agree_with_f64_also_just_past_the_prestretch() {
+    let mut rng = Rng(0x5eed_0012);
+    let (mut checked, mut near, mut worst) = (0, 0, 0.0f64);
+    while checked < 3000 {
+        let p = random_device(&mut rng);
+        let (Ok(d64), Ok(d32)) = (Device::new(p), Device::new(p.cast::<f32>())) else {
+            continue;
+        };
+        checked += 1;
+        let (l64, l32) = (limit_of(p), *Tuner::new(d32).limit());
+        near += usize::from(l64.at.offset < 1e-4 * p.prestretch_1);
+        let error = (f64::from(l32.at.volts) / l64.at.volts - 1.0).abs();
+        worst = worst.max(error);
+        assert!(error < 1e-6, "{error:e}: {p:?}\n{l64:?}\n{l32:?}");
+        assert_eq!(l32.mode, l64.mode, "{p:?}");
+        let _ = d64;
+    }
+    assert!(near > 1000, "{near} limits near the pre-stretch");
+    println!("{checked} devices, {near} with the limit within 1e-4 of λ1p: worst {worst:e}");
+}
+
+/// Issue 12.7. A margin with a NaN part fails its check, whichever part is NaN: the
+/// safety minimum propagates NaN (the ordinary `min` does not).
+#[test]
+fn a_nan_part_fails_its_margin_in_either_position() {
+    use de_resonator::material::Hessian;
+    use de_resonator::{Margins, Real};
+    for (a, b) in [(f64::NAN, 1.0), (1.0, f64::NAN), (f64::NAN, f64::NAN)] {
+        assert!(a.min_margin(b).is_nan());
+        assert!((a as f32).min_margin(b as f32).is_nan());
+    }
+    assert_eq!(2.0f64.min_margin(1.0), 1.0);
+    assert_eq!((-1.0f64).min_margin(1.0), -1.0);
+    // EMI's definiteness, min(d11, det): NaN in d11, and NaN in det (through d22).
+    for h in [
+        Hessian {
+            d11: f64::NAN,
+            d12: 0.0,
+            d22: 1.0,
+        },
+        Hessian {
+            d11: 1.0,
+            d12: 0.0,
+            d22: f64::NAN,
+        },
+    ] {
+        assert!(!(h.definiteness() > 0.0), "{h:?}");
+    }
+    // Any NaN margin is a failure of that check.
+    let d = Device::new(REFERENCE_DEVICE).unwrap();
+    let safe = d.margins_on_branch(2.1);
+    assert_eq!(safe.first_failure(), None);
+    for mode in FailureMode::ALL {
+        let mut m = safe;
+        m.values[mode as usize] = f64::NAN;
+        assert_eq!(Margins { values: m.values }.first_failure(), Some(mode));
+    }
+    // The stretch limit takes the least of A's and B's: a NaN in either fails it.
+    let g = Gent::<f64>::with_jlim(120.0);
+    for (a, b) in [(f64::NAN, 2.0), (2.0, f64::NAN)] {
+        let lock = g.lock_up_margin(a, 2.0).min_margin(g.lock_up_margin(b, 2.0));
+        assert!(!(lock > 0.0));
+    }
+}

@@ -217,11 +217,13 @@ impl Plant {
         if !(h11 > 0.0 && h11 * h22 - h12 * h12 > 0.0) {
             return Some(FailureMode::Emi);
         }
+        // §6.3 along a trajectory: B's tension in direction 1, and A's less the electrostatic
+        // stress (they differ by the bars' inertia).
         let (sb1, sb2) = self.stresses(y, lb, l2, false);
-        if !(sb1 > 0.0) {
+        let (sa1, sa2) = self.stresses(y, l, l2, true);
+        if !(sb1 > 0.0 && sa1 - eps * e0 * e0 * l * l2 * l2 > 0.0) {
             return Some(FailureMode::LossOfTension1);
         }
-        let (_, sa2) = self.stresses(y, l, l2, true);
         let field = volts * l * l2 / p.thickness;
         if !(l2 * sa2 - eps * field * field > 0.0) {
             return Some(FailureMode::LossOfTension2a);

@@ -52,6 +52,33 @@ fn plant_statics_and_limit_match_the_published_figures() {
     assert!((volts - 9854.73).abs() < 0.01, "{volts}");
 }
 
+/// MODEL.md §6.3 in the plant: A short (λ = 0.8) and B taut, under a voltage that puts A's
+/// tension along 1 just below zero (its value from the core's stress, independent of the
+/// plant's code): loss of tension 1; at 0.95 of that voltage, safe. Past the far end
+/// (λB < 0) loss of tension 1 too.
+#[test]
+fn plant_checks_the_active_membranes_tension_and_the_model_domain() {
+    let plant = elastic_reference();
+    let p = REFERENCE_DEVICE;
+    let mut y = plant.at_rest();
+    y[0] = 0.8;
+    let m = de_resonator::material::Gent::with_jlim(120.0);
+    let tension = p.shear_modulus * m.stress_1(0.8, 2.0);
+    let eps = p.relative_permittivity * de_resonator::device::VACUUM_PERMITTIVITY;
+    // ε(Φ/H)²·λ·λ2p² = s1(λ) at Φ0.
+    let zero_volts = (tension / (eps * 0.8 * 4.0)).sqrt() * p.thickness;
+    assert_eq!(
+        plant.first_failure(&y, 1.01 * zero_volts),
+        Some(FailureMode::LossOfTension1)
+    );
+    assert_eq!(plant.first_failure(&y, 0.95 * zero_volts), None);
+    y[0] = 4.2;
+    assert_eq!(
+        plant.first_failure(&y, 0.0),
+        Some(FailureMode::LossOfTension1)
+    );
+}
+
 /// No mismatch: the controller's bias gives the target within 0.1% in the plant, and the
 /// plant stays inside its safe region throughout.
 #[test]
