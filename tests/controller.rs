@@ -66,6 +66,97 @@ fn table_interpolation_is_exact_where_bias_squared_is_linear_in_f() {
     assert_eq!(t.params(), REFERENCE_DEVICE.cast());
 }
 
+/// Issue 12.5. A device whose f first falls, then rises past f0 (MODEL.md §5): its table is
+/// made (the turning point is one of its points) and its range is the tunable range (less
+/// the headroom at the top); for targets across it the table's bias lies on the piece
+/// `tune` takes (the smallest bias: below the minimum's bias while f0 is not passed) and
+/// gives the target within 1e-4 in the f64 model.
+#[test]
+fn a_table_for_a_device_whose_frequency_turns_picks_the_smallest_bias() {
+    let p = common::non_monotone_device();
+    let tuner = Tuner::new(Device::new(p).unwrap());
+    let bytes = common::made_table(p, 0.05, 64);
+    let t = Table::parse(&bytes).unwrap();
+    let range = tuner.tunable_range(0.05).unwrap();
+    let f0 = tuner.zero_bias().natural_frequency_hz;
+    let mut turns = Vec::new();
+    tuner
+        .for_each_turning_point(0.05, |e| turns.push(e))
+        .unwrap();
+    assert_eq!(turns.len(), 1);
+    let minimum = turns[0];
+    let (low, high) = t.range_hz();
+    assert!((f64::from(low) / range.low_hz - 1.0).abs() < 1e-6, "{low}");
+    assert!(f64::from(high) <= range.high_hz && f64::from(high) > f0);
+    let d = tuner.device();
+    for k in 1..200 {
+        let target = f64::from(low) + (f64::from(high) - f64::from(low)) * f64::from(k) / 200.0;
+        let volts = f64::from(t.bias_volts(target as f32).unwrap());
+        let tuned = tuner.tune(target, 0.05).unwrap();
+        if target < f0 {
+            assert!(tuned.volts <= minimum.volts);
+            assert!(volts <= minimum.volts * (1.0 + 1e-6), "{target}: {volts}");
+        } else {
+            assert!(volts > minimum.volts, "{target}: {volts}");
+        }
+        let offset = d.offset_for_bias(volts, tuner.limit().at.offset).unwrap();
+        let error = (d.natural_frequency_hz_at(offset) / target - 1.0).abs();
+        assert!(error < 1e-4, "{target}: {error}");
+    }
+}
+
+/// Issue 12.5. A table whose frequency first rises, then falls (no device in 20,000 random
+/// ones did that inside its safe region, so this one is made by hand): f = 50 − (Φ²/P − 1)²
+/// with P = 10⁷ V², its peak as a point. The lookup takes the smallest bias, the root below
+/// the peak, Φ² = P·(1 − √(50 − f)), while f is above f(0) = 49, and the falling side's
+/// Φ² = P·(1 + √(50 − f)) below it, each within the interpolation's error.
+#[test]
+fn a_table_that_rises_then_falls_looks_up_the_smallest_bias() {
+    let peak = 1e7f64;
+    let f = |squared: f64| 50.0 - (squared / peak - 1.0).powi(2);
+    let points: Vec<(f32, f32)> = (0..=40)
+        .map(|k| {
+            let squared = 2.5 * peak * f64::from(k) / 40.0;
+            (f(squared) as f32, squared.sqrt() as f32)
+        })
+        .collect();
+    let mut bytes = vec![0u8; table::table_bytes(points.len())];
+    table::write(&mut bytes, &REFERENCE_DEVICE.cast(), 0.05, 0.0, &points).unwrap();
+    let t = Table::parse(&bytes).unwrap();
+    assert_eq!(t.range_hz(), (f(2.5 * peak) as f32, 50.0));
+    for k in 1..100 {
+        let target = 47.8 + 2.2 * f64::from(k) / 100.0;
+        let got = f64::from(t.bias_volts(target as f32).unwrap()).powi(2) / peak;
+        let root = (50.0 - target).sqrt();
+        let expected = if target > 49.0 {
+            1.0 - root
+        } else {
+            1.0 + root
+        };
+        assert!(
+            (got - expected).abs() < 0.02,
+            "{target}: {got} vs {expected}"
+        );
+    }
+}
+
+/// A frequency column that turns more often than any device's f(Φ) (`MAX_TURNS`) is
+/// corruption, even resealed.
+#[test]
+fn a_table_whose_frequency_zigzags_is_refused() {
+    let points: Vec<(f32, f32)> = (0..12)
+        .map(|k| (45.0 + (k % 2) as f32, 100.0 * (k + 1) as f32))
+        .collect();
+    let mut bytes = vec![0u8; table::table_bytes(points.len())];
+    let written = table::write(&mut bytes, &REFERENCE_DEVICE.cast(), 0.05, 0.0, &points);
+    assert_eq!(
+        written,
+        Err(TableError::NotMonotone {
+            index: table::MAX_TURNS as u16 + 2
+        })
+    );
+}
+
 #[test]
 fn corrupted_tables_are_refused_with_the_reason() {
     let good = reference_table();

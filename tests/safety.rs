@@ -342,7 +342,9 @@ fn a_nan_part_fails_its_margin_in_either_position() {
     // The stretch limit takes the least of A's and B's: a NaN in either fails it.
     let g = Gent::<f64>::with_jlim(120.0);
     for (a, b) in [(f64::NAN, 2.0), (2.0, f64::NAN)] {
-        let lock = g.lock_up_margin(a, 2.0).min_margin(g.lock_up_margin(b, 2.0));
+        let lock = g
+            .lock_up_margin(a, 2.0)
+            .min_margin(g.lock_up_margin(b, 2.0));
         assert!(!(lock > 0.0));
     }
 }
