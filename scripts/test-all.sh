@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Every check CI runs, from a fresh machine: installs what it needs, then formats, lints
-# (host and Cortex-M4F target), builds the core for the target, runs all tests, and runs the
-# firmware under QEMU (installing qemu-system-arm and defmt-print when missing).
+# (host and Cortex-M4F target), builds the core for the target, runs all tests and the two
+# fuzzers, and runs the firmware under QEMU (installing qemu-system-arm, defmt-print and
+# cargo-fuzz when missing).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -38,8 +39,15 @@ step "build the no_std core for $TARGET"
 cargo build --locked -p de-resonator --target "$TARGET" --release
 cargo build --locked -p de-resonator --target "$TARGET" --release --features defmt
 
-step "tests (core integration tests, host-sim unit and CLI tests)"
-cargo test --locked --workspace
+step "tests (core integration tests, host-sim unit and CLI tests; the fuzz test has its own step)"
+cargo test --locked --workspace -- --skip fuzz_the_controller
+
+step "fuzz test: the f32 controller on random devices, settings, tables and sensors"
+FUZZ_TICKS=3000000 cargo test --locked -q -p de-resonator --test fuzz -- --nocapture
+
+step "cargo-fuzz: the table parser and the controller's boot under libFuzzer (30 s each)"
+cargo fmt --manifest-path fuzz/Cargo.toml -- --check
+scripts/fuzz.sh
 
 step "firmware under QEMU: the reference run and the on-target checks against expected logs"
 scripts/firmware.sh
