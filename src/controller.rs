@@ -447,6 +447,8 @@ pub struct Controller {
     /// The device flashed: the monitor checks every sample against it (and against the
     /// trim's estimate, when there is one), whatever the trim estimates.
     flashed: Device<f32>,
+    /// Whether `device` is the trim's estimate (not the device flashed).
+    estimated: bool,
     tick: u32,
     phase: Phase,
     monitor: Monitor<f32>,
@@ -592,6 +594,7 @@ impl Controller {
             max_volts,
             ceiling_volts: max_volts,
             flashed: device,
+            estimated: false,
             tick: 0,
             phase: Phase::Ramping,
             monitor: Monitor::new(),
@@ -985,6 +988,7 @@ impl Controller {
             return Err(fault);
         }
         self.device = device;
+        self.estimated = true;
         self.trim.tuned = true;
         self.plan = plan;
         self.phase = Phase::Ramping;
@@ -1010,15 +1014,14 @@ impl Controller {
         if let Some(fault) = self.check_stuck(stretch) {
             return Some(fault);
         }
-        let devices = [self.flashed, self.device];
-        let count = if self.device == self.flashed { 1 } else { 2 };
-        for device in devices.iter().take(count) {
-            let p = volts / device.volts_per_unit();
-            if let Some(mode) = self.monitor.observe(device, u64::from(k), stretch, p * p) {
-                return Some(Fault::Limit { mode, tick: k });
-            }
+        let tick = u64::from(k);
+        let p = volts / self.flashed.volts_per_unit();
+        let mut mode = self.monitor.observe(&self.flashed, tick, stretch, p * p);
+        if self.estimated && mode.is_none() {
+            let p = volts / self.device.volts_per_unit();
+            mode = self.monitor.observe(&self.device, tick, stretch, p * p);
         }
-        None
+        mode.map(|mode| Fault::Limit { mode, tick: k })
     }
 
     /// The amplifier's monitored output against the last command.

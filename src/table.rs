@@ -239,8 +239,7 @@ impl<'a> Table<'a> {
         let mut previous: Option<(f32, f32)> = None;
         let mut rising: Option<bool> = None;
         let mut turns = 0;
-        for k in 0..points {
-            let (hz, volts) = table.point(k);
+        for (k, (hz, volts)) in table.each_point().enumerate() {
             let index = k as u16;
             if !(hz.is_finite() && hz > 0.0 && volts.is_finite() && volts >= 0.0) {
                 return Err(TableError::NotFinite { index });
@@ -269,6 +268,17 @@ impl<'a> Table<'a> {
     pub fn point(&self, k: usize) -> (f32, f32) {
         let at = HEADER_BYTES + POINT_BYTES * k;
         (f32_at(self.bytes, at), f32_at(self.bytes, at + 4))
+    }
+
+    /// The points in order, (frequency Hz, bias V): one pass over the bytes.
+    fn each_point(&self) -> impl Iterator<Item = (f32, f32)> + '_ {
+        let end = HEADER_BYTES + POINT_BYTES * self.points;
+        let word = |w: Option<&[u8; 4]>| w.copied().map_or(f32::NAN, f32::from_le_bytes);
+        self.bytes
+            .get(HEADER_BYTES..end)
+            .unwrap_or(&[])
+            .chunks_exact(POINT_BYTES)
+            .map(move |p| (word(p.first_chunk()), word(p.last_chunk())))
     }
 
     /// The device parameters the table was made for.
@@ -318,10 +328,10 @@ impl<'a> Table<'a> {
 
     /// The table's frequency range, (low, high) Hz: the least and greatest of its points.
     pub fn range_hz(&self) -> (f32, f32) {
-        (0..self.points).fold((f32::INFINITY, f32::NEG_INFINITY), |(low, high), k| {
-            let hz = self.point(k).0;
-            (low.min(hz), high.max(hz))
-        })
+        self.each_point().fold(
+            (f32::INFINITY, f32::NEG_INFINITY),
+            |(low, high), (hz, _)| (low.min(hz), high.max(hz)),
+        )
     }
 
     /// The highest bias in the table, V.
@@ -333,31 +343,25 @@ impl<'a> Table<'a> {
     /// bracket the target (the smallest bias, MODEL.md §7), with Φ² interpolated linearly in
     /// f between them.
     pub fn bias_volts(&self, target_hz: f32) -> Result<f32, TableError> {
-        let (low_hz, high_hz) = self.range_hz();
-        if !(target_hz >= low_hz && target_hz <= high_hz) {
-            return Err(TableError::OutOfRange {
-                target_hz,
-                low_hz,
-                high_hz,
-            });
-        }
-        let mut previous = self.point(0);
-        for k in 1..self.points {
-            let (f1, v1) = self.point(k);
-            let (f0, v0) = previous;
-            if target_hz >= f0.min(f1) && target_hz <= f0.max(f1) {
-                // f0 = f1 only when the target is that frequency: take the lower bias.
-                let t = if f1 == f0 {
-                    0.0
-                } else {
-                    (target_hz - f0) / (f1 - f0)
-                };
-                let squared = v0 * v0 + t * (v1 * v1 - v0 * v0);
-                return Ok(Real::sqrt(squared.max(0.0)));
+        let mut points = self.each_point();
+        let mut previous = points.next();
+        for (f1, v1) in points {
+            if let Some((f0, v0)) = previous {
+                if target_hz >= f0.min(f1) && target_hz <= f0.max(f1) {
+                    // f0 = f1 only when the target is that frequency: take the lower bias.
+                    let t = if f1 == f0 {
+                        0.0
+                    } else {
+                        (target_hz - f0) / (f1 - f0)
+                    };
+                    let squared = v0 * v0 + t * (v1 * v1 - v0 * v0);
+                    return Ok(Real::sqrt(squared.max(0.0)));
+                }
             }
-            previous = (f1, v1);
+            previous = Some((f1, v1));
         }
-        // Unreachable: the range is the points' own, so some interval holds the target.
+        // No interval holds it: NaN, or outside the points' range.
+        let (low_hz, high_hz) = self.range_hz();
         Err(TableError::OutOfRange {
             target_hz,
             low_hz,
