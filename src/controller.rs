@@ -142,6 +142,27 @@ pub enum Setting {
     TrimEverySeconds,
 }
 
+impl Setting {
+    /// The setting's key, as in `Settings` and a scene's `[controller]` table.
+    pub fn key(self) -> &'static str {
+        match self {
+            Setting::SlewVoltsPerSecond => "slew_volts_per_second",
+            Setting::TickHz => "tick_hz",
+            Setting::SettleSeconds => "settle_seconds",
+            Setting::AcVolts => "ac_volts",
+            Setting::AcHz => "ac_hz",
+            Setting::CheckSeconds => "check_seconds",
+            Setting::Agreement => "agreement",
+            Setting::AmplifierToleranceVolts => "amplifier_tolerance_volts",
+            Setting::TrimTolerance => "trim_tolerance",
+            Setting::TrimWindowSeconds => "trim_window_seconds",
+            Setting::TrimPulseVolts => "trim_pulse_volts",
+            Setting::TrimProbeFraction => "trim_probe_fraction",
+            Setting::TrimEverySeconds => "trim_every_seconds",
+        }
+    }
+}
+
 /// Ticks in a row the amplifier may be off its command before it is a fault (its bandwidth
 /// and slew limit lag a step by a tick or two).
 pub const AMPLIFIER_TICKS: u32 = 3;
@@ -230,7 +251,7 @@ impl fmt::Display for Fault {
         match self {
             Fault::Device(e) => write!(f, "device: {e}"),
             Fault::Setting { setting, value } => {
-                write!(f, "setting {setting:?} = {value} is invalid")
+                write!(f, "setting `{}` = {value} is invalid", setting.key())
             }
             Fault::Table(e) => write!(f, "table: {e}"),
             Fault::Tune(e) => write!(f, "tuning: {e}"),
@@ -1102,6 +1123,8 @@ fn check_plan(
         stretch: device.prestretch_1(),
         velocity: 0.0,
     };
+    // A tick the model cannot step stably, even in substeps, is too slow for this device:
+    // the setting is at fault, not the plan.
     let mut model = Integrator::new(
         *device,
         Drive::constant(device, 0.0),
@@ -1111,7 +1134,13 @@ fn check_plan(
         start,
         true,
     )
-    .map_err(Fault::PlanFailed)?;
+    .map_err(|e| match e {
+        StepError::Unstable { .. } | StepError::InvalidStep { .. } => Fault::Setting {
+            setting: Setting::TickHz,
+            value: tick_hz,
+        },
+        e => Fault::PlanFailed(e),
+    })?;
     let mut monitor = Monitor::new();
     let (mut low, mut high) = (f32::INFINITY, f32::NEG_INFINITY);
     for k in 0..ticks {

@@ -496,6 +496,20 @@ fn bad_targets_and_settings_are_refused_before_anything_is_driven() {
         let fault = start(settings).unwrap_err();
         assert!(matches!(fault, Fault::Setting { .. }), "{fault}");
     }
+    // A tick rate far too slow for the device (the model cannot step it stably, even in
+    // substeps): named as the tick rate, not as a failed plan.
+    let fault = start(Settings {
+        tick_hz: 1e-6,
+        ..base
+    })
+    .unwrap_err();
+    assert_eq!(
+        fault,
+        Fault::Setting {
+            setting: Setting::TickHz,
+            value: 1e-6
+        }
+    );
     // The AC would take the peak past (1 − margin)·limit: a setting fault naming the AC.
     let fault = start(Settings {
         ac_volts: 2000.0,
