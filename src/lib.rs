@@ -34,6 +34,8 @@ pub mod tuning;
 pub use controller::{
     Boot, Controller, Event, Fault, Inputs, Output, Phase, Plan, Setting, Settings,
 };
+#[cfg(feature = "trim")]
+pub use controller::{TrimJob, TrimResult};
 pub use device::{Device, DeviceParams, Field, ParamError, Problem, REFERENCE_DEVICE};
 pub use drive::{Amplifier, CodeError, Dac8551, DacCode, DacError, PowerMode};
 pub use integration::{Drive, Integrator, Method, State, StepError};

@@ -326,7 +326,7 @@ pub struct Monitor<T> {
 }
 
 impl<T: Real> Monitor<T> {
-    pub fn new() -> Self {
+    pub const fn new() -> Self {
         Self { first: None }
     }
 

@@ -615,6 +615,9 @@ fn a_trim_on_a_stiffer_plant_never_lifts_the_ceiling() {
             Some(Event::Fault(f)) => panic!("tick {k}: {f}"),
             _ => {}
         }
+        if let Some(job) = c.trim_job() {
+            c.trim_done(job.solve());
+        }
         model.set_drive(drive(out.volts)).unwrap();
         model.step().unwrap();
     }

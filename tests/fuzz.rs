@@ -349,6 +349,12 @@ fn fuzz_the_controller() {
                 Some(Event::AboveCeiling { .. }) => tally.held += 1,
                 _ => {}
             }
+            // The trim's solve, outside the tick (now and then late, as a busy task is).
+            if rng.unit() < 0.5 {
+                if let Some(job) = c.trim_job() {
+                    c.trim_done(job.solve());
+                }
+            }
             last_volts = out.volts;
             if let Some(m) = model.as_mut() {
                 let d = *m.device();

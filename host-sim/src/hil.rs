@@ -262,6 +262,11 @@ impl Loop {
                     enabled = false;
                     let _ = Dac8551::new(&mut bus).power_down();
                 }
+                // The trim's solve, as the firmware's low-priority task runs it: between
+                // ticks; the next tick applies the result.
+                if let Some(job) = c.trim_job() {
+                    c.trim_done(job.solve());
+                }
                 run.final_command_volts = f64::from(out.volts);
                 run.max_command_volts = run.max_command_volts.max(f64::from(out.volts));
                 run.said(t, out.event);

@@ -1,0 +1,161 @@
+//! The boot stages, in order: `from_table` (device, settings, table), `cross_check` (the
+//! direct solve on the chip, MODEL.md §6–§7) and `check_plan` (the plan through the model,
+//! MODEL.md §6). A firmware may take the first alone, or the first two.
+
+use super::fault::Fault;
+use super::plan::Plan;
+use super::settings::guarded;
+use super::{Controller, State};
+use crate::device::Device;
+use crate::drive::Amplifier;
+use crate::safety::Limit;
+use crate::table::Table;
+use crate::tuning::Tuner;
+use crate::{DeviceParams, Settings};
+
+/// What the boot stages found.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Boot {
+    /// The bias the controller drives (the direct solve's once cross-checked), V.
+    pub bias_volts: f32,
+    /// The table's interpolated bias for the target, V.
+    pub table_volts: f32,
+    /// The table's highest bias, V.
+    pub table_top_volts: f32,
+    /// The cap: no command goes above it, V.
+    pub max_volts: f32,
+    /// The first failure on the loading branch, found on the chip (`cross_check`).
+    pub limit: Option<Limit<f32>>,
+    /// The ticks of the plan up to the end of its model check.
+    pub plan_ticks: u32,
+    /// The stretch range the model run of the plan swept (`check_plan`).
+    pub plan_stretch: Option<(f32, f32)>,
+}
+
+impl Controller {
+    /// Every check: `from_table`, then `cross_check`, then `check_plan`.
+    pub fn start(
+        params: DeviceParams<f32>,
+        table: &[u8],
+        amplifier: Amplifier,
+        settings: Settings,
+    ) -> Result<(Self, Boot), Fault> {
+        let (controller, boot) = Self::from_table(params, table, amplifier, settings)?;
+        let (controller, boot) = controller.cross_check(boot)?;
+        controller.check_plan(boot)
+    }
+
+    /// Check the device, the settings and the table, and plan from the table alone: the bias
+    /// by interpolation, commands capped at the table's top scaled to the settings' margin,
+    /// top·min(1, (1 − margin)/(1 − table margin)), which is at most (1 − margin)·limit.
+    pub fn from_table(
+        params: DeviceParams<f32>,
+        table: &[u8],
+        amplifier: Amplifier,
+        settings: Settings,
+    ) -> Result<(Self, Boot), Fault> {
+        let device = Device::new(params).map_err(Fault::Device)?;
+        settings.check()?;
+        let table = Table::parse(table).map_err(Fault::Table)?;
+        table.check_device(&params).map_err(Fault::Table)?;
+        let top = table.max_volts();
+        let max_volts = top * ((1.0 - settings.margin) / (1.0 - table.margin())).min(1.0);
+        let table_volts = table.bias_volts(settings.target_hz).map_err(Fault::Table)?;
+        let mut controller = Controller::new(device, amplifier, settings, max_volts);
+        let plan_ticks = controller.set_plan(table_volts)?;
+        let boot = Boot {
+            bias_volts: table_volts,
+            table_volts,
+            table_top_volts: top,
+            max_volts,
+            limit: None,
+            plan_ticks,
+            plan_stretch: None,
+        };
+        Ok((controller, boot))
+    }
+
+    /// Find the limit and the bias on the chip by the direct solve: the table's cap (its top,
+    /// scaled down to a larger margin than the table's) must lie below (1 − margin)·limit,
+    /// and the natural frequencies at the two biases must agree. The controller then drives
+    /// the solve's bias, capped at (1 − margin)·(1 − F32_GUARD)·limit.
+    pub fn cross_check(mut self, boot: Boot) -> Result<(Self, Boot), Fault> {
+        let settings = self.settings;
+        let tuner = Tuner::new(self.flashed);
+        let limit = tuner.limit();
+        let margin = guarded(settings.margin);
+        let max_volts = tuner.max_bias(margin).map_err(Fault::Tune)?.volts;
+        if !(boot.max_volts <= max_volts) {
+            return Err(Fault::AboveSafe {
+                volts: boot.max_volts,
+                max_volts,
+            });
+        }
+        let solved = tuner
+            .tune(settings.target_hz, margin)
+            .map_err(Fault::Tune)?;
+        let table_hz = self
+            .flashed
+            .offset_for_bias(boot.table_volts, limit.at.offset)
+            .map(|offset| self.flashed.natural_frequency_hz_at(offset))
+            .unwrap_or(f32::NAN);
+        let solved_hz = solved.natural_frequency_hz;
+        if !((table_hz - solved_hz).abs() <= settings.agreement * solved_hz) {
+            return Err(Fault::Disagree {
+                table_volts: boot.table_volts,
+                table_hz,
+                solved_volts: solved.volts,
+                solved_hz,
+            });
+        }
+        self.max_volts = max_volts;
+        self.ceiling_volts = max_volts;
+        let plan_ticks = self.set_plan(solved.volts)?;
+        let boot = Boot {
+            bias_volts: solved.volts,
+            max_volts,
+            limit: Some(*limit),
+            plan_ticks,
+            ..boot
+        };
+        Ok((self, boot))
+    }
+
+    /// Run the whole plan through the model (f32 RK4 under the monitor, from rest at the
+    /// pre-stretch) and refuse it if a limit is crossed on the way.
+    pub fn check_plan(self, boot: Boot) -> Result<(Self, Boot), Fault> {
+        let stretch =
+            self.plan
+                .run_in_model(&self.flashed, self.settings.tick_hz, boot.plan_ticks)?;
+        let boot = Boot {
+            plan_stretch: Some(stretch),
+            ..boot
+        };
+        Ok((self, boot))
+    }
+
+    /// Plan a ramp from rest to the bias for `tuned_volts` (with a trim, first to a probe
+    /// bias low enough for a softer plant), the hold and the AC drive, its whole range under
+    /// the cap; the ticks up to the end of its model check.
+    fn set_plan(&mut self, tuned_volts: f32) -> Result<u32, Fault> {
+        let s = self.settings;
+        let trimming = self.trim_wanted();
+        let bias_volts = if trimming {
+            tuned_volts.min(s.trim_probe_fraction * self.max_volts)
+        } else {
+            tuned_volts
+        };
+        let (plan, ticks) = Plan::from_rest(&s, bias_volts, !trimming)?;
+        plan.check_range(tuned_volts, self.max_volts)?;
+        // The amplifier must give the highest voltage: the ramp's, or the AC's on the bias.
+        let peak_volts = plan.peak_volts().max(tuned_volts + plan.ac_volts);
+        self.amplifier.code(peak_volts).map_err(Fault::Amplifier)?;
+        self.plan = plan;
+        self.state = State::Ramping {
+            then_measure: trimming,
+        };
+        self.set_tuned(bias_volts == tuned_volts);
+        Ok(ticks)
+    }
+}

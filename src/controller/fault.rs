@@ -1,0 +1,165 @@
+//! Why the controller will not drive or stopped driving (`Fault`), what it says at a tick
+//! (`Event`), and what a tick gives (`Output`).
+
+use core::fmt;
+
+use super::settings::Setting;
+use crate::device::ParamError;
+use crate::drive::{CodeError, DacCode};
+use crate::integration::StepError;
+use crate::safety::FailureMode;
+use crate::table::TableError;
+use crate::trim::TrimError;
+use crate::tuning::TuneError;
+
+/// Why the controller will not drive, or stopped driving. Each leaves the output at 0 V.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Fault {
+    /// The device parameters are invalid, or not safe at zero bias.
+    Device(ParamError),
+    /// A setting is NaN, out of range, or makes the plan too long.
+    Setting { setting: Setting, value: f32 },
+    /// The tuning table is corrupted, out of order, for another device, or misses the target.
+    Table(TableError),
+    /// The direct solve cannot reach the target (out of range, bad target or margin).
+    Tune(TuneError<f32>),
+    /// The natural frequencies at the table's bias and at the direct solve's differ by more
+    /// than the agreement.
+    Disagree {
+        table_volts: f32,
+        table_hz: f32,
+        solved_volts: f32,
+        solved_hz: f32,
+    },
+    /// A voltage of the plan or the table is above the safe maximum.
+    AboveSafe { volts: f32, max_volts: f32 },
+    /// The model run of the plan crossed a limit (ramp too fast, AC too strong).
+    PlanCrosses { mode: FailureMode, seconds: f32 },
+    /// The model run of the plan could not go on (left the model's range, NaN).
+    PlanFailed(StepError<f32>),
+    /// The amplifier cannot give a voltage of the plan.
+    Amplifier(CodeError),
+    /// A commanded voltage failed the final check (never expected: a guard of last resort).
+    Gate { volts: f32, max_volts: f32 },
+    /// A sensor sample (stretch or amplifier monitor) is NaN or infinite.
+    Sensor { value: f32 },
+    /// A stretch sample no device could give: the bars more than a frame's length outside
+    /// the frame (see `Device::plausible_stretch`).
+    SensorImplausible { value: f32, low: f32, high: f32 },
+    /// The stretch sensor gave the same sample `samples` times in a row.
+    SensorStuck { samples: u32, value: f32 },
+    /// The amplifier's output stayed off the command for `AMPLIFIER_TICKS` ticks.
+    AmplifierDisagrees {
+        commanded_volts: f32,
+        measured_volts: f32,
+    },
+    /// The measured motion crossed a limit of MODEL.md §6.
+    Limit { mode: FailureMode, tick: u32 },
+    /// The DAC bus failed (reported by the IO side).
+    Bus,
+    /// The trim could not measure, estimate or converge.
+    Trim(TrimError),
+}
+
+impl fmt::Display for Fault {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Fault::Device(e) => write!(f, "device: {e}"),
+            Fault::Setting { setting, value } => {
+                write!(f, "setting `{}` = {value} is invalid", setting.key())
+            }
+            Fault::Table(e) => write!(f, "table: {e}"),
+            Fault::Tune(e) => write!(f, "tuning: {e}"),
+            Fault::Disagree {
+                table_volts,
+                table_hz,
+                solved_volts,
+                solved_hz,
+            } => write!(
+                f,
+                "table gives {table_volts} V ({table_hz} Hz), the direct solve {solved_volts} V \
+                 ({solved_hz} Hz): they disagree"
+            ),
+            Fault::AboveSafe { volts, max_volts } => {
+                write!(f, "{volts} V is above the safe maximum {max_volts} V")
+            }
+            Fault::PlanCrosses { mode, seconds } => write!(
+                f,
+                "the plan crosses a limit in the model at {seconds} s: {}",
+                mode.description()
+            ),
+            Fault::PlanFailed(e) => write!(f, "the model run of the plan stopped: {e}"),
+            Fault::Amplifier(e) => write!(f, "amplifier: {e}"),
+            Fault::Gate { volts, max_volts } => {
+                write!(
+                    f,
+                    "final check refused {volts} V (safe maximum {max_volts} V)"
+                )
+            }
+            Fault::Sensor { value } => write!(f, "sensor sample {value} is not a number"),
+            Fault::SensorImplausible { value, low, high } => write!(
+                f,
+                "stretch sample {value} is outside ({low}, {high}), where no device can be: \
+                 sensor fault"
+            ),
+            Fault::SensorStuck { samples, value } => {
+                write!(f, "stretch sensor stuck at {value} for {samples} samples")
+            }
+            Fault::AmplifierDisagrees {
+                commanded_volts,
+                measured_volts,
+            } => write!(
+                f,
+                "amplifier gives {measured_volts} V for a command of {commanded_volts} V \
+                 (saturated or failed)"
+            ),
+            Fault::Limit { mode, tick } => {
+                write!(f, "measured motion at tick {tick}: {}", mode.description())
+            }
+            Fault::Bus => write!(f, "DAC bus error"),
+            Fault::Trim(e) => write!(f, "trim: {e}"),
+        }
+    }
+}
+
+impl core::error::Error for Fault {}
+
+/// Something that happened at a tick, said once.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Event {
+    /// The ramp reached the bias.
+    AtBias { volts: f32 },
+    /// The AC drive started.
+    DriveOn,
+    /// The AC drive paused, to trim again.
+    DriveOff,
+    /// The trim measured the natural frequency at the bias and re-estimated μ; the next bias
+    /// is the one its estimate gives for the target (equal to `bias_volts` once converged).
+    Trimmed {
+        bias_volts: f32,
+        measured_hz: f32,
+        shear_modulus: f32,
+        next_bias_volts: f32,
+    },
+    /// The trim's next bias (with the AC on top) would be `needed_volts`, above the ceiling
+    /// fixed at boot from the device flashed: the controller holds the present bias instead
+    /// (`Phase::Held`). A plant stiffer than the device flashed is not driven past that
+    /// device's limit on the strength of a measurement.
+    AboveCeiling {
+        needed_volts: f32,
+        ceiling_volts: f32,
+    },
+    /// A fault: from now on 0 V.
+    Fault(Fault),
+}
+
+/// One tick's output: the DAC code, the voltage it gives, and what happened.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Output {
+    pub code: DacCode,
+    pub volts: f32,
+    pub event: Option<Event>,
+}

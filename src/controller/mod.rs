@@ -1,0 +1,456 @@
+//! The resonator's controller, sans IO: the same code on the chip and in host-sim.
+//!
+//! `Controller::start` checks everything before anything is driven, in three stages a
+//! firmware can also take one by one (leaving out, and not linking, what it does not need):
+//! - `from_table`: the device parameters, the settings, the tuning table (CRC, order, made
+//!   for this device); the bias for the target from the table, and commands capped below the
+//!   table's top, which its maker put at (1 − margin)·limit;
+//! - `cross_check`: the limit and the bias by the core's direct solve on the chip (MODEL.md
+//!   §6–§7), which must agree with the table; the cap becomes (1 − margin)·limit;
+//! - `check_plan`: the whole plan (ramp at a bounded slew rate, hold, AC drive) run through
+//!   the fixed-step model under the safety monitor (MODEL.md §6).
+//!
+//! Then `tick`, at a fixed rate, gives the DAC code for that tick; every code passes one
+//! final check against the cap. The cap is fixed at boot from the device flashed, at most
+//! (1 − margin)·Φlimit: nothing measured ever raises it (a trim may only lower it). A fault
+//! of any kind gives code 0 from then on, and says what happened once. The tick never
+//! solves: a trim's solve is handed out (`trim_job`) and its result given back
+//! (`trim_done`).
+//!
+//! One idea a module: `settings` (what is asked, and its checks), `fault` (`Fault`, `Event`,
+//! `Output`), `plan` (the voltage at every tick, its range, its model run), `boot` (the
+//! stages), `watch` (sensor and amplifier checks), `gate` (the final check), `trim`
+//! (request and response).
+
+mod boot;
+mod fault;
+mod gate;
+mod plan;
+mod settings;
+#[cfg(feature = "trim")]
+mod trim;
+mod watch;
+
+pub use boot::Boot;
+pub use fault::{Event, Fault, Output};
+pub use plan::{Plan, MAX_PLAN_TICKS};
+pub use settings::{Setting, Settings, F32_GUARD, MAX_TRIMS, TRIM_SECANT_STEP};
+#[cfg(feature = "trim")]
+pub use trim::{TrimJob, TrimResult};
+pub use watch::{Inputs, AMPLIFIER_TICKS};
+
+use crate::device::Device;
+use crate::drive::{Amplifier, DacCode};
+use gate::gate;
+use watch::Watch;
+
+/// Where the controller is, for people and tests (the state without its data).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Phase {
+    Ramping,
+    Holding,
+    /// The trim's pulse and the ring after it, measured.
+    Measuring,
+    /// The ring is measured; the bias holds while the trim's job is solved outside the tick.
+    Solving,
+    Driving,
+    /// The trim found the plant needs a bias above the ceiling fixed at boot: the bias holds
+    /// where it is, no AC, no further trim (said once by `Event::AboveCeiling`).
+    Held,
+    Faulted,
+}
+
+/// Where the controller is, with what each place needs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(not(feature = "trim"), allow(dead_code))]
+enum State {
+    /// On the ramp to the plan's bias; then hold, then measure (a trim) or drive.
+    Ramping { then_measure: bool },
+    /// At the bias until tick `until`; then measure, or drive once the AC's tick comes.
+    Holding { until: u32, then_measure: bool },
+    /// Recording the ring after the trim's pulse.
+    Measuring,
+    /// The window is full: its job is out, the bias holds until the result comes back.
+    Solving,
+    /// The AC drive on, until the next trim (none: `None`).
+    Driving { next_trim: Option<u32> },
+    /// The trim needs `needed_volts` (bias and AC) above the ceiling: the bias holds.
+    Held { needed_volts: f32 },
+    /// 0 V for good, for this fault (the first).
+    Faulted(Fault),
+}
+
+/// The controller, between ticks: its configuration, fixed at boot, apart from its state.
+#[derive(Clone, Debug)]
+pub struct Controller {
+    // Configuration, fixed at boot.
+    /// The device flashed: the monitor checks every sample against it, whatever the trim
+    /// estimates.
+    flashed: Device<f32>,
+    amplifier: Amplifier,
+    /// Checked by `from_table`.
+    settings: Settings,
+    /// The cap fixed at boot from the device flashed, at most (1 − margin)·Φlimit, V.
+    /// Nothing measured raises it.
+    ceiling_volts: f32,
+
+    // State.
+    state: State,
+    /// The trim's estimate of the device, once it has one.
+    estimate: Option<Device<f32>>,
+    /// The cap in force: the ceiling, or lower after a trim found a softer plant, V.
+    max_volts: f32,
+    plan: Plan,
+    tick: u32,
+    watch: Watch,
+    /// The voltage commanded at the last tick, V.
+    last_volts: f32,
+    #[cfg(feature = "trim")]
+    trim: trim::TrimState,
+}
+
+impl Controller {
+    /// A controller before its plan: what the boot stages fill in.
+    fn new(device: Device<f32>, amplifier: Amplifier, settings: Settings, max_volts: f32) -> Self {
+        Self {
+            flashed: device,
+            amplifier,
+            settings,
+            ceiling_volts: max_volts,
+            state: State::Ramping {
+                then_measure: false,
+            },
+            estimate: None,
+            max_volts,
+            plan: Plan::idle(),
+            tick: 0,
+            watch: Watch::new(),
+            last_volts: 0.0,
+            #[cfg(feature = "trim")]
+            trim: trim::TrimState::new(*device.params(), true),
+        }
+    }
+
+    /// Where the controller is.
+    pub fn phase(&self) -> Phase {
+        match self.state {
+            State::Ramping { .. } => Phase::Ramping,
+            State::Holding { .. } => Phase::Holding,
+            State::Measuring => Phase::Measuring,
+            State::Solving => Phase::Solving,
+            State::Driving { .. } => Phase::Driving,
+            State::Held { .. } => Phase::Held,
+            State::Faulted(_) => Phase::Faulted,
+        }
+    }
+
+    /// The fault that holds the output at 0 V, if any (the first one).
+    pub fn latched_fault(&self) -> Option<Fault> {
+        match self.state {
+            State::Faulted(fault) => Some(fault),
+            _ => None,
+        }
+    }
+
+    /// What the trim needs (bias and AC, V) while it holds below the ceiling (`Phase::Held`).
+    pub fn held_needing_volts(&self) -> Option<f32> {
+        match self.state {
+            State::Held { needed_volts } => Some(needed_volts),
+            _ => None,
+        }
+    }
+
+    /// The cap fixed at boot from the device flashed, V: no command ever goes above it.
+    pub fn ceiling_volts(&self) -> f32 {
+        self.ceiling_volts
+    }
+
+    /// The cap in force now (the ceiling, or lower after a trim found a softer plant), V.
+    pub fn max_volts(&self) -> f32 {
+        self.max_volts
+    }
+
+    pub fn plan(&self) -> &Plan {
+        &self.plan
+    }
+
+    /// Ticks so far.
+    pub fn ticks(&self) -> u32 {
+        self.tick
+    }
+
+    /// One tick: the code to write now. `inputs` are this tick's measurements: the stretch
+    /// is checked (`watch`) against MODEL.md §6 at this tick's voltage, and for a stuck or
+    /// implausible sensor; the amplifier's output against the last command.
+    pub fn tick(&mut self, inputs: Inputs) -> Output {
+        if matches!(self.state, State::Faulted(_)) {
+            return Self::zero(None);
+        }
+        let tolerance = self.settings.amplifier_tolerance_volts;
+        if let Some(fault) =
+            self.watch
+                .amplifier(inputs.amplifier_volts, self.last_volts, tolerance)
+        {
+            return self.fault(fault);
+        }
+        let k = self.tick;
+        self.tick = self.tick.saturating_add(1);
+        let volts = self.plan.volts(k);
+        let code = match gate(&self.amplifier, volts, self.max_volts) {
+            Ok(code) => code,
+            Err(fault) => return self.fault(fault),
+        };
+        self.last_volts = self.amplifier.volts(code);
+        if let Some(stretch) = inputs.stretch {
+            let stuck = self.settings.stuck_samples;
+            let estimate = self.estimate.as_ref();
+            if let Some(fault) = self.watch.stretch(
+                k,
+                stretch,
+                volts,
+                &self.flashed,
+                estimate,
+                (stuck > 0).then_some(stuck),
+            ) {
+                return self.fault(fault);
+            }
+        }
+        match self.advance(k, volts, inputs.stretch) {
+            Ok(event) => Output {
+                code,
+                volts: self.last_volts,
+                event,
+            },
+            Err(fault) => self.fault(fault),
+        }
+    }
+
+    /// The state machine's step at tick `k`, and what it says.
+    fn advance(
+        &mut self,
+        k: u32,
+        volts: f32,
+        stretch: Option<f32>,
+    ) -> Result<Option<Event>, Fault> {
+        let _ = stretch;
+        match self.state {
+            State::Ramping { then_measure } if self.plan.ramp_volts(k) == self.plan.bias_volts => {
+                self.hold_from(k, then_measure);
+                Ok(Some(Event::AtBias { volts }))
+            }
+            #[cfg(feature = "trim")]
+            State::Holding {
+                until,
+                then_measure: true,
+            } if k >= until => {
+                self.start_measuring(k);
+                Ok(None)
+            }
+            State::Holding {
+                then_measure: false,
+                ..
+            } if self.plan.ac_tick.is_some_and(|at| k >= at) && self.plan.ac_volts > 0.0 => {
+                self.state = State::Driving {
+                    next_trim: self.next_trim(k),
+                };
+                Ok(Some(Event::DriveOn))
+            }
+            #[cfg(feature = "trim")]
+            State::Driving {
+                next_trim: Some(at),
+            } if k >= at => {
+                self.pause_for_trim(k);
+                Ok(Some(Event::DriveOff))
+            }
+            #[cfg(feature = "trim")]
+            State::Measuring => {
+                self.record(k, stretch);
+                Ok(None)
+            }
+            #[cfg(feature = "trim")]
+            State::Solving => self.apply_trim(k),
+            _ => Ok(None),
+        }
+    }
+
+    /// Hold the bias from tick `k` for the settle time, then measure or drive.
+    fn hold_from(&mut self, k: u32, then_measure: bool) {
+        let settle = self.settings.settle_seconds * self.settings.tick_hz;
+        self.state = State::Holding {
+            until: k.saturating_add(settle as u32),
+            then_measure,
+        };
+    }
+
+    /// Whether a trim was asked for.
+    fn trim_wanted(&self) -> bool {
+        self.settings.trim_tolerance > 0.0
+    }
+
+    /// When the next trim falls, the AC starting at tick `k`.
+    fn next_trim(&self, k: u32) -> Option<u32> {
+        let s = &self.settings;
+        let every = (s.trim_every_seconds * s.tick_hz) as u32;
+        (self.trim_wanted() && s.trim_every_seconds > 0.0).then(|| k.saturating_add(every.max(1)))
+    }
+
+    /// Whether the bias planned is the one the estimate gives for the target.
+    fn set_tuned(&mut self, tuned: bool) {
+        #[cfg(feature = "trim")]
+        {
+            self.trim.tuned = tuned;
+        }
+        let _ = tuned;
+    }
+
+    /// The IO side reports a fault (a DAC bus error): 0 V from now on.
+    pub fn fault(&mut self, fault: Fault) -> Output {
+        if matches!(self.state, State::Faulted(_)) {
+            return Self::zero(None);
+        }
+        self.state = State::Faulted(fault);
+        Self::zero(Some(Event::Fault(fault)))
+    }
+
+    fn zero(event: Option<Event>) -> Output {
+        Output {
+            code: DacCode(0),
+            volts: 0.0,
+            event,
+        }
+    }
+}
+
+#[cfg(feature = "trim")]
+impl Controller {
+    /// The trim's job for the window just measured, once (`None` otherwise): run
+    /// `TrimJob::solve` outside the tick (a low-priority task) and give its result to
+    /// `trim_done`; the bias holds meanwhile.
+    pub fn trim_job(&mut self) -> Option<TrimJob> {
+        if self.state != State::Solving || self.trim.handed_out {
+            return None;
+        }
+        self.trim.handed_out = true;
+        let (bias, ceiling) = (self.plan.bias_volts, self.ceiling_volts);
+        Some(TrimJob::new(&self.trim, self.settings, bias, ceiling))
+    }
+
+    /// The result of the job handed out: the next tick applies it.
+    pub fn trim_done(&mut self, result: TrimResult) {
+        if self.state == State::Solving && self.trim.handed_out {
+            self.trim.result = Some(result);
+        }
+    }
+
+    /// Pulse now; measure the ring from the pulse's end.
+    fn start_measuring(&mut self, k: u32) {
+        let s = self.settings;
+        let pulse = libm::roundf(0.5 * s.tick_hz / s.target_hz).max(1.0) as u32;
+        let from = k.saturating_add(1);
+        self.plan.pulse_ticks = (from, from.saturating_add(pulse));
+        self.plan.pulse_volts = s.trim_pulse_volts;
+        self.trim.window_from = from.saturating_add(pulse);
+        self.trim.window = [f32::NAN; crate::trim::MAX_WINDOW];
+        self.trim.handed_out = false;
+        self.trim.result = None;
+        self.state = State::Measuring;
+    }
+
+    /// Record this tick's sample; at the window's end, hand the solve out.
+    fn record(&mut self, k: u32, stretch: Option<f32>) {
+        let s = self.settings;
+        let len = (s.trim_window_seconds * s.tick_hz) as usize;
+        let Some(at) = k.checked_sub(self.trim.window_from) else {
+            return;
+        };
+        let at = at as usize;
+        if let (Some(x), Some(slot)) = (stretch, self.trim.window.get_mut(at)) {
+            *slot = x;
+        }
+        if at + 1 >= len {
+            self.state = State::Solving;
+        }
+    }
+
+    /// Pause the AC and trim again from the bias held (the old secant pair is stale: the
+    /// plant has drifted since).
+    fn pause_for_trim(&mut self, k: u32) {
+        self.plan.ac_tick = None;
+        self.trim.tuned = true;
+        self.trim.count = 0;
+        self.trim.previous = None;
+        self.hold_from(k, true);
+    }
+
+    /// Apply the trim's result at tick `k`, once it has come back.
+    fn apply_trim(&mut self, k: u32) -> Result<Option<Event>, Fault> {
+        let Some(result) = self.trim.result.take() else {
+            return Ok(None);
+        };
+        let bias_volts = self.plan.bias_volts;
+        match result {
+            TrimResult::Converged {
+                measured_hz,
+                shear_modulus,
+            } => {
+                self.trim.params.shear_modulus = shear_modulus;
+                self.trim.count = self.trim.count.saturating_add(1);
+                self.plan.ac_tick = Some(k.saturating_add(1));
+                self.state = State::Holding {
+                    until: k,
+                    then_measure: false,
+                };
+                Ok(Some(Event::Trimmed {
+                    bias_volts,
+                    measured_hz,
+                    shear_modulus,
+                    next_bias_volts: bias_volts,
+                }))
+            }
+            TrimResult::Retune {
+                measured_hz,
+                shear_modulus,
+                bias_volts: next_bias_volts,
+                max_volts,
+            } => {
+                self.trim.params.shear_modulus = shear_modulus;
+                self.trim.count = self.trim.count.saturating_add(1);
+                self.trim.previous = Some((bias_volts * bias_volts, measured_hz));
+                let device = Device::new(self.trim.params).map_err(Fault::Device)?;
+                let plan = Plan {
+                    start_tick: k.saturating_add(1),
+                    start_volts: bias_volts,
+                    bias_volts: next_bias_volts,
+                    pulse_ticks: (0, 0),
+                    ..self.plan
+                };
+                plan.check_range(next_bias_volts, max_volts.min(self.ceiling_volts))?;
+                self.max_volts = max_volts.min(self.ceiling_volts);
+                self.estimate = Some(device);
+                self.trim.tuned = true;
+                self.plan = plan;
+                self.state = State::Ramping { then_measure: true };
+                Ok(Some(Event::Trimmed {
+                    bias_volts,
+                    measured_hz,
+                    shear_modulus,
+                    next_bias_volts,
+                }))
+            }
+            TrimResult::AboveCeiling {
+                shear_modulus,
+                needed_volts,
+                ..
+            } => {
+                self.trim.params.shear_modulus = shear_modulus;
+                self.state = State::Held { needed_volts };
+                Ok(Some(Event::AboveCeiling {
+                    needed_volts,
+                    ceiling_volts: self.ceiling_volts,
+                }))
+            }
+            TrimResult::Failed(fault) => Err(fault),
+        }
+    }
+}

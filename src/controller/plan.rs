@@ -1,0 +1,197 @@
+//! The plan: the voltage at every tick (ramp from a voltage to the bias, hold, with the
+//! trim's pulse, then the AC drive), its range against [0, cap], and its run through the
+//! model under the monitor (MODEL.md §6).
+
+use core::f32::consts::TAU;
+
+use super::fault::Fault;
+use super::settings::{Setting, Settings};
+use crate::device::Device;
+use crate::integration::{Drive, Integrator, Method, State, StepError};
+use crate::real::Real;
+use crate::safety::Monitor;
+
+/// The longest plan, in ticks (about 18 hours at 1 kHz before the AC starts).
+pub const MAX_PLAN_TICKS: f32 = 6.4e7;
+
+/// The plan: ramp from a voltage to the bias, hold (with the trim's pulse, if any), then the
+/// AC drive; the voltage at every tick.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Plan {
+    /// Where the ramp starts: the tick and the voltage there.
+    pub start_tick: u32,
+    pub start_volts: f32,
+    pub bias_volts: f32,
+    /// Bias step per tick on the ramp (up or down), V.
+    pub ramp_volts_per_tick: f32,
+    /// Ticks [from, to) at which the voltage drops by `pulse_volts` (the trim's ping; a drop
+    /// is always toward safety).
+    pub pulse_ticks: (u32, u32),
+    pub pulse_volts: f32,
+    /// The tick at which the AC starts (`None`: not yet, as while a trim measures).
+    pub ac_tick: Option<u32>,
+    pub ac_volts: f32,
+    /// AC phase advance per tick, in units of 2π/2³²: the phase is an exact integer, so it
+    /// neither drifts nor loses precision however long the drive runs.
+    pub ac_phase_step: u32,
+}
+
+impl Plan {
+    /// No voltage at all (before a plan is made).
+    pub(super) const fn idle() -> Self {
+        Self {
+            start_tick: 0,
+            start_volts: 0.0,
+            bias_volts: 0.0,
+            ramp_volts_per_tick: 0.0,
+            pulse_ticks: (0, 0),
+            pulse_volts: 0.0,
+            ac_tick: None,
+            ac_volts: 0.0,
+            ac_phase_step: 0,
+        }
+    }
+
+    /// A ramp from 0 V at tick 0 to `bias_volts` at the settings' slew rate, the hold, and
+    /// (when `drive`, else later) the AC; with the ticks up to the end of its model check.
+    pub(super) fn from_rest(
+        s: &Settings,
+        bias_volts: f32,
+        drive: bool,
+    ) -> Result<(Self, u32), Fault> {
+        let ramp_ticks = bias_volts / s.slew_volts_per_second * s.tick_hz;
+        let ac_tick = libm::ceilf(ramp_ticks) + s.settle_seconds * s.tick_hz;
+        let check_ticks = s.check_seconds * s.tick_hz;
+        if !(ac_tick + check_ticks < MAX_PLAN_TICKS) {
+            return Err(Fault::Setting {
+                setting: Setting::SlewVoltsPerSecond,
+                value: s.slew_volts_per_second,
+            });
+        }
+        let plan = Plan {
+            start_tick: 0,
+            start_volts: 0.0,
+            bias_volts,
+            ramp_volts_per_tick: s.slew_volts_per_second / s.tick_hz,
+            pulse_ticks: (0, 0),
+            pulse_volts: 0.0,
+            ac_tick: drive.then_some(ac_tick as u32),
+            ac_volts: if s.ac_hz > 0.0 { s.ac_volts } else { 0.0 },
+            ac_phase_step: ((s.ac_hz / s.tick_hz) as f64 * 4_294_967_296.0) as u32,
+        };
+        Ok((plan, ac_tick as u32 + check_ticks as u32 + 1))
+    }
+
+    /// The ramp's voltage at tick `k` (the bias once it is reached).
+    pub fn ramp_volts(&self, k: u32) -> f32 {
+        let step = self.ramp_volts_per_tick * k.saturating_sub(self.start_tick) as f32;
+        if self.bias_volts >= self.start_volts {
+            (self.start_volts + step).min(self.bias_volts)
+        } else {
+            (self.start_volts - step).max(self.bias_volts)
+        }
+    }
+
+    /// The voltage at tick `k`.
+    pub fn volts(&self, k: u32) -> f32 {
+        match self.ac_tick {
+            Some(from) if k >= from => {
+                let phase = (k - from).wrapping_mul(self.ac_phase_step);
+                let angle = phase as f32 * (TAU / 4_294_967_296.0);
+                self.bias_volts + self.ac_volts * Real::sin(angle)
+            }
+            _ => {
+                let ramp = self.ramp_volts(k);
+                let (from, to) = self.pulse_ticks;
+                if k >= from && k < to {
+                    (ramp - self.pulse_volts).max(0.0)
+                } else {
+                    ramp
+                }
+            }
+        }
+    }
+
+    /// The highest voltage the plan reaches, V.
+    pub fn peak_volts(&self) -> f32 {
+        self.start_volts.max(self.bias_volts) + self.ac_volts
+    }
+
+    /// The whole voltage range against [0, `max_volts`], before anything is driven: the ramp
+    /// and the bias below the cap (else `AboveSafe`), and the AC about the bias it will ride
+    /// on (`ac_bias_volts`: the tuned bias, also while a trim probes lower) neither below
+    /// 0 V (the amplifier is unipolar) nor above the cap (else a `Setting` fault naming the
+    /// AC amplitude).
+    pub(super) fn check_range(&self, ac_bias_volts: f32, max_volts: f32) -> Result<(), Fault> {
+        let bias_peak = self.start_volts.max(self.bias_volts);
+        if !(bias_peak <= max_volts && self.bias_volts >= 0.0) {
+            return Err(Fault::AboveSafe {
+                volts: bias_peak,
+                max_volts,
+            });
+        }
+        let ac = self.ac_volts;
+        let ac_peak = ac_bias_volts.max(self.bias_volts) + ac;
+        if !(ac_bias_volts - ac >= 0.0 && ac_peak <= max_volts) {
+            return Err(Fault::Setting {
+                setting: Setting::AcVolts,
+                value: ac,
+            });
+        }
+        Ok(())
+    }
+
+    /// Run the plan through the model (RK4, f32, one step a tick, subdivided for stability)
+    /// from rest at the pre-stretch, with the monitor at every tick, for `ticks` ticks. The
+    /// stretch range swept, or the crossing.
+    pub(super) fn run_in_model(
+        &self,
+        device: &Device<f32>,
+        tick_hz: f32,
+        ticks: u32,
+    ) -> Result<(f32, f32), Fault> {
+        let start = State {
+            stretch: device.prestretch_1(),
+            velocity: 0.0,
+        };
+        // A tick the model cannot step stably, even in substeps, is too slow for this
+        // device: the setting is at fault, not the plan.
+        let mut model = Integrator::new(
+            *device,
+            Drive::constant(device, 0.0),
+            Method::Rk4,
+            1.0 / tick_hz,
+            device.model_range(),
+            start,
+            true,
+        )
+        .map_err(|e| match e {
+            StepError::Unstable { .. } | StepError::InvalidStep { .. } => Fault::Setting {
+                setting: Setting::TickHz,
+                value: tick_hz,
+            },
+            e => Fault::PlanFailed(e),
+        })?;
+        let mut monitor = Monitor::new();
+        let (mut low, mut high) = (f32::INFINITY, f32::NEG_INFINITY);
+        for k in 0..ticks {
+            let volts = self.volts(k);
+            let p = volts / device.volts_per_unit();
+            let stretch = model.state().stretch;
+            if let Some(mode) = monitor.observe(device, u64::from(k), stretch, p * p) {
+                return Err(Fault::PlanCrosses {
+                    mode,
+                    seconds: k as f32 / tick_hz,
+                });
+            }
+            low = low.min(stretch);
+            high = high.max(stretch);
+            model
+                .set_drive(Drive::constant(device, volts))
+                .map_err(Fault::PlanFailed)?;
+            model.step().map_err(Fault::PlanFailed)?;
+        }
+        Ok((low, high))
+    }
+}

@@ -1,0 +1,202 @@
+//! What the controller is asked to do (`Settings`), and the checks every setting passes
+//! before anything is driven.
+
+use super::fault::Fault;
+use crate::tuning::TuneError;
+
+/// What the controller is asked to do, and how.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Settings {
+    /// The natural frequency to tune to, Hz.
+    pub target_hz: f32,
+    /// Voltage margin: every commanded voltage stays at most (1 − margin)·Φlimit.
+    pub margin: f32,
+    /// Bias ramp rate, V/s.
+    pub slew_volts_per_second: f32,
+    /// The controller's fixed rate, Hz.
+    pub tick_hz: f32,
+    /// Hold at the bias before the AC drive starts, s.
+    pub settle_seconds: f32,
+    /// AC drive amplitude, V (0: none).
+    pub ac_volts: f32,
+    /// AC drive frequency, Hz.
+    pub ac_hz: f32,
+    /// How long the model follows the AC drive after it starts, s.
+    pub check_seconds: f32,
+    /// Largest relative difference allowed between the natural frequency at the table's bias
+    /// and at the direct solve's (the two biases differ by the table's interpolation).
+    pub agreement: f32,
+    /// Largest difference between the amplifier's monitored output and the last command,
+    /// V, for more than `AMPLIFIER_TICKS` ticks in a row (a saturated or failed amplifier).
+    pub amplifier_tolerance_volts: f32,
+    /// Bit-identical sensor samples in a row that mean a stuck sensor (0: no such check; a
+    /// real sensor's noise never repeats that long).
+    pub stuck_samples: u32,
+    /// Closed-loop trim: the relative frequency error to reach (0: no trim). Needs the
+    /// stretch sensor and the `cross_check` stage (the model is re-solved on the chip).
+    pub trim_tolerance: f32,
+    /// The ring measured after each pulse, s (at most `MAX_WINDOW` ticks).
+    pub trim_window_seconds: f32,
+    /// The pulse's drop below the bias, V, for half a period of the target.
+    pub trim_pulse_volts: f32,
+    /// The first bias the trim measures at, as a fraction of the nominal cap at most: a
+    /// plant softer than the model by a factor r has its limit √r lower, so a fraction p
+    /// covers plants down to r = p².
+    pub trim_probe_fraction: f32,
+    /// Trim again after this long of AC drive, s (0: once): for a plant that drifts, as a
+    /// viscoelastic membrane creeps. The AC pauses while the ring is measured.
+    pub trim_every_seconds: f32,
+}
+
+/// The f32 solve's allowance: the cap is (1 − margin)·(1 − F32_GUARD)·Φlimit in f32, so it
+/// stays below (1 − margin)·Φlimit in f64. The f32 limit was within 6.7e-7 of the f64 limit
+/// of the same parameters on 28,726 random devices (`tests/safety.rs` holds it to 1e-6).
+pub const F32_GUARD: f32 = 1e-5;
+
+/// The margin the f32 solve runs with: (1 − margin)·(1 − F32_GUARD) = 1 − that.
+pub(super) fn guarded(margin: f32) -> f32 {
+    1.0 - (1.0 - margin) * (1.0 - F32_GUARD)
+}
+
+/// Most trims (measure, estimate, retune) before the controller gives up.
+pub const MAX_TRIMS: u8 = 8;
+
+/// Largest change of the bias a secant step may make, as a fraction of the bias.
+pub const TRIM_SECANT_STEP: f32 = 0.1;
+
+impl Settings {
+    /// Defaults for a target: 5% margin, 10 kV/s, 1 kHz, 0.25 s hold, no AC, 0.5 s of
+    /// model after the AC starts, table and solve within 1e-4 in frequency, the amplifier
+    /// within 200 V of its command, 100 equal sensor samples in a row a stuck sensor.
+    pub const fn for_target(target_hz: f32) -> Self {
+        Self {
+            target_hz,
+            margin: 0.05,
+            slew_volts_per_second: 10_000.0,
+            tick_hz: 1_000.0,
+            settle_seconds: 0.25,
+            ac_volts: 0.0,
+            ac_hz: 0.0,
+            check_seconds: 0.5,
+            agreement: 1e-4,
+            amplifier_tolerance_volts: 200.0,
+            stuck_samples: 100,
+            trim_tolerance: 0.0,
+            trim_window_seconds: 0.5,
+            trim_pulse_volts: 200.0,
+            trim_probe_fraction: 0.5,
+            trim_every_seconds: 0.0,
+        }
+    }
+
+    /// Every setting in its range (the trim's only with the `trim` feature): a `Setting`
+    /// fault naming the first that is not, or `Tune` for the margin.
+    pub(super) fn check(&self) -> Result<(), Fault> {
+        let settings = self;
+        let tick_hz = positive(Setting::TickHz, settings.tick_hz)?;
+        positive(Setting::SlewVoltsPerSecond, settings.slew_volts_per_second)?;
+        non_negative(Setting::SettleSeconds, settings.settle_seconds)?;
+        non_negative(Setting::AcVolts, settings.ac_volts)?;
+        let ac_hz = non_negative(Setting::AcHz, settings.ac_hz)?;
+        non_negative(Setting::CheckSeconds, settings.check_seconds)?;
+        positive(Setting::Agreement, settings.agreement)?;
+        positive(
+            Setting::AmplifierToleranceVolts,
+            settings.amplifier_tolerance_volts,
+        )?;
+        let trim = non_negative(Setting::TrimTolerance, settings.trim_tolerance)?;
+        if trim > 0.0 && !cfg!(feature = "trim") {
+            // Built without the trim: asking for it is an error, not a silent no.
+            return Err(Fault::Setting {
+                setting: Setting::TrimTolerance,
+                value: trim,
+            });
+        }
+        non_negative(Setting::TrimPulseVolts, settings.trim_pulse_volts)?;
+        let window = positive(Setting::TrimWindowSeconds, settings.trim_window_seconds)?;
+        if trim > 0.0 && !(window * tick_hz <= crate::trim::MAX_WINDOW as f32) {
+            return Err(Fault::Setting {
+                setting: Setting::TrimWindowSeconds,
+                value: window,
+            });
+        }
+        non_negative(Setting::TrimEverySeconds, settings.trim_every_seconds)?;
+        let probe = positive(Setting::TrimProbeFraction, settings.trim_probe_fraction)?;
+        if !(probe <= 1.0) {
+            return Err(Fault::Setting {
+                setting: Setting::TrimProbeFraction,
+                value: probe,
+            });
+        }
+        // Below Nyquist; and AC volts without a frequency would drive nothing, silently.
+        if !(ac_hz < 0.5 * tick_hz) || (settings.ac_volts > 0.0 && ac_hz == 0.0) {
+            return Err(Fault::Setting {
+                setting: Setting::AcHz,
+                value: ac_hz,
+            });
+        }
+        if !(settings.margin >= 0.0 && settings.margin < 1.0) {
+            return Err(Fault::Tune(TuneError::InvalidMargin {
+                margin: settings.margin,
+            }));
+        }
+        Ok(())
+    }
+}
+
+/// A setting, for errors.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Setting {
+    SlewVoltsPerSecond,
+    TickHz,
+    SettleSeconds,
+    AcVolts,
+    AcHz,
+    CheckSeconds,
+    Agreement,
+    AmplifierToleranceVolts,
+    TrimTolerance,
+    TrimWindowSeconds,
+    TrimPulseVolts,
+    TrimProbeFraction,
+    TrimEverySeconds,
+}
+
+impl Setting {
+    /// The setting's key, as in `Settings` and a scene's `[controller]` table.
+    pub fn key(self) -> &'static str {
+        match self {
+            Setting::SlewVoltsPerSecond => "slew_volts_per_second",
+            Setting::TickHz => "tick_hz",
+            Setting::SettleSeconds => "settle_seconds",
+            Setting::AcVolts => "ac_volts",
+            Setting::AcHz => "ac_hz",
+            Setting::CheckSeconds => "check_seconds",
+            Setting::Agreement => "agreement",
+            Setting::AmplifierToleranceVolts => "amplifier_tolerance_volts",
+            Setting::TrimTolerance => "trim_tolerance",
+            Setting::TrimWindowSeconds => "trim_window_seconds",
+            Setting::TrimPulseVolts => "trim_pulse_volts",
+            Setting::TrimProbeFraction => "trim_probe_fraction",
+            Setting::TrimEverySeconds => "trim_every_seconds",
+        }
+    }
+}
+
+fn positive(setting: Setting, value: f32) -> Result<f32, Fault> {
+    if value.is_finite() && value > 0.0 {
+        Ok(value)
+    } else {
+        Err(Fault::Setting { setting, value })
+    }
+}
+
+fn non_negative(setting: Setting, value: f32) -> Result<f32, Fault> {
+    if value.is_finite() && value >= 0.0 {
+        Ok(value)
+    } else {
+        Err(Fault::Setting { setting, value })
+    }
+}

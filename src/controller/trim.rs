@@ -1,0 +1,191 @@
+//! The controller's closed-loop trim (feature `trim`) as request and response, so that the
+//! tick never solves: the tick pulses the bias and records the ring; at the window's end it
+//! holds the bias and hands out a `TrimJob` (a copy of everything the solve needs); a
+//! low-priority caller runs `TrimJob::solve` (the ring's frequency, μ re-estimated, the next
+//! bias: `crate::trim`, `crate::tuning`) and gives the `TrimResult` back; a later tick
+//! applies it.
+
+use super::fault::Fault;
+use super::settings::{guarded, Settings, MAX_TRIMS, TRIM_SECANT_STEP};
+use crate::device::{Device, DeviceParams};
+use crate::trim::{estimate_shear_modulus, ring_frequency_hz, TrimError, MAX_WINDOW};
+use crate::tuning::Tuner;
+
+/// The trim's memory between ticks: the model as estimated so far, the secant's last
+/// point, and the window being measured.
+#[derive(Clone, Debug)]
+pub(super) struct TrimState {
+    /// The device as estimated (μ re-estimated; the rest as told).
+    pub(super) params: DeviceParams<f32>,
+    /// Whether the bias held is the one the estimate gives for the target (not the probe).
+    pub(super) tuned: bool,
+    /// Trims done since the last convergence.
+    pub(super) count: u8,
+    /// The last measurement: (bias², measured f), for the secant step.
+    pub(super) previous: Option<(f32, f32)>,
+    /// The first tick of the window, and the samples in it (NaN: no sample that tick).
+    pub(super) window_from: u32,
+    pub(super) window: [f32; MAX_WINDOW],
+    /// The solve's answer, once the caller has given it.
+    pub(super) result: Option<TrimResult>,
+    /// Whether the job for the window just measured was handed out.
+    pub(super) handed_out: bool,
+}
+
+impl TrimState {
+    pub(super) fn new(params: DeviceParams<f32>, tuned: bool) -> Self {
+        Self {
+            params,
+            tuned,
+            count: 0,
+            previous: None,
+            window_from: 0,
+            window: [f32::NAN; MAX_WINDOW],
+            result: None,
+            handed_out: false,
+        }
+    }
+}
+
+/// A trim's work, handed out by `Controller::trim_job`: solved outside the tick.
+#[derive(Clone, Debug)]
+pub struct TrimJob {
+    window: [f32; MAX_WINDOW],
+    len: usize,
+    settings: Settings,
+    params: DeviceParams<f32>,
+    bias_volts: f32,
+    tuned: bool,
+    count: u8,
+    previous: Option<(f32, f32)>,
+    ceiling_volts: f32,
+}
+
+/// What a trim's solve found, given back by `Controller::trim_done`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TrimResult {
+    /// The measured frequency is the target's within the tolerance, at a tuned bias.
+    Converged {
+        measured_hz: f32,
+        shear_modulus: f32,
+    },
+    /// Ramp to `bias_volts` and measure again, under the cap `max_volts` (the estimate's,
+    /// never above the ceiling).
+    Retune {
+        measured_hz: f32,
+        shear_modulus: f32,
+        bias_volts: f32,
+        max_volts: f32,
+    },
+    /// The estimate needs `needed_volts` (bias and AC) above the ceiling: hold.
+    AboveCeiling {
+        measured_hz: f32,
+        shear_modulus: f32,
+        needed_volts: f32,
+    },
+    /// No ring, no estimate, no convergence, or no safe bias: a fault.
+    Failed(Fault),
+}
+
+impl TrimJob {
+    /// The job for the window in `state`, measured at `bias_volts`.
+    pub(super) fn new(
+        state: &TrimState,
+        settings: Settings,
+        bias_volts: f32,
+        ceiling_volts: f32,
+    ) -> Self {
+        let len = (settings.trim_window_seconds * settings.tick_hz) as usize;
+        Self {
+            window: state.window,
+            len: len.min(MAX_WINDOW),
+            settings,
+            params: state.params,
+            bias_volts,
+            tuned: state.tuned,
+            count: state.count,
+            previous: state.previous,
+            ceiling_volts,
+        }
+    }
+
+    /// The ring's frequency, μ re-estimated so that the model gives it at the bias, and the
+    /// next step: converged, or the next bias (by the secant through the last two
+    /// measurements in (Φ², f) once there are two, each step at most `TRIM_SECANT_STEP` of
+    /// the bias; else the estimated device's bias for the target), under the lower of the
+    /// estimate's cap and the ceiling.
+    pub fn solve(&self) -> TrimResult {
+        match self.try_solve() {
+            Ok(result) => result,
+            Err(fault) => TrimResult::Failed(fault),
+        }
+    }
+
+    fn try_solve(&self) -> Result<TrimResult, Fault> {
+        let s = self.settings;
+        let window = self.window.get(..self.len).unwrap_or(&self.window);
+        let measured_hz = ring_frequency_hz(window, s.tick_hz).map_err(Fault::Trim)?;
+        let shear_modulus = estimate_shear_modulus(&self.params, self.bias_volts, measured_hz)
+            .map_err(Fault::Trim)?;
+        let converged =
+            self.tuned && (measured_hz - s.target_hz).abs() <= s.trim_tolerance * s.target_hz;
+        if converged {
+            return Ok(TrimResult::Converged {
+                measured_hz,
+                shear_modulus,
+            });
+        }
+        if self.count.saturating_add(1) >= MAX_TRIMS {
+            return Err(Fault::Trim(TrimError::NotConverged {
+                measured_hz,
+                target_hz: s.target_hz,
+            }));
+        }
+        let params = DeviceParams {
+            shear_modulus,
+            ..self.params
+        };
+        let tuner = Tuner::new(Device::new(params).map_err(Fault::Device)?);
+        let margin = guarded(s.margin);
+        // The estimate may lower the cap (a softer plant), never raise it past the ceiling.
+        let max_volts = tuner
+            .max_bias(margin)
+            .map_err(Fault::Tune)?
+            .volts
+            .min(self.ceiling_volts);
+        let from = self.bias_volts;
+        let squared = from * from;
+        let secant = self.previous.and_then(|(p2, pf)| {
+            let next = squared + (s.target_hz - measured_hz) * (squared - p2) / (measured_hz - pf);
+            // A trust region: a drifting plant (creep) makes a poor secant, and a wild step
+            // up is what the model's region cannot vouch for.
+            let step = TRIM_SECANT_STEP * from;
+            let volts = libm::sqrtf(next).clamp(from - step, from + step);
+            (volts > 0.0 && volts + s.ac_volts <= max_volts).then_some(volts)
+        });
+        let bias_volts = match secant {
+            Some(volts) => volts,
+            None => tuner.tune(s.target_hz, margin).map_err(Fault::Tune)?.volts,
+        };
+        if !(from <= max_volts) {
+            return Err(Fault::AboveSafe {
+                volts: from,
+                max_volts,
+            });
+        }
+        let needed_volts = bias_volts + s.ac_volts;
+        if !(needed_volts <= max_volts) && max_volts == self.ceiling_volts {
+            return Ok(TrimResult::AboveCeiling {
+                measured_hz,
+                shear_modulus,
+                needed_volts,
+            });
+        }
+        Ok(TrimResult::Retune {
+            measured_hz,
+            shear_modulus,
+            bias_volts,
+            max_volts,
+        })
+    }
+}

@@ -1,0 +1,125 @@
+//! What the controller measures each tick (`Inputs`) and the checks on it: the stretch
+//! sample (a number, one a device could give, not stuck, inside MODEL.md §6) and the
+//! amplifier's monitored output against the last command.
+
+use super::fault::Fault;
+use crate::device::Device;
+use crate::safety::Monitor;
+
+/// Ticks in a row the amplifier may be off its command before it is a fault (its bandwidth
+/// and slew limit lag a step by a tick or two).
+pub const AMPLIFIER_TICKS: u32 = 3;
+
+/// What the IO side measured this tick, if anything.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Inputs {
+    /// The displacement sensor's stretch λ.
+    pub stretch: Option<f32>,
+    /// The amplifier's monitor output, V.
+    pub amplifier_volts: Option<f32>,
+}
+
+impl Inputs {
+    /// Nothing measured.
+    pub const NONE: Inputs = Inputs {
+        stretch: None,
+        amplifier_volts: None,
+    };
+
+    /// A stretch sample only.
+    pub const fn stretch(stretch: f32) -> Self {
+        Inputs {
+            stretch: Some(stretch),
+            amplifier_volts: None,
+        }
+    }
+}
+
+/// The watch's memory between ticks.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Watch {
+    monitor: Monitor<f32>,
+    /// The last stretch sample and how many times in a row it came (bit for bit).
+    repeated: Option<(f32, u32)>,
+    /// Ticks in a row the amplifier has been off its command.
+    amplifier_off_ticks: u32,
+}
+
+impl Watch {
+    pub(super) const fn new() -> Self {
+        Self {
+            monitor: Monitor::new(),
+            repeated: None,
+            amplifier_off_ticks: 0,
+        }
+    }
+
+    /// A stretch sample at tick `k` under `volts`: a number (`Sensor`), one a device could
+    /// give (`SensorImplausible`), not the same `stuck_samples` times in a row (`SensorStuck`;
+    /// `None`: no such check), and inside MODEL.md §6 for the device flashed and for the
+    /// trim's estimate, if any (`Limit`; a state outside the model is loss of tension 1).
+    pub(super) fn stretch(
+        &mut self,
+        k: u32,
+        stretch: f32,
+        volts: f32,
+        flashed: &Device<f32>,
+        estimate: Option<&Device<f32>>,
+        stuck_samples: Option<u32>,
+    ) -> Option<Fault> {
+        if !stretch.is_finite() {
+            return Some(Fault::Sensor { value: stretch });
+        }
+        let (low, high) = flashed.plausible_stretch();
+        if !(stretch > low && stretch < high) {
+            return Some(Fault::SensorImplausible {
+                value: stretch,
+                low,
+                high,
+            });
+        }
+        let count = match self.repeated {
+            Some((last, n)) if last.to_bits() == stretch.to_bits() => n.saturating_add(1),
+            _ => 1,
+        };
+        self.repeated = Some((stretch, count));
+        if stuck_samples.is_some_and(|limit| count >= limit) {
+            return Some(Fault::SensorStuck {
+                samples: count,
+                value: stretch,
+            });
+        }
+        let tick = u64::from(k);
+        for device in core::iter::once(flashed).chain(estimate) {
+            let p = volts / device.volts_per_unit();
+            if let Some(mode) = self.monitor.observe(device, tick, stretch, p * p) {
+                return Some(Fault::Limit { mode, tick: k });
+            }
+        }
+        None
+    }
+
+    /// The amplifier's monitored output against the last command: off by more than
+    /// `tolerance_volts` for more than `AMPLIFIER_TICKS` ticks in a row is a fault.
+    pub(super) fn amplifier(
+        &mut self,
+        measured: Option<f32>,
+        commanded_volts: f32,
+        tolerance_volts: f32,
+    ) -> Option<Fault> {
+        let measured = measured?;
+        if !measured.is_finite() {
+            return Some(Fault::Sensor { value: measured });
+        }
+        if (measured - commanded_volts).abs() <= tolerance_volts {
+            self.amplifier_off_ticks = 0;
+            return None;
+        }
+        self.amplifier_off_ticks += 1;
+        (self.amplifier_off_ticks > AMPLIFIER_TICKS).then_some(Fault::AmplifierDisagrees {
+            commanded_volts,
+            measured_volts: measured,
+        })
+    }
+}
