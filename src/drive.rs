@@ -117,6 +117,18 @@ pub enum DacError<E> {
     Bus(E),
 }
 
+impl<E: fmt::Debug> fmt::Display for DacError<E> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            DacError::Bus(e) => write!(f, "DAC bus error: {e:?}"),
+        }
+    }
+}
+
+impl<E: fmt::Debug> core::error::Error for DacError<E> {}
+
+impl core::error::Error for CodeError {}
+
 /// TI DAC8551 on an SPI bus.
 pub struct Dac8551<SPI> {
     spi: SPI,
@@ -139,6 +151,11 @@ impl<SPI: SpiDevice> Dac8551<SPI> {
         self.spi
             .write(&frame(PowerMode::GroundedOneKilohm, DacCode(0)))
             .map_err(DacError::Bus)
+    }
+
+    /// The bus, for a caller that inspects it (a simulated DAC).
+    pub fn bus(&self) -> &SPI {
+        &self.spi
     }
 
     /// The bus back, for a caller that shares it.

@@ -779,6 +779,79 @@ impl embedded_hal::spi::SpiDevice for BrokenBus {
     }
 }
 
+/// The one fault reaction (`OutputStage`, used by the firmware and host-sim's loop): the
+/// safe state is the enable line low, then the DAC powered down (DAC8551 frame 01 00 00);
+/// nothing is written before `enable`; a tick's code goes out once enabled; a fault event
+/// goes safe; and on a dead bus the line still drops and the controller latches `Bus`.
+#[test]
+fn the_output_stage_reacts_to_every_fault_the_same_way() {
+    use de_resonator::{OutputStage, StageError};
+    use embedded_hal_mock::eh1::digital::{
+        Mock as PinMock, State as PinState, Transaction as PinTransaction,
+    };
+    let frame = |bytes: [u8; 3]| {
+        [
+            Transaction::transaction_start(),
+            Transaction::write_vec(bytes.to_vec()),
+            Transaction::transaction_end(),
+        ]
+    };
+    let spi: Vec<Transaction<u8>> = [
+        frame([0x01, 0, 0]),       // safe at power-on
+        frame([0x00, 0x12, 0x34]), // a tick's code once enabled
+        frame([0x01, 0, 0]),       // the fault
+    ]
+    .concat();
+    let pin = [
+        PinTransaction::set(PinState::Low),
+        PinTransaction::set(PinState::High),
+        PinTransaction::set(PinState::Low),
+    ];
+    let mut c = start(Settings::for_target(44.0)).unwrap();
+    let mut stage = OutputStage::new(Dac8551::new(Mock::new(&spi)), PinMock::new(&pin));
+    assert!(stage.is_safe());
+    stage.safe().unwrap();
+    // Not enabled yet: a tick's output is not written.
+    let out = c.tick(Inputs::NONE);
+    assert_eq!(stage.send(&mut c, out), out);
+    stage.enable().unwrap();
+    let code = de_resonator::Output {
+        code: DacCode(0x1234),
+        volts: 0.0,
+        event: None,
+    };
+    stage.send(&mut c, code);
+    let out = c.fault(Fault::Bus);
+    stage.send(&mut c, out);
+    assert!(stage.is_safe());
+    let (dac, mut pin) = stage.release();
+    dac.release().done();
+    pin.done();
+
+    // A dead bus: the enable line drops all the same, the error is the bus's, and a tick
+    // sent through it latches the controller at `Bus`.
+    let pin = [
+        PinTransaction::set(PinState::High),
+        PinTransaction::set(PinState::Low),
+        PinTransaction::set(PinState::High),
+        PinTransaction::set(PinState::Low),
+    ];
+    let mut stage = OutputStage::new(Dac8551::new(BrokenBus), PinMock::new(&pin));
+    stage.enable().unwrap();
+    assert_eq!(
+        stage.safe(),
+        Err(StageError::Bus(embedded_hal::spi::ErrorKind::Other))
+    );
+    stage.enable().unwrap();
+    let mut c = start(Settings::for_target(44.0)).unwrap();
+    let out = c.tick(Inputs::NONE);
+    let sent = stage.send(&mut c, out);
+    assert_eq!(sent.event, Some(Event::Fault(Fault::Bus)));
+    assert_eq!(c.latched_fault(), Some(Fault::Bus));
+    let (_, mut pin) = stage.release();
+    pin.done();
+}
+
 #[test]
 fn dac_bus_errors_are_typed() {
     let mut dac = Dac8551::new(BrokenBus);

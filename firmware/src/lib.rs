@@ -132,6 +132,28 @@ pub mod stack {
     }
 }
 
+/// The amplifier-enable line as QEMU has it: GPIO is not emulated (writes are ignored), so
+/// this stand-in keeps the level the firmware set. On a board it is the HAL's output pin.
+#[derive(Default)]
+pub struct EnableLine {
+    pub high: bool,
+}
+
+impl embedded_hal::digital::ErrorType for EnableLine {
+    type Error = core::convert::Infallible;
+}
+
+impl embedded_hal::digital::OutputPin for EnableLine {
+    fn set_low(&mut self) -> Result<(), Self::Error> {
+        self.high = false;
+        Ok(())
+    }
+    fn set_high(&mut self) -> Result<(), Self::Error> {
+        self.high = true;
+        Ok(())
+    }
+}
+
 /// The DAC's SPI bus as QEMU has it: no DAC on the board, so frames are counted and the
 /// last one kept. A bus that fails after `fail_after` frames stands for a broken wire.
 pub struct RecordingBus {

@@ -3,12 +3,16 @@
 //! simulated `SpiDevice`, the amplifier and the membrane in the plant simulator, and the
 //! sensor sampling the plant back. Every tick host-sim checks the true plant against §6.
 
+use std::cell::Cell;
+use std::convert::Infallible;
 use std::time::Instant;
 
 use de_resonator::drive::PowerMode;
 use de_resonator::{
-    Amplifier, Boot, Controller, Dac8551, DeviceParams, Event, FailureMode, Fault, Inputs, Settings,
+    Amplifier, Boot, Controller, Dac8551, DeviceParams, Event, FailureMode, Fault, Inputs,
+    OutputStage, Settings,
 };
+use embedded_hal::digital::{self, OutputPin};
 use embedded_hal::spi::{ErrorKind, ErrorType, Operation, SpiDevice};
 
 use crate::plant::{self, Plant, Vector};
@@ -16,20 +20,27 @@ use crate::simulate::Solver;
 
 /// The DAC8551 as its datasheet has it: 24-bit frames (PD1 PD0, then the code MSB first),
 /// VOUT = VREF·code/65536, 0 V when powered down. Its bus fails after `fail_after` frames.
+/// Shared (`&SimulatedDac` is the `SpiDevice`), so the loop reads its output and fails its
+/// bus while the output stage holds it.
+#[derive(Default)]
 pub struct SimulatedDac {
     pub reference_volts: f64,
-    pub output_volts: f64,
-    pub frames: u64,
-    pub fail_after: Option<u64>,
+    pub output_volts: Cell<f64>,
+    pub frames: Cell<u64>,
+    pub fail_after: Cell<Option<u64>>,
 }
 
-impl ErrorType for SimulatedDac {
+impl ErrorType for &SimulatedDac {
     type Error = ErrorKind;
 }
 
-impl SpiDevice for SimulatedDac {
+impl SpiDevice for &SimulatedDac {
     fn transaction(&mut self, operations: &mut [Operation<'_, u8>]) -> Result<(), ErrorKind> {
-        if self.fail_after.is_some_and(|n| self.frames >= n) {
+        if self
+            .fail_after
+            .get()
+            .is_some_and(|n| self.frames.get() >= n)
+        {
             return Err(ErrorKind::Other);
         }
         for op in operations {
@@ -38,14 +49,36 @@ impl SpiDevice for SimulatedDac {
             };
             let [mode, high, low] =
                 <[u8; 3]>::try_from(&bytes[..]).map_err(|_| ErrorKind::Other)?;
-            self.frames += 1;
+            self.frames.set(self.frames.get() + 1);
             let code = u16::from_be_bytes([high, low]);
-            self.output_volts = if mode & 0b11 == PowerMode::Normal as u8 {
-                self.reference_volts * f64::from(code) / 65536.0
-            } else {
-                0.0
-            };
+            self.output_volts
+                .set(if mode & 0b11 == PowerMode::Normal as u8 {
+                    self.reference_volts * f64::from(code) / 65536.0
+                } else {
+                    0.0
+                });
         }
+        Ok(())
+    }
+}
+
+/// The amplifier's enable line: high lets the amplifier follow the DAC.
+#[derive(Default)]
+pub struct EnableLine {
+    pub high: Cell<bool>,
+}
+
+impl digital::ErrorType for &EnableLine {
+    type Error = Infallible;
+}
+
+impl OutputPin for &EnableLine {
+    fn set_low(&mut self) -> Result<(), Infallible> {
+        self.high.set(false);
+        Ok(())
+    }
+    fn set_high(&mut self) -> Result<(), Infallible> {
+        self.high.set(true);
         Ok(())
     }
 }
@@ -192,12 +225,16 @@ impl Loop {
         let tick_seconds = 1.0 / f64::from(self.settings.tick_hz);
         let ticks = (self.duration_seconds / tick_seconds).round() as u64;
         // The driver borrows the bus for each write, as firmware sharing a bus would.
-        let mut bus = SimulatedDac {
+        let bus = SimulatedDac {
             reference_volts: self.dac_reference_volts,
-            output_volts: 0.0,
-            frames: 0,
-            fail_after: None,
+            ..SimulatedDac::default()
         };
+        let enable = EnableLine::default();
+        // The core's output stage, as the firmware's: the DAC and the enable line, and the
+        // one reaction to a fault (enable low at once, since a dead bus keeps the DAC's last
+        // code, then the DAC powered down).
+        let mut stage = OutputStage::new(Dac8551::new(&bus), &enable);
+        let _ = stage.safe();
         let mut run = Run {
             boot: None,
             refused: None,
@@ -223,45 +260,35 @@ impl Loop {
         ) {
             Ok((c, boot)) => {
                 run.boot = Some(boot);
+                let _ = stage.enable();
                 Some(c)
             }
             Err(fault) => {
                 run.refused = Some(fault);
-                let _ = Dac8551::new(&mut bus).power_down();
                 None
             }
         };
         let mut noise = Noise(self.seed);
         let mut reading = f64::NAN;
         let gain = self.plant.amplifier.gain;
-        // The amplifier's enable line: the IO side drops it on any fault, so the output goes
-        // to 0 V even when the DAC can no longer be written (a dead bus keeps its last code).
-        let mut enabled = true;
-        let amplifier_input = |bus: &SimulatedDac, enabled: bool| {
-            if enabled {
-                gain * bus.output_volts
+        let amplifier_input = || {
+            if enable.high.get() {
+                gain * bus.output_volts.get()
             } else {
                 0.0
             }
         };
         for k in 0..ticks {
             let t = k as f64 * tick_seconds;
-            if self.bus_fails_after_seconds.is_some_and(|at| t >= at) && bus.fail_after.is_none() {
-                bus.fail_after = Some(bus.frames);
+            let failing = self.bus_fails_after_seconds.is_some_and(|at| t >= at);
+            if failing && bus.fail_after.get().is_none() {
+                bus.fail_after.set(Some(bus.frames.get()));
             }
-            let membrane_volts = self.plant.volts(&y, amplifier_input(&bus, enabled));
+            let membrane_volts = self.plant.volts(&y, amplifier_input());
             if let Some(c) = controller.as_mut() {
                 let inputs = self.inputs(&mut noise, &mut reading, k, t, &y, membrane_volts);
                 let out = c.tick(inputs);
-                let out = if Dac8551::new(&mut bus).write(out.code).is_err() {
-                    c.fault(Fault::Bus)
-                } else {
-                    out
-                };
-                if matches!(out.event, Some(Event::Fault(_))) {
-                    enabled = false;
-                    let _ = Dac8551::new(&mut bus).power_down();
-                }
+                let out = stage.send(c, out);
                 // The trim's solve, as the firmware's low-priority task runs it: between
                 // ticks; the next tick applies the result.
                 if let Some(job) = c.trim_job() {
@@ -271,7 +298,7 @@ impl Loop {
                 run.max_command_volts = run.max_command_volts.max(f64::from(out.volts));
                 run.said(t, out.event);
             }
-            let input = amplifier_input(&bus, enabled);
+            let input = amplifier_input();
             y = plant::advance(
                 &self.plant,
                 self.solver,

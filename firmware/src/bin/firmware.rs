@@ -7,8 +7,8 @@
 #![no_std]
 #![no_main]
 
-use de_resonator::{Boot, Controller, Dac8551, DacCode, Event, Fault, Inputs};
-use de_resonator_firmware::{amplifier, device, exit, settings, RecordingBus, TABLE};
+use de_resonator::{Boot, Controller, Dac8551, DacCode, Event, Fault, Inputs, OutputStage};
+use de_resonator_firmware::{amplifier, device, exit, settings, EnableLine, RecordingBus, TABLE};
 
 /// Ticks run under QEMU (2 s at 1 kHz).
 const RUN_TICKS: u32 = 2000;
@@ -26,7 +26,9 @@ fn boot() -> Result<(Controller, Boot), Fault> {
 
 #[cortex_m_rt::entry]
 fn main() -> ! {
-    let mut dac = Dac8551::new(RecordingBus::new(None));
+    // The output stage: the DAC and the amplifier-enable line, safe until the boot passes.
+    let mut stage = OutputStage::new(Dac8551::new(RecordingBus::new(None)), EnableLine::default());
+    let _ = stage.safe();
     #[cfg(feature = "defmt")]
     defmt::info!(
         "de-resonator: target {=f32} Hz, margin {=f32}, table {=usize} bytes",
@@ -40,10 +42,10 @@ fn main() -> ! {
             #[cfg(feature = "defmt")]
             defmt::error!("refusing to drive: {}", fault);
             let _ = fault;
-            let _ = dac.power_down();
             exit(1)
         }
     };
+    let _ = stage.enable();
     #[cfg(feature = "defmt")]
     log_boot(&boot);
     let _ = boot;
@@ -51,13 +53,7 @@ fn main() -> ! {
     for _ in 0..RUN_TICKS {
         let out = controller.tick(Inputs::NONE);
         highest = highest.max(out.code);
-        if dac.write(out.code).is_err() {
-            controller.fault(Fault::Bus);
-            #[cfg(feature = "defmt")]
-            defmt::error!("DAC bus error: 0 V");
-            let _ = dac.power_down();
-            exit(3)
-        }
+        let out = stage.send(&mut controller, out);
         match out.event {
             #[cfg(feature = "defmt")]
             Some(Event::AtBias { volts }) => {
@@ -67,15 +63,15 @@ fn main() -> ! {
             Some(Event::DriveOn) => defmt::info!("tick {=u32}: AC drive on", controller.ticks()),
             Some(Event::Fault(fault)) => {
                 #[cfg(feature = "defmt")]
-                defmt::error!("tick {=u32}: {}", controller.ticks(), fault);
+                defmt::error!("tick {=u32}: {}, 0 V", controller.ticks(), fault);
                 let _ = fault;
-                let _ = dac.power_down();
                 exit(2)
             }
             _ => {}
         }
     }
-    let _ = dac.power_down();
+    let _ = stage.safe();
+    let (dac, _) = stage.release();
     let bus = dac.release();
     #[cfg(feature = "defmt")]
     {
