@@ -1,9 +1,10 @@
 //! de-resonator: model, safe region and bias tuning of a dielectric elastomer resonator.
 //!
 //! `no_std`, no allocation, no panics on any input. Generic over the float type: `f32` on
-//! the target, `f64` on the host. Data flows one way: [`device`] parameters → [`statics`]
-//! model → [`safety`] and [`tuning`] decisions → [`controller`] → [`drive`]; [`integration`]
-//! steps the dynamics; [`table`] reads and writes tuning tables. Equations cite `MODEL.md` sections.
+//! the target, `f64` on the host. Data flows one way: the [`model`] (device parameters →
+//! statics → safe region) → [`tuning`] decisions → [`controller`] → [`shell`] and [`drive`];
+//! [`integration`] steps the dynamics; [`table`] reads and writes tuning tables. Equations
+//! cite `MODEL.md` sections.
 #![no_std]
 #![forbid(unsafe_code)]
 // "No panic on any input" checked by the compiler: no unwrap, expect, panic or indexing in
@@ -19,18 +20,18 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod controller;
-pub mod device;
 pub mod drive;
 pub mod integration;
-pub mod material;
+pub mod model;
 pub mod real;
 pub mod roots;
-pub mod safety;
 pub mod shell;
-pub mod statics;
 pub mod table;
 pub mod trim;
 pub mod tuning;
+
+// The model's modules at the crate's root too, as every caller names them.
+pub use model::{device, material, safety, statics};
 
 pub use controller::{
     Boot, Controller, Event, Fault, Inputs, Output, Phase, Plan, Setting, Settings,

@@ -22,7 +22,7 @@
 
 use core::fmt;
 
-use crate::device::{Device, DeviceParams};
+use crate::device::{Device, DeviceParams, Field};
 use crate::real::Real;
 use crate::statics::Equilibrium;
 
@@ -76,8 +76,8 @@ pub enum TableError {
     /// Point `index` does not continue the strictly rising bias, or is the frequency's
     /// turn past `MAX_TURNS`.
     NotMonotone { index: u16 },
-    /// The table was made for other device parameters (field index in `DeviceParams` order).
-    OtherDevice { field: u8 },
+    /// The table was made for other device parameters: the first that differs.
+    OtherDevice { field: Field },
     /// The target is NaN or outside the table's frequency range.
     OutOfRange {
         target_hz: f32,
@@ -87,6 +87,8 @@ pub enum TableError {
     /// The output buffer is too small for the table (writing).
     BufferTooSmall { needed: usize },
 }
+
+impl core::error::Error for TableError {}
 
 impl fmt::Display for TableError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -114,12 +116,11 @@ impl fmt::Display for TableError {
                 "table point {index} breaks the order (bias strictly rising, frequency turning \
                  at most {MAX_TURNS} times)"
             ),
-            TableError::OtherDevice { field } => {
-                write!(
-                    f,
-                    "table was made for another device (parameter {field} differs)"
-                )
-            }
+            TableError::OtherDevice { field } => write!(
+                f,
+                "table was made for another device (`{}` differs)",
+                field.key()
+            ),
             TableError::OutOfRange {
                 target_hz,
                 low_hz,
@@ -146,25 +147,6 @@ pub fn crc32(bytes: &[u8]) -> u32 {
         }
     }
     !crc
-}
-
-/// The 13 parameters in `DeviceParams` order, `jlim` as 0 for neo-Hookean.
-fn param_values(p: &DeviceParams<f32>) -> [f32; 13] {
-    [
-        p.shear_modulus,
-        p.jlim.unwrap_or(0.0),
-        p.relative_permittivity,
-        p.density,
-        p.breakdown_field,
-        p.thickness,
-        p.length_active,
-        p.length_passive,
-        p.width,
-        p.bar_mass,
-        p.prestretch_1,
-        p.prestretch_2,
-        p.damping,
-    ]
 }
 
 /// The four bytes at `offset` (zeros past the end: callers check the length first).
@@ -283,34 +265,21 @@ impl<'a> Table<'a> {
 
     /// The device parameters the table was made for.
     pub fn params(&self) -> DeviceParams<f32> {
-        let v = |k: usize| f32_at(self.bytes, 8 + 4 * k);
-        DeviceParams {
-            shear_modulus: v(0),
-            jlim: (v(1) > 0.0).then(|| v(1)),
-            relative_permittivity: v(2),
-            density: v(3),
-            breakdown_field: v(4),
-            thickness: v(5),
-            length_active: v(6),
-            length_passive: v(7),
-            width: v(8),
-            bar_mass: v(9),
-            prestretch_1: v(10),
-            prestretch_2: v(11),
-            damping: v(12),
+        let mut values = [0.0f32; 13];
+        for (k, value) in values.iter_mut().enumerate() {
+            *value = f32_at(self.bytes, 8 + 4 * k);
         }
+        DeviceParams::from_values(values)
     }
 
     /// Check that the table was made for `params` (bit for bit, as f32).
     pub fn check_device(&self, params: &DeviceParams<f32>) -> Result<(), TableError> {
-        let ours = param_values(&self.params());
-        let theirs = param_values(params);
-        match ours
-            .iter()
-            .zip(theirs.iter())
-            .position(|(a, b)| a.to_bits() != b.to_bits())
+        let ours = self.params();
+        match Field::ALL
+            .into_iter()
+            .find(|&field| ours.get(field).to_bits() != params.get(field).to_bits())
         {
-            Some(field) => Err(TableError::OtherDevice { field: field as u8 }),
+            Some(field) => Err(TableError::OtherDevice { field }),
             None => Ok(()),
         }
     }
@@ -440,7 +409,8 @@ pub fn write(
         .into_iter()
         .chain(VERSION.to_le_bytes())
         .chain((points.len() as u16).to_le_bytes());
-    let values = param_values(params)
+    let values = params
+        .values()
         .into_iter()
         .chain([margin, interpolation_error])
         .chain(points.iter().flat_map(|&(hz, volts)| [hz, volts]))

@@ -233,7 +233,12 @@ fn the_controller_refuses_a_bad_table_and_a_table_for_another_device() {
         ..params
     };
     let fault = Controller::start(other, &reference_table(), amplifier(), settings).unwrap_err();
-    assert_eq!(fault, Fault::Table(TableError::OtherDevice { field: 0 }));
+    assert_eq!(
+        fault,
+        Fault::Table(TableError::OtherDevice {
+            field: de_resonator::Field::ShearModulus
+        })
+    );
 }
 
 /// The published figure (issue 2): 44 Hz takes 7449.88 V on the reference device. The

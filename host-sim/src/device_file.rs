@@ -1,62 +1,60 @@
 //! Device files: TOML, SI units, flat keys named as the fields of `DeviceParams`; every key
 //! optional, defaulting to the reference device of MODEL.md §9. Unknown keys are an error.
 
+use std::collections::BTreeMap;
 use std::path::Path;
 
-use de_resonator::{DeviceParams, REFERENCE_DEVICE};
-use serde::Deserialize;
+use de_resonator::{DeviceParams, Field, REFERENCE_DEVICE};
+use toml::Spanned;
 
-/// The file's keys; an absent key takes the reference device's value.
-#[derive(Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct DeviceFile {
-    shear_modulus: Option<f64>,
-    jlim: Option<f64>,
-    relative_permittivity: Option<f64>,
-    density: Option<f64>,
-    breakdown_field: Option<f64>,
-    thickness: Option<f64>,
-    length_active: Option<f64>,
-    length_passive: Option<f64>,
-    width: Option<f64>,
-    bar_mass: Option<f64>,
-    prestretch_1: Option<f64>,
-    prestretch_2: Option<f64>,
-    damping: Option<f64>,
-}
-
-/// Parse a device file's text. Errors are one line: `line N: what is wrong`.
+/// Parse a device file's text: its keys are `Field::ALL`'s (the core's one list), each a
+/// number; an absent key takes the reference device's value, except `jlim` (absent:
+/// neo-Hookean). Errors are one line: `line N: what is wrong`.
 pub fn parse(text: &str) -> Result<DeviceParams<f64>, String> {
-    let file: DeviceFile = toml::from_str(text).map_err(|e| {
-        let message = e.message().trim().replace('\n', " ");
-        match e.span() {
-            Some(span) => {
-                let before = text.get(..span.start).unwrap_or(text);
-                let line = before.matches('\n').count() + 1;
-                format!("line {line}: {message}")
+    let line_of = |at: usize| text.get(..at).unwrap_or(text).matches('\n').count() + 1;
+    let file: BTreeMap<Spanned<String>, Spanned<toml::Value>> =
+        toml::from_str(text).map_err(|e| {
+            let message = e.message().trim().replace('\n', " ");
+            match e.span() {
+                Some(span) => format!("line {}: {message}", line_of(span.start)),
+                None => message,
             }
-            None => message,
+        })?;
+    let mut params = DeviceParams {
+        jlim: None,
+        ..REFERENCE_DEVICE
+    };
+    for (key, value) in &file {
+        let line = line_of(key.span().start);
+        let field = Field::from_key(key.get_ref()).ok_or_else(|| {
+            let keys: Vec<String> = Field::ALL
+                .iter()
+                .map(|f| format!("`{}`", f.key()))
+                .collect();
+            format!(
+                "line {line}: unknown field `{}`, expected one of {}",
+                key.get_ref(),
+                keys.join(", ")
+            )
+        })?;
+        let number = match value.get_ref() {
+            toml::Value::Float(x) => *x,
+            toml::Value::Integer(n) => *n as f64,
+            other => {
+                return Err(format!(
+                    "line {line}: `{}` must be a number, not a {}",
+                    field.key(),
+                    other.type_str()
+                ))
+            }
+        };
+        params.set(field, number);
+        if field == Field::Jlim {
+            // Written out, jlim is the Gent limit, whatever its value (0 is refused later).
+            params.jlim = Some(number);
         }
-    })?;
-    let r = REFERENCE_DEVICE;
-    Ok(DeviceParams {
-        shear_modulus: file.shear_modulus.unwrap_or(r.shear_modulus),
-        // Absent means neo-Hookean (Jlim = ∞), not the reference's 120.
-        jlim: file.jlim,
-        relative_permittivity: file
-            .relative_permittivity
-            .unwrap_or(r.relative_permittivity),
-        density: file.density.unwrap_or(r.density),
-        breakdown_field: file.breakdown_field.unwrap_or(r.breakdown_field),
-        thickness: file.thickness.unwrap_or(r.thickness),
-        length_active: file.length_active.unwrap_or(r.length_active),
-        length_passive: file.length_passive.unwrap_or(r.length_passive),
-        width: file.width.unwrap_or(r.width),
-        bar_mass: file.bar_mass.unwrap_or(r.bar_mass),
-        prestretch_1: file.prestretch_1.unwrap_or(r.prestretch_1),
-        prestretch_2: file.prestretch_2.unwrap_or(r.prestretch_2),
-        damping: file.damping.unwrap_or(r.damping),
-    })
+    }
+    Ok(params)
 }
 
 /// Read and parse a device file; errors name the file.

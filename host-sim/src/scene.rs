@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use de_resonator::{DeviceParams, Settings};
+use de_resonator::{DeviceParams, Setting, Settings};
 use serde::Deserialize;
 
 use crate::hil::{Loop, Sensor};
@@ -32,7 +32,9 @@ struct SceneFile {
     #[serde(default)]
     amplifier: AmplifierFile,
     sensor: Option<SensorFile>,
-    controller: ControllerFile,
+    /// The controller's settings: `Setting::ALL`'s keys (the core's one list), `target_hz`
+    /// required, the rest `Settings::for_target`'s when absent.
+    controller: toml::Table,
     #[serde(default)]
     faults: FaultsFile,
     #[serde(default)]
@@ -140,28 +142,6 @@ fn one_tick() -> u32 {
     1
 }
 
-/// The controller's settings (core `Settings`); absent keys take `Settings::for_target`'s.
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct ControllerFile {
-    target_hz: f32,
-    margin: Option<f32>,
-    slew_volts_per_second: Option<f32>,
-    tick_hz: Option<f32>,
-    settle_seconds: Option<f32>,
-    ac_volts: Option<f32>,
-    ac_hz: Option<f32>,
-    check_seconds: Option<f32>,
-    agreement: Option<f32>,
-    amplifier_tolerance_volts: Option<f32>,
-    stuck_samples: Option<u32>,
-    trim_tolerance: Option<f32>,
-    trim_window_seconds: Option<f32>,
-    trim_pulse_volts: Option<f32>,
-    trim_probe_fraction: Option<f32>,
-    trim_every_seconds: Option<f32>,
-}
-
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct FaultsFile {
@@ -223,31 +203,8 @@ pub fn parse(text: &str) -> Result<Scene, String> {
         let text = toml::to_string(&file.device).map_err(|e| e.to_string())?;
         crate::device_file::parse(&text).map_err(|e| format!("[device]: {e}"))?
     };
-    let plant = plant(&nominal, &file)?;
-    let c = &file.controller;
-    let base = Settings::for_target(c.target_hz);
-    let settings = Settings {
-        target_hz: c.target_hz,
-        margin: c.margin.unwrap_or(base.margin),
-        slew_volts_per_second: c
-            .slew_volts_per_second
-            .unwrap_or(base.slew_volts_per_second),
-        tick_hz: c.tick_hz.unwrap_or(base.tick_hz),
-        settle_seconds: c.settle_seconds.unwrap_or(base.settle_seconds),
-        ac_volts: c.ac_volts.unwrap_or(base.ac_volts),
-        ac_hz: c.ac_hz.unwrap_or(base.ac_hz),
-        check_seconds: c.check_seconds.unwrap_or(base.check_seconds),
-        agreement: c.agreement.unwrap_or(base.agreement),
-        amplifier_tolerance_volts: c
-            .amplifier_tolerance_volts
-            .unwrap_or(base.amplifier_tolerance_volts),
-        stuck_samples: c.stuck_samples.unwrap_or(base.stuck_samples),
-        trim_tolerance: c.trim_tolerance.unwrap_or(base.trim_tolerance),
-        trim_window_seconds: c.trim_window_seconds.unwrap_or(base.trim_window_seconds),
-        trim_pulse_volts: c.trim_pulse_volts.unwrap_or(base.trim_pulse_volts),
-        trim_probe_fraction: c.trim_probe_fraction.unwrap_or(base.trim_probe_fraction),
-        trim_every_seconds: c.trim_every_seconds.unwrap_or(base.trim_every_seconds),
-    };
+    let settings = controller_settings(&file.controller)?;
+    let plant = plant(&nominal, &file, settings.target_hz)?;
     if !(settings.tick_hz.is_finite() && settings.tick_hz > 0.0) {
         return Err(format!(
             "[controller] tick_hz {} must be positive",
@@ -293,8 +250,35 @@ pub fn parse(text: &str) -> Result<Scene, String> {
     })
 }
 
+/// The `[controller]` table as `Settings`: keys from the core's `Setting` list, numbers.
+fn controller_settings(table: &toml::Table) -> Result<Settings, String> {
+    let number = |key: &str, value: &toml::Value| match value {
+        toml::Value::Float(x) => Ok(*x as f32),
+        toml::Value::Integer(n) => Ok(*n as f32),
+        other => Err(format!(
+            "[controller] {key} must be a number, not a {}",
+            other.type_str()
+        )),
+    };
+    let target = table
+        .get("target_hz")
+        .ok_or("[controller] needs target_hz")?;
+    let mut settings = Settings::for_target(number("target_hz", target)?);
+    for (key, value) in table {
+        let setting = Setting::from_key(key).ok_or_else(|| {
+            let keys: Vec<&str> = Setting::ALL.iter().map(|s| s.key()).collect();
+            format!(
+                "[controller] unknown key `{key}`, expected one of {}",
+                keys.join(", ")
+            )
+        })?;
+        settings.set(setting, number(key, value)?);
+    }
+    Ok(settings)
+}
+
 /// The plant: the nominal device scaled, with the extras.
-fn plant(nominal: &DeviceParams<f64>, file: &SceneFile) -> Result<Plant, String> {
+fn plant(nominal: &DeviceParams<f64>, file: &SceneFile, target_hz: f32) -> Result<Plant, String> {
     let p = &file.plant;
     for (key, v) in [
         ("shear_modulus_scale", p.shear_modulus_scale),
@@ -374,7 +358,7 @@ fn plant(nominal: &DeviceParams<f64>, file: &SceneFile) -> Result<Plant, String>
         (Some(_), Some(_)) => return Err("[plant] give damping or quality_factor, not both".into()),
         (Some(c), None) => c,
         (None, Some(q)) if q.is_finite() && q > 0.0 => {
-            plant.mass() * std::f64::consts::TAU * f64::from(file.controller.target_hz) / q
+            plant.mass() * std::f64::consts::TAU * f64::from(target_hz) / q
         }
         (None, Some(q)) => return Err(format!("[plant] quality_factor {q} must be positive")),
         (None, None) => nominal.damping,

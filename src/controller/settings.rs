@@ -90,6 +90,47 @@ impl Settings {
         }
     }
 
+    /// One setting's value (`stuck_samples` as a number).
+    pub fn get(&self, setting: Setting) -> f32 {
+        match setting {
+            Setting::StuckSamples => self.stuck_samples as f32,
+            other => {
+                let mut copy = *self;
+                copy.slot_mut(other).map_or(f32::NAN, |value| *value)
+            }
+        }
+    }
+
+    /// Set one setting (`stuck_samples` rounded down, saturating).
+    pub fn set(&mut self, setting: Setting, value: f32) {
+        if setting == Setting::StuckSamples {
+            self.stuck_samples = value as u32;
+        } else if let Some(slot) = self.slot_mut(setting) {
+            *slot = value;
+        }
+    }
+
+    fn slot_mut(&mut self, setting: Setting) -> Option<&mut f32> {
+        Some(match setting {
+            Setting::TargetHz => &mut self.target_hz,
+            Setting::Margin => &mut self.margin,
+            Setting::SlewVoltsPerSecond => &mut self.slew_volts_per_second,
+            Setting::TickHz => &mut self.tick_hz,
+            Setting::SettleSeconds => &mut self.settle_seconds,
+            Setting::AcVolts => &mut self.ac_volts,
+            Setting::AcHz => &mut self.ac_hz,
+            Setting::CheckSeconds => &mut self.check_seconds,
+            Setting::Agreement => &mut self.agreement,
+            Setting::AmplifierToleranceVolts => &mut self.amplifier_tolerance_volts,
+            Setting::TrimTolerance => &mut self.trim_tolerance,
+            Setting::TrimWindowSeconds => &mut self.trim_window_seconds,
+            Setting::TrimPulseVolts => &mut self.trim_pulse_volts,
+            Setting::TrimProbeFraction => &mut self.trim_probe_fraction,
+            Setting::TrimEverySeconds => &mut self.trim_every_seconds,
+            Setting::StuckSamples => return None,
+        })
+    }
+
     /// Every setting in its range (the trim's only with the `trim` feature): a `Setting`
     /// fault naming the first that is not, or `Tune` for the margin.
     pub(super) fn check(&self) -> Result<(), Fault> {
@@ -145,10 +186,12 @@ impl Settings {
     }
 }
 
-/// A setting, for errors.
+/// A setting: the one list that settings files, messages and a command port take theirs from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Setting {
+    TargetHz,
+    Margin,
     SlewVoltsPerSecond,
     TickHz,
     SettleSeconds,
@@ -162,12 +205,41 @@ pub enum Setting {
     TrimPulseVolts,
     TrimProbeFraction,
     TrimEverySeconds,
+    StuckSamples,
 }
 
 impl Setting {
+    /// Every setting, in `Settings` order.
+    pub const ALL: [Setting; 16] = [
+        Setting::TargetHz,
+        Setting::Margin,
+        Setting::SlewVoltsPerSecond,
+        Setting::TickHz,
+        Setting::SettleSeconds,
+        Setting::AcVolts,
+        Setting::AcHz,
+        Setting::CheckSeconds,
+        Setting::Agreement,
+        Setting::AmplifierToleranceVolts,
+        Setting::StuckSamples,
+        Setting::TrimTolerance,
+        Setting::TrimWindowSeconds,
+        Setting::TrimPulseVolts,
+        Setting::TrimProbeFraction,
+        Setting::TrimEverySeconds,
+    ];
+
+    /// The setting with this key.
+    pub fn from_key(key: &str) -> Option<Setting> {
+        Setting::ALL.into_iter().find(|s| s.key() == key)
+    }
+
     /// The setting's key, as in `Settings` and a scene's `[controller]` table.
     pub fn key(self) -> &'static str {
         match self {
+            Setting::TargetHz => "target_hz",
+            Setting::Margin => "margin",
+            Setting::StuckSamples => "stuck_samples",
             Setting::SlewVoltsPerSecond => "slew_volts_per_second",
             Setting::TickHz => "tick_hz",
             Setting::SettleSeconds => "settle_seconds",

@@ -3,9 +3,9 @@
 
 use core::fmt;
 
+use super::failure::FailureMode;
 use crate::material::Gent;
 use crate::real::Real;
-use crate::safety::FailureMode;
 
 /// Vacuum permittivity ε0 in F/m (CODATA 2018).
 pub const VACUUM_PERMITTIVITY: f64 = 8.854_187_812_8e-12;
@@ -79,6 +79,29 @@ pub enum Field {
 }
 
 impl Field {
+    /// Every field, in `DeviceParams` order: the one list the table layout, device files,
+    /// scenes and messages take theirs from.
+    pub const ALL: [Field; 13] = [
+        Field::ShearModulus,
+        Field::Jlim,
+        Field::RelativePermittivity,
+        Field::Density,
+        Field::BreakdownField,
+        Field::Thickness,
+        Field::LengthActive,
+        Field::LengthPassive,
+        Field::Width,
+        Field::BarMass,
+        Field::Prestretch1,
+        Field::Prestretch2,
+        Field::Damping,
+    ];
+
+    /// The field with this device-file key.
+    pub fn from_key(key: &str) -> Option<Field> {
+        Field::ALL.into_iter().find(|f| f.key() == key)
+    }
+
     /// The device file's key for this field.
     pub fn key(self) -> &'static str {
         match self {
@@ -132,6 +155,8 @@ pub struct ParamError {
     pub field: Field,
     pub problem: Problem,
 }
+
+impl core::error::Error for ParamError {}
 
 impl fmt::Display for ParamError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -207,22 +232,77 @@ impl<T: Real> DeviceParams<T> {
     /// The same parameters in another float type (values too large for it become infinite,
     /// which validation then rejects).
     pub fn cast<U: Real>(&self) -> DeviceParams<U> {
-        let c = |x: T| U::of(x.to_f64());
-        DeviceParams {
-            shear_modulus: c(self.shear_modulus),
-            jlim: self.jlim.map(c),
-            relative_permittivity: c(self.relative_permittivity),
-            density: c(self.density),
-            breakdown_field: c(self.breakdown_field),
-            thickness: c(self.thickness),
-            length_active: c(self.length_active),
-            length_passive: c(self.length_passive),
-            width: c(self.width),
-            bar_mass: c(self.bar_mass),
-            prestretch_1: c(self.prestretch_1),
-            prestretch_2: c(self.prestretch_2),
-            damping: c(self.damping),
+        DeviceParams::from_values(self.values().map(|x| U::of(x.to_f64())))
+    }
+
+    /// The values in `Field::ALL` order, `jlim` 0 for neo-Hookean (the table's layout).
+    pub fn values(&self) -> [T; 13] {
+        Field::ALL.map(|field| self.get(field))
+    }
+
+    /// Parameters from values in `Field::ALL` order (`jlim` 0: neo-Hookean).
+    pub fn from_values(values: [T; 13]) -> Self {
+        let mut params = DeviceParams {
+            shear_modulus: T::zero(),
+            jlim: None,
+            relative_permittivity: T::zero(),
+            density: T::zero(),
+            breakdown_field: T::zero(),
+            thickness: T::zero(),
+            length_active: T::zero(),
+            length_passive: T::zero(),
+            width: T::zero(),
+            bar_mass: T::zero(),
+            prestretch_1: T::zero(),
+            prestretch_2: T::zero(),
+            damping: T::zero(),
+        };
+        for (field, value) in Field::ALL.into_iter().zip(values) {
+            params.set(field, value);
         }
+        params
+    }
+
+    /// One field's value (`jlim` 0 for neo-Hookean).
+    pub fn get(&self, field: Field) -> T {
+        match field {
+            Field::ShearModulus => self.shear_modulus,
+            Field::Jlim => self.jlim.unwrap_or(T::zero()),
+            Field::RelativePermittivity => self.relative_permittivity,
+            Field::Density => self.density,
+            Field::BreakdownField => self.breakdown_field,
+            Field::Thickness => self.thickness,
+            Field::LengthActive => self.length_active,
+            Field::LengthPassive => self.length_passive,
+            Field::Width => self.width,
+            Field::BarMass => self.bar_mass,
+            Field::Prestretch1 => self.prestretch_1,
+            Field::Prestretch2 => self.prestretch_2,
+            Field::Damping => self.damping,
+        }
+    }
+
+    /// Set one field (`jlim` 0 is neo-Hookean, `None`).
+    pub fn set(&mut self, field: Field, value: T) {
+        let slot = match field {
+            Field::ShearModulus => &mut self.shear_modulus,
+            Field::Jlim => {
+                self.jlim = (value != T::zero()).then_some(value);
+                return;
+            }
+            Field::RelativePermittivity => &mut self.relative_permittivity,
+            Field::Density => &mut self.density,
+            Field::BreakdownField => &mut self.breakdown_field,
+            Field::Thickness => &mut self.thickness,
+            Field::LengthActive => &mut self.length_active,
+            Field::LengthPassive => &mut self.length_passive,
+            Field::Width => &mut self.width,
+            Field::BarMass => &mut self.bar_mass,
+            Field::Prestretch1 => &mut self.prestretch_1,
+            Field::Prestretch2 => &mut self.prestretch_2,
+            Field::Damping => &mut self.damping,
+        };
+        *slot = value;
     }
 
     /// Effective mass M = m·L1A + ρ·L2·H·L1A·L1/3 (MODEL.md §4), kg·m.
