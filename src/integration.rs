@@ -155,6 +155,8 @@ pub enum StepError<T> {
     },
 }
 
+impl<T: Real> core::error::Error for StepError<T> {}
+
 impl<T: Real> fmt::Display for StepError<T> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {

@@ -34,7 +34,7 @@ pub mod tuning;
 pub use model::{device, material, safety, statics};
 
 pub use controller::{
-    Boot, Controller, Event, Fault, Inputs, Output, Phase, Plan, Setting, Settings,
+    Boot, Controller, Event, Fault, FaultStage, Inputs, Output, Phase, Plan, Setting, Settings,
 };
 #[cfg(feature = "trim")]
 pub use controller::{TrimJob, TrimResult};

@@ -21,6 +21,17 @@ pub enum StageError<S, P> {
     Pin(P),
 }
 
+impl<S: core::fmt::Debug, P: core::fmt::Debug> core::fmt::Display for StageError<S, P> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            StageError::Bus(e) => write!(f, "DAC bus error: {e:?}"),
+            StageError::Pin(e) => write!(f, "amplifier-enable line error: {e:?}"),
+        }
+    }
+}
+
+impl<S: core::fmt::Debug, P: core::fmt::Debug> core::error::Error for StageError<S, P> {}
+
 /// The DAC and the amplifier's enable line.
 pub struct OutputStage<SPI, EN> {
     dac: Dac8551<SPI>,

@@ -30,6 +30,8 @@ pub enum TrimError {
     NotConverged { measured_hz: f32, target_hz: f32 },
 }
 
+impl core::error::Error for TrimError {}
+
 impl fmt::Display for TrimError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {

@@ -32,6 +32,8 @@ pub enum TuneError<T> {
     OutOfRange { target_hz: T, low_hz: T, high_hz: T },
 }
 
+impl<T: Real> core::error::Error for TuneError<T> {}
+
 impl<T: Real> fmt::Display for TuneError<T> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {

@@ -501,6 +501,35 @@ fn bad_targets_and_settings_are_refused_before_anything_is_driven() {
         let fault = start(settings).unwrap_err();
         assert!(matches!(fault, Fault::Setting { .. }), "{fault}");
     }
+    // A plan too long (beyond MAX_PLAN_TICKS) names the part that makes it so.
+    for (settings, setting) in [
+        (
+            Settings {
+                slew_volts_per_second: 1e-3,
+                ..base
+            },
+            Setting::SlewVoltsPerSecond,
+        ),
+        (
+            Settings {
+                settle_seconds: 1e6,
+                ..base
+            },
+            Setting::SettleSeconds,
+        ),
+        (
+            Settings {
+                check_seconds: 1e6,
+                ..base
+            },
+            Setting::CheckSeconds,
+        ),
+    ] {
+        match start(settings).unwrap_err() {
+            Fault::Setting { setting: named, .. } => assert_eq!(named, setting),
+            other => panic!("{setting:?}: {other}"),
+        }
+    }
     // A tick rate far too slow for the device (the model cannot step it stably, even in
     // substeps): named as the tick rate, not as a failed plan.
     let fault = start(Settings {

@@ -15,8 +15,8 @@ use std::collections::BTreeMap;
 use common::{made_table, random_device, Rng};
 use de_resonator::table::{self, HEADER_BYTES, POINT_BYTES};
 use de_resonator::{
-    Amplifier, Controller, Device, DeviceParams, Drive, Event, Fault, Inputs, Integrator, Method,
-    Settings, State, Tuner,
+    Amplifier, Controller, Device, DeviceParams, Drive, Event, Fault, FaultStage, Inputs,
+    Integrator, Method, Settings, State, Tuner,
 };
 
 /// A value that breaks something: NaN, infinities, zero, negatives, huge and tiny.
@@ -254,6 +254,7 @@ fn fuzz_the_controller() {
         let mut c = match started {
             Ok((c, _)) => c,
             Err(fault) => {
+                assert_eq!(fault.stage(), FaultStage::Boot, "{fault}");
                 *tally.refused.entry(kind(&fault)).or_default() += 1;
                 continue;
             }

@@ -125,6 +125,42 @@ impl fmt::Display for Fault {
 
 impl core::error::Error for Fault {}
 
+/// When a fault can arise: at boot (a refusal, before anything is driven) or while running
+/// (a trip, from 0 V on).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum FaultStage {
+    Boot,
+    Running,
+}
+
+impl Fault {
+    /// Whether this is a boot refusal or a trip while running. A trim's retune runs the boot's
+    /// checks again while running: its `Setting`, `Tune`, `Device` and `AboveSafe` faults are
+    /// boot-kind refusals that stop a running drive.
+    pub fn stage(&self) -> FaultStage {
+        match self {
+            Fault::Device(_)
+            | Fault::Setting { .. }
+            | Fault::Table(_)
+            | Fault::Tune(_)
+            | Fault::Disagree { .. }
+            | Fault::AboveSafe { .. }
+            | Fault::PlanCrosses { .. }
+            | Fault::PlanFailed(_)
+            | Fault::Amplifier(_) => FaultStage::Boot,
+            Fault::Gate { .. }
+            | Fault::Sensor { .. }
+            | Fault::SensorImplausible { .. }
+            | Fault::SensorStuck { .. }
+            | Fault::AmplifierDisagrees { .. }
+            | Fault::Limit { .. }
+            | Fault::Bus
+            | Fault::Trim(_) => FaultStage::Running,
+        }
+    }
+}
+
 /// Something that happened at a tick, said once.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

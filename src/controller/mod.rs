@@ -32,7 +32,7 @@ mod trim;
 mod watch;
 
 pub use boot::Boot;
-pub use fault::{Event, Fault, Output};
+pub use fault::{Event, Fault, FaultStage, Output};
 pub use plan::{Plan, MAX_PLAN_TICKS};
 pub use settings::{Setting, Settings, F32_GUARD, MAX_TRIMS, TRIM_SECANT_STEP};
 #[cfg(feature = "trim")]

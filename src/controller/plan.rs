@@ -64,10 +64,16 @@ impl Plan {
         let ac_tick = libm::ceilf(ramp_ticks) + s.settle_seconds * s.tick_hz;
         let check_ticks = s.check_seconds * s.tick_hz;
         if !(ac_tick + check_ticks < MAX_PLAN_TICKS) {
-            return Err(Fault::Setting {
-                setting: Setting::SlewVoltsPerSecond,
-                value: s.slew_volts_per_second,
-            });
+            // Name the part that makes the plan too long: the ramp, the hold or the check.
+            let settle_ticks = s.settle_seconds * s.tick_hz;
+            let (setting, value) = if check_ticks >= ramp_ticks.max(settle_ticks) {
+                (Setting::CheckSeconds, s.check_seconds)
+            } else if settle_ticks >= ramp_ticks {
+                (Setting::SettleSeconds, s.settle_seconds)
+            } else {
+                (Setting::SlewVoltsPerSecond, s.slew_volts_per_second)
+            };
+            return Err(Fault::Setting { setting, value });
         }
         let plan = Plan {
             start_tick: 0,
