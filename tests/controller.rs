@@ -501,6 +501,36 @@ fn bad_targets_and_settings_are_refused_before_anything_is_driven() {
         let fault = start(settings).unwrap_err();
         assert!(matches!(fault, Fault::Setting { .. }), "{fault}");
     }
+    // Settings that can be off are `None` when off; on, they must make sense.
+    for (settings, setting) in [
+        (
+            Settings {
+                stuck_samples: Some(0),
+                ..base
+            },
+            Setting::StuckSamples,
+        ),
+        (
+            Settings {
+                trim_tolerance: Some(-1e-3),
+                ..base
+            },
+            Setting::TrimTolerance,
+        ),
+        (
+            Settings {
+                trim_tolerance: Some(1e-3),
+                trim_every_seconds: Some(0.0),
+                ..base
+            },
+            Setting::TrimEverySeconds,
+        ),
+    ] {
+        match start(settings).unwrap_err() {
+            Fault::Setting { setting: named, .. } => assert_eq!(named, setting),
+            other => panic!("{setting:?}: {other}"),
+        }
+    }
     // A plan too long (beyond MAX_PLAN_TICKS) names the part that makes it so.
     for (settings, setting) in [
         (
@@ -616,7 +646,7 @@ fn a_trim_on_a_stiffer_plant_never_lifts_the_ceiling() {
     let settings = Settings {
         ac_volts: 100.0,
         ac_hz: 29.0,
-        trim_tolerance: 1e-3,
+        trim_tolerance: Some(1e-3),
         ..Settings::for_target(32.5)
     };
     let table = common::made_table(nominal, 0.05, 64);

@@ -145,9 +145,9 @@ fn settings(
         s.ac_hz = (f0 * rng.range(0.1, 2.5)).min(0.45 * f64::from(s.tick_hz)) as f32;
     }
     if rng.unit() < 0.25 {
-        s.trim_tolerance = 1e-3;
+        s.trim_tolerance = Some(1e-3);
         s.trim_window_seconds = 0.25;
-        s.trim_every_seconds = [0.0, 0.5][rng.below(2)];
+        s.trim_every_seconds = [None, Some(0.5)][rng.below(2)];
     }
     if rng.unit() < 0.15 {
         let v = wild(rng) as f32;

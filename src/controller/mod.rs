@@ -205,14 +205,10 @@ impl Controller {
         if let Some(stretch) = inputs.stretch {
             let stuck = self.settings.stuck_samples;
             let estimate = self.estimate.as_ref();
-            if let Some(fault) = self.watch.stretch(
-                k,
-                stretch,
-                volts,
-                &self.flashed,
-                estimate,
-                (stuck > 0).then_some(stuck),
-            ) {
+            if let Some(fault) =
+                self.watch
+                    .stretch(k, stretch, volts, &self.flashed, estimate, stuck)
+            {
                 return self.fault(fault);
             }
         }
@@ -285,14 +281,14 @@ impl Controller {
 
     /// Whether a trim was asked for.
     fn trim_wanted(&self) -> bool {
-        self.settings.trim_tolerance > 0.0
+        self.settings.trim_tolerance.is_some()
     }
 
     /// When the next trim falls, the AC starting at tick `k`.
     fn next_trim(&self, k: u32) -> Option<u32> {
         let s = &self.settings;
-        let every = (s.trim_every_seconds * s.tick_hz) as u32;
-        (self.trim_wanted() && s.trim_every_seconds > 0.0).then(|| k.saturating_add(every.max(1)))
+        let every = s.trim_every_seconds.filter(|_| self.trim_wanted())?;
+        Some(k.saturating_add(((every * s.tick_hz) as u32).max(1)))
     }
 
     /// Whether the bias planned is the one the estimate gives for the target.

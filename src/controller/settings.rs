@@ -30,12 +30,12 @@ pub struct Settings {
     /// Largest difference between the amplifier's monitored output and the last command,
     /// V, for more than `AMPLIFIER_TICKS` ticks in a row (a saturated or failed amplifier).
     pub amplifier_tolerance_volts: f32,
-    /// Bit-identical sensor samples in a row that mean a stuck sensor (0: no such check; a
-    /// real sensor's noise never repeats that long).
-    pub stuck_samples: u32,
-    /// Closed-loop trim: the relative frequency error to reach (0: no trim). Needs the
+    /// Bit-identical sensor samples in a row that mean a stuck sensor (`None`: no such
+    /// check; a real sensor's noise never repeats that long).
+    pub stuck_samples: Option<u32>,
+    /// Closed-loop trim: the relative frequency error to reach (`None`: no trim). Needs the
     /// stretch sensor and the `cross_check` stage (the model is re-solved on the chip).
-    pub trim_tolerance: f32,
+    pub trim_tolerance: Option<f32>,
     /// The ring measured after each pulse, s (at most `MAX_WINDOW` ticks).
     pub trim_window_seconds: f32,
     /// The pulse's drop below the bias, V, for half a period of the target.
@@ -44,9 +44,9 @@ pub struct Settings {
     /// plant softer than the model by a factor r has its limit √r lower, so a fraction p
     /// covers plants down to r = p².
     pub trim_probe_fraction: f32,
-    /// Trim again after this long of AC drive, s (0: once): for a plant that drifts, as a
-    /// viscoelastic membrane creeps. The AC pauses while the ring is measured.
-    pub trim_every_seconds: f32,
+    /// Trim again after this long of AC drive, s (`None`: once): for a plant that drifts,
+    /// as a viscoelastic membrane creeps. The AC pauses while the ring is measured.
+    pub trim_every_seconds: Option<f32>,
 }
 
 /// The f32 solve's allowance: the cap is (1 − margin)·(1 − F32_GUARD)·Φlimit in f32, so it
@@ -81,19 +81,22 @@ impl Settings {
             check_seconds: 0.5,
             agreement: 1e-4,
             amplifier_tolerance_volts: 200.0,
-            stuck_samples: 100,
-            trim_tolerance: 0.0,
+            stuck_samples: Some(100),
+            trim_tolerance: None,
             trim_window_seconds: 0.5,
             trim_pulse_volts: 200.0,
             trim_probe_fraction: 0.5,
-            trim_every_seconds: 0.0,
+            trim_every_seconds: None,
         }
     }
 
-    /// One setting's value (`stuck_samples` as a number).
+    /// One setting's value; a setting that is off (`None`) reads 0, as settings files
+    /// write it.
     pub fn get(&self, setting: Setting) -> f32 {
         match setting {
-            Setting::StuckSamples => self.stuck_samples as f32,
+            Setting::StuckSamples => self.stuck_samples.map_or(0.0, |n| n as f32),
+            Setting::TrimTolerance => self.trim_tolerance.unwrap_or(0.0),
+            Setting::TrimEverySeconds => self.trim_every_seconds.unwrap_or(0.0),
             other => {
                 let mut copy = *self;
                 copy.slot_mut(other).map_or(f32::NAN, |value| *value)
@@ -101,12 +104,19 @@ impl Settings {
         }
     }
 
-    /// Set one setting (`stuck_samples` rounded down, saturating).
+    /// Set one setting; 0 turns off one that can be off (`stuck_samples` is rounded
+    /// down, saturating).
     pub fn set(&mut self, setting: Setting, value: f32) {
-        if setting == Setting::StuckSamples {
-            self.stuck_samples = value as u32;
-        } else if let Some(slot) = self.slot_mut(setting) {
-            *slot = value;
+        let on = (value != 0.0).then_some(value);
+        match setting {
+            Setting::StuckSamples => self.stuck_samples = on.map(|n| n as u32),
+            Setting::TrimTolerance => self.trim_tolerance = on,
+            Setting::TrimEverySeconds => self.trim_every_seconds = on,
+            other => {
+                if let Some(slot) = self.slot_mut(other) {
+                    *slot = value;
+                }
+            }
         }
     }
 
@@ -122,12 +132,13 @@ impl Settings {
             Setting::CheckSeconds => &mut self.check_seconds,
             Setting::Agreement => &mut self.agreement,
             Setting::AmplifierToleranceVolts => &mut self.amplifier_tolerance_volts,
-            Setting::TrimTolerance => &mut self.trim_tolerance,
+
             Setting::TrimWindowSeconds => &mut self.trim_window_seconds,
             Setting::TrimPulseVolts => &mut self.trim_pulse_volts,
             Setting::TrimProbeFraction => &mut self.trim_probe_fraction,
-            Setting::TrimEverySeconds => &mut self.trim_every_seconds,
-            Setting::StuckSamples => return None,
+            Setting::StuckSamples | Setting::TrimTolerance | Setting::TrimEverySeconds => {
+                return None
+            }
         })
     }
 
@@ -146,23 +157,35 @@ impl Settings {
             Setting::AmplifierToleranceVolts,
             settings.amplifier_tolerance_volts,
         )?;
-        let trim = non_negative(Setting::TrimTolerance, settings.trim_tolerance)?;
-        if trim > 0.0 && !cfg!(feature = "trim") {
-            // Built without the trim: asking for it is an error, not a silent no.
+        if let Some(trim) = settings.trim_tolerance {
+            positive(Setting::TrimTolerance, trim)?;
+            if !cfg!(feature = "trim") {
+                // Built without the trim: asking for it is an error, not a silent no.
+                return Err(Fault::Setting {
+                    setting: Setting::TrimTolerance,
+                    value: trim,
+                });
+            }
+        }
+        if settings.stuck_samples == Some(0) {
             return Err(Fault::Setting {
-                setting: Setting::TrimTolerance,
-                value: trim,
+                setting: Setting::StuckSamples,
+                value: 0.0,
             });
         }
         non_negative(Setting::TrimPulseVolts, settings.trim_pulse_volts)?;
         let window = positive(Setting::TrimWindowSeconds, settings.trim_window_seconds)?;
-        if trim > 0.0 && !(window * tick_hz <= crate::trim::MAX_WINDOW as f32) {
+        if settings.trim_tolerance.is_some()
+            && !(window * tick_hz <= crate::trim::MAX_WINDOW as f32)
+        {
             return Err(Fault::Setting {
                 setting: Setting::TrimWindowSeconds,
                 value: window,
             });
         }
-        non_negative(Setting::TrimEverySeconds, settings.trim_every_seconds)?;
+        if let Some(every) = settings.trim_every_seconds {
+            positive(Setting::TrimEverySeconds, every)?;
+        }
         let probe = positive(Setting::TrimProbeFraction, settings.trim_probe_fraction)?;
         if !(probe <= 1.0) {
             return Err(Fault::Setting {

@@ -127,8 +127,8 @@ impl TrimJob {
         let measured_hz = ring_frequency_hz(window, s.tick_hz).map_err(Fault::Trim)?;
         let shear_modulus = estimate_shear_modulus(&self.params, self.bias_volts, measured_hz)
             .map_err(Fault::Trim)?;
-        let converged =
-            self.tuned && (measured_hz - s.target_hz).abs() <= s.trim_tolerance * s.target_hz;
+        let tolerance = s.trim_tolerance.unwrap_or(0.0);
+        let converged = self.tuned && (measured_hz - s.target_hz).abs() <= tolerance * s.target_hz;
         if converged {
             return Ok(TrimResult::Converged {
                 measured_hz,
