@@ -40,6 +40,16 @@ for i in "${!tiers[@]}"; do
               if (flash > 48 * 1024 || ram > 8 * 1024) { print "over 48 KB / 8 KB" > "/dev/stderr"; exit 1 } }'
 done
 
+step "the tick's budget with the trim on: a whole trim cycle counted under -icount"
+QEMU_ICOUNT=1 cargo run --locked --release -q --bin count --features trim >../target/count-trim.log 2>&1 ||
+    { cat ../target/count-trim.log; echo "count (trim) failed" >&2; exit 1; }
+grep -E "trim" ../target/count-trim.log
+worst=$(sed -n 's/.*worst over a whole trim cycle: \([0-9]*\) instructions.*/\1/p' ../target/count-trim.log)
+if [ -z "$worst" ] || [ "$worst" -ge 1500 ]; then
+    echo "the worst tick of a trim cycle is ${worst:-unknown} instructions: the budget is 1,500" >&2
+    exit 1
+fi
+
 for bin in firmware check; do
     step "run $bin in QEMU"
     status=0

@@ -346,8 +346,8 @@ impl Controller {
         let from = k.saturating_add(1);
         self.plan.pulse_ticks = (from, from.saturating_add(pulse));
         self.plan.pulse_volts = s.trim_pulse_volts;
+        // No clearing (512 stores): every tick of the window writes its slot.
         self.trim.window_from = from.saturating_add(pulse);
-        self.trim.window = [f32::NAN; crate::trim::MAX_WINDOW];
         self.trim.handed_out = false;
         self.trim.result = None;
         self.state = State::Measuring;
@@ -361,8 +361,8 @@ impl Controller {
             return;
         };
         let at = at as usize;
-        if let (Some(x), Some(slot)) = (stretch, self.trim.window.get_mut(at)) {
-            *slot = x;
+        if let Some(slot) = self.trim.window.get_mut(at) {
+            *slot = stretch.unwrap_or(f32::NAN);
         }
         if at + 1 >= len {
             self.state = State::Solving;
@@ -409,11 +409,11 @@ impl Controller {
                 shear_modulus,
                 bias_volts: next_bias_volts,
                 max_volts,
+                device,
             } => {
                 self.trim.params.shear_modulus = shear_modulus;
                 self.trim.count = self.trim.count.saturating_add(1);
                 self.trim.previous = Some((bias_volts * bias_volts, measured_hz));
-                let device = Device::new(self.trim.params).map_err(Fault::Device)?;
                 let plan = Plan {
                     start_tick: k.saturating_add(1),
                     start_volts: bias_volts,

@@ -70,12 +70,13 @@ pub enum TrimResult {
         shear_modulus: f32,
     },
     /// Ramp to `bias_volts` and measure again, under the cap `max_volts` (the estimate's,
-    /// never above the ceiling).
+    /// never above the ceiling); `device` is the estimate (built here, not in the tick).
     Retune {
         measured_hz: f32,
         shear_modulus: f32,
         bias_volts: f32,
         max_volts: f32,
+        device: Device<f32>,
     },
     /// The estimate needs `needed_volts` (bias and AC) above the ceiling: hold.
     AboveCeiling {
@@ -145,7 +146,8 @@ impl TrimJob {
             shear_modulus,
             ..self.params
         };
-        let tuner = Tuner::new(Device::new(params).map_err(Fault::Device)?);
+        let device = Device::new(params).map_err(Fault::Device)?;
+        let tuner = Tuner::new(device);
         let margin = guarded(s.margin);
         // The estimate may lower the cap (a softer plant), never raise it past the ceiling.
         let max_volts = tuner
@@ -186,6 +188,7 @@ impl TrimJob {
             shear_modulus,
             bias_volts,
             max_volts,
+            device,
         })
     }
 }

@@ -141,6 +141,9 @@ fn main() -> ! {
         n
     );
 
+    #[cfg(feature = "trim")]
+    trim_cycle();
+
     defmt::info!(
         "stack, deepest over all of the above, from the top of RAM: {=u32} bytes",
         stack::used_below(stack::top())
@@ -176,4 +179,74 @@ fn deepest<R>(what: &str, f: impl FnOnce() -> R) -> R {
         stack::used_below(mark)
     );
     result
+}
+
+/// A whole trim cycle (ramp to the probe bias, hold, pulse, ring, solve, retune, ... to the AC
+/// drive), the reference device itself the plant (f32 RK4 between ticks, not counted) and its
+/// stretch the sensor: the worst tick of the cycle, and the solve (outside the tick) apart.
+#[cfg(feature = "trim")]
+fn trim_cycle() {
+    use de_resonator::{Phase, Settings};
+    let Ok(amp) = amplifier() else { exit(1) };
+    let s = Settings {
+        trim_tolerance: Some(1e-3),
+        ac_volts: 100.0,
+        ac_hz: 40.0,
+        ..settings()
+    };
+    let Ok((mut c, _)) = Controller::start(device(), TABLE, amp, s) else {
+        exit(1)
+    };
+    let Ok(dev) = Device::new(device()) else {
+        exit(1)
+    };
+    let rest = State {
+        stretch: dev.prestretch_1(),
+        velocity: 0.0,
+    };
+    let range = dev.model_range();
+    let drive = Drive::constant(&dev, 0.0);
+    let Ok(mut plant) = Integrator::new(dev, drive, Method::Rk4, 1e-3, range, rest, true) else {
+        exit(1)
+    };
+    let (mut worst, mut worst_phase, mut solves, mut solve_most) = (0, Phase::Ramping, 0, 0);
+    for _ in 0..20_000 {
+        let phase = c.phase();
+        let sample = plant.state().stretch;
+        let mut out = None;
+        let n = count(1, || out = Some(c.tick(Inputs::stretch(black_box(sample)))));
+        if n > worst {
+            (worst, worst_phase) = (n, phase);
+        }
+        if let Some(job) = c.trim_job() {
+            let mut result = None;
+            let n = count(1, || result = Some(job.solve()));
+            solves += 1;
+            solve_most = solve_most.max(n);
+            if let Some(result) = result {
+                c.trim_done(result);
+            }
+        }
+        let volts = out.map_or(0.0, |o| o.volts);
+        if plant.set_drive(Drive::constant(&dev, volts)).is_err() || plant.step().is_err() {
+            exit(1)
+        }
+        if c.phase() == Phase::Driving || c.phase() == Phase::Faulted {
+            break;
+        }
+    }
+    if c.phase() != Phase::Driving {
+        defmt::error!("the trim cycle did not reach the AC drive: {}", c.phase());
+        exit(1)
+    }
+    defmt::info!(
+        "controller tick with trim, worst over a whole trim cycle: {=u32} instructions ({})",
+        worst,
+        worst_phase
+    );
+    defmt::info!(
+        "trim solve outside the tick ({=u32} solves): at most {=u32} instructions",
+        solves,
+        solve_most
+    );
 }
