@@ -135,12 +135,3 @@ pub struct Errors {
     /// Largest bias difference from the direct solve, as a fraction of the top bias.
     pub volts: f64,
 }
-
-/// The table as CSV for people: a header comment, then frequency and bias per line.
-pub fn csv(made: &Made) -> String {
-    let mut out = String::from("natural_frequency_hz,bias_volts\n");
-    for (hz, volts) in &made.points {
-        out += &format!("{hz},{volts}\n");
-    }
-    out
-}

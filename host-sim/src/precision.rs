@@ -96,7 +96,7 @@ pub fn studies(params: DeviceParams<f64>) -> Result<Vec<Study>, String> {
 #[derive(Clone, Debug)]
 pub struct Row {
     pub scene: &'static str,
-    pub method: String,
+    pub method: &'static str,
     pub steps_per_period: u32,
     pub step_seconds: f64,
     /// `ok`, `refused` (the guard) or `stopped` (a typed error).

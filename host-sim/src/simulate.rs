@@ -47,44 +47,69 @@ pub enum Choice {
 }
 
 impl Choice {
-    /// Every method by name: `reference`, and `rk4`, `verlet`, `implicit-midpoint` with
-    /// `-f32` or `-f64`.
-    pub fn all() -> Vec<Choice> {
-        let mut all = vec![Choice::Reference, Choice::ReferenceBdf];
-        for method in Method::ALL {
-            for single in [true, false] {
-                all.push(Choice::Core { method, single });
-            }
-        }
-        all
-    }
+    /// Every method: the references, then each core method in f32 and f64.
+    pub const ALL: [Choice; 8] = [
+        Choice::Reference,
+        Choice::ReferenceBdf,
+        Choice::Core {
+            method: Method::Rk4,
+            single: true,
+        },
+        Choice::Core {
+            method: Method::Rk4,
+            single: false,
+        },
+        Choice::Core {
+            method: Method::Verlet,
+            single: true,
+        },
+        Choice::Core {
+            method: Method::Verlet,
+            single: false,
+        },
+        Choice::Core {
+            method: Method::ImplicitMidpoint,
+            single: true,
+        },
+        Choice::Core {
+            method: Method::ImplicitMidpoint,
+            single: false,
+        },
+    ];
 
     /// The core's fixed-step methods only, f32 then f64 for each.
     pub fn core() -> Vec<Choice> {
-        Choice::all()
+        Choice::ALL
             .into_iter()
             .filter(|c| matches!(c, Choice::Core { .. }))
             .collect()
     }
 
-    pub fn name(&self) -> String {
+    /// Its name: `reference`, `reference-bdf`, and `rk4`, `verlet`, `implicit-midpoint` with
+    /// `-f32` or `-f64`.
+    pub fn name(&self) -> &'static str {
         match self {
-            Choice::Reference => "reference".into(),
-            Choice::ReferenceBdf => "reference-bdf".into(),
-            Choice::Core { method, single } => {
-                format!("{}-{}", method.name(), if *single { "f32" } else { "f64" })
-            }
+            Choice::Reference => "reference",
+            Choice::ReferenceBdf => "reference-bdf",
+            Choice::Core { method, single } => match (method, single) {
+                (Method::Rk4, true) => "rk4-f32",
+                (Method::Rk4, false) => "rk4-f64",
+                (Method::Verlet, true) => "verlet-f32",
+                (Method::Verlet, false) => "verlet-f64",
+                (Method::ImplicitMidpoint, true) => "implicit-midpoint-f32",
+                (Method::ImplicitMidpoint, false) => "implicit-midpoint-f64",
+            },
         }
     }
+}
 
-    pub fn parse(name: &str) -> Result<Choice, String> {
-        Choice::all()
-            .into_iter()
-            .find(|c| c.name() == name)
-            .ok_or_else(|| {
-                let names: Vec<String> = Choice::all().iter().map(Choice::name).collect();
-                format!("unknown method `{name}`; one of {}", names.join(", "))
-            })
+impl clap::ValueEnum for Choice {
+    fn value_variants<'a>() -> &'a [Self] {
+        &Choice::ALL
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(self.name()))
     }
 }
 
@@ -484,9 +509,12 @@ mod tests {
 
     #[test]
     fn method_names_round_trip() {
-        for choice in Choice::all() {
-            assert_eq!(Choice::parse(&choice.name()), Ok(choice));
+        use clap::ValueEnum;
+        for choice in Choice::ALL {
+            assert_eq!(Choice::from_str(choice.name(), false), Ok(choice));
         }
-        assert!(Choice::parse("euler").unwrap_err().contains("rk4-f32"));
+        assert!(Choice::from_str("euler", false).is_err());
+        let names: Vec<&str> = Choice::value_variants().iter().map(Choice::name).collect();
+        assert!(names.contains(&"rk4-f32") && names.len() == 8);
     }
 }

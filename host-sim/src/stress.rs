@@ -7,7 +7,7 @@
 //! crossing the reference saw is `missed_crossing`: listed, and counted in the summary.
 
 use de_resonator::{Device, DeviceParams, Tuner};
-use serde_json::{json, Value};
+use serde::Serialize;
 
 use crate::simulate::{simulate, Choice, RunError, Scene, Start};
 
@@ -100,44 +100,107 @@ fn cases(r: DeviceParams<f64>) -> Vec<Case> {
 
 /// Steps per small-oscillation period tried for every method; 2 is past every explicit
 /// method's stability limit.
-const STEPS_PER_PERIOD: [f64; 5] = [2.0, 8.0, 32.0, 128.0, 512.0];
+pub const STEPS_PER_PERIOD: [f64; 5] = [2.0, 8.0, 32.0, 128.0, 512.0];
 
 /// Simulated time, in periods of the small oscillation.
-const PERIODS: f64 = 20.0;
+pub const PERIODS: f64 = 20.0;
 
-/// Run every case on `base`; the report as JSON, and whether any run failed silently.
-pub fn run(base: DeviceParams<f64>) -> Result<(Value, bool), String> {
-    let results = crate::work::map("stress", &cases(base), run_case);
-    let mut rows = Vec::new();
-    let mut silent = false;
-    for result in results {
-        let (row, failed) = result?;
-        rows.push(row);
-        silent |= failed;
-    }
-    let count = |verdict: &str| {
-        rows.iter()
-            .flat_map(|case| case["runs"].as_array().cloned().unwrap_or_default())
-            .filter(|run| run["verdict"] == verdict)
-            .count()
-    };
-    let summary = json!({
-        "runs": rows.len() * Choice::core().len() * STEPS_PER_PERIOD.len(),
-        "stable": count("stable"),
-        "refused": count("refused"),
-        "stopped": count("stopped") + count("stopped_after_crossing"),
-        "missed_crossing": count("missed_crossing"),
-        "failed_silently": count("failed_silently"),
-    });
-    Ok((
-        json!({ "periods": PERIODS, "summary": summary, "cases": rows }),
-        silent,
-    ))
+/// What a run at one step came to.
+#[derive(Serialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    /// Completed, within the swing of the reference at the end, crossings seen as the
+    /// reference saw them.
+    Stable,
+    /// Refused by the guard (the step is past the method's stability limit).
+    Refused,
+    /// Ended by a typed error.
+    Stopped,
+    /// Ended by a typed error after the monitor had flagged a crossing.
+    StoppedAfterCrossing,
+    /// Completed without the monitor seeing a crossing the reference saw.
+    MissedCrossing,
+    /// An error beyond the whole swing, or not finite: must never happen.
+    FailedSilently,
 }
 
-/// One case: its JSON row, and whether any run failed silently.
-fn run_case(case: &Case) -> Result<(Value, bool), String> {
-    let mut silent = false;
+impl Verdict {
+    pub fn name(self) -> &'static str {
+        match self {
+            Verdict::Stable => "stable",
+            Verdict::Refused => "refused",
+            Verdict::Stopped => "stopped",
+            Verdict::StoppedAfterCrossing => "stopped_after_crossing",
+            Verdict::MissedCrossing => "missed_crossing",
+            Verdict::FailedSilently => "failed_silently",
+        }
+    }
+}
+
+/// One method at one step.
+#[derive(Serialize, Debug)]
+pub struct RunReport {
+    pub method: &'static str,
+    pub steps_per_period: f64,
+    pub verdict: Verdict,
+    pub final_error_over_swing: Option<f64>,
+    pub monitor_crossed: Option<bool>,
+}
+
+/// The reference a case is measured against.
+#[derive(Serialize, Debug)]
+pub struct ReferenceRun {
+    pub method: &'static str,
+    pub run_seconds: f64,
+    pub min_stretch: f64,
+    pub max_stretch: f64,
+    pub first_limit: Option<crate::cmd::Crossing>,
+}
+
+/// One case and every run of it.
+#[derive(Serialize, Debug)]
+pub struct CaseReport {
+    pub case: &'static str,
+    pub what: &'static str,
+    pub natural_frequency_hz: f64,
+    pub bias_volts: f64,
+    pub reference: ReferenceRun,
+    pub runs: Vec<RunReport>,
+}
+
+/// How many runs came to each verdict.
+#[derive(Serialize, Debug, Default)]
+pub struct Summary {
+    pub runs: usize,
+    pub stable: usize,
+    pub refused: usize,
+    /// Stopped, with or without a crossing first.
+    pub stopped: usize,
+    pub missed_crossing: usize,
+    pub failed_silently: usize,
+}
+
+/// Every case on `base`, in parallel, with a progress bar.
+pub fn run(base: DeviceParams<f64>) -> Result<(Vec<CaseReport>, Summary), String> {
+    let cases = crate::work::map("stress", &cases(base), run_case)
+        .into_iter()
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut summary = Summary::default();
+    for run in cases.iter().flat_map(|c| &c.runs) {
+        summary.runs += 1;
+        match run.verdict {
+            Verdict::Stable => summary.stable += 1,
+            Verdict::Refused => summary.refused += 1,
+            Verdict::Stopped | Verdict::StoppedAfterCrossing => summary.stopped += 1,
+            Verdict::MissedCrossing => summary.missed_crossing += 1,
+            Verdict::FailedSilently => summary.failed_silently += 1,
+        }
+    }
+    Ok((cases, summary))
+}
+
+/// One case: the reference, then every core method at every step.
+fn run_case(case: &Case) -> Result<CaseReport, String> {
     let device = Device::new(case.params).map_err(|e| format!("{}: {e}", case.name))?;
     let tuner = Tuner::new(device);
     let limit = tuner.limit().at.volts;
@@ -162,17 +225,15 @@ fn run_case(case: &Case) -> Result<(Value, bool), String> {
     };
     let reference = simulate(&scene, solver, period / 64.0)
         .map_err(|e| format!("{}: reference: {e}", case.name))?;
-    // A run has failed silently if its error exceeds the whole swing of the motion (and
-    // 1e-4 in stretch, for scenes that barely move).
     let swing = (reference.max_stretch - reference.min_stretch).max(1e-4);
     let mut runs = Vec::new();
     for choice in Choice::core() {
         for per_period in STEPS_PER_PERIOD {
             let (verdict, error, caught) = match simulate(&scene, choice, period / per_period) {
-                Err(RunError::Refused(_)) => ("refused", None, None),
-                Err(RunError::Failed(_)) => ("stopped", None, None),
+                Err(RunError::Refused(_)) => (Verdict::Refused, None, None),
+                Err(RunError::Failed(_)) => (Verdict::Stopped, None, None),
                 Ok(out) if out.stopped.is_some() => (
-                    "stopped_after_crossing",
+                    Verdict::StoppedAfterCrossing,
                     None,
                     Some(out.first_limit.is_some()),
                 ),
@@ -181,64 +242,36 @@ fn run_case(case: &Case) -> Result<(Value, bool), String> {
                     let fine = error.is_finite() && error <= 1.0;
                     let crossed = out.first_limit.is_some();
                     let verdict = if !fine {
-                        "failed_silently"
+                        Verdict::FailedSilently
                     } else if reference.first_limit.is_some() && !crossed {
-                        "missed_crossing"
+                        Verdict::MissedCrossing
                     } else {
-                        "stable"
+                        Verdict::Stable
                     };
-                    silent |= !fine;
                     (verdict, Some(error), Some(crossed))
                 }
             };
-            runs.push(json!({
-                "method": choice.name(),
-                "steps_per_period": per_period,
-                "verdict": verdict,
-                "final_error_over_swing": error,
-                "monitor_crossed": caught,
-            }));
+            runs.push(RunReport {
+                method: choice.name(),
+                steps_per_period: per_period,
+                verdict,
+                final_error_over_swing: error,
+                monitor_crossed: caught,
+            });
         }
     }
-    let row = json!({
-        "case": case.name,
-        "what": case.what,
-        "natural_frequency_hz": f0,
-        "bias_volts": bias,
-        "reference": {
-            "method": solver.name(),
-            "run_seconds": reference.run_seconds,
-            "min_stretch": reference.min_stretch,
-            "max_stretch": reference.max_stretch,
-            "first_limit": reference.first_limit.map(|(m, t)| json!({"mode": m.name(), "time": t})),
+    Ok(CaseReport {
+        case: case.name,
+        what: case.what,
+        natural_frequency_hz: f0,
+        bias_volts: bias,
+        reference: ReferenceRun {
+            method: solver.name(),
+            run_seconds: reference.run_seconds,
+            min_stretch: reference.min_stretch,
+            max_stretch: reference.max_stretch,
+            first_limit: crate::cmd::Crossing::of(reference.first_limit),
         },
-        "runs": runs,
-    });
-    Ok((row, silent))
-}
-
-/// A short table for people: one line a case and method, verdicts by steps per period.
-pub fn table(report: &Value) -> String {
-    let mut out = String::from("case                 method                    ");
-    for n in STEPS_PER_PERIOD {
-        out += &format!("{:>24}", format!("{n}/period"));
-    }
-    out.push('\n');
-    for case in report["cases"].as_array().into_iter().flatten() {
-        let runs = case["runs"].as_array().cloned().unwrap_or_default();
-        for chunk in runs.chunks(STEPS_PER_PERIOD.len()) {
-            let method = chunk[0]["method"].as_str().unwrap_or("");
-            out += &format!("{:<21}{:<26}", case["case"].as_str().unwrap_or(""), method);
-            for run in chunk {
-                let cell = match run["final_error_over_swing"].as_f64() {
-                    Some(e) => format!("{} {e:.1e}", run["verdict"].as_str().unwrap_or("")),
-                    None => run["verdict"].as_str().unwrap_or("").to_string(),
-                };
-                out += &format!("{cell:>24}");
-            }
-            out.push('\n');
-        }
-    }
-    out += &format!("\nsummary: {}", report["summary"]);
-    out
+        runs,
+    })
 }

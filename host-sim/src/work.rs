@@ -1,10 +1,8 @@
 //! Long work: independent jobs over the machine's cores, with a progress bar on stderr (shown
 //! only on a terminal, so pipes and JSON consumers see nothing of it).
 
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
-
 use indicatif::{ProgressBar, ProgressStyle};
+use rayon::prelude::*;
 
 /// A progress bar of `len` jobs titled `what`, on stderr (hidden when it is not a terminal).
 pub fn bar(what: &str, len: usize) -> ProgressBar {
@@ -15,31 +13,20 @@ pub fn bar(what: &str, len: usize) -> ProgressBar {
     bar
 }
 
-/// `job` applied to every item, in order, on all cores, with a progress bar titled `what`.
+/// `job` applied to every item, in order, on all cores (rayon), with a progress bar titled
+/// `what`.
 pub fn map<I: Sync, O: Send>(what: &str, items: &[I], job: impl Fn(&I) -> O + Sync) -> Vec<O> {
     let bar = bar(what, items.len());
-    let next = AtomicUsize::new(0);
-    let done: Mutex<Vec<Option<O>>> = Mutex::new(items.iter().map(|_| None).collect());
-    let workers = std::thread::available_parallelism().map_or(1, |n| n.get());
-    std::thread::scope(|scope| {
-        for _ in 0..workers.min(items.len()) {
-            scope.spawn(|| loop {
-                let k = next.fetch_add(1, Ordering::Relaxed);
-                let Some(item) = items.get(k) else { break };
-                let out = job(item);
-                if let Ok(mut done) = done.lock() {
-                    done[k] = Some(out);
-                }
-                bar.inc(1);
-            });
-        }
-    });
+    let out = items
+        .par_iter()
+        .map(|item| {
+            let out = job(item);
+            bar.inc(1);
+            out
+        })
+        .collect();
     bar.finish_and_clear();
-    done.into_inner()
-        .unwrap_or_default()
-        .into_iter()
-        .flatten()
-        .collect()
+    out
 }
 
 #[cfg(test)]

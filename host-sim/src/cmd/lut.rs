@@ -1,0 +1,134 @@
+//! `lut`: the tuning table the firmware flashes (layout: the core's `table` module), from the
+//! f64 model, with its interpolation error against the direct solve.
+
+use std::fmt;
+use std::path::PathBuf;
+
+use clap::Args;
+use serde::Serialize;
+
+use super::{sig, DeviceArgs, MarginArgs, Report};
+use crate::lut;
+
+/// How `lut` writes the table.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum LutFormat {
+    Bin,
+    Csv,
+}
+
+#[derive(Args, Debug)]
+pub struct LutArgs {
+    /// Output file.
+    #[arg(long, value_name = "FILE")]
+    pub out: PathBuf,
+    /// Number of points (2 to 1024). Default: the fewest of 64, 128, … 1024 that
+    /// interpolate within 1e-5 in frequency.
+    #[arg(long, value_name = "N")]
+    pub points: Option<usize>,
+    /// `bin` (for flashing) or `csv` (for people).
+    #[arg(long, value_enum, default_value_t = LutFormat::Bin)]
+    pub format: LutFormat,
+    #[command(flatten)]
+    pub device: DeviceArgs,
+    #[command(flatten)]
+    pub margin: MarginArgs,
+}
+
+/// One point of the table, as the CSV has it.
+#[derive(Serialize, Debug, Clone, Copy)]
+pub struct Point {
+    pub natural_frequency_hz: f32,
+    pub bias_volts: f32,
+}
+
+/// The table's error against the direct solve.
+#[derive(Serialize, Debug)]
+pub struct Interpolation {
+    /// Largest relative error of f at the table's bias.
+    pub frequency: f64,
+    pub worst_hz: f64,
+    /// Largest bias difference, as a fraction of the top bias.
+    pub volts_of_top: f64,
+}
+
+/// What `lut` reports.
+#[derive(Serialize, Debug)]
+pub struct LutReport {
+    #[serde(skip)]
+    pub device: String,
+    pub file: String,
+    pub points: usize,
+    pub bytes: usize,
+    pub crc32: String,
+    pub margin: f64,
+    /// First and last point.
+    pub frequency_hz: [f32; 2],
+    pub bias_volts: [f32; 2],
+    pub interpolation_error: Interpolation,
+}
+
+impl fmt::Display for LutReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "device          {}\n\
+             table           {} points, {} bytes, CRC-32 {} -> {}\n\
+             covers          {} Hz at {} V .. {} Hz at {} V (margin {})\n\
+             interpolation   f at the table's bias within {:.2e} of the target (worst at {} Hz);\n\
+             \x20               bias within {:.2e} of the top bias from the direct solve",
+            self.device,
+            self.points,
+            self.bytes,
+            self.crc32,
+            self.file,
+            sig(f64::from(self.frequency_hz[0])),
+            sig(f64::from(self.bias_volts[0])),
+            sig(f64::from(self.frequency_hz[1])),
+            sig(f64::from(self.bias_volts[1])),
+            self.margin,
+            self.interpolation_error.frequency,
+            sig(self.interpolation_error.worst_hz),
+            self.interpolation_error.volts_of_top,
+        )
+    }
+}
+
+impl Report for LutReport {}
+
+pub fn lut(args: &LutArgs) -> Result<LutReport, String> {
+    let (params, name) = args.device.params()?;
+    let margin = args.margin.margin;
+    let made = lut::make(params, margin, args.points).map_err(|e| format!("{name}: {e}"))?;
+    let points: Vec<Point> = made
+        .points
+        .iter()
+        .map(|&(natural_frequency_hz, bias_volts)| Point {
+            natural_frequency_hz,
+            bias_volts,
+        })
+        .collect();
+    let written = match args.format {
+        LutFormat::Bin => made.bytes.clone(),
+        LutFormat::Csv => super::csv(&points)?,
+    };
+    std::fs::write(&args.out, written)
+        .map_err(|e| format!("cannot write {}: {e}", args.out.display()))?;
+    let first = made.points.first().copied().unwrap_or((f32::NAN, f32::NAN));
+    let last = made.points.last().copied().unwrap_or((f32::NAN, f32::NAN));
+    Ok(LutReport {
+        device: name,
+        file: args.out.display().to_string(),
+        points: made.points.len(),
+        bytes: made.bytes.len(),
+        crc32: format!("{:#010x}", made.crc),
+        margin,
+        frequency_hz: [first.0, last.0],
+        bias_volts: [first.1, last.1],
+        interpolation_error: Interpolation {
+            frequency: made.errors.frequency,
+            worst_hz: made.errors.worst_hz,
+            volts_of_top: made.errors.volts,
+        },
+    })
+}

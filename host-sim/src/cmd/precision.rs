@@ -1,0 +1,218 @@
+//! `report`: the work-precision study (error against run time of every core method in f32
+//! and f64, against the reference); work-precision.csv and .svg, a table per scene.
+
+use std::fmt;
+use std::path::PathBuf;
+
+use clap::Args;
+use serde::Serialize;
+
+use super::{finite, write_file, DeviceArgs, Report};
+use crate::plot::{svg, Panel, Series};
+use crate::precision::{reference, rows, studies, Row};
+use crate::simulate::Choice;
+
+#[derive(Args, Debug)]
+pub struct PrecisionArgs {
+    /// Folder for the CSV and the plot (created if needed).
+    #[arg(long, value_name = "DIR", default_value = "out/report")]
+    pub out: PathBuf,
+    #[command(flatten)]
+    pub device: DeviceArgs,
+}
+
+/// The reference and its error floor.
+#[derive(Serialize, Debug)]
+pub struct ReferenceReport {
+    pub method: &'static str,
+    pub tolerance: f64,
+    /// Largest stretch difference against tolerance 1e-13.
+    pub floor: f64,
+    pub floor_is: &'static str,
+}
+
+/// One scene of the study.
+#[derive(Serialize, Debug)]
+pub struct SceneReport {
+    pub name: &'static str,
+    pub what: String,
+    pub bias_volts: f64,
+    pub ac_volts: f64,
+    pub drive_hz: f64,
+    pub base_hz: f64,
+    pub duration_seconds: f64,
+    pub reference_floor: f64,
+}
+
+/// One method at one step on one scene: the CSV's line and the JSON's row (null where the
+/// run did not complete).
+#[derive(Serialize, Debug)]
+pub struct RowReport {
+    pub scene: &'static str,
+    pub method: &'static str,
+    pub steps_per_period: u32,
+    pub step_seconds: f64,
+    /// `ok`, `refused` (the guard) or `stopped` (a typed error).
+    pub status: &'static str,
+    pub final_relative_error: Option<f64>,
+    pub max_error: Option<f64>,
+    pub phase_error_rad: Option<f64>,
+    pub run_seconds_per_simulated_second: Option<f64>,
+}
+
+impl From<&Row> for RowReport {
+    fn from(r: &Row) -> Self {
+        Self {
+            scene: r.scene,
+            method: r.method,
+            steps_per_period: r.steps_per_period,
+            step_seconds: r.step_seconds,
+            status: r.status,
+            final_relative_error: finite(r.final_relative_error),
+            max_error: finite(r.max_error),
+            phase_error_rad: finite(r.phase_error_rad),
+            run_seconds_per_simulated_second: finite(r.run_seconds_per_simulated_second),
+        }
+    }
+}
+
+/// What `report` reports.
+#[derive(Serialize, Debug)]
+pub struct PrecisionReport {
+    #[serde(skip)]
+    pub device: String,
+    pub reference: ReferenceReport,
+    pub scenes: Vec<SceneReport>,
+    pub rows: Vec<RowReport>,
+    pub csv: String,
+    pub plot: String,
+}
+
+impl fmt::Display for PrecisionReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "device  {}\n\
+             reference: DOP853 at 1e-12; its error floor (against 1e-13) is {:.1e} in stretch\n\
+             max error in stretch at 16 / 64 / 256 steps a period; run time per simulated second at 64\n",
+            self.device, self.reference.floor
+        )?;
+        for scene in &self.scenes {
+            write!(
+                f,
+                "\n{}: {}\n  {:<24}{:>10}{:>10}{:>10}{:>13}\n",
+                scene.name, scene.what, "method", "16", "64", "256", "s/sim s"
+            )?;
+            let mut methods: Vec<&str> = Vec::new();
+            for r in self.rows.iter().filter(|r| r.scene == scene.name) {
+                if !methods.contains(&r.method) {
+                    methods.push(r.method);
+                }
+            }
+            for method in methods {
+                let at = |n: u32| {
+                    self.rows.iter().find(|r| {
+                        r.scene == scene.name && r.method == method && r.steps_per_period == n
+                    })
+                };
+                let cell = |n: u32| match at(n) {
+                    Some(r) if r.status == "ok" => {
+                        r.max_error.map_or("-".into(), |e| format!("{e:.1e}"))
+                    }
+                    Some(r) => r.status.to_string(),
+                    None => "-".into(),
+                };
+                let time = at(64)
+                    .and_then(|r| r.run_seconds_per_simulated_second)
+                    .map_or("-".into(), |t| format!("{t:.1e}"));
+                writeln!(
+                    f,
+                    "  {method:<24}{:>10}{:>10}{:>10}{time:>13}",
+                    cell(16),
+                    cell(64),
+                    cell(256)
+                )?;
+            }
+        }
+        write!(f, "\nwrote {}, {}", self.csv, self.plot)
+    }
+}
+
+impl Report for PrecisionReport {}
+
+pub fn precision(args: &PrecisionArgs) -> Result<PrecisionReport, String> {
+    let (params, name) = args.device.params()?;
+    let studies = studies(params).map_err(|e| format!("{name}: {e}"))?;
+    let references = crate::work::map("reference", &studies, reference)
+        .into_iter()
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| format!("{name}: {e}"))?;
+    // Timed runs one at a time: run times measured side by side must not share the cores.
+    let methods = Choice::core();
+    let bar = crate::work::bar("timing", studies.len() * methods.len());
+    let mut all: Vec<RowReport> = Vec::new();
+    for (study, reference) in studies.iter().zip(&references) {
+        for &choice in &methods {
+            all.extend(rows(study, reference, choice).iter().map(RowReport::from));
+            bar.inc(1);
+        }
+    }
+    bar.finish_and_clear();
+    let panels: Vec<Panel> = studies
+        .iter()
+        .map(|study| {
+            let mut series: Vec<Series> = Vec::new();
+            for r in all.iter().filter(|r| r.scene == study.name) {
+                let (Some(time), Some(error)) = (r.run_seconds_per_simulated_second, r.max_error)
+                else {
+                    continue;
+                };
+                match series.iter_mut().find(|s| s.name == r.method) {
+                    Some(s) => s.points.push((time, error)),
+                    None => series.push(Series {
+                        name: r.method.into(),
+                        points: vec![(time, error)],
+                    }),
+                }
+            }
+            Panel {
+                title: study.name.into(),
+                x_label: "run time per simulated second, s".into(),
+                y_label: "max stretch error".into(),
+                log_x: true,
+                log_y: true,
+                series,
+                guides: Vec::new(),
+            }
+        })
+        .collect();
+    let csv = write_file(&args.out, "work-precision.csv", &super::csv(&all)?)?;
+    let plot = write_file(&args.out, "work-precision.svg", svg(&panels).as_bytes())?;
+    let floor = references.iter().map(|r| r.floor).fold(0.0, f64::max);
+    Ok(PrecisionReport {
+        device: name,
+        reference: ReferenceReport {
+            method: "dop853",
+            tolerance: 1e-12,
+            floor,
+            floor_is: "largest stretch difference against tolerance 1e-13",
+        },
+        scenes: studies
+            .iter()
+            .zip(&references)
+            .map(|(s, r)| SceneReport {
+                name: s.name,
+                what: s.what.clone(),
+                bias_volts: s.scene.bias_volts,
+                ac_volts: s.scene.ac_volts,
+                drive_hz: s.scene.drive_hz,
+                base_hz: s.base_hz,
+                duration_seconds: s.scene.duration_seconds,
+                reference_floor: r.floor,
+            })
+            .collect(),
+        rows: all,
+        csv,
+        plot,
+    })
+}

@@ -1,0 +1,272 @@
+//! `run`: a scene, the firmware's controller against the full plant simulator (MODEL.md §8);
+//! a short report, and what the scene asks for (a plot, the time history).
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use clap::Args;
+use serde::Serialize;
+
+use super::{finite, sig, write_file, Crossing, Report};
+use crate::hil::Run;
+use crate::plot::{svg, Panel, Series};
+use crate::scene::{self, Scene};
+
+#[derive(Args, Debug, Default)]
+pub struct RunArgs {
+    /// Scene file (TOML; see scenes/ and the README).
+    pub scene: Option<PathBuf>,
+    /// Folder for the scene's files (a subfolder per scene).
+    #[arg(long, value_name = "DIR", default_value = "out/run")]
+    pub out: PathBuf,
+}
+
+/// The plant's own limit above the final bias, and the margin to it.
+#[derive(Serialize, Debug, Clone, Copy)]
+pub struct LimitReport {
+    pub mode: &'static str,
+    pub volts: f64,
+    pub margin: f64,
+}
+
+/// Something the controller said, and when.
+#[derive(Serialize, Debug)]
+pub struct EventReport {
+    /// s.
+    pub time: f64,
+    pub what: String,
+}
+
+/// One tick of the history CSV.
+#[derive(Serialize)]
+struct HistoryRow {
+    time_s: f64,
+    stretch: f64,
+    membrane_volts: f64,
+}
+
+/// What `run` reports.
+#[derive(Serialize, Debug)]
+pub struct RunReport {
+    pub scene: String,
+    pub description: String,
+    pub simulated_seconds: f64,
+    #[serde(skip)]
+    tick_hz: f32,
+    pub ticks: u64,
+    pub target_hz: f64,
+    pub bias_volts: f64,
+    pub nominal_bias_volts: Option<f32>,
+    pub refused: Option<String>,
+    pub fault: Option<String>,
+    pub natural_frequency_hz: Option<f64>,
+    pub relative_error: Option<f64>,
+    pub limit: Option<LimitReport>,
+    pub plant_crossing: Option<Crossing>,
+    #[serde(skip)]
+    plant_crossing_description: Option<&'static str>,
+    pub final_membrane_volts: f64,
+    pub events: Vec<EventReport>,
+    pub run_seconds: f64,
+    pub files: Vec<String>,
+    /// Branches faster than 10 periods of the target (the frozen-network frequency does not
+    /// hold for them), s.
+    #[serde(skip)]
+    fast_branches: Vec<f64>,
+}
+
+impl fmt::Display for RunReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(
+            f,
+            "scene           {} ({} s simulated, controller at {} Hz)\n\
+             target          {} Hz",
+            self.scene,
+            sig(self.simulated_seconds),
+            self.tick_hz,
+            sig(self.target_hz),
+        )?;
+        match (&self.refused, &self.fault) {
+            (Some(fault), _) => writeln!(f, "refused         {fault}: 0 V throughout")?,
+            (None, Some(fault)) => writeln!(
+                f,
+                "fault           {fault}\n\
+                 \x20               output {:.1} V at the end",
+                self.final_membrane_volts
+            )?,
+            (None, None) => {
+                let hz = self.natural_frequency_hz.unwrap_or(f64::NAN);
+                let error = self.relative_error.unwrap_or(f64::NAN);
+                writeln!(
+                    f,
+                    "bias            {} V\n\
+                     natural freq    {} Hz in the plant at that bias: error {:+.1e} ({:+.4}%)",
+                    sig(self.bias_volts),
+                    sig(hz),
+                    error,
+                    100.0 * error
+                )?;
+                if let Some(l) = self.limit {
+                    writeln!(
+                        f,
+                        "margin          {:.1}% below the plant's limit ({}, {} V)",
+                        100.0 * l.margin,
+                        l.mode,
+                        sig(l.volts)
+                    )?;
+                }
+            }
+        }
+        // The frequency freezes the networks over a period: say when a branch is faster.
+        for seconds in &self.fast_branches {
+            writeln!(
+                f,
+                "note            a branch relaxes in {} s, under 10 periods: the natural \
+                 frequency above (networks frozen) does not hold for it",
+                sig(*seconds)
+            )?;
+        }
+        match (self.plant_crossing, self.plant_crossing_description) {
+            (Some(c), Some(what)) => writeln!(
+                f,
+                "plant safe      NO: {} at {} s ({what})",
+                c.mode,
+                sig(c.time)
+            )?,
+            _ => writeln!(
+                f,
+                "plant safe      yes: no check of MODEL.md §6 failed at any of {} ticks",
+                self.ticks
+            )?,
+        }
+        for e in &self.events {
+            writeln!(f, "  {:>8.3} s     {}", e.time, e.what)?;
+        }
+        write!(f, "run time        {:.3} s", self.run_seconds)?;
+        for file in &self.files {
+            write!(f, "\nwrote           {file}")?;
+        }
+        Ok(())
+    }
+}
+
+impl Report for RunReport {
+    /// A plant that left its true safe region fails the run.
+    fn failure(&self) -> Option<String> {
+        self.plant_crossing
+            .map(|c| format!("the plant crossed {} at {} s", c.mode, c.time))
+    }
+}
+
+/// The scene named (or the built-in reference scene), run.
+pub fn run(args: &RunArgs, quiet: bool) -> Result<RunReport, String> {
+    let scene = match &args.scene {
+        Some(path) => scene::load(path)?,
+        None => {
+            scene::parse(scene::REFERENCE).map_err(|e| format!("built-in reference scene: {e}"))?
+        }
+    };
+    if !quiet {
+        eprintln!(
+            "running scene {} ({} s)...",
+            scene.name, scene.run.duration_seconds
+        );
+    }
+    let run = scene.run.run()?;
+    let files = files(&scene::out_dir(&args.out, &scene), &scene, &run)?;
+    let target = f64::from(scene.run.settings.target_hz);
+    let hz = run.natural_frequency_hz;
+    Ok(RunReport {
+        scene: scene.name.clone(),
+        description: scene.description.clone(),
+        simulated_seconds: scene.run.duration_seconds,
+        tick_hz: scene.run.settings.tick_hz,
+        ticks: run.ticks,
+        target_hz: target,
+        bias_volts: run.bias_volts,
+        nominal_bias_volts: run.boot.map(|b| b.bias_volts),
+        refused: run.refused.map(|f| f.to_string()),
+        fault: run.fault.map(|f| f.to_string()),
+        natural_frequency_hz: finite(hz),
+        relative_error: finite((hz - target) / target),
+        limit: run.limit.map(|(mode, volts)| LimitReport {
+            mode: mode.name(),
+            volts,
+            margin: 1.0 - run.bias_volts / volts,
+        }),
+        plant_crossing: Crossing::of(run.plant_crossing),
+        plant_crossing_description: run.plant_crossing.map(|(mode, _)| mode.description()),
+        final_membrane_volts: run.final_membrane_volts,
+        events: run
+            .events
+            .iter()
+            .map(|e| EventReport {
+                time: e.seconds,
+                what: e.what.clone(),
+            })
+            .collect(),
+        run_seconds: run.run_seconds,
+        files,
+        fast_branches: scene
+            .run
+            .plant
+            .branches
+            .iter()
+            .map(|b| b.relaxation_seconds)
+            .filter(|&s| s * target < 10.0)
+            .collect(),
+    })
+}
+
+/// Write what a scene asked for (history CSV, plot) into `dir`; the paths written.
+fn files(dir: &Path, scene: &Scene, run: &Run) -> Result<Vec<String>, String> {
+    let mut written = Vec::new();
+    if scene.history {
+        let rows: Vec<HistoryRow> = run
+            .history
+            .iter()
+            .map(|&(time_s, stretch, membrane_volts)| HistoryRow {
+                time_s,
+                stretch,
+                membrane_volts,
+            })
+            .collect();
+        written.push(write_file(dir, "history.csv", &super::csv(&rows)?)?);
+    }
+    if scene.plot && !run.history.is_empty() {
+        let series = |name: &str, pick: fn(&(f64, f64, f64)) -> f64| Series {
+            name: name.into(),
+            points: run.history.iter().map(|h| (h.0, pick(h))).collect(),
+        };
+        let guides: Vec<(f64, String)> = run
+            .events
+            .iter()
+            .map(|e| {
+                (
+                    e.seconds,
+                    e.what.split(',').next().unwrap_or("").to_string(),
+                )
+            })
+            .collect();
+        let panels = [
+            Panel {
+                title: format!("{}: stretch of A", scene.name),
+                x_label: "time, s".into(),
+                y_label: "stretch λ".into(),
+                series: vec![series("plant", |h| h.1)],
+                guides: guides.clone(),
+                ..Panel::default()
+            },
+            Panel {
+                title: "voltage on the membrane".into(),
+                x_label: "time, s".into(),
+                y_label: "V".into(),
+                series: vec![series("amplifier output", |h| h.2)],
+                guides,
+                ..Panel::default()
+            },
+        ];
+        written.push(write_file(dir, "run.svg", svg(&panels).as_bytes())?);
+    }
+    Ok(written)
+}
