@@ -93,7 +93,7 @@ pub fn studies(params: DeviceParams<f64>) -> Result<Vec<Study>, String> {
 }
 
 /// One method at one step on one scene.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize)]
 pub struct Row {
     pub scene: &'static str,
     pub method: &'static str,
@@ -101,10 +101,12 @@ pub struct Row {
     pub step_seconds: f64,
     /// `ok`, `refused` (the guard) or `stopped` (a typed error).
     pub status: &'static str,
-    pub final_relative_error: f64,
-    pub max_error: f64,
-    pub phase_error_rad: f64,
-    pub run_seconds_per_simulated_second: f64,
+    /// The errors and the run time, where the run completed with finite values (JSON null
+    /// and an empty CSV cell otherwise).
+    pub final_relative_error: Option<f64>,
+    pub max_error: Option<f64>,
+    pub phase_error_rad: Option<f64>,
+    pub run_seconds_per_simulated_second: Option<f64>,
 }
 
 /// The reference of one scene, sampled every 1/512 period, and its own error floor.
@@ -222,10 +224,10 @@ pub fn rows(study: &Study, reference: &Reference, choice: Choice) -> Vec<Row> {
             steps_per_period: n,
             step_seconds: step,
             status: "ok",
-            final_relative_error: f64::NAN,
-            max_error: f64::NAN,
-            phase_error_rad: f64::NAN,
-            run_seconds_per_simulated_second: f64::NAN,
+            final_relative_error: None,
+            max_error: None,
+            phase_error_rad: None,
+            run_seconds_per_simulated_second: None,
         };
         let mut fastest = f64::INFINITY;
         let mut spent = 0.0;
@@ -252,9 +254,13 @@ pub fn rows(study: &Study, reference: &Reference, choice: Choice) -> Vec<Row> {
             if out.stopped.is_some() {
                 row.status = "stopped";
             } else {
-                (row.final_relative_error, row.max_error, row.phase_error_rad) =
-                    errors(study, reference, &out, n);
-                row.run_seconds_per_simulated_second = fastest / study.scene.duration_seconds;
+                let (final_relative, max, phase) = errors(study, reference, &out, n);
+                let finite = crate::cmd::finite;
+                row.final_relative_error = finite(final_relative);
+                row.max_error = finite(max);
+                row.phase_error_rad = finite(phase);
+                row.run_seconds_per_simulated_second =
+                    finite(fastest / study.scene.duration_seconds);
             }
         }
         rows.push(row);

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use clap::Args;
 use serde::Serialize;
 
-use super::{finite, write_file, DeviceArgs, Report};
+use super::{write_file, DeviceArgs, Report};
 use crate::plot::{svg, Panel, Series};
 use crate::precision::{reference, rows, studies, Row};
 use crate::simulate::Choice;
@@ -44,38 +44,6 @@ pub struct SceneReport {
     pub reference_floor: f64,
 }
 
-/// One method at one step on one scene: the CSV's line and the JSON's row (null where the
-/// run did not complete).
-#[derive(Serialize, Debug)]
-pub struct RowReport {
-    pub scene: &'static str,
-    pub method: &'static str,
-    pub steps_per_period: u32,
-    pub step_seconds: f64,
-    /// `ok`, `refused` (the guard) or `stopped` (a typed error).
-    pub status: &'static str,
-    pub final_relative_error: Option<f64>,
-    pub max_error: Option<f64>,
-    pub phase_error_rad: Option<f64>,
-    pub run_seconds_per_simulated_second: Option<f64>,
-}
-
-impl From<&Row> for RowReport {
-    fn from(r: &Row) -> Self {
-        Self {
-            scene: r.scene,
-            method: r.method,
-            steps_per_period: r.steps_per_period,
-            step_seconds: r.step_seconds,
-            status: r.status,
-            final_relative_error: finite(r.final_relative_error),
-            max_error: finite(r.max_error),
-            phase_error_rad: finite(r.phase_error_rad),
-            run_seconds_per_simulated_second: finite(r.run_seconds_per_simulated_second),
-        }
-    }
-}
-
 /// What `report` reports.
 #[derive(Serialize, Debug)]
 pub struct PrecisionReport {
@@ -83,7 +51,7 @@ pub struct PrecisionReport {
     pub device: String,
     pub reference: ReferenceReport,
     pub scenes: Vec<SceneReport>,
-    pub rows: Vec<RowReport>,
+    pub rows: Vec<Row>,
     pub csv: String,
     pub plot: String,
 }
@@ -150,10 +118,10 @@ pub fn precision(args: &PrecisionArgs) -> Result<PrecisionReport, String> {
     // Timed runs one at a time: run times measured side by side must not share the cores.
     let methods = Choice::core();
     let bar = crate::work::bar("timing", studies.len() * methods.len());
-    let mut all: Vec<RowReport> = Vec::new();
+    let mut all: Vec<Row> = Vec::new();
     for (study, reference) in studies.iter().zip(&references) {
         for &choice in &methods {
-            all.extend(rows(study, reference, choice).iter().map(RowReport::from));
+            all.extend(rows(study, reference, choice));
             bar.inc(1);
         }
     }
