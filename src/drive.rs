@@ -84,11 +84,13 @@ impl Amplifier {
             return Err(CodeError::OutOfRange { volts, max_volts });
         }
         let steps = volts * (65536.0 / self.full_scale_volts);
-        // Truncation rounds down; the float product may land a hair above an exact step,
-        // so step back while the code's voltage exceeds the request.
+        // Truncation rounds down; the float product may land a hair above an exact step (by
+        // one code at most), so step back while the code's voltage exceeds the request.
         let mut code = (steps as u32).min(u32::from(u16::MAX)) as u16;
-        while code > 0 && self.volts(DacCode(code)) > volts {
-            code -= 1;
+        for _ in 0..2 {
+            if code > 0 && self.volts(DacCode(code)) > volts {
+                code -= 1;
+            }
         }
         Ok(DacCode(code))
     }

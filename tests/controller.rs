@@ -879,6 +879,7 @@ fn the_output_stage_reacts_to_every_fault_the_same_way() {
     let out = c.tick(Inputs::NONE);
     assert_eq!(stage.send(&mut c, out), out);
     stage.enable().unwrap();
+    assert!(!stage.is_safe());
     let code = de_resonator::Output {
         code: DacCode(0x1234),
         volts: 0.0,
@@ -924,6 +925,90 @@ fn dac_bus_errors_are_typed() {
         Err(DacError::Bus(embedded_hal::spi::ErrorKind::Other))
     );
     assert!(dac.power_down().is_err());
+}
+
+/// The code is the largest whose voltage does not exceed the request (its definition,
+/// checked on both sides), and each code's own voltage gives it back, on an amplifier
+/// (3.3 V × 3000) whose step is not a binary fraction, where the float product can land a
+/// hair above an exact step and rounding down takes a step back.
+#[test]
+fn codes_are_the_largest_at_or_below_the_voltage() {
+    let amp = Amplifier::new(3.3, 3000.0).unwrap();
+    let mut stepped_back = 0;
+    for k in 0..20_000u32 {
+        let volts = amp.max_volts() * k as f32 / 20_000.0;
+        let code = amp.code(volts).unwrap();
+        assert!(amp.volts(code) <= volts, "{volts}: {code:?}");
+        if code.0 < u16::MAX {
+            assert!(amp.volts(DacCode(code.0 + 1)) > volts, "{volts}: {code:?}");
+        }
+        let truncated = (volts * (65536.0 / (3.3 * 3000.0))) as u32;
+        stepped_back += usize::from(u32::from(code.0) < truncated);
+    }
+    // Each code's own voltage gives that code back, from either side of the float product.
+    let mut low = 0;
+    for c in 0..=u16::MAX {
+        let volts = amp.volts(DacCode(c));
+        let truncated = (volts * (65536.0 / (3.3 * 3000.0))) as u32;
+        low += usize::from(truncated < u32::from(c));
+        stepped_back += usize::from(truncated > u32::from(c));
+        assert_eq!(amp.code(volts), Ok(DacCode(c)), "{volts}");
+    }
+    // The step back runs (8 of these 85,536 voltages on x86-64), and no code's own voltage
+    // truncates below it.
+    assert!(stepped_back > 0 && low == 0, "{stepped_back} {low}");
+}
+
+/// The errors say what is wrong, with the numbers.
+#[test]
+fn drive_errors_read_as_sentences() {
+    let out = CodeError::OutOfRange {
+        volts: -1.0,
+        max_volts: 9999.0,
+    };
+    assert_eq!(
+        out.to_string(),
+        "-1 V is outside the amplifier's range [0, 9999] V"
+    );
+    let bad = CodeError::BadFullScale { volts: f32::NAN };
+    assert!(bad.to_string().contains("NaN V is not a positive number"));
+    let bus: DacError<embedded_hal::spi::ErrorKind> =
+        DacError::Bus(embedded_hal::spi::ErrorKind::Other);
+    assert_eq!(bus.to_string(), "DAC bus error: Other");
+    let stage: de_resonator::StageError<u8, u8> = de_resonator::StageError::Pin(7);
+    assert_eq!(stage.to_string(), "amplifier-enable line error: 7");
+    let stage: de_resonator::StageError<u8, u8> = de_resonator::StageError::Bus(3);
+    assert_eq!(stage.to_string(), "DAC bus error: 3");
+}
+
+/// The amplifier's monitor: a fault on exactly the (AMPLIFIER_TICKS + 1)-th tick in a row it
+/// is off its command by more than the tolerance; a tick back on resets the count.
+#[test]
+fn the_amplifier_faults_after_exactly_its_ticks_off() {
+    use de_resonator::controller::AMPLIFIER_TICKS;
+    let mut c = start(Settings::for_target(44.0)).unwrap();
+    let mut last = 0.0f32;
+    let tick = |c: &mut Controller, off: bool, last: &mut f32| {
+        let measured = if off { *last - 500.0 } else { *last };
+        let out = c.tick(Inputs {
+            stretch: None,
+            amplifier_volts: Some(measured),
+        });
+        *last = out.volts;
+        out.event
+    };
+    // Off for AMPLIFIER_TICKS ticks, then on: no fault, and the count starts again.
+    for _ in 0..AMPLIFIER_TICKS {
+        assert_eq!(tick(&mut c, true, &mut last), None);
+    }
+    assert_eq!(tick(&mut c, false, &mut last), None);
+    for _ in 0..AMPLIFIER_TICKS {
+        assert_eq!(tick(&mut c, true, &mut last), None);
+    }
+    assert!(matches!(
+        tick(&mut c, true, &mut last),
+        Some(Event::Fault(Fault::AmplifierDisagrees { .. }))
+    ));
 }
 
 #[test]

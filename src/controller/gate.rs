@@ -16,3 +16,27 @@ pub(super) fn gate(amplifier: &Amplifier, volts: f32, max_volts: f32) -> Result<
     }
     Ok(code)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Below 0 V, above the cap, or not a number: the gate's own refusal, whatever the
+    /// amplifier could give; in between, the amplifier's code.
+    #[test]
+    fn refuses_outside_zero_to_the_cap() {
+        let amplifier = Amplifier::new(2.5, 4000.0).unwrap_or_else(|_| unreachable!());
+        for volts in [-1.0, -0.0001, 100.5, f32::NAN, f32::INFINITY] {
+            let refused = gate(&amplifier, volts, 100.0);
+            assert!(
+                matches!(refused, Err(Fault::Gate { max_volts, .. }) if max_volts == 100.0),
+                "{volts}: {refused:?}"
+            );
+        }
+        assert_eq!(gate(&amplifier, 0.0, 100.0), Ok(DacCode(0)));
+        assert_eq!(
+            gate(&amplifier, 100.0, 100.0),
+            amplifier.code(100.0).map_err(Fault::Amplifier)
+        );
+    }
+}
