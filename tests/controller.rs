@@ -290,6 +290,9 @@ fn table_only_boot_stays_below_the_limit_for_any_margin() {
             ..Settings::for_target(45.0)
         };
         let (c, boot) = Controller::from_table(params, &table, amplifier(), settings).unwrap();
+        // The documented cap: the table's top scaled by min(1, (1 − m)/(1 − m_table)).
+        let top = Table::parse(&table).unwrap().max_volts();
+        assert_eq!(boot.max_volts, top * ((1.0 - margin) / 0.95).min(1.0));
         let cap = (1.0 - f64::from(margin)) * limit;
         assert!(
             f64::from(boot.max_volts) <= cap,
@@ -651,40 +654,19 @@ fn a_trim_on_a_stiffer_plant_never_lifts_the_ceiling() {
     };
     let table = common::made_table(nominal, 0.05, 64);
     let (mut c, _) = Controller::start(nominal.cast(), &table, amplifier(), settings).unwrap();
-    let device = Device::new(plant).unwrap();
-    let rest = State {
-        stretch: plant.prestretch_1,
-        velocity: 0.0,
-    };
-    let drive = |volts: f32| Drive::constant(&device, f64::from(volts));
-    let mut model = Integrator::new(
-        device,
-        drive(0.0),
-        Method::Rk4,
-        1e-3,
-        device.model_range(),
-        rest,
-        true,
-    )
-    .unwrap();
-    let mut held = None;
-    for k in 0..4000 {
-        let out = c.tick(Inputs::stretch(model.state().stretch as f32));
-        assert!(f64::from(out.volts) <= ceiling, "tick {k}: {} V", out.volts);
-        match out.event {
-            Some(Event::AboveCeiling {
-                needed_volts,
-                ceiling_volts,
-            }) => held = Some((needed_volts, ceiling_volts)),
-            Some(Event::Fault(f)) => panic!("tick {k}: {f}"),
-            _ => {}
-        }
-        if let Some(job) = c.trim_job() {
-            c.trim_done(job.solve());
-        }
-        model.set_drive(drive(out.volts)).unwrap();
-        model.step().unwrap();
-    }
+    let (events, highest) = against_plant(&mut c, plant, 4000);
+    assert!(f64::from(highest) <= ceiling, "{highest} V");
+    let held = events.iter().find_map(|&(_, e)| match e {
+        Event::AboveCeiling {
+            needed_volts,
+            ceiling_volts,
+        } => Some((needed_volts, ceiling_volts)),
+        _ => None,
+    });
+    assert!(
+        !events.iter().any(|(_, e)| matches!(e, Event::Fault(_))),
+        "{events:?}"
+    );
     let (asked, said_ceiling) = held.expect("the trim must say it needs more");
     assert!(
         (f64::from(asked) / needed - 1.0).abs() < 2e-3,
@@ -728,6 +710,140 @@ fn samples_outside_the_model_or_any_device_are_refused() {
         }
         assert_eq!(c.phase(), Phase::Faulted);
     }
+}
+
+/// The controller against a plant: the core's f64 RK4 model of `plant` (its stretch the
+/// sensor), one step a tick, the trim's job solved between ticks. What it said, when, and the
+/// highest voltage it commanded.
+#[cfg(feature = "trim")]
+fn against_plant(
+    c: &mut Controller,
+    plant: DeviceParams<f64>,
+    ticks: u32,
+) -> (Vec<(u32, Event)>, f32) {
+    use de_resonator::{Drive, Integrator, Method, State};
+    let device = Device::new(plant).unwrap();
+    let rest = State {
+        stretch: plant.prestretch_1,
+        velocity: 0.0,
+    };
+    let drive = |volts: f32| Drive::constant(&device, f64::from(volts));
+    let range = device.model_range();
+    let mut model =
+        Integrator::new(device, drive(0.0), Method::Rk4, 1e-3, range, rest, true).unwrap();
+    let (mut said, mut highest) = (Vec::new(), 0.0f32);
+    for k in 0..ticks {
+        let out = c.tick(Inputs::stretch(model.state().stretch as f32));
+        highest = highest.max(out.volts);
+        if let Some(event) = out.event {
+            said.push((k, event));
+        }
+        if let Some(job) = c.trim_job() {
+            c.trim_done(job.solve());
+        }
+        model.set_drive(drive(out.volts)).unwrap();
+        model.step().unwrap();
+    }
+    (said, highest)
+}
+
+/// The trim's probe: with the target's bias above `trim_probe_fraction` of the cap, the
+/// first ramp stops at that fraction (a softer plant is safe there); below it, at the bias
+/// itself, whose first measurement then converges at once on a plant that is the model (one
+/// trim, its next bias its own, then the AC).
+#[cfg(feature = "trim")]
+#[test]
+fn the_trim_probes_low_then_converges_at_once_where_the_model_is_right() {
+    let mut p = REFERENCE_DEVICE;
+    let trimmed = |target| Settings {
+        trim_tolerance: Some(1e-3),
+        ac_volts: 100.0,
+        ac_hz: 40.0,
+        ..Settings::for_target(target)
+    };
+    let (c, boot) =
+        Controller::start(p.cast(), &reference_table(), amplifier(), trimmed(44.0)).unwrap();
+    assert!(boot.bias_volts > 0.5 * boot.max_volts);
+    assert_eq!(c.plan().bias_volts, 0.5 * boot.max_volts);
+    // 45.5 Hz takes about 2 kV, below the probe: measured at its bias, the model's plant.
+    let (mut c, boot) =
+        Controller::start(p.cast(), &reference_table(), amplifier(), trimmed(45.5)).unwrap();
+    assert_eq!(c.plan().bias_volts, boot.bias_volts);
+    let f0 = Tuner::new(Device::new(p).unwrap())
+        .zero_bias()
+        .natural_frequency_hz;
+    p.damping = p.effective_mass() * std::f64::consts::TAU * f0 / 200.0;
+    let (events, _) = against_plant(&mut c, p, 3000);
+    let trims: Vec<_> = events
+        .iter()
+        .filter_map(|&(_, e)| match e {
+            Event::Trimmed {
+                bias_volts,
+                next_bias_volts,
+                ..
+            } => Some((bias_volts, next_bias_volts)),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(
+        trims,
+        vec![(boot.bias_volts, boot.bias_volts)],
+        "{events:?}"
+    );
+    assert!(events.iter().any(|(_, e)| *e == Event::DriveOn));
+}
+
+/// The amplifier must give the AC's peak on the tuned bias, not only the probe's ramp: a
+/// 7.5 kV amplifier cannot give 44 Hz's 7450 V plus 100 V of AC, with the trim's probe at
+/// 4.7 kV or without it.
+#[test]
+fn the_amplifier_must_give_the_tuned_bias_and_its_ac() {
+    let small = Amplifier::new(2.5, 3000.0).unwrap();
+    for trim in [None, Some(1e-3)] {
+        let settings = Settings {
+            trim_tolerance: trim,
+            ac_volts: 100.0,
+            ac_hz: 40.0,
+            ..Settings::for_target(44.0)
+        };
+        let params = REFERENCE_DEVICE.cast::<f32>();
+        let fault = Controller::start(params, &reference_table(), small, settings).unwrap_err();
+        assert!(matches!(fault, Fault::Amplifier(_)), "{trim:?}: {fault}");
+    }
+}
+
+/// `cross_check` drives the solve's bias and plans its ticks for it: with a coarse table (8
+/// points) the table's bias is volts off, the solve's within f32 of the f64 one; at a slow
+/// ramp (100 V/s) the plan's ticks are those of the solve's bias.
+#[test]
+fn the_cross_check_drives_the_solves_bias() {
+    let device = Device::new(REFERENCE_DEVICE).unwrap();
+    let tuner = Tuner::new(device);
+    let top = tuner.max_bias(table::table_margin(0.05)).unwrap();
+    let mut points = vec![(0.0f32, 0.0f32); 8];
+    table::fill(&device, &top, &[], &mut points).unwrap();
+    let mut coarse = vec![0u8; table::table_bytes(8)];
+    table::write(&mut coarse, &REFERENCE_DEVICE.cast(), 0.05, 0.0, &points).unwrap();
+    let settings = Settings {
+        slew_volts_per_second: 100.0,
+        agreement: 1e-3,
+        ..Settings::for_target(44.0)
+    };
+    let params = REFERENCE_DEVICE.cast::<f32>();
+    let (c, boot) = Controller::start(params, &coarse, amplifier(), settings).unwrap();
+    let solved = tuner.tune(44.0, 0.05).unwrap().volts;
+    assert!(
+        (f64::from(boot.table_volts) - solved).abs() > 0.5,
+        "{boot:?}"
+    );
+    assert!(
+        (f64::from(boot.bias_volts) - solved).abs() < 0.01,
+        "{boot:?}"
+    );
+    assert_eq!(c.plan().bias_volts, boot.bias_volts);
+    // Ramp ticks at 0.1 V a tick, then 0.25 s of hold and 0.5 s of model check, plus one.
+    let ramp = (boot.bias_volts / 100.0 * 1000.0).ceil() as u32;
+    assert_eq!(boot.plan_ticks, ramp + 250 + 500 + 1);
 }
 
 /// Issue 12.3. An AC amplitude above the bias would command below 0 V (a target at f0 has
