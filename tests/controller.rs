@@ -633,7 +633,6 @@ fn a_plan_that_crosses_dynamically_is_refused_by_the_model_check() {
 #[cfg(feature = "trim")]
 #[test]
 fn a_trim_on_a_stiffer_plant_never_lifts_the_ceiling() {
-    use de_resonator::{Drive, Integrator, Method, State};
     let nominal = common::wide_range_device();
     let mut plant = DeviceParams {
         shear_modulus: 1.2 * nominal.shear_modulus,
