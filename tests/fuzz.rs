@@ -144,7 +144,7 @@ fn settings(
         s.ac_volts = (most * rng.log_range(1e-3, 1.0)) as f32;
         s.ac_hz = (f0 * rng.range(0.1, 2.5)).min(0.45 * f64::from(s.tick_hz)) as f32;
     }
-    if rng.unit() < 0.25 {
+    if cfg!(feature = "trim") && rng.unit() < 0.25 {
         s.trim_tolerance = Some(1e-3);
         s.trim_window_seconds = 0.25;
         s.trim_every_seconds = [None, Some(0.5)][rng.below(2)];
@@ -351,6 +351,7 @@ fn fuzz_the_controller() {
                 _ => {}
             }
             // The trim's solve, outside the tick (now and then late, as a busy task is).
+            #[cfg(feature = "trim")]
             if rng.unit() < 0.5 {
                 if let Some(job) = c.trim_job() {
                     c.trim_done(job.solve());
