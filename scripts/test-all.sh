@@ -42,6 +42,9 @@ cargo build --locked -p de-resonator --target "$TARGET" --release --features def
 step "tests (core integration tests, host-sim unit and CLI tests; the fuzz test has its own step)"
 cargo test --locked --workspace -- --skip fuzz_the_controller
 
+step "the core's tests without its optional trim feature (as the firmware builds it)"
+cargo test --locked -q -p de-resonator --no-default-features -- --skip fuzz_the_controller
+
 step "fuzz test: the f32 controller on random devices, settings, tables and sensors"
 FUZZ_TICKS=3000000 cargo test --locked -q -p de-resonator --test fuzz -- --nocapture
 
