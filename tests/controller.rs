@@ -1155,44 +1155,69 @@ fn codes_round_down_and_refuse_what_the_amplifier_cannot_give() {
     assert!(Amplifier::new(2.5, 0.0).is_err());
 }
 
-proptest! {
-    #![proptest_config(ProptestConfig::with_cases(48))]
-
-    /// Any settings, target and corruption, however wrong: no panic; if the controller starts
-    /// (on every check, or on the table alone), no tick ever commands more than (1 − margin)·limit, and the code gives the volts reported.
-    #[test]
-    fn no_input_makes_the_controller_exceed_the_limit(
-        target in prop_oneof![42.5f32..46.5, Just(f32::NAN), any::<f32>()],
-        margin in prop_oneof![0.0f32..0.3, any::<f32>()],
-        slew in prop_oneof![100.0f32..1e6, any::<f32>()],
-        ac_volts in prop_oneof![0.0f32..3000.0, any::<f32>()],
-        ac_hz in prop_oneof![0.0f32..200.0, any::<f32>()],
-        corrupt in proptest::option::of(68usize..580),
-    ) {
-        let mut bytes = reference_table();
-        if let Some(at) = corrupt {
-            bytes[at] ^= 0x04;
-        }
-        let settings = Settings {
-            margin,
-            slew_volts_per_second: slew,
-            ac_volts,
-            ac_hz,
-            check_seconds: 0.2,
-            ..Settings::for_target(target)
-        };
-        let params = REFERENCE_DEVICE.cast::<f32>();
-        // Every check, and the table alone (a firmware without the solver and the model).
-        let all = Controller::start(params, &bytes, amplifier(), settings);
-        let table_only = Controller::from_table(params, &bytes, amplifier(), settings);
-        for (mut c, boot) in [all, table_only].into_iter().flatten() {
-            prop_assert!(corrupt.is_none());
-            prop_assert!(boot.max_volts <= (1.0 - margin) * 9854.74);
-            for _ in 0..2000 {
-                let out = c.tick(Inputs::NONE);
-                prop_assert!(out.volts >= 0.0 && out.volts <= boot.max_volts);
-                prop_assert_eq!(out.volts, amplifier().volts(out.code));
+/// Any settings, target and corruption, however wrong: no panic; if the controller starts
+/// (on every check, or on the table alone), no tick ever commands more than
+/// (1 − margin)·limit, and the code gives the volts reported. Inputs are drawn mostly
+/// plausible (nineteen in twenty each) so that most cases start a controller and its ticks
+/// are checked: the count is asserted (over half) and printed.
+#[test]
+fn no_input_makes_the_controller_exceed_the_limit() {
+    use proptest::test_runner::TestRunner;
+    use std::cell::Cell;
+    // Plausible: a target in the tunable range (43.0 .. 45.95 Hz) for margins up to 0.1, an
+    // AC that the plan holds; one draw in twenty wild for each.
+    let strategy = (
+        prop_oneof![19 => 43.1f32..45.9, 1 => any::<f32>()],
+        prop_oneof![19 => 0.0f32..0.1, 1 => any::<f32>()],
+        prop_oneof![19 => 1000.0f32..1e6, 1 => any::<f32>()],
+        prop_oneof![19 => 0.0f32..40.0, 1 => any::<f32>()],
+        prop_oneof![19 => 5.0f32..30.0, 1 => any::<f32>()],
+        prop_oneof![19 => Just(None), 1 => (68usize..580).prop_map(Some)],
+    );
+    let cases = 64;
+    let (started, ticks) = (Cell::new(0u32), Cell::new(0u32));
+    let mut runner = TestRunner::new(ProptestConfig::with_cases(cases));
+    let result = runner.run(
+        &strategy,
+        |(target, margin, slew, ac_volts, ac_hz, corrupt)| {
+            let mut bytes = reference_table();
+            if let Some(at) = corrupt {
+                bytes[at] ^= 0x04;
             }
-        }
+            let settings = Settings {
+                margin,
+                slew_volts_per_second: slew,
+                ac_volts,
+                ac_hz,
+                check_seconds: 0.2,
+                ..Settings::for_target(target)
+            };
+            let params = REFERENCE_DEVICE.cast::<f32>();
+            // Every check, and the table alone (a firmware without the solver and the model).
+            let all = Controller::start(params, &bytes, amplifier(), settings);
+            let table_only = Controller::from_table(params, &bytes, amplifier(), settings);
+            let any = all.is_ok();
+            for (mut c, boot) in [all, table_only].into_iter().flatten() {
+                prop_assert!(corrupt.is_none());
+                prop_assert!(boot.max_volts <= (1.0 - margin) * 9854.74);
+                for _ in 0..2000 {
+                    let out = c.tick(Inputs::NONE);
+                    prop_assert!(out.volts >= 0.0 && out.volts <= boot.max_volts);
+                    prop_assert_eq!(out.volts, amplifier().volts(out.code));
+                    ticks.set(ticks.get() + 1);
+                }
+            }
+            started.set(started.get() + u32::from(any));
+            Ok(())
+        },
+    );
+    if let Err(e) = result {
+        panic!("{e}");
     }
+    println!(
+        "{} of {cases} cases started a controller; {} ticks checked",
+        started.get(),
+        ticks.get()
+    );
+    assert!(started.get() * 2 > cases, "{} of {cases}", started.get());
 }
