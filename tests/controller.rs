@@ -385,6 +385,18 @@ fn ticks_ramp_at_the_slew_rate_hold_then_drive_and_never_exceed_the_limit() {
     );
 }
 
+/// Without AC the controller holds the bias for good: no `DriveOn`, ever.
+#[test]
+fn without_ac_the_bias_holds() {
+    let mut c = start(Settings::for_target(44.0)).unwrap();
+    let events: Vec<Event> = (0..3000)
+        .filter_map(|_| c.tick(Inputs::NONE).event)
+        .collect();
+    assert_eq!(events.len(), 1, "{events:?}");
+    assert!(matches!(events[0], Event::AtBias { .. }));
+    assert_eq!(c.phase(), Phase::Holding);
+}
+
 #[test]
 fn faults_at_run_time_give_zero_volts_and_say_so_once() {
     let mut c = start(Settings::for_target(44.0)).unwrap();
@@ -680,6 +692,7 @@ fn a_trim_on_a_stiffer_plant_never_lifts_the_ceiling() {
     );
     assert!(f64::from(said_ceiling) <= ceiling);
     assert_eq!(c.phase(), Phase::Held);
+    assert_eq!(c.held_needing_volts(), Some(asked));
     assert!(c.max_volts() <= c.ceiling_volts());
 }
 
@@ -727,6 +740,18 @@ fn against_plant(
     plant: DeviceParams<f64>,
     ticks: u32,
 ) -> (Vec<(u32, Event)>, f32) {
+    let (said, volts, _) = timeline(c, plant, ticks);
+    let highest = volts.iter().copied().fold(0.0f32, f32::max);
+    (said, highest)
+}
+
+/// As `against_plant`, with every tick's voltage and how many trim jobs were handed out.
+#[cfg(feature = "trim")]
+fn timeline(
+    c: &mut Controller,
+    plant: DeviceParams<f64>,
+    ticks: u32,
+) -> (Vec<(u32, Event)>, Vec<f32>, u32) {
     use de_resonator::{Drive, Integrator, Method, State};
     let device = Device::new(plant).unwrap();
     let rest = State {
@@ -737,20 +762,24 @@ fn against_plant(
     let range = device.model_range();
     let mut model =
         Integrator::new(device, drive(0.0), Method::Rk4, 1e-3, range, rest, true).unwrap();
-    let (mut said, mut highest) = (Vec::new(), 0.0f32);
+    let (mut said, mut volts, mut jobs) = (Vec::new(), Vec::new(), 0);
     for k in 0..ticks {
+        assert_eq!(c.ticks(), k);
         let out = c.tick(Inputs::stretch(model.state().stretch as f32));
-        highest = highest.max(out.volts);
+        volts.push(out.volts);
         if let Some(event) = out.event {
             said.push((k, event));
         }
         if let Some(job) = c.trim_job() {
+            jobs += 1;
+            // Handed out once: not again until the next window.
+            assert!(c.trim_job().is_none());
             c.trim_done(job.solve());
         }
         model.set_drive(drive(out.volts)).unwrap();
         model.step().unwrap();
     }
-    (said, highest)
+    (said, volts, jobs)
 }
 
 /// The trim's probe: with the target's bias above `trim_probe_fraction` of the cap, the
@@ -1220,4 +1249,127 @@ fn no_input_makes_the_controller_exceed_the_limit() {
         ticks.get()
     );
     assert!(started.get() * 2 > cases, "{} of {cases}", started.get());
+}
+
+/// The trim's timeline, tick by tick, each time from the settings (1 kHz, 10 V a tick, 0.25 s
+/// of hold, a 200 V pulse for half a period of the target, a 0.5 s window, re-trim every 1 s):
+/// the ramp to the probe (half the cap), the hold, the pulse, the window, the result applied
+/// the tick after the window, the ramp to the next bias from the last one, and the secant's
+/// next bias from the two measurements before it. The plant is the wide-range device with
+/// its permittivity 15% off, which no μ alone describes, so the secant steps are needed.
+#[cfg(feature = "trim")]
+#[test]
+fn the_trim_keeps_its_timeline_and_its_secant() {
+    let nominal = common::wide_range_device();
+    let mut plant = DeviceParams {
+        relative_permittivity: 1.15 * nominal.relative_permittivity,
+        ..nominal
+    };
+    let f0 = Tuner::new(Device::new(plant).unwrap())
+        .zero_bias()
+        .natural_frequency_hz;
+    plant.damping = plant.effective_mass() * std::f64::consts::TAU * f0 / 200.0;
+    let (target, tolerance) = (29.5f32, 1e-3f32);
+    let settings = Settings {
+        ac_volts: 100.0,
+        ac_hz: 26.0,
+        trim_tolerance: Some(tolerance),
+        trim_every_seconds: Some(1.0),
+        ..Settings::for_target(target)
+    };
+    let table = common::made_table(nominal, 0.05, 64);
+    let (mut c, boot) = Controller::start(nominal.cast(), &table, amplifier(), settings).unwrap();
+    let probe = 0.5 * boot.max_volts;
+    assert_eq!(c.plan().bias_volts, probe);
+    assert_eq!(c.max_volts(), boot.max_volts);
+    let (said, volts, jobs) = timeline(&mut c, plant, 9000);
+    let (hold, pulse, window) = (250, (0.5f32 * 1000.0 / target).round() as u32, 500);
+    // A tick reports the voltage its DAC code gives: within one code (10 kV/65536).
+    let near = |v: f32, expected: f32| (v - expected).abs() <= 10_000.0 / 65_536.0;
+
+    // The first ramp: 10 V a tick from 0 V, at the probe on the first tick that reaches it.
+    let at_bias = (probe / 10.0).ceil() as u32;
+    assert_eq!(said[0], (at_bias, Event::AtBias { volts: probe }));
+    // Hold, then the pulse: 200 V down for `pulse` ticks from the tick after the hold.
+    let start = at_bias + hold;
+    assert!(near(volts[start as usize], probe));
+    for k in start + 1..=start + pulse {
+        assert!(near(volts[k as usize], probe - 200.0), "tick {k}");
+    }
+    assert!(near(volts[(start + pulse + 1) as usize], probe));
+
+    // Every measurement: `window` ticks after the pulse, applied the tick after.
+    let mut from = start;
+    let mut trims = Vec::new();
+    let mut previous: Option<(f32, f32)> = None;
+    let mut driving_since = None;
+    for &(k, event) in &said[1..] {
+        match event {
+            Event::Trimmed {
+                bias_volts,
+                measured_hz,
+                next_bias_volts,
+                ..
+            } => {
+                assert_eq!(k, from + 1 + pulse + window, "{event:?}");
+                trims.push(k);
+                let converged = (measured_hz - target).abs() <= tolerance * target;
+                if converged && previous.is_some() {
+                    assert_eq!(next_bias_volts, bias_volts);
+                }
+                if let (false, Some((b0, f0))) = (converged, previous) {
+                    // The secant in (Φ², f), at most 10% of the bias a step.
+                    let (b2, p2) = (bias_volts * bias_volts, b0 * b0);
+                    let next = (b2 + (target - measured_hz) * (b2 - p2) / (measured_hz - f0))
+                        .sqrt()
+                        .clamp(0.9 * bias_volts, 1.1 * bias_volts);
+                    assert!(
+                        (next_bias_volts / next - 1.0).abs() < 1e-5,
+                        "{next} {event:?}"
+                    );
+                }
+                previous = (!converged).then_some((bias_volts, measured_hz));
+                if next_bias_volts != bias_volts {
+                    // The ramp from the bias measured at, 10 V a tick, to the next.
+                    let step = 10.0 * (next_bias_volts - bias_volts).signum();
+                    for n in 0..5 {
+                        let ramp = bias_volts + step * n as f32;
+                        let expected = if step > 0.0 {
+                            ramp.min(next_bias_volts)
+                        } else {
+                            ramp.max(next_bias_volts)
+                        };
+                        assert!(
+                            near(volts[(k + 1 + n) as usize], expected),
+                            "tick {k} + {n}"
+                        );
+                    }
+                }
+            }
+            Event::AtBias { volts: v } => {
+                let last = said.iter().rev().find(|&&(j, _)| j < k).unwrap();
+                if let (j, Event::Trimmed { bias_volts, .. }) = *last {
+                    let ramp = ((v - bias_volts).abs() / 10.0).ceil() as u32;
+                    assert_eq!(k, j + 1 + ramp, "{event:?}");
+                }
+                from = k + hold;
+            }
+            Event::DriveOn => {
+                let &(j, last) = said.iter().rev().find(|&&(j, _)| j < k).unwrap();
+                assert!(matches!(last, Event::Trimmed { .. }) && k == j + 1);
+                driving_since = Some(k);
+            }
+            Event::DriveOff => {
+                // Re-trim every second of drive, holding the bias first.
+                assert_eq!(Some(k), driving_since.map(|d| d + 1000));
+                from = k + hold;
+                previous = None;
+            }
+            other => panic!("tick {k}: {other:?}"),
+        }
+    }
+    assert!(trims.len() >= 5 && jobs as usize == trims.len(), "{said:?}");
+    assert!(said.iter().any(|(_, e)| *e == Event::DriveOff));
+    assert!(c.max_volts() <= c.ceiling_volts());
+    assert!(volts.iter().all(|&v| v <= c.ceiling_volts()));
 }
