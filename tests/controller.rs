@@ -385,6 +385,134 @@ fn ticks_ramp_at_the_slew_rate_hold_then_drive_and_never_exceed_the_limit() {
     );
 }
 
+/// The settings' one list: every key is the `Settings` field's name, found again by
+/// `from_key`; `set` then `get` gives the value back; 0 turns off what can be off.
+#[test]
+fn every_setting_by_its_key() {
+    let keys = [
+        "target_hz",
+        "margin",
+        "slew_volts_per_second",
+        "tick_hz",
+        "settle_seconds",
+        "ac_volts",
+        "ac_hz",
+        "check_seconds",
+        "agreement",
+        "amplifier_tolerance_volts",
+        "stuck_samples",
+        "trim_tolerance",
+        "trim_window_seconds",
+        "trim_pulse_volts",
+        "trim_probe_fraction",
+        "trim_every_seconds",
+    ];
+    assert_eq!(Setting::ALL.map(Setting::key), keys);
+    let mut s = Settings::for_target(44.0);
+    for (k, setting) in Setting::ALL.into_iter().enumerate() {
+        assert_eq!(Setting::from_key(setting.key()), Some(setting));
+        let value = 3.0 + k as f32;
+        s.set(setting, value);
+        assert_eq!(s.get(setting), value, "{setting:?}");
+    }
+    assert_eq!(Setting::from_key("ac_vols"), None);
+    assert_eq!(s.stuck_samples, Some(13));
+    assert_eq!((s.target_hz, s.trim_every_seconds), (3.0, Some(18.0)));
+    for off in [
+        Setting::StuckSamples,
+        Setting::TrimTolerance,
+        Setting::TrimEverySeconds,
+    ] {
+        s.set(off, 0.0);
+        assert_eq!(s.get(off), 0.0);
+    }
+    assert_eq!(
+        (s.stuck_samples, s.trim_tolerance, s.trim_every_seconds),
+        (None, None, None)
+    );
+}
+
+/// Each setting out of its range is refused by name, before anything is driven: NaN and
+/// negative values everywhere, zero where it must be positive, the AC at Nyquist or above,
+/// a margin of exactly 1 or below 0, a trim window one tick past `MAX_WINDOW`.
+#[test]
+fn each_bad_setting_is_refused_by_name() {
+    use de_resonator::tuning::TuneError;
+    let base = Settings {
+        ac_volts: 100.0,
+        ac_hz: 40.0,
+        ..Settings::for_target(44.0)
+    };
+    let positive = [
+        Setting::TickHz,
+        Setting::SlewVoltsPerSecond,
+        Setting::Agreement,
+        Setting::AmplifierToleranceVolts,
+        Setting::TrimWindowSeconds,
+        Setting::TrimProbeFraction,
+    ];
+    let non_negative = [
+        Setting::SettleSeconds,
+        Setting::AcVolts,
+        Setting::AcHz,
+        Setting::CheckSeconds,
+        Setting::TrimPulseVolts,
+    ];
+    let mut cases: Vec<(Setting, f32)> = Vec::new();
+    for setting in positive {
+        cases.extend([(setting, 0.0), (setting, -1.0), (setting, f32::NAN)]);
+    }
+    for setting in non_negative {
+        cases.extend([
+            (setting, -1e-3),
+            (setting, f32::NAN),
+            (setting, f32::INFINITY),
+        ]);
+    }
+    cases.extend([(Setting::AcHz, 500.0), (Setting::TrimProbeFraction, 1.01)]);
+    for (setting, value) in cases {
+        let mut s = base;
+        s.set(setting, value);
+        match start(s) {
+            Err(Fault::Setting {
+                setting: named,
+                value: v,
+            }) => {
+                assert_eq!(named, setting, "{value}");
+                assert_eq!(v.to_bits(), value.to_bits(), "{setting:?}");
+            }
+            other => panic!("{setting:?} = {value}: {other:?}"),
+        }
+    }
+    for margin in [1.0f32, -0.1, f32::NAN] {
+        let fault = start(Settings { margin, ..base }).unwrap_err();
+        assert!(
+            matches!(fault, Fault::Tune(TuneError::InvalidMargin { .. })),
+            "{margin}: {fault}"
+        );
+    }
+    // The trim's window: 512 ticks fit (MAX_WINDOW), 513 do not.
+    if cfg!(feature = "trim") {
+        let window = |seconds| Settings {
+            trim_tolerance: Some(1e-3),
+            trim_window_seconds: seconds,
+            ..base
+        };
+        assert!(start(window(0.512)).is_ok());
+        let fault = start(window(0.513)).unwrap_err();
+        assert!(
+            matches!(
+                fault,
+                Fault::Setting {
+                    setting: Setting::TrimWindowSeconds,
+                    ..
+                }
+            ),
+            "{fault}"
+        );
+    }
+}
+
 /// Without AC the controller holds the bias for good: no `DriveOn`, ever.
 #[test]
 fn without_ac_the_bias_holds() {
