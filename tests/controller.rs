@@ -513,6 +513,73 @@ fn each_bad_setting_is_refused_by_name() {
     }
 }
 
+/// The AC drive is bias + ac·sin(2π·f·(k − k_on)/tick_hz) from the tick it starts, tick by
+/// tick within one DAC code (10 kV/65536), for 400 ticks (16 periods at 40 Hz).
+#[test]
+fn the_ac_drive_is_the_sine_from_its_first_tick() {
+    let settings = Settings {
+        ac_volts: 100.0,
+        ac_hz: 40.0,
+        ..Settings::for_target(44.0)
+    };
+    let mut c = start(settings).unwrap();
+    let mut on = None;
+    for k in 0..2000u32 {
+        let out = c.tick(Inputs::NONE);
+        if out.event == Some(Event::DriveOn) {
+            on = Some(k);
+        }
+        if let Some(k_on) = on.filter(|&k_on| k < k_on + 400) {
+            let bias = f64::from(c.plan().bias_volts);
+            let t = f64::from(k - k_on) / 1000.0;
+            let expected = bias + 100.0 * (std::f64::consts::TAU * 40.0 * t).sin();
+            let code = 10_000.0 / 65_536.0;
+            assert!(
+                (f64::from(out.volts) - expected).abs() <= 1.01 * code,
+                "tick {k}: {} vs {expected}",
+                out.volts
+            );
+        }
+    }
+    assert!(on.is_some());
+}
+
+/// A plan too long is refused on the sum of its parts, ramp + hold + check (a hold of 7·10⁴ s
+/// is 7·10⁷ ticks, past `MAX_PLAN_TICKS`, with no check at all), and the hold is named when
+/// its ticks (settle × rate) outnumber the ramp's, even when settle + rate would not.
+#[test]
+fn a_plan_too_long_is_the_sum_of_its_parts() {
+    let base = Settings::for_target(44.0);
+    for settings in [
+        Settings {
+            settle_seconds: 7e4,
+            check_seconds: 0.0,
+            ..base
+        },
+        Settings {
+            settle_seconds: 7e4,
+            slew_volts_per_second: 7.45,
+            ..base
+        },
+    ] {
+        match start(settings).unwrap_err() {
+            Fault::Setting { setting, .. } => assert_eq!(setting, Setting::SettleSeconds),
+            other => panic!("{other}"),
+        }
+    }
+    // Just under the limit, the plan is made (its model check left out here: 6·10⁷ ticks).
+    let long = Settings {
+        settle_seconds: 6e4,
+        check_seconds: 0.0,
+        ..base
+    };
+    let params = REFERENCE_DEVICE.cast::<f32>();
+    let (_, boot) = Controller::from_table(params, &reference_table(), amplifier(), long).unwrap();
+    // f32 spaces its values by 4 at 6·10⁷: the plan's ticks are that close.
+    let ramp = (boot.bias_volts / 10.0).ceil() as u32;
+    assert!(boot.plan_ticks.abs_diff(ramp + 60_000_000 + 1) <= 4, "{boot:?}");
+}
+
 /// Without AC the controller holds the bias for good: no `DriveOn`, ever.
 #[test]
 fn without_ac_the_bias_holds() {
