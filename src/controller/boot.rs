@@ -148,8 +148,9 @@ impl Controller {
         };
         let (plan, ticks) = Plan::from_rest(&s, bias_volts, !trimming)?;
         plan.check_range(tuned_volts, self.max_volts)?;
-        // The amplifier must give the highest voltage: the ramp's, or the AC's on the bias.
-        let peak_volts = plan.peak_volts().max(tuned_volts + plan.ac_volts);
+        // The amplifier must give the highest voltage: the AC's peak on the tuned bias (the
+        // ramp starts at 0 V and ends at a bias no higher, the trim's probe included).
+        let peak_volts = tuned_volts + plan.ac_volts;
         self.amplifier.code(peak_volts).map_err(Fault::Amplifier)?;
         self.plan = plan;
         self.state = State::Ramping {

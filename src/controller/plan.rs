@@ -119,11 +119,6 @@ impl Plan {
         }
     }
 
-    /// The highest voltage the plan reaches, V.
-    pub fn peak_volts(&self) -> f32 {
-        self.start_volts.max(self.bias_volts) + self.ac_volts
-    }
-
     /// The whole voltage range against [0, `max_volts`], before anything is driven: the ramp
     /// and the bias below the cap (else `AboveSafe`), and the AC about the bias it will ride
     /// on (`ac_bias_volts`: the tuned bias, also while a trim probes lower) neither below
