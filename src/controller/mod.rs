@@ -422,6 +422,9 @@ impl Controller {
                     ..self.plan
                 };
                 plan.check_range(next_bias_volts, max_volts.min(self.ceiling_volts))?;
+                self.amplifier
+                    .code(next_bias_volts + plan.ac_volts)
+                    .map_err(Fault::Amplifier)?;
                 self.max_volts = max_volts.min(self.ceiling_volts);
                 self.estimate = Some(device);
                 self.trim.tuned = true;
