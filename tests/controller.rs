@@ -577,7 +577,10 @@ fn a_plan_too_long_is_the_sum_of_its_parts() {
     let (_, boot) = Controller::from_table(params, &reference_table(), amplifier(), long).unwrap();
     // f32 spaces its values by 4 at 6·10⁷: the plan's ticks are that close.
     let ramp = (boot.bias_volts / 10.0).ceil() as u32;
-    assert!(boot.plan_ticks.abs_diff(ramp + 60_000_000 + 1) <= 4, "{boot:?}");
+    assert!(
+        boot.plan_ticks.abs_diff(ramp + 60_000_000 + 1) <= 4,
+        "{boot:?}"
+    );
 }
 
 /// Without AC the controller holds the bias for good: no `DriveOn`, ever.
@@ -895,6 +898,26 @@ fn a_trim_on_a_stiffer_plant_never_lifts_the_ceiling() {
     assert!(f64::from(said_ceiling) <= ceiling);
     assert_eq!(c.phase(), Phase::Held);
     assert_eq!(c.held_needing_volts(), Some(asked));
+
+    // A target the stiffer plant reaches under the ceiling (33 Hz: 7525 V in the plant, plus
+    // the AC): the trim converges and the AC starts; nothing holds.
+    let reachable = Settings {
+        target_hz: 33.0,
+        ..settings
+    };
+    let (mut c, _) = Controller::start(nominal.cast(), &table, amplifier(), reachable).unwrap();
+    let (events, highest) = against_plant(&mut c, plant, 4000);
+    assert!(f64::from(highest) <= ceiling);
+    assert!(
+        events.iter().any(|(_, e)| *e == Event::DriveOn),
+        "{events:?}"
+    );
+    assert!(
+        !events
+            .iter()
+            .any(|(_, e)| matches!(e, Event::AboveCeiling { .. } | Event::Fault(_))),
+        "{events:?}"
+    );
     assert!(c.max_volts() <= c.ceiling_volts());
 }
 

@@ -159,11 +159,15 @@ impl TrimJob {
         let squared = from * from;
         let secant = self.previous.and_then(|(p2, pf)| {
             let next = squared + (s.target_hz - measured_hz) * (squared - p2) / (measured_hz - pf);
+            // No slope (two equal frequencies): the model decides.
+            if !next.is_finite() {
+                return None;
+            }
             // A trust region: a drifting plant (creep) makes a poor secant, and a wild step
-            // up is what the model's region cannot vouch for.
+            // (past zero volts, or up) is what the model's region cannot vouch for.
             let step = TRIM_SECANT_STEP * from;
-            let volts = libm::sqrtf(next).clamp(from - step, from + step);
-            (volts > 0.0 && volts + s.ac_volts <= max_volts).then_some(volts)
+            let volts = libm::sqrtf(next.max(0.0)).clamp(from - step, from + step);
+            (volts + s.ac_volts <= max_volts).then_some(volts)
         });
         let bias_volts = match secant {
             Some(volts) => volts,
@@ -190,5 +194,66 @@ impl TrimJob {
             max_volts,
             device,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::device::REFERENCE_DEVICE;
+
+    /// A job for the reference device measured at `bias_volts`, its window a clean ring at
+    /// `ring_hz` (500 ticks at 1 kHz), with a previous measurement `previous`.
+    fn job(bias_volts: f32, ring_hz: f32, previous: Option<(f32, f32)>) -> TrimJob {
+        let settings = Settings {
+            trim_tolerance: Some(1e-3),
+            ..Settings::for_target(44.0)
+        };
+        let mut window = [f32::NAN; MAX_WINDOW];
+        for (k, slot) in window.iter_mut().enumerate().take(500) {
+            let t = k as f32 / 1000.0;
+            *slot = 2.2 + 1e-3 * libm::sinf(core::f32::consts::TAU * ring_hz * t + 0.3);
+        }
+        TrimJob {
+            window,
+            len: 500,
+            settings,
+            params: REFERENCE_DEVICE.cast(),
+            bias_volts,
+            tuned: true,
+            count: 1,
+            previous,
+            ceiling_volts: 9361.9,
+        }
+    }
+
+    fn retune_bias(result: TrimResult) -> f32 {
+        match result {
+            TrimResult::Retune { bias_volts, .. } => bias_volts,
+            other => panic!("{other:?}"),
+        }
+    }
+
+    /// The secant in (Φ², f) through the last two measurements, clamped to ±10% of the bias:
+    /// here it would ask for 10.7 kV from 5 kV (up), and for a negative Φ² (down).
+    #[test]
+    fn the_secant_step_is_at_most_a_tenth_of_the_bias() {
+        // f falls 0.1 Hz from 4 kV to 5 kV; 1 Hz more to go: Φ² up by 9·10⁷ V².
+        let up = job(5000.0, 45.0, Some((4000.0 * 4000.0, 45.1)));
+        assert!((retune_bias(up.solve()) / 5500.0 - 1.0).abs() < 1e-6);
+        // f at 43 Hz, the target 1 Hz up, the slope as steep: Φ² down past zero.
+        let down = job(5000.0, 43.0, Some((4000.0 * 4000.0, 43.1)));
+        assert!((retune_bias(down.solve()) / 4500.0 - 1.0).abs() < 1e-6);
+    }
+
+    /// A secant step that would take the bias and its AC past the cap is not taken: the
+    /// estimated model's bias for the target is, and it lies below the cap.
+    #[test]
+    fn a_secant_past_the_cap_falls_back_to_the_model() {
+        let mut near = job(9000.0, 43.5, Some((8800.0 * 8800.0, 43.6)));
+        near.settings.ac_volts = 300.0;
+        let bias = retune_bias(near.solve());
+        assert!(bias + 300.0 <= 9361.9, "{bias}");
+        assert!((bias / 9900.0 - 1.0).abs() > 0.05, "{bias}");
     }
 }
