@@ -198,6 +198,7 @@ impl TrimJob {
 }
 
 #[cfg(test)]
+#[allow(clippy::panic)] // a test fails by panicking
 mod tests {
     use super::*;
     use crate::device::REFERENCE_DEVICE;
