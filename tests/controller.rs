@@ -159,6 +159,125 @@ fn a_table_whose_frequency_zigzags_is_refused() {
     );
 }
 
+/// The layout as documented: 68 header bytes, 8 a point, a 4-byte CRC; what is written is
+/// read back, point by point and field by field.
+#[test]
+fn the_table_layout_is_the_documented_one() {
+    for n in [2usize, 64, 1024] {
+        assert_eq!(table::table_bytes(n), 68 + 8 * n + 4);
+    }
+    let device = Device::new(REFERENCE_DEVICE).unwrap();
+    let top = Tuner::new(device).max_bias(0.1).unwrap();
+    let mut points = vec![(0.0f32, 0.0f32); 2];
+    table::fill(&device, &top, &[], &mut points).unwrap();
+    assert_eq!(points[1].1, top.volts as f32);
+    let mut one = vec![(0.0f32, 0.0f32); 1];
+    assert!(table::fill(&device, &top, &[], &mut one).is_err());
+    let mut bytes = vec![0u8; table::table_bytes(2)];
+    table::write(&mut bytes, &REFERENCE_DEVICE.cast(), 0.05, 2.5e-6, &points).unwrap();
+    let t = Table::parse(&bytes).unwrap();
+    assert_eq!(t.points(), 2);
+    assert_eq!((t.point(0), t.point(1)), (points[0], points[1]));
+    assert_eq!((t.margin(), t.interpolation_error()), (0.05, 2.5e-6));
+    assert_eq!(t.max_volts(), points[1].1);
+    // Exactly a header and a CRC, no points: a count problem, not too short.
+    let mut empty = vec![0u8; table::table_bytes(0)];
+    empty[..4].copy_from_slice(b"DERT");
+    empty[4..6].copy_from_slice(&table::VERSION.to_le_bytes());
+    assert_eq!(
+        Table::parse(&empty),
+        Err(TableError::BadCount { points: 0 })
+    );
+}
+
+/// Values that are no value, resealed so only the value checks can catch them: infinite,
+/// zero where a value must be positive, negative where zero is allowed, a margin of exactly
+/// 1; in the header and in the points.
+#[test]
+fn resealed_nonsense_values_are_refused_where_they_are() {
+    let good = reference_table();
+    let put = |at: usize, v: f32| {
+        let mut bytes = good.clone();
+        bytes[at..at + 4].copy_from_slice(&v.to_le_bytes());
+        reseal(&mut bytes);
+        Table::parse(&bytes).map(|_| ())
+    };
+    let header = |k: usize| 8 + 4 * k;
+    let hz = |k: usize| table::HEADER_BYTES + table::POINT_BYTES * k;
+    for (at, v, index) in [
+        (header(0), f32::INFINITY, 0u16),
+        (header(0), 0.0, 0),
+        (header(4), -1.0, 4),
+        (header(12), -1.0, 12),
+        (header(1), f32::NEG_INFINITY, 1),
+        (header(13), 1.0, 13),
+        (hz(3), f32::INFINITY, 3),
+        (hz(3), 0.0, 3),
+        (hz(3) + 4, -1.0, 3),
+        (hz(5) + 4, f32::INFINITY, 5),
+    ] {
+        assert_eq!(put(at, v), Err(TableError::NotFinite { index }), "{at} {v}");
+    }
+    // Zero where zero is allowed: damping, and a table error of 0.
+    assert!(put(header(12), 0.0).is_ok());
+    assert!(put(header(14), 0.0).is_ok());
+}
+
+/// The frequency may turn up to `MAX_TURNS` times (f(Φ) is not monotone on every device),
+/// not once more; the bias must rise strictly.
+#[test]
+fn a_table_turns_at_most_its_limit() {
+    let zigzag = |turns: usize| -> Vec<(f32, f32)> {
+        (0..turns + 2)
+            .map(|k| (45.0 + (k % 2) as f32, 100.0 * (k + 1) as f32))
+            .collect()
+    };
+    let write = |points: &[(f32, f32)]| {
+        let mut bytes = vec![0u8; table::table_bytes(points.len())];
+        table::write(&mut bytes, &REFERENCE_DEVICE.cast(), 0.05, 0.0, points).map(|_| ())
+    };
+    assert_eq!(write(&zigzag(table::MAX_TURNS)), Ok(()));
+    assert!(write(&zigzag(table::MAX_TURNS + 1)).is_err());
+    let flat_bias = [(45.0f32, 100.0f32), (44.0, 100.0)];
+    assert_eq!(write(&flat_bias), Err(TableError::NotMonotone { index: 1 }));
+}
+
+/// Every table error reads as one sentence with its numbers.
+#[test]
+fn table_errors_read_as_sentences() {
+    let cases: [(TableError, &str); 6] = [
+        (
+            TableError::TooShort { bytes: 10 },
+            "table of 10 bytes is too short",
+        ),
+        (TableError::BadMagic, "not a tuning table (no DERT magic)"),
+        (
+            TableError::BadCount { points: 1 },
+            "table has 1 points, expected 2 to 1024",
+        ),
+        (
+            TableError::WrongLength {
+                expected: 584,
+                bytes: 583,
+            },
+            "table is 583 bytes, its count says 584",
+        ),
+        (
+            TableError::OtherDevice {
+                field: de_resonator::Field::Thickness,
+            },
+            "table was made for another device (`thickness` differs)",
+        ),
+        (
+            TableError::NotFinite { index: 3 },
+            "table value 3 is NaN, infinite or not positive",
+        ),
+    ];
+    for (error, text) in cases {
+        assert_eq!(error.to_string(), text);
+    }
+}
+
 #[test]
 fn corrupted_tables_are_refused_with_the_reason() {
     let good = reference_table();
