@@ -1,5 +1,6 @@
 //! host-sim: workstation tools for de-resonator, on the same `no_std` core the firmware runs.
 
+use std::io::Write;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
@@ -90,7 +91,9 @@ fn main() -> ExitCode {
     };
     match result {
         Ok((out, failure)) => {
-            println!("{out}");
+            // A reader that stops early (`host-sim safe | head -1`) is not an error: no panic.
+            let mut stdout = std::io::stdout().lock();
+            let _ = writeln!(stdout, "{out}").and_then(|()| stdout.flush());
             match failure {
                 None => ExitCode::SUCCESS,
                 Some(message) => {

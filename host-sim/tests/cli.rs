@@ -469,3 +469,27 @@ fn report_measures_error_against_run_time() {
     let csv = std::fs::read_to_string(v["csv"].as_str().unwrap()).unwrap();
     assert_eq!(csv.lines().count(), 1 + rows.len());
 }
+
+/// A reader that stops early is not a crash: host-sim writing into a pipe nobody reads
+/// (its read end closed before host-sim starts) ends with status 0, not a "Broken pipe"
+/// panic (101).
+#[test]
+fn a_closed_pipe_is_not_a_panic() {
+    for args in [
+        &["safe"][..],
+        &["safe", "--json"],
+        &["tune", "--target-hz", "44"],
+    ] {
+        let (reader, writer) = std::io::pipe().expect("a pipe");
+        drop(reader);
+        let out = Command::new(env!("CARGO_BIN_EXE_host-sim"))
+            .args(args)
+            .stdout(writer)
+            .stderr(std::process::Stdio::piped())
+            .output()
+            .expect("host-sim runs");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(0), "{args:?}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+    }
+}
