@@ -9,6 +9,7 @@ seconds="${FUZZ_SECONDS:-30}"
 if ! command -v cargo-fuzz >/dev/null; then
     cargo install --locked cargo-fuzz --version 0.13.2
 fi
+mkdir -p target
 for target in table_parse controller; do
     mkdir -p "corpus/$target"
     cp -n "seeds/$target/"* "corpus/$target/"
