@@ -19,7 +19,8 @@ for target in table_parse controller; do
         >"target/$target.log" 2>&1 || status=$?
     if [ "$status" != 0 ]; then
         tail -40 "target/$target.log"
-        echo "cargo fuzz $target found a failure (status $status): input in fuzz/artifacts/" >&2
+        echo "cargo fuzz $target failed (status $status): a build error above, or a finding" \
+            "with its input in fuzz/artifacts/$target/" >&2
         exit "$status"
     fi
     grep -E '^Done' "target/$target.log"

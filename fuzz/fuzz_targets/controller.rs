@@ -25,7 +25,8 @@ fuzz_target!(|data: &[u8]| {
     s.slew_volts_per_second = take(&mut data);
     s.ac_volts = take(&mut data);
     s.ac_hz = take(&mut data);
-    s.trim_tolerance = take(&mut data).abs().min(1e-2);
+    let trim = take(&mut data).abs().min(1e-2);
+    s.trim_tolerance = (trim > 0.0).then_some(trim);
     let stretch = take(&mut data);
     let Ok(amplifier) = Amplifier::new(2.5, 4000.0) else {
         return;
