@@ -348,3 +348,152 @@ fn a_nan_part_fails_its_margin_in_either_position() {
         assert!(lock.is_nan());
     }
 }
+
+/// Every margin of MODEL.md §6, on and off the branch, against its plain-SI value (over μ,
+/// fields over √(μ/ε)), at states with both membranes taut: A's and B's stresses, the field,
+/// the invariants; the stiffness and the Hessian's definiteness by finite differences of the
+/// plain force law and energy.
+#[test]
+fn every_margin_is_its_plain_si_value() {
+    let p = REFERENCE_DEVICE;
+    let d = Device::new(p).unwrap();
+    let (mu, l2p, eps) = (p.shear_modulus, p.prestretch_2, permittivity(&p));
+    let jlim = p.jlim.unwrap();
+    for (l, volts) in [(2.1, 3000.0), (2.25, 8000.0), (1.9, 6000.0), (2.3, 500.0)] {
+        let e0 = volts / p.thickness;
+        let lb = passive_stretch(&p, l);
+        let bias = (volts / d.volts_per_unit()).powi(2);
+        let m = d.margins(l, bias);
+        let field = e0 * l * l2p;
+        let expected = [
+            (
+                FailureMode::DeviceInstability,
+                omega_squared_fd(&p, l, volts) / (d.rad_per_s_per_unit().powi(2)),
+            ),
+            (
+                FailureMode::LossOfTension1,
+                (s1(&p, lb, l2p)).min(s1(&p, l, l2p) - eps * e0 * e0 * l * l2p * l2p) / mu,
+            ),
+            (
+                FailureMode::LossOfTension2a,
+                (l2p * s2(&p, l, l2p) - eps * field * field) / mu,
+            ),
+            (FailureMode::LossOfTension2b, l2p * s2(&p, lb, l2p) / mu),
+            (
+                FailureMode::Breakdown,
+                (p.breakdown_field - field) * (eps / mu).sqrt(),
+            ),
+            (
+                FailureMode::StretchLimit,
+                (1.0 - first_invariant(l, l2p) / jlim).min(1.0 - first_invariant(lb, l2p) / jlim),
+            ),
+        ];
+        for (mode, value) in expected {
+            let got = m.of(mode);
+            assert!(
+                (got - value).abs() <= 1e-6 * value.abs().max(1e-3),
+                "{mode} at λ {l}, {volts} V: {got} vs {value}"
+            );
+        }
+        // EMI: the Hessian of F = W − ½ε E0² λ1² λ2² over μ, by differences of the energy.
+        let f = |a: f64, b: f64| (energy(&p, a, b) - 0.5 * eps * e0 * e0 * a * a * b * b) / mu;
+        let h = 1e-4;
+        let faa = (f(l + h, l2p) - 2.0 * f(l, l2p) + f(l - h, l2p)) / (h * h);
+        let fbb = (f(l, l2p + h) - 2.0 * f(l, l2p) + f(l, l2p - h)) / (h * h);
+        let fab = (f(l + h, l2p + h) - f(l + h, l2p - h) - f(l - h, l2p + h) + f(l - h, l2p - h))
+            / (4.0 * h * h);
+        let definiteness = faa.min(faa * fbb - fab * fab);
+        let got = m.of(FailureMode::Emi);
+        assert!(
+            (got - definiteness).abs() < 1e-4 * definiteness.abs(),
+            "{got} vs {definiteness}"
+        );
+        // On the branch, at the stretch this bias holds, the same values.
+        let held = d.stretch_for_bias(volts, 2.5).unwrap();
+        let on = d.margins_on_branch(held);
+        let off = d.margins(held, bias);
+        for mode in FailureMode::ALL {
+            let (a, b) = (on.of(mode), off.of(mode));
+            assert!(
+                (a - b).abs() <= 1e-6 * b.abs().max(1e-3),
+                "{mode}: {a} vs {b}"
+            );
+        }
+    }
+}
+
+/// A margin of exactly zero fails its check (the boundary is not safe), and a state outside
+/// the model has a negative tension margin, not only undefined others.
+#[test]
+fn zero_is_not_safe_and_outside_is_negative() {
+    use de_resonator::Margins;
+    let safe = Device::new(REFERENCE_DEVICE)
+        .unwrap()
+        .margins_on_branch(2.1);
+    for mode in FailureMode::ALL {
+        let mut values = safe.values;
+        values[mode as usize] = 0.0;
+        assert_eq!(Margins { values }.first_failure(), Some(mode));
+    }
+    assert!(Margins::<f64>::outside_model().of(FailureMode::LossOfTension1) < 0.0);
+}
+
+/// The bounds the scan and the sensor use, from their definitions: the plausible stretches
+/// (−λfull, 2·λfull) with λfull = L1·λ1p/L1A; the model's range from ½λ2p^(−1/2) (or λ1p);
+/// the scan's end, the least of B slack (λB = ½λ2p^(−1/2)), √Jlim, and the breakdown bound of
+/// `Device::scan_end_stretch`'s doc, never below λ1p.
+#[test]
+fn the_bounds_are_their_definitions() {
+    for p in [
+        REFERENCE_DEVICE,
+        neo_hookean_reference(),
+        DeviceParams {
+            breakdown_field: 20e6,
+            ..REFERENCE_DEVICE
+        },
+        DeviceParams {
+            jlim: Some(9.0),
+            ..REFERENCE_DEVICE
+        },
+        non_monotone_device(),
+    ] {
+        let d = Device::new(p).unwrap();
+        let (l1p, l2p) = (p.prestretch_1, p.prestretch_2);
+        let full = length_1(&p) * l1p / p.length_active;
+        let (low, high) = d.plausible_stretch();
+        assert!((low + full).abs() < 1e-12 && (high - 2.0 * full).abs() < 1e-12);
+        let slack = 0.5 / l2p.sqrt();
+        let (start, end) = d.model_range();
+        assert!((start - slack.min(l1p)).abs() < 1e-12);
+        let b_slack = l1p + (l1p - slack) * p.length_passive / p.length_active;
+        let locked = p.jlim.map_or(f64::INFINITY, f64::sqrt);
+        let k = 1.0 / (l1p.powi(3) * l2p * l2p) + s1(&p, l1p, l2p) / p.shear_modulus;
+        let eb = p.breakdown_field * (permittivity(&p) / p.shear_modulus).sqrt();
+        let broken = (k + (k * k + 4.0 * eb * eb).sqrt()) / 2.0 * 1.001;
+        let expected = b_slack.min(locked).min(broken).max(l1p);
+        assert!(
+            (end - expected).abs() < 1e-12 * expected,
+            "{end} vs {expected}"
+        );
+        assert_eq!(d.scan_end_stretch(), end);
+    }
+}
+
+/// Two checks failing in one cell of the scan: the earlier one is the limit. Breakdown set
+/// just below the field at the EMI limit (0.999 of it) comes first, at E = E_B.
+#[test]
+fn two_failures_in_one_cell_report_the_earlier() {
+    let emi = limit_of(REFERENCE_DEVICE);
+    assert_eq!(emi.mode, FailureMode::Emi);
+    let p = REFERENCE_DEVICE;
+    let field_at_emi = emi.at.volts * emi.at.stretch * p.prestretch_2 / p.thickness;
+    let q = DeviceParams {
+        breakdown_field: 0.999 * field_at_emi,
+        ..p
+    };
+    let limit = limit_of(q);
+    assert_eq!(limit.mode, FailureMode::Breakdown);
+    let field = limit.at.volts * limit.at.stretch * q.prestretch_2 / q.thickness;
+    assert!((field / q.breakdown_field - 1.0).abs() < 1e-9, "{field}");
+    assert!(limit.at.stretch < emi.at.stretch);
+}
