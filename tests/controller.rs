@@ -242,6 +242,35 @@ fn a_table_turns_at_most_its_limit() {
     assert_eq!(write(&flat_bias), Err(TableError::NotMonotone { index: 1 }));
 }
 
+/// A table that is consistent but wrong (its bias column scaled by 0.99, resealed) passes every
+/// check of its own, and the direct solve refuses it: the natural frequency at the table's
+/// bias is more than the 1e-4 agreement off the solve's (8.4e-4 here).
+#[test]
+fn a_wrong_but_sealed_table_disagrees_with_the_solve() {
+    let mut bytes = reference_table();
+    let points = (bytes.len() - table::HEADER_BYTES - 4) / table::POINT_BYTES;
+    for k in 0..points {
+        let at = table::HEADER_BYTES + table::POINT_BYTES * k + 4;
+        let v = f32::from_le_bytes(bytes[at..at + 4].try_into().unwrap()) * 0.99;
+        bytes[at..at + 4].copy_from_slice(&v.to_le_bytes());
+    }
+    reseal(&mut bytes);
+    assert!(Table::parse(&bytes).is_ok());
+    let params = REFERENCE_DEVICE.cast::<f32>();
+    let fault = Controller::start(params, &bytes, amplifier(), Settings::for_target(44.0));
+    match fault {
+        Err(Fault::Disagree {
+            table_hz,
+            solved_hz,
+            ..
+        }) => assert!(
+            (table_hz / solved_hz - 1.0).abs() > 1e-3,
+            "{table_hz} {solved_hz}"
+        ),
+        other => panic!("{other:?}"),
+    }
+}
+
 /// Every table error reads as one sentence with its numbers.
 #[test]
 fn table_errors_read_as_sentences() {
