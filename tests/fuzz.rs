@@ -61,10 +61,26 @@ fn reseal(bytes: &mut [u8]) {
     bytes[body..].copy_from_slice(&crc.to_le_bytes());
 }
 
+/// The little-endian f32 at `at`.
+fn f32_at(bytes: &[u8], at: usize) -> f32 {
+    f32::from_le_bytes(bytes[at..at + 4].try_into().unwrap())
+}
+
+/// The f32 at `at` scaled by 0.5 to `most`, or wild (half the time each), then resealed.
+fn change_value(rng: &mut Rng, bytes: &mut [u8], at: usize, most: f64) {
+    let v = f64::from(f32_at(bytes, at));
+    let new = if rng.unit() < 0.5 {
+        v * rng.range(0.5, most)
+    } else {
+        wild(rng)
+    };
+    bytes[at..at + 4].copy_from_slice(&(new as f32).to_le_bytes());
+    reseal(bytes);
+}
+
 /// The table as made, or corrupted one way or another; and the kind, for the summary.
 fn corrupt(rng: &mut Rng, mut bytes: Vec<u8>) -> (Vec<u8>, &'static str) {
     let n = bytes.len();
-    let f32_at = |b: &[u8], at: usize| f32::from_le_bytes(b[at..at + 4].try_into().unwrap());
     let points = (n - HEADER_BYTES - 4) / POINT_BYTES;
     let kind = match rng.below(8) {
         0..=2 => "clean",
@@ -76,14 +92,7 @@ fn corrupt(rng: &mut Rng, mut bytes: Vec<u8>) -> (Vec<u8>, &'static str) {
         4 => {
             // A value in the points, changed and resealed.
             let at = HEADER_BYTES + 4 * rng.below(2 * points);
-            let v = f64::from(f32_at(&bytes, at));
-            let new = if rng.unit() < 0.5 {
-                v * rng.range(0.5, 1.5)
-            } else {
-                wild(rng)
-            };
-            bytes[at..at + 4].copy_from_slice(&(new as f32).to_le_bytes());
-            reseal(&mut bytes);
+            change_value(rng, &mut bytes, at, 1.5);
             "point resealed"
         }
         5 => {
@@ -98,16 +107,9 @@ fn corrupt(rng: &mut Rng, mut bytes: Vec<u8>) -> (Vec<u8>, &'static str) {
             "biases scaled, resealed"
         }
         6 => {
-            // A header value (parameter, margin, error), resealed.
+            // A header value (parameter, margin, error), changed and resealed.
             let at = 8 + 4 * rng.below(15);
-            let v = f64::from(f32_at(&bytes, at));
-            let new = if rng.unit() < 0.5 {
-                v * rng.range(0.5, 2.0)
-            } else {
-                wild(rng)
-            };
-            bytes[at..at + 4].copy_from_slice(&(new as f32).to_le_bytes());
-            reseal(&mut bytes);
+            change_value(rng, &mut bytes, at, 2.0);
             "header resealed"
         }
         _ => {

@@ -145,19 +145,18 @@ impl Settings {
     /// Every setting in its range (the trim's only with the `trim` feature): a `Setting`
     /// fault naming the first that is not, or `Tune` for the margin.
     pub(super) fn check(&self) -> Result<(), Fault> {
-        let settings = self;
-        let tick_hz = positive(Setting::TickHz, settings.tick_hz)?;
-        positive(Setting::SlewVoltsPerSecond, settings.slew_volts_per_second)?;
-        non_negative(Setting::SettleSeconds, settings.settle_seconds)?;
-        non_negative(Setting::AcVolts, settings.ac_volts)?;
-        let ac_hz = non_negative(Setting::AcHz, settings.ac_hz)?;
-        non_negative(Setting::CheckSeconds, settings.check_seconds)?;
-        positive(Setting::Agreement, settings.agreement)?;
+        let tick_hz = positive(Setting::TickHz, self.tick_hz)?;
+        positive(Setting::SlewVoltsPerSecond, self.slew_volts_per_second)?;
+        non_negative(Setting::SettleSeconds, self.settle_seconds)?;
+        non_negative(Setting::AcVolts, self.ac_volts)?;
+        let ac_hz = non_negative(Setting::AcHz, self.ac_hz)?;
+        non_negative(Setting::CheckSeconds, self.check_seconds)?;
+        positive(Setting::Agreement, self.agreement)?;
         positive(
             Setting::AmplifierToleranceVolts,
-            settings.amplifier_tolerance_volts,
+            self.amplifier_tolerance_volts,
         )?;
-        if let Some(trim) = settings.trim_tolerance {
+        if let Some(trim) = self.trim_tolerance {
             positive(Setting::TrimTolerance, trim)?;
             if !cfg!(feature = "trim") {
                 // Built without the trim: asking for it is an error, not a silent no.
@@ -167,26 +166,24 @@ impl Settings {
                 });
             }
         }
-        if settings.stuck_samples == Some(0) {
+        if self.stuck_samples == Some(0) {
             return Err(Fault::Setting {
                 setting: Setting::StuckSamples,
                 value: 0.0,
             });
         }
-        non_negative(Setting::TrimPulseVolts, settings.trim_pulse_volts)?;
-        let window = positive(Setting::TrimWindowSeconds, settings.trim_window_seconds)?;
-        if settings.trim_tolerance.is_some()
-            && !(window * tick_hz <= crate::trim::MAX_WINDOW as f32)
-        {
+        non_negative(Setting::TrimPulseVolts, self.trim_pulse_volts)?;
+        let window = positive(Setting::TrimWindowSeconds, self.trim_window_seconds)?;
+        if self.trim_tolerance.is_some() && !(window * tick_hz <= crate::trim::MAX_WINDOW as f32) {
             return Err(Fault::Setting {
                 setting: Setting::TrimWindowSeconds,
                 value: window,
             });
         }
-        if let Some(every) = settings.trim_every_seconds {
+        if let Some(every) = self.trim_every_seconds {
             positive(Setting::TrimEverySeconds, every)?;
         }
-        let probe = positive(Setting::TrimProbeFraction, settings.trim_probe_fraction)?;
+        let probe = positive(Setting::TrimProbeFraction, self.trim_probe_fraction)?;
         if !(probe <= 1.0) {
             return Err(Fault::Setting {
                 setting: Setting::TrimProbeFraction,
@@ -194,15 +191,15 @@ impl Settings {
             });
         }
         // Below Nyquist; and AC volts without a frequency would drive nothing, silently.
-        if !(ac_hz < 0.5 * tick_hz) || (settings.ac_volts > 0.0 && ac_hz == 0.0) {
+        if !(ac_hz < 0.5 * tick_hz) || (self.ac_volts > 0.0 && ac_hz == 0.0) {
             return Err(Fault::Setting {
                 setting: Setting::AcHz,
                 value: ac_hz,
             });
         }
-        if !(settings.margin >= 0.0 && settings.margin < 1.0) {
+        if !(self.margin >= 0.0 && self.margin < 1.0) {
             return Err(Fault::Tune(TuneError::InvalidMargin {
-                margin: settings.margin,
+                margin: self.margin,
             }));
         }
         Ok(())

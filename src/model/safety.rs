@@ -61,6 +61,11 @@ impl<T: Real> Device<T> {
         if !self.in_model(stretch) {
             return Margins::outside_model();
         }
+        self.margins_in_model(stretch, bias_dimless_squared)
+    }
+
+    /// `margins` for a state known to be inside the model.
+    fn margins_in_model(&self, stretch: T, bias_dimless_squared: T) -> Margins<T> {
         let m = self.material();
         let l = stretch;
         let l2p = self.prestretch_2();
@@ -90,7 +95,8 @@ impl<T: Real> Device<T> {
         if !self.in_model(stretch) {
             return Some(FailureMode::LossOfTension1);
         }
-        self.margins(stretch, bias_dimless_squared).first_failure()
+        self.margins_in_model(stretch, bias_dimless_squared)
+            .first_failure()
     }
 
     /// The checks at the equilibrium of the loading branch at stretch λ.
