@@ -1,15 +1,25 @@
 #!/usr/bin/env bash
 # Cargo runner: the ELF in QEMU's netduinoplus2 (STM32F405), defmt frames over semihosting
 # decoded by defmt-print (a build without defmt runs alone). Exits with the firmware's
-# status (QEMU's), not the decoder's.
-# QEMU_ICOUNT=1 runs with -icount shift=0 (one nanosecond of virtual time per instruction).
+# status (QEMU's), not the decoder's. Environment:
+#   QEMU_IMAGE=FILE     the configuration image, loaded at 0x080E0000 (flash sector 11)
+#   QEMU_SERIAL1=SPEC   USART2, the command port: a -serial spec (default: null), e.g.
+#                       unix:/tmp/fw.sock,server=on,wait=on  or  tcp:127.0.0.1:4444,server=on
+#   QEMU_ICOUNT=1       -icount shift=0,sleep=off (one nanosecond of virtual time an
+#                       instruction, deterministic; QEMU-STM32F405.md §2)
+#   QEMU_EXTRA="..."    more QEMU arguments (e.g. -d trace:memory_region_ops_write -D FILE)
+#   QEMU_TIMEOUT=S      host seconds before QEMU is stopped (default 60)
 set -uo pipefail
 elf="$1"
 extra=()
-if [ "${QEMU_ICOUNT:-0}" = 1 ]; then extra=(-icount shift=0); fi
+if [ "${QEMU_ICOUNT:-0}" = 1 ]; then extra+=(-icount shift=0,sleep=off); fi
+if [ -n "${QEMU_IMAGE:-}" ]; then extra+=(-device "loader,file=${QEMU_IMAGE},addr=0x080E0000"); fi
+# shellcheck disable=SC2206
+if [ -n "${QEMU_EXTRA:-}" ]; then extra+=($QEMU_EXTRA); fi
 qemu() {
     timeout "${QEMU_TIMEOUT:-60}" qemu-system-arm -M netduinoplus2 -nographic -monitor none \
-        -serial null -semihosting-config enable=on,target=native "${extra[@]}" -kernel "$elf"
+        -serial null -serial "${QEMU_SERIAL1:-null}" \
+        -semihosting-config enable=on,target=native "${extra[@]}" -kernel "$elf"
 }
 # A build without defmt (no .defmt section) has no log to decode: its exit status says all.
 if ! size -A "$elf" | grep -q '^\.defmt '; then

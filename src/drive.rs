@@ -14,6 +14,8 @@
 
 use core::fmt;
 
+use crate::decimal::Decimal;
+
 use embedded_hal::spi::SpiDevice;
 
 /// A 16-bit DAC code.
@@ -27,6 +29,8 @@ pub struct DacCode(pub u16);
 pub struct Amplifier {
     /// Membrane volts at code 65536 (Vref times the amplifier's gain), V.
     full_scale_volts: f32,
+    /// The highest voltage it gives: the top code's, or the amplifier's rail if lower, V.
+    max_volts: f32,
 }
 
 /// Why a voltage has no code.
@@ -37,18 +41,33 @@ pub enum CodeError {
     BadFullScale { volts: f32 },
     /// The voltage is NaN, negative, or beyond the amplifier's range.
     OutOfRange { volts: f32, max_volts: f32 },
+    /// The rail is NaN or not positive.
+    BadRail { volts: f32 },
 }
 
 impl fmt::Display for CodeError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
             CodeError::BadFullScale { volts } => {
-                write!(f, "amplifier full scale {volts} V is not a positive number")
+                write!(
+                    f,
+                    "amplifier full scale {} V is not a positive number",
+                    Decimal(volts)
+                )
+            }
+            CodeError::BadRail { volts } => {
+                write!(
+                    f,
+                    "amplifier rail {} V is not a positive number",
+                    Decimal(volts)
+                )
             }
             CodeError::OutOfRange { volts, max_volts } => {
                 write!(
                     f,
-                    "{volts} V is outside the amplifier's range [0, {max_volts}] V"
+                    "{} V is outside the amplifier's range [0, {}] V",
+                    Decimal(volts),
+                    Decimal(max_volts)
                 )
             }
         }
@@ -64,12 +83,31 @@ impl Amplifier {
                 volts: full_scale_volts,
             });
         }
-        Ok(Self { full_scale_volts })
+        let top = Self {
+            full_scale_volts,
+            max_volts: f32::INFINITY,
+        };
+        Ok(Self {
+            max_volts: top.volts(DacCode(u16::MAX)),
+            ..top
+        })
     }
 
-    /// The highest voltage a code gives, V.
+    /// The same transfer on an amplifier whose output stops at `rail_volts`: no code above
+    /// the rail (a positive number; the top code's voltage if it is lower).
+    pub fn with_rail(self, rail_volts: f32) -> Result<Self, CodeError> {
+        if !(rail_volts > 0.0) {
+            return Err(CodeError::BadRail { volts: rail_volts });
+        }
+        Ok(Self {
+            max_volts: self.max_volts.min(rail_volts),
+            ..self
+        })
+    }
+
+    /// The highest voltage it gives, V.
     pub fn max_volts(&self) -> f32 {
-        self.volts(DacCode(u16::MAX))
+        self.max_volts
     }
 
     /// Volts at the membrane for a code.

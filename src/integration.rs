@@ -4,6 +4,8 @@
 
 use core::fmt;
 
+use crate::decimal::Decimal;
+
 use crate::device::Device;
 use crate::real::Real;
 
@@ -164,21 +166,21 @@ impl<T: Real> fmt::Display for StepError<T> {
                 write!(
                     f,
                     "step {} s is not a finite positive number",
-                    step_seconds.to_f64()
+                    Decimal(step_seconds)
                 )
             }
             StepError::InvalidDrive { drive } => write!(
                 f,
                 "drive (bias {}, AC {}, Ω̄ {}) is not finite",
-                drive.bias.to_f64(),
-                drive.ac.to_f64(),
-                drive.omega.to_f64()
+                Decimal(drive.bias),
+                Decimal(drive.ac),
+                Decimal(drive.omega)
             ),
             StepError::InvalidRange { low, high } => write!(
                 f,
                 "stretch range [{}, {}] is not a valid range of positive stretches",
-                low.to_f64(),
-                high.to_f64()
+                Decimal(low),
+                Decimal(high)
             ),
             StepError::Unstable {
                 method,
@@ -187,14 +189,14 @@ impl<T: Real> fmt::Display for StepError<T> {
             } => write!(
                 f,
                 "step {} s is unstable for {}: the stiffest reachable state allows at most {} s",
-                step_seconds.to_f64(),
+                Decimal(step_seconds),
                 method.name(),
-                max_step_seconds.to_f64()
+                Decimal(max_step_seconds)
             ),
             StepError::LeftGuardedRange { tick, stretch } => write!(
                 f,
                 "stretch {} at tick {} left the range the step was checked for",
-                stretch.to_f64(),
+                Decimal(stretch),
                 tick
             ),
             StepError::NewtonFailed { tick } => {
@@ -206,8 +208,8 @@ impl<T: Real> fmt::Display for StepError<T> {
             } => write!(
                 f,
                 "new drive reaches Φ̄² = {}, below the {} the step was checked for",
-                least_bias_dimless_squared.to_f64(),
-                guarded_bias_dimless_squared.to_f64()
+                Decimal(least_bias_dimless_squared),
+                Decimal(guarded_bias_dimless_squared)
             ),
             StepError::NonFinite { tick } => {
                 write!(f, "state became NaN or infinite at tick {tick}")

@@ -20,9 +20,12 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod controller;
+pub mod decimal;
 pub mod drive;
+pub mod image;
 pub mod integration;
 pub mod model;
+pub mod protocol;
 pub mod real;
 pub mod roots;
 pub mod shell;
@@ -34,12 +37,15 @@ pub mod tuning;
 pub use model::{device, material, safety, statics};
 
 pub use controller::{
-    Boot, Controller, Event, Fault, FaultStage, Inputs, Output, Phase, Plan, Setting, Settings,
+    Boot, Controller, Event, Fault, FaultStage, Inputs, Output, Phase, Plan, Refusal, ReplanJob,
+    Replanned, Setting, Settings,
 };
 #[cfg(feature = "trim")]
 pub use controller::{TrimJob, TrimResult};
+pub use decimal::Decimal;
 pub use device::{Device, DeviceParams, Field, ParamError, Problem, REFERENCE_DEVICE};
 pub use drive::{Amplifier, CodeError, Dac8551, DacCode, DacError, PowerMode};
+pub use image::{AmplifierSpec, Image, ImageError};
 pub use integration::{Drive, Integrator, Method, State, StepError};
 pub use real::Real;
 pub use safety::{Crossing, FailureMode, Limit, Margins, Monitor};

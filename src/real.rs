@@ -18,6 +18,8 @@ pub trait Real:
 {
     /// Machine epsilon of the type.
     const EPSILON: Self;
+    /// Significant digits a message writes (`Decimal`).
+    const DIGITS: u32;
     /// The value nearest to `x` (overflows to infinity).
     fn of(x: f64) -> Self;
     /// Widen to `f64` (exact).
@@ -81,6 +83,7 @@ pub trait Real:
 
 impl Real for f64 {
     const EPSILON: Self = f64::EPSILON;
+    const DIGITS: u32 = 12;
     fn of(x: f64) -> Self {
         x
     }
@@ -112,6 +115,7 @@ impl Real for f64 {
 
 impl Real for f32 {
     const EPSILON: Self = f32::EPSILON;
+    const DIGITS: u32 = 7;
     fn of(x: f64) -> Self {
         x as f32
     }

@@ -22,6 +22,8 @@
 
 use core::fmt;
 
+use crate::decimal::Decimal;
+
 use crate::device::{Device, DeviceParams, Field};
 use crate::real::Real;
 use crate::statics::Equilibrium;
@@ -127,7 +129,10 @@ impl fmt::Display for TableError {
                 high_hz,
             } => write!(
                 f,
-                "target {target_hz} Hz is outside the table's range [{low_hz}, {high_hz}] Hz"
+                "target {} Hz is outside the table's range [{}, {}] Hz",
+                Decimal(target_hz),
+                Decimal(low_hz),
+                Decimal(high_hz)
             ),
             TableError::BufferTooSmall { needed } => {
                 write!(f, "table needs a buffer of {needed} bytes")

@@ -4,6 +4,8 @@
 
 use core::fmt;
 
+use crate::decimal::Decimal;
+
 use crate::device::{Device, DeviceParams};
 use crate::roots::bisect;
 use crate::safety::Limit;
@@ -42,15 +44,19 @@ impl fmt::Display for TrimError {
             ),
             TrimError::NoEstimate { measured_hz, volts } => write!(
                 f,
-                "no shear modulus within {MODULUS_RANGE}x of the nominal gives {measured_hz} Hz \
-                 at {volts} V"
+                "no shear modulus within {}x of the nominal gives {} Hz at {} V",
+                Decimal(MODULUS_RANGE),
+                Decimal(measured_hz),
+                Decimal(volts)
             ),
             TrimError::NotConverged {
                 measured_hz,
                 target_hz,
             } => write!(
                 f,
-                "trim did not converge: {measured_hz} Hz measured for a target of {target_hz} Hz"
+                "trim did not converge: {} Hz measured for a target of {} Hz",
+                Decimal(measured_hz),
+                Decimal(target_hz)
             ),
         }
     }

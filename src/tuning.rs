@@ -7,6 +7,8 @@
 
 use core::fmt;
 
+use crate::decimal::Decimal;
+
 use crate::device::Device;
 use crate::real::Real;
 use crate::roots::{argmax, bisect};
@@ -40,10 +42,10 @@ impl<T: Real> fmt::Display for TuneError<T> {
             TuneError::InvalidTarget { target_hz } => write!(
                 f,
                 "target frequency {} Hz is not a finite positive number",
-                target_hz.to_f64()
+                Decimal(target_hz)
             ),
             TuneError::InvalidMargin { margin } => {
-                write!(f, "voltage margin {} is outside [0, 1)", margin.to_f64())
+                write!(f, "voltage margin {} is outside [0, 1)", Decimal(margin))
             }
             TuneError::OutOfRange {
                 target_hz,
@@ -52,9 +54,9 @@ impl<T: Real> fmt::Display for TuneError<T> {
             } => write!(
                 f,
                 "target frequency {} Hz is outside the tunable range [{}, {}] Hz",
-                target_hz.to_f64(),
-                low_hz.to_f64(),
-                high_hz.to_f64()
+                Decimal(target_hz),
+                Decimal(low_hz),
+                Decimal(high_hz)
             ),
         }
     }

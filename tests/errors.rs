@@ -2,7 +2,7 @@
 //! what is wrong. Nothing panics.
 
 use de_resonator::{
-    Device, DeviceParams, Field, ParamError, Problem, TuneError, Tuner, REFERENCE_DEVICE,
+    Decimal, Device, DeviceParams, Field, ParamError, Problem, TuneError, Tuner, REFERENCE_DEVICE,
 };
 
 type Setter = fn(&mut DeviceParams<f64>, f64);
@@ -220,7 +220,14 @@ fn out_of_range_carries_the_range_and_says_so() {
         message.contains("50 Hz") && message.contains("tunable range"),
         "{message}"
     );
-    assert!(message.contains(&range.high_hz.to_string()), "{message}");
+    // The range's ends as messages write numbers (12 significant digits for f64).
+    let high = Decimal(range.high_hz).to_string();
+    assert!(message.contains(&high), "{message}");
+    let back: f64 = high.parse().unwrap();
+    assert!(
+        (back - range.high_hz).abs() <= 1e-11 * range.high_hz,
+        "{high}"
+    );
 }
 
 /// The same inputs in f32, as the firmware sees them.

@@ -13,6 +13,7 @@ pub mod plant;
 pub mod plot;
 pub mod precision;
 pub mod scene;
+pub mod settings_file;
 pub mod simulate;
 pub mod stress;
 pub mod sweep;

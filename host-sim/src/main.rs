@@ -67,6 +67,16 @@ enum Command {
     /// (expected near f0/2, f0 and 2·f0, f0 the small-oscillation frequency at the bias).
     /// Writes sweep.csv and sweep.svg into --out.
     Sweep(cmd::sweep::SweepArgs),
+    /// Write the configuration image the firmware reads from its own flash sector (sector
+    /// 11, 0x080E0000): the device, the amplifier, the default settings and the tuning
+    /// table (layout: the core's `image` module), after running the firmware's own boot
+    /// checks on it. `--check FILE` reads an image or a table back: what it holds, and what
+    /// the firmware's boot says of it (status 1 if it would refuse).
+    Image(cmd::image::ImageArgs),
+    /// Talk to the firmware's command port (USART2): a serial port, or QEMU's socket.
+    /// Each request gets one reply line, `ok …` or `err <code> <message>` (the core's
+    /// `protocol` module). With --script, status 1 if any request got an `err`.
+    Console(cmd::console::ConsoleArgs),
 }
 
 fn main() -> ExitCode {
@@ -88,6 +98,8 @@ fn main() -> ExitCode {
         Command::Lut(args) => cmd::lut::lut(&args).map(|r| emit(&r, json)),
         Command::Report(args) => cmd::precision::precision(&args).map(|r| emit(&r, json)),
         Command::Sweep(args) => cmd::sweep::sweep(&args).map(|r| emit(&r, json)),
+        Command::Image(args) => cmd::image::image(&args).map(|r| emit(&r, json)),
+        Command::Console(args) => cmd::console::console(&args, json).map(|r| emit(&r, json)),
     };
     match result {
         Ok((out, failure)) => {

@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use de_resonator::{DeviceParams, Setting, Settings};
+use de_resonator::DeviceParams;
 use serde::Deserialize;
 
 use crate::hil::{Loop, Sensor};
@@ -203,7 +203,7 @@ pub fn parse(text: &str) -> Result<Scene, String> {
         let text = toml::to_string(&file.device).map_err(|e| e.to_string())?;
         crate::device_file::parse(&text).map_err(|e| format!("[device]: {e}"))?
     };
-    let settings = controller_settings(&file.controller)?;
+    let settings = crate::settings_file::from_table(&file.controller, "[controller]", None)?;
     let plant = plant(&nominal, &file, settings.target_hz)?;
     if !(settings.tick_hz.is_finite() && settings.tick_hz > 0.0) {
         return Err(format!(
@@ -248,33 +248,6 @@ pub fn parse(text: &str) -> Result<Scene, String> {
             history: file.output.history || file.output.plot,
         },
     })
-}
-
-/// The `[controller]` table as `Settings`: keys from the core's `Setting` list, numbers.
-fn controller_settings(table: &toml::Table) -> Result<Settings, String> {
-    let number = |key: &str, value: &toml::Value| match value {
-        toml::Value::Float(x) => Ok(*x as f32),
-        toml::Value::Integer(n) => Ok(*n as f32),
-        other => Err(format!(
-            "[controller] {key} must be a number, not a {}",
-            other.type_str()
-        )),
-    };
-    let target = table
-        .get("target_hz")
-        .ok_or("[controller] needs target_hz")?;
-    let mut settings = Settings::for_target(number("target_hz", target)?);
-    for (key, value) in table {
-        let setting = Setting::from_key(key).ok_or_else(|| {
-            let keys: Vec<&str> = Setting::ALL.iter().map(|s| s.key()).collect();
-            format!(
-                "[controller] unknown key `{key}`, expected one of {}",
-                keys.join(", ")
-            )
-        })?;
-        settings.set(setting, number(key, value)?);
-    }
-    Ok(settings)
 }
 
 /// The plant: the nominal device scaled, with the extras.

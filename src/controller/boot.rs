@@ -55,6 +55,17 @@ impl Controller {
         amplifier: Amplifier,
         settings: Settings,
     ) -> Result<(Self, Boot), Fault> {
+        Self::from_table_at(params, table, amplifier, settings, 0.0)
+    }
+
+    /// `from_table` for a plan that ramps from `from_volts` (a replan while running).
+    pub(super) fn from_table_at(
+        params: DeviceParams<f32>,
+        table: &[u8],
+        amplifier: Amplifier,
+        settings: Settings,
+        from_volts: f32,
+    ) -> Result<(Self, Boot), Fault> {
         let device = Device::new(params).map_err(Fault::Device)?;
         settings.check()?;
         let table = Table::parse(table).map_err(Fault::Table)?;
@@ -63,6 +74,7 @@ impl Controller {
         let max_volts = top * ((1.0 - settings.margin) / (1.0 - table.margin())).min(1.0);
         let table_volts = table.bias_volts(settings.target_hz).map_err(Fault::Table)?;
         let mut controller = Controller::new(device, amplifier, settings, max_volts);
+        controller.plan.start_volts = from_volts;
         let plan_ticks = controller.set_plan(table_volts)?;
         let boot = Boot {
             bias_volts: table_volts,
@@ -123,11 +135,26 @@ impl Controller {
     }
 
     /// Run the whole plan through the model (f32 RK4 under the monitor, from rest at the
-    /// pre-stretch) and refuse it if a limit is crossed on the way.
+    /// equilibrium of its first voltage: the pre-stretch from 0 V) and refuse it if a limit
+    /// is crossed on the way.
     pub fn check_plan(self, boot: Boot) -> Result<(Self, Boot), Fault> {
+        let from_volts = self.plan.start_volts;
+        let device = &self.flashed;
+        let start = if from_volts > 0.0 {
+            // Below the cap, so below the limit found by `cross_check` (a replan's boot).
+            boot.limit
+                .and_then(|limit| device.offset_for_bias(from_volts, limit.at.offset))
+                .map(|offset| device.stretch_at(offset))
+                .ok_or(Fault::AboveSafe {
+                    volts: from_volts,
+                    max_volts: boot.max_volts,
+                })?
+        } else {
+            device.prestretch_1()
+        };
         let stretch =
             self.plan
-                .run_in_model(&self.flashed, self.settings.tick_hz, boot.plan_ticks)?;
+                .run_in_model(device, self.settings.tick_hz, boot.plan_ticks, start)?;
         let boot = Boot {
             plan_stretch: Some(stretch),
             ..boot
@@ -135,9 +162,10 @@ impl Controller {
         Ok((self, boot))
     }
 
-    /// Plan a ramp from rest to the bias for `tuned_volts` (with a trim, first to a probe
-    /// bias low enough for a softer plant), the hold and the AC drive, its whole range under
-    /// the cap; the ticks up to the end of its model check.
+    /// Plan a ramp from where the present plan starts (0 V at boot) to the bias for
+    /// `tuned_volts` (with a trim, first to a probe bias low enough for a softer plant), the
+    /// hold and the AC drive, its whole range under the cap; the ticks up to the end of its
+    /// model check.
     fn set_plan(&mut self, tuned_volts: f32) -> Result<u32, Fault> {
         let s = self.settings;
         let trimming = self.trim_wanted();
@@ -146,7 +174,8 @@ impl Controller {
         } else {
             tuned_volts
         };
-        let (plan, ticks) = Plan::from_rest(&s, bias_volts, !trimming)?;
+        let from_volts = self.plan.start_volts;
+        let (plan, ticks) = Plan::ramp(&s, from_volts, bias_volts, !trimming)?;
         plan.check_range(tuned_volts, self.max_volts)?;
         // The amplifier must give the highest voltage: the AC's peak on the tuned bias (the
         // ramp starts at 0 V and ends at a bias no higher, the trim's probe included).

@@ -3,6 +3,8 @@
 
 use core::fmt;
 
+use crate::decimal::Decimal;
+
 use super::settings::Setting;
 use crate::device::ParamError;
 use crate::drive::{CodeError, DacCode};
@@ -67,7 +69,12 @@ impl fmt::Display for Fault {
         match self {
             Fault::Device(e) => write!(f, "device: {e}"),
             Fault::Setting { setting, value } => {
-                write!(f, "setting `{}` = {value} is invalid", setting.key())
+                write!(
+                    f,
+                    "setting `{}` = {} is invalid",
+                    setting.key(),
+                    Decimal(*value)
+                )
             }
             Fault::Table(e) => write!(f, "table: {e}"),
             Fault::Tune(e) => write!(f, "tuning: {e}"),
@@ -78,15 +85,24 @@ impl fmt::Display for Fault {
                 solved_hz,
             } => write!(
                 f,
-                "table gives {table_volts} V ({table_hz} Hz), the direct solve {solved_volts} V \
-                 ({solved_hz} Hz): they disagree"
+                "table gives {} V ({} Hz), the direct solve {} V ({} Hz): they disagree",
+                Decimal(*table_volts),
+                Decimal(*table_hz),
+                Decimal(*solved_volts),
+                Decimal(*solved_hz)
             ),
             Fault::AboveSafe { volts, max_volts } => {
-                write!(f, "{volts} V is above the safe maximum {max_volts} V")
+                write!(
+                    f,
+                    "{} V is above the safe maximum {} V",
+                    Decimal(*volts),
+                    Decimal(*max_volts)
+                )
             }
             Fault::PlanCrosses { mode, seconds } => write!(
                 f,
-                "the plan crosses a limit in the model at {seconds} s: {}",
+                "the plan crosses a limit in the model at {} s: {}",
+                Decimal(*seconds),
                 mode.description()
             ),
             Fault::PlanFailed(e) => write!(f, "the model run of the plan stopped: {e}"),
@@ -94,25 +110,36 @@ impl fmt::Display for Fault {
             Fault::Gate { volts, max_volts } => {
                 write!(
                     f,
-                    "final check refused {volts} V (safe maximum {max_volts} V)"
+                    "final check refused {} V (safe maximum {} V)",
+                    Decimal(*volts),
+                    Decimal(*max_volts)
                 )
             }
-            Fault::Sensor { value } => write!(f, "sensor sample {value} is not a number"),
+            Fault::Sensor { value } => {
+                write!(f, "sensor sample {} is not a number", Decimal(*value))
+            }
             Fault::SensorImplausible { value, low, high } => write!(
                 f,
-                "stretch sample {value} is outside ({low}, {high}), where no device can be: \
-                 sensor fault"
+                "stretch sample {} is outside ({}, {}), where no device can be: sensor fault",
+                Decimal(*value),
+                Decimal(*low),
+                Decimal(*high)
             ),
             Fault::SensorStuck { samples, value } => {
-                write!(f, "stretch sensor stuck at {value} for {samples} samples")
+                write!(
+                    f,
+                    "stretch sensor stuck at {} for {samples} samples",
+                    Decimal(*value)
+                )
             }
             Fault::AmplifierDisagrees {
                 commanded_volts,
                 measured_volts,
             } => write!(
                 f,
-                "amplifier gives {measured_volts} V for a command of {commanded_volts} V \
-                 (saturated or failed)"
+                "amplifier gives {} V for a command of {} V (saturated or failed)",
+                Decimal(*measured_volts),
+                Decimal(*commanded_volts)
             ),
             Fault::Limit { mode, tick } => {
                 write!(f, "measured motion at tick {tick}: {}", mode.description())

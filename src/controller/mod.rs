@@ -23,6 +23,7 @@
 //! (request and response).
 
 mod boot;
+mod command;
 mod fault;
 mod gate;
 mod plan;
@@ -32,6 +33,7 @@ mod trim;
 mod watch;
 
 pub use boot::Boot;
+pub use command::{Refusal, ReplanJob, Replanned};
 pub use fault::{Event, Fault, FaultStage, Output};
 pub use plan::{Plan, MAX_PLAN_TICKS};
 pub use settings::{Setting, Settings, F32_GUARD, MAX_TRIMS, TRIM_SECANT_STEP};
@@ -59,6 +61,21 @@ pub enum Phase {
     /// where it is, no AC, no further trim (said once by `Event::AboveCeiling`).
     Held,
     Faulted,
+}
+
+impl Phase {
+    /// The phase's name, as the command port's `status` says it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Phase::Ramping => "ramping",
+            Phase::Holding => "holding",
+            Phase::Measuring => "measuring",
+            Phase::Solving => "solving",
+            Phase::Driving => "driving",
+            Phase::Held => "held",
+            Phase::Faulted => "faulted",
+        }
+    }
 }
 
 /// Where the controller is, with what each place needs.

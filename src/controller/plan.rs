@@ -53,14 +53,16 @@ impl Plan {
         }
     }
 
-    /// A ramp from 0 V at tick 0 to `bias_volts` at the settings' slew rate, the hold, and
-    /// (when `drive`, else later) the AC; with the ticks up to the end of its model check.
-    pub(super) fn from_rest(
+    /// A ramp from `from_volts` at tick 0 to `bias_volts` at the settings' slew rate, the
+    /// hold, and (when `drive`, else later) the AC; with the ticks up to the end of its model
+    /// check.
+    pub(super) fn ramp(
         s: &Settings,
+        from_volts: f32,
         bias_volts: f32,
         drive: bool,
     ) -> Result<(Self, u32), Fault> {
-        let ramp_ticks = bias_volts / s.slew_volts_per_second * s.tick_hz;
+        let ramp_ticks = (bias_volts - from_volts).abs() / s.slew_volts_per_second * s.tick_hz;
         let ac_tick = libm::ceilf(ramp_ticks) + s.settle_seconds * s.tick_hz;
         let check_ticks = s.check_seconds * s.tick_hz;
         if !(ac_tick + check_ticks < MAX_PLAN_TICKS) {
@@ -77,7 +79,7 @@ impl Plan {
         }
         let plan = Plan {
             start_tick: 0,
-            start_volts: 0.0,
+            start_volts: from_volts,
             bias_volts,
             ramp_volts_per_tick: s.slew_volts_per_second / s.tick_hz,
             pulse_ticks: (0, 0),
@@ -87,6 +89,17 @@ impl Plan {
             ac_phase_step: ((s.ac_hz / s.tick_hz) as f64 * 4_294_967_296.0) as u32,
         };
         Ok((plan, ac_tick as u32 + check_ticks as u32 + 1))
+    }
+
+    /// The same plan `ticks` later (a plan made at tick 0, started at tick `ticks`).
+    pub(super) fn delayed(self, ticks: u32) -> Self {
+        let (from, to) = self.pulse_ticks;
+        Self {
+            start_tick: self.start_tick.saturating_add(ticks),
+            pulse_ticks: (from.saturating_add(ticks), to.saturating_add(ticks)),
+            ac_tick: self.ac_tick.map(|at| at.saturating_add(ticks)),
+            ..self
+        }
     }
 
     /// The ramp's voltage at tick `k` (the bias once it is reached).
@@ -144,16 +157,17 @@ impl Plan {
     }
 
     /// Run the plan through the model (RK4, f32, one step a tick, subdivided for stability)
-    /// from rest at the pre-stretch, with the monitor at every tick, for `ticks` ticks. The
-    /// stretch range swept, or the crossing.
+    /// from rest at `start_stretch` (the equilibrium at the plan's first voltage), with the
+    /// monitor at every tick, for `ticks` ticks. The stretch range swept, or the crossing.
     pub(super) fn run_in_model(
         &self,
         device: &Device<f32>,
         tick_hz: f32,
         ticks: u32,
+        start_stretch: f32,
     ) -> Result<(f32, f32), Fault> {
         let start = State {
-            stretch: device.prestretch_1(),
+            stretch: start_stretch,
             velocity: 0.0,
         };
         // A tick the model cannot step stably, even in substeps, is too slow for this

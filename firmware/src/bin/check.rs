@@ -8,7 +8,8 @@ use de_resonator::table::TableError;
 use de_resonator::{
     Controller, Dac8551, DacCode, Device, Event, Fault, Inputs, Settings, Tuner, REFERENCE_DEVICE,
 };
-use de_resonator_firmware::{amplifier, device, exit, settings, RecordingBus, TABLE};
+use de_resonator_firmware::reference::{amplifier, device, settings, TABLE};
+use de_resonator_firmware::{exit, stand_in::RecordingBus};
 
 /// Largest table this check copies to corrupt.
 const MAX_TABLE: usize = 1024;

@@ -14,7 +14,8 @@ use de_resonator::{
     Controller, Dac8551, Device, Drive, Inputs, Integrator, Method, State, Table, Tuner,
     REFERENCE_DEVICE,
 };
-use de_resonator_firmware::{amplifier, device, exit, settings, stack, RecordingBus, TABLE};
+use de_resonator_firmware::reference::{amplifier, device, settings, TABLE};
+use de_resonator_firmware::{exit, stack, stand_in::RecordingBus};
 
 /// Instructions per call of `f`, averaged over `n` calls.
 fn count(n: u32, mut f: impl FnMut()) -> u32 {

@@ -1,119 +1,309 @@
-//! The firmware: check what its features carry, tune the reference device to its target,
-//! ramp, drive, and (under QEMU) stop after two seconds with status 0; status 1 if it
-//! refused to drive, 2 on a fault while driving, 3 on a DAC bus error.
+//! The firmware: an RTIC 2 application. At power-up it reads the configuration image (flash
+//! sector 11), runs every boot check of the core's controller on it, and drives the image's
+//! default plan; or, if anything is wrong, keeps the amplifier disabled at 0 V and says why on
+//! the command port (`# refused …`) and in the log.
 //!
-//! Features choose the boot checks (README, Firmware): the table alone; `solver` adds the
-//! direct solve on the chip; `dynamics` runs the plan through the model; `defmt` logs.
+//! Tasks, highest priority first:
+//! - `tick` (SysTick, at the settings' `tick_hz`): one controller tick, its DAC frame on SPI1,
+//!   the enable line; hands a trim's solve to `trim`;
+//! - `rx` (USART2): bytes into request lines, queued to `command`;
+//! - `command` and `trim` (software, lowest): each request answered on USART2; the long work
+//!   (a new plan's checks, a boot, a trim's solve) runs here, preempted by the tick.
 #![no_std]
 #![no_main]
 
-use de_resonator::{Boot, Controller, Dac8551, DacCode, Event, Fault, Inputs, OutputStage};
-use de_resonator_firmware::{amplifier, device, exit, settings, EnableLine, RecordingBus, TABLE};
+use de_resonator_firmware as _;
 
-/// Ticks run under QEMU (2 s at 1 kHz).
-const RUN_TICKS: u32 = 2000;
+#[rtic::app(device = stm32f4xx_hal::pac, peripherals = true, dispatchers = [EXTI0])]
+mod app {
+    use core::fmt::Write as _;
 
-/// The boot stages this build carries.
-fn boot() -> Result<(Controller, Boot), Fault> {
-    let amp = amplifier().map_err(Fault::Amplifier)?;
-    let started = Controller::from_table(device(), TABLE, amp, settings());
-    #[cfg(feature = "solver")]
-    let started = started.and_then(|(c, boot)| c.cross_check(boot));
-    #[cfg(feature = "dynamics")]
-    let started = started.and_then(|(c, boot)| c.check_plan(boot));
-    started
-}
+    use de_resonator::protocol::NOTICE;
+    use de_resonator::{Controller, Dac8551, Decimal, Event, OutputStage, Phase};
+    use de_resonator_firmware::board::{self, Board, DacSpi, EnablePin};
+    use de_resonator_firmware::console::{Console, Extras, Line, Lines, ReplyLine};
+    use de_resonator_firmware::sensor::{NoSensor, Sensor};
+    use de_resonator_firmware::{config, stack, work};
+    use embedded_hal_nb::serial::Read as _;
+    use rtic_sync::channel::{Receiver, Sender, TrySendError};
+    use rtic_sync::make_channel;
+    use stm32f4xx_hal::pac::USART2;
+    use stm32f4xx_hal::serial::RxListen as _;
+    use stm32f4xx_hal::serial::{Rx, Tx};
 
-#[cortex_m_rt::entry]
-fn main() -> ! {
-    // The output stage: the DAC and the amplifier-enable line, safe until the boot passes.
-    let mut stage = OutputStage::new(Dac8551::new(RecordingBus::new(None)), EnableLine::default());
-    let _ = stage.safe();
-    #[cfg(feature = "defmt")]
-    defmt::info!(
-        "de-resonator: target {=f32} Hz, margin {=f32}, table {=usize} bytes",
-        settings().target_hz,
-        settings().margin,
-        TABLE.len()
-    );
-    let (mut controller, boot) = match boot() {
-        Ok(ok) => ok,
-        Err(fault) => {
-            #[cfg(feature = "defmt")]
-            defmt::error!("refusing to drive: {}", fault);
-            let _ = fault;
-            exit(1)
+    /// Request lines queued from the receive interrupt to the command task.
+    const QUEUE: usize = 4;
+
+    #[shared]
+    struct Shared {
+        /// `None`: nothing is driven (no usable image, or the boot refused).
+        controller: Option<Controller>,
+        /// The longest tick so far, core cycles.
+        tick_cycles_max: u32,
+    }
+
+    #[local]
+    struct Local {
+        stage: OutputStage<DacSpi, EnablePin>,
+        sensor: NoSensor,
+        serial_rx: Rx<USART2>,
+        lines: Lines,
+        /// A line that found the queue full, kept until the command task makes room.
+        held: Option<Line>,
+        to_command: Sender<'static, Line, QUEUE>,
+        from_rx: Receiver<'static, Line, QUEUE>,
+        tx: Tx<USART2>,
+        console: Console,
+    }
+
+    #[init]
+    fn init(cx: init::Context) -> (Shared, Local) {
+        #[cfg(feature = "qemu")]
+        board::qemu_clock::start(&cx.device.TIM2);
+        stack::paint();
+        let mut core = cx.core;
+        let board = Board::new(cx.device);
+        let mut tx = board.tx;
+        let mut stage = OutputStage::new(Dac8551::new(board.dac), board.enable);
+        // 0 V, DAC powered down, amplifier disabled, until the checks pass.
+        let _ = stage.safe();
+        #[cfg(feature = "defmt")]
+        if let Some(e) = board.clock_error {
+            defmt::warn!("clock: {}; running on the 16 MHz HSI", e);
         }
-    };
-    let _ = stage.enable();
-    #[cfg(feature = "defmt")]
-    log_boot(&boot);
-    let _ = boot;
-    let mut highest = DacCode(0);
-    for _ in 0..RUN_TICKS {
-        let out = controller.tick(Inputs::NONE);
-        highest = highest.max(out.code);
-        let out = stage.send(&mut controller, out);
-        match out.event {
-            #[cfg(feature = "defmt")]
-            Some(Event::AtBias { volts }) => {
-                defmt::info!("tick {=u32}: at bias, {=f32} V", controller.ticks(), volts)
-            }
-            #[cfg(feature = "defmt")]
-            Some(Event::DriveOn) => defmt::info!("tick {=u32}: AC drive on", controller.ticks()),
-            Some(Event::Fault(fault)) => {
+        let mut console = Console {
+            image: None,
+            amplifier: None,
+            settings: de_resonator::Settings::for_target(0.0),
+            refusal: None,
+            limit: None,
+        };
+        let mut notice = ReplyLine::new();
+        let controller = boot(&mut console, &mut notice);
+        let tick_hz = console.settings.tick_hz;
+        if controller.is_some()
+            && board::start_tick(&mut core.SYST, board.core_hz, tick_hz).is_none()
+        {
+            // The controller's own checks bound tick_hz; this is the timer's 24-bit reach.
+            let _ = write!(
+                notice,
+                "refused: tick_hz = {} is beyond SysTick's reach",
+                Decimal(tick_hz)
+            );
+        }
+        let _ = writeln!(tx, "{NOTICE}{notice}");
+        let (to_command, from_rx) = make_channel!(Line, QUEUE);
+        if command::spawn().is_err() {
+            de_resonator_firmware::exit(104);
+        }
+        (
+            Shared {
+                controller,
+                tick_cycles_max: 0,
+            },
+            Local {
+                stage,
+                sensor: NoSensor,
+                serial_rx: board.rx,
+                lines: Lines::default(),
+                held: None,
+                to_command,
+                from_rx,
+                tx,
+                console,
+            },
+        )
+    }
+
+    /// Read the image and run every boot check; the controller, or `None` with why in
+    /// `console.refusal`. The start-up notice into `notice`.
+    fn boot(console: &mut Console, notice: &mut ReplyLine) -> Option<Controller> {
+        let refuse =
+            |console: &mut Console, notice: &mut ReplyLine, why: &dyn core::fmt::Display| {
+                let mut reason = heapless::String::new();
+                let _ = write!(reason, "{why}");
                 #[cfg(feature = "defmt")]
-                defmt::error!("tick {=u32}: {}, 0 V", controller.ticks(), fault);
-                let _ = fault;
-                exit(2)
+                defmt::error!("refusing to drive: {=str}", reason.as_str());
+                let _ = write!(notice, "refused {reason}");
+                console.refusal = Some(reason);
+                None
+            };
+        let image = match config::image() {
+            Ok(image) => image,
+            Err(e) => return refuse(console, notice, &e),
+        };
+        let amplifier = match image.amplifier.amplifier() {
+            Ok(amplifier) => amplifier,
+            Err(e) => return refuse(console, notice, &e),
+        };
+        console.image = Some(image);
+        console.amplifier = Some(amplifier);
+        console.settings = image.settings;
+        match Controller::start(image.params, image.table, amplifier, image.settings) {
+            Ok((controller, boot)) => {
+                #[cfg(feature = "defmt")]
+                defmt::info!(
+                    "boot checks pass: bias {=f32} V for {=f32} Hz, cap {=f32} V",
+                    boot.bias_volts,
+                    image.settings.target_hz,
+                    boot.max_volts
+                );
+                console.limit = boot.limit.map(|l| l.mode);
+                let _ = write!(
+                    notice,
+                    "ready target_hz={} bias_volts={} max_volts={}",
+                    Decimal(image.settings.target_hz),
+                    Decimal(boot.bias_volts),
+                    Decimal(boot.max_volts)
+                );
+                Some(controller)
             }
-            _ => {}
+            Err(fault) => refuse(console, notice, &fault),
         }
     }
-    let _ = stage.safe();
-    let (dac, _) = stage.release();
-    let bus = dac.release();
-    #[cfg(feature = "defmt")]
-    {
-        defmt::info!(
-            "done: {=u32} ticks, {=u32} frames, highest code {=u16}, last frame {=[u8]:#04x}",
-            controller.ticks(),
-            bus.frames,
-            highest.0,
-            bus.last
-        );
-    }
-    let _ = (bus, highest);
-    exit(0)
-}
 
-#[cfg(feature = "defmt")]
-fn log_boot(boot: &Boot) {
-    if let Some(limit) = boot.limit {
-        defmt::info!(
-            "limit {} at {=f32} V; commands stay at or below {=f32} V",
-            limit.mode,
-            limit.at.volts,
-            boot.max_volts
-        );
-        defmt::info!(
-            "bias {=f32} V by direct solve, {=f32} V from the table",
-            boot.bias_volts,
-            boot.table_volts
-        );
-    } else {
-        defmt::info!(
-            "bias {=f32} V from the table; commands stay at or below {=f32} V",
-            boot.bias_volts,
-            boot.max_volts
-        );
+    #[idle]
+    fn idle(_: idle::Context) -> ! {
+        // An explicit WFI: RTIC's default SLEEPONEXIT idle runs about 40 times slower under
+        // QEMU's `-icount sleep=off` (QEMU-STM32F405.md §3).
+        loop {
+            cortex_m::asm::wfi();
+        }
     }
-    if let Some((low, high)) = boot.plan_stretch {
-        defmt::info!(
-            "plan checked in the model: {=u32} ticks, stretch {=f32} .. {=f32}",
-            boot.plan_ticks,
-            low,
-            high
-        );
+
+    /// One controller tick: its code to the DAC, the enable line held, the events logged.
+    #[task(binds = SysTick, priority = 3, shared = [controller, tick_cycles_max], local = [stage, sensor])]
+    fn tick(mut cx: tick::Context) {
+        let stage = cx.local.stage;
+        let inputs = cx.local.sensor.sample();
+        let (event, trim_wanted) = cx.shared.controller.lock(|c| {
+            let Some(c) = c else {
+                return (None, false);
+            };
+            // The amplifier on while a plan that passed its checks drives; off (the DAC
+            // powered down, the enable line low) on a fault and at rest at 0 V after `stop`.
+            let at_rest = c.phase() == Phase::Holding && c.plan().bias_volts == 0.0;
+            let out = c.tick(inputs);
+            let wanted = c.latched_fault().is_none() && !(at_rest && out.volts == 0.0);
+            if wanted && stage.is_safe() {
+                let _ = stage.enable();
+            } else if !wanted && !stage.is_safe() {
+                let _ = stage.safe();
+            }
+            let out = stage.send(c, out);
+            (out.event.map(|e| (e, c.ticks())), work::trim_wanted(c))
+        });
+        if trim_wanted {
+            // Already queued or running: it takes the job when it runs.
+            let _ = trim::spawn();
+        }
+        if let Some((event, ticks)) = event {
+            log(event, ticks);
+        }
+        let cycles = board::cycles_into_tick();
+        cx.shared
+            .tick_cycles_max
+            .lock(|most| *most = (*most).max(cycles));
+    }
+
+    fn log(event: Event, ticks: u32) {
+        #[cfg(feature = "defmt")]
+        match event {
+            Event::Fault(fault) => defmt::error!("tick {=u32}: {}, 0 V", ticks, fault),
+            event => defmt::info!("tick {=u32}: {}", ticks, event),
+        }
+        let _ = (event, ticks);
+    }
+
+    /// Bytes into lines; a full queue holds the line and pauses reception until `command`
+    /// makes room (it pends this interrupt). Paused, the byte that may already wait is kept
+    /// (`stash`): reading it lowers the interrupt line, which QEMU's USART does not lower when
+    /// RXNEIE is cleared; the rest wait in the USART (QEMU), or overrun and garble their line
+    /// (silicon), which then gets its `err`.
+    #[task(binds = USART2, priority = 2, local = [serial_rx, lines, held, stash: Option<u8> = None, to_command])]
+    fn rx(cx: rx::Context) {
+        let rx = cx.local.serial_rx;
+        let lines = cx.local.lines;
+        let to_command = cx.local.to_command;
+        let held = cx.local.held;
+        let stash = cx.local.stash;
+        if let Some(line) = held.take() {
+            if let Err(TrySendError::Full(line)) = to_command.try_send(line) {
+                *held = Some(line);
+                match rx.read() {
+                    Ok(byte) if stash.is_none() => *stash = Some(byte),
+                    Ok(_) | Err(nb::Error::Other(_)) => lines.lost(),
+                    Err(nb::Error::WouldBlock) => {}
+                }
+                return;
+            }
+            rx.listen();
+        }
+        let mut next = stash.take().map(Ok);
+        loop {
+            match next.take().unwrap_or_else(|| rx.read()) {
+                Ok(byte) => {
+                    if let Some(line) = lines.push(byte) {
+                        if let Err(TrySendError::Full(line)) = to_command.try_send(line) {
+                            *held = Some(line);
+                            rx.unlisten();
+                            return;
+                        }
+                    }
+                }
+                Err(nb::Error::WouldBlock) => return,
+                Err(nb::Error::Other(_)) => lines.lost(),
+            }
+        }
+    }
+
+    /// The controller under the lock it shares with the tick.
+    struct Locked<'a, M>(&'a mut M);
+
+    impl<M: rtic::Mutex<T = Option<Controller>>> de_resonator_firmware::console::Shared
+        for Locked<'_, M>
+    {
+        fn with<R>(&mut self, f: impl FnOnce(&mut Option<Controller>) -> R) -> R {
+            self.0.lock(f)
+        }
+    }
+
+    /// Each request answered, one reply line each.
+    #[task(priority = 1, shared = [controller, tick_cycles_max], local = [from_rx, tx, console])]
+    async fn command(mut cx: command::Context) {
+        let mut reply = ReplyLine::new();
+        while let Ok(line) = cx.local.from_rx.recv().await {
+            // Room in the queue again: a paused receiver resumes.
+            rtic::pend(stm32f4xx_hal::pac::Interrupt::USART2);
+            #[cfg(feature = "defmt")]
+            if let Line::Text(bytes) = &line {
+                defmt::info!("command: {=[u8]:a}", bytes);
+            }
+            let extras = Extras {
+                tick_cycles_max: cx.shared.tick_cycles_max.lock(|most| *most),
+                stack_bytes: stack::used(),
+                #[cfg(feature = "qemu")]
+                clock_us: Some(board::qemu_clock::micros()),
+                #[cfg(not(feature = "qemu"))]
+                clock_us: None,
+            };
+            let mut controller = Locked(&mut cx.shared.controller);
+            cx.local
+                .console
+                .serve(&line, &mut controller, &extras, &mut reply);
+            let _ = writeln!(cx.local.tx, "{reply}");
+        }
+    }
+
+    /// A trim's solve, outside the tick; its result back at the next tick.
+    #[task(priority = 1, shared = [controller])]
+    async fn trim(mut cx: trim::Context) {
+        work::trim(|f| {
+            cx.shared.controller.lock(|c| {
+                if let Some(c) = c {
+                    f(c);
+                }
+            })
+        });
     }
 }

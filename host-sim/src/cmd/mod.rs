@@ -1,6 +1,8 @@
 //! host-sim's commands, one module each: its arguments, the work, and a typed report (JSON
 //! through `Serialize`, text through `Display`, CSV from the same rows where it writes one).
 
+pub mod console;
+pub mod image;
 pub mod lut;
 pub mod precision;
 pub mod run;

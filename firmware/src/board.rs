@@ -1,0 +1,206 @@
+//! The board: clocks, the tick's timer, and the pins and peripherals the app drives. Wiring
+//! (README, Firmware: wiring):
+//!
+//! | signal | pin | peripheral |
+//! |---|---|---|
+//! | DAC8551 SCLK, DIN | PA5, PA7 (PA6 MISO unused) | SPI1, mode 1, 1 MHz |
+//! | DAC8551 SYNC (chip select) | PA4 | GPIO, in `ExclusiveDevice` |
+//! | amplifier enable (high: on) | PB0 | GPIO |
+//! | command port TX, RX | PA2, PA3 | USART2, 115200 8N1 |
+//!
+//! Silicon runs from an 8 MHz crystal (HSE) and the PLL at 168 MHz; the `qemu` build leaves
+//! the clocks at reset (QEMU does not emulate RCC, and its SysTick runs at 168 MHz anyway).
+
+use cortex_m::peripheral::syst::SystClkSource;
+use cortex_m::peripheral::SYST;
+use embedded_hal_bus::spi::ExclusiveDevice;
+use stm32f4xx_hal::gpio::{Output, Pin, PushPull};
+use stm32f4xx_hal::pac::{self, SPI1, USART2};
+use stm32f4xx_hal::prelude::*;
+use stm32f4xx_hal::rcc::{Config, Rcc};
+use stm32f4xx_hal::serial::{self, Rx, Serial, Tx};
+use stm32f4xx_hal::spi::Spi;
+
+/// The DAC on SPI1 with its chip select.
+pub type DacSpi =
+    ExclusiveDevice<Spi<SPI1>, Pin<'A', 4, Output<PushPull>>, embedded_hal_bus::spi::NoDelay>;
+/// The amplifier-enable line.
+pub type EnablePin = Pin<'B', 0, Output<PushPull>>;
+
+/// The command port's baud rate.
+pub const BAUD: u32 = 115_200;
+/// The SPI clock to the DAC (the DAC8551 takes up to 30 MHz).
+const SPI_HZ: u32 = 1_000_000;
+/// The crystal on the board, and the core clock from the PLL.
+const HSE_HZ: u32 = 8_000_000;
+const SYSCLK_HZ: u32 = 168_000_000;
+/// Polls of a ready flag before the clock setup gives up (the HSE starts in about 2 ms, the
+/// PLL locks in about 0.1 ms; 16 MHz HSI: a poll is a few cycles).
+#[cfg(not(feature = "qemu"))]
+const CLOCK_POLLS: u32 = 200_000;
+
+/// Why the clock setup fell back to the 16 MHz internal oscillator.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ClockError {
+    /// The crystal did not start (HSERDY never set).
+    Hse,
+    /// The PLL did not lock (PLLRDY never set).
+    Pll,
+}
+
+/// The peripherals the app owns, set up.
+pub struct Board {
+    pub dac: DacSpi,
+    pub enable: EnablePin,
+    pub tx: Tx<USART2>,
+    pub rx: Rx<USART2>,
+    /// The core clock SysTick counts, Hz.
+    pub core_hz: u32,
+    /// Set when the crystal or the PLL failed and the board runs on HSI (slower, still safe:
+    /// every rate is computed from the clock in use).
+    pub clock_error: Option<ClockError>,
+}
+
+/// Poll `ready` up to `CLOCK_POLLS` times.
+#[cfg(not(feature = "qemu"))]
+fn wait(ready: impl Fn() -> bool) -> bool {
+    (0..CLOCK_POLLS).any(|_| ready())
+}
+
+/// Whether the crystal starts and the PLL locks, each wait bounded. stm32f4xx-hal 0.23's
+/// `freeze` waits on HSERDY and PLLRDY without a timeout (rcc/f4/mod.rs, lines 437 and 461),
+/// so a board with a dead crystal would hang there at 0 V with no word said: we prove both
+/// first, with timeouts, and call `freeze` only once they have worked.
+#[cfg(not(feature = "qemu"))]
+fn probe_clocks(rcc: &pac::RCC) -> Result<(), ClockError> {
+    rcc.cr().modify(|_, w| w.hseon().set_bit());
+    if !wait(|| rcc.cr().read().hserdy().bit_is_set()) {
+        rcc.cr().modify(|_, w| w.hseon().clear_bit());
+        return Err(ClockError::Hse);
+    }
+    // PLL from HSE: 8 MHz / 8 × 336 / 2 = 168 MHz (Q = 7: 48 MHz).
+    rcc.pllcfgr().write(|w| unsafe {
+        w.pllsrc().hse();
+        w.pllm().bits(8);
+        w.plln().bits(336);
+        w.pllp().div2();
+        w.pllq().bits(7)
+    });
+    rcc.cr().modify(|_, w| w.pllon().set_bit());
+    let locked = wait(|| rcc.cr().read().pllrdy().bit_is_set());
+    rcc.cr().modify(|_, w| w.pllon().clear_bit());
+    let _ = wait(|| rcc.cr().read().pllrdy().bit_is_clear());
+    if locked {
+        Ok(())
+    } else {
+        Err(ClockError::Pll)
+    }
+}
+
+/// The clocks: HSE + PLL at 168 MHz on silicon (HSI if either fails), reset clocks in QEMU.
+fn clocks(rcc: pac::RCC) -> (Rcc, u32, Option<ClockError>) {
+    #[cfg(feature = "qemu")]
+    {
+        // QEMU's SysTick counts at 168 MHz whatever RCC says (QEMU-STM32F405.md §1).
+        (rcc.constrain(), SYSCLK_HZ, None)
+    }
+    #[cfg(not(feature = "qemu"))]
+    {
+        match probe_clocks(&rcc) {
+            Ok(()) => (
+                rcc.freeze(Config::hse(HSE_HZ.Hz()).sysclk(SYSCLK_HZ.Hz())),
+                SYSCLK_HZ,
+                None,
+            ),
+            Err(e) => (rcc.freeze(Config::hsi()), 16_000_000, Some(e)),
+        }
+    }
+}
+
+impl Board {
+    /// Set up the board; the DAC's chip select high, the amplifier disabled.
+    pub fn new(dp: pac::Peripherals) -> Self {
+        let (mut rcc, core_hz, clock_error) = clocks(dp.RCC);
+        let _ = (HSE_HZ, Config::hsi);
+        let gpioa = dp.GPIOA.split(&mut rcc);
+        let gpiob = dp.GPIOB.split(&mut rcc);
+        let mut enable = gpiob.pb0.into_push_pull_output();
+        enable.set_low();
+        let spi = dp.SPI1.spi(
+            (Some(gpioa.pa5), Some(gpioa.pa6), Some(gpioa.pa7)),
+            embedded_hal::spi::MODE_1,
+            SPI_HZ.Hz(),
+            &mut rcc,
+        );
+        let cs = gpioa
+            .pa4
+            .into_push_pull_output_in_state(stm32f4xx_hal::gpio::PinState::High);
+        let dac = match ExclusiveDevice::new_no_delay(spi, cs) {
+            Ok(dac) => dac,
+            Err(never) => match never {},
+        };
+        let serial: Serial<USART2> = match dp.USART2.serial(
+            (gpioa.pa2, gpioa.pa3),
+            serial::Config::default().baudrate(BAUD.bps()),
+            &mut rcc,
+        ) {
+            Ok(serial) => serial,
+            // 115200 baud from any of the clocks above is a valid divider.
+            Err(_) => crate::runtime::exit(103),
+        };
+        let (tx, mut rx) = serial.split();
+        rx.listen();
+        Self {
+            dac,
+            enable,
+            tx,
+            rx,
+            core_hz,
+            clock_error,
+        }
+    }
+}
+
+/// SysTick interrupts at `tick_hz` (rounded to whole core cycles), or `None` if the period
+/// does not fit the 24-bit reload (below core_hz / 2²⁴, about 10 Hz at 168 MHz).
+pub fn start_tick(syst: &mut SYST, core_hz: u32, tick_hz: f32) -> Option<u32> {
+    let cycles = libm::roundf(core_hz as f32 / tick_hz);
+    if !(2.0..=16_777_216.0).contains(&cycles) {
+        return None;
+    }
+    let reload = cycles as u32 - 1;
+    syst.set_clock_source(SystClkSource::Core);
+    syst.set_reload(reload);
+    syst.clear_current();
+    syst.enable_interrupt();
+    syst.enable_counter();
+    Some(reload)
+}
+
+/// Core cycles since the SysTick period began (it counts down from its reload).
+pub fn cycles_into_tick() -> u32 {
+    SYST::get_reload().saturating_sub(SYST::get_current())
+}
+
+/// An independent clock of virtual time under QEMU: TIM2 counting microseconds (QEMU's timer
+/// model counts at 1 GHz whatever RCC says; started first thing, its count is right:
+/// QEMU-STM32F405.md §2). Only for the tick-rate test; nothing on silicon uses it.
+#[cfg(feature = "qemu")]
+pub mod qemu_clock {
+    use stm32f4xx_hal::pac::TIM2;
+
+    /// Start TIM2 free-running in microseconds.
+    pub fn start(tim2: &TIM2) {
+        tim2.psc().write(|w| w.psc().set(999));
+        tim2.arr().write(|w| w.arr().set(u32::MAX));
+        tim2.egr().write(|w| w.ug().set_bit());
+        tim2.cr1().modify(|_, w| w.cen().set_bit());
+    }
+
+    /// Microseconds of virtual time since `start`.
+    pub fn micros() -> u32 {
+        // SAFETY: a read of a counter register no one writes after `start`.
+        unsafe { (*TIM2::ptr()).cnt().read().bits() }
+    }
+}

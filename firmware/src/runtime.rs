@@ -1,0 +1,103 @@
+//! Runtime glue: exit codes, the panic and HardFault handlers, and the stack meter. The only
+//! `unsafe` of the firmware lives here and in `config` (raw memory the linker names).
+
+/// End the run with a status (QEMU's exit status under semihosting); on a chip, stop at a
+/// breakpoint.
+pub fn exit(code: i32) -> ! {
+    #[cfg(feature = "qemu")]
+    semihosting::process::exit(code);
+    #[cfg(not(feature = "qemu"))]
+    {
+        let _ = code;
+        loop {
+            cortex_m::asm::bkpt();
+        }
+    }
+}
+
+#[cfg(feature = "defmt")]
+#[defmt::panic_handler]
+fn defmt_panic() -> ! {
+    exit(101)
+}
+
+#[panic_handler]
+fn panic(_: &core::panic::PanicInfo) -> ! {
+    #[cfg(feature = "defmt")]
+    defmt::error!("panic");
+    exit(101)
+}
+
+#[cortex_m_rt::exception]
+unsafe fn HardFault(frame: &cortex_m_rt::ExceptionFrame) -> ! {
+    #[cfg(feature = "defmt")]
+    defmt::error!(
+        "HardFault at pc {=u32:#x}, lr {=u32:#x}",
+        frame.pc(),
+        frame.lr()
+    );
+    let _ = frame;
+    exit(102)
+}
+
+/// The stack's high-water mark, by painting: `paint` fills the free stack below the caller
+/// with a pattern (before interrupts are enabled), `used` finds the lowest word that lost it.
+pub mod stack {
+    use core::ptr::{addr_of, read_volatile, write_volatile};
+
+    const PAINT: u32 = 0xC0DE_CAFE;
+    /// Left unpainted below `paint`'s own stack pointer.
+    const SLACK_BYTES: u32 = 16;
+
+    extern "C" {
+        /// End of the statics, start of the stack's room (cortex-m-rt's link.x).
+        static __sheap: u32;
+        /// The top of RAM, where the stack starts.
+        static _stack_start: u32;
+    }
+
+    /// Where the stack starts (only the symbol's address is taken).
+    pub fn top() -> u32 {
+        addr_of!(_stack_start) as u32
+    }
+
+    /// The lowest address the stack may reach (only the symbol's address is taken).
+    fn bottom() -> u32 {
+        addr_of!(__sheap) as u32
+    }
+
+    /// The stack pointer now.
+    pub fn pointer() -> u32 {
+        cortex_m::register::msp::read()
+    }
+
+    /// Paint the free stack from the end of the statics to just below this call's frame.
+    /// Call with interrupts off (RTIC's `init`, or a binary that has none).
+    #[inline(never)]
+    pub fn paint() {
+        let sp = pointer();
+        let mut at = bottom();
+        while at + SLACK_BYTES < sp {
+            // SAFETY: [__sheap, sp − slack) is RAM no one uses: below the live stack (no
+            // interrupt runs yet), above the statics.
+            unsafe { write_volatile(at as *mut u32, PAINT) };
+            at += 4;
+        }
+    }
+
+    /// Bytes of stack used below the address `mark` since `paint` (called with the stack
+    /// pointer at or above `mark`).
+    pub fn used_below(mark: u32) -> u32 {
+        let mut at = bottom();
+        // SAFETY: reads of the painted RAM, between the statics and `mark`.
+        while at < mark && unsafe { read_volatile(at as *const u32) } == PAINT {
+            at += 4;
+        }
+        mark - at
+    }
+
+    /// The deepest the stack has been since `paint`, bytes.
+    pub fn used() -> u32 {
+        used_below(top())
+    }
+}

@@ -1,0 +1,327 @@
+//! `image`: the configuration image the firmware reads from its own flash sector (layout: the
+//! core's `image` module): the device, the amplifier, the default settings and the tuning
+//! table; and `image --check FILE`, which reads an image (or a table) back and runs the
+//! firmware's own boot checks on it, saying what they say.
+
+use std::fmt;
+use std::path::PathBuf;
+
+use clap::Args;
+use de_resonator::image::{self, AmplifierSpec, Image, DAC_BITS};
+use de_resonator::table::{self, Table};
+use de_resonator::{Controller, DeviceParams, Field, Setting, Settings};
+use serde::Serialize;
+
+use super::{sig, DeviceArgs, Report};
+use crate::lut;
+
+/// The reference job's target (MODEL.md §9, scenes/reference.toml), Hz.
+const REFERENCE_TARGET_HZ: f32 = 44.0;
+
+#[derive(Args, Debug)]
+pub struct ImageArgs {
+    /// Where to write the image (flash it at 0x080E0000, sector 11).
+    #[arg(long, value_name = "FILE", required_unless_present = "check")]
+    pub out: Option<PathBuf>,
+    /// Read FILE (an image or a table) back instead: what it holds, and whether the
+    /// firmware's boot checks accept it (status 1 if not).
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["out", "settings", "target_hz"])]
+    pub check: Option<PathBuf>,
+    #[command(flatten)]
+    pub device: DeviceArgs,
+    /// Default settings (TOML, the keys of a scene's [controller] table). Default:
+    /// `Settings::for_target` (5% margin, 10 kV/s, 1 kHz, no AC).
+    #[arg(long, value_name = "FILE")]
+    pub settings: Option<PathBuf>,
+    /// The target the firmware tunes to at power-up, Hz (over the settings file's). Needed
+    /// for a device other than the reference (whose default is 44 Hz).
+    #[arg(long, value_name = "HZ")]
+    pub target_hz: Option<f32>,
+    /// The DAC's reference, V (the DAC8551's VREF).
+    #[arg(long, value_name = "V", default_value_t = 2.5)]
+    pub dac_reference_volts: f32,
+    /// The high-voltage amplifier's gain, V/V.
+    #[arg(long, value_name = "V/V", default_value_t = 4000.0)]
+    pub gain: f32,
+    /// The amplifier's output rail, V. Default: the DAC's full scale times the gain.
+    #[arg(long, value_name = "V")]
+    pub rail_volts: Option<f32>,
+}
+
+/// One device parameter or setting, for the report.
+#[derive(Serialize, Debug)]
+pub struct Entry {
+    pub key: &'static str,
+    pub value: f32,
+}
+
+/// What the table inside holds.
+#[derive(Serialize, Debug)]
+pub struct TableSummary {
+    pub points: usize,
+    pub bytes: usize,
+    pub margin: f32,
+    /// The maker's measured interpolation error (relative, in f).
+    pub interpolation_error: f32,
+    pub frequency_hz: [f32; 2],
+    pub top_volts: f32,
+}
+
+/// The firmware's boot checks on what the file holds.
+#[derive(Serialize, Debug)]
+#[serde(tag = "verdict", rename_all = "snake_case")]
+pub enum Verdict {
+    /// The firmware would drive: to this bias, capped here.
+    Drives {
+        bias_volts: f32,
+        max_volts: f32,
+        limit: Option<&'static str>,
+    },
+    /// The firmware would refuse, saying this (its own words).
+    Refuses { reason: String },
+}
+
+/// What `image` wrote, or `image --check` read.
+#[derive(Serialize, Debug)]
+pub struct ImageReport {
+    pub file: String,
+    /// `image` or `table`.
+    pub kind: &'static str,
+    pub bytes: usize,
+    pub device: Vec<Entry>,
+    pub amplifier: Option<AmplifierSummary>,
+    pub settings: Vec<Entry>,
+    pub table: Option<TableSummary>,
+    pub verdict: Verdict,
+    #[serde(skip)]
+    written: bool,
+}
+
+#[derive(Serialize, Debug)]
+pub struct AmplifierSummary {
+    pub dac_reference_volts: f32,
+    pub gain: f32,
+    pub rail_volts: f32,
+    pub dac_bits: u16,
+}
+
+impl fmt::Display for ImageReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let verb = if self.written { "wrote" } else { "read" };
+        writeln!(
+            f,
+            "{verb} {} ({}, {} bytes)",
+            self.file, self.kind, self.bytes
+        )?;
+        let list = |entries: &[Entry]| {
+            entries
+                .iter()
+                .map(|e| format!("{} = {}", e.key, e.value))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        if !self.device.is_empty() {
+            writeln!(f, "device          {}", list(&self.device))?;
+        }
+        if let Some(a) = &self.amplifier {
+            writeln!(
+                f,
+                "amplifier       {}-bit DAC, reference {} V, gain {}, rail {} V",
+                a.dac_bits, a.dac_reference_volts, a.gain, a.rail_volts
+            )?;
+        }
+        if !self.settings.is_empty() {
+            writeln!(f, "settings        {}", list(&self.settings))?;
+        }
+        if let Some(t) = &self.table {
+            writeln!(
+                f,
+                "table           {} points, {} .. {} Hz, top {} V (margin {}), \
+                 interpolation error {:.2e}",
+                t.points,
+                sig(f64::from(t.frequency_hz[0])),
+                sig(f64::from(t.frequency_hz[1])),
+                sig(f64::from(t.top_volts)),
+                t.margin,
+                t.interpolation_error
+            )?;
+        }
+        match &self.verdict {
+            Verdict::Drives {
+                bias_volts,
+                max_volts,
+                limit,
+            } => write!(
+                f,
+                "boot checks     pass: bias {} V, commands at or below {} V{}",
+                sig(f64::from(*bias_volts)),
+                sig(f64::from(*max_volts)),
+                limit.map_or(String::new(), |m| format!(" (limit: {m})"))
+            ),
+            Verdict::Refuses { reason } => write!(f, "boot checks     refuse: {reason}"),
+        }
+    }
+}
+
+impl Report for ImageReport {
+    fn failure(&self) -> Option<String> {
+        match &self.verdict {
+            Verdict::Refuses { reason } => Some(format!("the firmware would refuse: {reason}")),
+            Verdict::Drives { .. } => None,
+        }
+    }
+}
+
+pub fn image(args: &ImageArgs) -> Result<ImageReport, String> {
+    if let Some(path) = &args.check {
+        return check(path);
+    }
+    let out = args
+        .out
+        .as_ref()
+        .ok_or("give --out FILE (or --check FILE)")?;
+    let (params, name) = args.device.params()?;
+    let target_hz = args.target_hz.or_else(|| {
+        (args.device.device.is_none() && args.settings.is_none()).then_some(REFERENCE_TARGET_HZ)
+    });
+    let settings = match &args.settings {
+        Some(path) => crate::settings_file::load(path, target_hz)?,
+        None => Settings::for_target(target_hz.ok_or_else(|| {
+            format!("{name}: give the target the firmware tunes to (--target-hz or --settings)")
+        })?),
+    };
+    let settings = match args.target_hz {
+        Some(hz) => Settings {
+            target_hz: hz,
+            ..settings
+        },
+        None => settings,
+    };
+    let full_scale = args.dac_reference_volts * args.gain;
+    let amplifier = AmplifierSpec {
+        dac_reference_volts: args.dac_reference_volts,
+        gain: args.gain,
+        rail_volts: args.rail_volts.unwrap_or(full_scale),
+        dac_bits: DAC_BITS,
+    };
+    let made =
+        lut::make(params, f64::from(settings.margin), None).map_err(|e| format!("{name}: {e}"))?;
+    let mut bytes = vec![0; image::image_bytes(made.bytes.len())];
+    let params32: DeviceParams<f32> = params.cast();
+    Image::write(&mut bytes, &params32, &amplifier, &settings, &made.bytes)
+        .map_err(|e| e.to_string())?;
+    // Checked before writing: an image the firmware would refuse is not written.
+    let mut report = describe(&bytes, out.display().to_string())?;
+    if let Verdict::Refuses { reason } = &report.verdict {
+        return Err(format!(
+            "{name}: the firmware would refuse this image: {reason}"
+        ));
+    }
+    std::fs::write(out, &bytes).map_err(|e| format!("cannot write {}: {e}", out.display()))?;
+    report.written = true;
+    Ok(report)
+}
+
+fn check(path: &PathBuf) -> Result<ImageReport, String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    describe(&bytes, path.display().to_string())
+}
+
+fn entries(params: &DeviceParams<f32>) -> Vec<Entry> {
+    Field::ALL
+        .iter()
+        .map(|&field| Entry {
+            key: field.key(),
+            value: params.get(field),
+        })
+        .collect()
+}
+
+fn summary(table: &Table<'_>, bytes: usize) -> TableSummary {
+    TableSummary {
+        points: table.points(),
+        bytes,
+        margin: table.margin(),
+        interpolation_error: table.interpolation_error(),
+        frequency_hz: [table.point(0).0, table.point(table.points() - 1).0],
+        top_volts: table.max_volts(),
+    }
+}
+
+/// What `bytes` hold (an image, or a bare table), and what the firmware's boot says of it.
+fn describe(bytes: &[u8], file: String) -> Result<ImageReport, String> {
+    let refuse = |reason: String| Verdict::Refuses { reason };
+    if bytes.starts_with(&table::MAGIC) {
+        // A bare table: what it holds, and its own checks (it has no settings to boot with).
+        let parsed = Table::parse(bytes).map_err(|e| format!("{file}: {e}"))?;
+        return Ok(ImageReport {
+            file,
+            kind: "table",
+            bytes: bytes.len(),
+            device: entries(&parsed.params()),
+            amplifier: None,
+            settings: Vec::new(),
+            table: Some(summary(&parsed, bytes.len())),
+            verdict: refuse(
+                "a bare table: flash an image (`host-sim image`) holding it with its settings"
+                    .into(),
+            ),
+            written: false,
+        });
+    }
+    let parsed = match Image::parse(bytes) {
+        Ok(parsed) => parsed,
+        Err(e) => {
+            return Ok(ImageReport {
+                file,
+                kind: "image",
+                bytes: bytes.len(),
+                device: Vec::new(),
+                amplifier: None,
+                settings: Vec::new(),
+                table: None,
+                verdict: refuse(e.to_string()),
+                written: false,
+            })
+        }
+    };
+    let table = Table::parse(parsed.table).map_err(|e| format!("{file}: {e}"))?;
+    let a = parsed.amplifier;
+    // The firmware's boot, the same calls: the amplifier, then every boot stage.
+    let verdict = match a
+        .amplifier()
+        .map_err(|e| e.to_string())
+        .and_then(|amplifier| {
+            Controller::start(parsed.params, parsed.table, amplifier, parsed.settings)
+                .map_err(|e| e.to_string())
+        }) {
+        Ok((_, boot)) => Verdict::Drives {
+            bias_volts: boot.bias_volts,
+            max_volts: boot.max_volts,
+            limit: boot.limit.map(|l| l.mode.name()),
+        },
+        Err(reason) => refuse(reason),
+    };
+    Ok(ImageReport {
+        file,
+        kind: "image",
+        bytes: bytes.len(),
+        device: entries(&parsed.params),
+        amplifier: Some(AmplifierSummary {
+            dac_reference_volts: a.dac_reference_volts,
+            gain: a.gain,
+            rail_volts: a.rail_volts,
+            dac_bits: a.dac_bits,
+        }),
+        settings: Setting::ALL
+            .iter()
+            .map(|&s| Entry {
+                key: s.key(),
+                value: parsed.settings.get(s),
+            })
+            .collect(),
+        table: Some(summary(&table, parsed.table.len())),
+        verdict,
+        written: false,
+    })
+}

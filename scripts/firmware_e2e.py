@@ -1,0 +1,307 @@
+#!/usr/bin/env python3
+"""The firmware end to end under QEMU (netduinoplus2), as an engineer operates it.
+
+Each case starts QEMU with the firmware ELF and a configuration image made by `host-sim
+image` (loaded at 0x080E0000, flash sector 11), talks to the command port (USART2) over a
+Unix socket, and checks every reply. The DAC frames are rebuilt from QEMU's MMIO write trace
+(SPI1's data register) and the amplifier-enable line from GPIOB's BSRR writes.
+
+Usage: scripts/firmware_e2e.py ELF HOST_SIM WORKDIR
+"""
+
+import json
+import os
+import random
+import re
+import signal
+import socket
+import struct
+import subprocess
+import sys
+import time
+import zlib
+
+ELF, HOST_SIM, WORK = sys.argv[1], sys.argv[2], sys.argv[3]
+RUNNER = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "firmware", "qemu-run.sh")
+SPI1_DR = 0x4001300C
+GPIOB_BSRR = 0x40020418
+FULL_SCALE_VOLTS = 2.5 * 4000.0  # the image's amplifier (host-sim image's defaults)
+failures = []
+
+
+def check(ok, what):
+    print(("  ok    " if ok else "  FAIL  ") + what)
+    if not ok:
+        failures.append(what)
+
+
+def host_sim(*args):
+    done = subprocess.run([HOST_SIM, *args], capture_output=True, text=True)
+    if done.returncode != 0:
+        sys.exit(f"host-sim {' '.join(args)}: {done.stderr}")
+    return done.stdout
+
+
+class Firmware:
+    """QEMU running the firmware with an image; the command port as a line stream."""
+
+    def __init__(self, name, image, icount="shift=0,sleep=off", trace=True):
+        self.sock = os.path.join(WORK, f"{name}.sock")
+        self.trace = os.path.join(WORK, f"{name}.trace") if trace else None
+        self.log = os.path.join(WORK, f"{name}.log")
+        for path in (self.sock, self.trace):
+            if path and os.path.exists(path):
+                os.remove(path)
+        extra = []
+        if icount:
+            extra += ["-icount", icount]
+        if self.trace:
+            extra += ["-d", "trace:memory_region_ops_write", "-D", self.trace]
+        env = dict(os.environ, QEMU_SERIAL1=f"unix:{self.sock},server=on,wait=on",
+                   QEMU_EXTRA=" ".join(extra), QEMU_TIMEOUT="120")
+        if image:
+            env["QEMU_IMAGE"] = image
+        self.qemu = subprocess.Popen([RUNNER, ELF], env=env, stdout=open(self.log, "w"),
+                                     stderr=subprocess.STDOUT, start_new_session=True)
+        self.s = socket.socket(socket.AF_UNIX)
+        for _ in range(200):
+            try:
+                self.s.connect(self.sock)
+                break
+            except OSError:
+                time.sleep(0.05)
+        else:
+            sys.exit(f"{name}: QEMU did not open {self.sock}")
+        self.s.settimeout(60)
+        self.f = self.s.makefile("rwb", buffering=0)
+        self.banner = self.line()
+
+    def line(self):
+        raw = self.f.readline()
+        if not raw:
+            sys.exit("the firmware closed the command port")
+        return raw.decode().rstrip("\n")
+
+    def send(self, raw):
+        self.f.write(raw)
+
+    def ask(self, request):
+        self.send(request.encode() + b"\n")
+        return self.line()
+
+    def status(self):
+        reply = self.ask("status")
+        assert reply.startswith("ok "), reply
+        fields = dict(kv.split("=", 1) for kv in reply[3:].split(" fault=")[0].split())
+        fields["fault"] = reply.split(" fault=", 1)[1]
+        return fields
+
+    def wait_phase(self, phases, timeout=30.0):
+        end = time.time() + timeout
+        while time.time() < end:
+            s = self.status()
+            if s["phase"] in phases:
+                return s
+            time.sleep(0.05)
+        sys.exit(f"phase never became {phases}: {s}")
+
+    def stop(self):
+        # The runner, QEMU and the log decoder: the whole process group.
+        os.killpg(self.qemu.pid, signal.SIGTERM)
+        self.qemu.wait()
+        self.s.close()
+
+    def frames(self):
+        """The DAC frames (3 bytes each, in order) and the enable line's writes."""
+        data, enable = [], []
+        pattern = re.compile(r"addr 0x([0-9a-f]+) value 0x([0-9a-f]+) size")
+        with open(self.trace) as trace:
+            for line in trace:
+                m = pattern.search(line)
+                if not m:
+                    continue
+                addr, value = int(m.group(1), 16), int(m.group(2), 16)
+                if addr == SPI1_DR:
+                    data.append(value & 0xFF)
+                elif addr == GPIOB_BSRR and value & 0x10001:
+                    enable.append("high" if value & 1 else "low")
+        frames = [tuple(data[i:i + 3]) for i in range(0, len(data) - len(data) % 3, 3)]
+        return frames, enable
+
+
+def volts(frame):
+    return ((frame[1] << 8) | frame[2]) * FULL_SCALE_VOLTS / 65536.0
+
+
+def reseal(image, **changes):
+    """A copy of the image with bytes changed (offset: bytes) and a fresh CRC (MODEL: the
+    core's image layout; the CRC is CRC-32/IEEE over every byte before it, as zlib's)."""
+    body = bytearray(image[:-4])
+    for offset, raw in changes.values():
+        body[offset:offset + len(raw)] = raw
+    return bytes(body) + struct.pack("<I", zlib.crc32(body))
+
+
+def main():
+    os.makedirs(WORK, exist_ok=True)
+    ref = os.path.join(WORK, "reference.img")
+    host_sim("image", "--target-hz", "44", "--out", ref)
+
+    print("== the reference image: commands, replies and the DAC frames")
+    fw = Firmware("reference", ref)
+    check(fw.banner.startswith("# ready "), f"start-up notice: {fw.banner}")
+    first = fw.status()
+    check(first["phase"] in ("ramping", "holding"), f"status at start: phase {first['phase']}")
+    cap = float(first["max_volts"])
+    reply = fw.ask("target 43.5")
+    check(reply.startswith("err 3 ") or reply.startswith("ok "),
+          f"a target during the boot's ramp is refused as busy (or taken once at bias): {reply}")
+    fw.wait_phase(("holding",))
+    reply = fw.ask("target 44")
+    check(reply.startswith("ok target_hz=44 "), f"target 44: {reply}")
+    solved = float(re.search(r"bias_volts=([0-9.]+)", reply).group(1))
+    tuned = json.loads(host_sim("--json", "tune", "--target-hz", "44"))["bias_volts"]
+    check(abs(solved - tuned) <= 1e-4 * tuned,
+          f"the chip's bias for 44 Hz, {solved} V, is host-sim tune's f64 {tuned} V within 1e-4")
+    s = fw.wait_phase(("holding",))
+    check(abs(float(s["volts"]) - solved) <= FULL_SCALE_VOLTS / 65536,
+          f"the bias reached: {s['volts']} V (one DAC step below {solved} V at most)")
+    reply = fw.ask("ac 100 40")
+    check(reply.startswith("ok ") and "ac_volts=100" in reply, f"ac 100 40: {reply}")
+    s = fw.wait_phase(("driving",))
+    check(s["fault"] == "none", f"driving: {s['phase']}, fault {s['fault']}")
+    reply = fw.ask("target 47")
+    check(reply.startswith("err 2 ") and "range" in reply, f"target 47 (out of range): {reply}")
+    # The half line: one request in two writes.
+    fw.send(b"sta")
+    time.sleep(0.2)
+    fw.send(b"tus\n")
+    check(fw.line().startswith("ok phase=driving"), "a request sent in two halves is one request")
+    # Garbage and a 10 kB flood: each line gets exactly one `err`, nothing is misread.
+    rng = random.Random(7)
+    lines = [bytes(rng.choice(range(0, 256)) for _ in range(rng.randint(1, 60))).replace(b"\n", b"")
+             for _ in range(40)]
+    lines += [b"x" * 300, b"target", b"target 4.4.4", b"set margin", b"get nothing", b"\xff\xfe"]
+    words = [b"tar", b"get", b"44", b"stop", b"ac", b"1e9", b"clear", b"-", b" "]
+    flood = []
+    while sum(len(l) + 1 for l in flood) < 10_000:
+        # Near misses: command words run together or cut (never a whole valid request).
+        flood.append(b"?" + b"".join(rng.choice(words) + rng.choice([b"x", b"#", b"?", b"\t"])
+                                     for _ in range(rng.randint(1, 12))))
+    lines += flood
+    fw.send(b"".join(l + b"\n" for l in lines))
+    replies = [fw.line() for _ in lines]
+    bad = [(l, r) for l, r in zip(lines, replies) if not re.match(r"err [1-6] ", r)]
+    check(not bad, f"{len(lines)} garbage lines ({sum(len(l) + 1 for l in lines)} bytes), "
+                   f"one `err` each{'' if not bad else f': {bad[:3]}'}")
+    s = fw.status()
+    check(s["phase"] == "driving" and s["fault"] == "none",
+          f"after the flood the drive runs on: {s['phase']}, fault {s['fault']}")
+    reply = fw.ask("stop")
+    check(reply.startswith("ok stop"), f"stop: {reply}")
+    end = time.time() + 30
+    while float(fw.status()["volts"]) > 0 and time.time() < end:
+        time.sleep(0.05)
+    time.sleep(0.2)
+    s = fw.status()
+    check(float(s["volts"]) == 0.0, f"stopped at {s['volts']} V")
+    fw.stop()
+
+    frames, enable = fw.frames()
+    codes = [(f[1] << 8) | f[2] for f in frames]
+    cap_code = int(cap * 65536 / FULL_SCALE_VOLTS)
+    check(len(frames) > 1000, f"{len(frames)} DAC frames in the trace")
+    check(max(codes) <= cap_code, f"every code at or below the cap: highest {max(codes)}, "
+                                  f"cap {cap_code} ({cap} V)")
+    slew_volts_per_tick = 10_000.0 / 1000.0  # the image's settings: 10 kV/s at 1 kHz
+    steps = [abs(volts(b) - volts(a)) for a, b in zip(frames, frames[1:])]
+    ramp_steps = [d for d in steps if d > 0]
+    ac_step = 2 * 3.14159265 * 40 * 100 / 1000  # the AC's largest change a tick
+    step_codes = sorted(steps)[-5:]
+    check(max(steps) <= 100 + slew_volts_per_tick + 2 * FULL_SCALE_VOLTS / 65536,
+          f"largest change a tick {max(steps):.2f} V (the ramp's {slew_volts_per_tick} V, the AC's "
+          f"{ac_step:.1f} V, its start and stop at most 100 V): {[round(x, 2) for x in step_codes]}")
+    ramp_up = 0
+    for a, b in zip(frames, frames[1:]):
+        if volts(a) < volts(b) and abs(volts(b) - volts(a)) > ac_step + 1:
+            ramp_up += 1
+    check(ramp_up == 0, "no upward step faster than the slew rate or the AC")
+    check(frames[-1][0] == 0x01 and codes[-1] == 0, f"last frame powers the DAC down: {frames[-1]}")
+    check(enable and enable[-1] == "low", f"the amplifier-enable line ends low ({enable[-3:]})")
+
+    print("== a second device: the same firmware, its own image")
+    other = os.path.join(WORK, "other-device.toml")
+    with open(other, "w") as f:
+        f.write("shear_modulus = 60000.0\nbar_mass = 0.003\nprestretch_1 = 2.5\n")
+    safe = host_sim("--json", "safe", "--device", other)
+    low, high = json.loads(safe)["tunable_range_hz"]
+    target = round((low + high) / 2, 3)
+    img = os.path.join(WORK, "other.img")
+    host_sim("image", "--device", other, "--target-hz", str(target), "--out", img)
+    fw = Firmware("other", img, trace=False)
+    check(fw.banner.startswith("# ready "), f"second device boots: {fw.banner}")
+    fw.wait_phase(("holding",))
+    goal = round(low + 0.25 * (high - low), 3)
+    reply = fw.ask(f"target {goal}")
+    tuned = json.loads(host_sim("--json", "tune", "--device", other, "--target-hz",
+                                str(goal)))["bias_volts"]
+    solved = float(re.search(r"bias_volts=([0-9.]+)", reply).group(1)) if reply.startswith("ok") else -1
+    check(abs(solved - tuned) <= 1e-4 * tuned,
+          f"second device tuned to {goal} Hz on the chip: {solved} V, host-sim tune {tuned} V")
+    fw.stop()
+
+    print("== bad images: refused, amplifier off, every request `err 5`")
+    good = open(ref, "rb").read()
+    bad_images = {
+        "empty": None,
+        "crc": good[:-1] + bytes([good[-1] ^ 0xFF]),
+        "version": reseal(good, v=(4, struct.pack("<H", 2))),
+        "amplifier": reseal(good, a=(76, struct.pack("<H", 12))),
+        "settings": reseal(good, s=(84, struct.pack("<f", 1.5))),  # margin (ALL[1]) = 1.5
+    }
+    words = {"empty": "no configuration image", "crc": "CRC", "version": "version",
+             "amplifier": "DAC", "settings": "margin"}
+    for name, raw in bad_images.items():
+        path = None
+        if raw is not None:
+            path = os.path.join(WORK, f"bad-{name}.img")
+            open(path, "wb").write(raw)
+            said = subprocess.run([HOST_SIM, "image", "--check", path], capture_output=True,
+                                  text=True)
+            check(said.returncode == 1 and words[name] in said.stdout,
+                  f"{name}: host-sim image --check refuses it ({said.stdout.splitlines()[-1]})")
+        fw = Firmware(f"bad-{name}", path)
+        status = fw.ask("status")
+        target = fw.ask("target 44")
+        fw.stop()
+        frames, enable = fw.frames()
+        check(fw.banner.startswith("# refused ") and words[name] in fw.banner,
+              f"{name}: {fw.banner}")
+        check(status.startswith("err 5 ") and target.startswith("err 5 "),
+              f"{name}: status and target get err 5")
+        check(all(f[0] == 0x01 and f[1:] == (0, 0) for f in frames) and "high" not in enable,
+              f"{name}: only power-down frames ({len(frames)}), enable never high")
+
+    print("== tick rate against an independent clock (TIM2, virtual time)")
+    # `-icount shift=0` with sleep on: QEMU 7.2 with sleep=off and a WFI idle delivers every
+    # other SysTick period (measured: 2.000 ticks' time per tick against TIM2; a busy idle under
+    # sleep=off, or WFI with sleep on, ticks 1:1). With sleep on, virtual time follows the
+    # host's while the chip sleeps, so a loaded host can delay or merge a period: 2% allowed.
+    # See BENCHMARKS.md, Firmware.
+    fw = Firmware("rate", ref, icount="shift=0", trace=False)
+    a = fw.status()
+    time.sleep(2.0)
+    b = fw.status()
+    fw.stop()
+    ticks = int(b["ticks"]) - int(a["ticks"])
+    micros = int(b["clock_us"]) - int(a["clock_us"])
+    rate = ticks / micros * 1e6
+    check(abs(rate - 1000.0) <= 20.0, f"{ticks} ticks in {micros} µs of virtual time: {rate:.1f} Hz "
+                                     f"(tick_hz 1000)")
+
+    if failures:
+        sys.exit(f"{len(failures)} checks failed")
+    print("firmware end to end: all checks pass")
+
+
+main()

@@ -1,0 +1,198 @@
+//! What an operator asks of a running controller (the command port): a new plan (target, AC,
+//! settings) checked outside the tick like a boot, a stop, a trim now; and why one is
+//! refused (`Refusal`). The tick never solves: `replan` hands out a `ReplanJob`, whose
+//! `solve` (a low-priority task) runs every boot check from the present bias, and `adopt`
+//! takes its result at a tick.
+
+use core::fmt;
+
+use super::fault::Fault;
+use super::plan::Plan;
+use super::{Boot, Controller, Phase, State};
+use crate::drive::Amplifier;
+use crate::{DeviceParams, Settings};
+
+/// Why a request to a running controller was not done. The controller runs on as before.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Refusal {
+    /// Not while the bias moves or a trim measures: ask again once it holds.
+    Busy { phase: Phase },
+    /// A fault holds the output at 0 V.
+    Faulted { fault: Fault },
+    /// The checks refused the new plan (out of range, above the cap, a setting...).
+    Checks(Fault),
+    /// No trim is set (`trim_tolerance`), or this build has none.
+    NoTrim,
+}
+
+impl fmt::Display for Refusal {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Refusal::Busy { phase } => {
+                write!(f, "busy ({}): ask again once the bias holds", phase.name())
+            }
+            Refusal::Faulted { fault } => write!(f, "faulted at 0 V ({fault}): `clear` first"),
+            Refusal::Checks(fault) => write!(f, "{fault}"),
+            Refusal::NoTrim => write!(f, "no trim: set trim_tolerance (needs the trim build)"),
+        }
+    }
+}
+
+/// A new plan to check outside the tick: every boot stage, from the present bias.
+#[derive(Clone, Copy, Debug)]
+pub struct ReplanJob {
+    params: DeviceParams<f32>,
+    amplifier: Amplifier,
+    settings: Settings,
+    /// The plan in force when the job was made: `adopt` takes the result only if it still is.
+    plan: Plan,
+}
+
+/// A checked new plan, for `adopt`.
+#[derive(Clone, Debug)]
+pub struct Replanned {
+    controller: Controller,
+    boot: Boot,
+    plan: Plan,
+}
+
+impl Replanned {
+    /// What its boot checks found.
+    pub fn boot(&self) -> &Boot {
+        &self.boot
+    }
+}
+
+impl ReplanJob {
+    /// Every boot check for the new settings (`from_table`, `cross_check`, `check_plan`),
+    /// the ramp starting at the present bias; long work, for a low-priority task.
+    pub fn solve(&self, table: &[u8]) -> Result<Replanned, Refusal> {
+        let from_volts = self.plan.bias_volts;
+        let started = Controller::from_table_at(
+            self.params,
+            table,
+            self.amplifier,
+            self.settings,
+            from_volts,
+        )
+        .and_then(|(c, boot)| c.cross_check(boot))
+        .and_then(|(c, boot)| c.check_plan(boot))
+        .map_err(Refusal::Checks)?;
+        let (controller, boot) = started;
+        Ok(Replanned {
+            controller,
+            boot,
+            plan: self.plan,
+        })
+    }
+}
+
+impl Controller {
+    /// The settings in force.
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+
+    /// The voltage commanded at the last tick, V.
+    pub fn last_volts(&self) -> f32 {
+        self.last_volts
+    }
+
+    /// Whether the bias holds still (no ramp, no trim under way): when a new plan may start.
+    fn steady(&self) -> Result<(), Refusal> {
+        match self.state {
+            State::Holding {
+                then_measure: false,
+                ..
+            }
+            | State::Driving { .. }
+            | State::Held { .. } => Ok(()),
+            State::Faulted(fault) => Err(Refusal::Faulted { fault }),
+            _ => Err(Refusal::Busy {
+                phase: self.phase(),
+            }),
+        }
+    }
+
+    /// A job to check `settings` as a new plan from the present bias (the tick rate stays the
+    /// one booted with: a new rate takes a new boot).
+    pub fn replan(&self, settings: Settings) -> Result<ReplanJob, Refusal> {
+        self.steady()?;
+        Ok(ReplanJob {
+            params: *self.flashed.params(),
+            amplifier: self.amplifier,
+            settings: Settings {
+                tick_hz: self.settings.tick_hz,
+                ..settings
+            },
+            plan: self.plan,
+        })
+    }
+
+    /// Take a checked new plan from the next tick: the ramp from the present bias, then the
+    /// hold and the AC. The cap stays the lower of the one in force and the new plan's (the
+    /// ceiling fixed at boot never rises). Refused if the plan changed since the job was
+    /// made.
+    pub fn adopt(&mut self, replanned: Replanned) -> Result<Boot, Refusal> {
+        self.steady()?;
+        if self.plan != replanned.plan {
+            return Err(Refusal::Busy {
+                phase: self.phase(),
+            });
+        }
+        let fresh = replanned.controller;
+        let max_volts = fresh.max_volts.min(self.max_volts);
+        let plan = fresh.plan.delayed(self.tick);
+        plan.check_range(fresh.plan.bias_volts, max_volts)
+            .map_err(Refusal::Checks)?;
+        self.settings = fresh.settings;
+        self.max_volts = max_volts;
+        self.plan = plan;
+        self.state = fresh.state;
+        #[cfg(feature = "trim")]
+        {
+            self.trim = fresh.trim;
+        }
+        Ok(Boot {
+            max_volts,
+            ..replanned.boot
+        })
+    }
+
+    /// Ramp from the voltage now to 0 V at the slew rate, no AC, and hold there (always
+    /// allowed: the voltage only falls; a trim under way is dropped).
+    pub fn stop(&mut self) {
+        if matches!(self.state, State::Faulted(_)) {
+            return;
+        }
+        self.plan = Plan {
+            start_tick: self.tick,
+            start_volts: self.last_volts,
+            bias_volts: 0.0,
+            pulse_ticks: (0, 0),
+            ac_tick: None,
+            ac_volts: 0.0,
+            ..self.plan
+        };
+        self.set_tuned(false);
+        self.state = State::Ramping {
+            then_measure: false,
+        };
+    }
+
+    /// Measure the natural frequency and trim now (AC paused), as a periodic trim does.
+    pub fn trim_now(&mut self) -> Result<(), Refusal> {
+        self.steady()?;
+        if !self.trim_wanted() {
+            return Err(Refusal::NoTrim);
+        }
+        #[cfg(feature = "trim")]
+        {
+            self.pause_for_trim(self.tick);
+            Ok(())
+        }
+        #[cfg(not(feature = "trim"))]
+        Err(Refusal::NoTrim)
+    }
+}

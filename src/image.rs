@@ -1,0 +1,274 @@
+//! The configuration image a firmware is flashed with, apart from its code (flash sector 11
+//! on the STM32F405): the device, the amplifier, the default settings and the tuning table,
+//! one layout for the firmware that reads it and `host-sim image` that writes it.
+//!
+//! Layout (every number little-endian, f32 unless said):
+//!
+//! | offset | size | what |
+//! |---|---|---|
+//! | 0 | 4 | magic `DERI` |
+//! | 4 | 2 | version, u16 = 1 |
+//! | 6 | 2 | S, the number of settings, u16 = 16 |
+//! | 8 | 4 | L, the image's length in bytes with its CRC, u32 |
+//! | 12 | 52 | the 13 device parameters in `DeviceParams` order (`jlim` 0 = neo-Hookean) |
+//! | 64 | 16 | the amplifier: DAC reference V, gain V/V, rail V, DAC bits u16 (16), 0 u16 |
+//! | 80 | 4·S | the default settings in `Setting::ALL` order (0 = off for those that can be) |
+//! | 80 + 4·S | L − 84 − 4·S | the tuning table (`table`'s layout, with its own CRC) |
+//! | L − 4 | 4 | CRC-32 (IEEE 802.3) of every byte before it, u32 |
+//!
+//! `Image::parse` checks the frame (magic, version, length, CRC) and the amplifier; the
+//! device, the settings and the table are the controller's boot checks, as for any input.
+
+use core::fmt;
+
+use crate::device::DeviceParams;
+use crate::drive::{Amplifier, CodeError};
+use crate::table::{crc32, Table, TableError};
+use crate::{Setting, Settings};
+
+/// The first four bytes of an image.
+pub const MAGIC: [u8; 4] = *b"DERI";
+/// The layout version this code reads and writes.
+pub const VERSION: u16 = 1;
+/// The DAC this code drives (the DAC8551): its resolution.
+pub const DAC_BITS: u16 = 16;
+/// Bytes before the settings.
+const SETTINGS_AT: usize = 80;
+const SETTINGS: usize = Setting::ALL.len();
+/// Bytes before the table.
+pub const HEADER_BYTES: usize = SETTINGS_AT + 4 * SETTINGS;
+
+/// The length in bytes of an image holding a table of `table_bytes` bytes.
+pub const fn image_bytes(table_bytes: usize) -> usize {
+    HEADER_BYTES + table_bytes + 4
+}
+
+/// The amplifier the image was made for: the DAC's reference and resolution, the gain, and
+/// the rail its output stops at.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct AmplifierSpec {
+    pub dac_reference_volts: f32,
+    pub gain: f32,
+    pub rail_volts: f32,
+    pub dac_bits: u16,
+}
+
+impl AmplifierSpec {
+    /// The transfer from codes to membrane volts (the DAC must be this code's, `DAC_BITS`).
+    pub fn amplifier(&self) -> Result<Amplifier, ImageError> {
+        if self.dac_bits != DAC_BITS {
+            return Err(ImageError::DacBits {
+                bits: self.dac_bits,
+            });
+        }
+        Amplifier::new(self.dac_reference_volts, self.gain)
+            .and_then(|a| a.with_rail(self.rail_volts))
+            .map_err(ImageError::Amplifier)
+    }
+}
+
+/// Why an image cannot be used.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ImageError {
+    /// Nothing was flashed: the sector reads all `byte` where the header should be (0xFF
+    /// on erased silicon, 0x00 under QEMU).
+    Empty { byte: u8 },
+    /// Shorter than a header and a CRC.
+    TooShort { bytes: usize },
+    /// Does not start with `DERI`.
+    BadMagic,
+    /// A layout version this code does not read.
+    UnsupportedVersion { version: u16 },
+    /// Holds a number of settings this version does not have.
+    SettingsCount { count: u16 },
+    /// Its length is shorter than its parts or longer than the room it is in.
+    WrongLength { stated: u32, room: usize },
+    /// The stored CRC does not match the bytes: corrupted or cut short.
+    BadCrc { stored: u32, computed: u32 },
+    /// Made for a DAC of another resolution than this firmware drives.
+    DacBits { bits: u16 },
+    /// The amplifier's numbers give no transfer.
+    Amplifier(CodeError),
+    /// The table inside is not a valid table.
+    Table(TableError),
+    /// The output buffer is too small (writing).
+    BufferTooSmall { needed: usize },
+}
+
+impl fmt::Display for ImageError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            ImageError::Empty { byte } => write!(
+                f,
+                "no configuration image: the sector reads {byte:#04x} (flash one with \
+                 `host-sim image`)"
+            ),
+            ImageError::TooShort { bytes } => write!(f, "image of {bytes} bytes is too short"),
+            ImageError::BadMagic => write!(f, "not a configuration image (no DERI magic)"),
+            ImageError::UnsupportedVersion { version } => {
+                write!(f, "image layout version {version}, expected {VERSION}")
+            }
+            ImageError::SettingsCount { count } => {
+                write!(f, "image holds {count} settings, expected {SETTINGS}")
+            }
+            ImageError::WrongLength { stated, room } => write!(
+                f,
+                "image length {stated} bytes is impossible (room for {room})"
+            ),
+            ImageError::BadCrc { stored, computed } => write!(
+                f,
+                "image CRC {stored:#010x} does not match its bytes ({computed:#010x}): corrupted"
+            ),
+            ImageError::DacBits { bits } => write!(
+                f,
+                "image made for a {bits}-bit DAC, this firmware drives a {DAC_BITS}-bit DAC8551"
+            ),
+            ImageError::Amplifier(e) => write!(f, "image amplifier: {e}"),
+            ImageError::Table(e) => write!(f, "image {e}"),
+            ImageError::BufferTooSmall { needed } => {
+                write!(f, "image needs a buffer of {needed} bytes")
+            }
+        }
+    }
+}
+
+impl core::error::Error for ImageError {}
+
+/// A configuration image read from flash (borrowing its table, no copy).
+#[derive(Clone, Copy, Debug)]
+pub struct Image<'a> {
+    pub params: DeviceParams<f32>,
+    pub amplifier: AmplifierSpec,
+    pub settings: Settings,
+    /// The table's bytes, for `Controller::start` (which parses and checks them).
+    pub table: &'a [u8],
+}
+
+fn u16_at(bytes: &[u8], at: usize) -> u16 {
+    let mut b = [0; 2];
+    if let Some(src) = bytes.get(at..at + 2) {
+        b.copy_from_slice(src);
+    }
+    u16::from_le_bytes(b)
+}
+
+fn u32_at(bytes: &[u8], at: usize) -> u32 {
+    let mut b = [0; 4];
+    if let Some(src) = bytes.get(at..at + 4) {
+        b.copy_from_slice(src);
+    }
+    u32::from_le_bytes(b)
+}
+
+fn f32_at(bytes: &[u8], at: usize) -> f32 {
+    f32::from_bits(u32_at(bytes, at))
+}
+
+impl<'a> Image<'a> {
+    /// Read an image from the start of `room` (a flash sector: the image may be shorter).
+    pub fn parse(room: &'a [u8]) -> Result<Self, ImageError> {
+        let Some(head) = room.get(..HEADER_BYTES + 4) else {
+            return Err(ImageError::TooShort { bytes: room.len() });
+        };
+        if let Some(&byte) = head.first() {
+            if head.iter().all(|&b| b == byte) && (byte == 0x00 || byte == 0xFF) {
+                return Err(ImageError::Empty { byte });
+            }
+        }
+        if head.get(..4) != Some(&MAGIC[..]) {
+            return Err(ImageError::BadMagic);
+        }
+        let version = u16_at(room, 4);
+        if version != VERSION {
+            return Err(ImageError::UnsupportedVersion { version });
+        }
+        let count = u16_at(room, 6);
+        if usize::from(count) != SETTINGS {
+            return Err(ImageError::SettingsCount { count });
+        }
+        let stated = u32_at(room, 8);
+        let length = stated as usize;
+        let body = length.wrapping_sub(4);
+        let (Some(bytes), true) = (room.get(..length), length >= image_bytes(0)) else {
+            return Err(ImageError::WrongLength {
+                stated,
+                room: room.len(),
+            });
+        };
+        let stored = u32_at(bytes, body);
+        let computed = crc32(bytes.get(..body).unwrap_or(&[]));
+        if stored != computed {
+            return Err(ImageError::BadCrc { stored, computed });
+        }
+        let mut values = [0.0; 13];
+        for (k, value) in values.iter_mut().enumerate() {
+            *value = f32_at(bytes, 12 + 4 * k);
+        }
+        let amplifier = AmplifierSpec {
+            dac_reference_volts: f32_at(bytes, 64),
+            gain: f32_at(bytes, 68),
+            rail_volts: f32_at(bytes, 72),
+            dac_bits: u16_at(bytes, 76),
+        };
+        amplifier.amplifier()?;
+        let mut settings = Settings::for_target(0.0);
+        for (k, setting) in Setting::ALL.into_iter().enumerate() {
+            settings.set(setting, f32_at(bytes, SETTINGS_AT + 4 * k));
+        }
+        let table = bytes.get(HEADER_BYTES..body).unwrap_or(&[]);
+        Table::parse(table).map_err(ImageError::Table)?;
+        Ok(Self {
+            params: DeviceParams::from_values(values),
+            amplifier,
+            settings,
+            table,
+        })
+    }
+
+    /// Write an image into `out`; the bytes written. What is written parses back.
+    pub fn write(
+        out: &mut [u8],
+        params: &DeviceParams<f32>,
+        amplifier: &AmplifierSpec,
+        settings: &Settings,
+        table: &[u8],
+    ) -> Result<usize, ImageError> {
+        Table::parse(table).map_err(ImageError::Table)?;
+        let needed = image_bytes(table.len());
+        let Some(out) = out.get_mut(..needed) else {
+            return Err(ImageError::BufferTooSmall { needed });
+        };
+        let numbers = params
+            .values()
+            .into_iter()
+            .chain([
+                amplifier.dac_reference_volts,
+                amplifier.gain,
+                amplifier.rail_volts,
+            ])
+            .flat_map(f32::to_le_bytes)
+            .chain(amplifier.dac_bits.to_le_bytes())
+            .chain([0, 0])
+            .chain(
+                Setting::ALL
+                    .into_iter()
+                    .flat_map(|s| settings.get(s).to_le_bytes()),
+            );
+        let head = MAGIC
+            .into_iter()
+            .chain(VERSION.to_le_bytes())
+            .chain((SETTINGS as u16).to_le_bytes())
+            .chain((needed as u32).to_le_bytes())
+            .chain(numbers)
+            .chain(table.iter().copied());
+        let (body, crc_bytes) = out.split_at_mut(needed - 4);
+        for (slot, byte) in body.iter_mut().zip(head) {
+            *slot = byte;
+        }
+        crc_bytes.copy_from_slice(&crc32(body).to_le_bytes());
+        Image::parse(out)?;
+        Ok(needed)
+    }
+}

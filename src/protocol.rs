@@ -1,0 +1,466 @@
+//! The command port's line protocol, one definition for the firmware that serves it and the
+//! host that talks to it: a person can type it, a program can parse it.
+//!
+//! A request is one line of ASCII, at most `MAX_LINE` bytes, ended by `\n` (a `\r` before it
+//! is dropped). Every request gets exactly one reply line:
+//! - `ok <what was done>`, or `ok <key>=<value> ...` for `status` and `get`;
+//! - `err <code> <message>`, `code` an [`ErrorCode`] number.
+//!
+//! Lines that start with [`NOTICE`] are not replies: the firmware's start-up line (`# ready
+//! <status>`, or `# refused <why>` when the image or the boot checks refuse). Numbers are decimals (`44`, `44.5`, `1e-4`),
+//! parsed without the core library's float parser (17 KB of flash): [`parse_number`].
+
+use core::fmt;
+
+use crate::controller::{Fault, Phase, Setting};
+use crate::decimal::{scale10, Decimal};
+use crate::safety::FailureMode;
+
+/// What starts a line the firmware says on its own (not a reply).
+pub const NOTICE: &str = "# ";
+
+/// The longest request line, in bytes (without its `\n`).
+pub const MAX_LINE: usize = 96;
+
+/// What `help` answers, one line.
+pub const HELP: &str = "commands: help | status | target <Hz> | ac <volts> <Hz> | stop | trim | \
+                        clear | get <setting> | set <setting> <value>";
+
+/// A request.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Command {
+    Help,
+    /// Phase, target, bias, cap, limit mode, last fault, ticks.
+    Status,
+    /// Tune to a new natural frequency: solve, check the plan in the model, ramp there from
+    /// the present bias.
+    Target {
+        hz: f32,
+    },
+    /// A new AC drive on the bias (0 V: none), checked as `target` is.
+    Ac {
+        volts: f32,
+        hz: f32,
+    },
+    /// Ramp to 0 V at the slew rate and stay there.
+    Stop,
+    /// Measure the natural frequency and trim the bias now (the `trim` feature).
+    Trim,
+    /// Re-arm after a latched fault, or at 0 V: the boot checks again, then the default plan.
+    Clear,
+    Get(Setting),
+    Set(Setting, f32),
+}
+
+/// Why a request was not done: the number after `err`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ErrorCode {
+    /// The line is not a request (unknown command, bad number, too long, not text).
+    Syntax = 1,
+    /// The checks refused it (out of the tunable range, above the cap, a setting out of range).
+    Refused = 2,
+    /// Not now: a ramp, a trim or another request is under way; ask again.
+    Busy = 3,
+    /// A fault holds the output at 0 V: `clear` first.
+    Faulted = 4,
+    /// No usable configuration image, or its boot checks fail: nothing is driven.
+    Config = 5,
+    /// This build does not carry what the request needs.
+    Unsupported = 6,
+}
+
+impl ErrorCode {
+    pub const ALL: [ErrorCode; 6] = [
+        ErrorCode::Syntax,
+        ErrorCode::Refused,
+        ErrorCode::Busy,
+        ErrorCode::Faulted,
+        ErrorCode::Config,
+        ErrorCode::Unsupported,
+    ];
+
+    /// The code with this number.
+    pub fn from_number(n: u8) -> Option<Self> {
+        Self::ALL.into_iter().find(|c| *c as u8 == n)
+    }
+}
+
+impl fmt::Display for ErrorCode {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", *self as u8)
+    }
+}
+
+/// Why a line is not a request (all `ErrorCode::Syntax`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ParseError {
+    Empty,
+    /// Longer than `MAX_LINE` bytes (the rest of the line was dropped).
+    TooLong,
+    /// Bytes that are not printable ASCII.
+    NotText,
+    UnknownCommand,
+    UnknownSetting,
+    /// Argument `index` (from 1) is missing.
+    Missing {
+        index: u8,
+    },
+    /// More arguments than the command takes.
+    Extra,
+    /// Argument `index` (from 1) is not a decimal number.
+    BadNumber {
+        index: u8,
+    },
+}
+
+impl fmt::Display for ParseError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            ParseError::Empty => write!(f, "empty line; try `help`"),
+            ParseError::TooLong => write!(f, "line longer than {MAX_LINE} bytes, dropped"),
+            ParseError::NotText => write!(f, "line holds bytes that are not printable ASCII"),
+            ParseError::UnknownCommand => write!(f, "unknown command; try `help`"),
+            ParseError::UnknownSetting => {
+                write!(f, "unknown setting; the settings are those of `Settings`")
+            }
+            ParseError::Missing { index } => write!(f, "argument {index} is missing"),
+            ParseError::Extra => write!(f, "too many arguments"),
+            ParseError::BadNumber { index } => {
+                write!(f, "argument {index} is not a decimal number")
+            }
+        }
+    }
+}
+
+/// Parse one request line (without its `\n`; a trailing `\r` is dropped).
+pub fn parse(line: &[u8]) -> Result<Command, ParseError> {
+    let line = line.strip_suffix(b"\r").unwrap_or(line);
+    if line.len() > MAX_LINE {
+        return Err(ParseError::TooLong);
+    }
+    if !line
+        .iter()
+        .all(|&b| (b' '..=b'~').contains(&b) || b == b'\t')
+    {
+        return Err(ParseError::NotText);
+    }
+    let text = core::str::from_utf8(line).map_err(|_| ParseError::NotText)?;
+    let mut words = text.split_ascii_whitespace();
+    let name = words.next().ok_or(ParseError::Empty)?;
+    let mut args = Args { words, index: 0 };
+    let command = match name {
+        "help" => Command::Help,
+        "status" => Command::Status,
+        "target" => Command::Target { hz: args.number()? },
+        "ac" => Command::Ac {
+            volts: args.number()?,
+            hz: args.number()?,
+        },
+        "stop" => Command::Stop,
+        "trim" => Command::Trim,
+        "clear" => Command::Clear,
+        "get" => Command::Get(args.setting()?),
+        "set" => Command::Set(args.setting()?, args.number()?),
+        _ => return Err(ParseError::UnknownCommand),
+    };
+    if args.words.next().is_some() {
+        return Err(ParseError::Extra);
+    }
+    Ok(command)
+}
+
+struct Args<'a, I: Iterator<Item = &'a str>> {
+    words: I,
+    index: u8,
+}
+
+impl<'a, I: Iterator<Item = &'a str>> Args<'a, I> {
+    fn word(&mut self) -> Result<&'a str, ParseError> {
+        self.index += 1;
+        self.words
+            .next()
+            .ok_or(ParseError::Missing { index: self.index })
+    }
+
+    fn number(&mut self) -> Result<f32, ParseError> {
+        let word = self.word()?;
+        parse_number(word).ok_or(ParseError::BadNumber { index: self.index })
+    }
+
+    fn setting(&mut self) -> Result<Setting, ParseError> {
+        Setting::from_key(self.word()?).ok_or(ParseError::UnknownSetting)
+    }
+}
+
+/// A decimal number (`-12.5`, `.5`, `3e-4`, `1E3`) as the nearest f32, or `None` for anything
+/// else (no `inf`, no `nan`, no hex). Up to 19 significant digits are kept, exactly, in a u64;
+/// the value is that integer times a power of ten, both exact in f64 for the inputs a person
+/// types (|exponent| ≤ 22), so the result is the f64 rounding of the exact value, then f32's:
+/// within one f32 ulp of correctly rounded, and equal to it in all but rare double-rounding
+/// ties (tests hold it against `str::parse::<f32>`).
+pub fn parse_number(word: &str) -> Option<f32> {
+    let bytes = word.as_bytes();
+    let (negative, rest) = match bytes.first() {
+        Some(b'-') => (true, bytes.get(1..)?),
+        Some(b'+') => (false, bytes.get(1..)?),
+        _ => (false, bytes),
+    };
+    let mut digits: u64 = 0;
+    let mut kept = 0u32;
+    let mut exponent: i32 = 0;
+    let mut seen_digit = false;
+    let mut seen_point = false;
+    let mut at = 0;
+    while let Some(&b) = rest.get(at) {
+        match b {
+            b'0'..=b'9' => {
+                seen_digit = true;
+                if kept < 19 {
+                    digits = digits * 10 + u64::from(b - b'0');
+                    if digits > 0 {
+                        kept += 1;
+                    }
+                    if seen_point {
+                        exponent -= 1;
+                    }
+                } else if !seen_point {
+                    // A digit past the 19 kept: dropped, the magnitude kept.
+                    exponent += 1;
+                }
+            }
+            b'.' if !seen_point => seen_point = true,
+            b'e' | b'E' => break,
+            _ => return None,
+        }
+        at += 1;
+    }
+    if !seen_digit {
+        return None;
+    }
+    if let Some(tail) = rest.get(at + 1..).filter(|_| at < rest.len()) {
+        let text = core::str::from_utf8(tail).ok()?;
+        let (sign, body) = match text.as_bytes().first() {
+            Some(b'-') => (-1, text.get(1..)?),
+            Some(b'+') => (1, text.get(1..)?),
+            _ => (1, text),
+        };
+        if body.is_empty() || body.len() > 4 || !body.bytes().all(|b| b.is_ascii_digit()) {
+            return None;
+        }
+        let mut e: i32 = 0;
+        for b in body.bytes() {
+            e = e * 10 + i32::from(b - b'0');
+        }
+        exponent += sign * e;
+    }
+    // Exact steps of at most 10²²: the common inputs round once.
+    let value = scale10(digits as f64, exponent);
+    let value = value as f32;
+    if !value.is_finite() {
+        return None;
+    }
+    Some(if negative { -value } else { value })
+}
+
+/// A reply line as the host reads it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Reply<'a> {
+    /// `ok …`: what follows.
+    Ok(&'a str),
+    Err {
+        code: ErrorCode,
+        message: &'a str,
+    },
+}
+
+impl<'a> Reply<'a> {
+    /// Read a reply line (without its `\n`); `None` if it is not one.
+    pub fn parse(line: &'a str) -> Option<Self> {
+        let line = line.trim_end_matches('\r');
+        if line == "ok" {
+            return Some(Reply::Ok(""));
+        }
+        if let Some(rest) = line.strip_prefix("ok ") {
+            return Some(Reply::Ok(rest));
+        }
+        let rest = line.strip_prefix("err ")?;
+        let (number, message) = rest.split_once(' ').unwrap_or((rest, ""));
+        let code = ErrorCode::from_number(number.parse().ok()?)?;
+        Some(Reply::Err { code, message })
+    }
+
+    /// The value of `key=` in an `ok` reply of key=value pairs (`fault=` takes the rest of
+    /// the line: it is always last).
+    pub fn field(&self, key: &str) -> Option<&'a str> {
+        let Reply::Ok(text) = *self else {
+            return None;
+        };
+        let mut rest = text;
+        while !rest.is_empty() {
+            let (pair, after) = if rest.starts_with("fault=") {
+                (rest, "")
+            } else {
+                rest.split_once(' ').unwrap_or((rest, ""))
+            };
+            if let Some((k, v)) = pair.split_once('=') {
+                if k == key {
+                    return Some(v);
+                }
+            }
+            rest = after;
+        }
+        None
+    }
+}
+
+/// What `status` reports, written as key=value pairs, the fault last.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Status {
+    pub phase: Phase,
+    pub target_hz: f32,
+    /// The plan's bias, V.
+    pub bias_volts: f32,
+    /// The voltage commanded at the last tick, V.
+    pub volts: f32,
+    /// The cap in force, V.
+    pub max_volts: f32,
+    /// The first failure above it (the limit's mode), when the chip solved it.
+    pub limit: Option<FailureMode>,
+    pub ticks: u32,
+    /// The longest tick so far, core clock cycles (SysTick counts).
+    pub tick_cycles_max: u32,
+    /// The deepest stack so far, bytes.
+    pub stack_bytes: u32,
+    /// Virtual time from an independent clock, µs (QEMU builds only).
+    pub clock_us: Option<u32>,
+    /// The fault that holds the output at 0 V, if any.
+    pub fault: Option<Fault>,
+}
+
+impl fmt::Display for Status {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "phase={} target_hz={} bias_volts={} volts={} max_volts={} limit={} ticks={} \
+             tick_cycles_max={} stack_bytes={}",
+            self.phase.name(),
+            Decimal(self.target_hz),
+            Decimal(self.bias_volts),
+            Decimal(self.volts),
+            Decimal(self.max_volts),
+            self.limit.map_or("unknown", FailureMode::name),
+            self.ticks,
+            self.tick_cycles_max,
+            self.stack_bytes,
+        )?;
+        if let Some(us) = self.clock_us {
+            write!(f, " clock_us={us}")?;
+        }
+        match self.fault {
+            Some(fault) => write!(f, " fault={fault}"),
+            None => write!(f, " fault=none"),
+        }
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::panic, clippy::indexing_slicing)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_parse_as_the_core_library_does() {
+        for word in [
+            "44",
+            "44.5",
+            "-3",
+            "+2.25",
+            ".5",
+            "5.",
+            "1e-4",
+            "2.5E3",
+            "0",
+            "0.0001",
+            "7449.8784",
+            "123456789012345678901234",
+            "1e-30",
+            "3.4e38",
+            "0.1",
+            "-0.0",
+        ] {
+            let ours = parse_number(word);
+            let core: f32 = word.parse().unwrap_or(f32::NAN);
+            let Some(ours) = ours else {
+                panic!("{word} refused");
+            };
+            let ulps = (ours.to_bits() as i64 - core.to_bits() as i64).abs();
+            assert!(ulps <= 1, "{word}: {ours} against {core}");
+        }
+        for word in [
+            "", "-", ".", "e5", "1e", "1e+", "nan", "inf", "1.2.3", "0x10", "1,5", "4e99",
+        ] {
+            assert_eq!(parse_number(word), None, "{word}");
+        }
+    }
+
+    #[test]
+    fn requests_parse() {
+        assert_eq!(parse(b"target 44.5"), Ok(Command::Target { hz: 44.5 }));
+        assert_eq!(
+            parse(b"  ac 100   40\r"),
+            Ok(Command::Ac {
+                volts: 100.0,
+                hz: 40.0
+            })
+        );
+        assert_eq!(
+            parse(b"set margin 0.1"),
+            Ok(Command::Set(Setting::Margin, 0.1))
+        );
+        assert_eq!(parse(b"get tick_hz"), Ok(Command::Get(Setting::TickHz)));
+        assert_eq!(parse(b""), Err(ParseError::Empty));
+        assert_eq!(parse(b"target"), Err(ParseError::Missing { index: 1 }));
+        assert_eq!(parse(b"ac 100"), Err(ParseError::Missing { index: 2 }));
+        assert_eq!(parse(b"stop now"), Err(ParseError::Extra));
+        assert_eq!(parse(b"target 4x"), Err(ParseError::BadNumber { index: 1 }));
+        assert_eq!(parse(b"get volume"), Err(ParseError::UnknownSetting));
+        assert_eq!(parse(b"launch"), Err(ParseError::UnknownCommand));
+        assert_eq!(parse(b"target \xff44"), Err(ParseError::NotText));
+        assert_eq!(parse(&[b'a'; MAX_LINE + 1]), Err(ParseError::TooLong));
+    }
+
+    #[test]
+    fn replies_read_back() {
+        let status = Status {
+            phase: Phase::Driving,
+            target_hz: 44.0,
+            bias_volts: 7449.5,
+            volts: 7500.25,
+            max_volts: 9361.9,
+            limit: Some(FailureMode::Emi),
+            ticks: 12,
+            tick_cycles_max: 300,
+            stack_bytes: 1024,
+            clock_us: None,
+            fault: Some(Fault::Bus),
+        };
+        let mut line = heapless::String::<256>::new();
+        let _ = fmt::Write::write_fmt(&mut line, format_args!("ok {status}"));
+        let reply = Reply::parse(&line).unwrap_or_else(|| panic!("{line}"));
+        assert_eq!(reply.field("phase"), Some("driving"));
+        assert_eq!(reply.field("bias_volts"), Some("7449.5"));
+        assert_eq!(reply.field("limit"), Some("emi"));
+        assert_eq!(reply.field("fault"), Some("DAC bus error"));
+        assert_eq!(
+            Reply::parse("err 2 target out of range"),
+            Some(Reply::Err {
+                code: ErrorCode::Refused,
+                message: "target out of range"
+            })
+        );
+        assert_eq!(Reply::parse("err 9 what"), None);
+        assert_eq!(Reply::parse("hello"), None);
+    }
+}

@@ -1,0 +1,378 @@
+//! A running controller operated from the command port (the core's side of it): new targets
+//! and AC drives checked outside the tick and ramped to from the present bias, `stop`, the
+//! refusals that leave the drive as it was; and the configuration image the firmware boots
+//! from, read back and refused when it is wrong.
+
+mod common;
+
+use de_resonator::image::{self, AmplifierSpec, Image, ImageError, DAC_BITS};
+use de_resonator::protocol::{self, Command, Reply};
+use de_resonator::table::{self, TableError};
+use de_resonator::{
+    Amplifier, Controller, Device, Fault, Inputs, Phase, Refusal, Settings, TuneError, Tuner,
+    REFERENCE_DEVICE,
+};
+
+/// The reference device's table as `host-sim lut` makes it (64 points, f64 model).
+fn reference_table() -> Vec<u8> {
+    common::made_table(REFERENCE_DEVICE, 0.05, 64)
+}
+
+fn amplifier() -> Amplifier {
+    Amplifier::new(2.5, 4000.0).unwrap()
+}
+
+fn started(settings: Settings) -> Controller {
+    let (c, _) = Controller::start(
+        REFERENCE_DEVICE.cast(),
+        &reference_table(),
+        amplifier(),
+        settings,
+    )
+    .unwrap();
+    c
+}
+
+/// Tick until the phase is one of `phases` (at most `limit` ticks); the volts of each tick.
+fn run_until(c: &mut Controller, phases: &[Phase], limit: u32) -> Vec<f32> {
+    let mut volts = Vec::new();
+    for _ in 0..limit {
+        let out = c.tick(Inputs::NONE);
+        volts.push(out.volts);
+        if phases.contains(&c.phase()) {
+            return volts;
+        }
+    }
+    panic!("never reached {phases:?}: {:?}", c.phase());
+}
+
+/// The f64 model's bias for a target (the yardstick, independent of the f32 controller).
+fn f64_bias(target_hz: f64) -> f64 {
+    Tuner::new(Device::new(REFERENCE_DEVICE).unwrap())
+        .tune(target_hz, 0.05)
+        .unwrap()
+        .volts
+}
+
+/// One DAC step of the test amplifier, V.
+const STEP_VOLTS: f32 = 10_000.0 / 65536.0;
+
+#[test]
+fn a_new_target_ramps_from_the_present_bias_to_the_f64_models_bias() {
+    let mut c = started(Settings::for_target(44.0));
+    run_until(&mut c, &[Phase::Holding], 5_000);
+    let before = c.plan().bias_volts;
+    let settings = Settings {
+        target_hz: 43.5,
+        ..*c.settings()
+    };
+    let replanned = c.replan(settings).unwrap().solve(&reference_table()).unwrap();
+    let boot = c.adopt(replanned).unwrap();
+    let expected = f64_bias(43.5);
+    assert!(
+        (f64::from(boot.bias_volts) - expected).abs() <= 1e-4 * expected,
+        "{} V against {expected} V",
+        boot.bias_volts
+    );
+    assert_eq!(c.plan().start_volts, before);
+    let volts = run_until(&mut c, &[Phase::Holding], 5_000);
+    // Up at the slew rate (10 kV/s at 1 kHz: 10 V a tick), never past the new bias.
+    for pair in volts.windows(2) {
+        assert!(pair[1] - pair[0] <= 10.0 + STEP_VOLTS, "{pair:?}");
+        assert!(pair[1] <= boot.bias_volts, "{pair:?}");
+    }
+    let ramp_ticks = volts.len() as f32;
+    let expected_ticks = (boot.bias_volts - before) / 10.0;
+    assert!((ramp_ticks - expected_ticks).abs() <= 2.0, "{ramp_ticks} ticks");
+    assert!((c.last_volts() - boot.bias_volts).abs() <= STEP_VOLTS);
+}
+
+#[test]
+fn a_refused_request_leaves_the_drive_as_it_was() {
+    let mut c = started(Settings::for_target(44.0));
+    // While the boot's ramp runs: busy.
+    c.tick(Inputs::NONE);
+    let busy = c.replan(Settings::for_target(43.5));
+    assert!(
+        matches!(busy, Err(Refusal::Busy { phase: Phase::Ramping })),
+        "{busy:?}"
+    );
+    run_until(&mut c, &[Phase::Holding], 5_000);
+    let plan = *c.plan();
+    // Outside the range (the table's lookup refuses first): the range in the refusal.
+    let range = Tuner::new(Device::new(REFERENCE_DEVICE.cast::<f32>()).unwrap())
+        .tunable_range(0.05)
+        .unwrap();
+    let refused = c
+        .replan(Settings::for_target(47.0))
+        .unwrap()
+        .solve(&reference_table());
+    match refused {
+        Err(Refusal::Checks(Fault::Table(TableError::OutOfRange { high_hz, .. }))) => {
+            assert!((high_hz - range.high_hz).abs() <= 1e-5 * range.high_hz)
+        }
+        other => panic!("{other:?}"),
+    }
+    // A margin past 1: the direct solve's refusal.
+    let bad = Settings {
+        margin: 1.5,
+        ..*c.settings()
+    };
+    let refused = c.replan(bad).unwrap().solve(&reference_table());
+    assert!(
+        matches!(
+            refused,
+            Err(Refusal::Checks(Fault::Tune(TuneError::InvalidMargin { .. })))
+                | Err(Refusal::Checks(Fault::Setting { .. }))
+        ),
+        "{refused:?}"
+    );
+    assert_eq!(*c.plan(), plan);
+    assert_eq!(c.phase(), Phase::Holding);
+}
+
+#[test]
+fn an_ac_too_large_for_the_cap_is_refused_and_a_good_one_drives() {
+    let mut c = started(Settings::for_target(44.0));
+    run_until(&mut c, &[Phase::Holding], 5_000);
+    let cap = c.max_volts();
+    let bias = c.plan().bias_volts;
+    let too_much = Settings {
+        ac_volts: cap - bias + 1.0,
+        ac_hz: 40.0,
+        ..*c.settings()
+    };
+    let refused = c.replan(too_much).unwrap().solve(&reference_table());
+    assert!(
+        matches!(
+            refused,
+            Err(Refusal::Checks(Fault::Setting {
+                setting: de_resonator::Setting::AcVolts,
+                ..
+            }))
+        ),
+        "{refused:?}"
+    );
+    let ac = Settings {
+        ac_volts: 100.0,
+        ac_hz: 40.0,
+        ..*c.settings()
+    };
+    let replanned = c.replan(ac).unwrap().solve(&reference_table()).unwrap();
+    c.adopt(replanned).unwrap();
+    let volts = run_until(&mut c, &[Phase::Driving], 5_000);
+    assert!(volts.iter().all(|&v| v <= cap));
+    // 40 Hz at 1 kHz: the next 25 ticks are one period of 100 V about the bias.
+    let period: Vec<f32> = (0..25).map(|_| c.tick(Inputs::NONE).volts).collect();
+    let high = period.iter().cloned().fold(f32::MIN, f32::max);
+    let low = period.iter().cloned().fold(f32::MAX, f32::min);
+    assert!((high - bias - 100.0).abs() <= 1.0 && (bias - low - 100.0).abs() <= 1.0);
+}
+
+#[test]
+fn a_plan_changed_since_its_job_is_not_adopted() {
+    let mut c = started(Settings::for_target(44.0));
+    run_until(&mut c, &[Phase::Holding], 5_000);
+    let job = c.replan(Settings::for_target(43.5)).unwrap();
+    c.stop();
+    run_until(&mut c, &[Phase::Holding], 5_000);
+    let replanned = job.solve(&reference_table()).unwrap();
+    assert!(matches!(c.adopt(replanned), Err(Refusal::Busy { .. })));
+    assert_eq!(c.plan().bias_volts, 0.0);
+}
+
+#[test]
+fn stop_ramps_down_at_the_slew_rate_and_stays_at_zero() {
+    let settings = Settings {
+        ac_volts: 100.0,
+        ac_hz: 40.0,
+        ..Settings::for_target(44.0)
+    };
+    let mut c = started(settings);
+    run_until(&mut c, &[Phase::Driving], 5_000);
+    for _ in 0..13 {
+        c.tick(Inputs::NONE);
+    }
+    let from = c.last_volts();
+    c.stop();
+    let volts = run_until(&mut c, &[Phase::Holding], 5_000);
+    assert!(volts[0] <= from && from - volts[0] <= 10.0 + STEP_VOLTS);
+    for pair in volts.windows(2) {
+        assert!(pair[0] - pair[1] <= 10.0 + STEP_VOLTS && pair[1] <= pair[0], "{pair:?}");
+    }
+    assert_eq!(*volts.last().unwrap(), 0.0);
+    assert!((volts.len() as f32 - from / 10.0).abs() <= 2.0);
+    for _ in 0..2_000 {
+        assert_eq!(c.tick(Inputs::NONE).volts, 0.0);
+    }
+    // From rest a new target starts again from 0 V.
+    let replanned = c
+        .replan(Settings::for_target(44.0))
+        .unwrap()
+        .solve(&reference_table())
+        .unwrap();
+    c.adopt(replanned).unwrap();
+    assert_eq!(c.plan().start_volts, 0.0);
+}
+
+#[test]
+fn a_replan_never_lifts_the_cap_fixed_at_boot() {
+    let mut c = started(Settings {
+        margin: 0.2,
+        ..Settings::for_target(44.5)
+    });
+    run_until(&mut c, &[Phase::Holding], 5_000);
+    let ceiling = c.ceiling_volts();
+    let looser = Settings {
+        margin: 0.05,
+        target_hz: 44.0,
+        ..*c.settings()
+    };
+    let replanned = c.replan(looser).unwrap().solve(&reference_table()).unwrap();
+    c.adopt(replanned).unwrap();
+    assert!(c.max_volts() <= ceiling);
+    assert_eq!(c.ceiling_volts(), ceiling);
+}
+
+#[test]
+fn a_faulted_controller_refuses_every_request_but_stop() {
+    let mut c = started(Settings::for_target(44.0));
+    c.fault(Fault::Bus);
+    assert!(matches!(
+        c.replan(Settings::for_target(44.0)),
+        Err(Refusal::Faulted { fault: Fault::Bus })
+    ));
+    assert!(matches!(c.trim_now(), Err(Refusal::Faulted { .. })));
+    c.stop();
+    assert_eq!(c.phase(), Phase::Faulted);
+    assert_eq!(c.tick(Inputs::NONE).volts, 0.0);
+}
+
+fn spec() -> AmplifierSpec {
+    AmplifierSpec {
+        dac_reference_volts: 2.5,
+        gain: 4000.0,
+        rail_volts: 9_000.0,
+        dac_bits: DAC_BITS,
+    }
+}
+
+fn made_image(settings: &Settings) -> Vec<u8> {
+    let t = reference_table();
+    let mut out = vec![0xAA; image::image_bytes(t.len()) + 100];
+    let n = Image::write(&mut out, &REFERENCE_DEVICE.cast(), &spec(), settings, &t).unwrap();
+    out.truncate(n);
+    out
+}
+
+fn reseal(bytes: &mut [u8]) {
+    let body = bytes.len() - 4;
+    let crc = table::crc32(&bytes[..body]);
+    bytes[body..].copy_from_slice(&crc.to_le_bytes());
+}
+
+#[test]
+fn an_image_reads_back_what_was_written() {
+    let settings = Settings {
+        ac_volts: 100.0,
+        ac_hz: 40.0,
+        stuck_samples: None,
+        ..Settings::for_target(44.0)
+    };
+    let bytes = made_image(&settings);
+    assert_eq!(bytes.len(), image::HEADER_BYTES + reference_table().len() + 4);
+    // In a sector larger than the image (erased flash after it).
+    let mut sector = bytes.clone();
+    sector.resize(128 * 1024, 0xFF);
+    let read = Image::parse(&sector).unwrap();
+    assert_eq!(read.params, REFERENCE_DEVICE.cast());
+    assert_eq!(read.amplifier, spec());
+    assert_eq!(read.settings, settings);
+    assert_eq!(read.table, &reference_table()[..]);
+    // The rail caps the amplifier below its full scale.
+    let a = read.amplifier.amplifier().unwrap();
+    assert_eq!(a.max_volts(), 9_000.0);
+    assert!(a.code(9_000.5).is_err());
+}
+
+#[test]
+fn every_wrong_image_is_refused_with_its_reason() {
+    let good = made_image(&Settings::for_target(44.0));
+    for byte in [0x00, 0xFF] {
+        assert_eq!(
+            Image::parse(&vec![byte; 128 * 1024]).unwrap_err(),
+            ImageError::Empty { byte }
+        );
+    }
+    assert!(matches!(
+        Image::parse(&good[..50]),
+        Err(ImageError::TooShort { .. })
+    ));
+    // Every single flipped bit is caught (by the CRC, or before it by the frame).
+    for at in 0..good.len() {
+        let mut bad = good.clone();
+        bad[at] ^= 0x10;
+        assert!(Image::parse(&bad).is_err(), "bit flip at {at} accepted");
+    }
+    // Cut short: the stated length runs past the room.
+    assert!(matches!(
+        Image::parse(&good[..good.len() - 1]),
+        Err(ImageError::WrongLength { .. })
+    ));
+    let mut version = good.clone();
+    version[4] = 2;
+    reseal(&mut version);
+    assert_eq!(
+        Image::parse(&version).unwrap_err(),
+        ImageError::UnsupportedVersion { version: 2 }
+    );
+    let mut bits = good.clone();
+    bits[76] = 12;
+    reseal(&mut bits);
+    assert_eq!(
+        Image::parse(&bits).unwrap_err(),
+        ImageError::DacBits { bits: 12 }
+    );
+    let mut rail = good.clone();
+    rail[72..76].copy_from_slice(&f32::NAN.to_le_bytes());
+    reseal(&mut rail);
+    assert!(matches!(
+        Image::parse(&rail),
+        Err(ImageError::Amplifier(_))
+    ));
+    // A setting out of range passes the frame and is the boot's to refuse, by name.
+    let mut margin = good.clone();
+    margin[84..88].copy_from_slice(&1.5f32.to_le_bytes());
+    reseal(&mut margin);
+    let read = Image::parse(&margin).unwrap();
+    let a = read.amplifier.amplifier().unwrap();
+    let refused = Controller::start(read.params, read.table, a, read.settings).map(|_| ());
+    assert!(
+        matches!(
+            refused,
+            Err(Fault::Tune(TuneError::InvalidMargin { .. }))
+                | Err(Fault::Setting {
+                    setting: de_resonator::Setting::Margin,
+                    ..
+                })
+        ),
+        "{refused:?}"
+    );
+}
+
+/// Every request the help line names parses, and its reply forms read back.
+#[test]
+fn the_protocol_covers_what_help_says() {
+    for name in ["help", "status", "stop", "trim", "clear"] {
+        assert!(protocol::parse(name.as_bytes()).is_ok(), "{name}");
+    }
+    assert_eq!(
+        protocol::parse(b"target 44"),
+        Ok(Command::Target { hz: 44.0 })
+    );
+    assert!(protocol::HELP.contains("target <Hz>"));
+    assert_eq!(
+        Reply::parse("ok target_hz=44 bias_volts=7449.878").and_then(|r| r.field("bias_volts")),
+        Some("7449.878")
+    );
+}
