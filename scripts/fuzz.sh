@@ -10,7 +10,7 @@ if ! command -v cargo-fuzz >/dev/null; then
     cargo install --locked cargo-fuzz --version 0.13.2
 fi
 mkdir -p target
-for target in table_parse controller; do
+for target in table_parse controller image_and_commands; do
     mkdir -p "corpus/$target"
     cp -n "seeds/$target/"* "corpus/$target/"
     echo "== cargo fuzz: $target for $seconds s"

@@ -50,9 +50,9 @@ impl<T: Real> fmt::Display for Decimal<T> {
         }
         let digits = T::DIGITS as i32;
         let top = scale10(1.0, digits) as u64;
-        // The decimal exponent from the binary one (log10 2 ≈ 0.30103), then corrected.
+        // The decimal exponent from the binary one (times log10 2), then corrected.
         let binary = ((a.to_bits() >> 52) & 0x7FF) as i32 - 1023;
-        let mut e = (f64::from(binary) * 0.301_029_995_663_981_2) as i32;
+        let mut e = (f64::from(binary) * core::f64::consts::LOG10_2) as i32;
         let mut m = 0u64;
         for _ in 0..4 {
             m = libm::round(scale10(a, digits - 1 - e)) as u64;
@@ -66,7 +66,7 @@ impl<T: Real> fmt::Display for Decimal<T> {
         }
         // Trailing zeros dropped: `m` holds `kept` digits, the first at 10^e.
         let mut kept = digits;
-        while kept > 1 && m % 10 == 0 {
+        while kept > 1 && m.is_multiple_of(10) {
             m /= 10;
             kept -= 1;
         }

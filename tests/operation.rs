@@ -66,7 +66,11 @@ fn a_new_target_ramps_from_the_present_bias_to_the_f64_models_bias() {
         target_hz: 43.5,
         ..*c.settings()
     };
-    let replanned = c.replan(settings).unwrap().solve(&reference_table()).unwrap();
+    let replanned = c
+        .replan(settings)
+        .unwrap()
+        .solve(&reference_table())
+        .unwrap();
     let boot = c.adopt(replanned).unwrap();
     let expected = f64_bias(43.5);
     assert!(
@@ -83,7 +87,10 @@ fn a_new_target_ramps_from_the_present_bias_to_the_f64_models_bias() {
     }
     let ramp_ticks = volts.len() as f32;
     let expected_ticks = (boot.bias_volts - before) / 10.0;
-    assert!((ramp_ticks - expected_ticks).abs() <= 2.0, "{ramp_ticks} ticks");
+    assert!(
+        (ramp_ticks - expected_ticks).abs() <= 2.0,
+        "{ramp_ticks} ticks"
+    );
     assert!((c.last_volts() - boot.bias_volts).abs() <= STEP_VOLTS);
 }
 
@@ -94,7 +101,12 @@ fn a_refused_request_leaves_the_drive_as_it_was() {
     c.tick(Inputs::NONE);
     let busy = c.replan(Settings::for_target(43.5));
     assert!(
-        matches!(busy, Err(Refusal::Busy { phase: Phase::Ramping })),
+        matches!(
+            busy,
+            Err(Refusal::Busy {
+                phase: Phase::Ramping
+            })
+        ),
         "{busy:?}"
     );
     run_until(&mut c, &[Phase::Holding], 5_000);
@@ -122,8 +134,9 @@ fn a_refused_request_leaves_the_drive_as_it_was() {
     assert!(
         matches!(
             refused,
-            Err(Refusal::Checks(Fault::Tune(TuneError::InvalidMargin { .. })))
-                | Err(Refusal::Checks(Fault::Setting { .. }))
+            Err(Refusal::Checks(Fault::Tune(
+                TuneError::InvalidMargin { .. }
+            ))) | Err(Refusal::Checks(Fault::Setting { .. }))
         ),
         "{refused:?}"
     );
@@ -198,7 +211,10 @@ fn stop_ramps_down_at_the_slew_rate_and_stays_at_zero() {
     let volts = run_until(&mut c, &[Phase::Holding], 5_000);
     assert!(volts[0] <= from && from - volts[0] <= 10.0 + STEP_VOLTS);
     for pair in volts.windows(2) {
-        assert!(pair[0] - pair[1] <= 10.0 + STEP_VOLTS && pair[1] <= pair[0], "{pair:?}");
+        assert!(
+            pair[0] - pair[1] <= 10.0 + STEP_VOLTS && pair[1] <= pair[0],
+            "{pair:?}"
+        );
     }
     assert_eq!(*volts.last().unwrap(), 0.0);
     assert!((volts.len() as f32 - from / 10.0).abs() <= 2.0);
@@ -280,7 +296,10 @@ fn an_image_reads_back_what_was_written() {
         ..Settings::for_target(44.0)
     };
     let bytes = made_image(&settings);
-    assert_eq!(bytes.len(), image::HEADER_BYTES + reference_table().len() + 4);
+    assert_eq!(
+        bytes.len(),
+        image::HEADER_BYTES + reference_table().len() + 4
+    );
     // In a sector larger than the image (erased flash after it).
     let mut sector = bytes.clone();
     sector.resize(128 * 1024, 0xFF);
@@ -336,10 +355,7 @@ fn every_wrong_image_is_refused_with_its_reason() {
     let mut rail = good.clone();
     rail[72..76].copy_from_slice(&f32::NAN.to_le_bytes());
     reseal(&mut rail);
-    assert!(matches!(
-        Image::parse(&rail),
-        Err(ImageError::Amplifier(_))
-    ));
+    assert!(matches!(Image::parse(&rail), Err(ImageError::Amplifier(_))));
     // A setting out of range passes the frame and is the boot's to refuse, by name.
     let mut margin = good.clone();
     margin[84..88].copy_from_slice(&1.5f32.to_le_bytes());

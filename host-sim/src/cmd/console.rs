@@ -13,16 +13,16 @@ use serde::Serialize;
 use super::Report;
 
 #[derive(Args, Debug)]
-#[group(required = true, multiple = false, id = "connection")]
+#[command(group(clap::ArgGroup::new("connection").required(true).args(["port", "tcp", "unix"])))]
 pub struct ConsoleArgs {
     /// A serial port (a board's USART2 through a USB adapter), e.g. /dev/ttyUSB0.
-    #[arg(long, value_name = "DEVICE", group = "connection")]
+    #[arg(long, value_name = "DEVICE")]
     pub port: Option<String>,
     /// A TCP socket, HOST:PORT (QEMU's `-chardev socket,host=…,port=…,server=on`).
-    #[arg(long, value_name = "HOST:PORT", group = "connection")]
+    #[arg(long, value_name = "HOST:PORT")]
     pub tcp: Option<String>,
     /// A Unix socket (QEMU's `-chardev socket,path=…,server=on`).
-    #[arg(long, value_name = "PATH", group = "connection")]
+    #[arg(long, value_name = "PATH")]
     pub unix: Option<PathBuf>,
     /// The serial port's baud rate.
     #[arg(long, value_name = "BAUD", default_value_t = 115_200)]
@@ -77,11 +77,11 @@ impl Report for ConsoleReport {
 trait Port: Read + Write {}
 impl<T: Read + Write> Port for T {}
 
+/// A connection: its reading half and its writing half.
+type Halves = (Box<dyn Read>, Box<dyn Port>);
+
 /// The connection asked for: a reader and a writer on it.
-fn connect(
-    args: &ConsoleArgs,
-    timeout: Duration,
-) -> Result<(Box<dyn Read>, Box<dyn Port>), String> {
+fn connect(args: &ConsoleArgs, timeout: Duration) -> Result<Halves, String> {
     if let Some(address) = &args.tcp {
         let stream = std::net::TcpStream::connect(address)
             .map_err(|e| format!("cannot connect to {address}: {e}"))?;
