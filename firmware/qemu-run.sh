@@ -9,6 +9,7 @@
 #                       instruction, deterministic; QEMU-STM32F405.md §2)
 #   QEMU_EXTRA="..."    more QEMU arguments (e.g. -d trace:memory_region_ops_write -D FILE)
 #   QEMU_TIMEOUT=S      host seconds before QEMU is stopped (default 60)
+#   QEMU_ARGS=WORD      a semihosting argument for the firmware (e.g. busy-idle)
 set -uo pipefail
 elf="$1"
 extra=()
@@ -19,7 +20,8 @@ if [ -n "${QEMU_EXTRA:-}" ]; then extra+=($QEMU_EXTRA); fi
 qemu() {
     timeout "${QEMU_TIMEOUT:-60}" qemu-system-arm -M netduinoplus2 -nographic -monitor none \
         -serial null -serial "${QEMU_SERIAL1:-null}" \
-        -semihosting-config enable=on,target=native "${extra[@]}" -kernel "$elf"
+        -semihosting-config "enable=on,target=native${QEMU_ARGS:+,arg=firmware,arg=$QEMU_ARGS}" \
+        "${extra[@]}" -kernel "$elf"
 }
 # A build without defmt (no .defmt section) has no log to decode: its exit status says all.
 if ! size -A "$elf" | grep -q '^\.defmt '; then

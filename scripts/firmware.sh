@@ -18,7 +18,8 @@ cd firmware
 step "firmware: fmt, clippy on every build ($(rustc --version))"
 cargo fmt -- --check
 # QEMU builds, and the silicon builds (HSE + PLL, RTT logs) that CI cannot run.
-for f in qemu,log-semihosting qemu qemu,log-semihosting,trim rtt rtt,trim; do
+for f in qemu,log-semihosting qemu qemu,log-semihosting,trim qemu,log-semihosting,trim,model-sensor \
+    rtt rtt,trim; do
     cargo clippy --locked --release -q --bins --no-default-features --features "$f" -- -D warnings
 done
 
@@ -64,6 +65,9 @@ diff -u expected/check.log ../target/check.log
 echo "on-target checks match firmware/expected/check.log"
 
 step "the firmware end to end: command port, DAC frames, a second device, bad images, tick rate"
+elf=target/thumbv7em-none-eabihf/release/firmware
+cargo build --locked --release -q --bin firmware --features trim,model-sensor
+cp "$elf" ../target/firmware-trim.elf
 cargo build --locked --release -q --bin firmware
-python3 ../scripts/firmware_e2e.py "$PWD/target/thumbv7em-none-eabihf/release/firmware" \
-    "$host_sim" "$PWD/../target/e2e"
+python3 ../scripts/firmware_e2e.py "$PWD/$elf" "$host_sim" "$PWD/../target/e2e" \
+    "$PWD/../target/firmware-trim.elf"

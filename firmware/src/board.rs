@@ -183,6 +183,17 @@ pub fn cycles_into_tick() -> u32 {
     SYST::get_reload().saturating_sub(SYST::get_current())
 }
 
+/// Whether QEMU was started with the semihosting argument `busy-idle` (never on silicon).
+pub fn busy_idle_asked() -> bool {
+    #[cfg(feature = "qemu")]
+    {
+        semihosting::experimental::env::args::<64>()
+            .is_ok_and(|args| (&args).into_iter().any(|a| a == Ok("busy-idle")))
+    }
+    #[cfg(not(feature = "qemu"))]
+    false
+}
+
 /// An independent clock of virtual time under QEMU: TIM2 counting microseconds (QEMU's timer
 /// model counts at 1 GHz whatever RCC says; started first thing, its count is right:
 /// QEMU-STM32F405.md §2). Only for the tick-rate test; nothing on silicon uses it.

@@ -22,7 +22,11 @@ mod app {
     use de_resonator::{Controller, Dac8551, Decimal, Event, OutputStage, Phase};
     use de_resonator_firmware::board::{self, Board, DacSpi, EnablePin};
     use de_resonator_firmware::console::{Console, Extras, Line, Lines, ReplyLine};
-    use de_resonator_firmware::sensor::{NoSensor, Sensor};
+    #[cfg(feature = "model-sensor")]
+    use de_resonator_firmware::sensor::ModelSensor as Sensors;
+    #[cfg(not(feature = "model-sensor"))]
+    use de_resonator_firmware::sensor::NoSensor as Sensors;
+    use de_resonator_firmware::sensor::Sensor;
     use de_resonator_firmware::{config, stack, work};
     use embedded_hal_nb::serial::Read as _;
     use rtic_sync::channel::{Receiver, Sender, TrySendError};
@@ -40,12 +44,14 @@ mod app {
         controller: Option<Controller>,
         /// The longest tick so far, core cycles.
         tick_cycles_max: u32,
+        /// QEMU builds: the independent clock (TIM2, µs) at the last tick's start.
+        last_tick_us: u32,
     }
 
     #[local]
     struct Local {
         stage: OutputStage<DacSpi, EnablePin>,
-        sensor: NoSensor,
+        sensor: Sensors,
         serial_rx: Rx<USART2>,
         lines: Lines,
         /// A line that found the queue full, kept until the command task makes room.
@@ -54,6 +60,8 @@ mod app {
         from_rx: Receiver<'static, Line, QUEUE>,
         tx: Tx<USART2>,
         console: Console,
+        /// Idle without `wfi` (QEMU runs that measure the tick rate).
+        busy_idle: bool,
     }
 
     #[init]
@@ -100,10 +108,14 @@ mod app {
             Shared {
                 controller,
                 tick_cycles_max: 0,
+                last_tick_us: 0,
             },
             Local {
                 stage,
-                sensor: NoSensor,
+                #[cfg(not(feature = "model-sensor"))]
+                sensor: Sensors,
+                #[cfg(feature = "model-sensor")]
+                sensor: Sensors::new(console.image.map(|i| i.params), tick_hz),
                 serial_rx: board.rx,
                 lines: Lines::default(),
                 held: None,
@@ -111,6 +123,7 @@ mod app {
                 from_rx,
                 tx,
                 console,
+                busy_idle: board::busy_idle_asked(),
             },
         )
     }
@@ -162,20 +175,33 @@ mod app {
         }
     }
 
-    #[idle]
-    fn idle(_: idle::Context) -> ! {
-        // An explicit WFI: RTIC's default SLEEPONEXIT idle runs about 40 times slower under
-        // QEMU's `-icount sleep=off` (QEMU-STM32F405.md §3).
+    /// Silicon sleeps until the next interrupt (an explicit `wfi`: RTIC's default
+    /// SLEEPONEXIT idle runs about 40 times slower under QEMU, QEMU-STM32F405.md §3). Under
+    /// QEMU's `-icount sleep=off` a `wfi` loses every other SysTick period (measured against
+    /// TIM2: BENCHMARKS.md); a QEMU run started with the semihosting argument `busy-idle`
+    /// idles busy instead, so that its virtual time is its instruction count, exactly.
+    #[idle(local = [busy_idle])]
+    fn idle(cx: idle::Context) -> ! {
+        let busy = *cx.local.busy_idle;
         loop {
-            cortex_m::asm::wfi();
+            if busy {
+                cortex_m::asm::nop();
+            } else {
+                cortex_m::asm::wfi();
+            }
         }
     }
 
     /// One controller tick: its code to the DAC, the enable line held, the events logged.
-    #[task(binds = SysTick, priority = 3, shared = [controller, tick_cycles_max], local = [stage, sensor])]
+    #[task(binds = SysTick, priority = 3, shared = [controller, tick_cycles_max, last_tick_us], local = [stage, sensor])]
     fn tick(mut cx: tick::Context) {
+        #[cfg(feature = "qemu")]
+        cx.shared
+            .last_tick_us
+            .lock(|at| *at = board::qemu_clock::micros());
         let stage = cx.local.stage;
-        let inputs = cx.local.sensor.sample();
+        let sensor = cx.local.sensor;
+        let inputs = sensor.sample();
         let (event, trim_wanted) = cx.shared.controller.lock(|c| {
             let Some(c) = c else {
                 return (None, false);
@@ -191,6 +217,7 @@ mod app {
                 let _ = stage.safe();
             }
             let out = stage.send(c, out);
+            sensor.commanded(out.volts);
             (out.event.map(|e| (e, c.ticks())), work::trim_wanted(c))
         });
         if trim_wanted {
@@ -269,7 +296,7 @@ mod app {
     }
 
     /// Each request answered, one reply line each.
-    #[task(priority = 1, shared = [controller, tick_cycles_max], local = [from_rx, tx, console])]
+    #[task(priority = 1, shared = [controller, tick_cycles_max, last_tick_us], local = [from_rx, tx, console])]
     async fn command(mut cx: command::Context) {
         let mut reply = ReplyLine::new();
         while let Ok(line) = cx.local.from_rx.recv().await {
@@ -283,7 +310,7 @@ mod app {
                 tick_cycles_max: cx.shared.tick_cycles_max.lock(|most| *most),
                 stack_bytes: stack::used(),
                 #[cfg(feature = "qemu")]
-                clock_us: Some(board::qemu_clock::micros()),
+                clock_us: Some(cx.shared.last_tick_us.lock(|at| *at)),
                 #[cfg(not(feature = "qemu"))]
                 clock_us: None,
             };
