@@ -5,7 +5,9 @@
 use core::fmt::Write;
 
 use de_resonator::protocol::{self, Command, ErrorCode, ParseError, Status, MAX_LINE};
-use de_resonator::{Amplifier, Controller, Decimal, FailureMode, Image, Refusal, Settings};
+use de_resonator::{
+    Amplifier, Controller, Decimal, FailureMode, Image, Refusal, Setting, Settings,
+};
 use heapless::{String, Vec};
 
 /// One request as received: its bytes, or why it has none.
@@ -172,12 +174,20 @@ impl Console {
             Command::Set(setting, value) => {
                 let mut next = self.settings;
                 next.set(setting, value);
+                if setting == Setting::TickHz && value != self.settings.tick_hz {
+                    err(
+                        out,
+                        ErrorCode::Refused,
+                        "tick_hz sets SysTick at power-up: make an image with it",
+                    );
+                    return;
+                }
                 if !running {
-                    // Refused at boot: the settings are kept for `clear` to boot with.
+                    // Refused at boot: kept for `clear` to boot with, and check.
                     self.settings = next;
                     let _ = write!(
                         out,
-                        "ok {}={} (boots at `clear`)",
+                        "ok {}={} (applies at `clear`)",
                         setting.key(),
                         Decimal(value)
                     );
