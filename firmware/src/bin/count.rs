@@ -84,6 +84,7 @@ fn main() -> ! {
         let _ = black_box(drive.bias_dimless_squared_at(black_box(12.5)));
     });
     defmt::info!("drive, one evaluation (sine): {=u32} instructions", n);
+    math_kernels();
     let n = count(4, || {
         let tuner = Tuner::new(black_box(dev));
         let _ = black_box(tuner.tune(black_box(44.0), 0.05));
@@ -180,6 +181,36 @@ fn deepest<R>(what: &str, f: impl FnOnce() -> R) -> R {
         stack::used_below(mark)
     );
     result
+}
+
+/// The f32 functions the firmware would use, one call each (argument varied so nothing is
+/// folded): the core's kernels and libm against micromath (errors: tests/math_kernels.rs).
+fn math_kernels() {
+    use de_resonator::Real;
+    use micromath::F32Ext;
+    let kernels: [(&str, fn(f32) -> f32); 13] = [
+        ("sin, the core's kernel", |x| Real::sin(x)),
+        ("sin, libm sinf", libm::sinf),
+        ("sin, micromath", |x| F32Ext::sin(x)),
+        ("cos, libm cosf", libm::cosf),
+        ("cos, micromath", |x| F32Ext::cos(x)),
+        ("sqrt, libm sqrtf", libm::sqrtf),
+        ("sqrt, micromath", |x| F32Ext::sqrt(x)),
+        ("1/sqrt, 1 / libm sqrtf", |x| 1.0 / libm::sqrtf(x)),
+        ("1/sqrt, micromath invsqrt", |x| F32Ext::invsqrt(x)),
+        ("ln, libm logf", libm::logf),
+        ("ln, micromath", |x| F32Ext::ln(x)),
+        ("exp, libm expf", libm::expf),
+        ("exp, micromath", |x| F32Ext::exp(x)),
+    ];
+    for (name, f) in kernels {
+        let mut x = 0.3f32;
+        let n = count(1000, || {
+            x = black_box(x) + 0.001;
+            let _ = black_box(f(black_box(x)));
+        });
+        defmt::info!("math: {=str}: {=u32} instructions", name, n);
+    }
 }
 
 /// A whole trim cycle (ramp to the probe bias, hold, pulse, ring, solve, retune, ... to the AC

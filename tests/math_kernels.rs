@@ -1,0 +1,72 @@
+//! The f32 math the firmware runs, against f64 (the yardstick): the core's own kernels and
+//! libm against micromath (named in the product design), over the arguments the firmware
+//! sees. The worst errors printed here are BENCHMARKS.md's "micromath" table (with
+//! `-- --nocapture`); the assertions hold the choice it led to.
+
+use de_resonator::Real;
+use micromath::F32Ext;
+
+/// Worst absolute and relative error of `f32` against `f64` over `n` points of [lo, hi].
+fn worst(
+    lo: f64,
+    hi: f64,
+    n: usize,
+    f: impl Fn(f32) -> f32,
+    exact: impl Fn(f64) -> f64,
+) -> (f64, f64) {
+    let (mut abs, mut rel) = (0.0f64, 0.0f64);
+    for k in 0..=n {
+        let x = (lo + (hi - lo) * k as f64 / n as f64) as f32;
+        let want = exact(f64::from(x));
+        let got = f64::from(f(x));
+        let e = (got - want).abs();
+        abs = abs.max(e);
+        if want != 0.0 {
+            rel = rel.max(e / want.abs());
+        }
+    }
+    (abs, rel)
+}
+
+#[test]
+fn the_core_kernels_beat_micromath_on_accuracy() {
+    let n = 200_000;
+    let pi = std::f64::consts::PI;
+    // The drive's sine: the phase's angle in [−π, π).
+    let core_sin = worst(-pi, pi, n, |x| Real::sin(x), f64::sin);
+    let libm_sin = worst(-pi, pi, n, libm::sinf, f64::sin);
+    let micro_sin = worst(-pi, pi, n, |x| F32Ext::sin(x), f64::sin);
+    let micro_cos = worst(-pi, pi, n, |x| F32Ext::cos(x), f64::cos);
+    // Square roots: stretches and their products (0.05 .. 50), volts² scales (1 .. 1e8).
+    let libm_sqrt = worst(0.05, 1e8, n, libm::sqrtf, f64::sqrt);
+    let micro_sqrt = worst(0.05, 1e8, n, |x| F32Ext::sqrt(x), f64::sqrt);
+    let micro_isqrt = worst(0.05, 1e8, n, |x| F32Ext::invsqrt(x), |x| 1.0 / x.sqrt());
+    let libm_isqrt = worst(0.05, 1e8, n, |x| 1.0 / libm::sqrtf(x), |x| 1.0 / x.sqrt());
+    // The Gent model's log: ln(1 − (I1 − 3)/Jlim), argument in (0, 1].
+    let libm_ln = worst(1e-6, 1.0, n, libm::logf, f64::ln);
+    let micro_ln = worst(1e-6, 1.0, n, |x| F32Ext::ln(x), f64::ln);
+    let libm_exp = worst(-20.0, 20.0, n, libm::expf, f64::exp);
+    let micro_exp = worst(-20.0, 20.0, n, |x| F32Ext::exp(x), f64::exp);
+    for (name, (abs, rel)) in [
+        ("sin, the core's kernel", core_sin),
+        ("sin, libm sinf", libm_sin),
+        ("sin, micromath", micro_sin),
+        ("cos, micromath", micro_cos),
+        ("sqrt, libm sqrtf", libm_sqrt),
+        ("sqrt, micromath", micro_sqrt),
+        ("1/sqrt, 1 / libm sqrtf", libm_isqrt),
+        ("1/sqrt, micromath invsqrt", micro_isqrt),
+        ("ln on (0, 1], libm logf", libm_ln),
+        ("ln on (0, 1], micromath", micro_ln),
+        ("exp on [-20, 20], libm expf", libm_exp),
+        ("exp on [-20, 20], micromath", micro_exp),
+    ] {
+        println!("{name:32} worst absolute {abs:.2e}, relative {rel:.2e}");
+    }
+    // The choice: micromath loses on accuracy wherever the firmware would use it, by orders
+    // of magnitude (its functions are approximations for speed).
+    assert!(core_sin.0 <= 3e-7 && micro_sin.0 > 100.0 * core_sin.0);
+    assert!(libm_sqrt.1 <= 6e-8 && micro_sqrt.1 > 100.0 * libm_sqrt.1);
+    assert!(micro_isqrt.1 > 100.0 * libm_isqrt.1);
+    assert!(micro_ln.0 > 10.0 * libm_ln.0);
+}
