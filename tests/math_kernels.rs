@@ -33,20 +33,20 @@ fn the_core_kernels_beat_micromath_on_accuracy() {
     let n = 200_000;
     let pi = std::f64::consts::PI;
     // The drive's sine: the phase's angle in [−π, π).
-    let core_sin = worst(-pi, pi, n, |x| Real::sin(x), f64::sin);
+    let core_sin = worst(-pi, pi, n, <f32 as Real>::sin, f64::sin);
     let libm_sin = worst(-pi, pi, n, libm::sinf, f64::sin);
-    let micro_sin = worst(-pi, pi, n, |x| F32Ext::sin(x), f64::sin);
-    let micro_cos = worst(-pi, pi, n, |x| F32Ext::cos(x), f64::cos);
+    let micro_sin = worst(-pi, pi, n, F32Ext::sin, f64::sin);
+    let micro_cos = worst(-pi, pi, n, F32Ext::cos, f64::cos);
     // Square roots: stretches and their products (0.05 .. 50), volts² scales (1 .. 1e8).
     let libm_sqrt = worst(0.05, 1e8, n, libm::sqrtf, f64::sqrt);
-    let micro_sqrt = worst(0.05, 1e8, n, |x| F32Ext::sqrt(x), f64::sqrt);
-    let micro_isqrt = worst(0.05, 1e8, n, |x| F32Ext::invsqrt(x), |x| 1.0 / x.sqrt());
+    let micro_sqrt = worst(0.05, 1e8, n, F32Ext::sqrt, f64::sqrt);
+    let micro_isqrt = worst(0.05, 1e8, n, F32Ext::invsqrt, |x| 1.0 / x.sqrt());
     let libm_isqrt = worst(0.05, 1e8, n, |x| 1.0 / libm::sqrtf(x), |x| 1.0 / x.sqrt());
     // The Gent model's log: ln(1 − (I1 − 3)/Jlim), argument in (0, 1].
     let libm_ln = worst(1e-6, 1.0, n, libm::logf, f64::ln);
-    let micro_ln = worst(1e-6, 1.0, n, |x| F32Ext::ln(x), f64::ln);
+    let micro_ln = worst(1e-6, 1.0, n, F32Ext::ln, f64::ln);
     let libm_exp = worst(-20.0, 20.0, n, libm::expf, f64::exp);
-    let micro_exp = worst(-20.0, 20.0, n, |x| F32Ext::exp(x), f64::exp);
+    let micro_exp = worst(-20.0, 20.0, n, F32Ext::exp, f64::exp);
     for (name, (abs, rel)) in [
         ("sin, the core's kernel", core_sin),
         ("sin, libm sinf", libm_sin),

@@ -188,7 +188,8 @@ fn deepest<R>(what: &str, f: impl FnOnce() -> R) -> R {
 fn math_kernels() {
     use de_resonator::Real;
     use micromath::F32Ext;
-    let kernels: [(&str, fn(f32) -> f32); 13] = [
+    type Kernel = (&'static str, fn(f32) -> f32);
+    let kernels: [Kernel; 13] = [
         ("sin, the core's kernel", |x| Real::sin(x)),
         ("sin, libm sinf", libm::sinf),
         ("sin, micromath", |x| F32Ext::sin(x)),
