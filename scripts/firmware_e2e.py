@@ -246,6 +246,27 @@ def main():
     check(frames[-1][0] == 0x01 and codes[-1] == 0, f"last frame powers the DAC down: {frames[-1]}")
     check(enable and enable[-1] == "low", f"the amplifier-enable line ends low ({enable[-3:]})")
 
+    print("== settings saved in flash survive a reset (QEMU: .uninit RAM as the flash)")
+    fw = Firmware("saved", ref)
+    check("settings=image" in fw.banner, f"first boot from the image's settings: {fw.banner}")
+    fw.wait_phase(("holding",))
+    reply = fw.ask("set slew_volts_per_second 20000")
+    check(reply.startswith("ok "), f"set: {reply}")
+    fw.wait_phase(("holding",))
+    check(fw.ask("save").startswith("ok save"), "save")
+    reply = fw.ask("reset")
+    check(reply.startswith("ok reset"), f"reset: {reply}")
+    lines = [fw.line(), fw.line()]
+    check(lines[0] == "# reset: asked" and lines[1].startswith("# ready ")
+          and "settings=saved" in lines[1], f"after the reset: {lines}")
+    reply = fw.ask("get slew_volts_per_second")
+    check(reply == "ok slew_volts_per_second=20000", f"the saved slew rate in force: {reply}")
+    fw.stop()
+    frames, _ = fw.frames()
+    # Before the restart the output went off: a power-down frame, then the new boot's own.
+    downs = [k for k, f in enumerate(frames) if f[0] == 0x01]
+    check(len(downs) >= 3, f"power-down frames at boot, before the reset, at the new boot: {downs[:4]}")
+
     print("== a second device: the same firmware, its own image")
     other = os.path.join(WORK, "other-device.toml")
     with open(other, "w") as f:

@@ -29,6 +29,8 @@ pub mod protocol;
 pub mod real;
 pub mod roots;
 pub mod shell;
+#[cfg(feature = "storage")]
+pub mod store;
 pub mod table;
 pub mod trim;
 pub mod tuning;

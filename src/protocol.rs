@@ -24,7 +24,7 @@ pub const MAX_LINE: usize = 96;
 
 /// What `help` answers, one line.
 pub const HELP: &str = "commands: help | status | target <Hz> | ac <volts> <Hz> | stop | trim | \
-                        clear | get <setting> | set <setting> <value>";
+                        clear | get <setting> | set <setting> <value> | save | reset";
 
 /// A request.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -50,6 +50,10 @@ pub enum Command {
     Clear,
     Get(Setting),
     Set(Setting, f32),
+    /// Store the settings in force in flash: the firmware boots with them from then on.
+    Save,
+    /// Restart the firmware (the output off first; the boot checks run again).
+    Reset,
 }
 
 /// Why a request was not done: the number after `err`.
@@ -163,6 +167,8 @@ pub fn parse(line: &[u8]) -> Result<Command, ParseError> {
         "clear" => Command::Clear,
         "get" => Command::Get(args.setting()?),
         "set" => Command::Set(args.setting()?, args.number()?),
+        "save" => Command::Save,
+        "reset" => Command::Reset,
         _ => return Err(ParseError::UnknownCommand),
     };
     if args.words.next().is_some() {

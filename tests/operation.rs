@@ -379,7 +379,7 @@ fn every_wrong_image_is_refused_with_its_reason() {
 /// Every request the help line names parses, and its reply forms read back.
 #[test]
 fn the_protocol_covers_what_help_says() {
-    for name in ["help", "status", "stop", "trim", "clear"] {
+    for name in ["help", "status", "stop", "trim", "clear", "save", "reset"] {
         assert!(protocol::parse(name.as_bytes()).is_ok(), "{name}");
     }
     assert_eq!(

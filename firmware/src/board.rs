@@ -27,6 +27,10 @@ pub type DacSpi =
 /// The amplifier-enable line.
 pub type EnablePin = Pin<'B', 0, Output<PushPull>>;
 
+/// Polls of the output's state before a `reset` goes ahead anyway (a few ticks' worth: the
+/// tick turns the output off at its next run).
+pub const RESET_WAIT_POLLS: u32 = 2_000_000;
+
 /// The command port's baud rate.
 pub const BAUD: u32 = 115_200;
 /// The SPI clock to the DAC (the DAC8551 takes up to 30 MHz).
@@ -57,6 +61,8 @@ pub struct Board {
     pub rx: Rx<USART2>,
     /// The core clock SysTick counts, Hz.
     pub core_hz: u32,
+    /// The flash controller (the settings' storage on silicon).
+    pub flash: pac::FLASH,
     /// Set when the crystal or the PLL failed and the board runs on HSI (slower, still safe:
     /// every rate is computed from the clock in use).
     pub clock_error: Option<ClockError>,
@@ -157,6 +163,7 @@ impl Board {
             tx,
             rx,
             core_hz,
+            flash: dp.FLASH,
             clock_error,
         }
     }

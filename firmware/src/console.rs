@@ -3,12 +3,16 @@
 //! command task). The protocol itself (parse, replies, status) is the core's `protocol`.
 
 use core::fmt::Write;
+use core::ops::Range;
 
 use de_resonator::protocol::{self, Command, ErrorCode, ParseError, Status, MAX_LINE};
+use de_resonator::store;
 use de_resonator::{
     Amplifier, Controller, Decimal, FailureMode, Image, Refusal, Setting, Settings,
 };
 use heapless::{String, Vec};
+
+use crate::storage::{block_on, SettingsFlash};
 
 /// One request as received: its bytes, or why it has none.
 #[derive(Clone, Debug)]
@@ -58,6 +62,16 @@ impl Lines {
     }
 }
 
+/// What the command task does after the reply.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Then {
+    Reply,
+    /// Turn the output off and restart the firmware.
+    Reset,
+}
+
+const RESET_REPLY: &str = "ok reset: output off, restarting";
+
 /// A reply line (one `ok …` or `err …`, without its `\n`); cut short if it would not fit.
 pub type ReplyLine = String<256>;
 
@@ -71,6 +85,8 @@ pub struct Console {
     pub refusal: Option<String<200>>,
     /// The limit the last boot or plan found on the chip (its mode).
     pub limit: Option<FailureMode>,
+    /// Where `save` keeps the settings (`None`: nowhere in this build or boot).
+    pub store: Option<(SettingsFlash, Range<u32>)>,
 }
 
 /// Where the reply's extra status fields come from, read by the command task.
@@ -128,8 +144,23 @@ impl Console {
         controller: &mut impl Shared,
         extras: &Extras,
         out: &mut ReplyLine,
-    ) {
+    ) -> Then {
         out.clear();
+        self.answer(line, controller, extras, out);
+        if out.as_str() == RESET_REPLY {
+            Then::Reset
+        } else {
+            Then::Reply
+        }
+    }
+
+    fn answer(
+        &mut self,
+        line: &Line,
+        controller: &mut impl Shared,
+        extras: &Extras,
+        out: &mut ReplyLine,
+    ) {
         let parsed = match line {
             Line::Text(bytes) => protocol::parse(bytes),
             Line::TooLong => Err(ParseError::TooLong),
@@ -196,6 +227,26 @@ impl Console {
                 self.replan(image, next, controller, out);
             }
             Command::Clear => self.clear(image, amplifier, controller, out),
+            Command::Save => {
+                let saved = match &mut self.store {
+                    // The flash never waits (RAM, or the chip's controller blocking in each
+                    // call): run to its end here.
+                    Some((flash, range)) => {
+                        block_on(store::save(flash, range.clone(), &self.settings))
+                            .unwrap_or(Err(store::StoreError::Flash(store::FlashKind::Other)))
+                    }
+                    None => {
+                        err(out, ErrorCode::Unsupported, "no settings storage");
+                        return;
+                    }
+                };
+                match saved {
+                    Ok(()) => {
+                        let _ = write!(out, "ok save: the settings in force boot from now on");
+                    }
+                    Err(e) => err(out, ErrorCode::Refused, e),
+                }
+            }
             _ if !running => {
                 err(
                     out,
@@ -245,6 +296,9 @@ impl Console {
                 Some(Err(refusal)) => err(out, code(&refusal), refusal),
                 None => {}
             },
+            Command::Reset => {
+                let _ = write!(out, "{RESET_REPLY}");
+            }
             Command::Help => {}
         }
     }

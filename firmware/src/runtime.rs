@@ -1,6 +1,68 @@
 //! Runtime glue: exit codes, the panic and HardFault handlers, and the stack meter. The only
 //! `unsafe` of the firmware lives here and in `config` (raw memory the linker names).
 
+/// Why the firmware restarted, kept across the reset in `.uninit` RAM with a check word
+/// (QEMU has no reset flags; on silicon the same record works).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ResetCause {
+    /// The command port asked (`reset`).
+    Asked,
+    /// The watchdog was not fed in time.
+    Watchdog,
+}
+
+impl ResetCause {
+    pub fn name(self) -> &'static str {
+        match self {
+            ResetCause::Asked => "asked",
+            ResetCause::Watchdog => "watchdog",
+        }
+    }
+}
+
+const CAUSE_CHECK: u32 = 0x5E5E_7C0D;
+
+#[link_section = ".uninit.RESET_CAUSE"]
+static mut RESET_CAUSE: core::mem::MaybeUninit<[u32; 2]> = core::mem::MaybeUninit::uninit();
+
+/// Record why, then restart the chip.
+pub fn reset(cause: ResetCause) -> ! {
+    let code = match cause {
+        ResetCause::Asked => 1,
+        ResetCause::Watchdog => 2,
+    };
+    // SAFETY: a plain store into RAM no one else uses, just before the reset.
+    unsafe {
+        core::ptr::write_volatile(
+            core::ptr::addr_of_mut!(RESET_CAUSE).cast::<[u32; 2]>(),
+            [CAUSE_CHECK ^ code, code],
+        )
+    };
+    cortex_m::peripheral::SCB::sys_reset()
+}
+
+/// Why the last reset happened, if the firmware recorded it (then forgotten: a power cycle
+/// or a reset pin reads `None`).
+pub fn take_reset_cause() -> Option<ResetCause> {
+    // SAFETY: reads and clears RAM only this module touches; any bit pattern is a valid
+    // [u32; 2], and the check word says whether it was written.
+    let [check, code] = unsafe {
+        let at = core::ptr::addr_of_mut!(RESET_CAUSE).cast::<[u32; 2]>();
+        let record = core::ptr::read_volatile(at);
+        core::ptr::write_volatile(at, [0, 0]);
+        record
+    };
+    if check != CAUSE_CHECK ^ code {
+        return None;
+    }
+    match code {
+        1 => Some(ResetCause::Asked),
+        2 => Some(ResetCause::Watchdog),
+        _ => None,
+    }
+}
+
 /// End the run with a status (QEMU's exit status under semihosting); on a chip, stop at a
 /// breakpoint.
 pub fn exit(code: i32) -> ! {
@@ -100,4 +162,24 @@ pub mod stack {
     pub fn used() -> u32 {
         used_below(top())
     }
+}
+
+/// 2 KB of RAM that a reset keeps (`.uninit`: cortex-m-rt does not zero it; QEMU's
+/// `sys_reset` keeps it): the settings' flash under QEMU. Given out once.
+#[cfg(feature = "qemu")]
+pub fn settings_ram() -> Option<&'static mut [u8]> {
+    use core::mem::MaybeUninit;
+    use core::sync::atomic::{AtomicBool, Ordering};
+
+    const BYTES: usize = 2 * de_resonator::store::RAM_PAGE_BYTES;
+    #[link_section = ".uninit.SETTINGS"]
+    static mut RAM: MaybeUninit<[u8; BYTES]> = MaybeUninit::uninit();
+    static TAKEN: AtomicBool = AtomicBool::new(false);
+    if TAKEN.swap(true, Ordering::AcqRel) {
+        return None;
+    }
+    // SAFETY: given out once (TAKEN), so this is the only reference. The bytes are whatever
+    // the RAM holds (zeros at QEMU's power-up, the last run's after a reset): plain bytes,
+    // which the store checks (magic, CRCs) before it believes any.
+    Some(unsafe { (*core::ptr::addr_of_mut!(RAM)).assume_init_mut() })
 }

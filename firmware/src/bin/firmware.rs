@@ -21,13 +21,16 @@ mod app {
     use de_resonator::protocol::NOTICE;
     use de_resonator::{Controller, Dac8551, Decimal, Event, OutputStage, Phase};
     use de_resonator_firmware::board::{self, Board, DacSpi, EnablePin};
-    use de_resonator_firmware::console::{Console, Extras, Line, Lines, ReplyLine};
+    use de_resonator_firmware::console::{
+        Console, Extras, Line, Lines, ReplyLine, Shared as _, Then,
+    };
+    use de_resonator_firmware::runtime::{self, ResetCause};
     #[cfg(feature = "model-sensor")]
     use de_resonator_firmware::sensor::ModelSensor as Sensors;
     #[cfg(not(feature = "model-sensor"))]
     use de_resonator_firmware::sensor::NoSensor as Sensors;
     use de_resonator_firmware::sensor::Sensor;
-    use de_resonator_firmware::{config, stack, work};
+    use de_resonator_firmware::{config, stack, storage, work};
     use embedded_hal_nb::serial::Read as _;
     use rtic_sync::channel::{Receiver, Sender, TrySendError};
     use rtic_sync::make_channel;
@@ -46,6 +49,8 @@ mod app {
         tick_cycles_max: u32,
         /// QEMU builds: the independent clock (TIM2, µs) at the last tick's start.
         last_tick_us: u32,
+        /// Whether the output stage is off (DAC powered down, enable low), as the tick left it.
+        output_off: bool,
     }
 
     #[local]
@@ -85,9 +90,16 @@ mod app {
             settings: de_resonator::Settings::for_target(0.0),
             refusal: None,
             limit: None,
+            store: storage::open(board.flash),
         };
-        let mut notice = ReplyLine::new();
-        let controller = boot(&mut console, &mut notice);
+        let (mut notice, mut warning) = (ReplyLine::new(), ReplyLine::new());
+        if let Some(cause) = runtime::take_reset_cause() {
+            let _ = writeln!(tx, "{NOTICE}reset: {}", cause.name());
+        }
+        let controller = boot(&mut console, &mut notice, &mut warning);
+        if !warning.is_empty() {
+            let _ = writeln!(tx, "{NOTICE}warning: {warning}");
+        }
         let tick_hz = console.settings.tick_hz;
         if controller.is_some()
             && board::start_tick(&mut core.SYST, board.core_hz, tick_hz).is_none()
@@ -109,6 +121,7 @@ mod app {
                 controller,
                 tick_cycles_max: 0,
                 last_tick_us: 0,
+                output_off: true,
             },
             Local {
                 stage,
@@ -128,9 +141,14 @@ mod app {
         )
     }
 
-    /// Read the image and run every boot check; the controller, or `None` with why in
-    /// `console.refusal`. The start-up notice into `notice`.
-    fn boot(console: &mut Console, notice: &mut ReplyLine) -> Option<Controller> {
+    /// Read the image and the saved settings, and run every boot check: the controller, or
+    /// `None` with why in `console.refusal`. Saved settings that cannot be read, or that the
+    /// boot checks refuse, are ignored (said in `warning`): the image's are used.
+    fn boot(
+        console: &mut Console,
+        notice: &mut ReplyLine,
+        warning: &mut ReplyLine,
+    ) -> Option<Controller> {
         let refuse =
             |console: &mut Console, notice: &mut ReplyLine, why: &dyn core::fmt::Display| {
                 let mut reason = heapless::String::new();
@@ -152,20 +170,46 @@ mod app {
         console.image = Some(image);
         console.amplifier = Some(amplifier);
         console.settings = image.settings;
-        match Controller::start(image.params, image.table, amplifier, image.settings) {
+        let start = |settings| start(&image, amplifier, settings);
+        let mut source = "image";
+        let mut started = None;
+        match saved_settings(console) {
+            Ok(Some(saved)) => match start(saved) {
+                Ok(ok) => {
+                    console.settings = saved;
+                    source = "saved";
+                    started = Some(ok);
+                }
+                Err(fault) => {
+                    let _ = write!(
+                        warning,
+                        "saved settings refused ({fault}): the image's used"
+                    );
+                }
+            },
+            Ok(None) => {}
+            Err(e) => {
+                let _ = write!(warning, "{e}: the image's settings used");
+            }
+        }
+        #[cfg(feature = "defmt")]
+        if !warning.is_empty() {
+            defmt::warn!("{=str}", warning.as_str());
+        }
+        match started.map_or_else(|| start(image.settings), Ok) {
             Ok((controller, boot)) => {
                 #[cfg(feature = "defmt")]
                 defmt::info!(
                     "boot checks pass: bias {=f32} V for {=f32} Hz, cap {=f32} V",
                     boot.bias_volts,
-                    image.settings.target_hz,
+                    console.settings.target_hz,
                     boot.max_volts
                 );
                 console.limit = boot.limit.map(|l| l.mode);
                 let _ = write!(
                     notice,
-                    "ready target_hz={} bias_volts={} max_volts={}",
-                    Decimal(image.settings.target_hz),
+                    "ready target_hz={} bias_volts={} max_volts={} settings={source}",
+                    Decimal(console.settings.target_hz),
                     Decimal(boot.bias_volts),
                     Decimal(boot.max_volts)
                 );
@@ -173,6 +217,28 @@ mod app {
             }
             Err(fault) => refuse(console, notice, &fault),
         }
+    }
+
+    /// Every boot check (one call site: the boot tries the saved settings, then the image's).
+    #[inline(never)]
+    fn start(
+        image: &de_resonator::Image<'static>,
+        amplifier: de_resonator::Amplifier,
+        settings: de_resonator::Settings,
+    ) -> Result<(Controller, de_resonator::Boot), de_resonator::Fault> {
+        Controller::start(image.params, image.table, amplifier, settings)
+    }
+
+    /// The settings `save` stored, if any.
+    fn saved_settings(
+        console: &mut Console,
+    ) -> Result<Option<de_resonator::Settings>, de_resonator::store::StoreError> {
+        use de_resonator::store::{self, FlashKind, StoreError};
+        let Some((flash, range)) = &mut console.store else {
+            return Ok(None);
+        };
+        storage::block_on(store::load(&mut *flash, range.clone()))
+            .unwrap_or(Err(StoreError::Flash(FlashKind::Other)))
     }
 
     /// Silicon sleeps until the next interrupt (an explicit `wfi`: RTIC's default
@@ -193,7 +259,7 @@ mod app {
     }
 
     /// One controller tick: its code to the DAC, the enable line held, the events logged.
-    #[task(binds = SysTick, priority = 3, shared = [controller, tick_cycles_max, last_tick_us], local = [stage, sensor])]
+    #[task(binds = SysTick, priority = 3, shared = [controller, tick_cycles_max, last_tick_us, output_off], local = [stage, sensor])]
     fn tick(mut cx: tick::Context) {
         #[cfg(feature = "qemu")]
         cx.shared
@@ -204,6 +270,10 @@ mod app {
         let inputs = sensor.sample();
         let (event, trim_wanted) = cx.shared.controller.lock(|c| {
             let Some(c) = c else {
+                // No controller (a reset on its way): the output off.
+                if !stage.is_safe() {
+                    let _ = stage.safe();
+                }
                 return (None, false);
             };
             // The amplifier on while a plan that passed its checks drives; off (the DAC
@@ -227,6 +297,8 @@ mod app {
         if let Some((event, ticks)) = event {
             log(event, ticks);
         }
+        let off = stage.is_safe();
+        cx.shared.output_off.lock(|o| *o = off);
         let cycles = board::cycles_into_tick();
         cx.shared
             .tick_cycles_max
@@ -296,7 +368,7 @@ mod app {
     }
 
     /// Each request answered, one reply line each.
-    #[task(priority = 1, shared = [controller, tick_cycles_max, last_tick_us], local = [from_rx, tx, console])]
+    #[task(priority = 1, shared = [controller, tick_cycles_max, last_tick_us, output_off], local = [from_rx, tx, console])]
     async fn command(mut cx: command::Context) {
         let mut reply = ReplyLine::new();
         while let Ok(line) = cx.local.from_rx.recv().await {
@@ -315,10 +387,23 @@ mod app {
                 clock_us: None,
             };
             let mut controller = Locked(&mut cx.shared.controller);
-            cx.local
+            let then = cx
+                .local
                 .console
                 .serve(&line, &mut controller, &extras, &mut reply);
             let _ = writeln!(cx.local.tx, "{reply}");
+            if then == Then::Reset {
+                // The controller gone, the tick turns the output off; then the restart.
+                controller.with(|c| *c = None);
+                cx.shared.output_off.lock(|o| *o = false);
+                for _ in 0..board::RESET_WAIT_POLLS {
+                    if cx.shared.output_off.lock(|o| *o) {
+                        break;
+                    }
+                }
+                let _ = nb::block!(embedded_hal_nb::serial::Write::flush(cx.local.tx));
+                runtime::reset(ResetCause::Asked);
+            }
         }
     }
 

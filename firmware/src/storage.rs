@@ -1,0 +1,101 @@
+//! Where `save` keeps the settings: flash sectors 9 and 10 on the chip (memory.x's SETTINGS;
+//! the STM32F4 flash controller through the HAL), 2 KB of `.uninit` RAM under QEMU (whose
+//! flash controller is not emulated; `.uninit` survives `SCB::sys_reset`, as flash survives
+//! a power cycle). The layout and the power-cut safety are the core's `store`
+//! (sequential-storage).
+
+use core::future::Future;
+use core::ops::Range;
+use core::pin::pin;
+use core::task::{Context, Poll, Waker};
+
+/// The settings' flash as this build has it.
+#[cfg(feature = "qemu")]
+pub type SettingsFlash = de_resonator::store::RamFlash<'static>;
+#[cfg(not(feature = "qemu"))]
+pub type SettingsFlash = ChipFlash;
+
+/// The flash (from the chip's flash controller, unused under QEMU) and the range of it the
+/// settings use.
+pub fn open(controller: stm32f4xx_hal::pac::FLASH) -> Option<(SettingsFlash, Range<u32>)> {
+    #[cfg(feature = "qemu")]
+    {
+        let _ = controller;
+        let ram = crate::runtime::settings_ram()?;
+        let len = ram.len() as u32;
+        Some((de_resonator::store::RamFlash::new(ram), 0..len))
+    }
+    #[cfg(not(feature = "qemu"))]
+    {
+        extern "C" {
+            /// memory.x: the settings sectors as offsets from the start of flash.
+            static _settings_offset: u8;
+            static _settings_end: u8;
+        }
+        let from = core::ptr::addr_of!(_settings_offset) as u32;
+        let to = core::ptr::addr_of!(_settings_end) as u32;
+        let flash = stm32f4xx_hal::flash::LockedFlash::new(controller);
+        Some((ChipFlash(flash), from..to))
+    }
+}
+
+/// Run a future whose flash never waits (RAM, or the chip's flash controller, which blocks
+/// in each call) to its end: for `init`, which cannot await. `None` if it ever waits.
+pub fn block_on<F: Future>(future: F) -> Option<F::Output> {
+    let mut future = pin!(future);
+    let mut cx = Context::from_waker(Waker::noop());
+    // A future over a blocking flash is ready at its first poll; a few more are allowed.
+    for _ in 0..4 {
+        if let Poll::Ready(out) = future.as_mut().poll(&mut cx) {
+            return Some(out);
+        }
+    }
+    None
+}
+
+/// The STM32F4's flash controller as embedded-storage's async `NorFlash` (each call blocks
+/// until the controller is done; the HAL's waits on BSY). Not emulated by QEMU: compiled and
+/// clippy-checked in the silicon builds only.
+#[cfg(not(feature = "qemu"))]
+pub struct ChipFlash(stm32f4xx_hal::flash::LockedFlash);
+
+#[cfg(not(feature = "qemu"))]
+mod chip {
+    use embedded_storage_async::nor_flash::{ErrorType, NorFlash, ReadNorFlash};
+    use stm32f4xx_hal::flash::{FlashExt, UnlockedFlash};
+
+    use super::ChipFlash;
+
+    impl ErrorType for ChipFlash {
+        type Error = stm32f4xx_hal::flash::Error;
+    }
+
+    impl ReadNorFlash for ChipFlash {
+        const READ_SIZE: usize = 1;
+
+        async fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), Self::Error> {
+            embedded_storage::nor_flash::ReadNorFlash::read(&mut self.0, offset, bytes)
+        }
+
+        fn capacity(&self) -> usize {
+            embedded_storage::nor_flash::ReadNorFlash::capacity(&self.0)
+        }
+    }
+
+    impl NorFlash for ChipFlash {
+        const WRITE_SIZE: usize =
+            <UnlockedFlash<'static> as embedded_storage::nor_flash::NorFlash>::WRITE_SIZE;
+        const ERASE_SIZE: usize =
+            <UnlockedFlash<'static> as embedded_storage::nor_flash::NorFlash>::ERASE_SIZE;
+
+        async fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
+            embedded_storage::nor_flash::NorFlash::erase(&mut self.0.unlocked(), from, to)
+        }
+
+        async fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Self::Error> {
+            embedded_storage::nor_flash::NorFlash::write(&mut self.0.unlocked(), offset, bytes)
+        }
+    }
+
+    impl embedded_storage_async::nor_flash::MultiwriteNorFlash for ChipFlash {}
+}

@@ -1,0 +1,169 @@
+//! Settings saved in flash (`store`), on the RAM flash that can tear a write at any byte: a
+//! power cut anywhere in any save (either slot, every byte of its erase and its writes) never
+//! loses the last good settings, a corrupted record is skipped, and a blob of another version
+//! is refused by name.
+#![cfg(feature = "storage")]
+
+use de_resonator::store::{self, RamFlash, StoreError, BLOB_BYTES, RAM_PAGE_BYTES};
+use de_resonator::Settings;
+use futures::executor::block_on;
+
+/// Two pages, as the firmware's QEMU stand-in has.
+const PAGES: usize = 2;
+const RANGE: core::ops::Range<u32> = 0..(PAGES * RAM_PAGE_BYTES) as u32;
+
+fn erased() -> Vec<u8> {
+    vec![0xFF; PAGES * RAM_PAGE_BYTES]
+}
+
+/// The n-th settings of a sequence: each differs from the others.
+fn nth(n: usize) -> Settings {
+    Settings {
+        slew_volts_per_second: 1000.0 + n as f32,
+        ac_volts: n as f32,
+        stuck_samples: if n.is_multiple_of(2) {
+            None
+        } else {
+            Some(n as u32)
+        },
+        ..Settings::for_target(40.0 + n as f32 / 8.0)
+    }
+}
+
+fn save(
+    bytes: &mut [u8],
+    settings: &Settings,
+    fail_after: Option<usize>,
+) -> Result<(), StoreError> {
+    let mut flash = RamFlash::new(bytes);
+    flash.fail_after = fail_after;
+    block_on(store::save(&mut flash, RANGE, settings))
+}
+
+fn load(bytes: &mut [u8]) -> Result<Option<Settings>, StoreError> {
+    block_on(store::load(RamFlash::new(bytes), RANGE))
+}
+
+/// Bytes a save changes (written or erased), counted by a budget that never runs out.
+fn bytes_of_save(bytes: &[u8], settings: &Settings) -> usize {
+    let mut copy = bytes.to_vec();
+    let budget = usize::MAX / 2;
+    let mut flash = RamFlash::new(&mut copy);
+    flash.fail_after = Some(budget);
+    block_on(store::save(&mut flash, RANGE, settings)).unwrap();
+    budget - flash.fail_after.unwrap()
+}
+
+#[test]
+fn settings_read_back_as_saved() {
+    let mut bytes = erased();
+    assert_eq!(load(&mut bytes), Ok(None));
+    for n in 0..50 {
+        save(&mut bytes, &nth(n), None).unwrap();
+        assert_eq!(load(&mut bytes), Ok(Some(nth(n))), "save {n}");
+    }
+}
+
+/// Every save of a run that wraps the pages several times (so the cut also lands in a page's
+/// erase), cut at every byte it changes: the settings read afterwards are the last good ones
+/// (or the new ones, once the item is whole), and the next save works.
+#[test]
+fn a_power_cut_at_any_byte_of_any_save_loses_nothing() {
+    let mut bytes = erased();
+    let mut cuts = 0;
+    for n in 0..40 {
+        let before = nth(n);
+        let after = nth(n + 1);
+        if n > 0 {
+            assert_eq!(load(&mut bytes), Ok(Some(before)));
+        }
+        let total = bytes_of_save(&bytes, &after);
+        for cut in 0..total {
+            let mut torn = bytes.clone();
+            assert!(
+                save(&mut torn, &after, Some(cut)).is_err(),
+                "save {n} cut at {cut}"
+            );
+            let read = load(&mut torn);
+            let expected = if n == 0 { None } else { Some(before) };
+            assert!(
+                read == Ok(expected) || read == Ok(Some(after)),
+                "save {n} cut at byte {cut} of {total}: read {read:?}"
+            );
+            // The storage goes on: the next save is read back.
+            save(&mut torn, &nth(100 + n), None).unwrap();
+            assert_eq!(load(&mut torn), Ok(Some(nth(100 + n))));
+            cuts += 1;
+        }
+        save(&mut bytes, &after, None).unwrap();
+    }
+    println!("{cuts} power cuts, none lost the last good settings");
+    assert!(cuts > 40 * BLOB_BYTES);
+}
+
+/// A flipped bit in the newest record: it is skipped (its CRC), the one before is read.
+#[test]
+fn a_corrupted_item_is_skipped() {
+    let mut bytes = erased();
+    save(&mut bytes, &nth(1), None).unwrap();
+    save(&mut bytes, &nth(2), None).unwrap();
+    // The newest record's blob, found in the flash.
+    let blob = store::encode(&nth(2));
+    let at = bytes
+        .windows(blob.len())
+        .position(|w| w == blob)
+        .expect("the blob is stored as is");
+    bytes[at + 10] ^= 0x01;
+    assert_eq!(load(&mut bytes), Ok(Some(nth(1))));
+}
+
+/// A blob from another layout version: refused with its version, never read as settings.
+#[test]
+fn a_blob_of_another_version_is_refused() {
+    let mut bytes = erased();
+    let mut old = store::encode(&nth(3));
+    old[0..2].copy_from_slice(&0u16.to_le_bytes());
+    block_on(store::save_blob(RamFlash::new(&mut bytes), RANGE, &old)).unwrap();
+    let refused = load(&mut bytes);
+    assert_eq!(
+        refused,
+        Err(StoreError::Version {
+            version: 0,
+            count: 16
+        })
+    );
+    let message = refused.unwrap_err().to_string();
+    assert!(
+        message.contains("version 0") && message.contains("ignored"),
+        "{message}"
+    );
+    assert_eq!(store::decode(&store::encode(&nth(4))), Ok(nth(4)));
+}
+
+/// A range of garbage (a stranger's bytes, RAM at power-up) holds no settings; a save
+/// works on it; `erase` forgets what was saved.
+#[test]
+fn garbage_holds_no_settings_and_a_save_works_on_it() {
+    for fill in [0x00u8, 0x5A] {
+        let mut bytes = vec![fill; PAGES * RAM_PAGE_BYTES];
+        assert_eq!(load(&mut bytes), Ok(None));
+        save(&mut bytes, &nth(5), None).unwrap();
+        assert_eq!(load(&mut bytes), Ok(Some(nth(5))));
+        block_on(store::erase(RamFlash::new(&mut bytes), RANGE)).unwrap();
+        assert_eq!(load(&mut bytes), Ok(None));
+    }
+}
+
+/// A range that is not two slots of whole pages is refused.
+#[test]
+fn a_range_that_is_not_two_slots_is_refused() {
+    let mut bytes = erased();
+    for range in [0..RAM_PAGE_BYTES as u32, 0..3 * RAM_PAGE_BYTES as u32 / 2, 100..2148] {
+        let mut flash = RamFlash::new(&mut bytes);
+        assert_eq!(
+            block_on(store::save(&mut flash, range.clone(), &nth(1))),
+            Err(StoreError::Range),
+            "{range:?}"
+        );
+    }
+}
