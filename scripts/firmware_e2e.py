@@ -267,6 +267,26 @@ def main():
     downs = [k for k, f in enumerate(frames) if f[0] == 0x01]
     check(len(downs) >= 3, f"power-down frames at boot, before the reset, at the new boot: {downs[:4]}")
 
+    print("== the watchdog: a work task past its deadline resets the chip, which comes up refusing")
+    fw = Firmware("watchdog", ref)
+    fw.wait_phase(("holding",))
+    # A plan check 50,000 s long: the command task computes for minutes of chip time, the
+    # heartbeat at its priority cannot run, the dog starves (QEMU's stand-in: 1 s after the
+    # last feed, the tasks' deadline 0.5 s).
+    fw.send(b"set check_seconds 50000\n")
+    lines = [fw.line(), fw.line()]
+    check(lines[0] == "# reset: watchdog" and lines[1].startswith("# refused reset by the watchdog"),
+          f"reset by the watchdog, up refusing: {lines}")
+    reply = fw.ask("status")
+    check(reply.startswith("err 5 ") and "watchdog" in reply, f"status after it: {reply}")
+    reply = fw.ask("clear")
+    check(reply.startswith("ok clear"), f"clear boots again: {reply}")
+    s = fw.wait_phase(("holding",))
+    check(s["fault"] == "none" and s["bias_volts"] != "0", f"driving again: {s['phase']}")
+    fw.stop()
+    frames, enable = fw.frames()
+    check(enable.count("high") >= 2, f"the amplifier enabled at the first boot and after clear: {enable}")
+
     print("== a second device: the same firmware, its own image")
     other = os.path.join(WORK, "other-device.toml")
     with open(other, "w") as f:
@@ -335,6 +355,8 @@ def main():
         host_sim("image", "--settings", settings, "--out", img)
         fw = Firmware(f"rate-{tick_hz}", img, args="busy-idle")
         a = fw.status()
+        while int(a["ticks"]) == 0:  # `clock_us` is the last tick's: wait for one
+            a = fw.status()
         time.sleep(3.0)
         b = fw.status()
         fw.stop()

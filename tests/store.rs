@@ -158,7 +158,11 @@ fn garbage_holds_no_settings_and_a_save_works_on_it() {
 #[test]
 fn a_range_that_is_not_two_slots_is_refused() {
     let mut bytes = erased();
-    for range in [0..RAM_PAGE_BYTES as u32, 0..3 * RAM_PAGE_BYTES as u32 / 2, 100..2148] {
+    for range in [
+        0..RAM_PAGE_BYTES as u32,
+        0..3 * RAM_PAGE_BYTES as u32 / 2,
+        100..2148,
+    ] {
         let mut flash = RamFlash::new(&mut bytes);
         assert_eq!(
             block_on(store::save(&mut flash, range.clone(), &nth(1))),

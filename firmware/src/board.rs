@@ -63,6 +63,8 @@ pub struct Board {
     pub core_hz: u32,
     /// The flash controller (the settings' storage on silicon).
     pub flash: pac::FLASH,
+    /// The independent watchdog (not emulated by QEMU).
+    pub iwdg: pac::IWDG,
     /// Set when the crystal or the PLL failed and the board runs on HSI (slower, still safe:
     /// every rate is computed from the clock in use).
     pub clock_error: Option<ClockError>,
@@ -164,6 +166,7 @@ impl Board {
             rx,
             core_hz,
             flash: dp.FLASH,
+            iwdg: dp.IWDG,
             clock_error,
         }
     }

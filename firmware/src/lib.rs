@@ -3,7 +3,7 @@
 //! ticks the core's controller on SysTick, writes the DAC through SPI1, and serves the
 //! command port on USART2. The logic is in the `de-resonator` core; nothing here decides a
 //! voltage. One module a part: `board` (clocks, pins, peripherals), `config` (the image),
-//! `console` (the command port), `sensor` (what the tick measures), `work` (the tick's jobs for the low-priority task), `storage` (where `save` keeps the settings), `runtime` (exit codes,
+//! `console` (the command port), `sensor` (what the tick measures), `work` (the tick's jobs for the low-priority task), `storage` (where `save` keeps the settings), `watchdog` (the IWDG, or its QEMU stand-in), `runtime` (exit codes,
 //! panic and fault handlers, the stack meter); `reference` and `stand_in` serve the
 //! on-target checks and counts only.
 #![no_std]
@@ -22,6 +22,7 @@ pub mod runtime;
 pub mod sensor;
 pub mod stand_in;
 pub mod storage;
+pub mod watchdog;
 pub mod work;
 
 pub use runtime::{exit, stack};

@@ -30,6 +30,7 @@ mod app {
     #[cfg(not(feature = "model-sensor"))]
     use de_resonator_firmware::sensor::NoSensor as Sensors;
     use de_resonator_firmware::sensor::Sensor;
+    use de_resonator_firmware::watchdog::{self, Dog, Watchdog as _};
     use de_resonator_firmware::{config, stack, storage, work};
     use embedded_hal_nb::serial::Read as _;
     use rtic_sync::channel::{Receiver, Sender, TrySendError};
@@ -51,6 +52,8 @@ mod app {
         last_tick_us: u32,
         /// Whether the output stage is off (DAC powered down, enable low), as the tick left it.
         output_off: bool,
+        /// Set by the heartbeat task (the low-priority tasks are not stuck), cleared by the tick.
+        checked_in: bool,
     }
 
     #[local]
@@ -67,6 +70,9 @@ mod app {
         console: Console,
         /// Idle without `wfi` (QEMU runs that measure the tick rate).
         busy_idle: bool,
+        dog: Dog,
+        /// The tick rate booted with, Hz (the watchdog's deadlines are counted in ticks).
+        tick_hz: f32,
     }
 
     #[init]
@@ -93,15 +99,24 @@ mod app {
             store: storage::open(board.flash),
         };
         let (mut notice, mut warning) = (ReplyLine::new(), ReplyLine::new());
-        if let Some(cause) = runtime::take_reset_cause() {
+        let cause = runtime::take_reset_cause();
+        if let Some(cause) = cause {
             let _ = writeln!(tx, "{NOTICE}reset: {}", cause.name());
         }
-        let controller = boot(&mut console, &mut notice, &mut warning);
+        let mut controller = boot(&mut console, &mut notice, &mut warning);
+        if cause == Some(ResetCause::Watchdog) && controller.is_some() {
+            // Up faulted: nothing driven until someone has looked (`clear`).
+            controller = None;
+            let why = "reset by the watchdog (a task missed its deadline): `clear` to boot";
+            notice.clear();
+            let _ = write!(notice, "refused {why}");
+            console.refusal = heapless::String::try_from(why).ok();
+        }
         if !warning.is_empty() {
             let _ = writeln!(tx, "{NOTICE}warning: {warning}");
         }
         let tick_hz = console.settings.tick_hz;
-        if controller.is_some()
+        if console.image.is_some()
             && board::start_tick(&mut core.SYST, board.core_hz, tick_hz).is_none()
         {
             // The controller's own checks bound tick_hz; this is the timer's 24-bit reach.
@@ -122,6 +137,7 @@ mod app {
                 tick_cycles_max: 0,
                 last_tick_us: 0,
                 output_off: true,
+                checked_in: true,
             },
             Local {
                 stage,
@@ -137,6 +153,8 @@ mod app {
                 tx,
                 console,
                 busy_idle: board::busy_idle_asked(),
+                dog: Dog::new(board.iwdg),
+                tick_hz,
             },
         )
     }
@@ -259,7 +277,7 @@ mod app {
     }
 
     /// One controller tick: its code to the DAC, the enable line held, the events logged.
-    #[task(binds = SysTick, priority = 3, shared = [controller, tick_cycles_max, last_tick_us, output_off], local = [stage, sensor])]
+    #[task(binds = SysTick, priority = 3, shared = [controller, tick_cycles_max, last_tick_us, output_off, checked_in], local = [stage, sensor, dog, tick_hz, dog_started: bool = false, since_check_in: u32 = 0])]
     fn tick(mut cx: tick::Context) {
         #[cfg(feature = "qemu")]
         cx.shared
@@ -268,13 +286,13 @@ mod app {
         let stage = cx.local.stage;
         let sensor = cx.local.sensor;
         let inputs = sensor.sample();
-        let (event, trim_wanted) = cx.shared.controller.lock(|c| {
+        let (event, trim_wanted, running) = cx.shared.controller.lock(|c| {
             let Some(c) = c else {
-                // No controller (a reset on its way): the output off.
+                // No controller (refused, or a reset on its way): the output off.
                 if !stage.is_safe() {
                     let _ = stage.safe();
                 }
-                return (None, false);
+                return (None, false, false);
             };
             // The amplifier on while a plan that passed its checks drives; off (the DAC
             // powered down, the enable line low) on a fault and at rest at 0 V after `stop`.
@@ -288,8 +306,21 @@ mod app {
             }
             let out = stage.send(c, out);
             sensor.commanded(out.volts);
-            (out.event.map(|e| (e, c.ticks())), work::trim_wanted(c))
+            (
+                out.event.map(|e| (e, c.ticks())),
+                work::trim_wanted(c),
+                true,
+            )
         });
+        let checked_in = cx.shared.checked_in.lock(|c| core::mem::replace(c, false));
+        feed(
+            cx.local.dog,
+            cx.local.dog_started,
+            cx.local.since_check_in,
+            *cx.local.tick_hz,
+            checked_in,
+            running,
+        );
         if trim_wanted {
             // Already queued or running: it takes the job when it runs.
             let _ = trim::spawn();
@@ -303,6 +334,41 @@ mod app {
         cx.shared
             .tick_cycles_max
             .lock(|most| *most = (*most).max(cycles));
+    }
+
+    /// The watchdog at a tick: started with the first controller, fed while the low-priority
+    /// tasks check in (the heartbeat, asked for four times a deadline).
+    fn feed(
+        dog: &mut Dog,
+        started: &mut bool,
+        since_check_in: &mut u32,
+        tick_hz: f32,
+        checked_in: bool,
+        running: bool,
+    ) {
+        if running && !*started {
+            dog.start(watchdog::TIMEOUT_MS, tick_hz);
+            *started = true;
+        }
+        let deadline = (watchdog::CHECK_IN_SECONDS * tick_hz) as u32;
+        *since_check_in = if checked_in {
+            0
+        } else {
+            since_check_in.saturating_add(1)
+        };
+        if *since_check_in > 0 && since_check_in.is_multiple_of((deadline / 4).max(1)) {
+            let _ = heartbeat::spawn();
+        }
+        if *since_check_in <= deadline {
+            dog.feed();
+        }
+        dog.tick();
+    }
+
+    /// The low-priority tasks' check-in: it runs only when none of them holds the priority.
+    #[task(priority = 1, shared = [checked_in])]
+    async fn heartbeat(mut cx: heartbeat::Context) {
+        cx.shared.checked_in.lock(|c| *c = true);
     }
 
     fn log(event: Event, ticks: u32) {
