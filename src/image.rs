@@ -23,7 +23,7 @@ use core::fmt;
 
 use crate::device::DeviceParams;
 use crate::drive::{Amplifier, CodeError};
-use crate::table::{crc32, Table, TableError};
+use crate::table::{crc32, f32_at, u16_at, u32_at, Table, TableError};
 use crate::{Setting, Settings};
 
 /// The first four bytes of an image.
@@ -144,26 +144,6 @@ pub struct Image<'a> {
     pub settings: Settings,
     /// The table's bytes, for `Controller::start` (which parses and checks them).
     pub table: &'a [u8],
-}
-
-fn u16_at(bytes: &[u8], at: usize) -> u16 {
-    let mut b = [0; 2];
-    if let Some(src) = bytes.get(at..at + 2) {
-        b.copy_from_slice(src);
-    }
-    u16::from_le_bytes(b)
-}
-
-fn u32_at(bytes: &[u8], at: usize) -> u32 {
-    let mut b = [0; 4];
-    if let Some(src) = bytes.get(at..at + 4) {
-        b.copy_from_slice(src);
-    }
-    u32::from_le_bytes(b)
-}
-
-fn f32_at(bytes: &[u8], at: usize) -> f32 {
-    f32::from_bits(u32_at(bytes, at))
 }
 
 impl<'a> Image<'a> {

@@ -23,7 +23,7 @@ use embedded_storage_async::nor_flash::{
 };
 
 use crate::controller::{Setting, Settings};
-use crate::table::crc32;
+use crate::table::{crc32, f32_at, u16_at, u32_at};
 
 /// The blob's layout version this code reads and writes.
 pub const BLOB_VERSION: u16 = 1;
@@ -110,23 +110,13 @@ pub fn encode(settings: &Settings) -> [u8; BLOB_BYTES] {
 
 /// A blob as settings (this version only).
 pub fn decode(blob: &[u8]) -> Result<Settings, StoreError> {
-    let word = |at: usize| {
-        let mut b = [0u8; 2];
-        if let Some(src) = blob.get(at..at + 2) {
-            b.copy_from_slice(src);
-        }
-        u16::from_le_bytes(b)
-    };
-    let (version, count) = (word(0), word(2));
+    let (version, count) = (u16_at(blob, 0), u16_at(blob, 2));
     if version != BLOB_VERSION || usize::from(count) != COUNT || blob.len() != BLOB_BYTES {
         return Err(StoreError::Version { version, count });
     }
     let mut settings = Settings::for_target(0.0);
-    let values = blob.get(4..).unwrap_or(&[]).chunks_exact(4);
-    for (setting, bytes) in Setting::ALL.into_iter().zip(values) {
-        let mut b = [0u8; 4];
-        b.copy_from_slice(bytes);
-        settings.set(setting, f32::from_le_bytes(b));
+    for (k, setting) in Setting::ALL.into_iter().enumerate() {
+        settings.set(setting, f32_at(blob, 4 + 4 * k));
     }
     Ok(settings)
 }
@@ -155,22 +145,15 @@ async fn read_slot<F: NorFlash>(
 ) -> Result<Option<(u32, [u8; BLOB_BYTES])>, StoreError> {
     let mut record = [0u8; RECORD_BYTES];
     flash.read(at, &mut record).await.map_err(flash_error)?;
-    let word = |from: usize| {
-        let mut b = [0u8; 4];
-        if let Some(src) = record.get(from..from + 4) {
-            b.copy_from_slice(src);
-        }
-        u32::from_le_bytes(b)
-    };
     let body = record.get(..CRC_AT).unwrap_or(&[]);
-    if body.get(..4) != Some(&MAGIC[..]) || crc32(body) != word(CRC_AT) {
+    if body.get(..4) != Some(&MAGIC[..]) || crc32(body) != u32_at(&record, CRC_AT) {
         return Ok(None);
     }
     let mut blob = [0u8; BLOB_BYTES];
     if let Some(src) = record.get(8..CRC_AT) {
         blob.copy_from_slice(src);
     }
-    Ok(Some((word(4), blob)))
+    Ok(Some((u32_at(&record, 4), blob)))
 }
 
 /// Whether sequence `a` is newer than `b` (wrapping: a save every second for 68 years).

@@ -154,7 +154,9 @@ pub fn crc32(bytes: &[u8]) -> u32 {
     !crc
 }
 
-/// The four bytes at `offset` (zeros past the end: callers check the length first).
+/// The four bytes at `offset` (zeros past the end: callers check the length first). With
+/// `u16_at`, `u32_at` and `f32_at`: the little-endian reads of every flash layout (tables,
+/// images, saved settings).
 fn word_at(bytes: &[u8], offset: usize) -> [u8; 4] {
     let mut word = [0u8; 4];
     if let Some(src) = bytes.get(offset..offset.saturating_add(4)) {
@@ -163,13 +165,21 @@ fn word_at(bytes: &[u8], offset: usize) -> [u8; 4] {
     word
 }
 
-fn f32_at(bytes: &[u8], offset: usize) -> f32 {
+pub(crate) fn f32_at(bytes: &[u8], offset: usize) -> f32 {
     f32::from_le_bytes(word_at(bytes, offset))
 }
 
-fn u16_at(bytes: &[u8], offset: usize) -> u16 {
-    let [a, b, _, _] = word_at(bytes, offset);
-    u16::from_le_bytes([a, b])
+pub(crate) fn u32_at(bytes: &[u8], offset: usize) -> u32 {
+    u32::from_le_bytes(word_at(bytes, offset))
+}
+
+/// The two bytes at `offset` (zero past the end).
+pub(crate) fn u16_at(bytes: &[u8], offset: usize) -> u16 {
+    let mut half = [0u8; 2];
+    if let Some(src) = bytes.get(offset..offset.saturating_add(2)) {
+        half.copy_from_slice(src);
+    }
+    u16::from_le_bytes(half)
 }
 
 /// A checked table, borrowed from flash or a buffer.
@@ -206,7 +216,7 @@ impl<'a> Table<'a> {
             });
         }
         let body = expected - 4;
-        let stored = u32::from_le_bytes(word_at(bytes, body));
+        let stored = u32_at(bytes, body);
         let computed = crc32(bytes.get(..body).unwrap_or(&[]));
         if stored != computed {
             return Err(TableError::BadCrc { stored, computed });

@@ -3,6 +3,8 @@
 
 mod common;
 
+use common::reseal;
+
 use de_resonator::table::{self, Table, TableError};
 #[cfg(feature = "trim")]
 use de_resonator::DeviceParams;
@@ -30,13 +32,6 @@ fn reference_table() -> Vec<u8> {
 /// 0..10 kV over the full scale: a 2.5 V reference and an amplifier gain of 4000.
 fn amplifier() -> Amplifier {
     Amplifier::new(2.5, 4000.0).unwrap()
-}
-
-/// Recompute the CRC after editing a table, so the edit reaches the later checks.
-fn reseal(bytes: &mut [u8]) {
-    let body = bytes.len() - 4;
-    let crc = table::crc32(&bytes[..body]);
-    bytes[body..].copy_from_slice(&crc.to_le_bytes());
 }
 
 fn start(settings: Settings) -> Result<Controller, Fault> {

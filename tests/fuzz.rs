@@ -10,6 +10,8 @@
 
 mod common;
 
+use common::reseal;
+
 use std::collections::BTreeMap;
 
 use common::{made_table, random_device, Rng};
@@ -52,13 +54,6 @@ fn maybe_broken(rng: &mut Rng, mut p: DeviceParams<f64>) -> DeviceParams<f64> {
         }
     }
     p
-}
-
-/// Recompute the CRC after editing a table.
-fn reseal(bytes: &mut [u8]) {
-    let body = bytes.len() - 4;
-    let crc = table::crc32(&bytes[..body]);
-    bytes[body..].copy_from_slice(&crc.to_le_bytes());
 }
 
 /// The little-endian f32 at `at`.

@@ -5,9 +5,11 @@
 
 mod common;
 
+use common::reseal;
+
 use de_resonator::image::{self, AmplifierSpec, Image, ImageError, DAC_BITS};
 use de_resonator::protocol::{self, Command, Reply};
-use de_resonator::table::{self, TableError};
+use de_resonator::table::TableError;
 use de_resonator::{
     Amplifier, Controller, Device, Fault, Inputs, Phase, Refusal, Settings, TuneError, Tuner,
     REFERENCE_DEVICE,
@@ -279,12 +281,6 @@ fn made_image(settings: &Settings) -> Vec<u8> {
     let n = Image::write(&mut out, &REFERENCE_DEVICE.cast(), &spec(), settings, &t).unwrap();
     out.truncate(n);
     out
-}
-
-fn reseal(bytes: &mut [u8]) {
-    let body = bytes.len() - 4;
-    let crc = table::crc32(&bytes[..body]);
-    bytes[body..].copy_from_slice(&crc.to_le_bytes());
 }
 
 #[test]

@@ -197,3 +197,11 @@ pub fn random_device(rng: &mut Rng) -> DeviceParams<f64> {
     }
     p.cast::<f32>().cast()
 }
+
+/// Recompute the trailing CRC-32 after editing a table or an image (both end in the CRC of
+/// every byte before it), so the edit reaches the checks after the CRC.
+pub fn reseal(bytes: &mut [u8]) {
+    let body = bytes.len() - 4;
+    let crc = de_resonator::table::crc32(&bytes[..body]);
+    bytes[body..].copy_from_slice(&crc.to_le_bytes());
+}
