@@ -173,12 +173,10 @@ impl<T: Real> Tuner<T> {
             }
             let rising = p.f_end >= p.f_start;
             let f = |d| self.device.natural_frequency_hz_at(d);
-            let (a, b) = bisect(p.start, p.end, |d| (f(d) < target_hz) == rising);
-            found = Some(if (f(b) - target_hz).abs() < (f(a) - target_hz).abs() {
-                b
-            } else {
-                a
-            });
+            // Adjacent floats bracket the crossing; which of the two is below f's own rounding
+            // noise there, so the lower (the smaller bias) is taken.
+            let (a, _) = bisect(p.start, p.end, |d| (f(d) < target_hz) == rising);
+            found = Some(a);
             true
         });
         match found {
