@@ -248,14 +248,19 @@ pub async fn erase<F: NorFlash>(mut flash: F, range: Range<u32>) -> Result<(), S
         .map_err(flash_error)
 }
 
-/// A NOR flash in RAM: erased bytes read 0xFF, a write can only clear bits. For QEMU (whose
-/// flash controller is not emulated) and tests: `fail_after` bytes written from now, the next
-/// write or erase fails there, having done the bytes before it (a torn write: a power cut).
-pub struct RamFlash<'a> {
+/// A NOR flash in RAM: erased bytes read 0xFF, a write can only clear bits, writes are whole
+/// `WORD`-byte words and erases whole pages (else `NotAligned`, as real flash refuses). For
+/// QEMU (whose flash controller is not emulated) and tests: `fail_after` bytes written from
+/// now, the next write or erase fails there, having done the bytes before it (a torn write:
+/// a power cut).
+pub struct RamFlashWords<'a, const WORD: usize> {
     bytes: &'a mut [u8],
     /// Bytes a write or erase may still change before it fails (`None`: never).
     pub fail_after: Option<usize>,
 }
+
+/// The RAM flash of 4-byte words the firmware's QEMU build uses.
+pub type RamFlash<'a> = RamFlashWords<'a, RAM_WORD_BYTES>;
 
 /// Page and word of `RamFlash`.
 pub const RAM_PAGE_BYTES: usize = 1024;
@@ -271,7 +276,7 @@ impl NorFlashError for RamFlashError {
     }
 }
 
-impl<'a> RamFlash<'a> {
+impl<'a, const WORD: usize> RamFlashWords<'a, WORD> {
     /// Over `bytes` as they are (a whole number of pages; erased or not).
     pub fn new(bytes: &'a mut [u8]) -> Self {
         Self {
@@ -305,11 +310,11 @@ impl<'a> RamFlash<'a> {
     }
 }
 
-impl ErrorType for RamFlash<'_> {
+impl<const WORD: usize> ErrorType for RamFlashWords<'_, WORD> {
     type Error = RamFlashError;
 }
 
-impl ReadNorFlash for RamFlash<'_> {
+impl<const WORD: usize> ReadNorFlash for RamFlashWords<'_, WORD> {
     const READ_SIZE: usize = 1;
 
     async fn read(&mut self, offset: u32, out: &mut [u8]) -> Result<(), Self::Error> {
@@ -323,12 +328,16 @@ impl ReadNorFlash for RamFlash<'_> {
     }
 }
 
-impl NorFlash for RamFlash<'_> {
-    const WRITE_SIZE: usize = RAM_WORD_BYTES;
+impl<const WORD: usize> NorFlash for RamFlashWords<'_, WORD> {
+    const WRITE_SIZE: usize = WORD;
     const ERASE_SIZE: usize = RAM_PAGE_BYTES;
 
     async fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
         let len = (to as usize).saturating_sub(from as usize);
+        let page = RAM_PAGE_BYTES;
+        if !((from as usize).is_multiple_of(page) && len.is_multiple_of(page)) {
+            return Err(RamFlashError(NorFlashErrorKind::NotAligned));
+        }
         self.span(from, len)?;
         for at in from as usize..to as usize {
             self.spend()?;
@@ -340,6 +349,10 @@ impl NorFlash for RamFlash<'_> {
     }
 
     async fn write(&mut self, offset: u32, data: &[u8]) -> Result<(), Self::Error> {
+        let word = WORD.max(1);
+        if !((offset as usize).is_multiple_of(word) && data.len().is_multiple_of(word)) {
+            return Err(RamFlashError(NorFlashErrorKind::NotAligned));
+        }
         self.span(offset, data.len())?;
         for (k, &byte) in data.iter().enumerate() {
             self.spend()?;
@@ -351,4 +364,4 @@ impl NorFlash for RamFlash<'_> {
     }
 }
 
-impl MultiwriteNorFlash for RamFlash<'_> {}
+impl<const WORD: usize> MultiwriteNorFlash for RamFlashWords<'_, WORD> {}

@@ -253,6 +253,91 @@ fn a_replan_never_lifts_the_cap_fixed_at_boot() {
 }
 
 #[test]
+fn a_new_plan_keeps_the_tick_rate_booted_with_and_reports_the_cap_in_force() {
+    let mut c = started(Settings {
+        margin: 0.2,
+        ..Settings::for_target(44.5)
+    });
+    run_until(&mut c, &[Phase::Holding], 5_000);
+    let cap = c.max_volts();
+    let other_rate = Settings {
+        tick_hz: 2_000.0,
+        margin: 0.05,
+        target_hz: 44.0,
+        ..*c.settings()
+    };
+    let replanned = c
+        .replan(other_rate)
+        .unwrap()
+        .solve(&reference_table())
+        .unwrap();
+    let boot = c.adopt(replanned).unwrap();
+    assert_eq!(c.settings().tick_hz, 1_000.0);
+    assert_eq!(boot.max_volts, c.max_volts());
+    assert!(boot.max_volts <= cap);
+    // 10 kV/s at the booted 1 kHz: 10 V a tick on the way up.
+    let volts = run_until(&mut c, &[Phase::Holding], 5_000);
+    let step = volts[1] - volts[0];
+    assert!((step - 10.0).abs() <= STEP_VOLTS, "{step}");
+}
+
+#[test]
+fn a_trim_is_refused_without_a_trim_tolerance() {
+    let mut c = started(Settings::for_target(44.0));
+    run_until(&mut c, &[Phase::Holding], 5_000);
+    assert_eq!(c.trim_now(), Err(Refusal::NoTrim));
+    assert_eq!(c.phase(), Phase::Holding);
+}
+
+/// `stop` during a trim's pulse: the ramp down never dips below itself (the pulse is
+/// dropped) and no AC is left in the plan.
+#[cfg(feature = "trim")]
+#[test]
+fn stop_drops_a_pending_pulse_and_the_ac() {
+    let settings = Settings {
+        trim_tolerance: Some(1e-3),
+        ac_volts: 100.0,
+        ac_hz: 40.0,
+        // The stand-in plant below is static: its samples repeat while the bias holds.
+        stuck_samples: None,
+        ..Settings::for_target(44.0)
+    };
+    let (mut c, _) = Controller::start(
+        REFERENCE_DEVICE.cast(),
+        &reference_table(),
+        amplifier(),
+        settings,
+    )
+    .unwrap();
+    // The plant: the device's equilibrium at the voltage commanded, its stretch the sensor.
+    let device = Device::new(REFERENCE_DEVICE.cast::<f32>()).unwrap();
+    let stretch_at = |volts: f32| {
+        device
+            .offset_for_bias(volts, Tuner::new(device).limit().at.offset)
+            .map(|o| device.stretch_at(o))
+            .unwrap_or(device.prestretch_1())
+    };
+    let mut volts = 0.0;
+    for _ in 0..20_000 {
+        let out = c.tick(Inputs::stretch(stretch_at(volts)));
+        volts = out.volts;
+        if c.phase() == Phase::Measuring {
+            break;
+        }
+    }
+    assert_eq!(c.phase(), Phase::Measuring);
+    c.stop();
+    assert_eq!(c.plan().ac_volts, 0.0);
+    let mut last = c.last_volts();
+    for _ in 0..2_000 {
+        let v = c.tick(Inputs::stretch(stretch_at(last))).volts;
+        assert!(v <= last && last - v <= 10.0 + STEP_VOLTS, "{last} -> {v}");
+        last = v;
+    }
+    assert_eq!(last, 0.0);
+}
+
+#[test]
 fn a_faulted_controller_refuses_every_request_but_stop() {
     let mut c = started(Settings::for_target(44.0));
     c.fault(Fault::Bus);
@@ -329,11 +414,31 @@ fn every_wrong_image_is_refused_with_its_reason() {
         bad[at] ^= 0x10;
         assert!(Image::parse(&bad).is_err(), "bit flip at {at} accepted");
     }
-    // Cut short: the stated length runs past the room.
-    assert!(matches!(
-        Image::parse(&good[..good.len() - 1]),
-        Err(ImageError::WrongLength { .. })
-    ));
+    // Cut short: the stated length runs past the room (a header's worth or more left), or
+    // not even a header and a CRC.
+    for cut in [good.len() - 1, 300, image::HEADER_BYTES + 4] {
+        assert!(
+            matches!(
+                Image::parse(&good[..cut]),
+                Err(ImageError::WrongLength { .. })
+            ),
+            "{cut}"
+        );
+    }
+    assert_eq!(
+        Image::parse(&good[..image::HEADER_BYTES + 3]).unwrap_err(),
+        ImageError::TooShort {
+            bytes: image::HEADER_BYTES + 3
+        }
+    );
+    // Erased flash is empty only when all of the header is: anything else is not an image.
+    let mut stranger = vec![0xFFu8; 4096];
+    stranger[40] = 0x12;
+    assert_eq!(Image::parse(&stranger).unwrap_err(), ImageError::BadMagic);
+    assert_eq!(
+        Image::parse(&[0x5A; 4096]).unwrap_err(),
+        ImageError::BadMagic
+    );
     let mut version = good.clone();
     version[4] = 2;
     reseal(&mut version);
@@ -370,6 +475,46 @@ fn every_wrong_image_is_refused_with_its_reason() {
         ),
         "{refused:?}"
     );
+}
+
+/// Image errors and refusals read as sentences that name their cause.
+#[test]
+fn image_errors_and_refusals_say_why() {
+    let cases: [(String, &str); 8] = [
+        (
+            ImageError::Empty { byte: 0xFF }.to_string(),
+            "no configuration image",
+        ),
+        (ImageError::BadMagic.to_string(), "DERI"),
+        (
+            ImageError::UnsupportedVersion { version: 3 }.to_string(),
+            "version 3",
+        ),
+        (ImageError::DacBits { bits: 12 }.to_string(), "12-bit DAC"),
+        (
+            ImageError::BadCrc {
+                stored: 1,
+                computed: 2,
+            }
+            .to_string(),
+            "corrupted",
+        ),
+        (
+            Refusal::Busy {
+                phase: Phase::Ramping,
+            }
+            .to_string(),
+            "busy (ramping)",
+        ),
+        (
+            Refusal::Faulted { fault: Fault::Bus }.to_string(),
+            "DAC bus error",
+        ),
+        (Refusal::NoTrim.to_string(), "trim_tolerance"),
+    ];
+    for (text, word) in cases {
+        assert!(text.contains(word), "{text:?} lacks {word:?}");
+    }
 }
 
 /// Every request the help line names parses, and its reply forms read back.

@@ -4,8 +4,9 @@
 //! is refused by name.
 #![cfg(feature = "storage")]
 
-use de_resonator::store::{self, RamFlash, StoreError, BLOB_BYTES, RAM_PAGE_BYTES};
+use de_resonator::store::{self, RamFlash, RamFlashWords, StoreError, BLOB_BYTES, RAM_PAGE_BYTES};
 use de_resonator::Settings;
+use embedded_storage_async::nor_flash::ReadNorFlash;
 use futures::executor::block_on;
 
 /// Two pages, as the firmware's QEMU stand-in has.
@@ -170,4 +171,103 @@ fn a_range_that_is_not_two_slots_is_refused() {
             "{range:?}"
         );
     }
+}
+
+/// The blob's documented layout: version, count, then the 16 settings as f32 (68 bytes); a
+/// blob of this version with another count is refused.
+#[test]
+fn the_blob_is_the_documented_one() {
+    assert_eq!(BLOB_BYTES, 2 + 2 + 4 * de_resonator::Setting::ALL.len());
+    assert_eq!(BLOB_BYTES, 68);
+    let blob = store::encode(&nth(7));
+    assert_eq!(u16::from_le_bytes([blob[0], blob[1]]), store::BLOB_VERSION);
+    assert_eq!(u16::from_le_bytes([blob[2], blob[3]]), 16);
+    let mut short = blob;
+    short[2] = 15;
+    assert_eq!(
+        store::decode(&short),
+        Err(StoreError::Version {
+            version: store::BLOB_VERSION,
+            count: 15
+        })
+    );
+    assert!(store::decode(&blob[..60]).is_err());
+}
+
+/// A range anywhere in the flash: saves touch its bytes only; past the flash's end, the
+/// flash's own error.
+#[test]
+fn saves_stay_inside_their_range() {
+    let page = RAM_PAGE_BYTES as u32;
+    let mut bytes = vec![0xFF; 6 * RAM_PAGE_BYTES];
+    let range = page..5 * page;
+    for n in 0..6 {
+        let mut flash = RamFlash::new(&mut bytes);
+        block_on(store::save(&mut flash, range.clone(), &nth(n))).unwrap();
+        assert_eq!(
+            block_on(store::load(&mut flash, range.clone())),
+            Ok(Some(nth(n)))
+        );
+        let outside = bytes[..RAM_PAGE_BYTES]
+            .iter()
+            .chain(&bytes[5 * RAM_PAGE_BYTES..]);
+        assert!(
+            outside.copied().all(|b| b == 0xFF),
+            "save {n} wrote outside"
+        );
+    }
+    let mut flash = RamFlash::new(&mut bytes);
+    assert_eq!(
+        block_on(store::save(&mut flash, 4 * page..8 * page, &nth(1))),
+        Err(StoreError::Flash(store::FlashKind::OutOfBounds))
+    );
+    use embedded_storage_async::nor_flash::NorFlashErrorKind as Kind;
+    assert_eq!(
+        store::FlashKind::from(Kind::NotAligned),
+        store::FlashKind::NotAligned
+    );
+    assert_eq!(
+        store::FlashKind::from(Kind::OutOfBounds),
+        store::FlashKind::OutOfBounds
+    );
+}
+
+/// Flashes of other word sizes (1 to 32 bytes, as NOR flashes have): every save is whole
+/// words (the RAM flash refuses a misaligned write, as real flash does), a power cut at any
+/// byte still loses nothing.
+#[test]
+fn every_word_size_is_written_whole_and_survives_a_cut() {
+    fn run<const WORD: usize>() {
+        let mut bytes = erased();
+        for n in 0..4 {
+            let mut flash = RamFlashWords::<WORD>::new(&mut bytes);
+            block_on(store::save(&mut flash, RANGE, &nth(n))).unwrap();
+            assert_eq!(
+                block_on(store::load(&mut flash, RANGE)),
+                Ok(Some(nth(n))),
+                "{WORD}"
+            );
+        }
+        for cut in 0..RAM_PAGE_BYTES + 200 {
+            let mut torn = bytes.clone();
+            let mut flash = RamFlashWords::<WORD>::new(&mut torn);
+            flash.fail_after = Some(cut);
+            let _ = block_on(store::save(&mut flash, RANGE, &nth(9)));
+            flash.fail_after = None;
+            let read = block_on(store::load(&mut flash, RANGE));
+            assert!(
+                read == Ok(Some(nth(3))) || read == Ok(Some(nth(9))),
+                "{WORD} cut {cut}"
+            );
+        }
+        assert_eq!(
+            RamFlashWords::<WORD>::new(&mut bytes).capacity(),
+            PAGES * RAM_PAGE_BYTES
+        );
+    }
+    run::<1>();
+    run::<2>();
+    run::<8>();
+    run::<16>();
+    run::<32>();
 }
