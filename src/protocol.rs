@@ -435,6 +435,17 @@ mod tests {
         assert_eq!(parse(b"launch"), Err(ParseError::UnknownCommand));
         assert_eq!(parse(b"target \xff44"), Err(ParseError::NotText));
         assert_eq!(parse(&[b'a'; MAX_LINE + 1]), Err(ParseError::TooLong));
+        // Exactly MAX_LINE bytes is a line; tabs separate words as spaces do.
+        let mut longest = b"target 44".to_vec();
+        longest.resize(MAX_LINE, b' ');
+        assert_eq!(parse(&longest), Ok(Command::Target { hz: 44.0 }));
+        assert_eq!(
+            parse(b"ac\t100\t40"),
+            Ok(Command::Ac {
+                volts: 100.0,
+                hz: 40.0
+            })
+        );
     }
 
     #[test]
@@ -467,6 +478,16 @@ mod tests {
             })
         );
         assert_eq!(Reply::parse("err 9 what"), None);
+        // Codes are written as their numbers, parse errors as sentences.
+        let mut text = heapless::String::<64>::new();
+        let _ = fmt::Write::write_fmt(&mut text, format_args!("{}", ErrorCode::Busy));
+        assert_eq!(text.as_str(), "3");
+        text.clear();
+        let _ = fmt::Write::write_fmt(
+            &mut text,
+            format_args!("{}", ParseError::BadNumber { index: 2 }),
+        );
+        assert_eq!(text.as_str(), "argument 2 is not a decimal number");
         assert_eq!(Reply::parse("hello"), None);
     }
 }

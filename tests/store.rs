@@ -199,7 +199,9 @@ fn the_blob_is_the_documented_one() {
 #[test]
 fn saves_stay_inside_their_range() {
     let page = RAM_PAGE_BYTES as u32;
-    let mut bytes = vec![0xFF; 6 * RAM_PAGE_BYTES];
+    // Outside the range: bytes an erase would change (to 0xFF).
+    let mut bytes = vec![0x00; 6 * RAM_PAGE_BYTES];
+    bytes[RAM_PAGE_BYTES..5 * RAM_PAGE_BYTES].fill(0xFF);
     let range = page..5 * page;
     for n in 0..6 {
         let mut flash = RamFlash::new(&mut bytes);
@@ -212,7 +214,7 @@ fn saves_stay_inside_their_range() {
             .iter()
             .chain(&bytes[5 * RAM_PAGE_BYTES..]);
         assert!(
-            outside.copied().all(|b| b == 0xFF),
+            outside.copied().all(|b| b == 0x00),
             "save {n} wrote outside"
         );
     }
@@ -270,4 +272,28 @@ fn every_word_size_is_written_whole_and_survives_a_cut() {
     run::<8>();
     run::<16>();
     run::<32>();
+    // Words longer than the store's record buffer allows: refused, nothing half-written.
+    let mut bytes = erased();
+    let mut flash = RamFlashWords::<64>::new(&mut bytes);
+    assert_eq!(
+        block_on(store::save(&mut flash, RANGE, &nth(1))),
+        Err(StoreError::Range)
+    );
+}
+
+/// The RAM flash refuses what real NOR flash refuses: a write of part of a word, an erase of
+/// part of a page.
+#[test]
+fn the_ram_flash_refuses_misaligned_writes_and_erases() {
+    use embedded_storage_async::nor_flash::{NorFlash, NorFlashError, NorFlashErrorKind};
+    let mut bytes = erased();
+    let mut flash = RamFlash::new(&mut bytes);
+    let kind = |r: Result<(), store::RamFlashError>| r.map_err(|e| e.kind());
+    let not_aligned = Err(NorFlashErrorKind::NotAligned);
+    assert_eq!(kind(block_on(flash.write(1, &[0; 4]))), not_aligned);
+    assert_eq!(kind(block_on(flash.write(4, &[0; 3]))), not_aligned);
+    assert_eq!(kind(block_on(flash.write(4, &[0; 4]))), Ok(()));
+    assert_eq!(kind(block_on(flash.erase(512, 1024))), not_aligned);
+    assert_eq!(kind(block_on(flash.erase(0, 512))), not_aligned);
+    assert_eq!(kind(block_on(flash.erase(0, 1024))), Ok(()));
 }
