@@ -70,8 +70,6 @@ pub enum Then {
     Reset,
 }
 
-const RESET_REPLY: &str = "ok reset: output off, restarting";
-
 /// A reply line (one `ok …` or `err …`, without its `\n`); cut short if it would not fit.
 pub type ReplyLine = String<256>;
 
@@ -146,12 +144,7 @@ impl Console {
         out: &mut ReplyLine,
     ) -> Then {
         out.clear();
-        self.answer(line, controller, extras, out);
-        if out.as_str() == RESET_REPLY {
-            Then::Reset
-        } else {
-            Then::Reply
-        }
+        self.answer(line, controller, extras, out)
     }
 
     fn answer(
@@ -160,7 +153,7 @@ impl Console {
         controller: &mut impl Shared,
         extras: &Extras,
         out: &mut ReplyLine,
-    ) {
+    ) -> Then {
         let parsed = match line {
             Line::Text(bytes) => protocol::parse(bytes),
             Line::TooLong => Err(ParseError::TooLong),
@@ -170,19 +163,19 @@ impl Console {
                     ErrorCode::Syntax,
                     "bytes were lost on the line; send it again",
                 );
-                return;
+                return Then::Reply;
             }
         };
         let command = match parsed {
             Ok(command) => command,
             Err(e) => {
                 err(out, ErrorCode::Syntax, e);
-                return;
+                return Then::Reply;
             }
         };
         if let Command::Help = command {
             let _ = write!(out, "ok {}", protocol::HELP);
-            return;
+            return Then::Reply;
         }
         let (Some(image), Some(amplifier)) = (self.image, self.amplifier) else {
             err(
@@ -190,7 +183,7 @@ impl Console {
                 ErrorCode::Config,
                 self.refusal.as_deref().unwrap_or("no image"),
             );
-            return;
+            return Then::Reply;
         };
         let running = controller.with(|c| c.is_some());
         match command {
@@ -211,7 +204,7 @@ impl Console {
                         ErrorCode::Refused,
                         "tick_hz sets SysTick at power-up: make an image with it",
                     );
-                    return;
+                    return Then::Reply;
                 }
                 if !running {
                     // Refused at boot: kept for `clear` to boot with, and check.
@@ -222,7 +215,7 @@ impl Console {
                         setting.key(),
                         Decimal(value)
                     );
-                    return;
+                    return Then::Reply;
                 }
                 self.replan(image, next, controller, out);
             }
@@ -237,7 +230,7 @@ impl Console {
                     }
                     None => {
                         err(out, ErrorCode::Unsupported, "no settings storage");
-                        return;
+                        return Then::Reply;
                     }
                 };
                 match saved {
@@ -297,10 +290,12 @@ impl Console {
                 None => {}
             },
             Command::Reset => {
-                let _ = write!(out, "{RESET_REPLY}");
+                let _ = write!(out, "ok reset: output off, restarting");
+                return Then::Reset;
             }
             Command::Help => {}
         }
+        Then::Reply
     }
 
     /// A new plan with `next`: its job made under the lock, solved outside it, adopted under

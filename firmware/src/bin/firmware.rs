@@ -188,11 +188,11 @@ mod app {
         console.image = Some(image);
         console.amplifier = Some(amplifier);
         console.settings = image.settings;
-        let start = |settings| start(&image, amplifier, settings);
+        let boot_with = |settings| start(&image, amplifier, settings);
         let mut source = "image";
         let mut started = None;
         match saved_settings(console) {
-            Ok(Some(saved)) => match start(saved) {
+            Ok(Some(saved)) => match boot_with(saved) {
                 Ok(ok) => {
                     console.settings = saved;
                     source = "saved";
@@ -214,7 +214,7 @@ mod app {
         if !warning.is_empty() {
             defmt::warn!("{=str}", warning.as_str());
         }
-        match started.map_or_else(|| start(image.settings), Ok) {
+        match started.map_or_else(|| boot_with(image.settings), Ok) {
             Ok((controller, boot)) => {
                 #[cfg(feature = "defmt")]
                 defmt::info!(
