@@ -287,6 +287,16 @@ def main():
     frames, enable = fw.frames()
     check(enable.count("high") >= 2, f"the amplifier enabled at the first boot and after clear: {enable}")
 
+    print("== the watchdog: a stuck tick (QEMU's `tick-hangs`: the tick hangs after 2 s) resets "
+          "the chip, which comes up refusing")
+    fw = Firmware("stuck-tick", ref, trace=False, args="tick-hangs")
+    lines = [fw.line(), fw.line()]
+    check(lines[0] == "# reset: watchdog" and lines[1].startswith("# refused reset by the watchdog"),
+          f"reset by the watchdog's own clock, up refusing: {lines}")
+    reply = fw.ask("status")
+    check(reply.startswith("err 5 ") and "watchdog" in reply, f"status after it: {reply}")
+    fw.stop()
+
     print("== a second device: the same firmware, its own image")
     other = os.path.join(WORK, "other-device.toml")
     with open(other, "w") as f:
@@ -404,6 +414,54 @@ def main():
         check(worst <= 1e-3, f"the trims' shear modulus within {worst:.1e} of the device's")
         check(abs(float(trims[-1][1]) - 44.0) <= 44.0 * 1e-3,
               f"the asked trim measured {trims[-1][1]} Hz for 44 Hz (tolerance 1e-3)")
+
+        print("== a runtime fault latches: down at the slew rate, 0 V, until clear; clear with the "
+              "cause still there stays faulted")
+        # The model sensor fails (NaN for good) after 2 s: a `Sensor` fault while running.
+        fw = Firmware("latch", img, elf=TRIM_ELF, args="sensor-fails")
+        s = fw.wait_phase(("faulted",))
+        check("not a number" in s["fault"], f"status names the fault: {s['fault']}")
+        reply = fw.ask("target 44")
+        check(reply.startswith("err 4 "), f"a request while coming down: {reply}")
+        end = time.time() + 30
+        while s["volts"] != "0" and time.time() < end:
+            time.sleep(0.1)
+            s = fw.status()
+        check(s["phase"] == "faulted" and s["volts"] == "0",
+              f"latched, at 0 V: {s['phase']} {s['volts']} V")
+        reply = fw.ask("target 44")
+        check(reply.startswith("err 4 "), f"a request while faulted: {reply}")
+        frames, enable = fw.frames()
+        down = max(k for k, f in enumerate(frames) if f[0] != 0x01)  # the last code sent
+        # The slew rate: the image's default, 10 kV/s at 1 kHz.
+        step = 10_000.0 / 1000.0
+        lsb = FULL_SCALE_VOLTS / 65536
+        # Back from the last code, while each tick fell by at most the slew rate: the descent.
+        # Any faster drop on the way down ends it early, and then it does not start high.
+        start = down
+        while start > 0 and frames[start - 1][0] != 0x01 and \
+                0 <= volts(frames[start - 1]) - volts(frames[start]) <= step + lsb:
+            start -= 1
+        descent = [volts(f) for f in frames[start:down + 1]]
+        check(descent[0] > 1000 and descent[-1] <= step + lsb,
+              f"down from {descent[0]:.0f} V in {len(descent)} ticks, never faster than "
+              f"{step} V a tick, to {descent[-1]:.2f} V at the last code")
+        check(frames[down + 1:] and all(f[0] == 0x01 for f in frames[down + 1:])
+              and enable[-1] == "low",
+              f"then only power-down frames ({len(frames) - down - 1}), enable low ({enable[-2:]})")
+        sent = len(frames)
+        highs = enable.count("high")
+        reply = fw.ask("clear")
+        check(reply.startswith("ok clear"), f"clear boots again: {reply}")
+        time.sleep(0.5)
+        s = fw.status()
+        check(s["phase"] == "faulted" and "not a number" in s["fault"],
+              f"the sensor still fails: faulted again at once: {s['phase']}, {s['fault']}")
+        fw.stop()
+        frames, enable = fw.frames()
+        later = [(f[1] << 8) | f[2] for f in frames[sent:]]
+        check(all(c == 0 for c in later) and enable.count("high") == highs,
+              f"nothing driven after the clear: codes {set(later) or 'none'}, enable never high")
 
     if failures:
         sys.exit(f"{len(failures)} checks failed")

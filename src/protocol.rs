@@ -66,7 +66,7 @@ pub enum ErrorCode {
     Refused = 2,
     /// Not now: a ramp, a trim or another request is under way; ask again.
     Busy = 3,
-    /// A fault holds the output at 0 V: `clear` first.
+    /// A fault brings the output down to 0 V and holds it there: `clear` first.
     Faulted = 4,
     /// No usable configuration image, or its boot checks fail: nothing is driven.
     Config = 5,
@@ -341,7 +341,7 @@ pub struct Status {
     pub stack_bytes: u32,
     /// Virtual time from an independent clock, µs (QEMU builds only).
     pub clock_us: Option<u32>,
-    /// The fault that holds the output at 0 V, if any.
+    /// The fault that brings the output down to 0 V and holds it there, if any.
     pub fault: Option<Fault>,
 }
 

@@ -8,7 +8,7 @@
 use embedded_hal::digital::OutputPin;
 use embedded_hal::spi::SpiDevice;
 
-use crate::controller::{Controller, Event, Fault, Output};
+use crate::controller::{Controller, Fault, Output};
 use crate::drive::{Dac8551, DacError};
 
 /// What failed on the way out.
@@ -70,15 +70,16 @@ impl<SPI: SpiDevice, EN: OutputPin> OutputStage<SPI, EN> {
         pin.and(bus)
     }
 
-    /// Send one tick's output: its code, or, on a fault (the controller's, or the bus
-    /// failing now, which faults the controller), the safe state. Nothing is written while
-    /// the stage is safe (before `enable`, or after a fault). The output as it was sent: a
-    /// bus failure makes it code 0 with `Event::Fault(Fault::Bus)`.
+    /// Send one tick's output: its code, or the safe state once a fault's descent has
+    /// reached 0 V (or the bus fails now, which faults the controller: the enable line drops
+    /// at once). Nothing is written while the stage is safe (before `enable`, or after a
+    /// fault). The output as it was sent: a bus failure makes it code 0 with
+    /// `Event::Fault(Fault::Bus)`.
     pub fn send(&mut self, controller: &mut Controller, out: Output) -> Output {
         if self.safe {
             return out;
         }
-        if matches!(out.event, Some(Event::Fault(_))) {
+        if controller.latched_fault().is_some() && out.volts == 0.0 {
             let _ = self.safe();
             return out;
         }

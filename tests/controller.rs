@@ -9,8 +9,8 @@ use de_resonator::table::{self, Table, TableError};
 #[cfg(feature = "trim")]
 use de_resonator::DeviceParams;
 use de_resonator::{
-    Amplifier, CodeError, Controller, Dac8551, DacCode, DacError, Device, Event, Fault, Inputs,
-    Phase, Setting, Settings, Tuner, REFERENCE_DEVICE,
+    Amplifier, CodeError, Controller, Dac8551, DacCode, DacError, Device, Event, Fault, FaultStage,
+    Inputs, Output, Phase, Setting, Settings, Tuner, REFERENCE_DEVICE,
 };
 use embedded_hal_mock::eh1::spi::{Mock, Transaction};
 use proptest::prelude::*;
@@ -738,40 +738,69 @@ fn without_ac_the_bias_holds() {
     assert_eq!(c.phase(), Phase::Holding);
 }
 
+/// After a fault from `from_volts` (the last voltage sent), the output goes down by the slew
+/// rate's step a tick (issue 11: no faster, since a step down rings the membrane toward loss
+/// of tension), within one DAC step of the straight line, reaches 0 V in the ticks the slew
+/// needs and stays there; nothing more is said.
+fn assert_descends(c: &mut Controller, first: Output, from_volts: f32) {
+    let settings = *c.settings();
+    let step_volts = settings.slew_volts_per_second / settings.tick_hz;
+    let lsb_volts = 2.5 * 4000.0 / 65536.0;
+    let needed = (from_volts / step_volts).ceil() as u32;
+    let mut out = first;
+    for n in 1..=needed + 100 {
+        let line = (from_volts - step_volts * n as f32).max(0.0);
+        assert!(
+            (out.volts - line).abs() <= lsb_volts,
+            "descent tick {n}: {} V, the slew's line {line} V",
+            out.volts
+        );
+        if n >= needed {
+            assert_eq!(out.code, DacCode(0), "descent tick {n}");
+        }
+        out = c.tick(Inputs::stretch(f32::NAN));
+        assert_eq!(out.event, None);
+    }
+    assert_eq!(c.phase(), Phase::Faulted);
+}
+
 #[test]
-fn faults_at_run_time_give_zero_volts_and_say_so_once() {
+fn faults_at_run_time_come_down_at_the_slew_rate_and_say_so_once() {
+    // The reference settings ramp at 10 kV/s, 1 kHz: 10 V a tick.
     let mut c = start(Settings::for_target(44.0)).unwrap();
     // Samples near the pre-stretch while the ramp starts: safe, no event.
     for k in 0..100 {
         let stretch = 2.0 + 1e-6 * k as f32;
         assert_eq!(c.tick(Inputs::stretch(stretch)).event, None);
     }
+    let sent = c.last_volts();
+    // Tick 0 at 0 V, then 10 V a tick: 990 V at tick 99.
+    assert!((sent - 990.0).abs() <= 0.2, "{sent} V after 100 ticks");
     let out = c.tick(Inputs::stretch(f32::NAN));
-    assert_eq!(out.code, DacCode(0));
     assert!(matches!(
         out.event,
         Some(Event::Fault(Fault::Sensor { .. }))
     ));
-    let after = c.tick(Inputs::stretch(2.0));
-    assert_eq!((after.code, after.event), (DacCode(0), None));
+    assert_descends(&mut c, out, sent);
 
-    // A measured stretch where B has gone slack (λ = 3.9: λB = 0.1): a limit, 0 V.
+    // A measured stretch where B has gone slack (λ = 3.9: λB = 0.1): a limit.
     let mut c = start(Settings::for_target(44.0)).unwrap();
     c.tick(Inputs::NONE);
+    let sent = c.last_volts();
     let out = c.tick(Inputs::stretch(3.9));
     assert!(
         matches!(out.event, Some(Event::Fault(Fault::Limit { .. }))),
         "{out:?}"
     );
-    assert_eq!(out.code, DacCode(0));
+    assert_descends(&mut c, out, sent);
 
     // A stuck sensor: the same sample `stuck_samples` times in a row.
     let mut c = start(Settings::for_target(44.0)).unwrap();
     for _ in 1..100 {
         assert_eq!(c.tick(Inputs::stretch(2.0)).event, None);
     }
+    let sent = c.last_volts();
     let out = c.tick(Inputs::stretch(2.0));
-    assert_eq!(out.code, DacCode(0));
     assert!(
         matches!(
             out.event,
@@ -779,6 +808,7 @@ fn faults_at_run_time_give_zero_volts_and_say_so_once() {
         ),
         "{out:?}"
     );
+    assert_descends(&mut c, out, sent);
 
     // An amplifier that follows its command is fine; one stuck below it (saturated at 3 kV)
     // is a fault once it has been off for more than AMPLIFIER_TICKS ticks.
@@ -797,6 +827,7 @@ fn faults_at_run_time_give_zero_volts_and_say_so_once() {
                 "{fault:?}"
             );
             faulted_at = Some((k, last));
+            assert_descends(&mut c, out, last);
             break;
         }
         last = out.volts;
@@ -805,7 +836,8 @@ fn faults_at_run_time_give_zero_volts_and_say_so_once() {
     // At 10 V a tick the command passes 3200 V at tick 320; 3 ticks of grace after that.
     assert!(commanded > 3200.0 && k <= 325, "tick {k}, {commanded} V");
 
-    // The IO side reports a bus error.
+    // The IO side reports a bus error: it cannot ramp, 0 V at once; and a dead bus during
+    // another fault's descent ends it at once too.
     let mut c = start(Settings::for_target(44.0)).unwrap();
     c.tick(Inputs::NONE);
     let out = c.fault(Fault::Bus);
@@ -813,6 +845,20 @@ fn faults_at_run_time_give_zero_volts_and_say_so_once() {
         (out.code, out.event),
         (DacCode(0), Some(Event::Fault(Fault::Bus)))
     );
+    assert_eq!(c.tick(Inputs::NONE).code, DacCode(0));
+    let mut c = start(Settings::for_target(44.0)).unwrap();
+    for _ in 0..50 {
+        c.tick(Inputs::NONE);
+    }
+    let out = c.tick(Inputs::stretch(f32::NAN));
+    assert!(out.volts > 400.0, "{out:?}");
+    let out = c.fault(Fault::Bus);
+    assert_eq!((out.code, out.event), (DacCode(0), None));
+    assert_eq!(
+        c.latched_fault().map(|f| f.stage()),
+        Some(FaultStage::Running)
+    );
+    assert!(matches!(c.latched_fault(), Some(Fault::Sensor { .. })));
     assert_eq!(c.tick(Inputs::NONE).code, DacCode(0));
 }
 

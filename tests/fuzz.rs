@@ -3,7 +3,7 @@
 //! values changed and resealed with a fresh CRC), and sensor and amplifier-monitor samples
 //! (a simulated plant, mismatched or not, noisy, NaN, stuck, wild). Every tick's command is
 //! checked against (1 − margin)·Φlimit of the device flashed, computed in f64; after a fault
-//! every code is 0; the final gate never fires (the boot checks catch everything first).
+//! the output goes down at the slew rate, no faster, to 0 V and stays; the final gate never fires (the boot checks catch everything first).
 //!
 //! `FUZZ_TICKS` (default 10⁶) sets how many ticks to check, `FUZZ_SEED` the seed. A longer
 //! run: `FUZZ_TICKS=100000000 cargo test --release --test fuzz -- --nocapture`.
@@ -17,7 +17,7 @@ use std::collections::BTreeMap;
 use common::{made_table, random_device, Rng};
 use de_resonator::table::{self, HEADER_BYTES, POINT_BYTES};
 use de_resonator::{
-    Amplifier, Controller, Device, DeviceParams, Drive, Event, Fault, FaultStage, Inputs,
+    Amplifier, Controller, DacCode, Device, DeviceParams, Drive, Event, Fault, FaultStage, Inputs,
     Integrator, Method, Settings, State, Tuner,
 };
 
@@ -289,7 +289,9 @@ fn fuzz_the_controller() {
             let drive = Drive::constant(&d, 0.0);
             Integrator::new(d, drive, Method::Rk4, step, d.model_range(), rest, true).ok()
         });
-        let (mut faulted, mut last_volts, mut stuck) = (false, 0.0f32, f32::NAN);
+        let (mut faulted, mut last_volts, mut stuck) = (None, 0.0f32, f32::NAN);
+        let slew_step = s.slew_volts_per_second / s.tick_hz;
+        let lsb_volts = amplifier.volts(DacCode(1));
         for k in 0..ticks {
             let truth = model.as_ref().map(|m| m.state().stretch as f32);
             let stretch = match sensor {
@@ -331,21 +333,34 @@ fn fuzz_the_controller() {
                 out.volts
             );
             assert_eq!(out.volts, amplifier.volts(out.code));
-            if faulted {
-                assert_eq!(out.code.0, 0, "tick {k}: a code after a fault");
+            if let Some(Event::Fault(fault)) = out.event {
+                assert!(
+                    !matches!(fault, Fault::Gate { .. }),
+                    "the final gate fired: {fault} {flashed:?} {s:?}"
+                );
+                *tally.faults.entry(kind(&fault)).or_default() += 1;
+                faulted = Some((k, last_volts));
             }
-            match out.event {
-                Some(Event::Fault(fault)) => {
-                    assert!(
-                        !matches!(fault, Fault::Gate { .. }),
-                        "the final gate fired: {fault} {flashed:?} {s:?}"
-                    );
-                    assert_eq!(out.code.0, 0);
-                    *tally.faults.entry(kind(&fault)).or_default() += 1;
-                    faulted = true;
-                }
-                Some(Event::AboveCeiling { .. }) => tally.held += 1,
-                _ => {}
+            if let Some((at, from_volts)) = faulted {
+                // After a fault: down at the slew rate, never faster (at once where the bus
+                // died), to 0 V within the ticks the slew needs, and 0 V from then on.
+                let dead_bus = bus_fails.is_some_and(|b| b <= k);
+                let drop = last_volts - out.volts;
+                assert!(drop >= 0.0, "tick {k}: up {} V after a fault", -drop);
+                assert!(
+                    dead_bus || drop <= slew_step + lsb_volts,
+                    "tick {k}: down {drop} V in a tick after a fault, slew {slew_step} V"
+                );
+                let needed = (from_volts / slew_step).ceil() as u32 + 1;
+                assert!(
+                    k - at < needed || out.code.0 == 0,
+                    "tick {k}: {} V, {} ticks after the fault from {from_volts} V",
+                    out.volts,
+                    k - at
+                );
+            }
+            if let Some(Event::AboveCeiling { .. }) = out.event {
+                tally.held += 1;
             }
             // The trim's solve, outside the tick (now and then late, as a busy task is).
             #[cfg(feature = "trim")]
@@ -367,8 +382,8 @@ fn fuzz_the_controller() {
         }
     }
     println!(
-        "fuzz: {} cases ({} started), {} checked ticks, 0 above (1 - margin)·limit, 0 codes \
-         after a fault, {} trims held at the ceiling",
+        "fuzz: {} cases ({} started), {} checked ticks, 0 above (1 - margin)·limit, every fault \
+         down at the slew rate to 0 V, {} trims held at the ceiling",
         tally.cases, tally.started, tally.ticks, tally.held
     );
     println!("fuzz: tables {:?}", tally.tables);

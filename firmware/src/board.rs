@@ -193,15 +193,19 @@ pub fn cycles_into_tick() -> u32 {
     SYST::get_reload().saturating_sub(SYST::get_current())
 }
 
-/// Whether QEMU was started with the semihosting argument `busy-idle` (never on silicon).
-pub fn busy_idle_asked() -> bool {
+/// Whether QEMU was started with the semihosting argument `word` (`busy-idle`,
+/// `sensor-fails`): test switches of QEMU runs, never on silicon.
+pub fn asked(word: &str) -> bool {
     #[cfg(feature = "qemu")]
     {
         semihosting::experimental::env::args::<64>()
-            .is_ok_and(|args| (&args).into_iter().any(|a| a == Ok("busy-idle")))
+            .is_ok_and(|args| (&args).into_iter().any(|a| a == Ok(word)))
     }
     #[cfg(not(feature = "qemu"))]
-    false
+    {
+        let _ = word;
+        false
+    }
 }
 
 /// An independent clock of virtual time under QEMU: TIM2 counting microseconds (QEMU's timer

@@ -340,8 +340,8 @@ impl Console {
         }
     }
 
-    /// Boot again with the settings asked for, once the output is at 0 V (faulted, stopped,
-    /// or never booted); the new controller replaces the old only if every check passes.
+    /// Boot again with the settings asked for, once the output is at 0 V (a fault's descent
+    /// over, stopped, or never booted); the new controller replaces the old only if every check passes.
     fn clear(
         &mut self,
         image: Image<'static>,
@@ -349,15 +349,12 @@ impl Console {
         controller: &mut impl Shared,
         out: &mut ReplyLine,
     ) {
-        let at_zero = controller.with(|c| {
-            c.as_ref()
-                .is_none_or(|c| c.latched_fault().is_some() || c.last_volts() == 0.0)
-        });
+        let at_zero = controller.with(|c| c.as_ref().is_none_or(|c| c.last_volts() == 0.0));
         if !at_zero {
             err(
                 out,
                 ErrorCode::Busy,
-                "clear re-arms at 0 V only: `stop` first",
+                "clear re-arms at 0 V only: `stop` first, or wait for a fault's descent",
             );
             return;
         }
@@ -365,9 +362,7 @@ impl Console {
             Ok((fresh, boot)) => {
                 let bias = boot.bias_volts;
                 let swapped = controller.with(|c| {
-                    let idle = c
-                        .as_ref()
-                        .is_none_or(|c| c.latched_fault().is_some() || c.last_volts() == 0.0);
+                    let idle = c.as_ref().is_none_or(|c| c.last_volts() == 0.0);
                     if idle {
                         *c = Some(fresh);
                     }

@@ -31,6 +31,9 @@ impl Sensor for NoSensor {
 /// gives a device.
 pub struct ModelSensor {
     plant: Option<(Device<f32>, Integrator<f32>)>,
+    /// A sensor that fails: NaN from this many samples on (a QEMU test's `sensor-fails`).
+    fails_after: Option<u32>,
+    samples: u32,
 }
 
 impl ModelSensor {
@@ -49,12 +52,29 @@ impl ModelSensor {
                     .ok()?;
             Some((device, model))
         });
-        Self { plant }
+        Self {
+            plant,
+            fails_after: None,
+            samples: 0,
+        }
+    }
+
+    /// The same sensor failing (NaN samples, for good) after `samples` samples: a runtime
+    /// fault whose cause stays present, for the QEMU tests of the latch and of `clear`.
+    pub fn failing_after(self, samples: Option<f32>) -> Self {
+        Self {
+            fails_after: samples.map(|n| n as u32),
+            ..self
+        }
     }
 }
 
 impl Sensor for ModelSensor {
     fn sample(&mut self) -> Inputs {
+        self.samples = self.samples.saturating_add(1);
+        if self.fails_after.is_some_and(|n| self.samples > n) {
+            return Inputs::stretch(f32::NAN);
+        }
         match &self.plant {
             Some((_, model)) => Inputs::stretch(model.state().stretch),
             None => Inputs::NONE,

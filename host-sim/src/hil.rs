@@ -201,7 +201,11 @@ impl Run {
             ),
             Event::Fault(fault) => {
                 self.fault = Some(fault);
-                format!("fault, 0 V: {fault}")
+                if fault == Fault::Bus {
+                    format!("fault, amplifier disabled at once: {fault}")
+                } else {
+                    format!("fault, down to 0 V at the slew rate: {fault}")
+                }
             }
         };
         self.events.push(Said { seconds, what });

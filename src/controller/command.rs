@@ -32,7 +32,9 @@ impl fmt::Display for Refusal {
             Refusal::Busy { phase } => {
                 write!(f, "busy ({}): ask again once the bias holds", phase.name())
             }
-            Refusal::Faulted { fault } => write!(f, "faulted at 0 V ({fault}): `clear` first"),
+            Refusal::Faulted { fault } => {
+                write!(f, "faulted, down to 0 V ({fault}): `clear` once there")
+            }
             Refusal::Checks(fault) => write!(f, "{fault}"),
             Refusal::NoTrim => write!(f, "no trim: set trim_tolerance (needs the trim build)"),
         }
@@ -108,7 +110,7 @@ impl Controller {
             }
             | State::Driving { .. }
             | State::Held { .. } => Ok(()),
-            State::Faulted(fault) => Err(Refusal::Faulted { fault }),
+            State::Faulted { fault, .. } => Err(Refusal::Faulted { fault }),
             _ => Err(Refusal::Busy {
                 phase: self.phase(),
             }),
@@ -163,7 +165,7 @@ impl Controller {
     /// Ramp from the voltage now to 0 V at the slew rate, no AC, and hold there (always
     /// allowed: the voltage only falls; a trim under way is dropped).
     pub fn stop(&mut self) {
-        if matches!(self.state, State::Faulted(_)) {
+        if matches!(self.state, State::Faulted { .. }) {
             return;
         }
         self.plan = Plan {

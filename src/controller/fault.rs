@@ -214,7 +214,7 @@ pub enum Event {
         needed_volts: f32,
         ceiling_volts: f32,
     },
-    /// A fault: from now on 0 V.
+    /// A fault: from now on down to 0 V at the slew rate (at once for `Bus`), and held there.
     Fault(Fault),
 }
 

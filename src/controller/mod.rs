@@ -13,7 +13,8 @@
 //! Then `tick`, at a fixed rate, gives the DAC code for that tick; every code passes one
 //! final check against the cap. The cap is fixed at boot from the device flashed, at most
 //! (1 − margin)·Φlimit: nothing measured ever raises it (a trim may only lower it). A fault
-//! of any kind gives code 0 from then on, and says what happened once. The tick never
+//! of any kind brings the output down to 0 V at the slew rate (at once on a dead bus), holds
+//! it there, and says what happened once. The tick never
 //! solves: a trim's solve is handed out (`trim_job`) and its result given back
 //! (`trim_done`).
 //!
@@ -94,8 +95,13 @@ enum State {
     Driving { next_trim: Option<u32> },
     /// The trim needs `needed_volts` (bias and AC) above the ceiling: the bias holds.
     Held { needed_volts: f32 },
-    /// 0 V for good, for this fault (the first).
-    Faulted(Fault),
+    /// For this fault (the first): down from `from_volts` at the slew rate, `ticks` ticks so
+    /// far, then 0 V for good.
+    Faulted {
+        fault: Fault,
+        from_volts: f32,
+        ticks: u32,
+    },
 }
 
 /// The controller, between ticks: its configuration, fixed at boot, apart from its state.
@@ -158,14 +164,14 @@ impl Controller {
             State::Solving => Phase::Solving,
             State::Driving { .. } => Phase::Driving,
             State::Held { .. } => Phase::Held,
-            State::Faulted(_) => Phase::Faulted,
+            State::Faulted { .. } => Phase::Faulted,
         }
     }
 
-    /// The fault that holds the output at 0 V, if any (the first one).
+    /// The fault that brings the output down to 0 V and holds it there, if any (the first).
     pub fn latched_fault(&self) -> Option<Fault> {
         match self.state {
-            State::Faulted(fault) => Some(fault),
+            State::Faulted { fault, .. } => Some(fault),
             _ => None,
         }
     }
@@ -201,8 +207,14 @@ impl Controller {
     /// is checked (`watch`) against MODEL.md §6 at this tick's voltage, and for a stuck or
     /// implausible sensor; the amplifier's output against the last command.
     pub fn tick(&mut self, inputs: Inputs) -> Output {
-        if matches!(self.state, State::Faulted(_)) {
-            return Self::zero(None);
+        if let State::Faulted {
+            fault,
+            from_volts,
+            ticks,
+        } = self.state
+        {
+            self.tick = self.tick.saturating_add(1);
+            return self.descend(fault, from_volts, ticks.saturating_add(1), None);
         }
         let tolerance = self.settings.amplifier_tolerance_volts;
         if let Some(fault) =
@@ -218,7 +230,9 @@ impl Controller {
             Ok(code) => code,
             Err(fault) => return self.fault(fault),
         };
-        self.last_volts = self.amplifier.volts(code);
+        // The last voltage sent stays the previous tick's until this one passes every check:
+        // a fault's descent starts from what was sent.
+        let commanded_volts = self.amplifier.volts(code);
         if let Some(stretch) = inputs.stretch {
             let stuck = self.settings.stuck_samples;
             let estimate = self.estimate.as_ref();
@@ -230,11 +244,14 @@ impl Controller {
             }
         }
         match self.advance(k, volts, inputs.stretch) {
-            Ok(event) => Output {
-                code,
-                volts: self.last_volts,
-                event,
-            },
+            Ok(event) => {
+                self.last_volts = commanded_volts;
+                Output {
+                    code,
+                    volts: commanded_volts,
+                    event,
+                }
+            }
             Err(fault) => self.fault(fault),
         }
     }
@@ -317,19 +334,48 @@ impl Controller {
         let _ = tuned;
     }
 
-    /// The IO side reports a fault (a DAC bus error): 0 V from now on.
+    /// A fault (the tick's own, or one the IO side reports): the output goes down from the
+    /// last command at the slew rate, no faster (a step down rings the membrane below its
+    /// equilibrium, toward loss of tension, MODEL.md §6), then stays at 0 V until a new boot.
+    /// A dead bus (`Fault::Bus`) cannot ramp: 0 V at once (the IO side drops the enable
+    /// line). Only the first fault is latched and said.
     pub fn fault(&mut self, fault: Fault) -> Output {
-        if matches!(self.state, State::Faulted(_)) {
-            return Self::zero(None);
-        }
-        self.state = State::Faulted(fault);
-        Self::zero(Some(Event::Fault(fault)))
+        let (latched, from_volts, ticks, event) = match self.state {
+            State::Faulted {
+                fault: first,
+                from_volts,
+                ticks,
+            } => (first, from_volts, ticks, None),
+            _ => (fault, self.last_volts, 1, Some(Event::Fault(fault))),
+        };
+        let from_volts = if fault == Fault::Bus { 0.0 } else { from_volts };
+        self.descend(latched, from_volts, ticks, event)
     }
 
-    fn zero(event: Option<Event>) -> Output {
+    /// The descent's tick `ticks` (1 the first): the slew rate's step `ticks` times below
+    /// `from_volts`, at least 0 V, counted from the start so that no rounding can stall it.
+    fn descend(
+        &mut self,
+        fault: Fault,
+        from_volts: f32,
+        ticks: u32,
+        event: Option<Event>,
+    ) -> Output {
+        self.state = State::Faulted {
+            fault,
+            from_volts,
+            ticks,
+        };
+        let s = &self.settings;
+        let step = s.slew_volts_per_second / s.tick_hz;
+        let volts = from_volts - step * ticks as f32;
+        // Not a number (a nonsense step or start) or below 0: 0 V.
+        let volts = if volts > 0.0 { volts } else { 0.0 };
+        let code = gate(&self.amplifier, volts, self.max_volts).unwrap_or(DacCode(0));
+        self.last_volts = self.amplifier.volts(code);
         Output {
-            code: DacCode(0),
-            volts: 0.0,
+            code,
+            volts: self.last_volts,
             event,
         }
     }

@@ -70,6 +70,9 @@ mod app {
         console: Console,
         /// Idle without `wfi` (QEMU runs that measure the tick rate).
         busy_idle: bool,
+        /// QEMU's test of a stuck tick (semihosting argument `tick-hangs`): the tick hangs
+        /// after this many ticks of driving.
+        hang_after_ticks: Option<u32>,
         dog: Dog,
         /// The tick rate booted with, Hz (the watchdog's deadlines are counted in ticks).
         tick_hz: f32,
@@ -79,6 +82,8 @@ mod app {
     fn init(cx: init::Context) -> (Shared, Local) {
         #[cfg(feature = "qemu")]
         board::qemu_clock::start(&cx.device.TIM2);
+        #[cfg(feature = "qemu")]
+        Dog::start_clock(&cx.device.TIM3);
         stack::paint();
         let mut core = cx.core;
         let board = Board::new(cx.device);
@@ -144,7 +149,8 @@ mod app {
                 #[cfg(not(feature = "model-sensor"))]
                 sensor: Sensors,
                 #[cfg(feature = "model-sensor")]
-                sensor: Sensors::new(console.image.map(|i| i.params), tick_hz),
+                sensor: Sensors::new(console.image.map(|i| i.params), tick_hz)
+                    .failing_after(board::asked("sensor-fails").then_some(2.0 * tick_hz)),
                 serial_rx: board.rx,
                 lines: Lines::default(),
                 held: None,
@@ -152,7 +158,8 @@ mod app {
                 from_rx,
                 tx,
                 console,
-                busy_idle: board::busy_idle_asked(),
+                busy_idle: board::asked("busy-idle"),
+                hang_after_ticks: board::asked("tick-hangs").then_some(2 * tick_hz as u32),
                 dog: Dog::new(board.iwdg),
                 tick_hz,
             },
@@ -277,7 +284,7 @@ mod app {
     }
 
     /// One controller tick: its code to the DAC, the enable line held, the events logged.
-    #[task(binds = SysTick, priority = 3, shared = [controller, tick_cycles_max, last_tick_us, output_off, checked_in], local = [stage, sensor, dog, tick_hz, dog_started: bool = false, since_check_in: u32 = 0])]
+    #[task(binds = SysTick, priority = 3, shared = [controller, tick_cycles_max, last_tick_us, output_off, checked_in], local = [stage, sensor, dog, tick_hz, hang_after_ticks, dog_started: bool = false, since_check_in: u32 = 0, driven_ticks: u32 = 0])]
     fn tick(mut cx: tick::Context) {
         #[cfg(feature = "qemu")]
         cx.shared
@@ -295,13 +302,14 @@ mod app {
                 return (None, false, false);
             };
             // The amplifier on while a plan that passed its checks drives; off (the DAC
-            // powered down, the enable line low) on a fault and at rest at 0 V after `stop`.
+            // powered down, the enable line low) at rest at 0 V after `stop`, and at the end
+            // of a fault's descent (the stage's own reaction, in `send`).
             let at_rest = c.phase() == Phase::Holding && c.plan().bias_volts == 0.0;
             let out = c.tick(inputs);
-            let wanted = c.latched_fault().is_none() && !(at_rest && out.volts == 0.0);
-            if wanted && stage.is_safe() {
+            let rest = at_rest && out.volts == 0.0;
+            if !rest && c.latched_fault().is_none() && stage.is_safe() {
                 let _ = stage.enable();
-            } else if !wanted && !stage.is_safe() {
+            } else if rest && !stage.is_safe() {
                 let _ = stage.safe();
             }
             let out = stage.send(c, out);
@@ -312,6 +320,19 @@ mod app {
                 true,
             )
         });
+        if running {
+            *cx.local.driven_ticks += 1;
+            if cx
+                .local
+                .hang_after_ticks
+                .is_some_and(|n| *cx.local.driven_ticks > n)
+            {
+                // QEMU's `tick-hangs`: a stuck tick, for the watchdog to catch.
+                loop {
+                    cortex_m::asm::nop();
+                }
+            }
+        }
         let checked_in = cx.shared.checked_in.lock(|c| core::mem::replace(c, false));
         feed(
             cx.local.dog,
@@ -347,7 +368,7 @@ mod app {
         running: bool,
     ) {
         if running && !*started {
-            dog.start(watchdog::TIMEOUT_MS, tick_hz);
+            dog.start(watchdog::TIMEOUT_MS);
             *started = true;
         }
         let deadline = (watchdog::CHECK_IN_SECONDS * tick_hz) as u32;
@@ -362,7 +383,13 @@ mod app {
         if *since_check_in <= deadline {
             dog.feed();
         }
-        dog.tick();
+    }
+
+    /// QEMU's watchdog stand-in: its own clock, above the tick (a stuck tick starves it too).
+    #[cfg(feature = "qemu")]
+    #[task(binds = TIM3, priority = 4)]
+    fn dog_clock(_cx: dog_clock::Context) {
+        watchdog::bite_if_starved();
     }
 
     /// The low-priority tasks' check-in: it runs only when none of them holds the priority.
@@ -374,7 +401,7 @@ mod app {
     fn log(event: Event, ticks: u32) {
         #[cfg(feature = "defmt")]
         match event {
-            Event::Fault(fault) => defmt::error!("tick {=u32}: {}, 0 V", ticks, fault),
+            Event::Fault(fault) => defmt::error!("tick {=u32}: {}, down to 0 V", ticks, fault),
             event => defmt::info!("tick {=u32}: {}", ticks, event),
         }
         let _ = (event, ticks);

@@ -92,7 +92,12 @@ impl fmt::Display for RunReport {
                 f,
                 "fault           {fault}\n\
                  \x20               output {:.1} V at the end",
-                self.final_membrane_volts
+                // No "-0.0" for a decay a hair below zero.
+                if self.final_membrane_volts.abs() < 0.05 {
+                    0.0
+                } else {
+                    self.final_membrane_volts
+                }
             )?,
             (None, None) => {
                 let hz = self.natural_frequency_hz.unwrap_or(f64::NAN);
