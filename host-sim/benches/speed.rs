@@ -11,7 +11,7 @@ use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
 use de_resonator::{Device, Drive, Integrator, Method, Real, State, REFERENCE_DEVICE};
-use host_sim::simulate::{solve, Solver};
+use host_sim::simulate::{solve, Solver, Tolerance};
 
 const BIAS_VOLTS: f64 = 6000.0;
 const AC_VOLTS: f64 = 600.0;
@@ -116,12 +116,23 @@ fn one_second(c: &mut Criterion) {
                 black_box(y0),
                 end,
                 end,
-                1e-10,
+                Tolerance::both(1e-10),
             )
         })
     });
     group.bench_function("reference_bdf_1e-10", |b| {
-        b.iter(|| solve(Solver::Bdf, &device, drive, black_box(y0), end, end, 1e-10))
+        let tolerance = Tolerance::both(1e-10);
+        b.iter(|| {
+            solve(
+                Solver::Bdf,
+                &device,
+                drive,
+                black_box(y0),
+                end,
+                end,
+                tolerance,
+            )
+        })
     });
     let steps = (64.0 * f0).round() as u64;
     group.bench_function("core_rk4_f64_64_per_period", |b| {

@@ -16,7 +16,7 @@ use embedded_hal::digital::{self, OutputPin};
 use embedded_hal::spi::{ErrorKind, ErrorType, Operation, SpiDevice};
 
 use crate::plant::{self, Plant, Vector};
-use crate::simulate::Solver;
+use crate::simulate::{Solver, Tolerance};
 
 /// The DAC8551 as its datasheet has it: 24-bit frames (PD1 PD0, then the code MSB first),
 /// VOUT = VREF·code/65536, 0 V when powered down. Its bus fails after `fail_after` frames.
@@ -127,7 +127,7 @@ pub struct Loop {
     pub nominal: DeviceParams<f64>,
     pub plant: Plant,
     pub solver: Solver,
-    pub tolerance: f64,
+    pub tolerance: Tolerance,
     pub dac_reference_volts: f64,
     pub settings: Settings,
     pub sensor: Option<Sensor>,
@@ -256,6 +256,8 @@ impl Loop {
             run_seconds: 0.0,
         };
         let mut y = self.plant.at_rest();
+        // The solver's first step after the drive's jump, carried from tick to tick.
+        let mut next_step = None;
         let mut controller = match Controller::start(
             self.nominal.cast(),
             &made.bytes,
@@ -303,15 +305,18 @@ impl Loop {
                 run.said(t, out.event);
             }
             let input = amplifier_input();
-            y = plant::advance(
-                &self.plant,
-                self.solver,
-                self.tolerance,
+            (y, next_step) = plant::Tick {
+                plant: &self.plant,
+                solver: self.solver,
+                tolerance: self.tolerance,
                 y,
-                t,
-                t + tick_seconds,
-                input,
-            )?;
+                t0: t,
+                t1: t + tick_seconds,
+                input_volts: input,
+                first_step: next_step,
+            }
+            .solve()
+            .map(|(y, h)| (y, Some(h)))?;
             let volts = self.plant.volts(&y, input);
             if run.plant_crossing.is_none() {
                 if let Some(mode) = self.plant.first_failure(&y, volts) {

@@ -7,7 +7,7 @@
 use de_resonator::{DeviceParams, FailureMode};
 use differential_equations::prelude::*;
 
-use crate::simulate::Solver;
+use crate::simulate::{Solver, Tolerance};
 
 /// Most viscoelastic branches a plant may have.
 pub const MAX_BRANCHES: usize = 3;
@@ -51,7 +51,10 @@ const VACUUM_PERMITTIVITY: f64 = 8.854_187_812_8e-12;
 
 /// Gent nominal stresses (s1, s2) of MODEL.md §3, Pa, and I1 (NaN past lock-up).
 fn gent(p: &DeviceParams<f64>, l1: f64, l2: f64) -> (f64, f64, f64) {
-    let i1 = l1 * l1 + l2 * l2 + 1.0 / (l1 * l1 * l2 * l2);
+    // Two divisions where the formulas have five: this runs at every right-hand side.
+    let (r1, r2) = (1.0 / l1, 1.0 / l2);
+    let inverse = r1 * r1 * r2 * r2;
+    let i1 = l1 * l1 + l2 * l2 + inverse;
     let factor = match p.jlim {
         Some(jlim) => {
             let d = 1.0 - (i1 - 3.0) / jlim;
@@ -63,8 +66,8 @@ fn gent(p: &DeviceParams<f64>, l1: f64, l2: f64) -> (f64, f64, f64) {
         }
         None => 1.0,
     };
-    let s1 = p.shear_modulus * (l1 - 1.0 / (l1 * l1 * l1 * l2 * l2)) * factor;
-    let s2 = p.shear_modulus * (l2 - 1.0 / (l1 * l1 * l2 * l2 * l2)) * factor;
+    let s1 = p.shear_modulus * (l1 - inverse * r1) * factor;
+    let s2 = p.shear_modulus * (l2 - inverse * r2) * factor;
     (s1, s2, i1)
 }
 
@@ -134,12 +137,18 @@ impl Plant {
         (p.width * p.thickness * (sb - sa + electric) - p.damping * v) / self.mass()
     }
 
-    /// The amplifier's dV/dt toward `input` volts (before the rail).
-    fn amplifier_rate(&self, out: f64, input: f64) -> f64 {
+    /// The amplifier's output from `from_volts` at `t0` with `input` volts held at its input:
+    /// its rate, (target − V)·2π·bandwidth clamped to ± the slew rate (target: the input
+    /// below the rail), depends on nothing else, so over a tick it has a closed form.
+    fn amplifier_path(&self, t0: f64, from_volts: f64, input: f64) -> AmplifierPath {
         let a = &self.amplifier;
-        let target = input.min(a.rail_volts);
-        let rate = (target - out) * std::f64::consts::TAU * a.bandwidth_hz;
-        rate.clamp(-a.slew_volts_per_second, a.slew_volts_per_second)
+        AmplifierPath {
+            t0,
+            from_volts,
+            target_volts: input.min(a.rail_volts),
+            rate_per_second: std::f64::consts::TAU * a.bandwidth_hz,
+            slew_volts_per_second: a.slew_volts_per_second,
+        }
     }
 
     /// Whether the amplifier's output is a state (finite bandwidth or slew).
@@ -294,24 +303,74 @@ impl Plant {
     }
 }
 
+/// The amplifier's output over one tick (`Plant::amplifier_path`): a ramp at the slew rate
+/// while (target − V)·2π·bandwidth is above it, then the exponential toward the target.
+#[derive(Clone, Copy, Debug)]
+struct AmplifierPath {
+    t0: f64,
+    from_volts: f64,
+    target_volts: f64,
+    /// 2π·bandwidth, 1/s (infinite: no lag but the slew).
+    rate_per_second: f64,
+    /// Infinite: no slew limit.
+    slew_volts_per_second: f64,
+}
+
+impl AmplifierPath {
+    /// When the ramp at the slew rate ends, if it does after `t0`: the output's second
+    /// derivative jumps there, so a solve splits its interval at it.
+    fn knee_time(&self) -> Option<f64> {
+        let gap = self.target_volts - self.from_volts;
+        let knee = self.slew_volts_per_second / self.rate_per_second;
+        (gap.abs() > knee).then(|| self.t0 + (gap.abs() - knee) / self.slew_volts_per_second)
+    }
+
+    fn volts_at(&self, t: f64) -> f64 {
+        let s = (t - self.t0).max(0.0);
+        let gap = self.target_volts - self.from_volts;
+        let (slew, rate) = (self.slew_volts_per_second, self.rate_per_second);
+        // Below this gap the rate is under the slew limit: the exponential (0 without lag).
+        let knee = slew / rate;
+        let (ramp_seconds, gap_after) = if gap.abs() > knee {
+            let ramp_seconds = (gap.abs() - knee) / slew;
+            if s <= ramp_seconds {
+                return self.from_volts + gap.signum() * slew * s;
+            }
+            (ramp_seconds, gap.signum() * knee)
+        } else {
+            (0.0, gap)
+        };
+        if rate.is_infinite() {
+            return self.target_volts;
+        }
+        self.target_volts - gap_after * (-rate * (s - ramp_seconds)).exp()
+    }
+}
+
 /// The plant's equations over one controller tick, with the amplifier's input held (the
-/// DAC holds its code between ticks).
-pub struct Motion<'a> {
+/// DAC holds its code between ticks), on the first `N` states: 3 and four a branch, so that a
+/// plant with fewer branches than `MAX_BRANCHES` does not integrate zeros.
+pub struct Motion<'a, const N: usize> {
     pub plant: &'a Plant,
     /// The amplifier's input, V (DAC output × nothing: the gain is applied here).
     pub input_volts: f64,
+    /// The amplifier's output over the tick, where it has a lag or a slew limit: in closed
+    /// form, not integrated (its fast exponential would bind the solver's step).
+    amplifier: Option<AmplifierPath>,
 }
 
-impl ODE<f64, Vector> for Motion<'_> {
-    fn diff(&self, _t: f64, y: &Vector, dydt: &mut Vector) {
+impl<const N: usize> ODE<f64, [f64; N]> for Motion<'_, N> {
+    fn diff(&self, t: f64, short: &[f64; N], rate: &mut [f64; N]) {
         let plant = self.plant;
-        let volts = plant.volts(y, self.input_volts);
-        *dydt = [0.0; STATE];
-        dydt[0] = y[1];
-        dydt[1] = plant.acceleration(y, volts);
-        if plant.amplifier_has_state() {
-            dydt[2] = plant.amplifier_rate(y[2], self.input_volts);
+        let mut y = [0.0; STATE];
+        y[..N].copy_from_slice(short);
+        if let Some(path) = &self.amplifier {
+            y[2] = path.volts_at(t);
         }
+        let volts = plant.volts(&y, self.input_volts);
+        let mut dydt = [0.0; STATE];
+        dydt[0] = y[1];
+        dydt[1] = plant.acceleration(&y, volts);
         let l2 = plant.params.prestretch_2;
         let lb = plant.passive_stretch(y[0]);
         for (k, b) in plant.branches.iter().enumerate() {
@@ -323,20 +382,75 @@ impl ODE<f64, Vector> for Motion<'_> {
             dydt[at + 2] = b1;
             dydt[at + 3] = b2;
         }
+        rate.copy_from_slice(&dydt[..N]);
     }
 }
 
-/// Advance `y` over `[t0, t1]` with the amplifier's input held at `input_volts`.
-pub fn advance(
-    plant: &Plant,
-    solver: Solver,
-    tolerance: f64,
-    y: Vector,
-    t0: f64,
-    t1: f64,
-    input_volts: f64,
-) -> Result<Vector, String> {
-    solver
-        .advance(&Motion { plant, input_volts }, t0, t1, y, tolerance)
+/// One tick of the plant: `y` over `[t0, t1]` with the amplifier's input held at
+/// `input_volts`.
+pub struct Tick<'a> {
+    pub plant: &'a Plant,
+    pub solver: Solver,
+    pub tolerance: Tolerance,
+    pub y: Vector,
+    pub t0: f64,
+    pub t1: f64,
+    pub input_volts: f64,
+    /// The last tick's first step after the drive's jump, so that a tick neither estimates
+    /// its first step again nor starts too long and has it rejected (`None` at the start).
+    pub first_step: Option<f64>,
+}
+
+impl Tick<'_> {
+    /// The state at `t1`, and the first step the solve took after the drive's jump.
+    pub fn solve(self) -> Result<(Vector, f64), String> {
+        let t0 = self.t0;
+        match self.plant.branches.len() {
+            0 => self.advance::<3>(),
+            1 => self.advance::<7>(),
+            2 => self.advance::<11>(),
+            _ => self.advance::<STATE>(),
+        }
         .map_err(|e| format!("the plant's integration at t = {t0} s: {e}"))
+    }
+}
+
+impl Tick<'_> {
+    fn advance<const N: usize>(self) -> Result<(Vector, f64), String> {
+        let mut short = [0.0; N];
+        short.copy_from_slice(&self.y[..N]);
+        let amplifier = self.plant.amplifier_has_state().then(|| {
+            self.plant
+                .amplifier_path(self.t0, self.y[2], self.input_volts)
+        });
+        let motion = Motion::<N> {
+            plant: self.plant,
+            input_volts: self.input_volts,
+            amplifier,
+        };
+        // Split at the amplifier's knee, where its output's second derivative jumps.
+        let knee = amplifier
+            .and_then(|path| path.knee_time())
+            .filter(|&at| at > self.t0 && at < self.t1);
+        // The ramp at the slew rate (if any) in one step; then the rest from the last tick's
+        // first step there.
+        let (mut from, mut end, mut h) = (self.t0, short, f64::NAN);
+        for to in knee.into_iter().chain([self.t1]) {
+            let first = if to == self.t1 {
+                self.first_step
+            } else {
+                Some(to - from)
+            };
+            (end, h) = self
+                .solver
+                .advance(&motion, from, to, end, self.tolerance, first)?;
+            from = to;
+        }
+        let mut y = self.y;
+        y[..N].copy_from_slice(&end);
+        if let Some(path) = amplifier {
+            y[2] = path.volts_at(self.t1);
+        }
+        Ok((y, h))
+    }
 }

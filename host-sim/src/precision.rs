@@ -12,7 +12,7 @@ use std::time::Instant;
 
 use de_resonator::{Device, DeviceParams, Tuner, DEFAULT_MARGIN};
 
-use crate::simulate::{simulate, Choice, Outcome, RunError, Scene, Solver, Start};
+use crate::simulate::{simulate, Choice, Outcome, RunError, Scene, Solver, Start, Tolerance};
 
 /// Steps a period each method runs at.
 pub const STEPS_PER_PERIOD: [u32; 7] = [8, 16, 32, 64, 128, 256, 512];
@@ -44,8 +44,9 @@ pub fn studies(params: DeviceParams<f64>) -> Result<Vec<Study>, String> {
         .tune(target_hz, DEFAULT_MARGIN)
         .map_err(|e| e.to_string())?;
     let at = |volts: f64| -> Result<f64, String> {
-        let stretch = device
-            .stretch_for_bias(volts, device.scan_end_stretch())
+        let stretch = tuner
+            .limit()
+            .stretch_for_bias(&device, volts)
             .ok_or_else(|| format!("no equilibrium at {volts} V"))?;
         Ok(device.natural_frequency_hz(stretch))
     };
@@ -56,6 +57,7 @@ pub fn studies(params: DeviceParams<f64>) -> Result<Vec<Study>, String> {
         drive_hz,
         duration_seconds: f64::from(PERIODS) / base_hz,
         start: Start::Equilibrium,
+        tolerance: None,
     };
     let f_tuned = tuned.natural_frequency_hz;
     let (big_bias, big_ac) = (0.6 * limit, 0.2 * limit);
@@ -114,9 +116,25 @@ pub struct Reference {
     pub outcome: Outcome,
     /// Largest stretch difference on the error grid between tolerance 1e-12 and 1e-13.
     pub floor: f64,
+    /// The reference at looser tolerances against the run at 1e-13.
+    pub tolerances: Vec<ToleranceRow>,
 }
 
-/// The reference run of a study, and the floor (1e-12 against 1e-13).
+/// The reference's tolerances in the study, against a run at 1e-13.
+pub const REFERENCE_TOLERANCES: [f64; 4] = [1e-6, 1e-8, 1e-10, 1e-12];
+
+/// The reference at one tolerance.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct ToleranceRow {
+    pub tolerance: f64,
+    /// Largest stretch difference on the error grid against the run at 1e-13.
+    pub max_error: f64,
+    /// The solve alone (the fastest of repeats adding up to 20 ms), per simulated second.
+    pub run_seconds_per_simulated_second: f64,
+}
+
+/// The reference run of a study, the floor (1e-12 against 1e-13), and the reference at each
+/// of `REFERENCE_TOLERANCES` against 1e-13.
 pub fn reference(study: &Study) -> Result<Reference, String> {
     let finest = STEPS_PER_PERIOD[STEPS_PER_PERIOD.len() - 1];
     let step = 1.0 / (f64::from(finest) * study.base_hz);
@@ -132,14 +150,41 @@ pub fn reference(study: &Study) -> Result<Reference, String> {
         study.scene.drive_hz,
     );
     let end = study.scene.duration_seconds * scale;
-    let tighter = crate::simulate::solve(Solver::Dop853, &device, drive, start, end, grid, 1e-13)?;
-    let every = (finest / GRID_PER_PERIOD) as usize;
-    let floor = tighter
+    let at = |tolerance| {
+        let tolerance = Tolerance::both(tolerance);
+        crate::simulate::solve(Solver::Dop853, &device, drive, start, end, grid, tolerance)
+    };
+    let tighter = at(1e-13)?;
+    let mut tolerances = Vec::new();
+    for tolerance in REFERENCE_TOLERANCES {
+        let (mut fastest, mut spent, mut ys) = (f64::INFINITY, 0.0, Vec::new());
+        while spent < 0.02 {
+            let started = Instant::now();
+            ys = at(tolerance)?;
+            let took = started.elapsed().as_secs_f64();
+            (fastest, spent) = (fastest.min(took), spent + took);
+        }
+        let max_error = ys
+            .iter()
+            .zip(&tighter)
+            .map(|(a, b)| (a[0] - b[0]).abs())
+            .fold(0.0, f64::max);
+        tolerances.push(ToleranceRow {
+            tolerance,
+            max_error,
+            run_seconds_per_simulated_second: fastest / study.scene.duration_seconds,
+        });
+    }
+    // The reference's own: one solve whatever its output times, so its run at 1e-12 is this.
+    let floor = tolerances
         .iter()
-        .enumerate()
-        .filter_map(|(k, y)| Some((outcome.samples.get(k * every)? - y[0]).abs()))
-        .fold(0.0, f64::max);
-    Ok(Reference { outcome, floor })
+        .find(|t| t.tolerance == crate::simulate::REFERENCE_TOLERANCE)
+        .map_or(f64::NAN, |t| t.max_error);
+    Ok(Reference {
+        outcome,
+        floor,
+        tolerances,
+    })
 }
 
 /// The time (s) at which a cubic Hermite interpolant through (t0, x0, v0), (t1, x1, v1)
@@ -300,6 +345,7 @@ mod tests {
                 .collect(),
             stopped: None,
             run_seconds: 0.0,
+            step_seconds: dt,
         };
         let found = upward_crossings(&out, dt, 0.0);
         assert_eq!(found.len(), 3);

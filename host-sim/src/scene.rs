@@ -9,7 +9,7 @@ use serde::Deserialize;
 
 use crate::hil::{Loop, Sensor};
 use crate::plant::{AmplifierModel, Branch, Plant, MAX_BRANCHES};
-use crate::simulate::Solver;
+use crate::simulate::{Solver, Tolerance};
 
 /// The reference scene, built in: the main job.
 pub const REFERENCE: &str = include_str!("../../scenes/reference.toml");
@@ -72,8 +72,11 @@ struct PlantFile {
     branches: Vec<BranchFile>,
     #[serde(default = "dop853")]
     solver: Solver,
+    /// The plant solver's relative and absolute tolerance.
     #[serde(default = "tolerance")]
-    tolerance: f64,
+    rtol: f64,
+    #[serde(default = "tolerance")]
+    atol: f64,
 }
 
 impl Default for PlantFile {
@@ -229,6 +232,11 @@ pub fn parse(text: &str) -> Result<Scene, String> {
             return Err("[sensor] noise and resolution must be ≥ 0, every_ticks ≥ 1".into());
         }
     }
+    let tolerance = Tolerance {
+        rtol: file.plant.rtol,
+        atol: file.plant.atol,
+    };
+    tolerance.check().map_err(|e| format!("[plant] {e}"))?;
     Ok(Scene {
         name: file.name.clone(),
         description: file.description.clone(),
@@ -238,7 +246,7 @@ pub fn parse(text: &str) -> Result<Scene, String> {
             nominal,
             plant,
             solver: file.plant.solver,
-            tolerance: file.plant.tolerance,
+            tolerance,
             dac_reference_volts: file.amplifier.dac_reference_volts,
             settings,
             sensor,

@@ -5,15 +5,23 @@
 use std::time::Instant;
 
 use de_resonator::{
-    Device, DeviceParams, Drive, FailureMode, Integrator, Method, Monitor, Real, State, StepError,
+    Device, DeviceParams, Drive, FailureMode, Integrator, Limit, Method, Monitor, Real, State,
+    StepError,
 };
+use differential_equations::error::Error as SolveError;
+use differential_equations::interpolate::Interpolation;
+use differential_equations::ode::{solve_ode, OrdinaryNumericalMethod};
 use differential_equations::prelude::*;
+use differential_equations::solout::Solout;
 
 /// Relative and absolute tolerance of the reference integrator.
 pub const REFERENCE_TOLERANCE: f64 = 1e-12;
 
 /// Tolerance of the stiff reference (BDF, orders 1 to 5): tighter costs many tiny steps.
 pub const STIFF_REFERENCE_TOLERANCE: f64 = 1e-10;
+
+/// The most samples a run keeps (two f64 each, and as many monitor checks): 16 M, 256 MB.
+pub const MAX_SAMPLES: f64 = 16.0 * 1024.0 * 1024.0;
 
 /// An adaptive f64 solver from `differential-equations` (in scenes: `dop853` or `bdf`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize)]
@@ -122,6 +130,9 @@ pub struct Scene {
     pub drive_hz: f64,
     pub duration_seconds: f64,
     pub start: Start,
+    /// The reference's tolerance (`None`: `REFERENCE_TOLERANCE` for DOP853,
+    /// `STIFF_REFERENCE_TOLERANCE` for BDF); the core's methods have none.
+    pub tolerance: Option<Tolerance>,
 }
 
 /// What a run gives.
@@ -141,6 +152,9 @@ pub struct Outcome {
     /// Why the run ended before its duration (after a crossing the monitor reported).
     pub stopped: Option<String>,
     pub run_seconds: f64,
+    /// The sample spacing: the step asked for, shortened so that a whole number of them ends
+    /// at the duration exactly, s.
+    pub step_seconds: f64,
 }
 
 impl Scene {
@@ -148,8 +162,8 @@ impl Scene {
     fn start_stretch(&self, device: &Device<f64>) -> Result<f64, String> {
         match self.start {
             Start::Prestretch => Ok(device.prestretch_1()),
-            Start::Equilibrium => device
-                .stretch_for_bias(self.bias_volts, device.scan_end_stretch())
+            Start::Equilibrium => Limit::of(device)
+                .stretch_for_bias(device, self.bias_volts)
                 .ok_or_else(|| {
                     format!(
                         "no equilibrium holds {} V on the loading branch; try --start prestretch",
@@ -192,7 +206,25 @@ pub fn simulate(scene: &Scene, choice: Choice, step_seconds: f64) -> Result<Outc
     if !(step_seconds.is_finite() && step_seconds > 0.0) {
         return Err(format!("step {step_seconds} s must be positive").into());
     }
-    let steps = (scene.duration_seconds / step_seconds).round().max(1.0) as u64;
+    if scene.tolerance.is_some() && matches!(choice, Choice::Core { .. }) {
+        let why = "a tolerance applies to the reference methods only (the core's are fixed-step)";
+        return Err(why.to_string().into());
+    }
+    // A whole number of steps (a hair's float excess is not one more), ending at the
+    // duration exactly.
+    let steps = ((scene.duration_seconds / step_seconds) * (1.0 - 1e-12))
+        .ceil()
+        .max(1.0);
+    if steps > MAX_SAMPLES {
+        return Err(format!(
+            "{steps:.3e} steps of {step_seconds} s over {} s: more than {MAX_SAMPLES:.0e}; \
+             use a longer step or a shorter duration",
+            scene.duration_seconds
+        )
+        .into());
+    }
+    let steps = steps as u64;
+    let step_seconds = scene.duration_seconds / steps as f64;
     let device = Device::new(scene.params).map_err(|e| e.to_string())?;
     let start = scene.start_stretch(&device)?;
     let started = Instant::now();
@@ -209,6 +241,7 @@ pub fn simulate(scene: &Scene, choice: Choice, step_seconds: f64) -> Result<Outc
         } => core::<f64>(scene, method, start, step_seconds, steps)?,
     };
     outcome.run_seconds = started.elapsed().as_secs_f64();
+    outcome.step_seconds = step_seconds;
     Ok(outcome)
 }
 
@@ -226,6 +259,7 @@ fn outcome(samples: Vec<f64>, velocities: Vec<f64>) -> Outcome {
         velocities,
         stopped: None,
         run_seconds: 0.0,
+        step_seconds: f64::NAN,
     }
 }
 
@@ -321,10 +355,89 @@ impl ODE<f64, [f64; 2]> for Motion<'_> {
     }
 }
 
-/// Integrate `device` under `drive` from `y0` over dimensionless `[0, tau_end]`, output every
-/// `dtau`, with `solver` at `tolerance`. Each output interval is a solve of its own: the
-/// crate's dense output (`even`) was measured 5.6e-8 off between steps, far above the
-/// 1e-12 tolerance, so no sample comes from interpolation.
+/// Relative and absolute tolerance of an adaptive solve.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Tolerance {
+    pub rtol: f64,
+    pub atol: f64,
+}
+
+impl Tolerance {
+    /// The same relative and absolute tolerance.
+    pub fn both(tolerance: f64) -> Self {
+        Self {
+            rtol: tolerance,
+            atol: tolerance,
+        }
+    }
+
+    /// Both positive and finite, and not below what f64 can hold (1e-15).
+    pub fn check(&self) -> Result<(), String> {
+        for (name, value) in [("rtol", self.rtol), ("atol", self.atol)] {
+            if !(value.is_finite() && (1e-15..1.0).contains(&value)) {
+                return Err(format!("{name} = {value} must be in [1e-15, 1)"));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The sample times of one solve: τ_k = k·dτ, and the last at τ_end exactly.
+fn sample_times(dtau: f64, tau_end: f64) -> Vec<f64> {
+    // The grid's points before the end (a hair's float excess is not one more), then the end.
+    let intervals = ((tau_end / dtau) * (1.0 - 1e-12)).ceil().max(1.0) as usize;
+    (0..intervals)
+        .map(|k| k as f64 * dtau)
+        .chain([tau_end])
+        .collect()
+}
+
+/// DOP853's samples of one solve from its dense output between its own steps (Hairer's
+/// 7th-order interpolant, as patched in host-sim/vendor/PATCH.md).
+struct Samples<'a, const N: usize> {
+    times: &'a [f64],
+    ys: Vec<[f64; N]>,
+    failed: Option<String>,
+}
+
+impl<const N: usize> Solout<f64, [f64; N]> for Samples<'_, N> {
+    fn solout<I>(
+        &mut self,
+        t_curr: f64,
+        t_prev: f64,
+        y_curr: &[f64; N],
+        y_prev: &[f64; N],
+        interpolator: &mut I,
+        _solution: &mut Solution<f64, [f64; N]>,
+    ) -> ControlFlag<f64, [f64; N]>
+    where
+        I: Interpolation<f64, [f64; N]> + ?Sized,
+    {
+        while let Some(&tau) = self.times.get(self.ys.len()) {
+            if tau > t_curr {
+                break;
+            }
+            let y = if tau == t_curr {
+                *y_curr
+            } else if tau <= t_prev {
+                *y_prev
+            } else {
+                match interpolator.interpolate(tau) {
+                    Ok(y) => y,
+                    Err(e) => {
+                        self.failed = Some(format!("dense output at τ = {tau}: {e:?}"));
+                        return ControlFlag::Terminate;
+                    }
+                }
+            };
+            self.ys.push(y);
+        }
+        ControlFlag::Continue
+    }
+}
+
+/// Integrate `device` under `drive` from `y0` over dimensionless `[0, tau_end]` in one solve,
+/// sampled every `dtau` and at `tau_end` exactly (the last sample).
 pub fn solve(
     solver: Solver,
     device: &Device<f64>,
@@ -332,55 +445,211 @@ pub fn solve(
     y0: [f64; 2],
     tau_end: f64,
     dtau: f64,
-    tolerance: f64,
+    tolerance: Tolerance,
 ) -> Result<Vec<[f64; 2]>, String> {
-    let motion = Motion { device, drive };
-    let intervals = (tau_end / dtau).round().max(1.0) as usize;
-    let mut ys = Vec::with_capacity(intervals + 1);
-    ys.push(y0);
-    let mut y = y0;
-    for k in 0..intervals {
-        let (t0, t1) = (k as f64 * dtau, (k + 1) as f64 * dtau);
-        y = solver
-            .advance(&motion, t0, t1, y, tolerance)
-            .map_err(|e| format!("reference integrator at τ = {t0}: {e}"))?;
-        ys.push(y);
+    if !(dtau.is_finite() && dtau > 0.0 && tau_end.is_finite() && tau_end > 0.0) {
+        return Err(format!(
+            "the output step {dtau} and the end {tau_end} must be positive"
+        ));
     }
-    Ok(ys)
+    let motion = Motion { device, drive };
+    solver.sample(&motion, y0, &sample_times(dtau, tau_end), tolerance)
 }
 
 impl Solver {
-    /// Advance `y` of `ode` from `t0` to `t1` at `tolerance` (relative and absolute): the
-    /// state at `t1`.
-    pub fn advance<Y: differential_equations::traits::State<f64>, F: ODE<f64, Y>>(
+    /// One solve of `ode` from `times[0]` with `y` there, sampled at `times` (increasing; the
+    /// first sample is `y`).
+    pub fn sample<const N: usize, F: ODE<f64, [f64; N]>>(
+        self,
+        ode: &F,
+        y: [f64; N],
+        times: &[f64],
+        tolerance: Tolerance,
+    ) -> Result<Vec<[f64; N]>, String> {
+        tolerance.check()?;
+        let (&t0, &t1) = match (times.first(), times.last()) {
+            (Some(t0), Some(t1)) if t1 > t0 => (t0, t1),
+            _ => return Err("a solve needs an end after its start".into()),
+        };
+        let ys = match self {
+            Solver::Dop853 => {
+                let mut samples = Samples {
+                    times,
+                    ys: Vec::with_capacity(times.len()),
+                    failed: None,
+                };
+                let (end, _) = dop853(ode, t0, t1, y, tolerance, 0.0, &mut samples)?;
+                if let Some(why) = samples.failed {
+                    return Err(why);
+                }
+                // The solver ends within a rounding of the end (its last step is cut to it).
+                if samples.ys.len() + 1 == times.len() {
+                    samples.ys.push(end);
+                }
+                samples.ys
+            }
+            Solver::Bdf => {
+                let (mut ys, _) = bdf(ode, y, times, tolerance, 0.0)?;
+                ys.insert(0, y);
+                ys
+            }
+        };
+        if ys.len() != times.len() {
+            let why = format!("{} samples where {} were due", ys.len(), times.len());
+            return Err(why);
+        }
+        Ok(ys)
+    }
+
+    /// Advance `y` of `ode` from `t0` to `t1`: the state at `t1` and the first step the solver
+    /// took. `first_step`: the step to start with (a like solve's first step, so that a solve
+    /// of the next tick does not estimate its step again, nor start too long after the
+    /// drive's jump and have it rejected); `None` estimates it.
+    pub fn advance<const N: usize, F: ODE<f64, [f64; N]>>(
         self,
         ode: &F,
         t0: f64,
         t1: f64,
-        y: Y,
-        tolerance: f64,
-    ) -> Result<Y, String> {
-        let problem = IVP::ode(ode, t0, t1, y);
-        let solution = match self {
-            Solver::Dop853 => problem
-                .method(ExplicitRungeKutta::dop853().rtol(tolerance).atol(tolerance))
-                .solve(),
-            Solver::Bdf => problem
-                .method(
-                    BackwardDifferentiationFormula::adaptive()
-                        .rtol(tolerance)
-                        .atol(tolerance)
-                        .max_steps(10_000_000),
-                )
-                .solve(),
+        y: [f64; N],
+        tolerance: Tolerance,
+        first_step: Option<f64>,
+    ) -> Result<([f64; N], f64), String> {
+        tolerance.check()?;
+        let h0 = first_step
+            .filter(|h| h.is_finite() && *h > 0.0)
+            .map_or(0.0, |h| h.min(t1 - t0));
+        match self {
+            Solver::Dop853 => {
+                let mut first = FirstStep(None);
+                let (end, next) = dop853(ode, t0, t1, y, tolerance, h0, &mut first)?;
+                Ok((end, first.0.map_or(next, |h| 1.5 * h)))
+            }
+            Solver::Bdf => {
+                let (ys, h) = bdf(ode, y, &[t0, t1], tolerance, h0)?;
+                let end = ys.last().copied().ok_or("no state returned")?;
+                Ok((end, h))
+            }
         }
-        .map_err(|e| format!("failed: {e:?}"))?;
-        solution
-            .y
-            .last()
-            .cloned()
-            .ok_or_else(|| "no state returned".to_string())
     }
+}
+
+/// The first step a solve took.
+struct FirstStep(Option<f64>);
+
+impl<const N: usize> Solout<f64, [f64; N]> for FirstStep {
+    fn solout<I>(
+        &mut self,
+        t_curr: f64,
+        t_prev: f64,
+        _: &[f64; N],
+        _: &[f64; N],
+        _: &mut I,
+        _: &mut Solution<f64, [f64; N]>,
+    ) -> ControlFlag<f64, [f64; N]>
+    where
+        I: Interpolation<f64, [f64; N]> + ?Sized,
+    {
+        if self.0.is_none() && t_curr > t_prev {
+            self.0 = Some(t_curr - t_prev);
+        }
+        ControlFlag::Continue
+    }
+}
+
+/// DOP853 (differential-equations) from `t0` to `t1`, `solout` seeing every step: the state
+/// at the end and the next step. `h0` 0 estimates the first step.
+fn dop853<const N: usize, F: ODE<f64, [f64; N]>, O: Solout<f64, [f64; N]>>(
+    ode: &F,
+    t0: f64,
+    t1: f64,
+    y: [f64; N],
+    Tolerance { rtol, atol }: Tolerance,
+    h0: f64,
+    solout: &mut O,
+) -> Result<([f64; N], f64), String> {
+    let mut method = ExplicitRungeKutta::dop853()
+        .rtol(rtol)
+        .atol(atol)
+        .h0(h0)
+        .max_steps(usize::MAX);
+    solve_ode(&mut method, ode, t0, t1, &y, solout).map_err(|e| match e {
+        SolveError::StepSize { .. } => {
+            "the step size fell to nothing (a singularity, or too tight a tolerance)".to_string()
+        }
+        SolveError::Stiffness { .. } => "the scene is stiff for DOP853: use BDF".to_string(),
+        SolveError::BadInput { msg } => msg,
+        e => format!("{e:?}"),
+    })?;
+    Ok((*method.y(), method.h()))
+}
+
+/// diffsol's BDF (variable order 1 to 5, as SciPy's `BDF` and MATLAB's ode15s) over `times`
+/// (from `times[0]`, where the state is `y`): the states at `times[1..]` from its dense
+/// output, and its next step. `h0` 0 lets it choose the first step.
+///
+/// The Jacobian–vector product Newton's iteration needs is a directional difference (one
+/// right-hand side more): Newton converges with it; the error control does not use it.
+/// differential-equations' own BDF (0.7.0) was not used: it takes no Newton step, and its
+/// one solve of the reference scene ended 8e-3 off at rtol 1e-10 (BENCHMARKS.md).
+fn bdf<const N: usize, F: ODE<f64, [f64; N]>>(
+    ode: &F,
+    y: [f64; N],
+    times: &[f64],
+    Tolerance { rtol, atol }: Tolerance,
+    h0: f64,
+) -> Result<(Vec<[f64; N]>, f64), String> {
+    use diffsol::matrix::MatrixCommon;
+    use diffsol::{NalgebraLU, NalgebraMat, OdeBuilder, OdeSolverMethod};
+    let rhs = |x: &[f64], t: f64, out: &mut [f64]| {
+        let (mut state, mut rate) = ([0.0; N], [0.0; N]);
+        state.copy_from_slice(x);
+        ode.diff(t, &state, &mut rate);
+        out.copy_from_slice(&rate);
+    };
+    let jacobian_times = |x: &[f64], t: f64, v: &[f64], out: &mut [f64]| {
+        let norm = |a: &[f64]| a.iter().map(|z| z * z).sum::<f64>().sqrt();
+        let size = norm(v);
+        if size == 0.0 {
+            out.fill(0.0);
+            return;
+        }
+        let eps = f64::EPSILON.sqrt() * (1.0 + norm(x)) / size;
+        let (mut moved, mut at, mut there) = ([0.0; N], [0.0; N], [0.0; N]);
+        for ((m, a), b) in moved.iter_mut().zip(x).zip(v) {
+            *m = a + eps * b;
+        }
+        rhs(x, t, &mut at);
+        rhs(&moved, t, &mut there);
+        for ((o, a), b) in out.iter_mut().zip(at).zip(there) {
+            *o = (b - a) / eps;
+        }
+    };
+    let start = times[0];
+    let mut builder = OdeBuilder::<NalgebraMat<f64>>::new()
+        .t0(start)
+        .rtol(rtol)
+        .atol([atol]);
+    if h0 > 0.0 {
+        builder = builder.h0(h0);
+    }
+    let problem = builder
+        .rhs_implicit(
+            |x, _p, t, out| rhs(x, t, out),
+            |x, _p, t, v, out| jacobian_times(x, t, v, out),
+        )
+        .init(move |_p, _t, out| out.copy_from_slice(&y), N)
+        .build()
+        .map_err(|e| format!("BDF: {e}"))?;
+    let mut solver = problem
+        .bdf::<NalgebraLU<f64>>()
+        .map_err(|e| format!("BDF: {e}"))?;
+    let (dense, _) = solver
+        .solve_dense(&times[1..])
+        .map_err(|e| format!("BDF: {e}"))?;
+    let ys = (0..dense.ncols())
+        .map(|k| std::array::from_fn(|i| dense[(i, k)]))
+        .collect();
+    Ok((ys, solver.state().h))
 }
 
 fn reference(
@@ -394,22 +663,31 @@ fn reference(
     let drive = Drive::from_volts(device, scene.bias_volts, scene.ac_volts, scene.drive_hz);
     let scale = device.rad_per_s_per_unit();
     let dtau = step_seconds * scale;
-    let tolerance = match solver {
+    let tolerance = scene.tolerance.unwrap_or(Tolerance::both(match solver {
         Solver::Dop853 => REFERENCE_TOLERANCE,
         Solver::Bdf => STIFF_REFERENCE_TOLERANCE,
-    };
+    }));
+    let tau_end = scene.duration_seconds * scale;
     let ys = solve(
         solver,
         device,
         drive,
         [start, 0.0],
-        steps as f64 * dtau,
+        tau_end,
         dtau,
         tolerance,
     )?;
+    if ys.len() as u64 != steps + 1 {
+        let why = format!("{} samples where {} were due", ys.len(), steps + 1);
+        return Err(why);
+    }
     let mut monitor = Monitor::new();
     for (k, y) in ys.iter().enumerate() {
-        let tau = k as f64 * dtau;
+        let tau = if k as u64 == steps {
+            tau_end
+        } else {
+            k as f64 * dtau
+        };
         monitor.observe(device, k as u64, y[0], drive.bias_dimless_squared_at(tau));
     }
     let mut out = outcome(
@@ -445,7 +723,7 @@ mod tests {
             [2.0 + a, 0.0],
             10.0 * period * scale,
             dt * scale,
-            1e-13,
+            Tolerance::both(1e-13),
         )
         .unwrap();
         for (k, y) in ys.iter().enumerate() {
@@ -467,7 +745,16 @@ mod tests {
         let drive = Drive::from_volts(&device, 7000.0, 1500.0, 30.0);
         let run = |tol| {
             let (y0, end, every) = ([2.1, 0.0], 0.5 * scale, 0.01 * scale);
-            solve(Solver::Dop853, &device, drive, y0, end, every, tol).unwrap()
+            solve(
+                Solver::Dop853,
+                &device,
+                drive,
+                y0,
+                end,
+                every,
+                Tolerance::both(tol),
+            )
+            .unwrap()
         };
         let (a, b) = (run(1e-12), run(1e-13));
         let worst = a
@@ -496,14 +783,132 @@ mod tests {
             let drive = Drive::from_volts(&device, bias, ac, hz);
             let y0 = [device.stretch_for_bias(bias, 3.0).unwrap(), 0.0];
             let (end, every) = (seconds * scale, seconds / 50.0 * scale);
-            let stiff = solve(Solver::Bdf, &device, drive, y0, end, every, 1e-10).unwrap();
-            let accurate = solve(Solver::Dop853, &device, drive, y0, end, every, 1e-12).unwrap();
+            let (bdf, dop853) = (Tolerance::both(1e-10), Tolerance::both(1e-12));
+            let stiff = solve(Solver::Bdf, &device, drive, y0, end, every, bdf).unwrap();
+            let accurate = solve(Solver::Dop853, &device, drive, y0, end, every, dop853).unwrap();
             let swing = accurate.iter().map(|y| y[0]).fold(0.0, f64::max)
                 - accurate.iter().map(|y| y[0]).fold(f64::INFINITY, f64::min);
             assert!(swing > 1e-3, "the scene moves: {swing}");
             for (a, b) in stiff.iter().zip(&accurate) {
                 assert!((a[0] - b[0]).abs() < 1e-6 * swing, "{} vs {}", a[0], b[0]);
             }
+        }
+    }
+
+    /// The dense output (one solve, samples interpolated between its steps) against a second
+    /// method with no interpolation at all: a solve restarted at every sample, whose samples
+    /// are its step ends. At 1e-12 they agree to the tolerance's level; DOP853's interpolant
+    /// as released (differential-equations 0.7.0, host-sim/vendor/PATCH.md) was 5.6e-8 off.
+    #[test]
+    fn dense_output_matches_step_ends() {
+        let device = Device::new(REFERENCE_DEVICE).unwrap();
+        let scale = device.rad_per_s_per_unit();
+        let drive = Drive::from_volts(&device, 7000.0, 200.0, 30.0);
+        let y0 = [device.stretch_for_bias(7000.0, 3.0).unwrap(), 0.0];
+        // Samples at an awkward spacing, off the solver's steps.
+        let (end, every) = (0.5 * scale, 0.5 / 731.0 * scale);
+        for (solver, tol, within) in [(Solver::Dop853, 1e-12, 1e-10), (Solver::Bdf, 1e-10, 1e-7)] {
+            let tolerance = Tolerance::both(tol);
+            let dense = solve(solver, &device, drive, y0, end, every, tolerance).unwrap();
+            assert_eq!(dense.len(), 732);
+            let motion = Motion {
+                device: &device,
+                drive,
+            };
+            let mut y = y0;
+            let mut worst = 0.0f64;
+            for (k, sample) in dense.iter().enumerate().skip(1) {
+                let (t0, t1) = ((k - 1) as f64 * every, k as f64 * every);
+                let t1 = if k == 731 { end } else { t1 };
+                // The restarted solve at DOP853, 1e-13: the independent one.
+                (y, _) = Solver::Dop853
+                    .advance(&motion, t0, t1, y, Tolerance::both(1e-13), None)
+                    .unwrap();
+                worst = worst.max((sample[0] - y[0]).abs());
+            }
+            assert!(worst < within, "{solver:?}: {worst}");
+        }
+    }
+
+    /// The last sample is at the duration asked for, exactly: a duration that is no whole
+    /// number of steps ends at the same state as one solve straight to it.
+    #[test]
+    fn the_run_ends_at_the_duration() {
+        let device = Device::new(REFERENCE_DEVICE).unwrap();
+        let scene = Scene {
+            params: REFERENCE_DEVICE,
+            bias_volts: 7000.0,
+            ac_volts: 200.0,
+            drive_hz: 30.0,
+            duration_seconds: 0.5,
+            start: Start::Equilibrium,
+            tolerance: None,
+        };
+        let step = 0.5 / 100.3;
+        let scale = device.rad_per_s_per_unit();
+        let drive = Drive::from_volts(&device, 7000.0, 200.0, 30.0);
+        let motion = Motion {
+            device: &device,
+            drive,
+        };
+        let y0 = [device.stretch_for_bias(7000.0, 3.0).unwrap(), 0.0];
+        let (straight, _) = Solver::Dop853
+            .advance(&motion, 0.0, 0.5 * scale, y0, Tolerance::both(1e-13), None)
+            .unwrap();
+        for choice in [Choice::Reference, Choice::ReferenceBdf] {
+            let out = simulate(&scene, choice, step).unwrap();
+            assert_eq!(out.samples.len(), 102, "{choice:?}");
+            assert!((out.step_seconds * 101.0 - 0.5).abs() < 1e-15);
+            let within = if choice == Choice::Reference {
+                1e-10
+            } else {
+                1e-7
+            };
+            assert!(
+                (out.final_stretch - straight[0]).abs() < within,
+                "{choice:?}: {} vs {}",
+                out.final_stretch,
+                straight[0]
+            );
+        }
+        // The core's fixed steps too: 1001 of them, the last ending at 0.5 s.
+        let rk4 = Choice::Core {
+            method: Method::Rk4,
+            single: false,
+        };
+        let out = simulate(&scene, rk4, 0.5 / 1000.3).unwrap();
+        assert_eq!(out.samples.len(), 1002);
+        assert!((out.final_stretch - straight[0]).abs() < 1e-5);
+    }
+
+    /// The equilibrium start on a Gent device with a low Jlim and a high pre-stretch, where a
+    /// search to the scan's end meets Φ = NaN past B's lock-up: every bias from 0 V to the
+    /// limit starts at a state that stays put (at rest, no AC: an equilibrium, checked by
+    /// the dynamics, not by the search).
+    #[test]
+    fn the_equilibrium_start_holds_on_a_locking_gent_device() {
+        let params = DeviceParams {
+            jlim: Some(12.0),
+            prestretch_1: 2.5,
+            ..REFERENCE_DEVICE
+        };
+        let device = Device::new(params).unwrap();
+        let limit = Limit::of(&device).at.volts;
+        for k in 0..=10 {
+            let bias_volts = limit * f64::from(k) / 10.0;
+            let scene = Scene {
+                params,
+                bias_volts,
+                ac_volts: 0.0,
+                drive_hz: 0.0,
+                duration_seconds: 0.05,
+                start: Start::Equilibrium,
+                tolerance: None,
+            };
+            let out = simulate(&scene, Choice::Reference, 1e-3).unwrap();
+            let drift = out.max_stretch - out.min_stretch;
+            assert!(drift < 1e-9, "{bias_volts} V: the start moved by {drift}");
+            assert!(out.samples[0] > 2.5 || k == 0, "{bias_volts} V");
         }
     }
 

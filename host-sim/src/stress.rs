@@ -217,6 +217,7 @@ fn run_case(case: &Case) -> Result<CaseReport, String> {
         drive_hz: f0,
         duration_seconds: PERIODS * period,
         start: case.start,
+        tolerance: None,
     };
     let solver = if case.stiff {
         Choice::ReferenceBdf

@@ -4,7 +4,7 @@
 //! last quarter. Peaks are local maxima that stand out from the valleys on both sides.
 
 use de_resonator::{
-    Device, DeviceParams, Drive, FailureMode, Integrator, Method, Monitor, State, StepError,
+    Device, DeviceParams, Drive, FailureMode, Integrator, Limit, Method, Monitor, State, StepError,
 };
 
 /// What to sweep.
@@ -76,8 +76,8 @@ pub fn run(sweep: &Sweep) -> Result<Response, String> {
 /// The sweep's device, its equilibrium stretch at the bias and the natural frequency there.
 pub fn operating_point(sweep: &Sweep) -> Result<(Device<f64>, f64, f64), String> {
     let device = Device::new(sweep.params).map_err(|e| e.to_string())?;
-    let stretch = device
-        .stretch_for_bias(sweep.bias_volts, device.scan_end_stretch())
+    let stretch = Limit::of(&device)
+        .stretch_for_bias(&device, sweep.bias_volts)
         .ok_or_else(|| format!("no equilibrium holds {} V", sweep.bias_volts))?;
     let hz = device.natural_frequency_hz(stretch);
     if !(hz.is_finite() && hz > 0.0) {

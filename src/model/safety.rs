@@ -197,6 +197,17 @@ pub struct Limit<T> {
 pub const LIMIT_SCAN_POINTS: usize = 128;
 
 impl<T: Real> Limit<T> {
+    /// The stretch on the loading branch held by `volts` (sign ignored): searched up to the
+    /// limit's stretch, where Φ rises and every state is inside the model; above the limit's
+    /// voltage, on to `Device::scan_end_stretch` where Φ still rises. Past a Gent lock-up Φ
+    /// is not a number, so a search to the scan's end alone fails on some Gent devices.
+    /// `None` if no equilibrium on the branch holds `volts` (or `volts` is NaN).
+    pub fn stretch_for_bias(&self, device: &Device<T>, volts: T) -> Option<T> {
+        device
+            .stretch_for_bias(volts, self.at.stretch)
+            .or_else(|| device.stretch_for_bias(volts, device.scan_end_stretch()))
+    }
+
     /// Find the limit of the loading branch from λ1p, to full precision: a scan brackets the
     /// first failure, then each check failing at the bracket's end is bisected on its own.
     /// A check that fails and recovers inside one grid cell (1/128 of [λ1p, scan end]) is

@@ -84,7 +84,12 @@ pub fn sig(x: f64) -> String {
     if x == 0.0 || !x.is_finite() {
         return format!("{x}");
     }
-    let decimals = (5 - x.abs().log10().floor() as i32).max(0) as usize;
+    let exponent = x.abs().log10().floor() as i32;
+    if !(-4..9).contains(&exponent) {
+        // Tiny or huge: scientific, not a row of zeros.
+        return format!("{x:.5e}");
+    }
+    let decimals = (5 - exponent).max(0) as usize;
     format!("{x:.decimals$}")
 }
 

@@ -9,7 +9,7 @@ use serde::Serialize;
 
 use super::{write_file, DeviceArgs, Report};
 use crate::plot::{svg, Panel, Series};
-use crate::precision::{reference, rows, studies, Row};
+use crate::precision::{reference, rows, studies, Row, ToleranceRow};
 use crate::simulate::Choice;
 
 #[derive(Args, Debug)]
@@ -42,6 +42,8 @@ pub struct SceneReport {
     pub base_hz: f64,
     pub duration_seconds: f64,
     pub reference_floor: f64,
+    /// The reference (DOP853) at several tolerances against 1e-13.
+    pub reference_tolerances: Vec<ToleranceRow>,
 }
 
 /// What `report` reports.
@@ -101,6 +103,18 @@ impl fmt::Display for PrecisionReport {
                     cell(256)
                 )?;
             }
+            write!(
+                f,
+                "  reference DOP853 against 1e-13, tolerance: max error, s/sim s:"
+            )?;
+            for t in &scene.reference_tolerances {
+                write!(
+                    f,
+                    "  {:.0e}: {:.1e}, {:.1e}",
+                    t.tolerance, t.max_error, t.run_seconds_per_simulated_second
+                )?;
+            }
+            writeln!(f)?;
         }
         write!(f, "\nwrote {}, {}", self.csv, self.plot)
     }
@@ -177,6 +191,7 @@ pub fn precision(args: &PrecisionArgs) -> Result<PrecisionReport, String> {
                 base_hz: s.base_hz,
                 duration_seconds: s.scene.duration_seconds,
                 reference_floor: r.floor,
+                reference_tolerances: r.tolerances.clone(),
             })
             .collect(),
         rows: all,

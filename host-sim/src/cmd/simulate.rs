@@ -8,7 +8,7 @@ use de_resonator::Device;
 use serde::Serialize;
 
 use super::{sig, Crossing, DeviceArgs, Report};
-use crate::simulate::{self, Choice, Scene, Start};
+use crate::simulate::{self, Choice, Scene, Start, Tolerance};
 
 #[derive(Args, Debug)]
 pub struct SimulateArgs {
@@ -41,10 +41,19 @@ pub struct SimulateArgs {
     /// implicit-midpoint, each with -f32 (as on the target) or -f64.
     #[arg(long, value_name = "M", value_enum, default_value_t = Choice::Reference)]
     pub method: Choice,
-    /// Step, s (the reference's output spacing). Default: 1/64 of the small-oscillation
-    /// period at zero bias.
+    /// Step, s (the reference's output spacing), shortened if need be so that a whole number
+    /// of steps ends at the duration exactly. Default: 1/64 of the small-oscillation period
+    /// at zero bias.
     #[arg(long, value_name = "H", allow_negative_numbers = true)]
     pub step: Option<f64>,
+    /// The reference's relative tolerance. Default: 1e-12 (`reference`), 1e-10
+    /// (`reference-bdf`).
+    #[arg(long, value_name = "R", allow_negative_numbers = true)]
+    pub rtol: Option<f64>,
+    /// The reference's absolute tolerance (on the stretch, and on its rate in the model's
+    /// time unit). Default: the relative tolerance.
+    #[arg(long, value_name = "A", allow_negative_numbers = true)]
+    pub atol: Option<f64>,
     #[command(flatten)]
     pub device: DeviceArgs,
 }
@@ -63,6 +72,8 @@ pub struct SimulateReport {
     #[serde(skip)]
     pub device: String,
     pub method: &'static str,
+    /// The reference's tolerance (`null` for the core's fixed-step methods).
+    pub tolerance: Option<Tolerance>,
     pub step_seconds: f64,
     pub steps: usize,
     #[serde(rename = "final")]
@@ -85,12 +96,17 @@ impl fmt::Display for SimulateReport {
         write!(
             f,
             "device          {}\n\
-             method          {}, step {} s, {} steps in {} ms\n\
+             method          {}{}, step {} s, {} steps in {} ms\n\
              final           stretch {}, velocity {} 1/s\n\
              stretch range   {} .. {}\n\
              first limit     {limit}",
             self.device,
             self.method,
+            self.tolerance.map_or(String::new(), |t| format!(
+                " (rtol {}, atol {})",
+                sig(t.rtol),
+                sig(t.atol)
+            )),
             sig(self.step_seconds),
             self.steps,
             sig(self.run_seconds * 1e3),
@@ -113,6 +129,20 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
     let step = args
         .step
         .unwrap_or(1.0 / (64.0 * checked.natural_frequency_hz(checked.prestretch_1())));
+    let tolerance = match (args.rtol, args.atol) {
+        (None, None) => None,
+        (rtol, atol) => {
+            let default = match args.method {
+                Choice::ReferenceBdf => simulate::STIFF_REFERENCE_TOLERANCE,
+                _ => simulate::REFERENCE_TOLERANCE,
+            };
+            let rtol = rtol.unwrap_or(default);
+            Some(Tolerance {
+                rtol,
+                atol: atol.unwrap_or(rtol),
+            })
+        }
+    };
     let scene = Scene {
         params,
         bias_volts: args.bias_volts,
@@ -120,12 +150,22 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
         drive_hz: args.drive_hz,
         duration_seconds: args.duration,
         start: args.start,
+        tolerance,
     };
     let out = simulate::simulate(&scene, args.method, step).map_err(|e| e.to_string())?;
     Ok(SimulateReport {
         device: name,
         method: args.method.name(),
-        step_seconds: step,
+        tolerance: match args.method {
+            Choice::Core { .. } => None,
+            Choice::Reference => {
+                Some(tolerance.unwrap_or(Tolerance::both(simulate::REFERENCE_TOLERANCE)))
+            }
+            Choice::ReferenceBdf => {
+                Some(tolerance.unwrap_or(Tolerance::both(simulate::STIFF_REFERENCE_TOLERANCE)))
+            }
+        },
+        step_seconds: out.step_seconds,
         steps: out.samples.len().saturating_sub(1),
         end: Final {
             stretch: out.final_stretch,

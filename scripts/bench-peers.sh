@@ -1,0 +1,94 @@
+#!/usr/bin/env bash
+# The reference simulator against compiled peers, side by side in one run (issue 13):
+# - `host-sim simulate` (reference DOP853), whole process, against numbalsoda's DOP853
+#   (Hairer's code in C++, a numba-compiled right-hand side) in-process with the JIT
+#   excluded, on the reference scene: 7000 V + 200 V at 30 Hz, 10 s, output every 1/64 of
+#   the zero-bias period, rtol = atol = 1e-12;
+# - `host-sim simulate --method reference-bdf`, whole process, against SUNDIALS CVODE's BDF
+#   (scripts/peers/cvode_scene.c, compiled here), whole process, on a damped scene where BDF
+#   is the right choice: the same drive with c = 10 N·s from the pre-stretch, 1 s, 1e-10.
+# The peers restate the equations (scripts/peers/scene.py and the C file), sharing no code
+# with the core; each comparison checks the final stretches agree before it times anything.
+# Usage: scripts/bench-peers.sh [RUNS]
+# Installs numbalsoda and numba into target/peers-venv (gfortran builds numbalsoda) and
+# libsundials-dev with apt where missing.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+RUNS=${1:-10}
+SUDO=$([ "$(id -u)" = 0 ] && echo || echo sudo)
+need=()
+command -v gfortran >/dev/null || need+=(gfortran)
+[ -f /usr/include/cvode/cvode.h ] || need+=(libsundials-dev)
+if [ ${#need[@]} -gt 0 ]; then
+    $SUDO apt-get update -qq
+    $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${need[@]}"
+fi
+VENV=target/peers-venv
+if [ ! -x "$VENV/bin/python" ] || ! "$VENV/bin/python" -c "import numbalsoda, numba" 2>/dev/null; then
+    python3 -m venv "$VENV"
+    "$VENV/bin/pip" install --quiet numbalsoda numba
+fi
+cargo build --locked --release -p host-sim --quiet
+gcc -O2 -o target/cvode_scene scripts/peers/cvode_scene.c \
+    -lsundials_cvode -lsundials_nvecserial -lm
+"$VENV/bin/python" - "$RUNS" <<'PY'
+import json, subprocess, sys, time
+runs = int(sys.argv[1])
+sys.path.insert(0, "scripts/peers")
+
+def whole(cmd):
+    """Best and mean wall time of the whole process over `runs`, and its last output."""
+    times, out = [], None
+    for _ in range(runs):
+        t0 = time.perf_counter()
+        out = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
+        times.append(time.perf_counter() - t0)
+    return json.loads(out), min(times), sum(times) / len(times)
+
+def host_sim(*args):
+    return ["target/release/host-sim", "--json", "simulate", *args]
+
+failed = []
+def agree(what, ours, theirs, within):
+    diff = abs(ours - theirs)
+    print(f"  final stretch  host-sim {ours:.15f}  peer {theirs:.15f}  |diff| {diff:.1e} "
+          f"(within {within:.0e})")
+    if not diff <= within:
+        failed.append(what)
+
+print("DOP853: reference scene, 7000 V + 200 V at 30 Hz, 10 s, output every 1/64 period, 1e-12")
+ours, best, mean = whole(host_sim("--bias-volts", "7000", "--ac-volts", "200", "--drive-hz",
+                                  "30", "--duration", "10"))
+peer = json.loads(subprocess.run(
+    [sys.executable, "scripts/peers/numbalsoda_scene.py", "7000", "200", "30", "10",
+     repr(ours["step_seconds"]), "1e-12", str(runs)],
+    check=True, capture_output=True, text=True).stdout)
+agree("dop853", ours["final"]["stretch"], peer["final_stretch"], 1e-8)
+print(f"  {'':34}{'best ms':>10}{'mean ms':>10}")
+print(f"  {'host-sim simulate, whole process':34}{best * 1e3:10.2f}{mean * 1e3:10.2f}")
+print(f"  {'  of which the solve (in-process)':34}{ours['run_seconds'] * 1e3:10.2f}")
+print(f"  {'numbalsoda dop853, in-process':34}{peer['best_seconds'] * 1e3:10.2f}"
+      f"{peer['mean_seconds'] * 1e3:10.2f}")
+print(f"  ratio (best, whole process / peer in-process): {best / peer['best_seconds']:.2f} "
+      f"(goal ≤ 1.2), {peer['samples']} samples each")
+
+print("BDF: damped scene, c = 10 N·s, 7000 V + 200 V at 30 Hz from the pre-stretch, 1 s, 1e-10")
+args = ["--bias-volts", "7000", "--ac-volts", "200", "--drive-hz", "30", "--duration", "1",
+        "--damping", "10", "--start", "prestretch", "--method", "reference-bdf"]
+ours, best, mean = whole(host_sim(*args))
+cvode = ["target/cvode_scene", "7000", "200", "30", "10", "1", repr(ours["step_seconds"]),
+         "1e-10", "1"]
+peer, peer_best, peer_mean = whole(cvode)
+agree("bdf", ours["final"]["stretch"], peer["final_stretch"], 1e-8)
+dop = whole(host_sim(*args[:-2], "--method", "reference"))[0]
+print(f"  (DOP853 at 1e-12 on it: {dop['final']['stretch']:.15f}, {dop['run_seconds'] * 1e3:.1f} ms "
+      "in-process: BDF is the right choice)")
+print(f"  {'':34}{'best ms':>10}{'mean ms':>10}")
+print(f"  {'host-sim reference-bdf, whole':34}{best * 1e3:10.2f}{mean * 1e3:10.2f}")
+print(f"  {'  of which the solve (in-process)':34}{ours['run_seconds'] * 1e3:10.2f}")
+print(f"  {'CVODE BDF, whole process':34}{peer_best * 1e3:10.2f}{peer_mean * 1e3:10.2f}")
+print(f"  ratio (best, whole processes): {best / peer_best:.2f} (goal ≤ 2), CVODE took "
+      f"{peer['steps']} steps")
+if failed:
+    sys.exit(f"the final states disagree: {failed}")
+PY
