@@ -49,26 +49,27 @@ pub struct Plant {
 /// ε0, F/m (CODATA 2018).
 const VACUUM_PERMITTIVITY: f64 = 8.854_187_812_8e-12;
 
-/// Gent nominal stresses (s1, s2) of MODEL.md §3, Pa, and I1 (NaN past lock-up).
+/// Gent nominal stresses (s1, s2) of MODEL.md §3, Pa, and I1 (NaN past lock-up). With
+/// q = λ1²λ2² and D = q·(1 − (I1 − 3)/Jlim) = q·(1 − (λ1² + λ2² − 3)/Jlim) − 1/Jlim:
+/// s1 = μ(λ1²q − 1)/(λ1·D) and s2 = μ(λ2²q − 1)/(λ2·D), one division each. The dynamics'
+/// right-hand side waits on this (its time is the chain of divisions), so it has no more.
+#[inline]
 fn gent(p: &DeviceParams<f64>, l1: f64, l2: f64) -> (f64, f64, f64) {
-    // Two divisions where the formulas have five: this runs at every right-hand side.
-    let (r1, r2) = (1.0 / l1, 1.0 / l2);
-    let inverse = r1 * r1 * r2 * r2;
-    let i1 = l1 * l1 + l2 * l2 + inverse;
-    let factor = match p.jlim {
-        Some(jlim) => {
-            let d = 1.0 - (i1 - 3.0) / jlim;
-            if d > 0.0 {
-                1.0 / d
-            } else {
-                f64::NAN
-            }
-        }
-        None => 1.0,
-    };
-    let s1 = p.shear_modulus * (l1 - inverse * r1) * factor;
-    let s2 = p.shear_modulus * (l2 - inverse * r2) * factor;
-    (s1, s2, i1)
+    let (a, b) = (l1 * l1, l2 * l2);
+    let q = a * b;
+    // Off the chain: a constant of the device.
+    let inverse_jlim = p.jlim.map_or(0.0, |jlim| 1.0 / jlim);
+    let big_d = q * (1.0 - (a + b - 3.0) * inverse_jlim) - inverse_jlim;
+    let i1 = a + b + 1.0 / q;
+    if !(big_d > 0.0) {
+        return (f64::NAN, f64::NAN, i1);
+    }
+    let mu = p.shear_modulus;
+    (
+        mu * (a * q - 1.0) / (l1 * big_d),
+        mu * (b * q - 1.0) / (l2 * big_d),
+        i1,
+    )
 }
 
 /// A network's nominal stresses (s1, s2) at stretches (λ1, λ2) over viscous ones (ξ1, ξ2):
@@ -105,15 +106,17 @@ impl Plant {
         self.params.relative_permittivity * VACUUM_PERMITTIVITY
     }
 
-    /// λB from λ (MODEL.md §2).
+    /// λB from λ (MODEL.md §2), as λB = L1·λ1p/L1B − (L1A/L1B)·λ: the divisions are of
+    /// constants, off the right-hand side's chain.
     pub fn passive_stretch(&self, stretch: f64) -> f64 {
         let p = &self.params;
         let l1 = p.length_active + p.length_passive;
-        (l1 * p.prestretch_1 - p.length_active * stretch) / p.length_passive
+        l1 * p.prestretch_1 / p.length_passive - p.length_active / p.length_passive * stretch
     }
 
     /// Total nominal stresses (s1, s2) of membrane A (`active`) or B at stretches (λ1, λ2),
     /// with the networks at the viscous stretches in `y`.
+    #[inline]
     fn stresses(&self, y: &Vector, l1: f64, l2: f64, active: bool) -> (f64, f64) {
         let (mut s1, mut s2, _) = gent(&self.params, l1, l2);
         for (k, b) in self.branches.iter().enumerate() {
@@ -134,7 +137,8 @@ impl Plant {
         let (sa, _) = self.stresses(y, l, l2, true);
         let (sb, _) = self.stresses(y, self.passive_stretch(l), l2, false);
         let electric = self.permittivity() * e0 * e0 * l * p.prestretch_2 * p.prestretch_2;
-        (p.width * p.thickness * (sb - sa + electric) - p.damping * v) / self.mass()
+        // 1/M of constants, off the chain.
+        (p.width * p.thickness * (sb - sa + electric) - p.damping * v) * (1.0 / self.mass())
     }
 
     /// The amplifier's output from `from_volts` at `t0` with `input` volts held at its input:

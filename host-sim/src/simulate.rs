@@ -478,7 +478,7 @@ impl Solver {
                     ys: Vec::with_capacity(times.len()),
                     failed: None,
                 };
-                let (end, _) = dop853(ode, t0, t1, y, tolerance, 0.0, &mut samples)?;
+                let (end, _) = dop853(ode, t0, t1, y, tolerance, 0.0, true, &mut samples)?;
                 if let Some(why) = samples.failed {
                     return Err(why);
                 }
@@ -521,8 +521,8 @@ impl Solver {
         match self {
             Solver::Dop853 => {
                 let mut first = FirstStep(None);
-                let (end, next) = dop853(ode, t0, t1, y, tolerance, h0, &mut first)?;
-                Ok((end, first.0.map_or(next, |h| 1.5 * h)))
+                let (end, next) = dop853(ode, t0, t1, y, tolerance, h0, false, &mut first)?;
+                Ok((end, first.0.map_or(next, |h| 1.25 * h)))
             }
             Solver::Bdf => {
                 let (ys, h) = bdf(ode, y, &[t0, t1], tolerance, h0)?;
@@ -557,7 +557,9 @@ impl<const N: usize> Solout<f64, [f64; N]> for FirstStep {
 }
 
 /// DOP853 (differential-equations) from `t0` to `t1`, `solout` seeing every step: the state
-/// at the end and the next step. `h0` 0 estimates the first step.
+/// at the end and the next step. `h0` 0 estimates the first step. `dense`: whether `solout`
+/// interpolates (its three extra stages a step are left out otherwise: PATCH.md).
+#[allow(clippy::too_many_arguments)]
 fn dop853<const N: usize, F: ODE<f64, [f64; N]>, O: Solout<f64, [f64; N]>>(
     ode: &F,
     t0: f64,
@@ -565,6 +567,7 @@ fn dop853<const N: usize, F: ODE<f64, [f64; N]>, O: Solout<f64, [f64; N]>>(
     y: [f64; N],
     Tolerance { rtol, atol }: Tolerance,
     h0: f64,
+    dense: bool,
     solout: &mut O,
 ) -> Result<([f64; N], f64), String> {
     let mut method = ExplicitRungeKutta::dop853()
@@ -572,6 +575,9 @@ fn dop853<const N: usize, F: ODE<f64, [f64; N]>, O: Solout<f64, [f64; N]>>(
         .atol(atol)
         .h0(h0)
         .max_steps(usize::MAX);
+    if !dense {
+        method = method.without_dense_output();
+    }
     solve_ode(&mut method, ode, t0, t1, &y, solout).map_err(|e| match e {
         SolveError::StepSize { .. } => {
             "the step size fell to nothing (a singularity, or too tight a tolerance)".to_string()
@@ -828,6 +834,28 @@ mod tests {
             }
             assert!(worst < within, "{solver:?}: {worst}");
         }
+    }
+
+    /// A plant tick's solve leaves out DOP853's dense-output stages (PATCH.md); its steps
+    /// are the same, so it ends where the sampled solve ends, bit for bit.
+    #[test]
+    fn leaving_out_the_dense_stages_changes_no_step() {
+        let device = Device::new(REFERENCE_DEVICE).unwrap();
+        let drive = Drive::from_volts(&device, 7000.0, 200.0, 30.0);
+        let motion = Motion {
+            device: &device,
+            drive,
+        };
+        let y0 = [device.stretch_for_bias(7000.0, 3.0).unwrap(), 0.0];
+        let end = 0.3 * device.rad_per_s_per_unit();
+        let tolerance = Tolerance::both(1e-12);
+        let sampled = Solver::Dop853
+            .sample(&motion, y0, &[0.0, end], tolerance)
+            .unwrap();
+        let (advanced, _) = Solver::Dop853
+            .advance(&motion, 0.0, end, y0, tolerance, None)
+            .unwrap();
+        assert_eq!(sampled[1], advanced);
     }
 
     /// The last sample is at the duration asked for, exactly: a duration that is no whole

@@ -241,6 +241,14 @@ impl<E, F, T: Real, Y: State<T>, const O: usize, const S: usize, const I: usize>
     pub fn dense_stages(&self) -> usize {
         self.dense_stages
     }
+
+    /// de-resonator's patch (host-sim/vendor/PATCH.md): no dense output, so no extra stages
+    /// (DOP853: three right-hand sides a step fewer) where nothing is wanted between steps;
+    /// `interpolate` then refuses.
+    pub fn without_dense_output(mut self) -> Self {
+        self.bi = None;
+        self
+    }
 }
 
 impl<F, T: Real, Y: State<T>, const O: usize, const S: usize, const I: usize>

@@ -300,6 +300,12 @@ impl<T: Real, Y: State<T>, const O: usize, const S: usize, const I: usize> Inter
     for ExplicitRungeKutta<Ordinary, DormandPrince, T, Y, O, S, I>
 {
     fn interpolate(&mut self, t_interp: T) -> Result<Y, Error<T, Y>> {
+        // de-resonator's patch: no dense output after `without_dense_output`.
+        if self.bi.is_none() && I > S {
+            return Err(Error::BadInput {
+                msg: "dense output switched off (without_dense_output)".to_string(),
+            });
+        }
         // Check if interpolation is out of bounds
         if t_interp < self.t_prev || t_interp > self.t {
             return Err(Error::OutOfBounds {
