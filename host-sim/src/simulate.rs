@@ -111,6 +111,27 @@ impl Choice {
     }
 }
 
+impl Choice {
+    /// The adaptive solver of a reference method (`None` for the core's fixed-step ones).
+    pub fn solver(self) -> Option<Solver> {
+        match self {
+            Choice::Reference => Some(Solver::Dop853),
+            Choice::ReferenceBdf => Some(Solver::Bdf),
+            Choice::Core { .. } => None,
+        }
+    }
+}
+
+impl Solver {
+    /// The reference's tolerance with this solver unless one is asked for.
+    pub fn default_tolerance(self) -> Tolerance {
+        Tolerance::both(match self {
+            Solver::Dop853 => REFERENCE_TOLERANCE,
+            Solver::Bdf => STIFF_REFERENCE_TOLERANCE,
+        })
+    }
+}
+
 impl clap::ValueEnum for Choice {
     fn value_variants<'a>() -> &'a [Self] {
         &Choice::ALL
@@ -229,8 +250,8 @@ pub fn simulate(scene: &Scene, choice: Choice, step_seconds: f64) -> Result<Outc
     let start = scene.start_stretch(&device)?;
     let started = Instant::now();
     let mut outcome = match choice {
-        Choice::Reference => reference(scene, &device, start, step_seconds, steps, Solver::Dop853)?,
-        Choice::ReferenceBdf => reference(scene, &device, start, step_seconds, steps, Solver::Bdf)?,
+        Choice::Reference => reference(scene, &device, start, step_seconds, Solver::Dop853)?,
+        Choice::ReferenceBdf => reference(scene, &device, start, step_seconds, Solver::Bdf)?,
         Choice::Core {
             method,
             single: true,
@@ -489,9 +510,8 @@ impl Solver {
                 samples.ys
             }
             Solver::Bdf => {
-                let (mut ys, _) = bdf(ode, y, times, tolerance, 0.0)?;
-                ys.insert(0, y);
-                ys
+                let (later, _) = bdf(ode, y, times, tolerance, 0.0)?;
+                std::iter::once(y).chain(later).collect()
             }
         };
         if ys.len() != times.len() {
@@ -663,38 +683,16 @@ fn reference(
     device: &Device<f64>,
     start: f64,
     step_seconds: f64,
-    steps: u64,
     solver: Solver,
 ) -> Result<Outcome, String> {
     let drive = Drive::from_volts(device, scene.bias_volts, scene.ac_volts, scene.drive_hz);
     let scale = device.rad_per_s_per_unit();
-    let dtau = step_seconds * scale;
-    let tolerance = scene.tolerance.unwrap_or(Tolerance::both(match solver {
-        Solver::Dop853 => REFERENCE_TOLERANCE,
-        Solver::Bdf => STIFF_REFERENCE_TOLERANCE,
-    }));
-    let tau_end = scene.duration_seconds * scale;
-    let ys = solve(
-        solver,
-        device,
-        drive,
-        [start, 0.0],
-        tau_end,
-        dtau,
-        tolerance,
-    )?;
-    if ys.len() as u64 != steps + 1 {
-        let why = format!("{} samples where {} were due", ys.len(), steps + 1);
-        return Err(why);
-    }
+    let tolerance = scene.tolerance.unwrap_or(solver.default_tolerance());
+    let times = sample_times(step_seconds * scale, scene.duration_seconds * scale);
+    let ys = solver.sample(&Motion { device, drive }, [start, 0.0], &times, tolerance)?;
     let mut monitor = Monitor::new();
-    for (k, y) in ys.iter().enumerate() {
-        let tau = if k as u64 == steps {
-            tau_end
-        } else {
-            k as f64 * dtau
-        };
-        monitor.observe(device, k as u64, y[0], drive.bias_dimless_squared_at(tau));
+    for (k, (y, tau)) in ys.iter().zip(&times).enumerate() {
+        monitor.observe(device, k as u64, y[0], drive.bias_dimless_squared_at(*tau));
     }
     let mut out = outcome(
         ys.iter().map(|y| y[0]).collect(),

@@ -110,7 +110,7 @@ impl Controller {
             }
             | State::Driving { .. }
             | State::Held { .. } => Ok(()),
-            State::Faulted { fault, .. } => Err(Refusal::Faulted { fault }),
+            State::Faulted(fault) => Err(Refusal::Faulted { fault }),
             _ => Err(Refusal::Busy {
                 phase: self.phase(),
             }),
@@ -165,18 +165,10 @@ impl Controller {
     /// Ramp from the voltage now to 0 V at the slew rate, no AC, and hold there (always
     /// allowed: the voltage only falls; a trim under way is dropped).
     pub fn stop(&mut self) {
-        if matches!(self.state, State::Faulted { .. }) {
+        if matches!(self.state, State::Faulted(_)) {
             return;
         }
-        self.plan = Plan {
-            start_tick: self.tick,
-            start_volts: self.last_volts,
-            bias_volts: 0.0,
-            pulse_ticks: (0, 0),
-            ac_tick: None,
-            ac_volts: 0.0,
-            ..self.plan
-        };
+        self.ramp_down(self.last_volts);
         self.set_tuned(false);
         self.state = State::Ramping {
             then_measure: false,

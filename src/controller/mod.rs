@@ -95,13 +95,9 @@ enum State {
     Driving { next_trim: Option<u32> },
     /// The trim needs `needed_volts` (bias and AC) above the ceiling: the bias holds.
     Held { needed_volts: f32 },
-    /// For this fault (the first): down from `from_volts` at the slew rate, `ticks` ticks so
-    /// far, then 0 V for good.
-    Faulted {
-        fault: Fault,
-        from_volts: f32,
-        ticks: u32,
-    },
+    /// For this fault (the first): down the plan's ramp to 0 V (`Controller::ramp_down`),
+    /// then 0 V for good.
+    Faulted(Fault),
 }
 
 /// The controller, between ticks: its configuration, fixed at boot, apart from its state.
@@ -164,14 +160,14 @@ impl Controller {
             State::Solving => Phase::Solving,
             State::Driving { .. } => Phase::Driving,
             State::Held { .. } => Phase::Held,
-            State::Faulted { .. } => Phase::Faulted,
+            State::Faulted(_) => Phase::Faulted,
         }
     }
 
     /// The fault that brings the output down to 0 V and holds it there, if any (the first).
     pub fn latched_fault(&self) -> Option<Fault> {
         match self.state {
-            State::Faulted { fault, .. } => Some(fault),
+            State::Faulted(fault) => Some(fault),
             _ => None,
         }
     }
@@ -207,14 +203,9 @@ impl Controller {
     /// is checked (`watch`) against MODEL.md §6 at this tick's voltage, and for a stuck or
     /// implausible sensor; the amplifier's output against the last command.
     pub fn tick(&mut self, inputs: Inputs) -> Output {
-        if let State::Faulted {
-            fault,
-            from_volts,
-            ticks,
-        } = self.state
-        {
+        if matches!(self.state, State::Faulted(_)) {
             self.tick = self.tick.saturating_add(1);
-            return self.descend(fault, from_volts, ticks.saturating_add(1), None);
+            return self.descend(None);
         }
         let tolerance = self.settings.amplifier_tolerance_volts;
         if let Some(fault) =
@@ -340,37 +331,40 @@ impl Controller {
     /// A dead bus (`Fault::Bus`) cannot ramp: 0 V at once (the IO side drops the enable
     /// line). Only the first fault is latched and said.
     pub fn fault(&mut self, fault: Fault) -> Output {
-        let (latched, from_volts, ticks, event) = match self.state {
-            State::Faulted {
-                fault: first,
-                from_volts,
-                ticks,
-            } => (first, from_volts, ticks, None),
-            _ => (fault, self.last_volts, 1, Some(Event::Fault(fault))),
+        let event = match self.state {
+            State::Faulted(_) => None,
+            _ => {
+                self.state = State::Faulted(fault);
+                self.ramp_down(self.last_volts);
+                Some(Event::Fault(fault))
+            }
         };
-        let from_volts = if fault == Fault::Bus { 0.0 } else { from_volts };
-        self.descend(latched, from_volts, ticks, event)
+        if fault == Fault::Bus {
+            self.plan.start_volts = 0.0;
+        }
+        self.descend(event)
     }
 
-    /// The descent's tick `ticks` (1 the first): the slew rate's step `ticks` times below
-    /// `from_volts`, at least 0 V, counted from the start so that no rounding can stall it.
-    fn descend(
-        &mut self,
-        fault: Fault,
-        from_volts: f32,
-        ticks: u32,
-        event: Option<Event>,
-    ) -> Output {
-        self.state = State::Faulted {
-            fault,
-            from_volts,
-            ticks,
+    /// From this tick on, down from `from_volts` to 0 V at the slew rate and held there
+    /// (`stop`, and a fault's descent). Counted from the start (`Plan::ramp_volts`), so no
+    /// rounding can stall it; a rate that is not positive gives 0 V at once.
+    fn ramp_down(&mut self, from_volts: f32) {
+        let rate_ok = self.plan.ramp_volts_per_tick > 0.0;
+        self.plan = Plan {
+            start_tick: self.tick,
+            start_volts: if rate_ok { from_volts } else { 0.0 },
+            bias_volts: 0.0,
+            pulse_ticks: (0, 0),
+            ac_tick: None,
+            ac_volts: 0.0,
+            ..self.plan
         };
-        let s = &self.settings;
-        let step = s.slew_volts_per_second / s.tick_hz;
-        let volts = from_volts - step * ticks as f32;
-        // Not a number (a nonsense step or start) or below 0: 0 V.
-        let volts = if volts > 0.0 { volts } else { 0.0 };
+    }
+
+    /// The descent's output at this tick: the ramp down one step on from the last (the first
+    /// a step below the voltage sent when the fault came), through the final gate.
+    fn descend(&mut self, event: Option<Event>) -> Output {
+        let volts = self.plan.ramp_volts(self.tick.saturating_add(1));
         let code = gate(&self.amplifier, volts, self.max_volts).unwrap_or(DacCode(0));
         self.last_volts = self.amplifier.volts(code);
         Output {

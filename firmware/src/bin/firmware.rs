@@ -320,6 +320,8 @@ mod app {
                 true,
             )
         });
+        // QEMU's test switch only: no cost on silicon's tick.
+        #[cfg(feature = "qemu")]
         if running {
             *cx.local.driven_ticks += 1;
             if cx

@@ -8,7 +8,7 @@ use de_resonator::Device;
 use serde::Serialize;
 
 use super::{sig, Crossing, DeviceArgs, Report};
-use crate::simulate::{self, Choice, Scene, Start, Tolerance};
+use crate::simulate::{self, Choice, Scene, Solver, Start, Tolerance};
 
 #[derive(Args, Debug)]
 pub struct SimulateArgs {
@@ -132,11 +132,8 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
     let tolerance = match (args.rtol, args.atol) {
         (None, None) => None,
         (rtol, atol) => {
-            let default = match args.method {
-                Choice::ReferenceBdf => simulate::STIFF_REFERENCE_TOLERANCE,
-                _ => simulate::REFERENCE_TOLERANCE,
-            };
-            let rtol = rtol.unwrap_or(default);
+            let default = args.method.solver().unwrap_or(Solver::Dop853);
+            let rtol = rtol.unwrap_or(default.default_tolerance().rtol);
             Some(Tolerance {
                 rtol,
                 atol: atol.unwrap_or(rtol),
@@ -156,15 +153,10 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
     Ok(SimulateReport {
         device: name,
         method: args.method.name(),
-        tolerance: match args.method {
-            Choice::Core { .. } => None,
-            Choice::Reference => {
-                Some(tolerance.unwrap_or(Tolerance::both(simulate::REFERENCE_TOLERANCE)))
-            }
-            Choice::ReferenceBdf => {
-                Some(tolerance.unwrap_or(Tolerance::both(simulate::STIFF_REFERENCE_TOLERANCE)))
-            }
-        },
+        tolerance: args
+            .method
+            .solver()
+            .map(|solver| tolerance.unwrap_or(solver.default_tolerance())),
         step_seconds: out.step_seconds,
         steps: out.samples.len().saturating_sub(1),
         end: Final {
