@@ -57,8 +57,8 @@ def agree(what, ours, theirs, within):
         failed.append(what)
 
 print("DOP853: reference scene, 7000 V + 200 V at 30 Hz, 10 s, output every 1/64 period, 1e-12")
-ours, best, mean = whole(host_sim("--bias-volts", "7000", "--ac-volts", "200", "--drive-hz",
-                                  "30", "--duration", "10"))
+ours, best, mean = whole(host_sim("--bias-volts", "7000", "--ac-volts", "200", "--ac-hz",
+                                  "30", "--duration-seconds", "10"))
 peer = json.loads(subprocess.run(
     [sys.executable, "scripts/peers/numbalsoda_scene.py", "7000", "200", "30", "10",
      repr(ours["step_seconds"]), "1e-12", str(runs)],
@@ -73,7 +73,7 @@ print(f"  ratio (best, whole process / peer in-process): {best / peer['best_seco
       f"(goal ≤ 1.2), {peer['samples']} samples each")
 
 print("BDF: damped scene, c = 10 N·s, 7000 V + 200 V at 30 Hz from the pre-stretch, 1 s, 1e-10")
-args = ["--bias-volts", "7000", "--ac-volts", "200", "--drive-hz", "30", "--duration", "1",
+args = ["--bias-volts", "7000", "--ac-volts", "200", "--ac-hz", "30", "--duration-seconds", "1",
         "--damping", "10", "--start", "prestretch", "--method", "reference-bdf"]
 ours, best, mean = whole(host_sim(*args))
 cvode = ["target/cvode_scene", "7000", "200", "30", "10", "1", repr(ours["step_seconds"]),

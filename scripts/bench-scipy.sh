@@ -19,7 +19,7 @@ runs = int(sys.argv[1])
 # The scene: reference device, 6000 V bias, 600 V AC at 40.2 Hz (0.9 f0), 1 s, tolerance 1e-12.
 bias, ac, hz, seconds, tol = "6000", "600", "40.2", "1", "1e-12"
 rust = ["target/release/host-sim", "simulate", "--bias-volts", bias, "--ac-volts", ac,
-        "--drive-hz", hz, "--duration", seconds, "--step", seconds, "--json"]
+        "--ac-hz", hz, "--duration-seconds", seconds, "--step-seconds", seconds, "--json"]
 scipy = [sys.executable, "scripts/scipy_scene.py", bias, ac, hz, seconds, tol]
 
 def timed(cmd):

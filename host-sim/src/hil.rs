@@ -17,6 +17,7 @@ use embedded_hal::spi::{ErrorKind, ErrorType, Operation, SpiDevice};
 
 use crate::plant::{self, Plant, Vector};
 use crate::simulate::{Solver, Tolerance};
+use crate::text::sig;
 
 /// The DAC8551 as its datasheet has it: 24-bit frames (PD1 PD0, then the code MSB first),
 /// VOUT = VREF·code/65536, 0 V when powered down. Its bus fails after `fail_after` frames.
@@ -167,7 +168,8 @@ pub struct Run {
     /// The plant's natural frequency at its static equilibrium under the controller's bias
     /// (networks frozen), Hz; NaN if there is none.
     pub natural_frequency_hz: f64,
-    /// The true plant's voltage limit above that equilibrium (networks frozen) and its mode.
+    /// The true plant's voltage limit on its loading branch from 0 V (networks frozen as they
+    /// are at the end) and its mode.
     pub limit: Option<(FailureMode, f64)>,
     pub history: Vec<(f64, f64, f64)>,
     pub ticks: u64,
@@ -212,7 +214,36 @@ impl Run {
     }
 }
 
+/// The most ticks a scene may run: 1,000 s at 10 kHz, about a minute of work and 240 MB of
+/// history at ~5 µs and 24 bytes a tick.
+pub const MAX_TICKS: f64 = 1e7;
+
 impl Loop {
+    /// The scene's ticks, refused before any work when not a number or beyond `MAX_TICKS`.
+    pub fn ticks(&self) -> Result<u64, String> {
+        let tick_hz = f64::from(self.settings.tick_hz);
+        let ticks = (self.duration_seconds * tick_hz).round();
+        if !(ticks.is_finite() && ticks >= 1.0) {
+            return Err(format!(
+                "duration_seconds {} at tick_hz {}: not a whole tick",
+                sig(self.duration_seconds),
+                sig(tick_hz)
+            ));
+        }
+        if ticks > MAX_TICKS {
+            return Err(format!(
+                "duration_seconds {} at tick_hz {} is {} ticks, more than {}: about {} s of \
+                 work; shorten the scene or lower the tick rate",
+                sig(self.duration_seconds),
+                sig(tick_hz),
+                sig(ticks),
+                sig(MAX_TICKS),
+                sig((ticks * 5e-6).round())
+            ));
+        }
+        Ok(ticks as u64)
+    }
+
     /// The amplifier the controller is told about: the DAC's reference times the gain.
     fn amplifier(&self) -> Result<Amplifier, String> {
         Amplifier::new(
@@ -224,10 +255,13 @@ impl Loop {
 
     /// Run the loop for its duration.
     pub fn run(&self) -> Result<Run, String> {
+        let ticks = self.ticks()?;
         let made = crate::lut::make(self.nominal, f64::from(self.settings.margin), None)?;
         let started = Instant::now();
         let tick_seconds = 1.0 / f64::from(self.settings.tick_hz);
-        let ticks = (self.duration_seconds / tick_seconds).round() as u64;
+        // On a terminal only, and not tick by tick.
+        let progress = crate::work::bar("run", ticks as usize);
+        let every = (ticks / 200).max(1);
         // The driver borrows the bus for each write, as firmware sharing a bus would.
         let bus = SimulatedDac {
             reference_volts: self.dac_reference_volts,
@@ -285,6 +319,9 @@ impl Loop {
             }
         };
         for k in 0..ticks {
+            if k % every == 0 {
+                progress.set_position(k);
+            }
             let t = k as f64 * tick_seconds;
             let failing = self.bus_fails_after_seconds.is_some_and(|at| t >= at);
             if failing && bus.fail_after.get().is_none() {
@@ -329,6 +366,7 @@ impl Loop {
             run.final_membrane_volts = volts;
             run.ticks = k + 1;
         }
+        progress.finish_and_clear();
         run.run_seconds = started.elapsed().as_secs_f64();
         let bias = controller
             .as_ref()
@@ -337,8 +375,13 @@ impl Loop {
         run.bias_volts = bias;
         if let Some(rest) = self.plant.equilibrium(&y, bias) {
             run.natural_frequency_hz = self.plant.natural_frequency_hz(&rest, bias);
-            run.limit = self.plant.limit_volts(&rest, bias);
         }
+        // The plant's own limit from 0 V up (networks as they are): a bias past it shows as
+        // a negative margin, not as a limit just above the bias.
+        run.limit = self
+            .plant
+            .equilibrium(&y, 0.0)
+            .and_then(|unbiased| self.plant.limit_volts(&unbiased, 0.0));
         Ok(run)
     }
 

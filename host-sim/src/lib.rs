@@ -17,4 +17,5 @@ pub mod settings_file;
 pub mod simulate;
 pub mod stress;
 pub mod sweep;
+pub mod text;
 pub mod work;

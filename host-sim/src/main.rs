@@ -1,6 +1,6 @@
 //! host-sim: workstation tools for de-resonator, on the same `no_std` core the firmware runs.
 
-use std::io::Write;
+use std::io::{IsTerminal, Write};
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
@@ -15,10 +15,15 @@ use host_sim::cmd::{self, Report};
 /// integrates the motion under a drive and reports any dynamic crossing of a limit. Without
 /// a command, `run` runs the built-in reference scene (scenes/reference.toml).
 ///
-/// Exit status: 0 on success; 1 when a run failed (a scene's plant left its safe region, a
-/// stress run failed silently); 2 when the target cannot be reached, the device, a scene or
-/// a setting is invalid, or a step is unstable (one line on stderr says why, nothing on
-/// stdout).
+/// Exit status, one rule for every command:
+///   0  done, and safe;
+///   1  done, and the report is on stdout, but a limit was crossed (a scene's plant, a
+///      simulated trajectory, a sweep point) or the controller refused or faulted (a scene,
+///      `image --check`, a console script's `err`), or a stress case failed silently or lost
+///      its reference; the last line on stderr says which;
+///   2  nothing done: bad input (the device, a scene, a setting, a flag, an unreachable
+///      target, an unstable step, work beyond the bounds); one line on stderr says why,
+///      nothing on stdout.
 #[derive(Parser, Debug)]
 #[command(name = "host-sim", version, about, long_about)]
 struct Cli {
@@ -31,51 +36,78 @@ struct Cli {
 
 #[derive(Subcommand, Debug)]
 enum Command {
-    /// Run a scene: the firmware's controller (the core's, unchanged) tunes and drives the
-    /// full plant simulator through its DAC driver, reading the simulated sensor; host-sim
-    /// checks the true plant against MODEL.md §6 at every tick. Prints a short report and
-    /// writes what the scene asks for (a plot, the time history) into --out/<scene name>.
-    /// Without a scene: the built-in reference scene (scenes/reference.toml).
+    /// Run a scene: the firmware's controller against the full plant simulator.
+    ///
+    /// Run a scene: the firmware's controller (the core's, unchanged) tunes and drives the full
+    /// plant simulator through its DAC driver, reading the simulated sensor; host-sim checks
+    /// the true plant against MODEL.md §6 at every tick. Prints a short report and writes what
+    /// the scene asks for (a plot, the time history) into --out/<scene name>. Without a scene:
+    /// the built-in reference scene (scenes/reference.toml).
     Run(cmd::run::RunArgs),
-    /// Show the safe region: f at zero bias, the first failure on the loading branch
-    /// (mode, volts, stretch, f there) and the tunable range within the margin.
+    /// The tuning curve: f against bias to the limit, or a family over pre-stretches.
+    ///
+    /// The tuning curve: natural frequency against bias from 0 V to the limit, with the limit,
+    /// the margin's highest bias, the tunable range and a target marked; over ranges of
+    /// pre-stretch (`--prestretch-1 2:3:5`), a family of curves and the safe region's edge
+    /// through their limits. Writes curve.csv and curve.svg into --out.
+    Curve(cmd::curve::CurveArgs),
+    /// The safe region: the limit of the loading branch and the tunable range.
+    ///
+    /// Show the safe region: f at zero bias, the first failure on the loading branch (mode,
+    /// volts, stretch, f there) and the tunable range within the margin.
     Safe(cmd::safe::SafeArgs),
-    /// Find the smallest bias (volts) that sets the natural frequency to a target,
-    /// at most (1 − margin) times the limit voltage.
+    /// The smallest bias that sets the natural frequency to a target.
+    ///
+    /// Find the smallest bias (volts) that sets the natural frequency to a target, at most (1 −
+    /// margin) times the limit voltage.
     Tune(cmd::safe::TuneArgs),
+    /// Integrate the motion under bias + AC, watched by the safety monitor.
+    ///
     /// Integrate the motion from rest under Φ(t) = bias + ac·sin(2π·f·t), watched by the
     /// dynamic safety monitor (the six checks of MODEL.md §6 at every step).
     Simulate(cmd::simulate::SimulateArgs),
-    /// Run the stiff and extreme cases (near the EMI limit, passive membrane near slack,
-    /// Gent lock-up, a very light bar, a large AC amplitude, a fast voltage step) with every
-    /// core method in f32 and f64 at several steps, against the reference. Each run is
-    /// `stable`, `refused` (by the guard), `stopped` (a typed error), or `failed_silently`,
-    /// which must never happen: exit status 1 if any run did.
+    /// Run the stiff and extreme cases with every core method against the reference.
+    ///
+    /// Run the stiff and extreme cases (near the EMI limit, passive membrane near slack, Gent
+    /// lock-up, a very light bar, a large AC amplitude, a fast voltage step) with every core
+    /// method in f32 and f64 at several steps, against the reference. Each run is `stable`,
+    /// `refused` (by the guard), `stopped` (a typed error), or `failed_silently`, which must
+    /// never happen: exit status 1 if any run did.
     Stress(cmd::stress::StressArgs),
+    /// Write the tuning table the firmware flashes.
+    ///
     /// Write the tuning table the firmware flashes: bias against natural frequency from zero
     /// bias to (1 − margin)·limit, evenly spaced in bias², with the device parameters, the
     /// margin, the measured interpolation error and a CRC-32 (layout: the core's `table`
     /// module, README). Prints the interpolation error against the direct solve.
     Lut(cmd::lut::LutArgs),
-    /// Error against run time (a work-precision study): every core method in f32 and f64 at
-    /// 8 to 512 steps a period against the reference (DOP853, 1e-12), on three scenes (a small
-    /// oscillation about a tuned bias, a large parametric drive, a bias near the limit).
-    /// Writes work-precision.csv and work-precision.svg (log-log) into --out; prints a table.
+    /// Error against run time of every core method (work-precision study).
+    ///
+    /// Error against run time (a work-precision study): every core method in f32 and f64 at 8
+    /// to 512 steps a period against the reference (DOP853, 1e-12), on three scenes (a small
+    /// oscillation about a tuned bias, a large parametric drive, a bias near the limit). Writes
+    /// work-precision.csv and work-precision.svg (log-log) into --out; prints a table.
     Report(cmd::precision::PrecisionArgs),
-    /// Frequency response under parametric drive Φ = bias + ac·sin(2π·f·t) (MODEL.md §7):
-    /// one run from rest per drive frequency, the amplitude once settled, and the peaks
-    /// (expected near f0/2, f0 and 2·f0, f0 the small-oscillation frequency at the bias).
-    /// Writes sweep.csv and sweep.svg into --out.
+    /// Frequency response under parametric drive: peaks and crossings.
+    ///
+    /// Frequency response under parametric drive Φ = bias + ac·sin(2π·f·t) (MODEL.md §7): one
+    /// run from rest per drive frequency, the amplitude once settled, and the peaks (expected
+    /// near f0/2, f0 and 2·f0, f0 the small-oscillation frequency at the bias). Writes
+    /// sweep.csv and sweep.svg into --out.
     Sweep(cmd::sweep::SweepArgs),
-    /// Write the configuration image the firmware reads from its own flash sector (sector
-    /// 11, 0x080E0000): the device, the amplifier, the default settings and the tuning
-    /// table (layout: the core's `image` module), after running the firmware's own boot
-    /// checks on it. `--check FILE` reads an image or a table back: what it holds, and what
-    /// the firmware's boot says of it (status 1 if it would refuse).
+    /// Write the configuration image the firmware reads, or check one (--check).
+    ///
+    /// Write the configuration image the firmware reads from its own flash sector (sector 11,
+    /// 0x080E0000): the device, the amplifier, the default settings and the tuning table
+    /// (layout: the core's `image` module), after running the firmware's own boot checks on it.
+    /// `--check FILE` reads an image or a table back: what it holds, and what the firmware's
+    /// boot says of it (status 1 if it would refuse).
     Image(cmd::image::ImageArgs),
-    /// Talk to the firmware's command port (USART2): a serial port, or QEMU's socket.
-    /// Each request gets one reply line, `ok …` or `err <code> <message>` (the core's
-    /// `protocol` module). With --script, status 1 if any request got an `err`.
+    /// Talk to the firmware's command port (serial, or QEMU's socket).
+    ///
+    /// Talk to the firmware's command port (USART2): a serial port, or QEMU's socket. Each
+    /// request gets one reply line, `ok …` or `err <code> <message>` (the core's `protocol`
+    /// module). With --script, status 1 if any request got an `err`.
     Console(cmd::console::ConsoleArgs),
 }
 
@@ -91,6 +123,7 @@ fn main() -> ExitCode {
     }));
     let result = match command {
         Command::Run(args) => cmd::run::run(&args, json).map(|r| emit(&r, json)),
+        Command::Curve(args) => cmd::curve::curve(&args).map(|r| emit(&r, json)),
         Command::Safe(args) => cmd::safe::safe(&args).map(|r| emit(&r, json)),
         Command::Tune(args) => cmd::safe::tune(&args).map(|r| emit(&r, json)),
         Command::Simulate(args) => cmd::simulate::simulate(&args).map(|r| emit(&r, json)),
@@ -109,16 +142,26 @@ fn main() -> ExitCode {
             match failure {
                 None => ExitCode::SUCCESS,
                 Some(message) => {
-                    eprintln!("error: {message}");
+                    say_error(&message);
                     ExitCode::from(1)
                 }
             }
         }
         Err(message) => {
-            eprintln!("error: {message}");
+            say_error(&message);
             ExitCode::from(2)
         }
     }
+}
+
+/// One line on stderr, `error:` in bold red on a terminal (as clap writes its own).
+fn say_error(message: &str) {
+    let mut stderr = std::io::stderr().lock();
+    let _ = if stderr.is_terminal() {
+        writeln!(stderr, "\x1b[1;31merror:\x1b[0m {message}")
+    } else {
+        writeln!(stderr, "error: {message}")
+    };
 }
 
 /// A report as text or JSON, and the failure it carries (exit status 1).
@@ -139,7 +182,12 @@ fn clap_error(e: clap::Error) -> ExitCode {
         let _ = e.print();
         return ExitCode::SUCCESS;
     }
-    let text = e.render().to_string();
+    // Styled on a terminal, as clap would print it; one line either way.
+    let text = if std::io::stderr().is_terminal() {
+        e.render().ansi().to_string()
+    } else {
+        e.render().to_string()
+    };
     let line: Vec<&str> = text
         .lines()
         .map(str::trim)

@@ -278,7 +278,9 @@ impl Plant {
     }
 
     /// The voltage above `volts` at which the equilibrium (networks frozen, followed from
-    /// `y`) first fails a check of §6, and the check: steps of 1%, then bisection.
+    /// `y`) first fails a check of §6, and the check: steps of 1% (from 1 V up), then
+    /// bisection. From a state above the limit this finds nothing new: the plant's own
+    /// limit is searched from 0 V (`Run`'s `limit`), so a bias past it shows a negative margin.
     pub fn limit_volts(&self, y: &Vector, volts: f64) -> Option<(FailureMode, f64)> {
         // The safe equilibrium at `v` followed from `from`, or the check that fails there.
         let check = |v: f64, from: &Vector| match self.equilibrium(from, v) {
@@ -286,7 +288,8 @@ impl Plant {
             None => Err(FailureMode::DeviceInstability),
         };
         let (mut low, mut at) = (volts.max(1.0), *y);
-        for _ in 0..400 {
+        // 1% steps from 1 V reach 10 MV within 1,700.
+        for _ in 0..1700 {
             let next = low * 1.01;
             match check(next, &at) {
                 Ok(z) => (low, at) = (next, z),
@@ -415,7 +418,12 @@ impl Tick<'_> {
             2 => self.advance::<11>(),
             _ => self.advance::<STATE>(),
         }
-        .map_err(|e| format!("the plant's integration at t = {t0} s: {e}"))
+        .map_err(|e| {
+            format!(
+                "the plant's integration at t = {} s: {e}",
+                crate::text::sig(t0)
+            )
+        })
     }
 }
 

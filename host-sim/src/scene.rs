@@ -177,6 +177,8 @@ fn yes() -> bool {
 pub struct Scene {
     pub name: String,
     pub description: String,
+    /// What the `[device]` section is: the reference device, or its keys.
+    pub device_source: String,
     pub run: Loop,
     /// Write the time history as CSV.
     pub history: bool,
@@ -206,6 +208,9 @@ pub fn parse(text: &str) -> Result<Scene, String> {
         let text = toml::to_string(&file.device).map_err(|e| e.to_string())?;
         crate::device_file::parse(&text).map_err(|e| format!("[device]: {e}"))?
     };
+    // The device told must itself be valid: its errors name [device], not the plant made
+    // from it.
+    de_resonator::Device::new(nominal).map_err(|e| format!("[device]: {e}"))?;
     let settings = crate::settings_file::from_table(&file.controller, "[controller]", None)?;
     let plant = plant(&nominal, &file, settings.target_hz)?;
     if !(settings.tick_hz.is_finite() && settings.tick_hz > 0.0) {
@@ -237,9 +242,15 @@ pub fn parse(text: &str) -> Result<Scene, String> {
         atol: file.plant.atol,
     };
     tolerance.check().map_err(|e| format!("[plant] {e}"))?;
-    Ok(Scene {
+    check_name(&file.name)?;
+    let scene = Scene {
         name: file.name.clone(),
         description: file.description.clone(),
+        device_source: if file.device.is_empty() {
+            "reference device (built in)".into()
+        } else {
+            "the scene's [device]".into()
+        },
         history: file.output.history,
         plot: file.output.plot,
         run: Loop {
@@ -255,7 +266,25 @@ pub fn parse(text: &str) -> Result<Scene, String> {
             seed: file.seed,
             history: file.output.history || file.output.plot,
         },
-    })
+    };
+    // Bounded work, refused before it starts.
+    scene.run.ticks()?;
+    Ok(scene)
+}
+
+/// A scene's name names its folder under `--out`: one plain path component (letters, digits,
+/// `-`, `_`, `.`, not starting with `.`), so no scene writes outside `--out` or into it.
+fn check_name(name: &str) -> Result<(), String> {
+    let plain = name
+        .chars()
+        .all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.'));
+    if name.is_empty() || name.len() > 64 || name.starts_with('.') || !plain {
+        return Err(format!(
+            "name {name:?}: a scene's name is its folder under --out: 1 to 64 letters, digits, \
+             '-', '_' or '.', not starting with '.'"
+        ));
+    }
+    Ok(())
 }
 
 /// The plant: the nominal device scaled, with the extras.
@@ -344,7 +373,8 @@ fn plant(nominal: &DeviceParams<f64>, file: &SceneFile, target_hz: f32) -> Resul
         (None, Some(q)) => return Err(format!("[plant] quality_factor {q} must be positive")),
         (None, None) => nominal.damping,
     };
-    de_resonator::Device::new(plant.params).map_err(|e| format!("[plant]: {e}"))?;
+    de_resonator::Device::new(plant.params)
+        .map_err(|e| format!("[plant]: the device scaled by [plant] is not valid: {e}"))?;
     Ok(plant)
 }
 

@@ -4,6 +4,8 @@
 
 use std::time::Instant;
 
+use crate::text::sig;
+
 use de_resonator::{
     Device, DeviceParams, Drive, FailureMode, Integrator, Limit, Method, Monitor, Real, State,
     StepError,
@@ -238,9 +240,13 @@ pub fn simulate(scene: &Scene, choice: Choice, step_seconds: f64) -> Result<Outc
         .max(1.0);
     if steps > MAX_SAMPLES {
         return Err(format!(
-            "{steps:.3e} steps of {step_seconds} s over {} s: more than {MAX_SAMPLES:.0e}; \
-             use a longer step or a shorter duration",
-            scene.duration_seconds
+            "{} steps of {} s over {} s: more than {} (about {} GB of samples); use a longer \
+             step or a shorter duration",
+            sig(steps),
+            sig(step_seconds),
+            sig(scene.duration_seconds),
+            sig(MAX_SAMPLES),
+            sig((steps * 16.0 / 1e9).round())
         )
         .into());
     }
@@ -446,7 +452,7 @@ impl<const N: usize> Solout<f64, [f64; N]> for Samples<'_, N> {
                 match interpolator.interpolate(tau) {
                     Ok(y) => y,
                     Err(e) => {
-                        self.failed = Some(format!("dense output at τ = {tau}: {e:?}"));
+                        self.failed = Some(format!("the reference's dense output failed: {e:?}"));
                         return ControlFlag::Terminate;
                     }
                 }
@@ -602,9 +608,11 @@ fn dop853<const N: usize, F: ODE<f64, [f64; N]>, O: Solout<f64, [f64; N]>>(
         SolveError::StepSize { .. } => {
             "the step size fell to nothing (a singularity, or too tight a tolerance)".to_string()
         }
-        SolveError::Stiffness { .. } => "the scene is stiff for DOP853: use BDF".to_string(),
+        SolveError::Stiffness { .. } => "stiff for DOP853: use BDF (`--method reference-bdf`, \
+                                          or `solver = \"bdf\"` in a scene's [plant])"
+            .to_string(),
         SolveError::BadInput { msg } => msg,
-        e => format!("{e:?}"),
+        e => format!("the reference solver stopped: {e:?}"),
     })?;
     Ok((*method.y(), method.h()))
 }

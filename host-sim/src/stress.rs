@@ -162,10 +162,15 @@ pub struct ReferenceRun {
 pub struct CaseReport {
     pub case: &'static str,
     pub what: &'static str,
-    pub natural_frequency_hz: f64,
-    pub bias_volts: f64,
-    pub reference: ReferenceRun,
+    /// `null` when the case could not be built on the device.
+    pub natural_frequency_hz: Option<f64>,
+    pub bias_volts: Option<f64>,
+    /// `null` when the case could not be built or its reference failed (`problem` says why).
+    pub reference: Option<ReferenceRun>,
     pub runs: Vec<RunReport>,
+    /// Why the case has no runs: it could not be built on this device, or its reference
+    /// failed. The other cases still run; the command fails (exit status 1).
+    pub problem: Option<String>,
 }
 
 /// How many runs came to each verdict.
@@ -178,14 +183,27 @@ pub struct Summary {
     pub stopped: usize,
     pub missed_crossing: usize,
     pub failed_silently: usize,
+    /// Cases with no runs (no reference): `problem` says why.
+    pub cases_without_reference: usize,
 }
 
 /// Every case on `base`, in parallel, with a progress bar.
-pub fn run(base: DeviceParams<f64>) -> Result<(Vec<CaseReport>, Summary), String> {
-    let cases = crate::work::map("stress", &cases(base), run_case)
-        .into_iter()
-        .collect::<Result<Vec<_>, _>>()?;
-    let mut summary = Summary::default();
+pub fn run(base: DeviceParams<f64>) -> (Vec<CaseReport>, Summary) {
+    let cases = crate::work::map("stress", &cases(base), |case| {
+        run_case(case).unwrap_or_else(|problem| CaseReport {
+            case: case.name,
+            what: case.what,
+            natural_frequency_hz: None,
+            bias_volts: None,
+            reference: None,
+            runs: Vec::new(),
+            problem: Some(problem),
+        })
+    });
+    let mut summary = Summary {
+        cases_without_reference: cases.iter().filter(|c| c.reference.is_none()).count(),
+        ..Summary::default()
+    };
     for run in cases.iter().flat_map(|c| &c.runs) {
         summary.runs += 1;
         match run.verdict {
@@ -196,18 +214,18 @@ pub fn run(base: DeviceParams<f64>) -> Result<(Vec<CaseReport>, Summary), String
             Verdict::FailedSilently => summary.failed_silently += 1,
         }
     }
-    Ok((cases, summary))
+    (cases, summary)
 }
 
 /// One case: the reference, then every core method at every step.
 fn run_case(case: &Case) -> Result<CaseReport, String> {
-    let device = Device::new(case.params).map_err(|e| format!("{}: {e}", case.name))?;
+    let device = Device::new(case.params).map_err(|e| format!("not a valid device: {e}"))?;
     let tuner = Tuner::new(device);
     let limit = tuner.limit().at.volts;
     let bias = case.bias_of_limit * limit;
     let at_bias = device
         .stretch_for_bias(bias, tuner.limit().at.stretch)
-        .ok_or("bias above the limit")?;
+        .ok_or("no equilibrium at the case's bias")?;
     let f0 = device.natural_frequency_hz(at_bias);
     let period = 1.0 / f0;
     let scene = Scene {
@@ -225,7 +243,7 @@ fn run_case(case: &Case) -> Result<CaseReport, String> {
         Choice::Reference
     };
     let reference = simulate(&scene, solver, period / 64.0)
-        .map_err(|e| format!("{}: reference: {e}", case.name))?;
+        .map_err(|e| format!("the reference ({}) failed: {e}", solver.name()))?;
     let swing = (reference.max_stretch - reference.min_stretch).max(1e-4);
     let mut runs = Vec::new();
     for choice in Choice::core() {
@@ -264,15 +282,16 @@ fn run_case(case: &Case) -> Result<CaseReport, String> {
     Ok(CaseReport {
         case: case.name,
         what: case.what,
-        natural_frequency_hz: f0,
-        bias_volts: bias,
-        reference: ReferenceRun {
+        natural_frequency_hz: Some(f0),
+        bias_volts: Some(bias),
+        reference: Some(ReferenceRun {
             method: solver.name(),
             run_seconds: reference.run_seconds,
             min_stretch: reference.min_stretch,
             max_stretch: reference.max_stretch,
             first_limit: crate::cmd::Crossing::of(reference.first_limit),
-        },
+        }),
         runs,
+        problem: None,
     })
 }

@@ -26,12 +26,13 @@ pub struct Sweep {
 #[derive(Clone, Debug)]
 pub struct Point {
     pub drive_hz: f64,
-    /// Half the peak-to-peak stretch over the last quarter of the run.
-    pub amplitude: f64,
+    /// Half the peak-to-peak stretch over the last quarter of the run; `None` when the run
+    /// stopped (the motion left the model's range: no amplitude was measured).
+    pub amplitude: Option<f64>,
     /// The first check of MODEL.md §6 that failed along the run, and when (s).
     pub first_limit: Option<(FailureMode, f64)>,
     /// Why the run ended early (after the monitor's crossing: the motion left the range in
-    /// which the model is defined); the amplitude is then half that range.
+    /// which the model is defined).
     pub stopped: Option<String>,
 }
 
@@ -152,14 +153,10 @@ pub fn respond(
             Err(e) => return Err(format!("at {drive_hz} Hz: {e}")),
         }
     }
-    if stopped.is_some() {
-        // It left the range in which the model is defined: count it as spanning that range,
-        // so every such run has the same amplitude, at least any swing the model can follow.
-        (low, high) = (range.0, range.1);
-    }
     Ok(Point {
         drive_hz,
-        amplitude: 0.5 * (high - low),
+        // A stopped run measured nothing: no filler value that would read as data.
+        amplitude: stopped.is_none().then_some(0.5 * (high - low)),
         first_limit: monitor
             .first_crossing()
             .map(|c| (c.mode, c.tick as f64 * step)),
@@ -169,8 +166,18 @@ pub fn respond(
 
 /// The interior local maxima that stand at least `MIN_PROMINENCE` times above the higher of
 /// the lowest points between them and the next higher response on either side (or the end).
+/// Stopped points measured nothing: each run of measured points between them is searched
+/// on its own, and its ends are not peaks (the response may rise past them).
 pub fn peaks(points: &[Point]) -> Vec<Peak> {
-    let a: Vec<f64> = points.iter().map(|p| p.amplitude).collect();
+    points
+        .split(|p| p.amplitude.is_none())
+        .flat_map(peaks_in_run)
+        .collect()
+}
+
+/// `peaks` within consecutive measured points.
+fn peaks_in_run(points: &[Point]) -> Vec<Peak> {
+    let a: Vec<f64> = points.iter().filter_map(|p| p.amplitude).collect();
     let mut found = Vec::new();
     // The ends are not peaks: the response may go on rising past them.
     for i in 1..a.len().saturating_sub(1) {
@@ -211,7 +218,7 @@ mod tests {
             .enumerate()
             .map(|(k, &amplitude)| Point {
                 drive_hz: k as f64,
-                amplitude,
+                amplitude: amplitude.is_finite().then_some(amplitude),
                 first_limit: None,
                 stopped: None,
             })
@@ -228,5 +235,16 @@ mod tests {
         assert_eq!(found[0].prominence, 5.0);
         assert_eq!(found[1].prominence, 4.0);
         assert!(peaks(&at(&[1.0, 1.0, 1.0])).is_empty());
+    }
+
+    /// Stopped points (NaN here: no amplitude) are no peak and break the response: a
+    /// measured point beside them is an end, not a peak, and no valley spans them.
+    #[test]
+    fn stopped_points_are_not_peaks() {
+        let nan = f64::NAN;
+        let found = peaks(&at(&[1.0, 2.0, nan, nan, 2.0, 1.0, 5.0, 1.0]));
+        let where_: Vec<f64> = found.iter().map(|p| p.drive_hz).collect();
+        assert_eq!(where_, vec![6.0]);
+        assert!(peaks(&at(&[nan, nan, nan])).is_empty());
     }
 }

@@ -22,6 +22,29 @@ fn refused(args: &[&str]) -> String {
     err
 }
 
+/// Exit status 1 (done, but a limit was crossed or the controller refused): the report on
+/// stdout as JSON, and the last line of stderr says why.
+fn crossed(args: &[&str]) -> (Value, String) {
+    let out = host_sim(args);
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+    let last = err.lines().last().unwrap_or("").to_string();
+    assert!(last.starts_with("error: "), "{err}");
+    let v = serde_json::from_slice(&out.stdout).expect("the report on stdout");
+    (v, last)
+}
+
+/// Done (exit status 0, or 1 if a limit was crossed): the report.
+fn ran(args: &[&str]) -> Value {
+    let out = host_sim(args);
+    assert!(
+        matches!(out.status.code(), Some(0 | 1)),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("one JSON object on stdout")
+}
+
 fn json(args: &[&str]) -> Value {
     let out = host_sim(args);
     assert!(
@@ -224,11 +247,11 @@ fn simulate_core_methods_converge_to_the_reference() {
             "7000",
             "--ac-volts",
             "500",
-            "--drive-hz",
+            "--ac-hz",
             "40",
-            "--duration",
+            "--duration-seconds",
             "0.2",
-            "--step",
+            "--step-seconds",
             step,
             "--method",
             method,
@@ -264,20 +287,28 @@ fn simulate_reports_a_dynamic_crossing() {
     for (fraction, crosses) in [(0.95, true), (0.5, false)] {
         let volts = (fraction * limit).to_string();
         for method in ["reference", "rk4-f32"] {
-            let v = json(&[
+            let args = [
                 "simulate",
                 "--bias-volts",
                 &volts,
                 "--start",
                 "prestretch",
-                "--duration",
+                "--duration-seconds",
                 "0.03",
-                "--step",
+                "--step-seconds",
                 "1e-5",
                 "--method",
                 method,
                 "--json",
-            ]);
+            ];
+            // Exit status 1 when the trajectory crossed a limit, 0 when not.
+            let v = if crosses {
+                let (v, why) = crossed(&args);
+                assert!(why.contains("emi"), "{why}");
+                v
+            } else {
+                json(&args)
+            };
             assert_eq!(
                 !v["first_limit"].is_null(),
                 crosses,
@@ -285,7 +316,7 @@ fn simulate_reports_a_dynamic_crossing() {
             );
             if crosses {
                 assert_eq!(v["first_limit"]["mode"], "emi");
-                assert!(v["first_limit"]["time"].as_f64().unwrap() > 0.0);
+                assert!(v["first_limit"]["time_seconds"].as_f64().unwrap() > 0.0);
             }
         }
     }
@@ -297,13 +328,19 @@ fn simulate_refuses_unstable_steps_and_unknown_methods() {
         (
             "7000",
             "0.1",
-            &["--method", "verlet-f64", "--step", "0.01"][..],
+            &["--method", "verlet-f64", "--step-seconds", "0.01"][..],
         ),
         ("7000", "0.1", &["--method", "euler"][..]),
         ("7000", "-1", &[][..]),
         ("1e6", "0.1", &[][..]),
     ] {
-        let mut args = vec!["simulate", "--bias-volts", bias, "--duration", duration];
+        let mut args = vec![
+            "simulate",
+            "--bias-volts",
+            bias,
+            "--duration-seconds",
+            duration,
+        ];
         args.extend(extra);
         refused(&args);
     }
@@ -359,7 +396,19 @@ fn out_dir(name: &str) -> String {
 #[test]
 fn sweep_finds_resonance_at_half_one_and_twice_f0() {
     let dir = out_dir("sweep");
-    let v = json(&["sweep", "--out", &dir, "--json"]);
+    // 600 V AC: the resonance at f0 is measured (it crosses a limit at a few frequencies,
+    // exit status 1, but no run stops).
+    let (v, _) = crossed(&[
+        "sweep",
+        "--bias-volts",
+        "6000",
+        "--ac-volts",
+        "600",
+        "--out",
+        &dir,
+        "--json",
+    ]);
+    assert_eq!(v["stopped"], 0);
     // f0 at 6000 V, from the core's statics (tested against an independent force law).
     let device = de_resonator::Device::new(de_resonator::REFERENCE_DEVICE).unwrap();
     let stretch = device.stretch_for_bias(6000.0, 3.0).unwrap();
@@ -381,9 +430,9 @@ fn sweep_finds_resonance_at_half_one_and_twice_f0() {
     }
     // Nothing else stands out.
     assert_eq!(ratios.len(), 3, "{ratios:?}");
-    let csv = std::fs::read_to_string(v["csv"].as_str().unwrap()).unwrap();
+    let csv = std::fs::read_to_string(v["files"][0].as_str().unwrap()).unwrap();
     assert_eq!(csv.lines().count(), 1 + 211);
-    let svg = std::fs::read_to_string(v["plot"].as_str().unwrap()).unwrap();
+    let svg = std::fs::read_to_string(v["files"][1].as_str().unwrap()).unwrap();
     assert!(svg.starts_with("<svg"));
 }
 
@@ -407,7 +456,7 @@ fn parametric_resonance_needs_the_mathieu_threshold() {
     );
     let peaks_near_two = |ac: f64| {
         let dir = out_dir(&format!("mathieu-{ac}"));
-        let v = json(&[
+        let v = ran(&[
             "sweep",
             "--bias-volts",
             "6000",
@@ -468,7 +517,7 @@ fn report_measures_error_against_run_time() {
         assert!(time.unwrap() > 0.0);
     }
     assert_eq!(rows.len(), 3 * 6 * 7);
-    let csv = std::fs::read_to_string(v["csv"].as_str().unwrap()).unwrap();
+    let csv = std::fs::read_to_string(v["files"][0].as_str().unwrap()).unwrap();
     assert_eq!(csv.lines().count(), 1 + rows.len());
 }
 
@@ -477,10 +526,33 @@ fn report_measures_error_against_run_time() {
 /// panic (101).
 #[test]
 fn a_closed_pipe_is_not_a_panic() {
+    let sweep = out_dir("pipe-sweep");
+    let curve = out_dir("pipe-curve");
     for args in [
         &["safe"][..],
         &["safe", "--json"],
         &["tune", "--target-hz", "44"],
+        &[
+            "sweep",
+            "--json",
+            "--points",
+            "5",
+            "--periods",
+            "8",
+            "--ac-volts",
+            "100",
+            "--out",
+            &sweep,
+        ],
+        &["curve", "--json", "--out", &curve],
+        &[
+            "simulate",
+            "--bias-volts",
+            "7000",
+            "--duration-seconds",
+            "0.1",
+        ],
+        &["lut", "--out", "/dev/null", "--json"],
     ] {
         let (reader, writer) = std::io::pipe().expect("a pipe");
         drop(reader);
@@ -494,4 +566,397 @@ fn a_closed_pipe_is_not_a_panic() {
         assert_eq!(out.status.code(), Some(0), "{args:?}: {stderr}");
         assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
     }
+}
+
+/// A scene file in a scratch folder (its own folder per test), and that folder for `--out`.
+fn scene_file(test: &str, text: &str) -> (std::path::PathBuf, std::path::PathBuf) {
+    let dir = std::env::temp_dir().join(format!("host-sim-cli-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("scene.toml");
+    std::fs::write(&path, text).unwrap();
+    (path, dir.join("out"))
+}
+
+/// The exit-status rule (`host-sim --help`): 0 done and safe; 1 done, report on stdout, but
+/// a limit was crossed or the controller refused; 2 bad input, nothing on stdout. The same
+/// unreachable target is 2 in `tune` (nothing done) and 1 in a scene (the controller ran
+/// and refused, 0 V throughout).
+#[test]
+fn one_exit_status_rule() {
+    assert_eq!(host_sim(&["safe"]).status.code(), Some(0));
+    refused(&["tune", "--target-hz", "50"]);
+    refused(&["safe", "--margin", "2"]);
+    refused(&["simulate", "--bias-volts", "7000"]);
+    let (scene, out) = scene_file(
+        "refusing-scene",
+        "name = \"unreachable\"\nduration_seconds = 0.2\n[controller]\ntarget_hz = 50.0\n",
+    );
+    let (v, why) = crossed(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(!v["refused"].is_null(), "{v}");
+    assert!(why.contains("refused"), "{why}");
+    assert_eq!(v["final_membrane_volts"], 0.0);
+    // A fault is the controller refusing to go on: 1, the report on stdout.
+    let scenes = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/");
+    let (v, why) = crossed(&[
+        "run",
+        &format!("{scenes}fault-dac-bus.toml"),
+        "--out",
+        out.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(!v["fault"].is_null() && why.contains("faulted"), "{why}");
+}
+
+/// One case that cannot be built on the device (Gent lock-up's jlim 8.3 is below I1 at a
+/// pre-stretch of 2.5) does not abort the others: it is listed with why, the rest run, and
+/// the command fails with status 1.
+#[test]
+fn stress_goes_on_past_a_case_it_cannot_build() {
+    let file = DeviceFile::new("stretched.toml", "jlim = 120\nprestretch_1 = 2.5\n");
+    let (v, why) = crossed(&["stress", "--device", file.path(), "--json"]);
+    let cases = v["cases"].as_array().unwrap();
+    assert_eq!(cases.len(), 6);
+    let lock_up = cases.iter().find(|c| c["case"] == "gent_lock_up").unwrap();
+    assert!(lock_up["reference"].is_null() && lock_up["runs"].as_array().unwrap().is_empty());
+    assert!(
+        lock_up["problem"].as_str().unwrap().contains("jlim"),
+        "{lock_up}"
+    );
+    assert!(why.contains("gent_lock_up"), "{why}");
+    assert_eq!(v["summary"]["cases_without_reference"], 1);
+    assert_eq!(v["summary"]["runs"], 5 * 6 * 5);
+}
+
+/// Work beyond the bounds is refused before it starts, with an estimate, never aborted:
+/// 1e9 s of simulation, a scene of 1e9 s or at 1e9 Hz, 1e8 sweep points.
+#[test]
+fn work_beyond_the_bounds_is_refused_up_front() {
+    let err = refused(&[
+        "simulate",
+        "--bias-volts",
+        "100",
+        "--duration-seconds",
+        "1e9",
+    ]);
+    assert!(err.contains("steps"), "{err}");
+    let err = refused(&[
+        "simulate",
+        "--bias-volts",
+        "100",
+        "--duration-seconds",
+        "1",
+        "--step-seconds",
+        "1e-12",
+    ]);
+    assert!(err.contains("1.00000e12 steps"), "{err}");
+    for (test, text) in [
+        (
+            "long-scene",
+            "name = \"long\"\nduration_seconds = 1e9\n[controller]\ntarget_hz = 44.0\n",
+        ),
+        (
+            "fast-scene",
+            "name = \"fast\"\n[controller]\ntarget_hz = 44.0\ntick_hz = 1e9\n",
+        ),
+    ] {
+        let (scene, out) = scene_file(test, text);
+        let err = refused(&[
+            "run",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(err.contains("ticks") && err.contains("work"), "{err}");
+        assert!(!out.exists(), "nothing written");
+    }
+    let err = refused(&["sweep", "--points", "100000000", "--out", &out_dir("huge")]);
+    assert!(err.contains("at most"), "{err}");
+    let err = refused(&["sweep", "--points", "100000", "--out", &out_dir("huge")]);
+    assert!(err.contains("RK4 steps") && err.contains("work"), "{err}");
+}
+
+/// A scene's name is its folder under --out: one plain component, or the scene is refused
+/// (nothing written anywhere). An --out that cannot take files is refused before the work.
+#[test]
+fn scene_names_and_output_folders_are_checked_first() {
+    for name in ["../../escape", "a/b", "", ".hidden", "a\\\\b"] {
+        let (scene, out) = scene_file(
+            "names",
+            &format!("name = \"{name}\"\n[controller]\ntarget_hz = 44.0\n"),
+        );
+        let err = refused(&[
+            "run",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(err.contains("name"), "{name}: {err}");
+        let parent = scene.parent().unwrap();
+        let written: Vec<_> = std::fs::read_dir(parent).unwrap().collect();
+        assert_eq!(written.len(), 1, "{name}: only the scene file");
+    }
+    // --out is a file, not a folder: refused at once, not after the run.
+    let (scene, _) = scene_file(
+        "out-is-a-file",
+        "name = \"ok\"\n[controller]\ntarget_hz = 44.0\n",
+    );
+    let err = refused(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        scene.to_str().unwrap(),
+    ]);
+    assert!(err.contains("cannot"), "{err}");
+    let err = refused(&["sweep", "--out", scene.to_str().unwrap()]);
+    assert!(err.contains("cannot"), "{err}");
+}
+
+/// Stopped points measured nothing: their amplitude is null (an empty CSV cell), they are
+/// counted, and no peak is made of them. On the default sweep the runs near f0 stop: no
+/// peak lies among them, and the resonances at f0/2 and 2·f0 are still found.
+#[test]
+fn sweep_counts_stopped_points_and_takes_no_peak_from_them() {
+    let dir = out_dir("sweep-default");
+    let (v, _) = crossed(&["sweep", "--out", &dir, "--json"]);
+    let points = v["points"].as_array().unwrap();
+    let stopped: Vec<&Value> = points.iter().filter(|p| p["stopped"] == true).collect();
+    assert!(!stopped.is_empty());
+    assert_eq!(v["stopped"], stopped.len());
+    assert!(stopped.iter().all(|p| p["amplitude"].is_null()));
+    let (low, high) = (
+        stopped.first().unwrap()["drive_hz"].as_f64().unwrap(),
+        stopped.last().unwrap()["drive_hz"].as_f64().unwrap(),
+    );
+    let f0 = v["natural_frequency_hz"].as_f64().unwrap();
+    let ratios: Vec<f64> = v["peaks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| {
+            let hz = p["drive_hz"].as_f64().unwrap();
+            assert!(hz < low || hz > high, "a peak among stopped points: {hz}");
+            hz / f0
+        })
+        .collect();
+    for expected in [0.5, 2.0] {
+        assert!(
+            ratios
+                .iter()
+                .any(|r| (r - expected).abs() < 0.05 * expected),
+            "{ratios:?}"
+        );
+    }
+    // The default drive is relative to the device: 0.6 and 0.2 of its limit.
+    let limit = v["limit_volts"].as_f64().unwrap();
+    assert!((v["bias_volts"].as_f64().unwrap() - 0.6 * limit).abs() < 1e-9 * limit);
+    let csv = std::fs::read_to_string(v["files"][0].as_str().unwrap()).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let column = header.iter().position(|h| *h == "amplitude").unwrap();
+    let empty = csv
+        .lines()
+        .skip(1)
+        .filter(|l| l.split(',').nth(column) == Some(""))
+        .count();
+    assert_eq!(empty, stopped.len());
+    let text = String::from_utf8(host_sim(&["sweep", "--out", &dir]).stdout).unwrap();
+    assert!(
+        text.contains(&format!("{} of them left the model's range", stopped.len())),
+        "{text}"
+    );
+}
+
+/// A plant softer than the device told (μ halved): its limit is √0.5 of the device's (Φ
+/// scales with √μ, MODEL.md §5), below the bias tuned for the device; the report gives that
+/// limit and a negative margin, not 0% "below" a limit searched upward from the bias.
+#[test]
+fn a_bias_past_a_softer_plants_limit_shows_a_negative_margin() {
+    let (scene, out) = scene_file(
+        "soft-plant",
+        "name = \"soft\"\nduration_seconds = 1.0\n[plant]\nshear_modulus_scale = 0.5\n\
+         [controller]\ntarget_hz = 44.0\n",
+    );
+    let v = ran(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--json",
+    ]);
+    let device_limit = 9854.73;
+    let plant_limit = device_limit * 0.5f64.sqrt();
+    let limit = v["limit"]["volts"].as_f64().unwrap();
+    assert!(
+        (limit - plant_limit).abs() < 1e-3 * plant_limit,
+        "{limit} vs {plant_limit}"
+    );
+    let bias = v["bias_volts"].as_f64().unwrap();
+    assert!((bias - 7449.88).abs() < 0.5, "{bias}");
+    let margin = v["limit"]["margin"].as_f64().unwrap();
+    assert!(
+        (margin - (1.0 - bias / plant_limit)).abs() < 1e-3,
+        "{margin}"
+    );
+    assert!(margin < -0.06, "{margin}");
+    let text = String::from_utf8(
+        host_sim(&[
+            "run",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .stdout,
+    )
+    .unwrap();
+    assert!(text.contains("ABOVE the plant's limit"), "{text}");
+}
+
+/// Which material model ran is said: Gent with its jlim, or neo-Hookean when a file leaves
+/// `jlim` out (a copied file without it is another device).
+#[test]
+fn the_material_model_is_named() {
+    let v = json(&["safe", "--json"]);
+    assert_eq!(v["device"]["material"], "gent");
+    assert_eq!(v["device"]["jlim"], 120.0);
+    let file = DeviceFile::new("no-jlim.toml", "shear_modulus = 45e3\n");
+    let v = json(&["safe", "--device", file.path(), "--json"]);
+    assert_eq!(v["device"]["material"], "neo_hookean");
+    assert!(v["device"]["jlim"].is_null());
+    let text = String::from_utf8(host_sim(&["safe", "--device", file.path()]).stdout).unwrap();
+    assert!(text.contains("neo-Hookean"), "{text}");
+    let text = String::from_utf8(host_sim(&["run"]).stdout).unwrap();
+    assert!(text.contains("Gent, jlim 120"), "{text}");
+}
+
+/// Flags take negative numbers as values (the check then says what is wrong), an AC
+/// amplitude needs its frequency, and `lut` writes what the file's extension says.
+#[test]
+fn flags_say_what_is_wrong() {
+    let err = refused(&[
+        "simulate",
+        "--bias-volts",
+        "7000",
+        "--ac-hz",
+        "-44",
+        "--duration-seconds",
+        "0.1",
+    ]);
+    assert!(err.contains("--ac-hz -44"), "{err}");
+    let err = refused(&[
+        "simulate",
+        "--bias-volts",
+        "7000",
+        "--ac-volts",
+        "100",
+        "--duration-seconds",
+        "0.1",
+    ]);
+    assert!(err.contains("needs --ac-hz"), "{err}");
+    let dir = out_dir("lut-ext");
+    std::fs::create_dir_all(&dir).unwrap();
+    let csv = format!("{dir}/table.csv");
+    let v = json(&["lut", "--out", &csv, "--json"]);
+    assert_eq!(v["format"], "csv");
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert!(
+        text.starts_with("natural_frequency_hz,bias_volts"),
+        "{text}"
+    );
+    refused(&["lut", "--out", &csv, "--format", "bin"]);
+}
+
+/// `simulate --csv/--plot`: the trajectory as CSV (one row a sample, from t = 0 to the
+/// duration exactly) and a plot; a crossing is marked on it.
+#[test]
+fn simulate_writes_its_trajectory() {
+    let dir = out_dir("simulate-files");
+    let (csv, svg) = (format!("{dir}/t.csv"), format!("{dir}/t.svg"));
+    let (v, _) = crossed(&[
+        "simulate",
+        "--bias-volts",
+        "9400",
+        "--start",
+        "prestretch",
+        "--duration-seconds",
+        "0.03",
+        "--step-seconds",
+        "1e-4",
+        "--csv",
+        &csv,
+        "--plot",
+        &svg,
+        "--json",
+    ]);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let rows: Vec<&str> = text.lines().collect();
+    assert_eq!(rows[0], "time_seconds,stretch,velocity_per_second,volts");
+    assert_eq!(rows.len(), 1 + 300 + 1);
+    let last: f64 = rows[rows.len() - 1]
+        .split(',')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!((last - 0.03).abs() < 1e-12, "{last}");
+    let plot = std::fs::read_to_string(&svg).unwrap();
+    let mode = v["first_limit"]["mode"].as_str().unwrap();
+    assert!(plot.contains(&format!("{mode} at")), "the crossing marked");
+}
+
+/// The tuning curve agrees with `safe` and `tune` (published figures of the reference
+/// device: f(0) = 45.9527 Hz, the limit EMI at 9854.73 V, 44 Hz at 7449.88 V), falls
+/// monotonically to the limit on the reference device, and a family over λ1p draws one
+/// curve a pre-stretch, each ending at its own `safe` limit.
+#[test]
+fn the_tuning_curve_and_its_family() {
+    let dir = out_dir("curve");
+    let v = json(&["curve", "--target-hz", "44", "--out", &dir, "--json"]);
+    let c = &v["curves"][0];
+    rounds_to(&c["limit"]["volts"], 9854.73, 2);
+    assert_eq!(c["limit"]["mode"], "emi");
+    rounds_to(&c["target"]["bias_volts"], 7449.88, 2);
+    let points = c["points"].as_array().unwrap();
+    rounds_to(&points[0]["natural_frequency_hz"], 45.9527, 4);
+    assert_eq!(points[0]["bias_volts"], 0.0);
+    let f: Vec<f64> = points
+        .iter()
+        .map(|p| p["natural_frequency_hz"].as_f64().unwrap())
+        .collect();
+    assert!(f.windows(2).all(|w| w[1] <= w[0]), "f falls with bias here");
+    let max = c["max_bias_volts"].as_f64().unwrap();
+    assert!(points
+        .iter()
+        .all(|p| p["beyond_margin"] == (p["bias_volts"].as_f64().unwrap() > max)));
+    let v = json(&[
+        "curve",
+        "--prestretch-1",
+        "1.5:3:4",
+        "--out",
+        &dir,
+        "--json",
+    ]);
+    let curves = v["curves"].as_array().unwrap();
+    assert_eq!(curves.len(), 4);
+    for (k, c) in curves.iter().enumerate() {
+        let l1 = 1.5 + 0.5 * k as f64;
+        assert!((c["prestretch_1"].as_f64().unwrap() - l1).abs() < 1e-12);
+        let file = DeviceFile::new(
+            &format!("l1-{k}.toml"),
+            &format!("jlim = 120\nprestretch_1 = {l1}\n"),
+        );
+        let safe = json(&["safe", "--device", file.path(), "--json"]);
+        assert_eq!(c["limit"]["volts"], safe["limit"]["volts"]);
+        let last = c["points"].as_array().unwrap().last().unwrap()["bias_volts"]
+            .as_f64()
+            .unwrap();
+        assert!((last - safe["limit"]["volts"].as_f64().unwrap()).abs() < 1e-6 * last);
+    }
+    refused(&["curve", "--prestretch-1", "1:2"]);
+    refused(&["curve", "--prestretch-1", "1:2:100000"]);
 }

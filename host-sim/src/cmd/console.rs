@@ -15,7 +15,9 @@ use super::Report;
 #[derive(Args, Debug)]
 #[command(group(clap::ArgGroup::new("connection").required(true).args(["port", "tcp", "unix"])))]
 pub struct ConsoleArgs {
-    /// A serial port (a board's USART2 through a USB adapter), e.g. /dev/ttyUSB0.
+    /// A serial port (a board's USART2 through a USB adapter), e.g.
+    ///
+    /// /dev/ttyUSB0.
     #[arg(long, value_name = "DEVICE")]
     pub port: Option<String>,
     /// A TCP socket, HOST:PORT (QEMU's `-chardev socket,host=…,port=…,server=on`).
@@ -27,8 +29,10 @@ pub struct ConsoleArgs {
     /// The serial port's baud rate.
     #[arg(long, value_name = "BAUD", default_value_t = 115_200)]
     pub baud: u32,
-    /// Requests from FILE, one a line (`#` comments and blank lines skipped); status 1 if
-    /// any gets an `err`. Without it: a prompt on stdin.
+    /// Requests from FILE, one a line (`#` comments and blank lines skipped); status 1 if any gets
+    /// an `err`.
+    ///
+    /// Without it: a prompt on stdin.
     #[arg(long, value_name = "FILE")]
     pub script: Option<PathBuf>,
     /// How long to wait for a reply, s.
@@ -109,6 +113,12 @@ fn connect(args: &ConsoleArgs, timeout: Duration) -> Result<Halves, String> {
     Ok((Box::new(reader), Box::new(port)))
 }
 
+/// A line on stdout as it happens; a reader gone (a closed pipe) is not an error.
+fn say(line: &str) {
+    let mut out = std::io::stdout().lock();
+    let _ = writeln!(out, "{line}").and_then(|()| out.flush());
+}
+
 /// Read lines until a reply, keeping the notices before it.
 fn reply(
     reader: &mut impl BufRead,
@@ -125,7 +135,7 @@ fn reply(
         let line = line.trim_end().to_string();
         if line.starts_with(NOTICE) {
             if echo {
-                println!("{line}");
+                say(&line);
             }
             notices.push(line);
             continue;
@@ -174,9 +184,9 @@ pub fn console(args: &ConsoleArgs, json: bool) -> Result<ConsoleReport, String> 
         let line = reply(&mut reader, &mut report.notices, echo)?;
         if echo {
             if report.script {
-                println!("> {request}");
+                say(&format!("> {request}"));
             }
-            println!("{line}");
+            say(&line);
         }
         let ok = matches!(Reply::parse(&line), Some(Reply::Ok(_)));
         report.exchanges.push(Exchange {

@@ -29,12 +29,14 @@ pub struct ImageArgs {
     pub check: Option<PathBuf>,
     #[command(flatten)]
     pub device: DeviceArgs,
-    /// Default settings (TOML, the keys of a scene's [controller] table). Default:
-    /// `Settings::for_target` (5% margin, 10 kV/s, 1 kHz, no AC).
+    /// Default settings (TOML, the keys of a scene's [controller] table).
+    ///
+    /// Default: `Settings::for_target` (5% margin, 10 kV/s, 1 kHz, no AC).
     #[arg(long, value_name = "FILE")]
     pub settings: Option<PathBuf>,
-    /// The target the firmware tunes to at power-up, Hz (over the settings file's). Needed
-    /// for a device other than the reference (whose default is 44 Hz).
+    /// The target the firmware tunes to at power-up, Hz (over the settings file's).
+    ///
+    /// Needed for a device other than the reference (whose default is 44 Hz).
     #[arg(long, value_name = "HZ")]
     pub target_hz: Option<f32>,
     /// The DAC's reference, V (the DAC8551's VREF).
@@ -43,7 +45,9 @@ pub struct ImageArgs {
     /// The high-voltage amplifier's gain, V/V.
     #[arg(long, value_name = "V/V", default_value_t = 4000.0)]
     pub gain: f32,
-    /// The amplifier's output rail, V. Default: the DAC's full scale times the gain.
+    /// The amplifier's output rail, V.
+    ///
+    /// Default: the DAC's full scale times the gain.
     #[arg(long, value_name = "V")]
     pub rail_volts: Option<f32>,
 }
@@ -63,7 +67,7 @@ pub struct TableSummary {
     pub margin: f32,
     /// The maker's measured interpolation error (relative, in f).
     pub interpolation_error: f32,
-    pub frequency_hz: [f32; 2],
+    pub frequency_range_hz: [f32; 2],
     pub top_volts: f32,
 }
 
@@ -88,7 +92,8 @@ pub struct ImageReport {
     /// `image` or `table`.
     pub kind: &'static str,
     pub bytes: usize,
-    pub device: Vec<Entry>,
+    /// The device parameters the image holds, in `Field::ALL` order.
+    pub device_parameters: Vec<Entry>,
     pub amplifier: Option<AmplifierSummary>,
     pub settings: Vec<Entry>,
     pub table: Option<TableSummary>,
@@ -120,8 +125,8 @@ impl fmt::Display for ImageReport {
                 .collect::<Vec<_>>()
                 .join(", ")
         };
-        if !self.device.is_empty() {
-            writeln!(f, "device          {}", list(&self.device))?;
+        if !self.device_parameters.is_empty() {
+            writeln!(f, "device          {}", list(&self.device_parameters))?;
         }
         if let Some(a) = &self.amplifier {
             writeln!(
@@ -139,8 +144,8 @@ impl fmt::Display for ImageReport {
                 "table           {} points, {} .. {} Hz, top {} V (margin {}), \
                  interpolation error {:.2e}",
                 t.points,
-                sig(f64::from(t.frequency_hz[0])),
-                sig(f64::from(t.frequency_hz[1])),
+                sig(f64::from(t.frequency_range_hz[0])),
+                sig(f64::from(t.frequency_range_hz[1])),
                 sig(f64::from(t.top_volts)),
                 t.margin,
                 t.interpolation_error
@@ -243,7 +248,7 @@ fn summary(table: &Table<'_>, bytes: usize) -> TableSummary {
         bytes,
         margin: table.margin(),
         interpolation_error: table.interpolation_error(),
-        frequency_hz: [table.point(0).0, table.point(table.points() - 1).0],
+        frequency_range_hz: [table.point(0).0, table.point(table.points() - 1).0],
         top_volts: table.max_volts(),
     }
 }
@@ -258,7 +263,7 @@ fn describe(bytes: &[u8], file: String) -> Result<ImageReport, String> {
             file,
             kind: "table",
             bytes: bytes.len(),
-            device: entries(&parsed.params()),
+            device_parameters: entries(&parsed.params()),
             amplifier: None,
             settings: Vec::new(),
             table: Some(summary(&parsed, bytes.len())),
@@ -276,7 +281,7 @@ fn describe(bytes: &[u8], file: String) -> Result<ImageReport, String> {
                 file,
                 kind: "image",
                 bytes: bytes.len(),
-                device: Vec::new(),
+                device_parameters: Vec::new(),
                 amplifier: None,
                 settings: Vec::new(),
                 table: None,
@@ -306,7 +311,7 @@ fn describe(bytes: &[u8], file: String) -> Result<ImageReport, String> {
         file,
         kind: "image",
         bytes: bytes.len(),
-        device: entries(&parsed.params),
+        device_parameters: entries(&parsed.params),
         amplifier: Some(AmplifierSummary {
             dac_reference_volts: a.dac_reference_volts,
             gain: a.gain,

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use clap::Args;
 use serde::Serialize;
 
-use super::{sig, DeviceArgs, MarginArgs, Report};
+use super::{short, sig, DeviceArgs, DeviceInfo, MarginArgs, Report};
 use crate::lut;
 
 /// How `lut` writes the table.
@@ -22,13 +22,17 @@ pub struct LutArgs {
     /// Output file.
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
-    /// Number of points (2 to 1024). Default: the fewest of 64, 128, … 1024 that
-    /// interpolate within 1e-5 in frequency.
+    /// Number of points (2 to 1024).
+    ///
+    /// Default: the fewest of 64, 128, … 1024 that interpolate within 1e-5 in frequency.
     #[arg(long, value_name = "N")]
     pub points: Option<usize>,
     /// `bin` (for flashing) or `csv` (for people).
-    #[arg(long, value_enum, default_value_t = LutFormat::Bin)]
-    pub format: LutFormat,
+    ///
+    /// Default: from the file's extension (`.csv` is csv, anything else bin); an extension that
+    /// says otherwise is refused.
+    #[arg(long, value_enum)]
+    pub format: Option<LutFormat>,
     #[command(flatten)]
     pub device: DeviceArgs,
     #[command(flatten)]
@@ -55,16 +59,17 @@ pub struct Interpolation {
 /// What `lut` reports.
 #[derive(Serialize, Debug)]
 pub struct LutReport {
-    #[serde(skip)]
-    pub device: String,
-    pub file: String,
+    pub device: DeviceInfo,
+    /// The table written.
+    pub files: Vec<String>,
+    pub format: &'static str,
     pub points: usize,
     pub bytes: usize,
     pub crc32: String,
     pub margin: f64,
     /// First and last point.
-    pub frequency_hz: [f32; 2],
-    pub bias_volts: [f32; 2],
+    pub frequency_range_hz: [f32; 2],
+    pub bias_range_volts: [f32; 2],
     pub interpolation_error: Interpolation,
 }
 
@@ -73,7 +78,7 @@ impl fmt::Display for LutReport {
         write!(
             f,
             "device          {}\n\
-             table           {} points, {} bytes, CRC-32 {} -> {}\n\
+             table           {} points, {} bytes, CRC-32 {} -> {} ({})\n\
              covers          {} Hz at {} V .. {} Hz at {} V (margin {})\n\
              interpolation   f at the table's bias within {:.2e} of the target (worst at {} Hz);\n\
              \x20               bias within {:.2e} of the top bias from the direct solve",
@@ -81,12 +86,13 @@ impl fmt::Display for LutReport {
             self.points,
             self.bytes,
             self.crc32,
-            self.file,
-            sig(f64::from(self.frequency_hz[0])),
-            sig(f64::from(self.bias_volts[0])),
-            sig(f64::from(self.frequency_hz[1])),
-            sig(f64::from(self.bias_volts[1])),
-            self.margin,
+            self.files.join(", "),
+            self.format,
+            sig(f64::from(self.frequency_range_hz[0])),
+            sig(f64::from(self.bias_range_volts[0])),
+            sig(f64::from(self.frequency_range_hz[1])),
+            sig(f64::from(self.bias_range_volts[1])),
+            short(self.margin),
             self.interpolation_error.frequency,
             sig(self.interpolation_error.worst_hz),
             self.interpolation_error.volts_of_top,
@@ -99,6 +105,26 @@ impl Report for LutReport {}
 pub fn lut(args: &LutArgs) -> Result<LutReport, String> {
     let (params, name) = args.device.params()?;
     let margin = args.margin.margin;
+    let csv_named = args
+        .out
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
+    let bin_named = args
+        .out
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("bin"));
+    let format = match (args.format, csv_named, bin_named) {
+        (Some(LutFormat::Bin), true, _) | (Some(LutFormat::Csv), _, true) => {
+            return Err(format!(
+                "--out {} and --format {}: the extension says the other format",
+                args.out.display(),
+                if csv_named { "bin" } else { "csv" }
+            ))
+        }
+        (Some(format), _, _) => format,
+        (None, true, _) => LutFormat::Csv,
+        (None, false, _) => LutFormat::Bin,
+    };
     let made = lut::make(params, margin, args.points).map_err(|e| format!("{name}: {e}"))?;
     let points: Vec<Point> = made
         .points
@@ -108,7 +134,7 @@ pub fn lut(args: &LutArgs) -> Result<LutReport, String> {
             bias_volts,
         })
         .collect();
-    let written = match args.format {
+    let written = match format {
         LutFormat::Bin => made.bytes.clone(),
         LutFormat::Csv => super::csv(&points)?,
     };
@@ -118,13 +144,17 @@ pub fn lut(args: &LutArgs) -> Result<LutReport, String> {
     let last = made.points.last().copied().unwrap_or((f32::NAN, f32::NAN));
     Ok(LutReport {
         device: name,
-        file: args.out.display().to_string(),
+        files: vec![args.out.display().to_string()],
+        format: match format {
+            LutFormat::Bin => "bin",
+            LutFormat::Csv => "csv",
+        },
         points: made.points.len(),
         bytes: made.bytes.len(),
         crc32: format!("{:#010x}", made.crc),
         margin,
-        frequency_hz: [first.0, last.0],
-        bias_volts: [first.1, last.1],
+        frequency_range_hz: [first.0, last.0],
+        bias_range_volts: [first.1, last.1],
         interpolation_error: Interpolation {
             frequency: made.errors.frequency,
             worst_hz: made.errors.worst_hz,

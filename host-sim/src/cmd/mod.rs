@@ -2,6 +2,7 @@
 //! through `Serialize`, text through `Display`, CSV from the same rows where it writes one).
 
 pub mod console;
+pub mod curve;
 pub mod image;
 pub mod lut;
 pub mod precision;
@@ -31,26 +32,64 @@ pub trait Report: Serialize + Display {
 /// The device a command works on.
 #[derive(Args, Debug, Clone, Default)]
 pub struct DeviceArgs {
-    /// Device file (TOML, SI units, flat keys; absent keys take the reference device's
-    /// values, an absent `jlim` means neo-Hookean). Default: the built-in reference device.
+    /// Device file (TOML, SI units, flat keys; absent keys take the reference device's values, an
+    /// absent `jlim` means neo-Hookean).
+    ///
+    /// Default: the built-in reference device.
     #[arg(long, value_name = "FILE")]
     pub device: Option<PathBuf>,
 }
 
 impl DeviceArgs {
-    /// The device's parameters (the reference's without a file) and a name for it.
-    pub fn params(&self) -> Result<(DeviceParams<f64>, String), String> {
-        Ok(match &self.device {
+    /// The device's parameters (the reference's without a file) and what it is.
+    pub fn params(&self) -> Result<(DeviceParams<f64>, DeviceInfo), String> {
+        let (params, source) = match &self.device {
             Some(path) => (device_file::load(path)?, path.display().to_string()),
             None => (REFERENCE_DEVICE, "reference device (built in)".into()),
-        })
+        };
+        Ok((params, DeviceInfo::new(source, &params)))
     }
 
-    /// The device validated, with its limit found, and its name.
-    pub fn tuner(&self) -> Result<(Tuner<f64>, String), String> {
+    /// The device validated, with its limit found, and what it is.
+    pub fn tuner(&self) -> Result<(Tuner<f64>, DeviceInfo), String> {
         let (params, name) = self.params()?;
         let device = Device::new(params).map_err(|e| format!("{name}: {e}"))?;
         Ok((Tuner::new(device), name))
+    }
+}
+
+/// Which device a command ran on, and its material model (JSON: `device`): an absent `jlim`
+/// is neo-Hookean, which a reader should not have to guess.
+#[derive(Serialize, Debug, Clone)]
+pub struct DeviceInfo {
+    /// The device file, or `reference device (built in)`.
+    pub source: String,
+    /// `gent` or `neo_hookean` (MODEL.md §3).
+    pub material: &'static str,
+    /// Gent's limit on I1 − 3 (`null`: neo-Hookean).
+    pub jlim: Option<f64>,
+}
+
+impl DeviceInfo {
+    pub fn new(source: String, params: &DeviceParams<f64>) -> Self {
+        Self {
+            source,
+            material: if params.jlim.is_some() {
+                "gent"
+            } else {
+                "neo_hookean"
+            },
+            jlim: params.jlim,
+        }
+    }
+}
+
+impl Display for DeviceInfo {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.jlim {
+            Some(jlim) => write!(f, "{} (Gent, jlim {})", self.source, short(jlim)),
+            None => write!(f, "{} (neo-Hookean: no jlim)", self.source),
+        }
     }
 }
 
@@ -62,40 +101,31 @@ pub struct MarginArgs {
     pub margin: f64,
 }
 
-/// A check that failed along a run, and when (JSON: `{mode, time}`).
+/// A check that failed along a run, and when (JSON: `{mode, time_seconds}`).
 #[derive(Serialize, Debug, Clone, Copy)]
 pub struct Crossing {
     pub mode: &'static str,
-    /// s.
-    pub time: f64,
+    pub time_seconds: f64,
 }
 
 impl Crossing {
     pub fn of(first: Option<(FailureMode, f64)>) -> Option<Self> {
-        first.map(|(mode, time)| Crossing {
+        first.map(|(mode, time_seconds)| Crossing {
             mode: mode.name(),
-            time,
+            time_seconds,
         })
     }
 }
 
-/// Six significant figures, for people.
-pub fn sig(x: f64) -> String {
-    if x == 0.0 || !x.is_finite() {
-        return format!("{x}");
-    }
-    let exponent = x.abs().log10().floor() as i32;
-    if !(-4..9).contains(&exponent) {
-        // Tiny or huge: scientific, not a row of zeros.
-        return format!("{x:.5e}");
-    }
-    let decimals = (5 - exponent).max(0) as usize;
-    format!("{x:.decimals$}")
-}
+pub use crate::text::{finite, short, sig};
 
-/// A number for JSON: `None` (null) when not finite, as JSON has no NaN.
-pub fn finite(x: f64) -> Option<f64> {
-    x.is_finite().then_some(x)
+/// Create `dir` and check it takes files, before the work that fills it (not after).
+pub fn out_dir(dir: &Path) -> Result<(), String> {
+    std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    let probe = dir.join(".host-sim-write-test");
+    std::fs::write(&probe, b"")
+        .and_then(|()| std::fs::remove_file(&probe))
+        .map_err(|e| format!("cannot write into {}: {e}", dir.display()))
 }
 
 /// Write `bytes` to `dir/file`, creating `dir`; the path written, or why not.

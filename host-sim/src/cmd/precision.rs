@@ -7,8 +7,8 @@ use std::path::PathBuf;
 use clap::Args;
 use serde::Serialize;
 
-use super::{write_file, DeviceArgs, Report};
-use crate::plot::{svg, Panel, Series};
+use super::{write_file, DeviceArgs, DeviceInfo, Report};
+use crate::plot::{svg, Marker, Panel, Series, Style, COLOURS};
 use crate::precision::{reference, rows, studies, Row, ToleranceRow};
 use crate::simulate::Choice;
 
@@ -49,13 +49,12 @@ pub struct SceneReport {
 /// What `report` reports.
 #[derive(Serialize, Debug)]
 pub struct PrecisionReport {
-    #[serde(skip)]
-    pub device: String,
+    pub device: DeviceInfo,
     pub reference: ReferenceReport,
     pub scenes: Vec<SceneReport>,
     pub rows: Vec<Row>,
-    pub csv: String,
-    pub plot: String,
+    /// The files written: the CSV and the plot.
+    pub files: Vec<String>,
 }
 
 impl fmt::Display for PrecisionReport {
@@ -116,7 +115,7 @@ impl fmt::Display for PrecisionReport {
             }
             writeln!(f)?;
         }
-        write!(f, "\nwrote {}, {}", self.csv, self.plot)
+        write!(f, "\nwrote {}", self.files.join(", "))
     }
 }
 
@@ -142,34 +141,12 @@ pub fn precision(args: &PrecisionArgs) -> Result<PrecisionReport, String> {
     bar.finish_and_clear();
     let panels: Vec<Panel> = studies
         .iter()
-        .map(|study| {
-            let mut series: Vec<Series> = Vec::new();
-            for r in all.iter().filter(|r| r.scene == study.name) {
-                let (Some(time), Some(error)) = (r.run_seconds_per_simulated_second, r.max_error)
-                else {
-                    continue;
-                };
-                match series.iter_mut().find(|s| s.name == r.method) {
-                    Some(s) => s.points.push((time, error)),
-                    None => series.push(Series {
-                        name: r.method.into(),
-                        points: vec![(time, error)],
-                    }),
-                }
-            }
-            Panel {
-                title: study.name.into(),
-                x_label: "run time per simulated second, s".into(),
-                y_label: "max stretch error".into(),
-                log_x: true,
-                log_y: true,
-                series,
-                guides: Vec::new(),
-            }
-        })
+        .map(|study| panel(study.name, &all))
         .collect();
-    let csv = write_file(&args.out, "work-precision.csv", &super::csv(&all)?)?;
-    let plot = write_file(&args.out, "work-precision.svg", svg(&panels).as_bytes())?;
+    let files = vec![
+        write_file(&args.out, "work-precision.csv", &super::csv(&all)?)?,
+        write_file(&args.out, "work-precision.svg", svg(&panels).as_bytes())?,
+    ];
     let floor = references.iter().map(|r| r.floor).fold(0.0, f64::max);
     Ok(PrecisionReport {
         device: name,
@@ -195,7 +172,63 @@ pub fn precision(args: &PrecisionArgs) -> Result<PrecisionReport, String> {
             })
             .collect(),
         rows: all,
-        csv,
-        plot,
+        files,
     })
+}
+
+/// One scene's work-precision panel: a colour per method, solid in f64 and dashed in f32,
+/// the steps a period written at 8, 64 and 512, and the runs that have no point listed.
+fn panel(scene: &str, rows: &[Row]) -> Panel {
+    let mut panel = Panel {
+        title: scene.into(),
+        x_label: "run time per simulated second, s".into(),
+        y_label: "max stretch error".into(),
+        log_x: true,
+        log_y: true,
+        ..Panel::default()
+    };
+    let mut bases: Vec<&str> = Vec::new();
+    for r in rows.iter().filter(|r| r.scene == scene) {
+        let (base, f32_) = match r.method.rsplit_once('-') {
+            Some((base, precision)) => (base, precision == "f32"),
+            None => (r.method, false),
+        };
+        if !bases.contains(&base) {
+            bases.push(base);
+        }
+        let colour = COLOURS[bases.iter().position(|b| *b == base).unwrap_or(0) % COLOURS.len()];
+        let (Some(time), Some(error)) = (r.run_seconds_per_simulated_second, r.max_error) else {
+            panel.notes.push(format!(
+                "{} at {}/period: {}",
+                r.method, r.steps_per_period, r.status
+            ));
+            continue;
+        };
+        match panel.series.iter_mut().find(|s| s.name == r.method) {
+            Some(s) => s.points.push((time, error)),
+            None => panel.series.push(Series {
+                name: r.method.into(),
+                points: vec![(time, error)],
+                style: Style {
+                    colour: Some(colour),
+                    dashed: f32_,
+                    dots_only: false,
+                },
+            }),
+        }
+        if matches!(r.steps_per_period, 8 | 64 | 512) {
+            panel.markers.push(Marker {
+                x: time,
+                y: error,
+                label: format!("{}", r.steps_per_period),
+                colour,
+            });
+        }
+    }
+    if !panel.notes.is_empty() {
+        panel
+            .notes
+            .insert(0, "no point (refused or stopped):".into());
+    }
+    panel
 }

@@ -7,9 +7,9 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 use serde::Serialize;
 
-use super::{finite, sig, write_file, Crossing, Report};
+use super::{finite, out_dir, sig, write_file, Crossing, DeviceInfo, Report};
 use crate::hil::Run;
-use crate::plot::{svg, Panel, Series};
+use crate::plot::{svg, Marker, Panel, Series, RED};
 use crate::scene::{self, Scene};
 
 #[derive(Args, Debug, Default)]
@@ -21,7 +21,8 @@ pub struct RunArgs {
     pub out: PathBuf,
 }
 
-/// The plant's own limit above the final bias, and the margin to it.
+/// The plant's own limit on its loading branch from 0 V, and the final bias's margin to it
+/// (negative: the bias is past the plant's limit).
 #[derive(Serialize, Debug, Clone, Copy)]
 pub struct LimitReport {
     pub mode: &'static str,
@@ -32,15 +33,14 @@ pub struct LimitReport {
 /// Something the controller said, and when.
 #[derive(Serialize, Debug)]
 pub struct EventReport {
-    /// s.
-    pub time: f64,
+    pub time_seconds: f64,
     pub what: String,
 }
 
 /// One tick of the history CSV.
 #[derive(Serialize)]
 struct HistoryRow {
-    time_s: f64,
+    time_seconds: f64,
     stretch: f64,
     membrane_volts: f64,
 }
@@ -50,6 +50,8 @@ struct HistoryRow {
 pub struct RunReport {
     pub scene: String,
     pub description: String,
+    /// The device the controller is told of (the scene's `[device]`).
+    pub device: DeviceInfo,
     pub simulated_seconds: f64,
     #[serde(skip)]
     tick_hz: f32,
@@ -80,10 +82,12 @@ impl fmt::Display for RunReport {
         writeln!(
             f,
             "scene           {} ({} s simulated, controller at {} Hz)\n\
+             device          {}\n\
              target          {} Hz",
             self.scene,
             sig(self.simulated_seconds),
             self.tick_hz,
+            self.device,
             sig(self.target_hz),
         )?;
         match (&self.refused, &self.fault) {
@@ -111,14 +115,23 @@ impl fmt::Display for RunReport {
                     error,
                     100.0 * error
                 )?;
-                if let Some(l) = self.limit {
-                    writeln!(
+                match self.limit {
+                    Some(l) if l.margin >= 0.0 => writeln!(
                         f,
                         "margin          {:.1}% below the plant's limit ({}, {} V)",
                         100.0 * l.margin,
                         l.mode,
                         sig(l.volts)
-                    )?;
+                    )?,
+                    Some(l) => writeln!(
+                        f,
+                        "margin          NONE: the bias is {:.1}% ABOVE the plant's limit \
+                         ({}, {} V)",
+                        -100.0 * l.margin,
+                        l.mode,
+                        sig(l.volts)
+                    )?,
+                    None => {}
                 }
             }
         }
@@ -136,7 +149,7 @@ impl fmt::Display for RunReport {
                 f,
                 "plant safe      NO: {} at {} s ({what})",
                 c.mode,
-                sig(c.time)
+                sig(c.time_seconds)
             )?,
             _ => writeln!(
                 f,
@@ -145,7 +158,7 @@ impl fmt::Display for RunReport {
             )?,
         }
         for e in &self.events {
-            writeln!(f, "  {:>8.3} s     {}", e.time, e.what)?;
+            writeln!(f, "  {:>8.3} s     {}", e.time_seconds, e.what)?;
         }
         write!(f, "run time        {:.3} s", self.run_seconds)?;
         for file in &self.files {
@@ -156,10 +169,22 @@ impl fmt::Display for RunReport {
 }
 
 impl Report for RunReport {
-    /// A plant that left its true safe region fails the run.
+    /// Done, but the plant left its true safe region, or the controller refused to start
+    /// or faulted (exit status 1).
     fn failure(&self) -> Option<String> {
-        self.plant_crossing
-            .map(|c| format!("the plant crossed {} at {} s", c.mode, c.time))
+        if let Some(c) = self.plant_crossing {
+            return Some(format!(
+                "the plant crossed {} at {} s",
+                c.mode,
+                sig(c.time_seconds)
+            ));
+        }
+        if let Some(why) = &self.refused {
+            return Some(format!("the controller refused to start: {why}"));
+        }
+        self.fault
+            .as_ref()
+            .map(|why| format!("the controller faulted: {why}"))
     }
 }
 
@@ -171,6 +196,10 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<RunReport, String> {
             scene::parse(scene::REFERENCE).map_err(|e| format!("built-in reference scene: {e}"))?
         }
     };
+    let dir = scene::out_dir(&args.out, &scene);
+    if scene.plot || scene.history {
+        out_dir(&dir)?;
+    }
     if !quiet {
         eprintln!(
             "running scene {} ({} s)...",
@@ -178,12 +207,13 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<RunReport, String> {
         );
     }
     let run = scene.run.run()?;
-    let files = files(&scene::out_dir(&args.out, &scene), &scene, &run)?;
+    let files = files(&dir, &scene, &run)?;
     let target = f64::from(scene.run.settings.target_hz);
     let hz = run.natural_frequency_hz;
     Ok(RunReport {
         scene: scene.name.clone(),
         description: scene.description.clone(),
+        device: DeviceInfo::new(scene.device_source.clone(), &scene.run.nominal),
         simulated_seconds: scene.run.duration_seconds,
         tick_hz: scene.run.settings.tick_hz,
         ticks: run.ticks,
@@ -206,7 +236,7 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<RunReport, String> {
             .events
             .iter()
             .map(|e| EventReport {
-                time: e.seconds,
+                time_seconds: e.seconds,
                 what: e.what.clone(),
             })
             .collect(),
@@ -230,8 +260,8 @@ fn files(dir: &Path, scene: &Scene, run: &Run) -> Result<Vec<String>, String> {
         let rows: Vec<HistoryRow> = run
             .history
             .iter()
-            .map(|&(time_s, stretch, membrane_volts)| HistoryRow {
-                time_s,
+            .map(|&(time_seconds, stretch, membrane_volts)| HistoryRow {
+                time_seconds,
                 stretch,
                 membrane_volts,
             })
@@ -239,39 +269,82 @@ fn files(dir: &Path, scene: &Scene, run: &Run) -> Result<Vec<String>, String> {
         written.push(write_file(dir, "history.csv", &super::csv(&rows)?)?);
     }
     if scene.plot && !run.history.is_empty() {
-        let series = |name: &str, pick: fn(&(f64, f64, f64)) -> f64| Series {
-            name: name.into(),
-            points: run.history.iter().map(|h| (h.0, pick(h))).collect(),
-        };
-        let guides: Vec<(f64, String)> = run
-            .events
-            .iter()
-            .map(|e| {
-                (
-                    e.seconds,
-                    e.what.split(',').next().unwrap_or("").to_string(),
-                )
-            })
-            .collect();
-        let panels = [
-            Panel {
-                title: format!("{}: stretch of A", scene.name),
-                x_label: "time, s".into(),
-                y_label: "stretch λ".into(),
-                series: vec![series("plant", |h| h.1)],
-                guides: guides.clone(),
-                ..Panel::default()
-            },
-            Panel {
-                title: "voltage on the membrane".into(),
-                x_label: "time, s".into(),
-                y_label: "V".into(),
-                series: vec![series("amplifier output", |h| h.2)],
-                guides,
-                ..Panel::default()
-            },
-        ];
-        written.push(write_file(dir, "run.svg", svg(&panels).as_bytes())?);
+        written.push(write_file(
+            dir,
+            "run.svg",
+            svg(&plot(scene, run)).as_bytes(),
+        )?);
     }
     Ok(written)
+}
+
+/// The run's two panels: the stretch (the plant's crossing marked) and the voltage on the
+/// membrane with the controller's cap and the plant's own limit; the controller's events as
+/// guides (the first clause of each, labels in rows that do not overprint).
+fn plot(scene: &Scene, run: &Run) -> [Panel; 2] {
+    let series = |name: &str, pick: fn(&(f64, f64, f64)) -> f64| Series {
+        name: name.into(),
+        points: run.history.iter().map(|h| (h.0, pick(h))).collect(),
+        ..Series::default()
+    };
+    let guides: Vec<(f64, String)> = run
+        .events
+        .iter()
+        .map(|e| {
+            (
+                e.seconds,
+                e.what.split([',', ':']).next().unwrap_or("").to_string(),
+            )
+        })
+        .collect();
+    let markers = |pick: fn(&(f64, f64, f64)) -> f64| -> Vec<Marker> {
+        run.plant_crossing
+            .and_then(|(mode, t)| {
+                let at = run.history.iter().find(|h| h.0 >= t)?;
+                Some(Marker {
+                    x: t,
+                    y: pick(at),
+                    label: format!("{} at {} s", mode.name(), sig(t)),
+                    colour: RED,
+                })
+            })
+            .into_iter()
+            .collect()
+    };
+    let mut levels = Vec::new();
+    let mut stretch_levels = Vec::new();
+    if let Some(boot) = run.boot {
+        levels.push((f64::from(boot.max_volts), "controller's cap".into()));
+        if let Some(limit) = boot.limit {
+            stretch_levels.push((
+                f64::from(limit.at.stretch),
+                format!("device's limit stretch ({})", limit.mode.name()),
+            ));
+        }
+    }
+    if let Some((mode, volts)) = run.limit {
+        levels.push((volts, format!("plant's limit ({})", mode.name())));
+    }
+    [
+        Panel {
+            title: format!("{}: stretch of A", scene.name),
+            x_label: "time, s".into(),
+            y_label: "stretch λ".into(),
+            series: vec![series("plant", |h| h.1)],
+            guides: guides.clone(),
+            levels: stretch_levels,
+            markers: markers(|h| h.1),
+            ..Panel::default()
+        },
+        Panel {
+            title: "voltage on the membrane".into(),
+            x_label: "time, s".into(),
+            y_label: "V".into(),
+            series: vec![series("amplifier output", |h| h.2)],
+            guides,
+            levels,
+            markers: markers(|h| h.2),
+            ..Panel::default()
+        },
+    ]
 }

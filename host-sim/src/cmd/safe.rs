@@ -7,7 +7,7 @@ use clap::Args;
 use de_resonator::{Equilibrium, Tuner};
 use serde::Serialize;
 
-use super::{sig, DeviceArgs, MarginArgs, Report};
+use super::{short, sig, DeviceArgs, DeviceInfo, MarginArgs, Report};
 
 #[derive(Args, Debug)]
 pub struct SafeArgs {
@@ -42,8 +42,7 @@ pub struct LimitReport {
 /// The safe region: what `safe` reports, and `tune` before its target.
 #[derive(Serialize, Debug)]
 pub struct Region {
-    #[serde(skip)]
-    pub device: String,
+    pub device: DeviceInfo,
     pub zero_bias_frequency_hz: f64,
     #[serde(skip)]
     zero_bias_stretch: f64,
@@ -56,7 +55,7 @@ pub struct Region {
 }
 
 impl Region {
-    pub fn new(device: String, tuner: &Tuner<f64>, margin: f64) -> Result<Self, String> {
+    pub fn new(device: DeviceInfo, tuner: &Tuner<f64>, margin: f64) -> Result<Self, String> {
         let range = tuner.tunable_range(margin).map_err(|e| e.to_string())?;
         let limit = tuner.limit();
         let zero = tuner.zero_bias();
@@ -98,7 +97,7 @@ impl fmt::Display for Region {
             sig(l.volts),
             sig(l.stretch),
             sig(l.natural_frequency_hz),
-            self.margin,
+            short(self.margin),
             sig(self.max_bias_volts),
             sig(self.max_bias_stretch),
             sig(self.tunable_range_hz[0]),

@@ -2,12 +2,14 @@
 //! dynamic safety monitor (the six checks of MODEL.md §6 at every step).
 
 use std::fmt;
+use std::path::{Path, PathBuf};
 
 use clap::Args;
 use de_resonator::Device;
 use serde::Serialize;
 
-use super::{sig, Crossing, DeviceArgs, Report};
+use super::{out_dir, sig, Crossing, DeviceArgs, DeviceInfo, Report};
+use crate::plot::{svg, Marker, Panel, Series, RED};
 use crate::simulate::{self, Choice, Scene, Solver, Start, Tolerance};
 
 #[derive(Args, Debug)]
@@ -15,47 +17,88 @@ pub struct SimulateArgs {
     /// Static bias, V.
     #[arg(long, value_name = "V", allow_negative_numbers = true)]
     pub bias_volts: f64,
-    /// AC amplitude, V.
+    /// AC amplitude, V (needs --ac-hz).
     #[arg(
         long,
-        value_name = "A",
+        value_name = "V",
         default_value_t = 0.0,
         allow_negative_numbers = true
     )]
     pub ac_volts: f64,
-    /// AC drive frequency, Hz.
-    #[arg(long, value_name = "F", default_value_t = 0.0)]
-    pub drive_hz: f64,
+    /// AC drive frequency, Hz (the settings' `ac_hz`).
+    #[arg(
+        long,
+        visible_alias = "drive-hz",
+        value_name = "HZ",
+        allow_negative_numbers = true
+    )]
+    pub ac_hz: Option<f64>,
     /// Viscous damping c, N·s (overrides the device's).
-    #[arg(long, value_name = "C")]
+    #[arg(long, value_name = "C", allow_negative_numbers = true)]
     pub damping: Option<f64>,
     /// Simulated time, s.
-    #[arg(long, value_name = "S", allow_negative_numbers = true)]
-    pub duration: f64,
-    /// Start at rest at the bias's equilibrium, or at the pre-stretch with the voltage
-    /// switched on at t = 0.
+    #[arg(
+        long,
+        visible_alias = "duration",
+        value_name = "S",
+        allow_negative_numbers = true
+    )]
+    pub duration_seconds: f64,
+    /// Where the motion starts from rest.
+    ///
+    /// At the bias's equilibrium, or at the pre-stretch with the voltage switched on at
+    /// t = 0.
     #[arg(long, value_enum, default_value_t = Start::Equilibrium)]
     pub start: Start,
+    /// The integrator: a reference (adaptive, f64) or a core fixed-step method.
+    ///
     /// `reference` (adaptive DOP853, rtol = atol = 1e-12, f64), `reference-bdf` (adaptive
     /// BDF at 1e-10, for stiff scenes) or a core fixed-step method: rk4, verlet,
     /// implicit-midpoint, each with -f32 (as on the target) or -f64.
-    #[arg(long, value_name = "M", value_enum, default_value_t = Choice::Reference)]
+    #[arg(long, value_name = "M", value_enum, default_value_t = Choice::Reference, hide_possible_values = true)]
     pub method: Choice,
-    /// Step, s (the reference's output spacing), shortened if need be so that a whole number
-    /// of steps ends at the duration exactly. Default: 1/64 of the small-oscillation period
-    /// at zero bias.
-    #[arg(long, value_name = "H", allow_negative_numbers = true)]
-    pub step: Option<f64>,
-    /// The reference's relative tolerance. Default: 1e-12 (`reference`), 1e-10
-    /// (`reference-bdf`).
+    /// Step, s (the reference's output spacing), shortened if need be so that a whole number of
+    /// steps ends at the duration exactly.
+    ///
+    /// Default: 1/64 of the small-oscillation period at zero bias.
+    #[arg(
+        long,
+        visible_alias = "step",
+        value_name = "S",
+        allow_negative_numbers = true
+    )]
+    pub step_seconds: Option<f64>,
+    /// The reference's relative tolerance.
+    ///
+    /// Default: 1e-12 (`reference`), 1e-10 (`reference-bdf`).
     #[arg(long, value_name = "R", allow_negative_numbers = true)]
     pub rtol: Option<f64>,
-    /// The reference's absolute tolerance (on the stretch, and on its rate in the model's
-    /// time unit). Default: the relative tolerance.
+    /// The reference's absolute tolerance (on the stretch, and on its rate in the model's time
+    /// unit).
+    ///
+    /// Default: the relative tolerance.
     #[arg(long, value_name = "A", allow_negative_numbers = true)]
     pub atol: Option<f64>,
+    /// Write the trajectory as CSV (time_seconds, stretch, velocity_per_second, volts).
+    #[arg(long, value_name = "FILE")]
+    pub csv: Option<PathBuf>,
+    /// Plot the trajectory as SVG.
+    ///
+    /// The stretch against time, with the loading branch's limit stretch and the first
+    /// crossing marked.
+    #[arg(long, value_name = "FILE")]
+    pub plot: Option<PathBuf>,
     #[command(flatten)]
     pub device: DeviceArgs,
+}
+
+/// One sample of `--csv`.
+#[derive(Serialize)]
+struct Sample {
+    time_seconds: f64,
+    stretch: f64,
+    velocity_per_second: f64,
+    volts: f64,
 }
 
 /// The final state of a run.
@@ -69,8 +112,7 @@ pub struct Final {
 /// What `simulate` reports.
 #[derive(Serialize, Debug)]
 pub struct SimulateReport {
-    #[serde(skip)]
-    pub device: String,
+    pub device: DeviceInfo,
     pub method: &'static str,
     /// The reference's tolerance (`null` for the core's fixed-step methods).
     pub tolerance: Option<Tolerance>,
@@ -83,6 +125,8 @@ pub struct SimulateReport {
     /// The first check the trajectory failed, and when.
     pub first_limit: Option<Crossing>,
     pub run_seconds: f64,
+    /// What `--csv` and `--plot` wrote.
+    pub files: Vec<String>,
     #[serde(skip)]
     first_limit_description: Option<&'static str>,
 }
@@ -90,7 +134,7 @@ pub struct SimulateReport {
 impl fmt::Display for SimulateReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let limit = match (self.first_limit, self.first_limit_description) {
-            (Some(c), Some(what)) => format!("{what} at t = {} s", sig(c.time)),
+            (Some(c), Some(what)) => format!("{what} at t = {} s", sig(c.time_seconds)),
             _ => "none crossed".into(),
         };
         write!(
@@ -99,7 +143,7 @@ impl fmt::Display for SimulateReport {
              method          {}{}, step {} s, {} steps in {} ms\n\
              final           stretch {}, velocity {} 1/s\n\
              stretch range   {} .. {}\n\
-             first limit     {limit}",
+             first limit     {limit}{}",
             self.device,
             self.method,
             self.tolerance.map_or(String::new(), |t| format!(
@@ -114,20 +158,48 @@ impl fmt::Display for SimulateReport {
             sig(self.end.velocity),
             sig(self.min_stretch),
             sig(self.max_stretch),
+            self.files
+                .iter()
+                .map(|f| format!("\nwrote           {f}"))
+                .collect::<String>(),
         )
     }
 }
 
-impl Report for SimulateReport {}
+impl Report for SimulateReport {
+    /// Done, but the trajectory crossed a limit (exit status 1).
+    fn failure(&self) -> Option<String> {
+        self.first_limit.map(|c| {
+            format!(
+                "the trajectory crossed {} at {} s",
+                c.mode,
+                sig(c.time_seconds)
+            )
+        })
+    }
+}
 
 pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
-    let (mut params, name) = args.device.params()?;
+    let (mut params, device) = args.device.params()?;
     if let Some(c) = args.damping {
         params.damping = c;
     }
-    let checked = Device::new(params).map_err(|e| format!("{name}: {e}"))?;
+    let checked = Device::new(params).map_err(|e| format!("{device}: {e}"))?;
+    let ac_hz = match args.ac_hz {
+        Some(hz) if !(hz.is_finite() && hz >= 0.0) => {
+            return Err(format!("--ac-hz {hz}: need a finite frequency ≥ 0"))
+        }
+        Some(hz) => hz,
+        None if args.ac_volts != 0.0 => {
+            return Err(format!(
+                "--ac-volts {} needs --ac-hz: the drive's frequency",
+                sig(args.ac_volts)
+            ))
+        }
+        None => 0.0,
+    };
     let step = args
-        .step
+        .step_seconds
         .unwrap_or(1.0 / (64.0 * checked.natural_frequency_hz(checked.prestretch_1())));
     let tolerance = match (args.rtol, args.atol) {
         (None, None) => None,
@@ -140,18 +212,49 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
             })
         }
     };
+    // Where the files go, checked before the work.
+    for path in [&args.csv, &args.plot].into_iter().flatten() {
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            out_dir(dir)?;
+        }
+    }
     let scene = Scene {
         params,
         bias_volts: args.bias_volts,
         ac_volts: args.ac_volts,
-        drive_hz: args.drive_hz,
-        duration_seconds: args.duration,
+        drive_hz: ac_hz,
+        duration_seconds: args.duration_seconds,
         start: args.start,
         tolerance,
     };
     let out = simulate::simulate(&scene, args.method, step).map_err(|e| e.to_string())?;
+    let volts_at =
+        |t: f64| args.bias_volts + args.ac_volts * (std::f64::consts::TAU * ac_hz * t).sin();
+    let mut files = Vec::new();
+    if let Some(path) = &args.csv {
+        let rows: Vec<Sample> = out
+            .samples
+            .iter()
+            .zip(&out.velocities)
+            .enumerate()
+            .map(|(k, (&stretch, &velocity_per_second))| {
+                let time_seconds = k as f64 * out.step_seconds;
+                Sample {
+                    time_seconds,
+                    stretch,
+                    velocity_per_second,
+                    volts: volts_at(time_seconds),
+                }
+            })
+            .collect();
+        files.push(write(path, &super::csv(&rows)?)?);
+    }
+    if let Some(path) = &args.plot {
+        let panel = plot(&device, &checked, &scene, &out, args.method.name());
+        files.push(write(path, svg(&[panel]).as_bytes())?);
+    }
     Ok(SimulateReport {
-        device: name,
+        device,
         method: args.method.name(),
         tolerance: args
             .method
@@ -167,6 +270,65 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
         max_stretch: out.max_stretch,
         first_limit: Crossing::of(out.first_limit),
         run_seconds: out.run_seconds,
+        files,
         first_limit_description: out.first_limit.map(|(mode, _)| mode.description()),
     })
+}
+
+fn write(path: &Path, bytes: &[u8]) -> Result<String, String> {
+    std::fs::write(path, bytes).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    Ok(path.display().to_string())
+}
+
+/// The stretch against time, the limit's stretch on the loading branch as a level, the
+/// first crossing marked.
+fn plot(
+    device: &DeviceInfo,
+    checked: &Device<f64>,
+    scene: &Scene,
+    out: &simulate::Outcome,
+    method: &str,
+) -> Panel {
+    let limit = de_resonator::Limit::of(checked);
+    let points: Vec<(f64, f64)> = out
+        .samples
+        .iter()
+        .enumerate()
+        .map(|(k, &x)| (k as f64 * out.step_seconds, x))
+        .collect();
+    let markers = out
+        .first_limit
+        .and_then(|(mode, t)| {
+            let at = points.iter().find(|p| p.0 >= t)?;
+            Some(Marker {
+                x: t,
+                y: at.1,
+                label: format!("{} at {} s", mode.name(), sig(t)),
+                colour: RED,
+            })
+        })
+        .into_iter()
+        .collect();
+    Panel {
+        title: format!(
+            "{}: {} V + {} V AC at {} Hz",
+            device.source,
+            sig(scene.bias_volts),
+            sig(scene.ac_volts),
+            sig(scene.drive_hz)
+        ),
+        x_label: "time, s".into(),
+        y_label: "stretch λ".into(),
+        series: vec![Series {
+            name: method.into(),
+            points,
+            ..Series::default()
+        }],
+        levels: vec![(
+            limit.at.stretch,
+            format!("static limit ({}) stretch", limit.mode.name()),
+        )],
+        markers,
+        ..Panel::default()
+    }
 }

@@ -6,7 +6,7 @@ use std::fmt;
 use clap::Args;
 use serde::Serialize;
 
-use super::{DeviceArgs, Report};
+use super::{DeviceArgs, DeviceInfo, Report};
 use crate::stress::{self, CaseReport, Summary, Verdict, PERIODS, STEPS_PER_PERIOD};
 
 #[derive(Args, Debug)]
@@ -19,6 +19,7 @@ pub struct StressArgs {
 /// What `stress` reports.
 #[derive(Serialize, Debug)]
 pub struct StressReport {
+    pub device: DeviceInfo,
     pub periods: f64,
     pub summary: Summary,
     pub cases: Vec<CaseReport>,
@@ -26,12 +27,16 @@ pub struct StressReport {
 
 impl fmt::Display for StressReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(f, "device          {}", self.device)?;
         write!(f, "case                 method                    ")?;
         for n in STEPS_PER_PERIOD {
             write!(f, "{:>24}", format!("{n}/period"))?;
         }
         writeln!(f)?;
         for case in &self.cases {
+            if let Some(problem) = &case.problem {
+                writeln!(f, "{:<21}no runs: {problem}", case.case)?;
+            }
             for chunk in case.runs.chunks(STEPS_PER_PERIOD.len()) {
                 let method = chunk.first().map_or("", |r| r.method);
                 write!(f, "{:<21}{:<26}", case.case, method)?;
@@ -49,8 +54,14 @@ impl fmt::Display for StressReport {
         write!(
             f,
             "\nsummary: {} runs: {} stable, {} refused, {} stopped, {} missed a crossing, \
-             {} failed silently",
-            s.runs, s.stable, s.refused, s.stopped, s.missed_crossing, s.failed_silently
+             {} failed silently; {} cases without a reference",
+            s.runs,
+            s.stable,
+            s.refused,
+            s.stopped,
+            s.missed_crossing,
+            s.failed_silently,
+            s.cases_without_reference
         )
     }
 }
@@ -62,14 +73,25 @@ impl Report for StressReport {
             .iter()
             .flat_map(|c| &c.runs)
             .any(|r| r.verdict == Verdict::FailedSilently);
-        silent.then(|| "a stress run failed silently".to_string())
+        let broken: Vec<String> = self
+            .cases
+            .iter()
+            .filter_map(|c| Some(format!("{}: {}", c.case, c.problem.as_ref()?)))
+            .collect();
+        match (silent, broken.is_empty()) {
+            (true, _) => Some("a stress run failed silently".into()),
+            (false, false) => Some(format!("cases without a reference: {}", broken.join("; "))),
+            (false, true) => None,
+        }
     }
 }
 
 pub fn stress(args: &StressArgs) -> Result<StressReport, String> {
-    let (params, name) = args.device.params()?;
-    let (cases, summary) = stress::run(params).map_err(|e| format!("{name}: {e}"))?;
+    let (params, device) = args.device.params()?;
+    de_resonator::Device::new(params).map_err(|e| format!("{device}: {e}"))?;
+    let (cases, summary) = stress::run(params);
     Ok(StressReport {
+        device,
         periods: PERIODS,
         summary,
         cases,

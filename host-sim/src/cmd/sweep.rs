@@ -1,43 +1,51 @@
 //! `sweep`: the frequency response under parametric drive (MODEL.md §7), its peaks, and
-//! which drive frequencies crossed a limit; sweep.csv and sweep.svg.
+//! which drive frequencies crossed a limit or stopped; sweep.csv and sweep.svg.
 
 use std::fmt;
 use std::path::PathBuf;
 
 use clap::Args;
+use de_resonator::{Device, Tuner};
 use serde::Serialize;
 
-use super::{sig, write_file, Crossing, DeviceArgs, Report};
-use crate::plot::{svg, Panel, Series};
+use super::{out_dir, short, sig, write_file, DeviceArgs, DeviceInfo, Report};
+use crate::plot::{svg, Panel, Series, Style, GREY, RED};
 use crate::sweep::{self, Sweep};
+
+/// The default bias and AC amplitude, as fractions of the device's limit voltage: a drive
+/// that means the same on every device (6000 V and 2000 V on the reference device).
+pub const DEFAULT_BIAS_OF_LIMIT: f64 = 0.6;
+pub const DEFAULT_AC_OF_LIMIT: f64 = 0.2;
+
+/// The most drive frequencies, and the most RK4 steps over all of them (about 20 s of
+/// work on 2 cores at ~20 ns a step).
+pub const MAX_POINTS: usize = 100_000;
+pub const MAX_STEPS: f64 = 2e9;
 
 #[derive(Args, Debug)]
 pub struct SweepArgs {
     /// Static bias, V.
-    #[arg(
-        long,
-        value_name = "V",
-        default_value_t = 6000.0,
-        allow_negative_numbers = true
-    )]
-    pub bias_volts: f64,
+    ///
+    /// Default: 0.6 of the device's limit voltage.
+    #[arg(long, value_name = "V", allow_negative_numbers = true)]
+    pub bias_volts: Option<f64>,
     /// AC amplitude, V.
+    ///
+    /// Default: 0.2 of the device's limit voltage.
+    #[arg(long, value_name = "V", allow_negative_numbers = true)]
+    pub ac_volts: Option<f64>,
+    /// Quality factor Q of the small oscillation at the bias: sets the damping c = M·ω0/Q (M the
+    /// effective mass of MODEL.md §4).
+    ///
+    /// 0 keeps the device's damping.
     #[arg(
         long,
-        value_name = "A",
-        default_value_t = 2000.0,
-        allow_negative_numbers = true
-    )]
-    pub ac_volts: f64,
-    /// Quality factor Q of the small oscillation at the bias: sets the damping
-    /// c = M·ω0/Q (M the effective mass of MODEL.md §4). 0 keeps the device's damping.
-    #[arg(
-        long,
+        visible_alias = "quality",
         value_name = "Q",
         default_value_t = 200.0,
         allow_negative_numbers = true
     )]
-    pub quality: f64,
+    pub quality_factor: f64,
     /// Lowest drive frequency, as a multiple of f0.
     #[arg(
         long,
@@ -54,7 +62,7 @@ pub struct SweepArgs {
         allow_negative_numbers = true
     )]
     pub to_ratio: f64,
-    /// Drive frequencies, evenly spaced.
+    /// Drive frequencies, evenly spaced (3 to 100,000).
     #[arg(long, value_name = "N", default_value_t = 211)]
     pub points: usize,
     /// Run length per drive frequency, in periods of f0 (the last quarter is measured).
@@ -73,35 +81,30 @@ pub struct SweepArgs {
         allow_negative_numbers = true
     )]
     pub steps_per_period: f64,
-    /// Folder for sweep.csv and sweep.svg (created if needed).
+    /// Folder for sweep.csv and sweep.svg (created if needed, checked before the work).
     #[arg(long, value_name = "DIR", default_value = "out/sweep")]
     pub out: PathBuf,
     #[command(flatten)]
     pub device: DeviceArgs,
 }
 
-/// One drive frequency.
+/// One drive frequency: a JSON point and a CSV row alike (the crossing flattened, an empty
+/// cell where JSON has null).
 #[derive(Serialize, Debug)]
 pub struct Point {
     pub drive_hz: f64,
-    pub amplitude: f64,
-    pub first_limit: Option<Crossing>,
-    /// Why the run ended early (the motion left the model's range), if it did.
-    pub stopped: Option<String>,
+    /// drive_hz / f0.
+    pub ratio: f64,
+    /// Half the peak-to-peak stretch once settled; null when the run stopped.
+    pub amplitude: Option<f64>,
+    /// The first check of MODEL.md §6 the motion failed (`null`: none).
+    pub first_limit_mode: Option<&'static str>,
+    pub first_limit_time_seconds: Option<f64>,
+    /// The motion left the range in which the model is defined: nothing measured.
+    pub stopped: bool,
 }
 
-/// The same point as a CSV row.
-#[derive(Serialize, Debug)]
-struct Row {
-    drive_hz: f64,
-    ratio: f64,
-    amplitude: f64,
-    first_limit: &'static str,
-    first_limit_time: Option<f64>,
-    stopped: bool,
-}
-
-/// A peak of the response.
+/// A peak of the response (among the measured points).
 #[derive(Serialize, Debug)]
 pub struct Peak {
     pub drive_hz: f64,
@@ -114,20 +117,23 @@ pub struct Peak {
 /// What `sweep` reports.
 #[derive(Serialize, Debug)]
 pub struct SweepReport {
-    #[serde(skip)]
-    pub device: String,
+    pub device: DeviceInfo,
+    /// The device's limit on the loading branch, V (the defaults are fractions of it).
+    pub limit_volts: f64,
     pub bias_volts: f64,
     pub ac_volts: f64,
-    pub quality: f64,
+    pub quality_factor: f64,
+    /// c, N·s.
     pub damping: f64,
     /// Small oscillation at the bias, Hz.
     pub natural_frequency_hz: f64,
     pub peaks: Vec<Peak>,
     pub points: Vec<Point>,
-    /// How many points crossed a limit.
+    /// How many points crossed a limit of MODEL.md §6 (exit status 1 if any).
     pub crossed_limit: usize,
-    pub csv: String,
-    pub plot: String,
+    /// How many points stopped (no amplitude; never a peak).
+    pub stopped: usize,
+    pub files: Vec<String>,
 }
 
 impl fmt::Display for SweepReport {
@@ -135,16 +141,23 @@ impl fmt::Display for SweepReport {
         writeln!(
             f,
             "device          {}\n\
-             drive           {} V bias + {} V AC, Q {} (c = {} N·s)\n\
+             drive           {} V bias + {} V AC ({:.0}% and {:.0}% of the limit {} V), \
+             Q {} (c = {} N·s)\n\
              f0 at the bias  {} Hz\n\
              peaks           drive Hz    ratio   amplitude",
             self.device,
             sig(self.bias_volts),
             sig(self.ac_volts),
-            sig(self.quality),
+            100.0 * self.bias_volts / self.limit_volts,
+            100.0 * self.ac_volts / self.limit_volts,
+            sig(self.limit_volts),
+            short(self.quality_factor),
             sig(self.damping),
             sig(self.natural_frequency_hz),
         )?;
+        if self.peaks.is_empty() {
+            writeln!(f, "                none among the measured points")?;
+        }
         for p in &self.peaks {
             writeln!(
                 f,
@@ -157,80 +170,112 @@ impl fmt::Display for SweepReport {
         write!(
             f,
             "limits          {} of {} drive frequencies crossed a limit of MODEL.md §6\n\
-             wrote           {}, {}",
+             stopped         {} of them left the model's range (no amplitude, never a peak)\n\
+             wrote           {}",
             self.crossed_limit,
             self.points.len(),
-            self.csv,
-            self.plot
+            self.stopped,
+            self.files.join(", ")
         )
     }
 }
 
-impl Report for SweepReport {}
+impl Report for SweepReport {
+    /// Done, but the drive crossed a limit at some frequency.
+    fn failure(&self) -> Option<String> {
+        (self.crossed_limit > 0).then(|| {
+            format!(
+                "{} of {} drive frequencies crossed a limit of MODEL.md §6",
+                self.crossed_limit,
+                self.points.len()
+            )
+        })
+    }
+}
 
 pub fn sweep(args: &SweepArgs) -> Result<SweepReport, String> {
-    let (mut params, name) = args.device.params()?;
-    let quality = args.quality;
+    let (mut params, device) = args.device.params()?;
+    let quality = args.quality_factor;
     if !(quality.is_finite() && quality >= 0.0) {
         return Err(format!(
-            "quality {quality}: need Q > 0 (or 0 for the device's damping)"
+            "--quality-factor {quality}: need Q > 0 (or 0 for the device's damping)"
         ));
+    }
+    let limit_volts = Tuner::new(Device::new(params).map_err(|e| format!("{device}: {e}"))?)
+        .limit()
+        .at
+        .volts;
+    let bias_volts = args
+        .bias_volts
+        .unwrap_or(DEFAULT_BIAS_OF_LIMIT * limit_volts);
+    let ac_volts = args.ac_volts.unwrap_or(DEFAULT_AC_OF_LIMIT * limit_volts);
+    for (flag, v) in [("--bias-volts", bias_volts), ("--ac-volts", ac_volts)] {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(format!("{flag} {v}: need a finite voltage ≥ 0"));
+        }
+    }
+    if args.points > MAX_POINTS {
+        return Err(format!("--points {}: at most {MAX_POINTS}", args.points));
     }
     let mut s = Sweep {
         params,
-        bias_volts: args.bias_volts,
-        ac_volts: args.ac_volts,
+        bias_volts,
+        ac_volts,
         ratios: (args.from_ratio, args.to_ratio),
         points: args.points,
         periods: args.periods,
         steps_per_period: args.steps_per_period,
     };
-    let (_, _, natural_hz) = sweep::operating_point(&s).map_err(|e| format!("{name}: {e}"))?;
+    let (_, _, natural_hz) = sweep::operating_point(&s).map_err(|e| format!("{device}: {e}"))?;
+    sweep::drive_frequencies(&s, natural_hz)?;
+    // RK4 steps of the whole sweep: each point runs `periods` of f0 at `steps_per_period`
+    // of the faster of drive and f0.
+    let faster = (0.5 * (s.ratios.0 + s.ratios.1)).max(1.0);
+    let steps = s.points as f64 * s.periods * s.steps_per_period * faster;
+    if steps > MAX_STEPS {
+        return Err(format!(
+            "{} RK4 steps in all, more than {}: about {} s of work; fewer --points, \
+             --periods or --steps-per-period",
+            sig(steps),
+            sig(MAX_STEPS),
+            sig((steps * 2e-8 / 2.0).round())
+        ));
+    }
+    out_dir(&args.out)?;
     if quality > 0.0 {
         params.damping = params.effective_mass() * std::f64::consts::TAU * natural_hz / quality;
         s.params = params;
     }
     let response = sweep::run(&s)?;
     let f0 = response.natural_frequency_hz;
-    let rows: Vec<Row> = response
+    let points: Vec<Point> = response
         .points
         .iter()
-        .map(|p| Row {
+        .map(|p| Point {
             drive_hz: p.drive_hz,
             ratio: p.drive_hz / f0,
             amplitude: p.amplitude,
-            first_limit: p.first_limit.map_or("", |(m, _)| m.name()),
-            first_limit_time: p.first_limit.map(|(_, t)| t),
+            first_limit_mode: p.first_limit.map(|(m, _)| m.name()),
+            first_limit_time_seconds: p.first_limit.map(|(_, t)| t),
             stopped: p.stopped.is_some(),
         })
         .collect();
-    let panel = Panel {
-        title: format!(
-            "Response: {:.0} V bias, {:.0} V AC, Q {quality}",
-            s.bias_volts, s.ac_volts
-        ),
-        x_label: "drive frequency / f0".into(),
-        y_label: "amplitude (stretch)".into(),
-        log_y: true,
-        series: vec![Series {
-            name: format!("f0 = {} Hz", sig(f0)),
-            points: rows.iter().map(|r| (r.ratio, r.amplitude)).collect(),
-        }],
-        guides: vec![
-            (0.5, "f0/2".into()),
-            (1.0, "f0".into()),
-            (2.0, "2 f0".into()),
-        ],
-        ..Panel::default()
-    };
-    let csv = write_file(&args.out, "sweep.csv", &super::csv(&rows)?)?;
-    let plot = write_file(&args.out, "sweep.svg", svg(&[panel]).as_bytes())?;
-    let crossed_limit = rows.iter().filter(|r| r.first_limit_time.is_some()).count();
+    let crossed_limit = points
+        .iter()
+        .filter(|p| p.first_limit_mode.is_some())
+        .count();
+    let stopped = points.iter().filter(|p| p.stopped).count();
+    let panel = plot(&device, &s, f0, quality, &points, stopped);
+    let files = vec![
+        write_file(&args.out, "sweep.csv", &super::csv(&points)?)?,
+        write_file(&args.out, "sweep.svg", svg(&[panel]).as_bytes())?,
+    ];
     Ok(SweepReport {
-        device: name,
-        bias_volts: s.bias_volts,
-        ac_volts: s.ac_volts,
-        quality,
+        device,
+        limit_volts,
+        bias_volts,
+        ac_volts,
+        quality_factor: quality,
         damping: s.params.damping,
         natural_frequency_hz: f0,
         peaks: response
@@ -243,18 +288,91 @@ pub fn sweep(args: &SweepArgs) -> Result<SweepReport, String> {
                 prominence: p.prominence,
             })
             .collect(),
-        points: response
-            .points
-            .into_iter()
-            .map(|p| Point {
-                drive_hz: p.drive_hz,
-                amplitude: p.amplitude,
-                first_limit: Crossing::of(p.first_limit),
-                stopped: p.stopped,
-            })
-            .collect(),
+        points,
         crossed_limit,
-        csv,
-        plot,
+        stopped,
+        files,
     })
+}
+
+/// The response against drive frequency in Hz: measured points as a line (broken where runs
+/// stopped), those that crossed a limit in red, stopped ones grey along the top.
+fn plot(
+    device: &DeviceInfo,
+    s: &Sweep,
+    f0: f64,
+    quality: f64,
+    points: &[Point],
+    stopped: usize,
+) -> Panel {
+    let measured = |p: &Point| p.amplitude.map(|a| (p.drive_hz, a));
+    let top = points
+        .iter()
+        .filter_map(|p| p.amplitude)
+        .fold(f64::MIN_POSITIVE, f64::max);
+    let mut series: Vec<Series> = points
+        .split(|p| p.stopped)
+        .filter(|run| !run.is_empty())
+        .enumerate()
+        .map(|(k, run)| Series {
+            name: if k == 0 {
+                "amplitude".into()
+            } else {
+                String::new()
+            },
+            points: run.iter().filter_map(measured).collect(),
+            style: Style {
+                colour: Some(crate::plot::COLOURS[0]),
+                ..Style::default()
+            },
+        })
+        .collect();
+    series.push(Series {
+        name: "crossed a limit".into(),
+        points: points
+            .iter()
+            .filter(|p| p.first_limit_mode.is_some())
+            .filter_map(measured)
+            .collect(),
+        style: Style {
+            colour: Some(RED),
+            dots_only: true,
+            ..Style::default()
+        },
+    });
+    series.push(Series {
+        name: "stopped: nothing measured".into(),
+        points: points
+            .iter()
+            .filter(|p| p.stopped)
+            .map(|p| (p.drive_hz, top * 2.0))
+            .collect(),
+        style: Style {
+            colour: Some(GREY),
+            dots_only: true,
+            ..Style::default()
+        },
+    });
+    series.retain(|s| !s.points.is_empty());
+    Panel {
+        title: format!(
+            "{}: {} V + {} V AC, Q {}, f0 {} Hz",
+            device.source,
+            sig(s.bias_volts),
+            sig(s.ac_volts),
+            short(quality),
+            sig(f0)
+        ),
+        x_label: "drive frequency, Hz".into(),
+        y_label: "amplitude (stretch)".into(),
+        log_y: true,
+        series,
+        guides: vec![
+            (0.5 * f0, "f0/2".into()),
+            (f0, "f0".into()),
+            (2.0 * f0, "2 f0".into()),
+        ],
+        notes: vec![format!("{} of {} points stopped", stopped, points.len())],
+        ..Panel::default()
+    }
 }

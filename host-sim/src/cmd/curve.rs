@@ -1,0 +1,392 @@
+//! `curve`: the tuning curve, natural frequency against bias on the loading branch (MODEL.md
+//! §5), with the limit (§6), the margin's highest bias, the tunable range and a target; over
+//! ranges of pre-stretch, a family of curves and the safe region's boundary through their
+//! limits (the paper's figures). curve.csv and curve.svg.
+
+use std::fmt;
+use std::path::PathBuf;
+
+use clap::Args;
+use de_resonator::{Device, Field, Tuner};
+use serde::Serialize;
+
+use super::{out_dir, short, sig, write_file, DeviceArgs, DeviceInfo, MarginArgs, Report};
+use crate::plot::{svg, Marker, Panel, Series, Style, RED};
+
+/// The most curves in a family, and the most points a curve.
+pub const MAX_CURVES: usize = 400;
+pub const MAX_POINTS: usize = 100_000;
+
+#[derive(Args, Debug)]
+pub struct CurveArgs {
+    /// Pre-stretch of the active membrane: one value, or `low:high:count` for a family.
+    ///
+    /// Default: the device's.
+    #[arg(long, value_name = "A[:B:N]")]
+    pub prestretch_1: Option<String>,
+    /// Pre-stretch of the passive membrane: one value, or `low:high:count`.
+    ///
+    /// Default: the device's.
+    #[arg(long, value_name = "A[:B:N]")]
+    pub prestretch_2: Option<String>,
+    /// Mark the smallest bias for this frequency, Hz (on every curve that reaches it).
+    #[arg(long, value_name = "HZ", allow_negative_numbers = true)]
+    pub target_hz: Option<f64>,
+    /// Points a curve, from 0 V to its limit.
+    #[arg(long, value_name = "N", default_value_t = 200)]
+    pub points: usize,
+    /// Folder for curve.csv and curve.svg (created if needed, checked before the work).
+    #[arg(long, value_name = "DIR", default_value = "out/curve")]
+    pub out: PathBuf,
+    #[command(flatten)]
+    pub device: DeviceArgs,
+    #[command(flatten)]
+    pub margin: MarginArgs,
+}
+
+/// One point of a curve: a CSV row, and in the JSON.
+#[derive(Serialize, Debug, Clone, Copy)]
+pub struct Point {
+    pub prestretch_1: f64,
+    pub prestretch_2: f64,
+    pub bias_volts: f64,
+    pub natural_frequency_hz: f64,
+    pub stretch: f64,
+    /// Above (1 − margin)·limit: not allowed to be commanded.
+    pub beyond_margin: bool,
+}
+
+/// Where a curve ends: the first check of §6 to fail on the loading branch.
+#[derive(Serialize, Debug)]
+pub struct CurveLimit {
+    pub mode: &'static str,
+    pub volts: f64,
+    pub stretch: f64,
+    pub natural_frequency_hz: f64,
+}
+
+/// The target on one curve.
+#[derive(Serialize, Debug)]
+pub struct Target {
+    pub target_hz: f64,
+    /// The smallest bias within the margin; null when the curve does not reach it.
+    pub bias_volts: Option<f64>,
+    /// Why not, when it does not.
+    pub refused: Option<String>,
+}
+
+/// One pre-stretch pair's curve.
+#[derive(Serialize, Debug)]
+pub struct Curve {
+    pub prestretch_1: f64,
+    pub prestretch_2: f64,
+    /// `null` when this pre-stretch makes no valid device (`problem` says why).
+    pub limit: Option<CurveLimit>,
+    pub max_bias_volts: Option<f64>,
+    pub tunable_range_hz: Option<[f64; 2]>,
+    pub target: Option<Target>,
+    pub problem: Option<String>,
+    pub points: Vec<Point>,
+}
+
+/// What `curve` reports.
+#[derive(Serialize, Debug)]
+pub struct CurveReport {
+    pub device: DeviceInfo,
+    pub margin: f64,
+    pub curves: Vec<Curve>,
+    pub files: Vec<String>,
+}
+
+impl fmt::Display for CurveReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(
+            f,
+            "device          {}\nmargin          {}\n\
+             λ1p      λ2p      limit                          max bias V   tunable range Hz{}",
+            self.device,
+            short(self.margin),
+            if self.curves.iter().any(|c| c.target.is_some()) {
+                "        target bias V"
+            } else {
+                ""
+            }
+        )?;
+        for c in &self.curves {
+            write!(
+                f,
+                "{:<9}{:<9}",
+                short(c.prestretch_1),
+                short(c.prestretch_2)
+            )?;
+            match (&c.limit, c.max_bias_volts, c.tunable_range_hz) {
+                (Some(l), Some(max), Some([low, high])) => {
+                    write!(
+                        f,
+                        "{:<31}{:<13}{} .. {}",
+                        format!("{} at {} V", l.mode, sig(l.volts)),
+                        sig(max),
+                        sig(low),
+                        sig(high)
+                    )?;
+                    if let Some(t) = &c.target {
+                        match (t.bias_volts, &t.refused) {
+                            (Some(v), _) => write!(f, "   {}", sig(v))?,
+                            (None, Some(_)) => write!(f, "   none (out of range)")?,
+                            (None, None) => {}
+                        }
+                    }
+                }
+                _ => write!(f, "no curve: {}", c.problem.as_deref().unwrap_or("?"))?,
+            }
+            writeln!(f)?;
+        }
+        write!(f, "wrote           {}", self.files.join(", "))
+    }
+}
+
+impl Report for CurveReport {}
+
+/// `A` or `low:high:count` (count ≥ 2, evenly spaced; at most `MAX_CURVES`).
+fn values(flag: &str, text: Option<&str>, default: f64) -> Result<Vec<f64>, String> {
+    let Some(text) = text else {
+        return Ok(vec![default]);
+    };
+    let number = |s: &str| {
+        s.trim()
+            .parse::<f64>()
+            .ok()
+            .filter(|x| x.is_finite())
+            .ok_or_else(|| format!("{flag} {text}: `{s}` is not a finite number"))
+    };
+    let parts: Vec<&str> = text.split(':').collect();
+    match parts[..] {
+        [one] => Ok(vec![number(one)?]),
+        [low, high, count] => {
+            let (low, high) = (number(low)?, number(high)?);
+            let count: usize = count
+                .trim()
+                .parse()
+                .ok()
+                .filter(|n| (2..=MAX_CURVES).contains(n))
+                .ok_or_else(|| {
+                    format!(
+                        "{flag} {text}: the count must be a whole number from 2 to {MAX_CURVES}"
+                    )
+                })?;
+            Ok((0..count)
+                .map(|k| low + (high - low) * k as f64 / (count - 1) as f64)
+                .collect())
+        }
+        _ => Err(format!("{flag} {text}: give one value or low:high:count")),
+    }
+}
+
+pub fn curve(args: &CurveArgs) -> Result<CurveReport, String> {
+    let (params, device) = args.device.params()?;
+    let margin = args.margin.margin;
+    if !(0.0..1.0).contains(&margin) {
+        return Err(format!("--margin {margin}: need 0 ≤ margin < 1"));
+    }
+    if let Some(hz) = args.target_hz.filter(|hz| !(hz.is_finite() && *hz > 0.0)) {
+        return Err(format!("--target-hz {hz}: need a finite frequency > 0"));
+    }
+    if !(2..=MAX_POINTS).contains(&args.points) {
+        return Err(format!("--points {}: need 2 to {MAX_POINTS}", args.points));
+    }
+    let ones = values(
+        "--prestretch-1",
+        args.prestretch_1.as_deref(),
+        params.prestretch_1,
+    )?;
+    let twos = values(
+        "--prestretch-2",
+        args.prestretch_2.as_deref(),
+        params.prestretch_2,
+    )?;
+    if ones.len() * twos.len() > MAX_CURVES {
+        return Err(format!(
+            "{} curves: at most {MAX_CURVES}",
+            ones.len() * twos.len()
+        ));
+    }
+    // A single device must be valid: its errors are the user's to fix.
+    if ones.len() * twos.len() == 1 {
+        let mut one = params;
+        one.set(Field::Prestretch1, ones[0]);
+        one.set(Field::Prestretch2, twos[0]);
+        Device::new(one).map_err(|e| format!("{device}: {e}"))?;
+    }
+    out_dir(&args.out)?;
+    let mut curves = Vec::new();
+    for &l1 in &ones {
+        for &l2 in &twos {
+            let mut p = params;
+            p.set(Field::Prestretch1, l1);
+            p.set(Field::Prestretch2, l2);
+            curves.push(one_curve(p, margin, args.target_hz, args.points));
+        }
+    }
+    let rows: Vec<Point> = curves
+        .iter()
+        .flat_map(|c| c.points.iter().copied())
+        .collect();
+    let panel = plot(&device, &curves, ones.len() * twos.len() > 1);
+    let files = vec![
+        write_file(&args.out, "curve.csv", &super::csv(&rows)?)?,
+        write_file(&args.out, "curve.svg", svg(&[panel]).as_bytes())?,
+    ];
+    Ok(CurveReport {
+        device,
+        margin,
+        curves,
+        files,
+    })
+}
+
+/// The loading branch of one device from 0 V to its limit, at offsets evenly spaced in √δ
+/// (so evenly spaced in bias near 0 V, where Φ ∝ √δ, MODEL.md §5).
+fn one_curve(
+    p: de_resonator::DeviceParams<f64>,
+    margin: f64,
+    target_hz: Option<f64>,
+    points: usize,
+) -> Curve {
+    let mut curve = Curve {
+        prestretch_1: p.prestretch_1,
+        prestretch_2: p.prestretch_2,
+        limit: None,
+        max_bias_volts: None,
+        tunable_range_hz: None,
+        target: None,
+        problem: None,
+        points: Vec::new(),
+    };
+    let device = match Device::new(p) {
+        Ok(d) => d,
+        Err(e) => {
+            curve.problem = Some(e.to_string());
+            return curve;
+        }
+    };
+    let tuner = Tuner::new(device);
+    let limit = *tuner.limit();
+    let range = match tuner.tunable_range(margin) {
+        Ok(r) => r,
+        Err(e) => {
+            curve.problem = Some(e.to_string());
+            return curve;
+        }
+    };
+    let end = limit.at.offset;
+    curve.points = (0..points)
+        .map(|k| {
+            let s = k as f64 / (points - 1) as f64;
+            let at = device.equilibrium_at(end * s * s);
+            Point {
+                prestretch_1: p.prestretch_1,
+                prestretch_2: p.prestretch_2,
+                bias_volts: at.volts,
+                natural_frequency_hz: at.natural_frequency_hz,
+                stretch: at.stretch,
+                beyond_margin: at.volts > range.max_bias.volts,
+            }
+        })
+        .collect();
+    curve.limit = Some(CurveLimit {
+        mode: limit.mode.name(),
+        volts: limit.at.volts,
+        stretch: limit.at.stretch,
+        natural_frequency_hz: limit.at.natural_frequency_hz,
+    });
+    curve.max_bias_volts = Some(range.max_bias.volts);
+    curve.tunable_range_hz = Some([range.low_hz, range.high_hz]);
+    curve.target = target_hz.map(|hz| match tuner.tune(hz, margin) {
+        Ok(at) => Target {
+            target_hz: hz,
+            bias_volts: Some(at.volts),
+            refused: None,
+        },
+        Err(e) => Target {
+            target_hz: hz,
+            bias_volts: None,
+            refused: Some(e.to_string()),
+        },
+    });
+    curve
+}
+
+/// f against bias. One device: the curve, its limit (red ×), the margin's highest bias, the
+/// tunable range as two levels, the target. A family: a curve per pre-stretch pair and the
+/// safe region's boundary through their limits, in red.
+fn plot(device: &DeviceInfo, curves: &[Curve], family: bool) -> Panel {
+    let mut panel = Panel {
+        title: format!("Tuning curve: {}", device.source),
+        x_label: "bias, V".into(),
+        y_label: "natural frequency, Hz".into(),
+        ..Panel::default()
+    };
+    for c in curves {
+        let name = format!(
+            "λ1p {}, λ2p {}",
+            short(c.prestretch_1),
+            short(c.prestretch_2)
+        );
+        match &c.problem {
+            Some(why) => panel.notes.push(format!("{name}: no curve ({why})")),
+            None => panel.series.push(Series {
+                name: if family { name } else { "f(bias)".into() },
+                points: c
+                    .points
+                    .iter()
+                    .map(|p| (p.bias_volts, p.natural_frequency_hz))
+                    .collect(),
+                ..Series::default()
+            }),
+        }
+        if let Some(t) = &c.target {
+            if let Some(v) = t.bias_volts {
+                panel.markers.push(Marker {
+                    x: v,
+                    y: t.target_hz,
+                    label: format!("target {} Hz", sig(t.target_hz)),
+                    colour: "#2ca02c",
+                });
+            }
+        }
+    }
+    let limits: Vec<(f64, f64)> = curves
+        .iter()
+        .filter_map(|c| c.limit.as_ref())
+        .map(|l| (l.volts, l.natural_frequency_hz))
+        .collect();
+    if family {
+        panel.series.push(Series {
+            name: "limit: the safe region's edge".into(),
+            points: limits,
+            style: Style {
+                colour: Some(RED),
+                dashed: true,
+                dots_only: false,
+            },
+        });
+    } else if let (Some(c), Some((volts, hz))) = (curves.first(), limits.first().copied()) {
+        let mode = c.limit.as_ref().map_or("", |l| l.mode);
+        panel.markers.push(Marker {
+            x: volts,
+            y: hz,
+            label: format!("limit ({mode}) {} V", sig(volts)),
+            colour: RED,
+        });
+        if let Some(max) = c.max_bias_volts {
+            panel.guides.push((max, format!("max bias {} V", sig(max))));
+        }
+        if let Some([low, high]) = c.tunable_range_hz {
+            panel
+                .levels
+                .push((low, format!("tunable range {} Hz", sig(low))));
+            panel.levels.push((high, format!("{} Hz", sig(high))));
+        }
+    }
+    panel
+}

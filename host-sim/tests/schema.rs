@@ -1,0 +1,164 @@
+//! Every command's `--json` against the one documented JSON schema (`host-sim/schema.json`,
+//! a definition per command under `$defs`): a key renamed, added, dropped or of another type
+//! in either place fails here.
+
+use std::process::Command;
+
+use serde_json::{json, Value};
+
+fn schema() -> Value {
+    let text = include_str!("../schema.json");
+    serde_json::from_str(text).expect("schema.json is JSON")
+}
+
+/// `host-sim args` (exit status 0 or 1: a report), its stdout checked against
+/// `$defs/<command>`.
+fn conforms(command: &str, args: &[&str]) {
+    let out = Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .arg(command)
+        .args(args)
+        .arg("--json")
+        .output()
+        .expect("host-sim runs");
+    assert!(
+        matches!(out.status.code(), Some(0 | 1)),
+        "{command} {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    let mut wrapper = schema();
+    wrapper["$ref"] = json!(format!("#/$defs/{command}"));
+    let validator = jsonschema::validator_for(&wrapper).expect("a valid JSON Schema");
+    let errors: Vec<String> = validator
+        .iter_errors(&report)
+        .map(|e| format!("{} at {}", e, e.instance_path()))
+        .collect();
+    assert!(
+        errors.is_empty(),
+        "{command} {args:?}:\n{}",
+        errors.join("\n")
+    );
+}
+
+fn scratch(name: &str) -> String {
+    let dir = std::env::temp_dir().join(format!("host-sim-schema-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.to_str().unwrap().to_string()
+}
+
+#[test]
+fn every_command_matches_the_schema() {
+    let dir = scratch("all");
+    let neo = format!("{dir}/neo.toml");
+    std::fs::write(&neo, "shear_modulus = 45e3\n").unwrap();
+    let stretched = format!("{dir}/stretched.toml");
+    std::fs::write(&stretched, "jlim = 120\nprestretch_1 = 2.5\n").unwrap();
+    let refusing = format!("{dir}/refusing.toml");
+    std::fs::write(
+        &refusing,
+        "name = \"refusing\"\nduration_seconds = 0.1\n[controller]\ntarget_hz = 50.0\n",
+    )
+    .unwrap();
+    let scenes = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/");
+    let (table, image) = (format!("{dir}/t.bin"), format!("{dir}/i.img"));
+    conforms("safe", &[]);
+    conforms("safe", &["--device", &neo]);
+    conforms("tune", &["--target-hz", "44"]);
+    conforms(
+        "curve",
+        &["--target-hz", "44", "--points", "5", "--out", &dir],
+    );
+    conforms(
+        "curve",
+        &[
+            "--prestretch-1",
+            "1.5:3:3",
+            "--prestretch-2",
+            "0.5:2:2",
+            "--target-hz",
+            "44",
+            "--points",
+            "3",
+            "--out",
+            &dir,
+        ],
+    );
+    conforms(
+        "simulate",
+        &["--bias-volts", "7000", "--duration-seconds", "0.05"],
+    );
+    conforms(
+        "simulate",
+        &[
+            "--bias-volts",
+            "9400",
+            "--start",
+            "prestretch",
+            "--duration-seconds",
+            "0.03",
+            "--method",
+            "rk4-f32",
+        ],
+    );
+    conforms(
+        "sweep",
+        &[
+            "--points",
+            "7",
+            "--periods",
+            "8",
+            "--from-ratio",
+            "0.8",
+            "--to-ratio",
+            "1.2",
+            "--out",
+            &dir,
+        ],
+    );
+    conforms("lut", &["--out", &table]);
+    conforms("image", &["--out", &image]);
+    conforms("image", &["--check", &image]);
+    conforms("image", &["--check", &table]);
+    conforms("run", &["--out", &dir]);
+    conforms("run", &[&refusing, "--out", &dir]);
+    conforms(
+        "run",
+        &[&format!("{scenes}fault-dac-bus.toml"), "--out", &dir],
+    );
+    conforms("stress", &["--device", &stretched]);
+}
+
+/// The report is the slowest command: its own test, so the rest report sooner.
+#[test]
+fn the_work_precision_report_matches_the_schema() {
+    conforms("report", &["--out", &scratch("report")]);
+}
+
+/// `console --json` against a stand-in for the firmware's port on TCP: a banner, then `ok`
+/// to `status` and an `err` to anything else.
+#[test]
+fn the_console_matches_the_schema() {
+    use std::io::{BufRead, BufReader, Write};
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let address = listener.local_addr().unwrap().to_string();
+    let port = std::thread::spawn(move || {
+        let (stream, _) = listener.accept().unwrap();
+        let mut writer = stream.try_clone().unwrap();
+        writer.write_all(b"# ready stand-in\n").unwrap();
+        for line in BufReader::new(stream).lines().map_while(Result::ok) {
+            let reply = if line == "status" {
+                "ok phase=holding\n"
+            } else {
+                "err 1 unknown request\n"
+            };
+            if writer.write_all(reply.as_bytes()).is_err() {
+                break;
+            }
+        }
+    });
+    let dir = scratch("console");
+    let script = format!("{dir}/script.txt");
+    std::fs::write(&script, "status\nnonsense\n").unwrap();
+    conforms("console", &["--tcp", &address, "--script", &script]);
+    port.join().unwrap();
+}
