@@ -830,7 +830,7 @@ fn the_material_model_is_named() {
     assert!(v["device"]["jlim"].is_null());
     let text = String::from_utf8(host_sim(&["safe", "--device", file.path()]).stdout).unwrap();
     assert!(text.contains("neo-Hookean"), "{text}");
-    let text = String::from_utf8(host_sim(&["run"]).stdout).unwrap();
+    let text = String::from_utf8(host_sim(&["run", "--out", &out_dir("material")]).stdout).unwrap();
     assert!(text.contains("Gent, jlim 120"), "{text}");
 }
 

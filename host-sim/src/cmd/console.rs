@@ -36,7 +36,12 @@ pub struct ConsoleArgs {
     #[arg(long, value_name = "FILE")]
     pub script: Option<PathBuf>,
     /// How long to wait for a reply, s.
-    #[arg(long, value_name = "S", default_value_t = 10.0)]
+    #[arg(
+        long,
+        value_name = "S",
+        default_value_t = 10.0,
+        allow_negative_numbers = true
+    )]
     pub timeout: f64,
 }
 

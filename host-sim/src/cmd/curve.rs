@@ -11,7 +11,7 @@ use de_resonator::{Device, Field, Tuner};
 use serde::Serialize;
 
 use super::{out_dir, short, sig, write_file, DeviceArgs, DeviceInfo, MarginArgs, Report};
-use crate::plot::{svg, Marker, Panel, Series, Style, RED};
+use crate::plot::{svg, Marker, Panel, Series, Style, COLOURS, RED};
 
 /// The most curves in a family, and the most points a curve.
 pub const MAX_CURVES: usize = 400;
@@ -317,8 +317,8 @@ fn one_curve(
 }
 
 /// f against bias. One device: the curve, its limit (red ×), the margin's highest bias, the
-/// tunable range as two levels, the target. A family: a curve per pre-stretch pair and the
-/// safe region's boundary through their limits, in red.
+/// tunable range as two levels, the target. A family: a colour per λ2p, a curve per λ1p, and
+/// through each colour's limits the safe region's edge, dashed red.
 fn plot(device: &DeviceInfo, curves: &[Curve], family: bool) -> Panel {
     let mut panel = Panel {
         title: format!("Tuning curve: {}", device.source),
@@ -326,24 +326,71 @@ fn plot(device: &DeviceInfo, curves: &[Curve], family: bool) -> Panel {
         y_label: "natural frequency, Hz".into(),
         ..Panel::default()
     };
+    let mut groups: Vec<f64> = Vec::new();
     for c in curves {
-        let name = format!(
-            "λ1p {}, λ2p {}",
-            short(c.prestretch_1),
-            short(c.prestretch_2)
-        );
-        match &c.problem {
-            Some(why) => panel.notes.push(format!("{name}: no curve ({why})")),
-            None => panel.series.push(Series {
-                name: if family { name } else { "f(bias)".into() },
+        if !groups.contains(&c.prestretch_2) {
+            groups.push(c.prestretch_2);
+        }
+    }
+    for (g, &l2) in groups.iter().enumerate() {
+        // The palette without its red, which is the limits'.
+        let palette: Vec<&str> = COLOURS.iter().copied().filter(|c| *c != RED).collect();
+        let colour = palette[g % palette.len()];
+        let members: Vec<&Curve> = curves.iter().filter(|c| c.prestretch_2 == l2).collect();
+        let ones: Vec<String> = members.iter().map(|c| short(c.prestretch_1)).collect();
+        for (k, c) in members.iter().enumerate() {
+            if let Some(why) = &c.problem {
+                let name = format!("λ1p {}, λ2p {}", short(c.prestretch_1), short(l2));
+                panel.notes.push(format!("{name}: no curve ({why})"));
+                continue;
+            }
+            let name = match (family, k) {
+                (false, _) => "f(bias)".into(),
+                (true, 0) if ones.len() > 1 => {
+                    format!(
+                        "λ2p {}, λ1p {} .. {}",
+                        short(l2),
+                        ones[0],
+                        ones[ones.len() - 1]
+                    )
+                }
+                (true, 0) => format!("λ2p {}, λ1p {}", short(l2), ones[0]),
+                (true, _) => String::new(),
+            };
+            panel.series.push(Series {
+                name,
                 points: c
                     .points
                     .iter()
                     .map(|p| (p.bias_volts, p.natural_frequency_hz))
                     .collect(),
-                ..Series::default()
-            }),
+                style: Style {
+                    colour: Some(colour),
+                    ..Style::default()
+                },
+            });
         }
+        if family {
+            panel.series.push(Series {
+                name: if g == 0 {
+                    "limits: the safe region's edge".into()
+                } else {
+                    String::new()
+                },
+                points: members
+                    .iter()
+                    .filter_map(|c| c.limit.as_ref())
+                    .map(|l| (l.volts, l.natural_frequency_hz))
+                    .collect(),
+                style: Style {
+                    colour: Some(RED),
+                    dashed: true,
+                    dots_only: false,
+                },
+            });
+        }
+    }
+    for c in curves {
         if let Some(t) = &c.target {
             if let Some(v) = t.bias_volts {
                 panel.markers.push(Marker {
@@ -355,29 +402,15 @@ fn plot(device: &DeviceInfo, curves: &[Curve], family: bool) -> Panel {
             }
         }
     }
-    let limits: Vec<(f64, f64)> = curves
-        .iter()
-        .filter_map(|c| c.limit.as_ref())
-        .map(|l| (l.volts, l.natural_frequency_hz))
-        .collect();
-    if family {
-        panel.series.push(Series {
-            name: "limit: the safe region's edge".into(),
-            points: limits,
-            style: Style {
-                colour: Some(RED),
-                dashed: true,
-                dots_only: false,
-            },
-        });
-    } else if let (Some(c), Some((volts, hz))) = (curves.first(), limits.first().copied()) {
-        let mode = c.limit.as_ref().map_or("", |l| l.mode);
-        panel.markers.push(Marker {
-            x: volts,
-            y: hz,
-            label: format!("limit ({mode}) {} V", sig(volts)),
-            colour: RED,
-        });
+    if let (false, Some(c)) = (family, curves.first()) {
+        if let Some(l) = &c.limit {
+            panel.markers.push(Marker {
+                x: l.volts,
+                y: l.natural_frequency_hz,
+                label: format!("limit ({}) {} V", l.mode, sig(l.volts)),
+                colour: RED,
+            });
+        }
         if let Some(max) = c.max_bias_volts {
             panel.guides.push((max, format!("max bias {} V", sig(max))));
         }

@@ -37,18 +37,28 @@ pub struct ImageArgs {
     /// The target the firmware tunes to at power-up, Hz (over the settings file's).
     ///
     /// Needed for a device other than the reference (whose default is 44 Hz).
-    #[arg(long, value_name = "HZ")]
+    #[arg(long, value_name = "HZ", allow_negative_numbers = true)]
     pub target_hz: Option<f32>,
     /// The DAC's reference, V (the DAC8551's VREF).
-    #[arg(long, value_name = "V", default_value_t = 2.5)]
+    #[arg(
+        long,
+        value_name = "V",
+        default_value_t = 2.5,
+        allow_negative_numbers = true
+    )]
     pub dac_reference_volts: f32,
     /// The high-voltage amplifier's gain, V/V.
-    #[arg(long, value_name = "V/V", default_value_t = 4000.0)]
+    #[arg(
+        long,
+        value_name = "V/V",
+        default_value_t = 4000.0,
+        allow_negative_numbers = true
+    )]
     pub gain: f32,
     /// The amplifier's output rail, V.
     ///
     /// Default: the DAC's full scale times the gain.
-    #[arg(long, value_name = "V")]
+    #[arg(long, value_name = "V", allow_negative_numbers = true)]
     pub rail_volts: Option<f32>,
 }
 
