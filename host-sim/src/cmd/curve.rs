@@ -10,8 +10,8 @@ use clap::Args;
 use de_resonator::{Device, Field, Tuner};
 use serde::Serialize;
 
-use super::{out_dir, short, sig, write_file, DeviceArgs, DeviceInfo, MarginArgs, Report};
-use crate::plot::{svg, Marker, Panel, Series, Style, COLOURS, RED};
+use super::{out_dir, short, sig, write_csv_and_plot, DeviceArgs, DeviceInfo, MarginArgs, Report};
+use crate::plot::{Marker, Panel, Series, Style, COLOURS, RED};
 
 /// The most curves in a family, and the most points a curve.
 pub const MAX_CURVES: usize = 400;
@@ -232,10 +232,7 @@ pub fn curve(args: &CurveArgs) -> Result<CurveReport, String> {
         .flat_map(|c| c.points.iter().copied())
         .collect();
     let panel = plot(&device, &curves, ones.len() * twos.len() > 1);
-    let files = vec![
-        write_file(&args.out, "curve.csv", &super::csv(&rows)?)?,
-        write_file(&args.out, "curve.svg", svg(&[panel]).as_bytes())?,
-    ];
+    let files = write_csv_and_plot(&args.out, "curve", &rows, &[panel])?;
     Ok(CurveReport {
         device,
         margin,

@@ -136,6 +136,24 @@ pub fn write_file(dir: &Path, file: &str, bytes: &[u8]) -> Result<String, String
     Ok(path.display().to_string())
 }
 
+/// A study's two files in `dir`: `<stem>.csv` (the rows) and `<stem>.svg` (the panels); the
+/// paths written.
+pub fn write_csv_and_plot<R: Serialize>(
+    dir: &Path,
+    stem: &str,
+    rows: &[R],
+    panels: &[crate::plot::Panel],
+) -> Result<Vec<String>, String> {
+    Ok(vec![
+        write_file(dir, &format!("{stem}.csv"), &csv(rows)?)?,
+        write_file(
+            dir,
+            &format!("{stem}.svg"),
+            crate::plot::svg(panels).as_bytes(),
+        )?,
+    ])
+}
+
 /// Rows as CSV: a header from the row type's field names, a line a row (serde).
 pub fn csv<R: Serialize>(rows: &[R]) -> Result<Vec<u8>, String> {
     let mut writer = csv::Writer::from_writer(Vec::new());

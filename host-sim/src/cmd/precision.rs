@@ -7,8 +7,8 @@ use std::path::PathBuf;
 use clap::Args;
 use serde::Serialize;
 
-use super::{write_file, DeviceArgs, DeviceInfo, Report};
-use crate::plot::{svg, Marker, Panel, Series, Style, COLOURS};
+use super::{write_csv_and_plot, DeviceArgs, DeviceInfo, Report};
+use crate::plot::{Marker, Panel, Series, Style, COLOURS};
 use crate::precision::{reference, rows, studies, Row, ToleranceRow};
 use crate::simulate::Choice;
 
@@ -143,10 +143,7 @@ pub fn precision(args: &PrecisionArgs) -> Result<PrecisionReport, String> {
         .iter()
         .map(|study| panel(study.name, &all))
         .collect();
-    let files = vec![
-        write_file(&args.out, "work-precision.csv", &super::csv(&all)?)?,
-        write_file(&args.out, "work-precision.svg", svg(&panels).as_bytes())?,
-    ];
+    let files = write_csv_and_plot(&args.out, "work-precision", &all, &panels)?;
     let floor = references.iter().map(|r| r.floor).fold(0.0, f64::max);
     Ok(PrecisionReport {
         device: name,

@@ -8,8 +8,8 @@ use clap::Args;
 use de_resonator::{Device, Tuner};
 use serde::Serialize;
 
-use super::{out_dir, short, sig, write_file, DeviceArgs, DeviceInfo, Report};
-use crate::plot::{svg, Panel, Series, Style, GREY, RED};
+use super::{out_dir, short, sig, write_csv_and_plot, DeviceArgs, DeviceInfo, Report};
+use crate::plot::{Panel, Series, Style, GREY, RED};
 use crate::sweep::{self, Sweep};
 
 /// The default bias and AC amplitude, as fractions of the device's limit voltage: a drive
@@ -266,10 +266,7 @@ pub fn sweep(args: &SweepArgs) -> Result<SweepReport, String> {
         .count();
     let stopped = points.iter().filter(|p| p.stopped).count();
     let panel = plot(&device, &s, f0, quality, &points, stopped);
-    let files = vec![
-        write_file(&args.out, "sweep.csv", &super::csv(&points)?)?,
-        write_file(&args.out, "sweep.svg", svg(&[panel]).as_bytes())?,
-    ];
+    let files = write_csv_and_plot(&args.out, "sweep", &points, &[panel])?;
     Ok(SweepReport {
         device,
         limit_volts,
