@@ -767,7 +767,11 @@ fn sweep_counts_stopped_points_and_takes_no_peak_from_them() {
     assert_eq!(empty, stopped.len());
     let text = String::from_utf8(host_sim(&["sweep", "--out", &dir]).stdout).unwrap();
     assert!(
-        text.contains(&format!("{} of them left the model's range", stopped.len())),
+        text.contains(&format!(
+            "{} of {} runs left the model's range",
+            stopped.len(),
+            points.len()
+        )),
         "{text}"
     );
 }

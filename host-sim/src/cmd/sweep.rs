@@ -155,6 +155,12 @@ impl fmt::Display for SweepReport {
             sig(self.damping),
             sig(self.natural_frequency_hz),
         )?;
+        if self.bias_volts > self.limit_volts {
+            writeln!(
+                f,
+                "note            the bias is above the limit: every run starts past it"
+            )?;
+        }
         if self.peaks.is_empty() {
             writeln!(f, "                none among the measured points")?;
         }
@@ -170,11 +176,12 @@ impl fmt::Display for SweepReport {
         write!(
             f,
             "limits          {} of {} drive frequencies crossed a limit of MODEL.md §6\n\
-             stopped         {} of them left the model's range (no amplitude, never a peak)\n\
+             stopped         {} of {} runs left the model's range (no amplitude, never a peak)\n\
              wrote           {}",
             self.crossed_limit,
             self.points.len(),
             self.stopped,
+            self.points.len(),
             self.files.join(", ")
         )
     }
