@@ -818,8 +818,8 @@ fn faults_at_run_time_come_down_at_the_slew_rate_and_say_so_once() {
     for k in 0..1000u32 {
         let monitored = last.min(3000.0);
         let out = c.tick(Inputs {
-            stretch: None,
             amplifier_volts: Some(monitored),
+            ..Inputs::NONE
         });
         if let Some(Event::Fault(fault)) = out.event {
             assert!(
@@ -1561,8 +1561,8 @@ fn the_amplifier_faults_after_exactly_its_ticks_off() {
     let tick = |c: &mut Controller, off: bool, last: &mut f32| {
         let measured = if off { *last - 500.0 } else { *last };
         let out = c.tick(Inputs {
-            stretch: None,
             amplifier_volts: Some(measured),
+            ..Inputs::NONE
         });
         *last = out.volts;
         out.event

@@ -319,9 +319,21 @@ fn fuzz_the_controller() {
                     last_volts
                 }),
             };
+            // The current monitor: absent, the plant's speed as a current (what self-sensing
+            // trims on when there is no stretch), or wild (NaN, infinite, huge) at times.
+            let current_amps = match monitor_amplifier {
+                0 => None,
+                1 => model.as_ref().map(|m| (m.state().velocity * 1e-6) as f32),
+                _ => Some(if rng.unit() < 0.01 {
+                    wild(&mut rng) as f32
+                } else {
+                    rng.range(-1e-5, 1e-5) as f32
+                }),
+            };
             let mut out = c.tick(Inputs {
                 stretch,
                 amplifier_volts,
+                current_amps,
             });
             if bus_fails == Some(k) {
                 out = c.fault(Fault::Bus);

@@ -99,6 +99,28 @@ pub struct Sensor {
     pub amplifier_monitor: bool,
 }
 
+/// The amplifier's current monitor as the controller reads it: the mean over a tick of the
+/// output current (MODEL.md §8), with noise and a quantum.
+#[derive(Clone, Copy, Debug)]
+pub struct CurrentMonitor {
+    /// RMS noise of a tick's mean, A.
+    pub noise_amps: f64,
+    /// The quantum of a tick's mean, A (0: none).
+    pub resolution_amps: f64,
+}
+
+impl CurrentMonitor {
+    /// The reading of a true mean current `amps`.
+    fn read(&self, amps: f64, noise: &mut Noise) -> f64 {
+        let x = amps + self.noise_amps * noise.gaussian();
+        if self.resolution_amps > 0.0 {
+            (x / self.resolution_amps).round() * self.resolution_amps
+        } else {
+            x
+        }
+    }
+}
+
 /// SplitMix64 and Box–Muller: reproducible noise from a seed.
 struct Noise(u64);
 
@@ -132,11 +154,13 @@ pub struct Loop {
     pub dac_reference_volts: f64,
     pub settings: Settings,
     pub sensor: Option<Sensor>,
+    /// The amplifier's current monitor, if the controller reads one.
+    pub current_monitor: Option<CurrentMonitor>,
     /// The DAC bus fails from this time on, s.
     pub bus_fails_after_seconds: Option<f64>,
     pub duration_seconds: f64,
     pub seed: u64,
-    /// Keep the time history (t, λ, volts on the membrane) at every tick.
+    /// Keep the time history (`Sample`) at every tick.
     pub history: bool,
 }
 
@@ -171,7 +195,7 @@ pub struct Run {
     /// The true plant's voltage limit on its loading branch from 0 V (networks frozen as they
     /// are at the end) and its mode.
     pub limit: Option<(FailureMode, f64)>,
-    pub history: Vec<(f64, f64, f64)>,
+    pub history: Vec<Sample>,
     pub ticks: u64,
     pub run_seconds: f64,
 }
@@ -212,6 +236,16 @@ impl Run {
         };
         self.events.push(Said { seconds, what });
     }
+}
+
+/// The plant at the end of a tick, as the history keeps it.
+#[derive(Clone, Copy, Debug)]
+pub struct Sample {
+    pub seconds: f64,
+    pub stretch: f64,
+    pub membrane_volts: f64,
+    /// The amplifier's mean output current over the tick, A (MODEL.md §8).
+    pub current_amps: f64,
 }
 
 /// The most ticks a scene may run: 1,000 s at 10 kHz, about a minute of work and 240 MB of
@@ -309,6 +343,8 @@ impl Loop {
             }
         };
         let mut noise = Noise(self.seed);
+        // The membrane's (stretch, volts) at the last tick, for the current over a tick.
+        let mut last_port: Option<(f64, f64)> = None;
         let mut reading = f64::NAN;
         let gain = self.plant.amplifier.gain;
         let amplifier_input = || {
@@ -328,8 +364,17 @@ impl Loop {
                 bus.fail_after.set(Some(bus.frames.get()));
             }
             let membrane_volts = self.plant.volts(&y, amplifier_input());
+            // The output current over the last tick, from the membrane's charge (§8).
+            let port = (y[0], membrane_volts);
+            let current =
+                last_port.map(|from| self.plant.mean_current_amps(from, port, tick_seconds));
+            last_port = Some(port);
             if let Some(c) = controller.as_mut() {
-                let inputs = self.inputs(&mut noise, &mut reading, k, t, &y, membrane_volts);
+                let mut inputs = self.inputs(&mut noise, &mut reading, k, t, &y, membrane_volts);
+                inputs.current_amps = self
+                    .current_monitor
+                    .zip(current)
+                    .map(|(monitor, amps)| monitor.read(amps, &mut noise) as f32);
                 let out = c.tick(inputs);
                 let out = stage.send(c, out);
                 // The trim's solve, as the firmware's low-priority task runs it: between
@@ -361,7 +406,16 @@ impl Loop {
                 }
             }
             if self.history {
-                run.history.push((t + tick_seconds, y[0], volts));
+                let amps = last_port.map_or(f64::NAN, |from| {
+                    self.plant
+                        .mean_current_amps(from, (y[0], volts), tick_seconds)
+                });
+                run.history.push(Sample {
+                    seconds: t + tick_seconds,
+                    stretch: y[0],
+                    membrane_volts: volts,
+                    current_amps: amps,
+                });
             }
             run.final_membrane_volts = volts;
             run.ticks = k + 1;
@@ -415,6 +469,7 @@ impl Loop {
         Inputs {
             stretch,
             amplifier_volts: sensor.amplifier_monitor.then_some(membrane_volts as f32),
+            current_amps: None,
         }
     }
 }

@@ -44,6 +44,8 @@ pub struct Plant {
     pub params: DeviceParams<f64>,
     pub branches: Vec<Branch>,
     pub amplifier: AmplifierModel,
+    /// The membrane's leakage resistance, Ω (infinite: none), MODEL.md §8.
+    pub leakage_ohms: f64,
 }
 
 /// ε0, F/m (CODATA 2018).
@@ -175,6 +177,29 @@ impl Plant {
     }
 
     /// The voltage on the membrane in state `y` with `input` volts at the amplifier's input.
+    /// Membrane A's capacitance at stretch λ (λ2 held at λ2p), MODEL.md §8 (paper eq. 1):
+    /// C = ε·L1A·L2·λ²·λ2p²/H, F.
+    pub fn capacitance(&self, stretch: f64) -> f64 {
+        let p = &self.params;
+        p.relative_permittivity
+            * VACUUM_PERMITTIVITY
+            * p.length_active
+            * p.width
+            * stretch
+            * stretch
+            * p.prestretch_2
+            * p.prestretch_2
+            / p.thickness
+    }
+
+    /// The amplifier's mean output current over an interval from (λ, Φ) at its start to
+    /// (λ, Φ) at its end, `seconds` long: the charge's change, dQ/dt with Q = C(λ)·Φ, plus
+    /// the leakage at the mean voltage (MODEL.md §8), A.
+    pub fn mean_current_amps(&self, from: (f64, f64), to: (f64, f64), seconds: f64) -> f64 {
+        let charge = |(stretch, volts): (f64, f64)| self.capacitance(stretch) * volts;
+        (charge(to) - charge(from)) / seconds + 0.5 * (from.1 + to.1) / self.leakage_ohms
+    }
+
     pub fn volts(&self, y: &Vector, input: f64) -> f64 {
         if self.amplifier_has_state() {
             y[2]

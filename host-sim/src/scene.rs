@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use de_resonator::DeviceParams;
 use serde::Deserialize;
 
-use crate::hil::{Loop, Sensor};
+use crate::hil::{CurrentMonitor, Loop, Sensor};
 use crate::plant::{AmplifierModel, Branch, Plant, MAX_BRANCHES};
 use crate::simulate::{Solver, Tolerance};
 
@@ -32,6 +32,7 @@ struct SceneFile {
     #[serde(default)]
     amplifier: AmplifierFile,
     sensor: Option<SensorFile>,
+    current_monitor: Option<CurrentMonitorFile>,
     /// The controller's settings: `Setting::ALL`'s keys (the core's one list), `target_hz`
     /// required, the rest `Settings::for_target`'s when absent.
     controller: toml::Table,
@@ -77,6 +78,9 @@ struct PlantFile {
     rtol: f64,
     #[serde(default = "tolerance")]
     atol: f64,
+    /// The membrane's leakage resistance, Ω (default: none).
+    #[serde(default = "infinite")]
+    leakage_ohms: f64,
 }
 
 impl Default for PlantFile {
@@ -143,6 +147,25 @@ struct SensorFile {
 
 fn one_tick() -> u32 {
     1
+}
+
+/// The amplifier's current monitor: its noise at its own sample rate, averaged over a tick.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CurrentMonitorFile {
+    /// RMS noise of one sample, A.
+    #[serde(default)]
+    noise_amps: f64,
+    /// Its sample rate, Hz (the tick averages its samples).
+    #[serde(default = "ten_khz")]
+    sample_hz: f64,
+    /// The quantum of the tick's mean, A (0: none).
+    #[serde(default)]
+    resolution_amps: f64,
+}
+
+fn ten_khz() -> f64 {
+    1e4
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -232,6 +255,23 @@ pub fn parse(text: &str) -> Result<Scene, String> {
         stuck_after_seconds: s.stuck_after_seconds,
         amplifier_monitor: s.amplifier_monitor,
     });
+    let current_monitor = match &file.current_monitor {
+        None => None,
+        Some(m) => {
+            let per_tick = m.sample_hz / f64::from(settings.tick_hz);
+            if !(m.noise_amps >= 0.0 && m.resolution_amps >= 0.0 && per_tick >= 1.0) {
+                return Err(
+                    "[current_monitor] noise_amps and resolution_amps must be ≥ 0, \
+                            sample_hz at least the tick rate"
+                        .into(),
+                );
+            }
+            Some(CurrentMonitor {
+                noise_amps: m.noise_amps / per_tick.floor().sqrt(),
+                resolution_amps: m.resolution_amps,
+            })
+        }
+    };
     if let Some(s) = &sensor {
         if !(s.noise >= 0.0 && s.resolution >= 0.0 && s.every_ticks >= 1) {
             return Err("[sensor] noise and resolution must be ≥ 0, every_ticks ≥ 1".into());
@@ -261,6 +301,7 @@ pub fn parse(text: &str) -> Result<Scene, String> {
             dac_reference_volts: file.amplifier.dac_reference_volts,
             settings,
             sensor,
+            current_monitor,
             bus_fails_after_seconds: file.faults.dac_bus_fails_after_seconds,
             duration_seconds: file.duration_seconds,
             seed: file.seed,
@@ -359,10 +400,17 @@ fn plant(nominal: &DeviceParams<f64>, file: &SceneFile, target_hz: f32) -> Resul
     {
         return Err("[amplifier] gain, bandwidth, slew and rail must be positive".into());
     }
+    if !(p.leakage_ohms > 0.0) {
+        return Err(format!(
+            "[plant] leakage_ohms {} must be positive (inf: none)",
+            p.leakage_ohms
+        ));
+    }
     let mut plant = Plant {
         params,
         branches,
         amplifier,
+        leakage_ohms: p.leakage_ohms,
     };
     plant.params.damping = match (p.damping, p.quality_factor) {
         (Some(_), Some(_)) => return Err("[plant] give damping or quality_factor, not both".into()),

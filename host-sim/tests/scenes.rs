@@ -28,6 +28,7 @@ fn elastic_reference() -> Plant {
             slew_volts_per_second: f64::INFINITY,
             rail_volts: f64::INFINITY,
         },
+        leakage_ohms: f64::INFINITY,
     }
 }
 
@@ -216,4 +217,95 @@ fn stiff_scene_runs_with_bdf() {
     assert!(r.refused.is_none() && r.fault.is_none(), "{r:?}");
     assert_eq!(r.ticks, 2000);
     assert_eq!(r.plant_crossing, None);
+}
+
+/// Self-sensing (issue 15's first must): no displacement sensor, the trim times the ring in
+/// the amplifier's current (1 µA rms a sample at 10 kHz, averaged over 1 kHz ticks). With the
+/// plant's μ 20% off either way the plant ends within 0.5% of the target, μ estimated within
+/// 0.1% of the true value (as with the displacement sensor), and the true plant is never
+/// outside its safe region.
+#[test]
+fn sensorless_scenes_trim_on_the_current_within_half_a_percent() {
+    for (file, target, mu) in [
+        ("sensorless-soft.toml", 29.5, 0.8 * 45e3),
+        ("sensorless-stiff.toml", 33.0, 1.2 * 45e3),
+    ] {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../scenes")
+            .join(file);
+        let s = scene::load(&path).unwrap();
+        assert!(
+            s.run.sensor.is_none() && s.run.current_monitor.is_some(),
+            "{file}"
+        );
+        let r = run(file);
+        assert!(r.refused.is_none() && r.fault.is_none(), "{file}: {r:?}");
+        let error = (r.natural_frequency_hz - target) / target;
+        assert!(error.abs() < 5e-3, "{file}: {error}");
+        assert_eq!(r.plant_crossing, None, "{file}");
+        let last = r
+            .events
+            .iter()
+            .rev()
+            .find(|e| e.what.starts_with("trim"))
+            .unwrap();
+        let kpa: f64 = last.what.split("estimated ").nth(1).unwrap()[..5]
+            .parse()
+            .unwrap();
+        assert!((kpa * 1e3 / mu - 1.0).abs() < 1e-3, "{file}: {}", last.what);
+    }
+}
+
+/// Where self-sensing stops: at 30 and 100 times the monitor's noise the ring is lost in it;
+/// the controller then faults (down to 0 V) or still lands within 0.5%, never mistunes
+/// silently, and the plant stays safe.
+#[test]
+fn too_much_current_noise_faults_safely() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/sensorless-soft.toml");
+    for factor in [30.0, 100.0] {
+        let mut s = scene::load(&path).unwrap();
+        s.run.history = false;
+        let monitor = s.run.current_monitor.as_mut().unwrap();
+        monitor.noise_amps *= factor;
+        let r = s.run.run().unwrap();
+        assert_eq!(r.plant_crossing, None, "×{factor}");
+        let error = (r.natural_frequency_hz - 29.5) / 29.5;
+        assert!(
+            r.fault.is_some() || error.abs() < 5e-3,
+            "×{factor}: {error}"
+        );
+        if r.fault.is_some() {
+            assert!(r.final_membrane_volts.abs() < 1.0, "×{factor}");
+        }
+    }
+}
+
+/// The electrical port against Ohm's law: a plant held at a constant voltage, at rest, draws
+/// Φ/R_leak through its leakage (the charge no longer changes).
+#[test]
+fn the_current_at_rest_is_the_leakage() {
+    let plant = Plant {
+        leakage_ohms: 2e9,
+        ..elastic_reference()
+    };
+    let rest = plant.at_rest();
+    let at = plant.equilibrium(&rest, 5000.0).unwrap();
+    let amps = plant.mean_current_amps((at[0], 5000.0), (at[0], 5000.0), 1e-3);
+    assert!((amps - 5000.0 / 2e9).abs() < 1e-12 * 2.5e-6, "{amps}");
+    // Charging at rest: the charge C(λ)·Φ of a parallel-plate capacitor of the membrane's
+    // current area and thickness (incompressible: h = H/(λ·λ2p)), ε E² energy aside.
+    let (lambda, volts) = (at[0], 5000.0);
+    let p = &plant.params;
+    let area = p.length_active * lambda * p.width * p.prestretch_2;
+    let thickness = p.thickness / (lambda * p.prestretch_2);
+    let capacitance = 8.8541878128e-12 * p.relative_permittivity * area / thickness;
+    let no_leak = Plant {
+        leakage_ohms: f64::INFINITY,
+        ..plant.clone()
+    };
+    let charging = no_leak.mean_current_amps((lambda, 0.0), (lambda, volts), 1e-3);
+    assert!(
+        (charging - capacitance * volts / 1e-3).abs() < 1e-12 * charging,
+        "{charging}"
+    );
 }

@@ -44,7 +44,7 @@ pub enum Fault {
     Amplifier(CodeError),
     /// A commanded voltage failed the final check (never expected: a guard of last resort).
     Gate { volts: f32, max_volts: f32 },
-    /// A sensor sample (stretch or amplifier monitor) is NaN or infinite.
+    /// A sensor sample (stretch, amplifier monitor or current monitor) is NaN or infinite.
     Sensor { value: f32 },
     /// A stretch sample no device could give: the bars more than a frame's length outside
     /// the frame (see `Device::plausible_stretch`).

@@ -45,7 +45,7 @@ pub use watch::{Inputs, AMPLIFIER_TICKS};
 use crate::device::Device;
 use crate::drive::{Amplifier, DacCode};
 use gate::gate;
-use watch::Watch;
+use watch::{Ring, Watch};
 
 /// Where the controller is, for people and tests (the state without its data).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -214,6 +214,9 @@ impl Controller {
         {
             return self.fault(fault);
         }
+        if let Some(fault) = Watch::current(inputs.current_amps) {
+            return self.fault(fault);
+        }
         let k = self.tick;
         self.tick = self.tick.saturating_add(1);
         let volts = self.plan.volts(k);
@@ -234,7 +237,7 @@ impl Controller {
                 return self.fault(fault);
             }
         }
-        match self.advance(k, volts, inputs.stretch) {
+        match self.advance(k, volts, inputs.ring()) {
             Ok(event) => {
                 self.last_volts = commanded_volts;
                 Output {
@@ -247,14 +250,10 @@ impl Controller {
         }
     }
 
-    /// The state machine's step at tick `k`, and what it says.
-    fn advance(
-        &mut self,
-        k: u32,
-        volts: f32,
-        stretch: Option<f32>,
-    ) -> Result<Option<Event>, Fault> {
-        let _ = stretch;
+    /// The state machine's step at tick `k`, and what it says; `ring` is what the trim
+    /// records.
+    fn advance(&mut self, k: u32, volts: f32, ring: Ring) -> Result<Option<Event>, Fault> {
+        let _ = ring;
         match self.state {
             State::Ramping { then_measure } if self.plan.ramp_volts(k) == self.plan.bias_volts => {
                 self.hold_from(k, then_measure);
@@ -286,7 +285,7 @@ impl Controller {
             }
             #[cfg(feature = "trim")]
             State::Measuring => {
-                self.record(k, stretch);
+                self.record(k, ring);
                 Ok(None)
             }
             #[cfg(feature = "trim")]
@@ -405,21 +404,36 @@ impl Controller {
         self.plan.pulse_volts = s.trim_pulse_volts;
         // No clearing (512 stores): every tick of the window writes its slot.
         self.trim.window_from = from.saturating_add(pulse);
+        self.trim.charge = 0.0;
         self.trim.handed_out = false;
         self.trim.result = None;
         self.state = State::Measuring;
     }
 
-    /// Record this tick's sample; at the window's end, hand the solve out.
-    fn record(&mut self, k: u32, stretch: Option<f32>) {
+    /// Record this tick's sample; at the window's end, hand the solve out. From the current,
+    /// the ring is its running sum, the charge (Q = C(λ)·Φ at a constant bias, MODEL.md §8,
+    /// so it follows λ): the sum turns the monitor's noise into a slow wander, which the
+    /// crossings' fit averages out, where the current's own crossings would multiply. The
+    /// window's first tenth of a target period is skipped (NaN): the step back from the
+    /// pulse charges the membrane then (C·dΦ/dt, far above the ring's Φ·C'·dλ/dt).
+    fn record(&mut self, k: u32, ring: Ring) {
         let s = self.settings;
         let len = (s.trim_window_seconds * s.tick_hz) as usize;
         let Some(at) = k.checked_sub(self.trim.window_from) else {
             return;
         };
         let at = at as usize;
+        let settling = (0.1 * s.tick_hz / s.target_hz) as usize + 1;
+        let sample = match ring {
+            Ring::Stretch(stretch) => stretch,
+            Ring::Current(amps) if at >= settling => {
+                self.trim.charge += amps;
+                self.trim.charge
+            }
+            Ring::Current(_) | Ring::Nothing => f32::NAN,
+        };
         if let Some(slot) = self.trim.window.get_mut(at) {
-            *slot = stretch.unwrap_or(f32::NAN);
+            *slot = sample;
         }
         if at + 1 >= len {
             self.state = State::Solving;

@@ -26,6 +26,9 @@ pub(super) struct TrimState {
     /// The first tick of the window, and the samples in it (NaN: no sample that tick).
     pub(super) window_from: u32,
     pub(super) window: [f32; MAX_WINDOW],
+    /// The current's running sum over the window (its charge, in A·ticks), when the ring
+    /// comes from the current.
+    pub(super) charge: f32,
     /// The solve's answer, once the caller has given it.
     pub(super) result: Option<TrimResult>,
     /// Whether the job for the window just measured was handed out.
@@ -41,6 +44,7 @@ impl TrimState {
             previous: None,
             window_from: 0,
             window: [f32::NAN; MAX_WINDOW],
+            charge: 0.0,
             result: None,
             handed_out: false,
         }

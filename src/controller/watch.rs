@@ -18,6 +18,11 @@ pub struct Inputs {
     pub stretch: Option<f32>,
     /// The amplifier's monitor output, V.
     pub amplifier_volts: Option<f32>,
+    /// The amplifier's output current, A, averaged over the tick (its current monitor).
+    /// At a constant bias it is Φ·C'(λ)·dλ/dt plus the leakage (MODEL.md §8, the electrical
+    /// port): a ring in it has the stretch's frequency. The trim measures it when there is
+    /// no stretch sample (self-sensing).
+    pub current_amps: Option<f32>,
 }
 
 impl Inputs {
@@ -25,15 +30,43 @@ impl Inputs {
     pub const NONE: Inputs = Inputs {
         stretch: None,
         amplifier_volts: None,
+        current_amps: None,
     };
 
     /// A stretch sample only.
     pub const fn stretch(stretch: f32) -> Self {
         Inputs {
             stretch: Some(stretch),
-            amplifier_volts: None,
+            ..Inputs::NONE
         }
     }
+
+    /// A current sample only (no displacement sensor).
+    pub const fn current(amps: f32) -> Self {
+        Inputs {
+            current_amps: Some(amps),
+            ..Inputs::NONE
+        }
+    }
+
+    /// What the trim records this tick: the stretch when there is one, else the current.
+    pub(super) fn ring(&self) -> Ring {
+        match (self.stretch, self.current_amps) {
+            (Some(stretch), _) => Ring::Stretch(stretch),
+            (None, Some(amps)) => Ring::Current(amps),
+            (None, None) => Ring::Nothing,
+        }
+    }
+}
+
+/// A sample of the ring the trim measures.
+#[derive(Clone, Copy, Debug)]
+#[cfg_attr(not(feature = "trim"), allow(dead_code))]
+pub(super) enum Ring {
+    Stretch(f32),
+    /// The current carries C·dΦ/dt too: the trim skips it while the pulse's step settles.
+    Current(f32),
+    Nothing,
 }
 
 /// The watch's memory between ticks.
@@ -98,6 +131,12 @@ impl Watch {
             }
         }
         None
+    }
+
+    /// A current sample must be a number (`Sensor`); its size is the plant's business.
+    pub(super) fn current(measured: Option<f32>) -> Option<Fault> {
+        let measured = measured?;
+        (!measured.is_finite()).then_some(Fault::Sensor { value: measured })
     }
 
     /// The amplifier's monitored output against the last command: off by more than

@@ -8,7 +8,7 @@ use clap::Args;
 use serde::Serialize;
 
 use super::{finite, out_dir, sig, write_file, Crossing, DeviceInfo, Report};
-use crate::hil::Run;
+use crate::hil::{Run, Sample};
 use crate::plot::{svg, Marker, Panel, Series, RED};
 use crate::scene::{self, Scene};
 
@@ -43,6 +43,7 @@ struct HistoryRow {
     time_seconds: f64,
     stretch: f64,
     membrane_volts: f64,
+    current_amps: Option<f64>,
 }
 
 /// What `run` reports.
@@ -260,10 +261,11 @@ fn files(dir: &Path, scene: &Scene, run: &Run) -> Result<Vec<String>, String> {
         let rows: Vec<HistoryRow> = run
             .history
             .iter()
-            .map(|&(time_seconds, stretch, membrane_volts)| HistoryRow {
-                time_seconds,
-                stretch,
-                membrane_volts,
+            .map(|h| HistoryRow {
+                time_seconds: h.seconds,
+                stretch: h.stretch,
+                membrane_volts: h.membrane_volts,
+                current_amps: finite(h.current_amps),
             })
             .collect();
         written.push(write_file(dir, "history.csv", &super::csv(&rows)?)?);
@@ -282,9 +284,9 @@ fn files(dir: &Path, scene: &Scene, run: &Run) -> Result<Vec<String>, String> {
 /// membrane with the controller's cap and the plant's own limit; the controller's events as
 /// guides (the first clause of each, labels in rows that do not overprint).
 fn plot(scene: &Scene, run: &Run) -> [Panel; 2] {
-    let series = |name: &str, pick: fn(&(f64, f64, f64)) -> f64| Series {
+    let series = |name: &str, pick: fn(&Sample) -> f64| Series {
         name: name.into(),
-        points: run.history.iter().map(|h| (h.0, pick(h))).collect(),
+        points: run.history.iter().map(|h| (h.seconds, pick(h))).collect(),
         ..Series::default()
     };
     let guides: Vec<(f64, String)> = run
@@ -297,10 +299,10 @@ fn plot(scene: &Scene, run: &Run) -> [Panel; 2] {
             )
         })
         .collect();
-    let markers = |pick: fn(&(f64, f64, f64)) -> f64| -> Vec<Marker> {
+    let markers = |pick: fn(&Sample) -> f64| -> Vec<Marker> {
         run.plant_crossing
             .and_then(|(mode, t)| {
-                let at = run.history.iter().find(|h| h.0 >= t)?;
+                let at = run.history.iter().find(|h| h.seconds >= t)?;
                 Some(Marker {
                     x: t,
                     y: pick(at),
@@ -330,20 +332,20 @@ fn plot(scene: &Scene, run: &Run) -> [Panel; 2] {
             title: format!("{}: stretch of A", scene.name),
             x_label: "time, s".into(),
             y_label: "stretch λ".into(),
-            series: vec![series("plant", |h| h.1)],
+            series: vec![series("plant", |h| h.stretch)],
             guides: guides.clone(),
             levels: stretch_levels,
-            markers: markers(|h| h.1),
+            markers: markers(|h| h.stretch),
             ..Panel::default()
         },
         Panel {
             title: "voltage on the membrane".into(),
             x_label: "time, s".into(),
             y_label: "V".into(),
-            series: vec![series("amplifier output", |h| h.2)],
+            series: vec![series("amplifier output", |h| h.membrane_volts)],
             guides,
             levels,
-            markers: markers(|h| h.2),
+            markers: markers(|h| h.membrane_volts),
             ..Panel::default()
         },
     ]
