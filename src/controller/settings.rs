@@ -34,7 +34,8 @@ pub struct Settings {
     /// check; a real sensor's noise never repeats that long).
     pub stuck_samples: Option<u32>,
     /// Closed-loop trim: the relative frequency error to reach (`None`: no trim). Needs the
-    /// stretch sensor and the `cross_check` stage (the model is re-solved on the chip).
+    /// stretch sensor or the amplifier's current monitor (`Inputs`), and the `cross_check`
+    /// stage (the model is re-solved on the chip).
     pub trim_tolerance: Option<f32>,
     /// The ring measured after each pulse, s (at most `MAX_WINDOW` ticks).
     pub trim_window_seconds: f32,
