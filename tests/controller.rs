@@ -549,6 +549,7 @@ fn every_setting_by_its_key() {
         "trim_pulse_volts",
         "trim_probe_fraction",
         "trim_every_seconds",
+        "leakage_floor_ohms",
     ];
     assert_eq!(Setting::ALL.map(Setting::key), keys);
     let mut s = Settings::for_target(44.0);
@@ -565,13 +566,19 @@ fn every_setting_by_its_key() {
         Setting::StuckSamples,
         Setting::TrimTolerance,
         Setting::TrimEverySeconds,
+        Setting::LeakageFloorOhms,
     ] {
         s.set(off, 0.0);
         assert_eq!(s.get(off), 0.0);
     }
     assert_eq!(
-        (s.stuck_samples, s.trim_tolerance, s.trim_every_seconds),
-        (None, None, None)
+        (
+            s.stuck_samples,
+            s.trim_tolerance,
+            s.trim_every_seconds,
+            s.leakage_floor_ohms
+        ),
+        (None, None, None, None)
     );
 }
 
@@ -1870,4 +1877,52 @@ fn the_trim_measures_the_ring_in_the_current() {
     let at = device.stretch_for_bias(bias, 3.0).unwrap();
     let error = device.natural_frequency_hz(at) / 44.5 - 1.0;
     assert!(error.abs() < 1e-3, "{error} at {bias} V");
+}
+
+/// The leakage watch: at a steady bias the current is the leakage Φ/R (and noise that
+/// averages out over the window). R below `leakage_floor_ohms` is a `Leakage` fault within
+/// the hold plus a window; R above it, none over three windows; no floor, no watch.
+#[test]
+fn the_leakage_watch_measures_the_dc_current_against_the_voltage() {
+    for (floor, ohms, faults) in [
+        (Some(1e10f32), 5e9f32, true),
+        (Some(1e10), 2e10, false),
+        (None, 1e6, false),
+    ] {
+        let settings = Settings {
+            leakage_floor_ohms: floor,
+            ..Settings::for_target(44.0)
+        };
+        let mut c = start(settings).unwrap();
+        let (mut volts, mut fault) = (0.0f32, None);
+        // A ±1 µA square "noise" that averages out over the window.
+        for k in 0..5000u32 {
+            let noise = if k % 2 == 0 { 1e-6 } else { -1e-6 };
+            let out = c.tick(Inputs::current(volts / ohms + noise));
+            if let Some(Event::Fault(f)) = out.event {
+                fault = Some((k, f));
+                break;
+            }
+            volts = out.volts;
+        }
+        match (faults, fault) {
+            (
+                true,
+                Some((
+                    k,
+                    Fault::Leakage {
+                        ohms: seen,
+                        floor_ohms,
+                    },
+                )),
+            ) => {
+                assert!((seen / ohms - 1.0).abs() < 1e-3, "{seen}");
+                assert_eq!(Some(floor_ohms), floor);
+                // The ramp (0.75 s at 10 kV/s), the window (1 s), and a tick.
+                assert!(k <= 1800, "{k}");
+            }
+            (false, None) => {}
+            other => panic!("{floor:?} {ohms}: {other:?}"),
+        }
+    }
 }

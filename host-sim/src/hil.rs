@@ -367,7 +367,7 @@ impl Loop {
             // The output current over the last tick, from the membrane's charge (§8).
             let port = (y[0], membrane_volts);
             let current =
-                last_port.map(|from| self.plant.mean_current_amps(from, port, tick_seconds));
+                last_port.map(|from| self.plant.mean_current_amps(from, port, tick_seconds, t));
             last_port = Some(port);
             if let Some(c) = controller.as_mut() {
                 let mut inputs = self.inputs(&mut noise, &mut reading, k, t, &y, membrane_volts);
@@ -401,14 +401,23 @@ impl Loop {
             .map(|(y, h)| (y, Some(h)))?;
             let volts = self.plant.volts(&y, input);
             if run.plant_crossing.is_none() {
-                if let Some(mode) = self.plant.first_failure(&y, volts) {
+                let broken = self
+                    .plant
+                    .leakage
+                    .breaks_down(t + tick_seconds, volts)
+                    .then_some(FailureMode::Breakdown);
+                if let Some(mode) = broken.or_else(|| self.plant.first_failure(&y, volts)) {
                     run.plant_crossing = Some((mode, t + tick_seconds));
                 }
             }
             if self.history {
                 let amps = last_port.map_or(f64::NAN, |from| {
-                    self.plant
-                        .mean_current_amps(from, (y[0], volts), tick_seconds)
+                    self.plant.mean_current_amps(
+                        from,
+                        (y[0], volts),
+                        tick_seconds,
+                        t + tick_seconds,
+                    )
                 });
                 run.history.push(Sample {
                     seconds: t + tick_seconds,

@@ -44,8 +44,44 @@ pub struct Plant {
     pub params: DeviceParams<f64>,
     pub branches: Vec<Branch>,
     pub amplifier: AmplifierModel,
-    /// The membrane's leakage resistance, Ω (infinite: none), MODEL.md §8.
-    pub leakage_ohms: f64,
+    /// The membrane's leakage resistance over time (MODEL.md §8).
+    pub leakage: Leakage,
+}
+
+/// The membrane's leakage resistance: from `ohms` it falls geometrically to `final_ohms`
+/// over `ramp_seconds` (conduction rising before breakdown), then stays; below
+/// `breakdown_below_ohms` under voltage the membrane breaks down (this scene model's
+/// stand-in for the end of that precursor).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Leakage {
+    pub ohms: f64,
+    pub final_ohms: f64,
+    pub ramp_seconds: f64,
+    pub breakdown_below_ohms: f64,
+}
+
+impl Leakage {
+    /// No leakage, no breakdown by it.
+    pub const NONE: Leakage = Leakage {
+        ohms: f64::INFINITY,
+        final_ohms: f64::INFINITY,
+        ramp_seconds: 0.0,
+        breakdown_below_ohms: 0.0,
+    };
+
+    /// The resistance at `seconds`, Ω.
+    pub fn ohms_at(&self, seconds: f64) -> f64 {
+        if self.final_ohms == self.ohms || !(self.ramp_seconds > 0.0) {
+            return self.final_ohms;
+        }
+        let s = (seconds / self.ramp_seconds).clamp(0.0, 1.0);
+        self.ohms * (self.final_ohms / self.ohms).powf(s)
+    }
+
+    /// Whether the membrane has broken down at `seconds` under `volts`.
+    pub fn breaks_down(&self, seconds: f64, volts: f64) -> bool {
+        volts.abs() > 1.0 && self.ohms_at(seconds) < self.breakdown_below_ohms
+    }
 }
 
 /// ε0, F/m (CODATA 2018).
@@ -193,11 +229,18 @@ impl Plant {
     }
 
     /// The amplifier's mean output current over an interval from (λ, Φ) at its start to
-    /// (λ, Φ) at its end, `seconds` long: the charge's change, dQ/dt with Q = C(λ)·Φ, plus
-    /// the leakage at the mean voltage (MODEL.md §8), A.
-    pub fn mean_current_amps(&self, from: (f64, f64), to: (f64, f64), seconds: f64) -> f64 {
+    /// (λ, Φ) at its end, `seconds` long, ending at `at_seconds`: the charge's change, dQ/dt
+    /// with Q = C(λ)·Φ, plus the leakage at the mean voltage (MODEL.md §8), A.
+    pub fn mean_current_amps(
+        &self,
+        from: (f64, f64),
+        to: (f64, f64),
+        seconds: f64,
+        at_seconds: f64,
+    ) -> f64 {
         let charge = |(stretch, volts): (f64, f64)| self.capacitance(stretch) * volts;
-        (charge(to) - charge(from)) / seconds + 0.5 * (from.1 + to.1) / self.leakage_ohms
+        let leakage = self.leakage.ohms_at(at_seconds - 0.5 * seconds);
+        (charge(to) - charge(from)) / seconds + 0.5 * (from.1 + to.1) / leakage
     }
 
     pub fn volts(&self, y: &Vector, input: f64) -> f64 {

@@ -8,7 +8,7 @@ use de_resonator::DeviceParams;
 use serde::Deserialize;
 
 use crate::hil::{CurrentMonitor, Loop, Sensor};
-use crate::plant::{AmplifierModel, Branch, Plant, MAX_BRANCHES};
+use crate::plant::{AmplifierModel, Branch, Leakage, Plant, MAX_BRANCHES};
 use crate::simulate::{Solver, Tolerance};
 
 /// The reference scene, built in: the main job.
@@ -78,9 +78,16 @@ struct PlantFile {
     rtol: f64,
     #[serde(default = "tolerance")]
     atol: f64,
-    /// The membrane's leakage resistance, Ω (default: none).
+    /// The membrane's leakage resistance, Ω (default: none); it may fall geometrically to
+    /// `leakage_final_ohms` over `leakage_ramp_seconds`; below `breakdown_below_ohms` under
+    /// voltage the membrane breaks down.
     #[serde(default = "infinite")]
     leakage_ohms: f64,
+    leakage_final_ohms: Option<f64>,
+    #[serde(default)]
+    leakage_ramp_seconds: f64,
+    #[serde(default)]
+    breakdown_below_ohms: f64,
 }
 
 impl Default for PlantFile {
@@ -400,17 +407,28 @@ fn plant(nominal: &DeviceParams<f64>, file: &SceneFile, target_hz: f32) -> Resul
     {
         return Err("[amplifier] gain, bandwidth, slew and rail must be positive".into());
     }
-    if !(p.leakage_ohms > 0.0) {
-        return Err(format!(
-            "[plant] leakage_ohms {} must be positive (inf: none)",
-            p.leakage_ohms
-        ));
+    let leakage = Leakage {
+        ohms: p.leakage_ohms,
+        final_ohms: p.leakage_final_ohms.unwrap_or(p.leakage_ohms),
+        ramp_seconds: p.leakage_ramp_seconds,
+        breakdown_below_ohms: p.breakdown_below_ohms,
+    };
+    if !(leakage.ohms > 0.0
+        && leakage.final_ohms > 0.0
+        && leakage.ramp_seconds >= 0.0
+        && leakage.breakdown_below_ohms >= 0.0)
+    {
+        return Err(
+            "[plant] leakage_ohms and leakage_final_ohms must be positive (inf: none), \
+                    leakage_ramp_seconds and breakdown_below_ohms ≥ 0"
+                .into(),
+        );
     }
     let mut plant = Plant {
         params,
         branches,
         amplifier,
-        leakage_ohms: p.leakage_ohms,
+        leakage,
     };
     plant.params.damping = match (p.damping, p.quality_factor) {
         (Some(_), Some(_)) => return Err("[plant] give damping or quality_factor, not both".into()),

@@ -5,7 +5,7 @@ use std::path::Path;
 
 use de_resonator::{Device, DeviceParams, FailureMode, Fault, Tuner, REFERENCE_DEVICE};
 use host_sim::hil::Run;
-use host_sim::plant::{AmplifierModel, Plant};
+use host_sim::plant::{AmplifierModel, Leakage, Plant};
 use host_sim::scene;
 
 fn run(file: &str) -> Run {
@@ -28,7 +28,7 @@ fn elastic_reference() -> Plant {
             slew_volts_per_second: f64::INFINITY,
             rail_volts: f64::INFINITY,
         },
-        leakage_ohms: f64::INFINITY,
+        leakage: Leakage::NONE,
     }
 }
 
@@ -285,12 +285,16 @@ fn too_much_current_noise_faults_safely() {
 #[test]
 fn the_current_at_rest_is_the_leakage() {
     let plant = Plant {
-        leakage_ohms: 2e9,
+        leakage: Leakage {
+            ohms: 2e9,
+            final_ohms: 2e9,
+            ..Leakage::NONE
+        },
         ..elastic_reference()
     };
     let rest = plant.at_rest();
     let at = plant.equilibrium(&rest, 5000.0).unwrap();
-    let amps = plant.mean_current_amps((at[0], 5000.0), (at[0], 5000.0), 1e-3);
+    let amps = plant.mean_current_amps((at[0], 5000.0), (at[0], 5000.0), 1e-3, 1.0);
     assert!((amps - 5000.0 / 2e9).abs() < 1e-12 * 2.5e-6, "{amps}");
     // Charging at rest: the charge C(λ)·Φ of a parallel-plate capacitor of the membrane's
     // current area and thickness (incompressible: h = H/(λ·λ2p)), ε E² energy aside.
@@ -300,12 +304,54 @@ fn the_current_at_rest_is_the_leakage() {
     let thickness = p.thickness / (lambda * p.prestretch_2);
     let capacitance = 8.8541878128e-12 * p.relative_permittivity * area / thickness;
     let no_leak = Plant {
-        leakage_ohms: f64::INFINITY,
+        leakage: Leakage::NONE,
         ..plant.clone()
     };
-    let charging = no_leak.mean_current_amps((lambda, 0.0), (lambda, volts), 1e-3);
+    let charging = no_leak.mean_current_amps((lambda, 0.0), (lambda, volts), 1e-3, 1.0);
     assert!(
         (charging - capacitance * volts / 1e-3).abs() < 1e-12 * charging,
         "{charging}"
+    );
+}
+
+/// The leakage watch (issue 15): the leakage resistance falls geometrically from 1 TΩ to
+/// 100 MΩ over 10 s, and the membrane breaks down below 300 MΩ under voltage, at
+/// t_b = 10·ln(3e8/1e12)/ln(1e8/1e12) s. With the watch's floor at 10 GΩ the controller
+/// faults (`Leakage`) and is at 0 V before t_b; without the watch the plant breaks down at t_b.
+#[test]
+fn the_leakage_watch_faults_before_breakdown() {
+    let breakdown_at = 10.0 * (3e8f64 / 1e12).ln() / (1e8f64 / 1e12).ln();
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/leakage-ramp.toml");
+    let mut s = scene::load(&path).unwrap();
+    s.run.history = true;
+    let r = s.run.run().unwrap();
+    assert!(
+        matches!(r.fault, Some(Fault::Leakage { .. })),
+        "{:?}",
+        r.fault
+    );
+    assert_eq!(r.plant_crossing, None);
+    let zero_from = r
+        .history
+        .iter()
+        .rev()
+        .take_while(|h| h.membrane_volts.abs() < 1.0)
+        .last()
+        .unwrap()
+        .seconds;
+    assert!(
+        zero_from < breakdown_at,
+        "0 V from {zero_from} s, breakdown at {breakdown_at} s"
+    );
+    // The watch off: the same plant breaks down at t_b (within a tick).
+    let mut s = scene::load(&path).unwrap();
+    s.run.history = false;
+    s.run.settings.leakage_floor_ohms = None;
+    let r = s.run.run().unwrap();
+    let (mode, at) = r.plant_crossing.expect("breakdown");
+    assert_eq!(mode, FailureMode::Breakdown);
+    assert!(
+        (at - breakdown_at).abs() <= 1.5e-3,
+        "{at} vs {breakdown_at}"
     );
 }

@@ -51,6 +51,9 @@ pub enum Fault {
     SensorImplausible { value: f32, low: f32, high: f32 },
     /// The stretch sensor gave the same sample `samples` times in a row.
     SensorStuck { samples: u32, value: f32 },
+    /// The membrane's leakage resistance, measured over a window at a steady bias, fell
+    /// below the `leakage_floor_ohms` setting: conduction rising before breakdown.
+    Leakage { ohms: f32, floor_ohms: f32 },
     /// The amplifier's output stayed off the command for `AMPLIFIER_TICKS` ticks.
     AmplifierDisagrees {
         commanded_volts: f32,
@@ -118,6 +121,12 @@ impl fmt::Display for Fault {
             Fault::Sensor { value } => {
                 write!(f, "sensor sample {} is not a number", Decimal(*value))
             }
+            Fault::Leakage { ohms, floor_ohms } => write!(
+                f,
+                "leakage resistance {} Ω is below the floor {} Ω: breakdown may be near",
+                Decimal(*ohms),
+                Decimal(*floor_ohms)
+            ),
             Fault::SensorImplausible { value, low, high } => write!(
                 f,
                 "stretch sample {} is outside ({}, {}), where no device can be: sensor fault",
@@ -180,6 +189,7 @@ impl Fault {
             | Fault::Sensor { .. }
             | Fault::SensorImplausible { .. }
             | Fault::SensorStuck { .. }
+            | Fault::Leakage { .. }
             | Fault::AmplifierDisagrees { .. }
             | Fault::Limit { .. }
             | Fault::Bus

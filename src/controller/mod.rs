@@ -40,12 +40,12 @@ pub use plan::{Plan, MAX_PLAN_TICKS};
 pub use settings::{Setting, Settings, F32_GUARD, MAX_TRIMS, TRIM_SECANT_STEP};
 #[cfg(feature = "trim")]
 pub use trim::{TrimJob, TrimResult};
-pub use watch::{Inputs, AMPLIFIER_TICKS};
+pub use watch::{Inputs, AMPLIFIER_TICKS, LEAKAGE_WINDOW_SECONDS};
 
 use crate::device::Device;
 use crate::drive::{Amplifier, DacCode};
 use gate::gate;
-use watch::{Ring, Watch};
+use watch::{Leakage, Ring, Watch};
 
 /// Where the controller is, for people and tests (the state without its data).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -123,6 +123,8 @@ pub struct Controller {
     plan: Plan,
     tick: u32,
     watch: Watch,
+    /// The leakage watch's sums (MODEL.md §8).
+    leakage: Leakage,
     /// The voltage commanded at the last tick, V.
     last_volts: f32,
     #[cfg(feature = "trim")]
@@ -145,6 +147,7 @@ impl Controller {
             plan: Plan::idle(),
             tick: 0,
             watch: Watch::new(),
+            leakage: Leakage::default(),
             last_volts: 0.0,
             #[cfg(feature = "trim")]
             trim: trim::TrimState::new(*device.params(), true),
@@ -217,6 +220,9 @@ impl Controller {
         if let Some(fault) = Watch::current(inputs.current_amps) {
             return self.fault(fault);
         }
+        if let Some(fault) = self.watch_leakage(inputs.current_amps) {
+            return self.fault(fault);
+        }
         let k = self.tick;
         self.tick = self.tick.saturating_add(1);
         let volts = self.plan.volts(k);
@@ -247,6 +253,27 @@ impl Controller {
                 }
             }
             Err(fault) => self.fault(fault),
+        }
+    }
+
+    /// The leakage watch: the current against the last command, summed while the bias is
+    /// steady (held, driven, or held below the ceiling), started again otherwise.
+    fn watch_leakage(&mut self, amps: Option<f32>) -> Option<Fault> {
+        let floor_ohms = self.settings.leakage_floor_ohms?;
+        let steady = matches!(
+            self.state,
+            State::Holding { .. } | State::Driving { .. } | State::Held { .. }
+        );
+        match amps.filter(|_| steady) {
+            Some(amps) => {
+                let window = (LEAKAGE_WINDOW_SECONDS * self.settings.tick_hz) as u32;
+                self.leakage
+                    .observe(amps, self.last_volts, window.max(1), floor_ohms)
+            }
+            None => {
+                self.leakage = Leakage::default();
+                None
+            }
         }
     }
 

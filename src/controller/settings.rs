@@ -48,6 +48,11 @@ pub struct Settings {
     /// Trim again after this long of AC drive, s (`None`: once): for a plant that drifts,
     /// as a viscoelastic membrane creeps. The AC pauses while the ring is measured.
     pub trim_every_seconds: Option<f32>,
+    /// The leakage watch (MODEL.md §8): the membrane's leakage resistance, from the DC part
+    /// of the amplifier's current against the voltage over each `LEAKAGE_WINDOW_SECONDS` at
+    /// a steady bias, must stay above this, Ω (`None`: no watch). A falling leakage
+    /// resistance is a precursor of breakdown. Needs the current monitor.
+    pub leakage_floor_ohms: Option<f32>,
 }
 
 /// The f32 solve's allowance: the cap is (1 − margin)·(1 − F32_GUARD)·Φlimit in f32, so it
@@ -88,6 +93,7 @@ impl Settings {
             trim_pulse_volts: 200.0,
             trim_probe_fraction: 0.5,
             trim_every_seconds: None,
+            leakage_floor_ohms: None,
         }
     }
 
@@ -98,6 +104,7 @@ impl Settings {
             Setting::StuckSamples => self.stuck_samples.map_or(0.0, |n| n as f32),
             Setting::TrimTolerance => self.trim_tolerance.unwrap_or(0.0),
             Setting::TrimEverySeconds => self.trim_every_seconds.unwrap_or(0.0),
+            Setting::LeakageFloorOhms => self.leakage_floor_ohms.unwrap_or(0.0),
             other => {
                 let mut copy = *self;
                 copy.slot_mut(other).map_or(f32::NAN, |value| *value)
@@ -113,6 +120,7 @@ impl Settings {
             Setting::StuckSamples => self.stuck_samples = on.map(|n| n as u32),
             Setting::TrimTolerance => self.trim_tolerance = on,
             Setting::TrimEverySeconds => self.trim_every_seconds = on,
+            Setting::LeakageFloorOhms => self.leakage_floor_ohms = on,
             other => {
                 if let Some(slot) = self.slot_mut(other) {
                     *slot = value;
@@ -137,9 +145,10 @@ impl Settings {
             Setting::TrimWindowSeconds => &mut self.trim_window_seconds,
             Setting::TrimPulseVolts => &mut self.trim_pulse_volts,
             Setting::TrimProbeFraction => &mut self.trim_probe_fraction,
-            Setting::StuckSamples | Setting::TrimTolerance | Setting::TrimEverySeconds => {
-                return None
-            }
+            Setting::StuckSamples
+            | Setting::TrimTolerance
+            | Setting::TrimEverySeconds
+            | Setting::LeakageFloorOhms => return None,
         })
     }
 
@@ -184,6 +193,9 @@ impl Settings {
         if let Some(every) = self.trim_every_seconds {
             positive(Setting::TrimEverySeconds, every)?;
         }
+        if let Some(ohms) = self.leakage_floor_ohms {
+            positive(Setting::LeakageFloorOhms, ohms)?;
+        }
         let probe = positive(Setting::TrimProbeFraction, self.trim_probe_fraction)?;
         if !(probe <= 1.0) {
             return Err(Fault::Setting {
@@ -227,11 +239,12 @@ pub enum Setting {
     TrimProbeFraction,
     TrimEverySeconds,
     StuckSamples,
+    LeakageFloorOhms,
 }
 
 impl Setting {
     /// Every setting, in `Settings` order.
-    pub const ALL: [Setting; 16] = [
+    pub const ALL: [Setting; 17] = [
         Setting::TargetHz,
         Setting::Margin,
         Setting::SlewVoltsPerSecond,
@@ -248,6 +261,7 @@ impl Setting {
         Setting::TrimPulseVolts,
         Setting::TrimProbeFraction,
         Setting::TrimEverySeconds,
+        Setting::LeakageFloorOhms,
     ];
 
     /// The setting with this key.
@@ -274,6 +288,7 @@ impl Setting {
             Setting::TrimPulseVolts => "trim_pulse_volts",
             Setting::TrimProbeFraction => "trim_probe_fraction",
             Setting::TrimEverySeconds => "trim_every_seconds",
+            Setting::LeakageFloorOhms => "leakage_floor_ohms",
         }
     }
 }

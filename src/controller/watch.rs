@@ -69,6 +69,46 @@ pub(super) enum Ring {
     Nothing,
 }
 
+/// The leakage watch's window, s: long enough that the AC drive and the ring average out of
+/// the current (whole periods but a fraction), short against a leakage that falls over
+/// seconds.
+pub const LEAKAGE_WINDOW_SECONDS: f32 = 1.0;
+
+/// The leakage watch's sums over its window at a steady bias (MODEL.md §8): the current's
+/// DC part against the voltage is the leakage conductance.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Leakage {
+    ticks: u32,
+    amps: f32,
+    volts: f32,
+}
+
+impl Leakage {
+    /// A tick's current under `volts` (the command the current flowed under); at the window's
+    /// end, the leakage resistance against `floor_ohms`: below it is a fault.
+    pub(super) fn observe(
+        &mut self,
+        amps: f32,
+        volts: f32,
+        window_ticks: u32,
+        floor_ohms: f32,
+    ) -> Option<Fault> {
+        self.ticks += 1;
+        self.amps += amps;
+        self.volts += volts;
+        if self.ticks < window_ticks {
+            return None;
+        }
+        let (amps, volts) = (self.amps, self.volts);
+        *self = Leakage::default();
+        // Σi/ΣΦ is the conductance; compared without dividing (Σi may be 0 or negative).
+        (volts > 0.0 && amps * floor_ohms > volts).then_some(Fault::Leakage {
+            ohms: volts / amps,
+            floor_ohms,
+        })
+    }
+}
+
 /// The watch's memory between ticks.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Watch {
