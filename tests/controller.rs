@@ -1894,14 +1894,18 @@ fn the_leakage_watch_measures_the_dc_current_against_the_voltage() {
             ..Settings::for_target(44.0)
         };
         let mut c = start(settings).unwrap();
-        let (mut volts, mut fault) = (0.0f32, None);
+        let (mut volts, mut fault, mut at_bias) = (0.0f32, None, None);
         // A ±1 µA square "noise" that averages out over the window.
         for k in 0..5000u32 {
             let noise = if k % 2 == 0 { 1e-6 } else { -1e-6 };
             let out = c.tick(Inputs::current(volts / ohms + noise));
-            if let Some(Event::Fault(f)) = out.event {
-                fault = Some((k, f));
-                break;
+            match out.event {
+                Some(Event::Fault(f)) => {
+                    fault = Some((k, f));
+                    break;
+                }
+                Some(Event::AtBias { .. }) => at_bias = Some(k),
+                _ => {}
             }
             volts = out.volts;
         }
@@ -1918,8 +1922,8 @@ fn the_leakage_watch_measures_the_dc_current_against_the_voltage() {
             ) => {
                 assert!((seen / ohms - 1.0).abs() < 1e-3, "{seen}");
                 assert_eq!(Some(floor_ohms), floor);
-                // The ramp (0.75 s at 10 kV/s), the window (1 s), and a tick.
-                assert!(k <= 1800, "{k}");
+                // Held from the tick after the bias is reached: one window, 1 s at 1 kHz.
+                assert_eq!(Some(k), at_bias.map(|a| a + 1000));
             }
             (false, None) => {}
             other => panic!("{floor:?} {ohms}: {other:?}"),
