@@ -343,8 +343,12 @@ impl Loop {
             }
         };
         let mut noise = Noise(self.seed);
-        // The membrane's (stretch, volts) at the last tick, for the current over a tick.
-        let mut last_port: Option<(f64, f64)> = None;
+        // The amplifier's current, worked out only when a monitor or the history reads it:
+        // the membrane's (stretch, volts) at the tick's start, and the mean current over the
+        // last tick (none before the first).
+        let current_wanted = self.current_monitor.is_some() || self.history;
+        let mut port = (y[0], self.plant.volts(&y, 0.0));
+        let mut last_current: Option<f64> = None;
         let mut reading = f64::NAN;
         let gain = self.plant.amplifier.gain;
         let amplifier_input = || {
@@ -364,16 +368,11 @@ impl Loop {
                 bus.fail_after.set(Some(bus.frames.get()));
             }
             let membrane_volts = self.plant.volts(&y, amplifier_input());
-            // The output current over the last tick, from the membrane's charge (§8).
-            let port = (y[0], membrane_volts);
-            let current =
-                last_port.map(|from| self.plant.mean_current_amps(from, port, tick_seconds, t));
-            last_port = Some(port);
             if let Some(c) = controller.as_mut() {
                 let mut inputs = self.inputs(&mut noise, &mut reading, k, t, &y, membrane_volts);
                 inputs.current_amps = self
                     .current_monitor
-                    .zip(current)
+                    .zip(last_current)
                     .map(|(monitor, amps)| monitor.read(amps, &mut noise) as f32);
                 let out = c.tick(inputs);
                 let out = stage.send(c, out);
@@ -410,20 +409,22 @@ impl Loop {
                     run.plant_crossing = Some((mode, t + tick_seconds));
                 }
             }
+            if current_wanted {
+                // The output current over this tick, from the membrane's charge (§8).
+                let end = (y[0], volts);
+                last_current =
+                    Some(
+                        self.plant
+                            .mean_current_amps(port, end, tick_seconds, t + tick_seconds),
+                    );
+                port = end;
+            }
             if self.history {
-                let amps = last_port.map_or(f64::NAN, |from| {
-                    self.plant.mean_current_amps(
-                        from,
-                        (y[0], volts),
-                        tick_seconds,
-                        t + tick_seconds,
-                    )
-                });
                 run.history.push(Sample {
                     seconds: t + tick_seconds,
                     stretch: y[0],
                     membrane_volts: volts,
-                    current_amps: amps,
+                    current_amps: last_current.unwrap_or(f64::NAN),
                 });
             }
             run.final_membrane_volts = volts;

@@ -10,7 +10,9 @@ use clap::Args;
 use de_resonator::{Device, Field, Tuner};
 use serde::Serialize;
 
-use super::{out_dir, short, sig, write_csv_and_plot, DeviceArgs, DeviceInfo, MarginArgs, Report};
+use super::{
+    prepare_dir, short, sig, write_csv_and_plot, DeviceArgs, DeviceInfo, MarginArgs, Report,
+};
 use crate::plot::{Marker, Panel, Series, Style, COLOURS, RED};
 
 /// The most curves in a family, and the most points a curve.
@@ -217,7 +219,7 @@ pub fn curve(args: &CurveArgs) -> Result<CurveReport, String> {
         one.set(Field::Prestretch2, twos[0]);
         Device::new(one).map_err(|e| format!("{device}: {e}"))?;
     }
-    out_dir(&args.out)?;
+    prepare_dir(&args.out)?;
     let mut curves = Vec::new();
     for &l1 in &ones {
         for &l2 in &twos {

@@ -120,7 +120,7 @@ impl Crossing {
 pub use crate::text::{finite, short, sig};
 
 /// Create `dir` and check it takes files, before the work that fills it (not after).
-pub fn out_dir(dir: &Path) -> Result<(), String> {
+pub fn prepare_dir(dir: &Path) -> Result<(), String> {
     std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
     let probe = dir.join(".host-sim-write-test");
     std::fs::write(&probe, b"")
@@ -131,8 +131,12 @@ pub fn out_dir(dir: &Path) -> Result<(), String> {
 /// Write `bytes` to `dir/file`, creating `dir`; the path written, or why not.
 pub fn write_file(dir: &Path, file: &str, bytes: &[u8]) -> Result<String, String> {
     std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
-    let path = dir.join(file);
-    std::fs::write(&path, bytes).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    write_path(&dir.join(file), bytes)
+}
+
+/// Write `bytes` to `path`; the path written, or why not.
+pub fn write_path(path: &Path, bytes: &[u8]) -> Result<String, String> {
+    std::fs::write(path, bytes).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     Ok(path.display().to_string())
 }
 

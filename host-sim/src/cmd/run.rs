@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 use serde::Serialize;
 
-use super::{finite, out_dir, sig, write_file, Crossing, DeviceInfo, Report};
+use super::{finite, prepare_dir, sig, write_file, Crossing, DeviceInfo, Report};
 use crate::hil::{Run, Sample};
 use crate::plot::{svg, Marker, Panel, Series, RED};
 use crate::scene::{self, Scene};
@@ -199,7 +199,7 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<RunReport, String> {
     };
     let dir = scene::out_dir(&args.out, &scene);
     if scene.plot || scene.history {
-        out_dir(&dir)?;
+        prepare_dir(&dir)?;
     }
     if !quiet {
         eprintln!(

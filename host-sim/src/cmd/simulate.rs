@@ -2,13 +2,13 @@
 //! dynamic safety monitor (the six checks of MODEL.md §6 at every step).
 
 use std::fmt;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use clap::Args;
 use de_resonator::Device;
 use serde::Serialize;
 
-use super::{out_dir, sig, Crossing, DeviceArgs, DeviceInfo, Report};
+use super::{prepare_dir, sig, write_path, Crossing, DeviceArgs, DeviceInfo, Report};
 use crate::plot::{svg, Marker, Panel, Series, RED};
 use crate::simulate::{self, Choice, Scene, Solver, Start, Tolerance};
 
@@ -215,7 +215,7 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
     // Where the files go, checked before the work.
     for path in [&args.csv, &args.plot].into_iter().flatten() {
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            out_dir(dir)?;
+            prepare_dir(dir)?;
         }
     }
     let scene = Scene {
@@ -247,11 +247,11 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
                 }
             })
             .collect();
-        files.push(write(path, &super::csv(&rows)?)?);
+        files.push(write_path(path, &super::csv(&rows)?)?);
     }
     if let Some(path) = &args.plot {
         let panel = plot(&device, &checked, &scene, &out, args.method.name());
-        files.push(write(path, svg(&[panel]).as_bytes())?);
+        files.push(write_path(path, svg(&[panel]).as_bytes())?);
     }
     Ok(SimulateReport {
         device,
@@ -273,11 +273,6 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
         files,
         first_limit_description: out.first_limit.map(|(mode, _)| mode.description()),
     })
-}
-
-fn write(path: &Path, bytes: &[u8]) -> Result<String, String> {
-    std::fs::write(path, bytes).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-    Ok(path.display().to_string())
 }
 
 /// The stretch against time, the limit's stretch on the loading branch as a level, the

@@ -8,7 +8,7 @@ use clap::Args;
 use de_resonator::{Device, Tuner};
 use serde::Serialize;
 
-use super::{out_dir, short, sig, write_csv_and_plot, DeviceArgs, DeviceInfo, Report};
+use super::{prepare_dir, short, sig, write_csv_and_plot, DeviceArgs, DeviceInfo, Report};
 use crate::plot::{Panel, Series, Style, GREY, RED};
 use crate::sweep::{self, Sweep};
 
@@ -248,7 +248,7 @@ pub fn sweep(args: &SweepArgs) -> Result<SweepReport, String> {
             sig((steps * 2e-8 / 2.0).round())
         ));
     }
-    out_dir(&args.out)?;
+    prepare_dir(&args.out)?;
     if quality > 0.0 {
         params.damping = params.effective_mass() * std::f64::consts::TAU * natural_hz / quality;
         s.params = params;
