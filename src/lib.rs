@@ -32,6 +32,7 @@ pub mod shell;
 #[cfg(feature = "storage")]
 pub mod store;
 pub mod table;
+pub mod track;
 pub mod trim;
 pub mod tuning;
 

@@ -550,6 +550,8 @@ fn every_setting_by_its_key() {
         "trim_probe_fraction",
         "trim_every_seconds",
         "leakage_floor_ohms",
+        "leakage_fall_per_second",
+        "track_seconds",
     ];
     assert_eq!(Setting::ALL.map(Setting::key), keys);
     let mut s = Settings::for_target(44.0);

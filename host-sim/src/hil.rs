@@ -196,8 +196,29 @@ pub struct Run {
     /// are at the end) and its mode.
     pub limit: Option<(FailureMode, f64)>,
     pub history: Vec<Sample>,
+    /// With tracking on (`track_seconds`): every `TRACE_SECONDS`, the plant's natural
+    /// frequency at the bias held and what the tracker measures.
+    pub tracking: Vec<Tracked>,
     pub ticks: u64,
     pub run_seconds: f64,
+}
+
+/// How often a tracked run records `Tracked`, s.
+pub const TRACE_SECONDS: f64 = 0.1;
+
+/// A tracked drive at one time: the true plant against the tracker.
+#[derive(Clone, Copy, Debug)]
+pub struct Tracked {
+    pub seconds: f64,
+    /// The plant's natural frequency at its equilibrium under the controller's bias
+    /// (networks frozen as they are), Hz; NaN if there is none.
+    pub plant_hz: f64,
+    /// The drive's frequency, Hz (NaN before the tracker runs).
+    pub drive_hz: f64,
+    /// The tracker's last cycle: natural frequency, Hz, and Q.
+    pub measured_hz: f64,
+    pub quality_factor: f64,
+    pub bias_volts: f64,
 }
 
 impl Run {
@@ -320,6 +341,7 @@ impl Loop {
             natural_frequency_hz: f64::NAN,
             limit: None,
             history: Vec::new(),
+            tracking: Vec::new(),
             ticks: 0,
             run_seconds: 0.0,
         };
@@ -358,6 +380,9 @@ impl Loop {
                 0.0
             }
         };
+        let tracked = self.settings.track_seconds.is_some();
+        let trace_every =
+            ((TRACE_SECONDS * f64::from(self.settings.tick_hz)).round() as u64).max(1);
         for k in 0..ticks {
             if k % every == 0 {
                 progress.set_position(k);
@@ -427,6 +452,10 @@ impl Loop {
                     current_amps: last_current.unwrap_or(f64::NAN),
                 });
             }
+            if tracked && (k + 1) % trace_every == 0 {
+                run.tracking
+                    .push(self.tracked(controller.as_ref(), &y, t + tick_seconds));
+            }
             run.final_membrane_volts = volts;
             run.ticks = k + 1;
         }
@@ -447,6 +476,29 @@ impl Loop {
             .equilibrium(&y, 0.0)
             .and_then(|unbiased| self.plant.limit_volts(&unbiased, 0.0));
         Ok(run)
+    }
+
+    /// The plant against the tracker at `seconds`.
+    fn tracked(&self, controller: Option<&Controller>, y: &Vector, seconds: f64) -> Tracked {
+        let bias = controller.map_or(0.0, |c| f64::from(c.plan().bias_volts));
+        let plant_hz = self.plant.equilibrium(y, bias).map_or(f64::NAN, |rest| {
+            self.plant.natural_frequency_hz(&rest, bias)
+        });
+        let lock = controller.and_then(|c| c.tracked());
+        let drive_hz = controller
+            .filter(|c| c.plan().ac_tick.is_some())
+            .map_or(f64::NAN, |c| {
+                f64::from(self.settings.tick_hz) * f64::from(c.plan().ac_phase_step)
+                    / 4_294_967_296.0
+            });
+        Tracked {
+            seconds,
+            plant_hz,
+            drive_hz,
+            measured_hz: lock.map_or(f64::NAN, |l| f64::from(l.natural_hz)),
+            quality_factor: lock.map_or(f64::NAN, |l| f64::from(l.quality_factor)),
+            bias_volts: bias,
+        }
     }
 
     /// This tick's measurements.

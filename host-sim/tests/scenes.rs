@@ -210,6 +210,36 @@ fn viscoelastic_scene_trims_within_half_a_percent() {
     assert!(r.events.iter().any(|e| e.what.contains("paused")));
 }
 
+/// Resonance tracking (issue 15): the VHB plant creeps for 60 s (its 6.6 s and 61 s
+/// branches relax under the bias); the drive, once on, is never paused, and from 5 s on the
+/// true plant's natural frequency (its own statics, networks frozen as they are, every
+/// 0.1 s) stays within 0.1% of the target, while the bias it needs falls by hundreds of
+/// volts. The tracker's Q is the plant's order of magnitude (30 set, the branches add loss).
+#[test]
+fn tracking_holds_a_creeping_plant_within_a_tenth_of_a_percent() {
+    let r = run("tracking-vhb.toml");
+    assert!(r.refused.is_none() && r.fault.is_none(), "{r:?}");
+    assert_eq!(r.plant_crossing, None);
+    assert!(!r.events.iter().any(|e| e.what.contains("paused")));
+    let from = r.tracking.iter().filter(|t| t.seconds >= 5.0 - 1e-9);
+    let mut worst: f64 = 0.0;
+    for t in from {
+        // The drive on at every sample from 5 s (never paused), the plant on target.
+        assert!(t.drive_hz.is_finite(), "{t:?}");
+        worst = worst.max((t.plant_hz / 47.0 - 1.0).abs());
+    }
+    assert!(worst < 1e-3, "{worst}");
+    assert_eq!(r.tracking.last().map(|t| t.seconds.round()), Some(60.0));
+    // The drift the tracking followed: the bias at 5 s against the end.
+    let at5 = r.tracking.iter().find(|t| t.seconds >= 5.0).unwrap();
+    let end = r.tracking.last().unwrap();
+    assert!(at5.bias_volts - end.bias_volts > 200.0, "{at5:?} {end:?}");
+    assert!(
+        end.quality_factor > 10.0 && end.quality_factor < 30.0,
+        "{end:?}"
+    );
+}
+
 /// The stiff plant (a 0.2 ms branch) integrates with BDF through the whole run, safely.
 #[test]
 fn stiff_scene_runs_with_bdf() {
@@ -354,4 +384,34 @@ fn the_leakage_watch_faults_before_breakdown() {
         (at - breakdown_at).abs() <= 1.5e-3,
         "{at} vs {breakdown_at}"
     );
+    // No floor, the rate of fall only (the resistance falls 10^0.4 = 2.5 times a second;
+    // 1.5 per second of R_previous/R − 1 allowed would pass it, 0.5 not): a fault of its
+    // own kind, and 0 V, before t_b.
+    for (rate, faults) in [(0.5, true), (2.0, false)] {
+        let mut s = scene::load(&path).unwrap();
+        s.run.history = true;
+        s.run.settings.leakage_floor_ohms = None;
+        s.run.settings.leakage_fall_per_second = Some(rate);
+        let r = s.run.run().unwrap();
+        if !faults {
+            assert!(r.fault.is_none(), "{:?}", r.fault);
+            continue;
+        }
+        assert!(
+            matches!(r.fault, Some(Fault::LeakageFalling { .. })),
+            "{:?}",
+            r.fault
+        );
+        assert_eq!(r.plant_crossing, None);
+        let zero_from = r
+            .history
+            .iter()
+            .rev()
+            .take_while(|h| h.membrane_volts.abs() < 1.0)
+            .last()
+            .unwrap()
+            .seconds;
+        assert!(zero_from < breakdown_at, "{zero_from} vs {breakdown_at}");
+        eprintln!("falling: 0 V from {zero_from} s, {:?}", r.events.last());
+    }
 }

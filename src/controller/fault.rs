@@ -54,6 +54,12 @@ pub enum Fault {
     /// The membrane's leakage resistance, measured over a window at a steady bias, fell
     /// below the `leakage_floor_ohms` setting: conduction rising before breakdown.
     Leakage { ohms: f32, floor_ohms: f32 },
+    /// The leakage resistance fell from one window to the next faster than
+    /// `leakage_fall_per_second` allows, beyond the current's scatter.
+    LeakageFalling { ohms: f32, previous_ohms: f32 },
+    /// The tracked drive left the target by more than `track::MAX_DETUNING` (the lock is
+    /// lost, or the plant is far from the model): Hz.
+    TrackLost { drive_hz: f32, target_hz: f32 },
     /// The amplifier's output stayed off the command for `AMPLIFIER_TICKS` ticks.
     AmplifierDisagrees {
         commanded_volts: f32,
@@ -127,6 +133,25 @@ impl fmt::Display for Fault {
                 Decimal(*ohms),
                 Decimal(*floor_ohms)
             ),
+            Fault::LeakageFalling {
+                ohms,
+                previous_ohms,
+            } => write!(
+                f,
+                "leakage resistance fell from {} Ω to {} Ω in one window, faster than \
+                 leakage_fall_per_second allows: breakdown may be near",
+                Decimal(*previous_ohms),
+                Decimal(*ohms)
+            ),
+            Fault::TrackLost {
+                drive_hz,
+                target_hz,
+            } => write!(
+                f,
+                "tracked drive at {} Hz, too far from the target {} Hz: lock lost",
+                Decimal(*drive_hz),
+                Decimal(*target_hz)
+            ),
             Fault::SensorImplausible { value, low, high } => write!(
                 f,
                 "stretch sample {} is outside ({}, {}), where no device can be: sensor fault",
@@ -190,6 +215,8 @@ impl Fault {
             | Fault::SensorImplausible { .. }
             | Fault::SensorStuck { .. }
             | Fault::Leakage { .. }
+            | Fault::LeakageFalling { .. }
+            | Fault::TrackLost { .. }
             | Fault::AmplifierDisagrees { .. }
             | Fault::Limit { .. }
             | Fault::Bus

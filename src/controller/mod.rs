@@ -29,6 +29,8 @@ mod fault;
 mod gate;
 mod plan;
 mod settings;
+#[cfg(feature = "track")]
+mod tracking;
 #[cfg(feature = "trim")]
 mod trim;
 mod watch;
@@ -45,7 +47,7 @@ pub use watch::{Inputs, AMPLIFIER_TICKS, LEAKAGE_WINDOW_SECONDS};
 use crate::device::Device;
 use crate::drive::{Amplifier, DacCode};
 use gate::gate;
-use watch::{Leakage, Ring, Watch};
+use watch::{Leakage, LeakageLimits, Ring, Watch};
 
 /// Where the controller is, for people and tests (the state without its data).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -129,6 +131,9 @@ pub struct Controller {
     last_volts: f32,
     #[cfg(feature = "trim")]
     trim: trim::TrimState,
+    /// The resonance tracker, while a tracked drive is on.
+    #[cfg(feature = "track")]
+    tracking: tracking::Tracking,
 }
 
 impl Controller {
@@ -151,6 +156,8 @@ impl Controller {
             last_volts: 0.0,
             #[cfg(feature = "trim")]
             trim: trim::TrimState::new(*device.params(), true),
+            #[cfg(feature = "track")]
+            tracking: tracking::Tracking::default(),
         }
     }
 
@@ -259,16 +266,25 @@ impl Controller {
     /// The leakage watch: the current against the last command, summed while the bias is
     /// steady (held, driven, or held below the ceiling), started again otherwise.
     fn watch_leakage(&mut self, amps: Option<f32>) -> Option<Fault> {
-        let floor_ohms = self.settings.leakage_floor_ohms?;
+        let s = &self.settings;
+        if s.leakage_floor_ohms.is_none() && s.leakage_fall_per_second.is_none() {
+            return None;
+        }
         let steady = matches!(
             self.state,
             State::Holding { .. } | State::Driving { .. } | State::Held { .. }
         );
         match amps.filter(|_| steady) {
             Some(amps) => {
-                let window = (LEAKAGE_WINDOW_SECONDS * self.settings.tick_hz) as u32;
-                self.leakage
-                    .observe(amps, self.last_volts, window.max(1), floor_ohms)
+                let window = (LEAKAGE_WINDOW_SECONDS * s.tick_hz) as u32;
+                let limits = LeakageLimits {
+                    window_ticks: window.max(1),
+                    floor_ohms: s.leakage_floor_ohms,
+                    fall: s
+                        .leakage_fall_per_second
+                        .map(|rate| rate * LEAKAGE_WINDOW_SECONDS),
+                };
+                self.leakage.observe(amps, self.last_volts, limits)
             }
             None => {
                 self.leakage = Leakage::default();
@@ -317,6 +333,8 @@ impl Controller {
             }
             #[cfg(feature = "trim")]
             State::Solving => self.apply_trim(k),
+            #[cfg(feature = "track")]
+            State::Driving { .. } if self.settings.track_seconds.is_some() => self.track(k, ring),
             _ => Ok(None),
         }
     }
@@ -407,7 +425,8 @@ impl Controller {
     /// `TrimJob::solve` outside the tick (a low-priority task) and give its result to
     /// `trim_done`; the bias holds meanwhile.
     pub fn trim_job(&mut self) -> Option<TrimJob> {
-        if self.state != State::Solving || self.trim.handed_out {
+        let wanted = self.state == State::Solving || self.trim.tracked_hz.is_some();
+        if !wanted || self.trim.handed_out {
             return None;
         }
         self.trim.handed_out = true;
@@ -417,7 +436,8 @@ impl Controller {
 
     /// The result of the job handed out: the next tick applies it.
     pub fn trim_done(&mut self, result: TrimResult) {
-        if self.state == State::Solving && self.trim.handed_out {
+        let wanted = self.state == State::Solving || self.trim.tracked_hz.is_some();
+        if wanted && self.trim.handed_out {
             self.trim.result = Some(result);
         }
     }

@@ -35,6 +35,13 @@ pub struct Plan {
     /// AC phase advance per tick, in units of 2π/2³²: the phase is an exact integer, so it
     /// neither drifts nor loses precision however long the drive runs.
     pub ac_phase_step: u32,
+    /// The AC's phase at `ac_tick` (a tracked drive changes its frequency there, in phase).
+    pub ac_phase_start: u32,
+}
+
+/// The AC's phase advance per tick for `hz` at `tick_hz`, in units of 2π/2³².
+pub(super) fn phase_step(hz: f32, tick_hz: f32) -> u32 {
+    ((hz / tick_hz) as f64 * 4_294_967_296.0) as u32
 }
 
 impl Plan {
@@ -50,6 +57,7 @@ impl Plan {
             ac_tick: None,
             ac_volts: 0.0,
             ac_phase_step: 0,
+            ac_phase_start: 0,
         }
     }
 
@@ -86,7 +94,8 @@ impl Plan {
             pulse_volts: 0.0,
             ac_tick: drive.then_some(ac_tick as u32),
             ac_volts: if s.ac_hz > 0.0 { s.ac_volts } else { 0.0 },
-            ac_phase_step: ((s.ac_hz / s.tick_hz) as f64 * 4_294_967_296.0) as u32,
+            ac_phase_step: phase_step(s.ac_hz, s.tick_hz),
+            ac_phase_start: 0,
         };
         Ok((plan, ac_tick as u32 + check_ticks as u32 + 1))
     }
@@ -112,13 +121,23 @@ impl Plan {
         }
     }
 
-    /// The voltage at tick `k`.
+    /// The AC's phase at tick `k`, in units of 2π/2³² (0 before the AC starts).
+    pub fn phase(&self, k: u32) -> u32 {
+        match self.ac_tick {
+            Some(from) if k >= from => (k - from)
+                .wrapping_mul(self.ac_phase_step)
+                .wrapping_add(self.ac_phase_start),
+            _ => 0,
+        }
+    }
+
+    /// The voltage at tick `k`: the AC rides on the ramp (a tracked drive's bias moves with
+    /// the drive on).
     pub fn volts(&self, k: u32) -> f32 {
         match self.ac_tick {
             Some(from) if k >= from => {
-                let phase = (k - from).wrapping_mul(self.ac_phase_step);
-                let angle = phase as f32 * (TAU / 4_294_967_296.0);
-                self.bias_volts + self.ac_volts * Real::sin(angle)
+                let angle = self.phase(k) as f32 * (TAU / 4_294_967_296.0);
+                self.ramp_volts(k) + self.ac_volts * Real::sin(angle)
             }
             _ => {
                 let ramp = self.ramp_volts(k);

@@ -53,6 +53,15 @@ pub struct Settings {
     /// a steady bias, must stay above this, Ω (`None`: no watch). A falling leakage
     /// resistance is a precursor of breakdown. Needs the current monitor.
     pub leakage_floor_ohms: Option<f32>,
+    /// The leakage watch's second test: from one window to the next, the leakage resistance
+    /// may fall by at most this fraction a second, where the fall stands out of the current's
+    /// scatter (`None`: no such test). A fast fall comes before breakdown, far above a floor.
+    pub leakage_fall_per_second: Option<f32>,
+    /// Resonance tracking while driving (feature `track`, `crate::track`): the drive follows
+    /// the resonance measured in the stretch with this time constant, s, and the bias is
+    /// retuned to the target within `trim_tolerance` without pausing the drive (`None`: off).
+    /// Needs the stretch sensor and a trim; not with `trim_every_seconds`.
+    pub track_seconds: Option<f32>,
 }
 
 /// The f32 solve's allowance: the cap is (1 − margin)·(1 − F32_GUARD)·Φlimit in f32, so it
@@ -94,6 +103,8 @@ impl Settings {
             trim_probe_fraction: 0.5,
             trim_every_seconds: None,
             leakage_floor_ohms: None,
+            leakage_fall_per_second: None,
+            track_seconds: None,
         }
     }
 
@@ -105,6 +116,8 @@ impl Settings {
             Setting::TrimTolerance => self.trim_tolerance.unwrap_or(0.0),
             Setting::TrimEverySeconds => self.trim_every_seconds.unwrap_or(0.0),
             Setting::LeakageFloorOhms => self.leakage_floor_ohms.unwrap_or(0.0),
+            Setting::LeakageFallPerSecond => self.leakage_fall_per_second.unwrap_or(0.0),
+            Setting::TrackSeconds => self.track_seconds.unwrap_or(0.0),
             other => {
                 let mut copy = *self;
                 copy.slot_mut(other).map_or(f32::NAN, |value| *value)
@@ -121,6 +134,8 @@ impl Settings {
             Setting::TrimTolerance => self.trim_tolerance = on,
             Setting::TrimEverySeconds => self.trim_every_seconds = on,
             Setting::LeakageFloorOhms => self.leakage_floor_ohms = on,
+            Setting::LeakageFallPerSecond => self.leakage_fall_per_second = on,
+            Setting::TrackSeconds => self.track_seconds = on,
             other => {
                 if let Some(slot) = self.slot_mut(other) {
                     *slot = value;
@@ -148,7 +163,9 @@ impl Settings {
             Setting::StuckSamples
             | Setting::TrimTolerance
             | Setting::TrimEverySeconds
-            | Setting::LeakageFloorOhms => return None,
+            | Setting::LeakageFloorOhms
+            | Setting::LeakageFallPerSecond
+            | Setting::TrackSeconds => return None,
         })
     }
 
@@ -196,6 +213,24 @@ impl Settings {
         if let Some(ohms) = self.leakage_floor_ohms {
             positive(Setting::LeakageFloorOhms, ohms)?;
         }
+        if let Some(rate) = self.leakage_fall_per_second {
+            positive(Setting::LeakageFallPerSecond, rate)?;
+        }
+        if let Some(seconds) = self.track_seconds {
+            positive(Setting::TrackSeconds, seconds)?;
+            // Built without tracking, or without the trim it retunes with, or with the
+            // periodic trim that pauses the drive it would track: an error, not a silent no.
+            if !cfg!(feature = "track")
+                || self.trim_tolerance.is_none()
+                || self.trim_every_seconds.is_some()
+                || !(self.ac_volts > 0.0)
+            {
+                return Err(Fault::Setting {
+                    setting: Setting::TrackSeconds,
+                    value: seconds,
+                });
+            }
+        }
         let probe = positive(Setting::TrimProbeFraction, self.trim_probe_fraction)?;
         if !(probe <= 1.0) {
             return Err(Fault::Setting {
@@ -240,11 +275,13 @@ pub enum Setting {
     TrimEverySeconds,
     StuckSamples,
     LeakageFloorOhms,
+    LeakageFallPerSecond,
+    TrackSeconds,
 }
 
 impl Setting {
     /// Every setting, in `Settings` order.
-    pub const ALL: [Setting; 17] = [
+    pub const ALL: [Setting; 19] = [
         Setting::TargetHz,
         Setting::Margin,
         Setting::SlewVoltsPerSecond,
@@ -262,6 +299,8 @@ impl Setting {
         Setting::TrimProbeFraction,
         Setting::TrimEverySeconds,
         Setting::LeakageFloorOhms,
+        Setting::LeakageFallPerSecond,
+        Setting::TrackSeconds,
     ];
 
     /// The setting with this key.
@@ -289,6 +328,8 @@ impl Setting {
             Setting::TrimProbeFraction => "trim_probe_fraction",
             Setting::TrimEverySeconds => "trim_every_seconds",
             Setting::LeakageFloorOhms => "leakage_floor_ohms",
+            Setting::LeakageFallPerSecond => "leakage_fall_per_second",
+            Setting::TrackSeconds => "track_seconds",
         }
     }
 }

@@ -11,6 +11,10 @@ use crate::device::{Device, DeviceParams};
 use crate::trim::{estimate_shear_modulus, ring_frequency_hz, TrimError, MAX_WINDOW};
 use crate::tuning::Tuner;
 
+/// The relative frequency error at which the trim before a tracked drive hands over to the
+/// tracker.
+pub const TRACK_HANDOVER: f32 = 0.05;
+
 /// The trim's memory between ticks: the model as estimated so far, the secant's last
 /// point, and the window being measured.
 #[derive(Clone, Debug)]
@@ -33,6 +37,9 @@ pub(super) struct TrimState {
     pub(super) result: Option<TrimResult>,
     /// Whether the job for the window just measured was handed out.
     pub(super) handed_out: bool,
+    /// A tracked drive's measured natural frequency, Hz, whose retune is wanted (instead of
+    /// a window's ring).
+    pub(super) tracked_hz: Option<f32>,
 }
 
 impl TrimState {
@@ -47,6 +54,7 @@ impl TrimState {
             charge: 0.0,
             result: None,
             handed_out: false,
+            tracked_hz: None,
         }
     }
 }
@@ -63,6 +71,8 @@ pub struct TrimJob {
     count: u8,
     previous: Option<(f32, f32)>,
     ceiling_volts: f32,
+    /// Measured by the tracker (the window is not read), Hz.
+    measured_hz: Option<f32>,
 }
 
 /// What a trim's solve found, given back by `Controller::trim_done`.
@@ -111,6 +121,7 @@ impl TrimJob {
             count: state.count,
             previous: state.previous,
             ceiling_volts,
+            measured_hz: state.tracked_hz,
         }
     }
 
@@ -129,10 +140,18 @@ impl TrimJob {
     fn try_solve(&self) -> Result<TrimResult, Fault> {
         let s = self.settings;
         let window = self.window.get(..self.len).unwrap_or(&self.window);
-        let measured_hz = ring_frequency_hz(window, s.tick_hz).map_err(Fault::Trim)?;
+        let measured_hz = match self.measured_hz {
+            Some(hz) => hz,
+            None => ring_frequency_hz(window, s.tick_hz).map_err(Fault::Trim)?,
+        };
         let shear_modulus = estimate_shear_modulus(&self.params, self.bias_volts, measured_hz)
             .map_err(Fault::Trim)?;
-        let tolerance = s.trim_tolerance.unwrap_or(0.0);
+        let mut tolerance = s.trim_tolerance.unwrap_or(0.0);
+        if s.track_seconds.is_some() && self.measured_hz.is_none() {
+            // Before a tracked drive, the ring's trim need only bring the resonance within
+            // the tracker's reach: the tracker holds the target with the drive on.
+            tolerance = tolerance.max(TRACK_HANDOVER);
+        }
         let converged = self.tuned && (measured_hz - s.target_hz).abs() <= tolerance * s.target_hz;
         if converged {
             return Ok(TrimResult::Converged {
@@ -229,6 +248,7 @@ mod tests {
             count: 1,
             previous,
             ceiling_volts: 9361.9,
+            measured_hz: None,
         }
     }
 

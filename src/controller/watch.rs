@@ -81,31 +81,89 @@ pub(super) struct Leakage {
     ticks: u32,
     amps: f32,
     volts: f32,
+    /// The current summed over the part of the window being summed, and the parts' means'
+    /// sum and sum of squares: the scatter of the window's mean (the AC and the ring average
+    /// out of each part, the noise does not).
+    part_amps: f32,
+    parts_mean: f32,
+    parts_mean_squared: f32,
+    /// The last window's conductance and its standard error, S.
+    previous: Option<(f32, f32)>,
 }
+
+/// Parts of a window whose means give its scatter.
+const PARTS: u32 = 10;
+
+/// What the leakage watch tests at each window's end.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct LeakageLimits {
+    pub(super) window_ticks: u32,
+    pub(super) floor_ohms: Option<f32>,
+    /// Largest R_previous/R − 1 from one window to the next (the fall a second times the
+    /// window).
+    pub(super) fall: Option<f32>,
+}
+
+/// How far a fall must stand out of the windows' scatter (standard errors) to count.
+const FALL_SIGNIFICANCE: f32 = 3.0;
 
 impl Leakage {
     /// A tick's current under `volts` (the command the current flowed under); at the window's
-    /// end, the leakage resistance against `floor_ohms`: below it is a fault.
+    /// end, the leakage resistance against the floor (below is a fault) and against the last
+    /// window's (a fall faster than allowed, beyond the scatter, is a fault).
     pub(super) fn observe(
         &mut self,
         amps: f32,
         volts: f32,
-        window_ticks: u32,
-        floor_ohms: f32,
+        limits: LeakageLimits,
     ) -> Option<Fault> {
         self.ticks += 1;
         self.amps += amps;
         self.volts += volts;
-        if self.ticks < window_ticks {
+        self.part_amps += amps;
+        let part_ticks = (limits.window_ticks / PARTS).max(1);
+        if self.ticks.is_multiple_of(part_ticks) {
+            let mean = self.part_amps / part_ticks as f32;
+            self.parts_mean += mean;
+            self.parts_mean_squared += mean * mean;
+            self.part_amps = 0.0;
+        }
+        if self.ticks < limits.window_ticks {
             return None;
         }
+        let n = self.ticks as f32;
         let (amps, volts) = (self.amps, self.volts);
+        let mean_amps = amps / n;
+        let parts = (self.ticks / part_ticks).max(1) as f32;
+        let part_mean = self.parts_mean / parts;
+        let variance = (self.parts_mean_squared / parts - part_mean * part_mean).max(0.0);
+        let spread_amps = libm::sqrtf(variance / parts);
+        let previous = self.previous;
         *self = Leakage::default();
+        if !(volts > 0.0) {
+            return None;
+        }
         // Σi/ΣΦ is the conductance; compared without dividing (Σi may be 0 or negative).
-        (volts > 0.0 && amps * floor_ohms > volts).then_some(Fault::Leakage {
-            ohms: volts / amps,
-            floor_ohms,
-        })
+        if let Some(floor_ohms) = limits.floor_ohms {
+            if amps * floor_ohms > volts {
+                return Some(Fault::Leakage {
+                    ohms: volts / amps,
+                    floor_ohms,
+                });
+            }
+        }
+        let mean_volts = volts / n;
+        let (siemens, spread) = (mean_amps / mean_volts, spread_amps / mean_volts);
+        self.previous = Some((siemens, spread));
+        let (fall, (was, was_spread)) = limits.fall.zip(previous)?;
+        let resolved = was > FALL_SIGNIFICANCE * was_spread;
+        let beyond_scatter = siemens - was > FALL_SIGNIFICANCE * (spread + was_spread);
+        (resolved && beyond_scatter && siemens > was * (1.0 + fall)).then_some(
+            Fault::LeakageFalling {
+                ohms: 1.0 / siemens,
+                previous_ohms: 1.0 / was,
+            },
+        )
     }
 }
 

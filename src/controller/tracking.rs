@@ -1,0 +1,184 @@
+//! Resonance tracking while driving (feature `track`): each tick of a tracked drive feeds
+//! the stretch to `crate::track::Tracker`; at each cycle's end the drive follows the
+//! resonance (in phase) and the bias moves by an integral law on the frequency error, its
+//! gain the model's slope dΦ²/df, which the trim's solve gives outside the tick (`TrimJob`
+//! with the measured frequency) now and then.
+
+use super::fault::Fault;
+use super::plan::{phase_step, Plan};
+use super::trim::TrimResult;
+use super::watch::Ring;
+use super::{Controller, Event, State};
+use crate::track::{drive_force_per_stretch, Lock, Tracker, MAX_DETUNING};
+
+/// The tracker's memory between ticks.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Tracking {
+    /// The tracker, once the tracked drive has a sample.
+    pub(super) tracker: Option<Tracker>,
+    /// The tick the tracked drive's first sample came.
+    pub(super) steady_from: u32,
+    /// The model's dΦ²/df at the bias, V²/Hz, once a solve has given it.
+    pub(super) volts_squared_per_hz: Option<f32>,
+    /// The tick of the last solve asked for.
+    pub(super) solved_at: u32,
+}
+
+/// Time constants of the tracker the estimate waits before the bias moves on it.
+const SETTLE_TIME_CONSTANTS: f32 = 3.0;
+
+/// The bias's integral time, in the tracker's time constants: slower than the tracker, so
+/// that the drive's estimate leads the bias that moves it.
+const INTEGRAL_TIME_CONSTANTS: f32 = 2.0;
+
+/// The model's slope is solved again after this many of the tracker's time constants.
+const SLOPE_TIME_CONSTANTS: f32 = 10.0;
+
+impl Controller {
+    /// The tracked drive's last measurement (natural frequency, Q, amplitude), if any.
+    pub fn tracked(&self) -> Option<Lock> {
+        self.tracking.tracker.and_then(|t| t.lock())
+    }
+
+    /// The tracked drive at tick `k`: a solve's slope taken, the sample fed to the tracker,
+    /// and at a cycle's end the drive moved in phase and the bias moved by the integral law.
+    pub(super) fn track(&mut self, k: u32, ring: Ring) -> Result<Option<Event>, Fault> {
+        if let Some(result) = self.trim.result.take() {
+            self.trim.tracked_hz = None;
+            return self.take_slope(result);
+        }
+        let s = self.settings;
+        let track_seconds = s.track_seconds.unwrap_or(1.0);
+        let bias = self.plan.bias_volts;
+        let Ring::Stretch(stretch) = ring else {
+            return Ok(None);
+        };
+        let step = self.plan.ac_phase_step;
+        // The sample is the state at the tick's start; the last command held over the tick
+        // before, centred half a tick back: the drive's phase at the sample is half a step
+        // behind this tick's.
+        let phase = self.plan.phase(k).wrapping_sub(step / 2);
+        let device = self.estimate.as_ref().unwrap_or(&self.flashed);
+        let force = drive_force_per_stretch(device, bias, self.plan.ac_volts);
+        let drive_hz = s.tick_hz * (step as f32 / 4_294_967_296.0);
+        let gain = (1.0 / (drive_hz * track_seconds)).min(1.0);
+        if self.tracking.tracker.is_none() {
+            // The drive's first sample: the estimate settles from here.
+            self.tracking.steady_from = k;
+        }
+        let tracker = self
+            .tracking
+            .tracker
+            .get_or_insert_with(|| Tracker::new(drive_hz, stretch));
+        let Some(lock) = tracker.observe(phase, stretch, force, gain) else {
+            return Ok(None);
+        };
+        let hz = tracker.drive_hz();
+        if !((hz - s.target_hz).abs() <= MAX_DETUNING * s.target_hz) {
+            return Err(Fault::TrackLost {
+                drive_hz: hz,
+                target_hz: s.target_hz,
+            });
+        }
+        // The drive follows, in phase: from this tick at the new frequency.
+        self.plan = Plan {
+            ac_tick: Some(k),
+            ac_phase_start: self.plan.phase(k),
+            ac_phase_step: phase_step(hz, s.tick_hz),
+            ..self.plan
+        };
+        let ticks_of = |constants: f32| constants * track_seconds * s.tick_hz;
+        let steady = (k - self.tracking.steady_from.min(k)) as f32;
+        if steady < ticks_of(SETTLE_TIME_CONSTANTS) {
+            return Ok(None);
+        }
+        let since_solve = k.wrapping_sub(self.tracking.solved_at) as f32;
+        let stale = self.tracking.volts_squared_per_hz.is_none()
+            || since_solve >= ticks_of(SLOPE_TIME_CONSTANTS);
+        if stale && self.trim.tracked_hz.is_none() {
+            self.trim.tracked_hz = Some(hz);
+            self.trim.handed_out = false;
+            self.trim.result = None;
+            self.tracking.solved_at = k;
+        }
+        let Some(slope) = self.tracking.volts_squared_per_hz else {
+            return Ok(None);
+        };
+        // The integral law over this cycle (1/hz s long): Φ² moves by slope·error·dt/Ti, the
+        // error the cycle's own estimate's (the drive's frequency lags it by the tracker's
+        // smoothing).
+        let integral_seconds = INTEGRAL_TIME_CONSTANTS * track_seconds;
+        let error_hz = s.target_hz - lock.natural_hz;
+        let squared = bias * bias + slope * error_hz / (hz * integral_seconds);
+        let next_bias_volts = libm::sqrtf(squared.max(0.0));
+        let ac = self.plan.ac_volts;
+        if !(next_bias_volts + ac <= self.max_volts) {
+            // The plant needs more than the cap: hold the bias, the drive off, and say so.
+            self.plan.ac_tick = None;
+            self.state = State::Held {
+                needed_volts: next_bias_volts + ac,
+            };
+            return Ok(Some(Event::AboveCeiling {
+                needed_volts: next_bias_volts + ac,
+                ceiling_volts: self.ceiling_volts,
+            }));
+        }
+        // From this tick (its voltage is sent): a step within the ramp's is done by the next.
+        let plan = Plan {
+            start_tick: k,
+            start_volts: bias,
+            bias_volts: next_bias_volts,
+            ..self.plan
+        };
+        plan.check_range(next_bias_volts, self.max_volts)?;
+        self.plan = plan;
+        Ok(None)
+    }
+
+    /// A solve's result under a tracked drive: the model's slope dΦ²/df between the bias
+    /// and the bias it gives for the target, and the estimate's cap; or a fault.
+    fn take_slope(&mut self, result: TrimResult) -> Result<Option<Event>, Fault> {
+        let bias = self.plan.bias_volts;
+        match result {
+            TrimResult::Converged { shear_modulus, .. } => {
+                self.trim.params.shear_modulus = shear_modulus;
+                Ok(None)
+            }
+            TrimResult::Retune {
+                measured_hz,
+                shear_modulus,
+                bias_volts,
+                max_volts,
+                device,
+            } => {
+                self.trim.params.shear_modulus = shear_modulus;
+                // A drift's solves are not counted against `MAX_TRIMS` (a lost lock is
+                // `TrackLost`), and take no secant (two points apart in time differ by the
+                // drift too).
+                self.trim.previous = None;
+                let slope = (bias_volts * bias_volts - bias * bias)
+                    / (self.settings.target_hz - measured_hz);
+                if slope.is_finite() && slope != 0.0 {
+                    self.tracking.volts_squared_per_hz = Some(slope);
+                }
+                self.max_volts = max_volts.min(self.ceiling_volts);
+                self.estimate = Some(device);
+                Ok(None)
+            }
+            TrimResult::AboveCeiling {
+                shear_modulus,
+                needed_volts,
+                ..
+            } => {
+                self.trim.params.shear_modulus = shear_modulus;
+                self.plan.ac_tick = None;
+                self.state = State::Held { needed_volts };
+                Ok(Some(Event::AboveCeiling {
+                    needed_volts,
+                    ceiling_volts: self.ceiling_volts,
+                }))
+            }
+            TrimResult::Failed(fault) => Err(fault),
+        }
+    }
+}

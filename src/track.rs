@@ -1,0 +1,208 @@
+//! Resonance tracking while driving: a lock-in on the stretch at the drive's frequency.
+//!
+//! Over each drive cycle the stretch is fitted as m + A·sin θ + B·cos θ (θ the drive's
+//! phase at the sample). Near the equilibrium the membrane is the linear resonator
+//! λ'' + (ω0/Q)·λ' + ω0²·λ = F·sin Ωt (MODEL.md §5; F from the bias times the AC in the
+//! Φ² term of §4), so its response Z = A + jB obeys F/Z = ω0² − Ω² + j·Ω·ω0/Q: one cycle
+//! gives the natural frequency and Q. The drive moves toward the estimate each cycle (a
+//! phase-locked loop): its fixed point is the phase quadrature (A = 0, Ω = ω0 whatever the
+//! damping), where an error in the model's F drops out.
+
+use core::f32::consts::TAU;
+
+/// The drive's frequency moves at most this fraction a cycle (a wild cycle cannot throw the
+/// drive off the resonance).
+pub const MAX_STEP: f32 = 0.01;
+
+/// Fewest samples a cycle for a fit (three unknowns, and some to spare).
+pub const MIN_SAMPLES: f32 = 6.0;
+
+/// The tracked drive may stray this fraction of the target at most: further, the lock is
+/// lost (`Fault::TrackLost`).
+pub const MAX_DETUNING: f32 = 0.2;
+
+/// What one drive cycle measured.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Lock {
+    /// The natural frequency the cycle gives, Hz.
+    pub natural_hz: f32,
+    /// The drive's frequency over the cycle, Hz.
+    pub drive_hz: f32,
+    /// The quality factor (`NaN` when the response does not lag the force: no damping seen).
+    pub quality_factor: f32,
+    /// The stretch's amplitude at the drive's frequency.
+    pub amplitude: f32,
+    /// The mean stretch over the cycle.
+    pub mean_stretch: f32,
+}
+
+/// The sums of a least-squares fit of m + A·s + B·c to x over one cycle.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Sums {
+    n: f32,
+    s: f32,
+    c: f32,
+    ss: f32,
+    cc: f32,
+    sc: f32,
+    x: f32,
+    xs: f32,
+    xc: f32,
+}
+
+impl Sums {
+    fn add(&mut self, x: f32, s: f32, c: f32) {
+        self.n += 1.0;
+        self.s += s;
+        self.c += c;
+        self.ss += s * s;
+        self.cc += c * c;
+        self.sc += s * c;
+        self.x += x;
+        self.xs += x * s;
+        self.xc += x * c;
+    }
+
+    /// (m, A, B) from the normal equations by Cramer's rule; `None` if singular.
+    fn fit(&self) -> Option<(f32, f32, f32)> {
+        let Sums {
+            n,
+            s,
+            c,
+            ss,
+            cc,
+            sc,
+            x,
+            xs,
+            xc,
+        } = *self;
+        let det3 = |a: [f32; 9]| {
+            a[0] * (a[4] * a[8] - a[5] * a[7]) - a[1] * (a[3] * a[8] - a[5] * a[6])
+                + a[2] * (a[3] * a[7] - a[4] * a[6])
+        };
+        let d = det3([n, s, c, s, ss, sc, c, sc, cc]);
+        if !(n >= MIN_SAMPLES && d.abs() > 0.0) {
+            return None;
+        }
+        let m = det3([x, s, c, xs, ss, sc, xc, sc, cc]) / d;
+        let a = det3([n, x, c, s, xs, sc, c, xc, cc]) / d;
+        let b = det3([n, s, x, s, ss, xs, c, sc, xc]) / d;
+        Some((m, a, b))
+    }
+}
+
+/// The tracker between ticks: the drive's frequency and the cycle being summed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tracker {
+    /// The drive's frequency, Hz.
+    drive_hz: f32,
+    sums: Sums,
+    /// The stretch subtracted from every sample before summing (the last cycle's mean), so
+    /// that f32 keeps the ring's digits.
+    reference: f32,
+    /// The last sample's phase: a smaller one starts a new cycle.
+    last_phase: Option<u32>,
+    lock: Option<Lock>,
+}
+
+impl Tracker {
+    /// A tracker driving at `drive_hz`, about a stretch near `stretch`.
+    pub fn new(drive_hz: f32, stretch: f32) -> Self {
+        Self {
+            drive_hz,
+            sums: Sums::default(),
+            reference: stretch,
+            last_phase: None,
+            lock: None,
+        }
+    }
+
+    /// The drive's frequency now, Hz.
+    pub fn drive_hz(&self) -> f32 {
+        self.drive_hz
+    }
+
+    /// The last cycle's measurement, if any.
+    pub fn lock(&self) -> Option<Lock> {
+        self.lock
+    }
+
+    /// Forget the cycle being summed (the bias moved: the response is not steady).
+    pub fn restart(&mut self) {
+        self.sums = Sums::default();
+        self.last_phase = None;
+    }
+
+    /// A stretch sample taken at the drive's phase `phase` (turns in units of 2⁻³²).
+    /// `force_per_stretch` is F/λ̄ in (rad/s)²: the Φ² term's part at the drive's frequency
+    /// per unit of the mean stretch (`drive_force_per_stretch`). When the phase wraps, the
+    /// cycle just ended is fitted; the drive moves `gain` (0..1] of the way to the natural
+    /// frequency found, at most `MAX_STEP` of itself. The cycle's measurement, if one ended.
+    pub fn observe(
+        &mut self,
+        phase: u32,
+        stretch: f32,
+        force_per_stretch: f32,
+        gain: f32,
+    ) -> Option<Lock> {
+        let wrapped = self.last_phase.is_some_and(|last| phase < last);
+        self.last_phase = Some(phase);
+        let lock = if wrapped {
+            let lock = self.cycle(force_per_stretch, gain);
+            self.sums = Sums::default();
+            lock
+        } else {
+            None
+        };
+        let angle = phase as f32 * (TAU / 4_294_967_296.0);
+        let quarter = phase.wrapping_add(1 << 30) as f32 * (TAU / 4_294_967_296.0);
+        let (s, c) = (crate::Real::sin(angle), crate::Real::sin(quarter));
+        self.sums.add(stretch - self.reference, s, c);
+        lock
+    }
+
+    /// The fit of the cycle summed, the estimate, and the drive's next frequency.
+    fn cycle(&mut self, force_per_stretch: f32, gain: f32) -> Option<Lock> {
+        let (m, a, b) = self.sums.fit()?;
+        let mean_stretch = self.reference + m;
+        let force = force_per_stretch * mean_stretch;
+        let z2 = a * a + b * b;
+        let omega = TAU * self.drive_hz;
+        // F/Z = F·(A − jB)/|Z|².
+        let omega0_squared = omega * omega + force * a / z2;
+        let damping = -force * b / z2;
+        if !(omega0_squared > 0.0 && mean_stretch.is_finite()) {
+            return None;
+        }
+        let omega0 = libm::sqrtf(omega0_squared);
+        let natural_hz = omega0 / TAU;
+        let quality_factor = if damping > 0.0 {
+            omega * omega0 / damping
+        } else {
+            f32::NAN
+        };
+        let lock = Lock {
+            natural_hz,
+            drive_hz: self.drive_hz,
+            quality_factor,
+            amplitude: libm::sqrtf(z2),
+            mean_stretch,
+        };
+        let step = (gain * (natural_hz - self.drive_hz))
+            .clamp(-MAX_STEP * self.drive_hz, MAX_STEP * self.drive_hz);
+        self.drive_hz += step;
+        self.reference = mean_stretch;
+        self.lock = Some(lock);
+        Some(lock)
+    }
+}
+
+/// F/λ̄ of the drive (MODEL.md §4): the Φ² term ε(Φ/H)²·λ·λ2p² per unit mass holds
+/// 2·Φdc·Φac·sin Ωt; in the model's units that is ω_unit²·2·Φ̄dc·Φ̄ac·λ2p², (rad/s)².
+pub fn drive_force_per_stretch(device: &crate::Device<f32>, bias_volts: f32, ac_volts: f32) -> f32 {
+    let w = device.rad_per_s_per_unit();
+    let v = device.volts_per_unit();
+    let l2 = device.prestretch_2();
+    w * w * 2.0 * (bias_volts / v) * (ac_volts / v) * l2 * l2
+}
