@@ -344,6 +344,17 @@ fn the_current_at_rest_is_the_leakage() {
     );
 }
 
+/// When the membrane came to 0 V for good (within 1 V), s.
+fn zero_volts_from(r: &Run) -> f64 {
+    r.history
+        .iter()
+        .rev()
+        .take_while(|h| h.membrane_volts.abs() < 1.0)
+        .last()
+        .unwrap()
+        .seconds
+}
+
 /// The leakage watch (issue 15): the leakage resistance falls geometrically from 1 TΩ to
 /// 100 MΩ over 10 s, and the membrane breaks down below 300 MΩ under voltage, at
 /// t_b = 10·ln(3e8/1e12)/ln(1e8/1e12) s. With the watch's floor at 10 GΩ the controller
@@ -361,14 +372,7 @@ fn the_leakage_watch_faults_before_breakdown() {
         r.fault
     );
     assert_eq!(r.plant_crossing, None);
-    let zero_from = r
-        .history
-        .iter()
-        .rev()
-        .take_while(|h| h.membrane_volts.abs() < 1.0)
-        .last()
-        .unwrap()
-        .seconds;
+    let zero_from = zero_volts_from(&r);
     assert!(
         zero_from < breakdown_at,
         "0 V from {zero_from} s, breakdown at {breakdown_at} s"
@@ -403,15 +407,7 @@ fn the_leakage_watch_faults_before_breakdown() {
             r.fault
         );
         assert_eq!(r.plant_crossing, None);
-        let zero_from = r
-            .history
-            .iter()
-            .rev()
-            .take_while(|h| h.membrane_volts.abs() < 1.0)
-            .last()
-            .unwrap()
-            .seconds;
+        let zero_from = zero_volts_from(&r);
         assert!(zero_from < breakdown_at, "{zero_from} vs {breakdown_at}");
-        eprintln!("falling: 0 V from {zero_from} s, {:?}", r.events.last());
     }
 }
