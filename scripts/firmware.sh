@@ -19,7 +19,7 @@ step "firmware: fmt, clippy on every build ($(rustc --version))"
 cargo fmt -- --check
 # QEMU builds, and the silicon builds (HSE + PLL, RTT logs) that CI cannot run.
 for f in qemu,log-semihosting qemu qemu,log-semihosting,trim qemu,log-semihosting,trim,model-sensor \
-    rtt rtt,trim; do
+    qemu,log-semihosting,track rtt rtt,trim; do
     cargo clippy --locked --release -q --bins --no-default-features --features "$f" -- -D warnings
 done
 
@@ -40,13 +40,19 @@ for i in "${!sets[@]}"; do
               if (flash > 72 * 1024 || ram > 16 * 1024) { print "over 72 KB / 16 KB" > "/dev/stderr"; exit 1 } }'
 done
 
-step "the tick's budget with the trim on: a whole trim cycle counted under -icount"
-QEMU_ICOUNT=1 cargo run --locked --release -q --bin count --features trim >../target/count-trim.log 2>&1 ||
-    { cat ../target/count-trim.log; echo "count (trim) failed" >&2; exit 1; }
-grep -E "trim" ../target/count-trim.log
-worst=$(sed -n 's/.*worst over a whole trim cycle: \([0-9]*\) instructions.*/\1/p' ../target/count-trim.log)
-if [ -z "$worst" ] || [ "$worst" -ge 1500 ]; then
-    echo "the worst tick of a trim cycle is ${worst:-unknown} instructions: the budget is 1,500" >&2
+step "the tick's budget: whole trim cycles (stretch, current only) and a tracked drive counted under -icount"
+QEMU_ICOUNT=1 cargo run --locked --release -q --bin count --features trim,track >../target/count-trim.log 2>&1 ||
+    { cat ../target/count-trim.log; echo "count (trim, track) failed" >&2; exit 1; }
+grep -E "trim|track" ../target/count-trim.log
+# The product's tick (trim on the stretch, trim on the current only) within the 1,500
+# instruction budget; tracking, not in the product's builds, is over it (BENCHMARKS.md) and
+# held below 2,000 so that it does not grow unseen.
+trim=$(sed -n 's/.*with trim, worst over a whole trim cycle: \([0-9]*\) instructions.*/\1/p' ../target/count-trim.log | head -1)
+sensorless=$(sed -n 's/.*with sensorless trim[^:]*: \([0-9]*\) instructions.*/\1/p' ../target/count-trim.log)
+tracking=$(sed -n 's/.*with tracking, worst over [^:]*: \([0-9]*\) instructions.*/\1/p' ../target/count-trim.log)
+if [ -z "$trim" ] || [ -z "$sensorless" ] || [ -z "$tracking" ] || [ "$trim" -ge 1500 ] ||
+    [ "$sensorless" -ge 1500 ] || [ "$tracking" -ge 2000 ]; then
+    echo "worst ticks: trim ${trim:-unknown}, sensorless ${sensorless:-unknown} (budget 1,500), tracking ${tracking:-unknown} (held below 2,000)" >&2
     exit 1
 fi
 

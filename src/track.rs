@@ -93,14 +93,21 @@ impl Sums {
 }
 
 /// The tracker between ticks: the drive's frequency and the cycle being summed.
+///
+/// A tick does one of three small things (the tick's budget): sum a sample; at a cycle's
+/// end, set its sums aside (`observe` says so); on a later tick, fit them (`fit`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Tracker {
     /// The drive's frequency, Hz.
     drive_hz: f32,
     sums: Sums,
-    /// The stretch subtracted from every sample before summing (the last cycle's mean), so
-    /// that f32 keeps the ring's digits.
+    /// The stretch subtracted from every sample of this cycle before summing (a recent
+    /// cycle's mean), so that f32 keeps the ring's digits.
     reference: f32,
+    /// The last fit's mean stretch: the next cycle's reference.
+    next_reference: f32,
+    /// The cycle that ended, and its reference, until fitted.
+    pending: Option<(Sums, f32)>,
     /// The last sample's phase: a smaller one starts a new cycle.
     last_phase: Option<u32>,
     lock: Option<Lock>,
@@ -113,6 +120,8 @@ impl Tracker {
             drive_hz,
             sums: Sums::default(),
             reference: stretch,
+            next_reference: stretch,
+            pending: None,
             last_phase: None,
             lock: None,
         }
@@ -128,44 +137,31 @@ impl Tracker {
         self.lock
     }
 
-    /// Forget the cycle being summed (the bias moved: the response is not steady).
-    pub fn restart(&mut self) {
-        self.sums = Sums::default();
-        self.last_phase = None;
-    }
-
-    /// A stretch sample taken at the drive's phase `phase` (turns in units of 2⁻³²).
-    /// `force_per_stretch` is F/λ̄ in (rad/s)²: the Φ² term's part at the drive's frequency
-    /// per unit of the mean stretch (`drive_force_per_stretch`). When the phase wraps, the
-    /// cycle just ended is fitted; the drive moves `gain` (0..1] of the way to the natural
-    /// frequency found, at most `MAX_STEP` of itself. The cycle's measurement, if one ended.
-    pub fn observe(
-        &mut self,
-        phase: u32,
-        stretch: f32,
-        force_per_stretch: f32,
-        gain: f32,
-    ) -> Option<Lock> {
+    /// A stretch sample taken at the drive's phase `phase` (turns in units of 2⁻³²); when
+    /// the phase wraps, the cycle just ended is set aside for `fit` first (true).
+    pub fn observe(&mut self, phase: u32, stretch: f32) -> bool {
         let wrapped = self.last_phase.is_some_and(|last| phase < last);
         self.last_phase = Some(phase);
-        let lock = if wrapped {
-            let lock = self.cycle(force_per_stretch, gain);
+        if wrapped {
+            self.pending = Some((self.sums, self.reference));
             self.sums = Sums::default();
-            lock
-        } else {
-            None
-        };
+            self.reference = self.next_reference;
+        }
         let angle = phase as f32 * (TAU / 4_294_967_296.0);
         let quarter = phase.wrapping_add(1 << 30) as f32 * (TAU / 4_294_967_296.0);
         let (s, c) = (crate::Real::sin(angle), crate::Real::sin(quarter));
         self.sums.add(stretch - self.reference, s, c);
-        lock
+        wrapped
     }
 
-    /// The fit of the cycle summed, the estimate, and the drive's next frequency.
-    fn cycle(&mut self, force_per_stretch: f32, gain: f32) -> Option<Lock> {
-        let (m, a, b) = self.sums.fit()?;
-        let mean_stretch = self.reference + m;
+    /// Fit the cycle set aside, if any. `force_per_stretch` is F/λ̄ in (rad/s)²: the Φ²
+    /// term's part at the drive's frequency per unit of the mean stretch
+    /// (`drive_force_per_stretch`). The drive moves `gain` (0..1] of the way to the natural
+    /// frequency found, at most `MAX_STEP` of itself. The cycle's measurement.
+    pub fn fit(&mut self, force_per_stretch: f32, gain: f32) -> Option<Lock> {
+        let (sums, reference) = self.pending.take()?;
+        let (m, a, b) = sums.fit()?;
+        let mean_stretch = reference + m;
         let force = force_per_stretch * mean_stretch;
         let z2 = a * a + b * b;
         let omega = TAU * self.drive_hz;
@@ -192,7 +188,7 @@ impl Tracker {
         let step = (gain * (natural_hz - self.drive_hz))
             .clamp(-MAX_STEP * self.drive_hz, MAX_STEP * self.drive_hz);
         self.drive_hz += step;
-        self.reference = mean_stretch;
+        self.next_reference = mean_stretch;
         self.lock = Some(lock);
         Some(lock)
     }

@@ -5,7 +5,7 @@
 //! with the measured frequency) now and then.
 
 use super::fault::Fault;
-use super::plan::{phase_step, Plan};
+use super::plan::Plan;
 use super::trim::TrimResult;
 use super::watch::Ring;
 use super::{Controller, Event, State};
@@ -22,6 +22,8 @@ pub(super) struct Tracking {
     pub(super) volts_squared_per_hz: Option<f32>,
     /// The tick of the last solve asked for.
     pub(super) solved_at: u32,
+    /// The last cycle's fit, applied on the tick after it.
+    pub(super) to_apply: Option<Lock>,
 }
 
 /// Time constants of the tracker the estimate waits before the bias moves on it.
@@ -29,7 +31,7 @@ const SETTLE_TIME_CONSTANTS: f32 = 3.0;
 
 /// The bias's integral time, in the tracker's time constants: slower than the tracker, so
 /// that the drive's estimate leads the bias that moves it.
-const INTEGRAL_TIME_CONSTANTS: f32 = 2.0;
+const INTEGRAL_TIME_CONSTANTS: f32 = 1.5;
 
 /// The model's slope is solved again after this many of the tracker's time constants.
 const SLOPE_TIME_CONSTANTS: f32 = 10.0;
@@ -58,10 +60,7 @@ impl Controller {
         // before, centred half a tick back: the drive's phase at the sample is half a step
         // behind this tick's.
         let phase = self.plan.phase(k).wrapping_sub(step / 2);
-        let device = self.estimate.as_ref().unwrap_or(&self.flashed);
-        let force = drive_force_per_stretch(device, bias, self.plan.ac_volts);
         let drive_hz = s.tick_hz * (step as f32 / 4_294_967_296.0);
-        let gain = (1.0 / (drive_hz * track_seconds)).min(1.0);
         if self.tracking.tracker.is_none() {
             // The drive's first sample: the estimate settles from here.
             self.tracking.steady_from = k;
@@ -70,7 +69,20 @@ impl Controller {
             .tracking
             .tracker
             .get_or_insert_with(|| Tracker::new(drive_hz, stretch));
-        let Some(lock) = tracker.observe(phase, stretch, force, gain) else {
+        // One of three small things a tick (the budget): sum, set a cycle aside, fit it; the
+        // fit's result is applied on the tick after.
+        if tracker.observe(phase, stretch) {
+            return Ok(None);
+        }
+        // The fit's inputs, only on the tick that fits.
+        let device = self.estimate.as_ref().unwrap_or(&self.flashed);
+        let force = drive_force_per_stretch(device, bias, self.plan.ac_volts);
+        let gain = (1.0 / (drive_hz * track_seconds)).min(1.0);
+        if let Some(lock) = tracker.fit(force, gain) {
+            self.tracking.to_apply = Some(lock);
+            return Ok(None);
+        }
+        let Some(lock) = self.tracking.to_apply.take() else {
             return Ok(None);
         };
         let hz = tracker.drive_hz();
@@ -84,7 +96,8 @@ impl Controller {
         self.plan = Plan {
             ac_tick: Some(k),
             ac_phase_start: self.plan.phase(k),
-            ac_phase_step: phase_step(hz, s.tick_hz),
+            // In f32 (the tick's budget; f64 is software on the M4F): 2⁻²⁴ of the frequency.
+            ac_phase_step: (hz / s.tick_hz * 4_294_967_296.0) as u32,
             ..self.plan
         };
         let ticks_of = |constants: f32| constants * track_seconds * s.tick_hz;

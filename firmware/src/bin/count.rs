@@ -144,7 +144,12 @@ fn main() -> ! {
     );
 
     #[cfg(feature = "trim")]
-    trim_cycle();
+    {
+        trim_cycle(Sensing::Stretch, None, 0);
+        trim_cycle(Sensing::Current, None, 0);
+    }
+    #[cfg(feature = "track")]
+    trim_cycle(Sensing::Stretch, Some(0.2), 3000);
 
     defmt::info!(
         "stack, deepest over all of the above, from the top of RAM: {=u32} bytes",
@@ -214,23 +219,50 @@ fn math_kernels() {
     }
 }
 
+/// How the controller senses the plant in a counted cycle.
+#[cfg(feature = "trim")]
+#[derive(Clone, Copy, PartialEq)]
+enum Sensing {
+    /// The displacement sensor's stretch.
+    Stretch,
+    /// The amplifier's current only (self-sensing): the change of the membrane's charge
+    /// C(λ)·Φ over the tick (MODEL.md §8).
+    Current,
+}
+
+/// The membrane's charge C(λ)·Φ, C(λ) = ε·L1A·L2·λ²·λ2p²/H (MODEL.md §8), C.
+#[cfg(feature = "trim")]
+fn charge_coulombs(p: &de_resonator::DeviceParams<f32>, stretch: f32, volts: f32) -> f32 {
+    let l2p = p.prestretch_2;
+    p.permittivity() * p.length_active * p.width * stretch * stretch * l2p * l2p / p.thickness
+        * volts
+}
+
 /// A whole trim cycle (ramp to the probe bias, hold, pulse, ring, solve, retune, ... to the AC
 /// drive), the reference device itself the plant (f32 RK4 between ticks, not counted) and its
-/// stretch the sensor: the worst tick of the cycle, and the solve (outside the tick) apart.
+/// stretch (or its current) the sensor: the worst tick of the cycle, and the solve (outside
+/// the tick) apart. With `track_seconds`, on for `track_ticks` of tracked drive (the plant
+/// damped to Q = 30, as a driven resonance needs), counting the tracked ticks' worst too.
 #[cfg(feature = "trim")]
-fn trim_cycle() {
+fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
     use de_resonator::{Phase, Settings};
     let Ok(amp) = amplifier() else { exit(1) };
     let s = Settings {
         trim_tolerance: Some(1e-3),
         ac_volts: 100.0,
-        ac_hz: 40.0,
+        ac_hz: if track_seconds.is_some() { 44.0 } else { 40.0 },
+        track_seconds,
         ..settings()
     };
     let Ok((mut c, _)) = Controller::start(device(), TABLE, amp, s) else {
         exit(1)
     };
-    let Ok(dev) = Device::new(device()) else {
+    let mut params = device();
+    if track_seconds.is_some() {
+        // c = M·ω/Q at 44 Hz, Q = 30.
+        params.damping = params.effective_mass() * core::f32::consts::TAU * 44.0 / 30.0;
+    }
+    let Ok(dev) = Device::new(params) else {
         exit(1)
     };
     let rest = State {
@@ -243,13 +275,23 @@ fn trim_cycle() {
         exit(1)
     };
     let (mut worst, mut worst_phase, mut solves, mut solve_most) = (0, Phase::Ramping, 0, 0);
-    for _ in 0..20_000 {
+    let (mut tracked, mut worst_tracked) = (0u32, 0);
+    let (mut charge, mut amps) = (0.0f32, 0.0f32);
+    for _ in 0..40_000 {
         let phase = c.phase();
-        let sample = plant.state().stretch;
+        let stretch = plant.state().stretch;
+        let inputs = match sensing {
+            Sensing::Stretch => Inputs::stretch(stretch),
+            Sensing::Current => Inputs::current(amps),
+        };
         let mut out = None;
-        let n = count(1, || out = Some(c.tick(Inputs::stretch(black_box(sample)))));
+        let n = count(1, || out = Some(c.tick(black_box(inputs))));
         if n > worst {
             (worst, worst_phase) = (n, phase);
+        }
+        if phase == Phase::Driving && track_seconds.is_some() {
+            tracked += 1;
+            worst_tracked = worst_tracked.max(n);
         }
         if let Some(job) = c.trim_job() {
             let mut result = None;
@@ -264,7 +306,13 @@ fn trim_cycle() {
         if plant.set_drive(Drive::constant(&dev, volts)).is_err() || plant.step().is_err() {
             exit(1)
         }
-        if c.phase() == Phase::Driving || c.phase() == Phase::Faulted {
+        let now = charge_coulombs(&params, plant.state().stretch, volts);
+        (amps, charge) = ((now - charge) * 1000.0, now);
+        let done = match track_seconds {
+            Some(_) => tracked >= track_ticks,
+            None => c.phase() == Phase::Driving,
+        };
+        if done || c.phase() == Phase::Faulted {
             break;
         }
     }
@@ -272,14 +320,33 @@ fn trim_cycle() {
         defmt::error!("the trim cycle did not reach the AC drive: {}", c.phase());
         exit(1)
     }
+    let what = match (sensing, track_seconds) {
+        (Sensing::Stretch, None) => "trim",
+        (Sensing::Stretch, Some(_)) => "trim then tracking",
+        (Sensing::Current, _) => "sensorless trim (the current only)",
+    };
     defmt::info!(
-        "controller tick with trim, worst over a whole trim cycle: {=u32} instructions ({})",
+        "controller tick with {=str}, worst over a whole trim cycle: {=u32} instructions ({})",
+        what,
         worst,
         worst_phase
     );
     defmt::info!(
-        "trim solve outside the tick ({=u32} solves): at most {=u32} instructions",
+        "{=str} solve outside the tick ({=u32} solves): at most {=u32} instructions",
+        what,
         solves,
         solve_most
     );
+    #[cfg(feature = "track")]
+    if track_seconds.is_some() {
+        let hz = c.tracked().map_or(f32::NAN, |l| l.natural_hz);
+        let q = c.tracked().map_or(f32::NAN, |l| l.quality_factor);
+        defmt::info!(
+            "controller tick with tracking, worst over {=u32} tracked ticks: {=u32} instructions (f {=f32} Hz, Q {=f32})",
+            tracked,
+            worst_tracked,
+            hz,
+            q
+        );
+    }
 }
