@@ -137,6 +137,11 @@ impl Tracker {
         self.lock
     }
 
+    /// Whether a cycle waits for `fit`.
+    pub fn pending(&self) -> bool {
+        self.pending.is_some()
+    }
+
     /// A stretch sample taken at the drive's phase `phase` (turns in units of 2⁻³²); when
     /// the phase wraps, the cycle just ended is set aside for `fit` first (true).
     pub fn observe(&mut self, phase: u32, stretch: f32) -> bool {

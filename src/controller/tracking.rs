@@ -60,7 +60,8 @@ impl Controller {
         // before, centred half a tick back: the drive's phase at the sample is half a step
         // behind this tick's.
         let phase = self.plan.phase(k).wrapping_sub(step / 2);
-        let drive_hz = s.tick_hz * (step as f32 / 4_294_967_296.0);
+        // The drive's frequency as the plan runs it.
+        let drive_hz = || s.tick_hz * (step as f32 / 4_294_967_296.0);
         if self.tracking.tracker.is_none() {
             // The drive's first sample: the estimate settles from here.
             self.tracking.steady_from = k;
@@ -68,18 +69,18 @@ impl Controller {
         let tracker = self
             .tracking
             .tracker
-            .get_or_insert_with(|| Tracker::new(drive_hz, stretch));
+            .get_or_insert_with(|| Tracker::new(drive_hz(), stretch));
         // One of three small things a tick (the budget): sum, set a cycle aside, fit it; the
         // fit's result is applied on the tick after.
         if tracker.observe(phase, stretch) {
             return Ok(None);
         }
-        // The fit's inputs, only on the tick that fits.
-        let device = self.estimate.as_ref().unwrap_or(&self.flashed);
-        let force = drive_force_per_stretch(device, bias, self.plan.ac_volts);
-        let gain = (1.0 / (drive_hz * track_seconds)).min(1.0);
-        if let Some(lock) = tracker.fit(force, gain) {
-            self.tracking.to_apply = Some(lock);
+        if tracker.pending() {
+            // The fit's inputs, only on the tick that fits.
+            let device = self.estimate.as_ref().unwrap_or(&self.flashed);
+            let force = drive_force_per_stretch(device, bias, self.plan.ac_volts);
+            let gain = (1.0 / (drive_hz() * track_seconds)).min(1.0);
+            self.tracking.to_apply = tracker.fit(force, gain);
             return Ok(None);
         }
         let Some(lock) = self.tracking.to_apply.take() else {
