@@ -19,7 +19,7 @@ step "firmware: fmt, clippy on every build ($(rustc --version))"
 cargo fmt -- --check
 # QEMU builds, and the silicon builds (HSE + PLL, RTT logs) that CI cannot run.
 for f in qemu,log-semihosting qemu qemu,log-semihosting,trim qemu,log-semihosting,trim,model-sensor \
-    qemu,log-semihosting,track rtt rtt,trim; do
+    qemu,log-semihosting,track,probe rtt rtt,trim; do
     cargo clippy --locked --release -q --bins --no-default-features --features "$f" -- -D warnings
 done
 
@@ -40,8 +40,8 @@ for i in "${!sets[@]}"; do
               if (flash > 72 * 1024 || ram > 16 * 1024) { print "over 72 KB / 16 KB" > "/dev/stderr"; exit 1 } }'
 done
 
-step "the tick's budget: whole trim cycles (stretch, current only) and a tracked drive counted under -icount"
-QEMU_ICOUNT=1 cargo run --locked --release -q --bin count --features trim,track >../target/count-trim.log 2>&1 ||
+step "the tick's budget: whole trim cycles (stretch; current only with λ from C under the probe) and a tracked drive counted under -icount"
+QEMU_ICOUNT=1 cargo run --locked --release -q --bin count --features trim,track,probe >../target/count-trim.log 2>&1 ||
     { cat ../target/count-trim.log; echo "count (trim, track) failed" >&2; exit 1; }
 grep -E "trim|track" ../target/count-trim.log
 # The product's tick (trim on the stretch, trim on the current only) within the 1,500

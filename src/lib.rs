@@ -28,6 +28,7 @@ pub mod model;
 pub mod protocol;
 pub mod real;
 pub mod roots;
+pub mod sense;
 pub mod shell;
 #[cfg(feature = "storage")]
 pub mod store;

@@ -552,6 +552,8 @@ fn every_setting_by_its_key() {
         "leakage_floor_ohms",
         "leakage_fall_per_second",
         "track_seconds",
+        "probe_volts",
+        "probe_hz",
     ];
     assert_eq!(Setting::ALL.map(Setting::key), keys);
     let mut s = Settings::for_target(44.0);
@@ -1611,7 +1613,8 @@ fn codes_round_down_and_refuse_what_the_amplifier_cannot_give() {
 /// (on every check, or on the table alone), no tick ever commands more than
 /// (1 − margin)·limit, and the code gives the volts reported. Inputs are drawn mostly
 /// plausible (nineteen in twenty each) so that most cases start a controller and its ticks
-/// are checked: the count is asserted (over half) and printed.
+/// are checked: the count is asserted (over half) and printed. The self-sensing probe is on
+/// in most cases, its current monitor reading anything from a plausible ring to nonsense.
 #[test]
 fn no_input_makes_the_controller_exceed_the_limit() {
     use proptest::test_runner::TestRunner;
@@ -1625,13 +1628,16 @@ fn no_input_makes_the_controller_exceed_the_limit() {
         prop_oneof![19 => 0.0f32..40.0, 1 => any::<f32>()],
         prop_oneof![19 => 5.0f32..30.0, 1 => any::<f32>()],
         prop_oneof![19 => Just(None), 1 => (68usize..580).prop_map(Some)],
+        prop_oneof![4 => Just(None), 15 => (1.0f32..100.0).prop_map(Some), 1 => any::<f32>().prop_map(Some)],
+        prop_oneof![19 => Just(500.0f32), 1 => any::<f32>()],
+        prop_oneof![19 => 0.0f32..1e-3, 1 => any::<f32>()],
     );
     let cases = 64;
     let (started, ticks) = (Cell::new(0u32), Cell::new(0u32));
     let mut runner = TestRunner::new(ProptestConfig::with_cases(cases));
     let result = runner.run(
         &strategy,
-        |(target, margin, slew, ac_volts, ac_hz, corrupt)| {
+        |(target, margin, slew, ac_volts, ac_hz, corrupt, probe_volts, probe_hz, amps)| {
             let mut bytes = reference_table();
             if let Some(at) = corrupt {
                 bytes[at] ^= 0x04;
@@ -1642,6 +1648,8 @@ fn no_input_makes_the_controller_exceed_the_limit() {
                 ac_volts,
                 ac_hz,
                 check_seconds: 0.2,
+                probe_volts,
+                probe_hz,
                 ..Settings::for_target(target)
             };
             let params = REFERENCE_DEVICE.cast::<f32>();
@@ -1652,8 +1660,8 @@ fn no_input_makes_the_controller_exceed_the_limit() {
             for (mut c, boot) in [all, table_only].into_iter().flatten() {
                 prop_assert!(corrupt.is_none());
                 prop_assert!(boot.max_volts <= (1.0 - margin) * 9854.74);
-                for _ in 0..2000 {
-                    let out = c.tick(Inputs::NONE);
+                for k in 0..2000 {
+                    let out = c.tick(Inputs::current(amps * (k as f32 * 0.37).sin()));
                     prop_assert!(out.volts >= 0.0 && out.volts <= boot.max_volts);
                     prop_assert_eq!(out.volts, amplifier().volts(out.code));
                     ticks.set(ticks.get() + 1);

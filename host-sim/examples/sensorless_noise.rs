@@ -1,8 +1,9 @@
-//! How good the sensorless trim is against the current monitor's noise, and where it stops:
-//! the `sensorless-soft` scene (plant μ 20% below nominal, no displacement sensor) at noise
-//! levels from 0.1 to 1000 µA rms a sample (10 kHz, averaged over 1 kHz ticks), several
-//! seeds each; the plant's final frequency error, or the fault. Prints a table and writes
-//! docs/plots/sensorless-noise.svg.
+//! How good the sensorless path is against the current monitor's noise, and where it stops:
+//! the `sensorless-soft` scene (plant μ 20% below nominal, no displacement sensor, the probe
+//! on) at noise levels from 0.1 to 1000 µA rms a sample (10 kHz, averaged over 1 kHz
+//! ticks), several seeds each; the plant's final frequency error, or the fault; and the
+//! stretch from C: its rms error against the plant's mean stretch over each window, and the
+//! standard error it reports. Prints a table and writes docs/plots/sensorless-noise.svg.
 //!
 //! `cargo run --release -p host-sim --example sensorless_noise`
 
@@ -37,31 +38,77 @@ fn main() -> Result<(), String> {
         let r = s.run.run().expect("the scene runs");
         let target = f64::from(s.run.settings.target_hz);
         let error = (r.natural_frequency_hz - target) / target;
+        // The stretch from C over the windows: Σ(relative error)², Σ relative σ, count.
+        // Windows that read no number (C ≤ 0 in the noise) are the monitor's faults.
+        let finite = r
+            .sensed
+            .iter()
+            .filter(|w| w.stretch.is_finite() && w.sigma.is_finite());
+        let sensed = finite.fold((0.0, 0.0, 0usize), |(e2, sd, n), w| {
+            let e = (w.stretch - w.plant_stretch) / w.plant_stretch;
+            (e2 + e * e, sd + w.sigma / w.plant_stretch, n + 1)
+        });
         (
             noise,
             r.fault.is_none().then_some(error.abs()),
             r.plant_crossing.is_some(),
+            sensed,
         )
     });
-    println!("noise A rms/sample   tuned   worst |error|   faulted   plant crossed");
+    println!(
+        "noise A rms/sample   tuned   worst |error|   faulted   plant crossed   λ from C: rms error   mean σ"
+    );
     let (mut worst, mut faults) = (Vec::new(), Vec::new());
+    let (mut stretch_error, mut stretch_sigma) = (Vec::new(), Vec::new());
     for &noise in &levels {
         let at: Vec<_> = results.iter().filter(|r| r.0 == noise).collect();
         let tuned: Vec<f64> = at.iter().filter_map(|r| r.1).collect();
         let crossed = at.iter().filter(|r| r.2).count();
         let w = tuned.iter().copied().fold(f64::NAN, f64::max);
+        let (e2, sd, n) = at.iter().fold((0.0, 0.0, 0usize), |(a, b, c), r| {
+            (a + r.3 .0, b + r.3 .1, c + r.3 .2)
+        });
+        let (rms, sigma) = ((e2 / n as f64).sqrt(), sd / n as f64);
         println!(
-            "{noise:>18.2e}   {:>5}   {:>13.2e}   {:>7}   {crossed:>13}",
+            "{noise:>18.2e}   {:>5}   {:>13.2e}   {:>7}   {crossed:>13}   {rms:>19.2e}   {sigma:>6.1e}",
             tuned.len(),
             w,
             at.len() - tuned.len()
         );
+        if n > 0 {
+            stretch_error.push((noise, rms));
+            stretch_sigma.push((noise, sigma));
+        }
         if w.is_finite() {
             worst.push((noise, w));
         }
         faults.push((noise, (at.len() - tuned.len()) as f64 / at.len() as f64));
     }
     let panels = [
+        Panel {
+            title: "λ from C (probe ±20 V, 500 Hz): error against the plant".into(),
+            x_label: "current monitor noise, A rms a sample at 10 kHz".into(),
+            y_label: "relative to λ, over every 0.1 s window".into(),
+            log_x: true,
+            log_y: true,
+            series: vec![
+                Series {
+                    name: "rms error".into(),
+                    points: stretch_error,
+                    ..Series::default()
+                },
+                Series {
+                    name: "standard error reported".into(),
+                    points: stretch_sigma,
+                    style: Style {
+                        colour: Some(RED),
+                        ..Style::default()
+                    },
+                },
+            ],
+            guides: vec![(stated, "scene's noise".into())],
+            ..Panel::default()
+        },
         Panel {
             title: "sensorless trim: frequency error".into(),
             x_label: "current monitor noise, A rms a sample at 10 kHz".into(),

@@ -10,7 +10,7 @@ use std::time::Instant;
 use de_resonator::drive::PowerMode;
 use de_resonator::{
     Amplifier, Boot, Controller, Dac8551, DeviceParams, Event, FailureMode, Fault, Inputs,
-    OutputStage, Settings,
+    OutputStage, Phase, Settings,
 };
 use embedded_hal::digital::{self, OutputPin};
 use embedded_hal::spi::{ErrorKind, ErrorType, Operation, SpiDevice};
@@ -199,12 +199,27 @@ pub struct Run {
     /// With tracking on (`track_seconds`): every `TRACE_SECONDS`, the plant's natural
     /// frequency at the bias held and what the tracker measures.
     pub tracking: Vec<Tracked>,
+    /// With the probe on (`probe_volts`): each window's stretch from the capacitance against
+    /// the plant's mean stretch over it.
+    pub sensed: Vec<Sensed>,
     pub ticks: u64,
     pub run_seconds: f64,
 }
 
 /// How often a tracked run records `Tracked`, s.
 pub const TRACE_SECONDS: f64 = 0.1;
+
+/// One window of the stretch from the capacitance against the true plant.
+#[derive(Clone, Copy, Debug)]
+pub struct Sensed {
+    /// When the window ended, s.
+    pub seconds: f64,
+    /// The estimate and its standard error.
+    pub stretch: f64,
+    pub sigma: f64,
+    /// The plant's stretch averaged over the ticks since the last window.
+    pub plant_stretch: f64,
+}
 
 /// A tracked drive at one time: the true plant against the tracker.
 #[derive(Clone, Copy, Debug)]
@@ -342,6 +357,7 @@ impl Loop {
             limit: None,
             history: Vec::new(),
             tracking: Vec::new(),
+            sensed: Vec::new(),
             ticks: 0,
             run_seconds: 0.0,
         };
@@ -381,6 +397,9 @@ impl Loop {
             }
         };
         let tracked = self.settings.track_seconds.is_some();
+        // The plant's stretch summed since the last window of the probe's lock-in.
+        let (mut stretch_sum, mut stretch_ticks) = (0.0, 0u32);
+        let mut last_sensed = None;
         let trace_every =
             ((TRACE_SECONDS * f64::from(self.settings.tick_hz)).round() as u64).max(1);
         for k in 0..ticks {
@@ -405,6 +424,25 @@ impl Loop {
                 // ticks; the next tick applies the result.
                 if let Some(job) = c.trim_job() {
                     c.trim_done(job.solve());
+                }
+                stretch_sum += y[0];
+                stretch_ticks += 1;
+                let sensed = c.sensed();
+                if sensed.is_some() && sensed != last_sensed {
+                    if let Some(s) = sensed {
+                        run.sensed.push(Sensed {
+                            seconds: t,
+                            stretch: f64::from(s.stretch),
+                            sigma: f64::from(s.sigma),
+                            plant_stretch: stretch_sum / f64::from(stretch_ticks.max(1)),
+                        });
+                    }
+                    (stretch_sum, stretch_ticks) = (0.0, 0);
+                }
+                last_sensed = sensed;
+                // The lock-in starts again after the trim's ring.
+                if c.phase() == Phase::Measuring {
+                    (stretch_sum, stretch_ticks) = (0.0, 0);
                 }
                 run.final_command_volts = f64::from(out.volts);
                 run.max_command_volts = run.max_command_volts.max(f64::from(out.volts));

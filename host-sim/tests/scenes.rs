@@ -3,6 +3,7 @@
 
 use std::path::Path;
 
+use de_resonator::sense::PROBE_SIGMAS;
 use de_resonator::{Device, DeviceParams, FailureMode, Fault, Tuner, REFERENCE_DEVICE};
 use host_sim::hil::Run;
 use host_sim::plant::{AmplifierModel, Leakage, Plant};
@@ -283,6 +284,26 @@ fn sensorless_scenes_trim_on_the_current_within_half_a_percent() {
             .parse()
             .unwrap();
         assert!((kpa * 1e3 / mu - 1.0).abs() < 1e-3, "{file}: {}", last.what);
+        // The stretch from C under the probe (a window every 0.1 s, but while the trim
+        // measures): inside the interval the monitor checks, PROBE_SIGMAS standard errors
+        // wide, in every window; within 0.5% of the plant's mean stretch once driving.
+        assert!(r.sensed.len() >= 80, "{file}: {}", r.sensed.len());
+        let drive_on = r
+            .events
+            .iter()
+            .find(|e| e.what.starts_with("AC drive on"))
+            .unwrap()
+            .seconds;
+        for w in &r.sensed {
+            let error = w.stretch - w.plant_stretch;
+            assert!(
+                error.abs() <= f64::from(PROBE_SIGMAS) * w.sigma,
+                "{file}: {w:?}"
+            );
+            if w.seconds > drive_on + 0.2 {
+                assert!((error / w.plant_stretch).abs() < 5e-3, "{file}: {w:?}");
+            }
+        }
     }
 }
 

@@ -177,9 +177,10 @@ impl Controller {
         let from_volts = self.plan.start_volts;
         let (plan, ticks) = Plan::ramp(&s, from_volts, bias_volts, !trimming)?;
         plan.check_range(tuned_volts, self.max_volts)?;
-        // The amplifier must give the highest voltage: the AC's peak on the tuned bias (the
-        // ramp starts at 0 V and ends at a bias no higher, the trim's probe included).
-        let peak_volts = tuned_volts + plan.ac_volts;
+        // The amplifier must give the highest voltage: the AC's and the probe's peak on the
+        // tuned bias (the ramp starts at 0 V and ends at a bias no higher, the trim's first
+        // bias included).
+        let peak_volts = tuned_volts + plan.swing_volts();
         self.amplifier.code(peak_volts).map_err(Fault::Amplifier)?;
         self.plan = plan;
         self.state = State::Ramping {

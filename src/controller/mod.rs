@@ -28,6 +28,8 @@ mod command;
 mod fault;
 mod gate;
 mod plan;
+#[cfg(feature = "probe")]
+mod sensing;
 mod settings;
 #[cfg(feature = "track")]
 mod tracking;
@@ -134,6 +136,9 @@ pub struct Controller {
     /// The resonance tracker, while a tracked drive is on.
     #[cfg(feature = "track")]
     tracking: tracking::Tracking,
+    /// The stretch from the capacitance, while the probe is on.
+    #[cfg(feature = "probe")]
+    sensing: sensing::Sensing,
 }
 
 impl Controller {
@@ -158,6 +163,8 @@ impl Controller {
             trim: trim::TrimState::new(*device.params(), true),
             #[cfg(feature = "track")]
             tracking: tracking::Tracking::default(),
+            #[cfg(feature = "probe")]
+            sensing: sensing::Sensing::default(),
         }
     }
 
@@ -250,7 +257,11 @@ impl Controller {
                 return self.fault(fault);
             }
         }
-        match self.advance(k, volts, inputs.ring()) {
+        #[cfg(feature = "probe")]
+        if let Some(fault) = self.sense(k, &inputs) {
+            return self.fault(fault);
+        }
+        match self.advance(k, inputs.ring()) {
             Ok(event) => {
                 self.last_volts = commanded_volts;
                 Output {
@@ -295,12 +306,14 @@ impl Controller {
 
     /// The state machine's step at tick `k`, and what it says; `ring` is what the trim
     /// records.
-    fn advance(&mut self, k: u32, volts: f32, ring: Ring) -> Result<Option<Event>, Fault> {
+    fn advance(&mut self, k: u32, ring: Ring) -> Result<Option<Event>, Fault> {
         let _ = ring;
         match self.state {
             State::Ramping { then_measure } if self.plan.ramp_volts(k) == self.plan.bias_volts => {
                 self.hold_from(k, then_measure);
-                Ok(Some(Event::AtBias { volts }))
+                Ok(Some(Event::AtBias {
+                    volts: self.plan.bias_volts,
+                }))
             }
             #[cfg(feature = "trim")]
             State::Holding {
@@ -401,6 +414,7 @@ impl Controller {
             pulse_ticks: (0, 0),
             ac_tick: None,
             ac_volts: 0.0,
+            probe_volts: 0.0,
             ..self.plan
         };
     }
@@ -452,6 +466,8 @@ impl Controller {
         // No clearing (512 stores): every tick of the window writes its slot.
         self.trim.window_from = from.saturating_add(pulse);
         self.trim.charge = 0.0;
+        // The probe's charge would swamp the ring's: off until the trim is applied.
+        self.plan.probe_volts = 0.0;
         self.trim.handed_out = false;
         self.trim.result = None;
         self.state = State::Measuring;
@@ -484,6 +500,7 @@ impl Controller {
         }
         if at + 1 >= len {
             self.state = State::Solving;
+            self.plan.probe_volts = s.probe_volts.unwrap_or(0.0);
         }
     }
 
@@ -541,7 +558,7 @@ impl Controller {
                 };
                 plan.check_range(next_bias_volts, max_volts.min(self.ceiling_volts))?;
                 self.amplifier
-                    .code(next_bias_volts + plan.ac_volts)
+                    .code(next_bias_volts + plan.swing_volts())
                     .map_err(Fault::Amplifier)?;
                 self.max_volts = max_volts.min(self.ceiling_volts);
                 self.estimate = Some(device);

@@ -37,6 +37,10 @@ pub struct Plan {
     pub ac_phase_step: u32,
     /// The AC's phase at `ac_tick` (a tracked drive changes its frequency there, in phase).
     pub ac_phase_start: u32,
+    /// The self-sensing probe (`crate::sense`): ±`probe_volts` on the ramp wherever the ramp
+    /// is at least that high, its sign flipping every `probe_half_ticks` ticks (0: none).
+    pub probe_volts: f32,
+    pub probe_half_ticks: u32,
 }
 
 /// The AC's phase advance per tick for `hz` at `tick_hz`, in units of 2π/2³².
@@ -58,6 +62,8 @@ impl Plan {
             ac_volts: 0.0,
             ac_phase_step: 0,
             ac_phase_start: 0,
+            probe_volts: 0.0,
+            probe_half_ticks: 0,
         }
     }
 
@@ -96,6 +102,11 @@ impl Plan {
             ac_volts: if s.ac_hz > 0.0 { s.ac_volts } else { 0.0 },
             ac_phase_step: phase_step(s.ac_hz, s.tick_hz),
             ac_phase_start: 0,
+            probe_volts: s.probe_volts.unwrap_or(0.0),
+            probe_half_ticks: match s.probe_volts {
+                Some(_) if cfg!(feature = "probe") => s.probe_half_ticks()?,
+                _ => 0,
+            },
         };
         Ok((plan, ac_tick as u32 + check_ticks as u32 + 1))
     }
@@ -132,30 +143,51 @@ impl Plan {
     }
 
     /// The voltage at tick `k`: the AC rides on the ramp (a tracked drive's bias moves with
-    /// the drive on).
+    /// the drive on), and the probe on both.
     pub fn volts(&self, k: u32) -> f32 {
+        let ramp = self.ramp_volts(k);
+        let probe = match self.probe_positive(k, ramp) {
+            Some(true) => self.probe_volts,
+            Some(false) => -self.probe_volts,
+            None => 0.0,
+        };
         match self.ac_tick {
             Some(from) if k >= from => {
                 let angle = self.phase(k) as f32 * (TAU / 4_294_967_296.0);
-                self.ramp_volts(k) + self.ac_volts * Real::sin(angle)
+                ramp + self.ac_volts * Real::sin(angle) + probe
             }
             _ => {
-                let ramp = self.ramp_volts(k);
                 let (from, to) = self.pulse_ticks;
                 if k >= from && k < to {
                     (ramp - self.pulse_volts).max(0.0)
                 } else {
-                    ramp
+                    ramp + probe
                 }
             }
         }
     }
 
+    /// The probe's sign at tick `k` on a ramp at `ramp_volts` (`None`: no probe then).
+    pub fn probe_positive(&self, k: u32, ramp_volts: f32) -> Option<bool> {
+        let half = self.probe_half_ticks;
+        // Without the feature no plan has a probe (`Settings::check`): none in the code.
+        let on = cfg!(feature = "probe")
+            && half > 0
+            && self.probe_volts > 0.0
+            && ramp_volts >= self.probe_volts;
+        on.then(|| (k / half).is_multiple_of(2))
+    }
+
+    /// The most the voltage swings about the bias: the AC and the probe, V.
+    pub fn swing_volts(&self) -> f32 {
+        self.ac_volts + self.probe_volts
+    }
+
     /// The whole voltage range against [0, `max_volts`], before anything is driven: the ramp
-    /// and the bias below the cap (else `AboveSafe`), and the AC about the bias it will ride
-    /// on (`ac_bias_volts`: the tuned bias, also while a trim probes lower) neither below
-    /// 0 V (the amplifier is unipolar) nor above the cap (else a `Setting` fault naming the
-    /// AC amplitude).
+    /// and the bias below the cap (else `AboveSafe`), and the AC and the probe about the bias
+    /// they will ride on (`ac_bias_volts`: the tuned bias, also while a trim probes lower)
+    /// neither below 0 V (the amplifier is unipolar) nor above the cap (else a `Setting`
+    /// fault naming the AC amplitude, or the probe's if the AC alone fits).
     pub(super) fn check_range(&self, ac_bias_volts: f32, max_volts: f32) -> Result<(), Fault> {
         let bias_peak = self.start_volts.max(self.bias_volts);
         if !(bias_peak <= max_volts && self.bias_volts >= 0.0) {
@@ -164,12 +196,19 @@ impl Plan {
                 max_volts,
             });
         }
-        let ac = self.ac_volts;
-        let ac_peak = ac_bias_volts.max(self.bias_volts) + ac;
-        if !(ac_bias_volts - ac >= 0.0 && ac_peak <= max_volts) {
+        let fits = |swing: f32| {
+            ac_bias_volts - swing >= 0.0 && ac_bias_volts.max(self.bias_volts) + swing <= max_volts
+        };
+        if !fits(self.ac_volts) {
             return Err(Fault::Setting {
                 setting: Setting::AcVolts,
-                value: ac,
+                value: self.ac_volts,
+            });
+        }
+        if !fits(self.swing_volts()) {
+            return Err(Fault::Setting {
+                setting: Setting::ProbeVolts,
+                value: self.probe_volts,
             });
         }
         Ok(())

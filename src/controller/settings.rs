@@ -62,6 +62,14 @@ pub struct Settings {
     /// retuned to the target within `trim_tolerance` without pausing the drive (`None`: off).
     /// Needs the stretch sensor and a trim; not with `trim_every_seconds`.
     pub track_seconds: Option<f32>,
+    /// The stretch from the capacitance (feature `probe`, `crate::sense`): a square probe of
+    /// this amplitude, V, rides on the bias (`None`: off). The current monitor's lock-in on
+    /// it gives λ with its uncertainty, checked against MODEL.md §6 widened by it. Off while
+    /// the trim measures a ring.
+    pub probe_volts: Option<f32>,
+    /// The probe's frequency, Hz: half the tick rate over a whole number (its sign flips
+    /// every so many ticks).
+    pub probe_hz: f32,
 }
 
 /// The f32 solve's allowance: the cap is (1 − margin)·(1 − F32_GUARD)·Φlimit in f32, so it
@@ -74,6 +82,9 @@ pub(super) fn guarded(margin: f32) -> f32 {
     1.0 - (1.0 - margin) * (1.0 - F32_GUARD)
 }
 
+/// The self-sensing probe's frequency over the target's, at least.
+pub const PROBE_ABOVE_TARGET: f32 = 4.0;
+
 /// Most trims (measure, estimate, retune) before the controller gives up.
 pub const MAX_TRIMS: u8 = 8;
 
@@ -81,9 +92,30 @@ pub const MAX_TRIMS: u8 = 8;
 pub const TRIM_SECANT_STEP: f32 = 0.1;
 
 impl Settings {
+    /// The probe's half period in ticks: `tick_hz`/(2·`probe_hz`), which must be a whole
+    /// number (within 1e-4) of at least 1; else a `Setting` fault naming `probe_hz`.
+    pub(super) fn probe_half_ticks(&self) -> Result<u32, Fault> {
+        let hz = self.probe_hz;
+        let half = self.tick_hz / (2.0 * hz);
+        let whole = libm::roundf(half);
+        if !(hz > 0.0 && whole >= 1.0 && (half - whole).abs() <= 1e-4 * whole && whole < 1e6) {
+            return Err(Fault::Setting {
+                setting: Setting::ProbeHz,
+                value: hz,
+            });
+        }
+        Ok(whole as u32)
+    }
+
+    /// The most the voltage swings about the bias: the AC and the probe, V.
+    pub fn swing_volts(&self) -> f32 {
+        self.ac_volts + self.probe_volts.unwrap_or(0.0)
+    }
+
     /// Defaults for a target: 5% margin, 10 kV/s, 1 kHz, 0.25 s hold, no AC, 0.5 s of
     /// model after the AC starts, table and solve within 1e-4 in frequency, the amplifier
-    /// within 200 V of its command, 100 equal sensor samples in a row a stuck sensor.
+    /// within 200 V of its command, 100 equal sensor samples in a row a stuck sensor; no
+    /// probe (its frequency, once on, 500 Hz).
     pub const fn for_target(target_hz: f32) -> Self {
         Self {
             target_hz,
@@ -105,6 +137,8 @@ impl Settings {
             leakage_floor_ohms: None,
             leakage_fall_per_second: None,
             track_seconds: None,
+            probe_volts: None,
+            probe_hz: 500.0,
         }
     }
 
@@ -118,6 +152,7 @@ impl Settings {
             Setting::LeakageFloorOhms => self.leakage_floor_ohms.unwrap_or(0.0),
             Setting::LeakageFallPerSecond => self.leakage_fall_per_second.unwrap_or(0.0),
             Setting::TrackSeconds => self.track_seconds.unwrap_or(0.0),
+            Setting::ProbeVolts => self.probe_volts.unwrap_or(0.0),
             other => {
                 let mut copy = *self;
                 copy.slot_mut(other).map_or(f32::NAN, |value| *value)
@@ -136,6 +171,7 @@ impl Settings {
             Setting::LeakageFloorOhms => self.leakage_floor_ohms = on,
             Setting::LeakageFallPerSecond => self.leakage_fall_per_second = on,
             Setting::TrackSeconds => self.track_seconds = on,
+            Setting::ProbeVolts => self.probe_volts = on,
             other => {
                 if let Some(slot) = self.slot_mut(other) {
                     *slot = value;
@@ -160,12 +196,14 @@ impl Settings {
             Setting::TrimWindowSeconds => &mut self.trim_window_seconds,
             Setting::TrimPulseVolts => &mut self.trim_pulse_volts,
             Setting::TrimProbeFraction => &mut self.trim_probe_fraction,
+            Setting::ProbeHz => &mut self.probe_hz,
             Setting::StuckSamples
             | Setting::TrimTolerance
             | Setting::TrimEverySeconds
             | Setting::LeakageFloorOhms
             | Setting::LeakageFallPerSecond
-            | Setting::TrackSeconds => return None,
+            | Setting::TrackSeconds
+            | Setting::ProbeVolts => return None,
         })
     }
 
@@ -231,6 +269,24 @@ impl Settings {
                 });
             }
         }
+        if let Some(volts) = self.probe_volts {
+            positive(Setting::ProbeVolts, volts)?;
+            if !cfg!(feature = "probe") {
+                return Err(Fault::Setting {
+                    setting: Setting::ProbeVolts,
+                    value: volts,
+                });
+            }
+            self.probe_half_ticks()?;
+            // Well above the resonance: the motion the probe drives stays small against the
+            // AC's (it is not in the edges' charge, `crate::sense`, but moves λ).
+            if !(self.probe_hz >= PROBE_ABOVE_TARGET * self.target_hz) {
+                return Err(Fault::Setting {
+                    setting: Setting::ProbeHz,
+                    value: self.probe_hz,
+                });
+            }
+        }
         let probe = positive(Setting::TrimProbeFraction, self.trim_probe_fraction)?;
         if !(probe <= 1.0) {
             return Err(Fault::Setting {
@@ -277,11 +333,13 @@ pub enum Setting {
     LeakageFloorOhms,
     LeakageFallPerSecond,
     TrackSeconds,
+    ProbeVolts,
+    ProbeHz,
 }
 
 impl Setting {
     /// Every setting, in `Settings` order.
-    pub const ALL: [Setting; 19] = [
+    pub const ALL: [Setting; 21] = [
         Setting::TargetHz,
         Setting::Margin,
         Setting::SlewVoltsPerSecond,
@@ -301,6 +359,8 @@ impl Setting {
         Setting::LeakageFloorOhms,
         Setting::LeakageFallPerSecond,
         Setting::TrackSeconds,
+        Setting::ProbeVolts,
+        Setting::ProbeHz,
     ];
 
     /// The setting with this key.
@@ -330,6 +390,8 @@ impl Setting {
             Setting::LeakageFloorOhms => "leakage_floor_ohms",
             Setting::LeakageFallPerSecond => "leakage_fall_per_second",
             Setting::TrackSeconds => "track_seconds",
+            Setting::ProbeVolts => "probe_volts",
+            Setting::ProbeHz => "probe_hz",
         }
     }
 }

@@ -125,7 +125,7 @@ impl Controller {
         let error_hz = s.target_hz - lock.natural_hz;
         let squared = bias * bias + slope * error_hz / (hz * integral_seconds);
         let next_bias_volts = libm::sqrtf(squared.max(0.0));
-        let ac = self.plan.ac_volts;
+        let ac = self.plan.swing_volts();
         if !(next_bias_volts + ac <= self.max_volts) {
             // The plant needs more than the cap: hold the bias, the drive off, and say so.
             self.plan.ac_tick = None;

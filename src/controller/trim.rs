@@ -190,7 +190,7 @@ impl TrimJob {
             // (past zero volts, or up) is what the model's region cannot vouch for.
             let step = TRIM_SECANT_STEP * from;
             let volts = libm::sqrtf(next.max(0.0)).clamp(from - step, from + step);
-            (volts + s.ac_volts <= max_volts).then_some(volts)
+            (volts + s.swing_volts() <= max_volts).then_some(volts)
         });
         let bias_volts = match secant {
             Some(volts) => volts,
@@ -202,7 +202,7 @@ impl TrimJob {
                 max_volts,
             });
         }
-        let needed_volts = bias_volts + s.ac_volts;
+        let needed_volts = bias_volts + s.swing_volts();
         if !(needed_volts <= max_volts) && max_volts == self.ceiling_volts {
             return Ok(TrimResult::AboveCeiling {
                 measured_hz,

@@ -108,6 +108,12 @@ pub(super) struct LeakageLimits {
 const FALL_SIGNIFICANCE: f32 = 3.0;
 
 impl Leakage {
+    /// The last window's leakage conductance, S, if one is measured.
+    #[cfg(feature = "probe")]
+    pub(super) fn siemens(&self) -> Option<f32> {
+        self.previous.map(|(siemens, _)| siemens)
+    }
+
     /// A tick's current under `volts` (the command the current flowed under); at the window's
     /// end, the leakage resistance against the floor (below is a fault) and against the last
     /// window's (a fall faster than allowed, beyond the scatter, is a fault).

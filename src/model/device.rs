@@ -316,6 +316,22 @@ impl<T: Real> DeviceParams<T> {
     pub fn permittivity(&self) -> T {
         self.relative_permittivity * T::of(VACUUM_PERMITTIVITY)
     }
+
+    /// Membrane A's capacitance per λ², F: C(λ) = this·λ² (MODEL.md §8, paper eq. 1:
+    /// C = ε·L1A·L2·λ²·λ2p²/H, λ2 held at λ2p).
+    pub fn farads_per_stretch_squared(&self) -> T {
+        self.permittivity()
+            * self.length_active
+            * self.width
+            * self.prestretch_2
+            * self.prestretch_2
+            / self.thickness
+    }
+
+    /// Membrane A's capacitance at stretch λ, F (MODEL.md §8).
+    pub fn capacitance_farads(&self, stretch: T) -> T {
+        self.farads_per_stretch_squared() * stretch * stretch
+    }
 }
 
 impl<T: Real> Device<T> {

@@ -233,9 +233,7 @@ enum Sensing {
 /// The membrane's charge C(λ)·Φ, C(λ) = ε·L1A·L2·λ²·λ2p²/H (MODEL.md §8), C.
 #[cfg(feature = "trim")]
 fn charge_coulombs(p: &de_resonator::DeviceParams<f32>, stretch: f32, volts: f32) -> f32 {
-    let l2p = p.prestretch_2;
-    p.permittivity() * p.length_active * p.width * stretch * stretch * l2p * l2p / p.thickness
-        * volts
+    p.capacitance_farads(stretch) * volts
 }
 
 /// A whole trim cycle (ramp to the probe bias, hold, pulse, ring, solve, retune, ... to the AC
@@ -252,6 +250,10 @@ fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
         ac_volts: 100.0,
         ac_hz: if track_seconds.is_some() { 44.0 } else { 40.0 },
         track_seconds,
+        // Self-sensing with the `probe` feature: λ from C as well, under a ±20 V probe.
+        probe_volts: (cfg!(feature = "probe") && matches!(sensing, Sensing::Current))
+            .then_some(20.0),
+        probe_hz: 500.0,
         ..settings()
     };
     let Ok((mut c, _)) = Controller::start(device(), TABLE, amp, s) else {
@@ -323,6 +325,9 @@ fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
     let what = match (sensing, track_seconds) {
         (Sensing::Stretch, None) => "trim",
         (Sensing::Stretch, Some(_)) => "trim then tracking",
+        (Sensing::Current, _) if s.probe_volts.is_some() => {
+            "sensorless trim (the current only, and λ from C under the probe)"
+        }
         (Sensing::Current, _) => "sensorless trim (the current only)",
     };
     defmt::info!(
@@ -337,6 +342,17 @@ fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
         solves,
         solve_most
     );
+    #[cfg(feature = "probe")]
+    if let Some(sensed) = c.sensed() {
+        let (_, high) = dev.plausible_stretch();
+        let rest = dev.stretch_for_bias(c.plan().bias_volts, high);
+        defmt::info!(
+            "λ from C, the last window's mean: {=f32} ± {=f32} (the plant's equilibrium at the bias, the AC drive's centre: {=f32})",
+            sensed.stretch,
+            sensed.sigma,
+            rest.unwrap_or(f32::NAN)
+        );
+    }
     #[cfg(feature = "track")]
     if track_seconds.is_some() {
         let hz = c.tracked().map_or(f32::NAN, |l| l.natural_hz);

@@ -37,6 +37,64 @@ pub struct EventReport {
     pub what: String,
 }
 
+/// The stretch from the capacitance (the probe's lock-in) over the run, against the plant.
+#[derive(Serialize, Debug, Clone, Copy)]
+pub struct SensedReport {
+    pub windows: usize,
+    /// The last window's estimate and standard error.
+    pub stretch: f64,
+    pub sigma: f64,
+    /// The largest |estimate − plant's mean stretch over the window| over the windows, and
+    /// the largest in standard errors.
+    pub worst_error: f64,
+    pub worst_sigmas: f64,
+}
+
+impl SensedReport {
+    fn of(run: &Run) -> Option<Self> {
+        let last = run.sensed.last()?;
+        let errors = run
+            .sensed
+            .iter()
+            .map(|s| (s.stretch - s.plant_stretch).abs());
+        let sigmas = run
+            .sensed
+            .iter()
+            .map(|s| (s.stretch - s.plant_stretch).abs() / s.sigma);
+        Some(Self {
+            windows: run.sensed.len(),
+            stretch: last.stretch,
+            sigma: last.sigma,
+            worst_error: errors.fold(0.0, f64::max),
+            worst_sigmas: sigmas.fold(0.0, f64::max),
+        })
+    }
+}
+
+/// What resonance tracking measured last: the natural frequency and Q, and the parametric
+/// threshold of `sweep` that Q gives (the modulation depth h above 2/Q: README, `sweep`).
+#[derive(Serialize, Debug, Clone, Copy)]
+pub struct TrackedReport {
+    pub natural_hz: f64,
+    pub quality_factor: f64,
+    pub parametric_threshold: f64,
+}
+
+impl TrackedReport {
+    fn of(run: &Run) -> Option<Self> {
+        let last = run
+            .tracking
+            .iter()
+            .rev()
+            .find(|t| t.quality_factor.is_finite())?;
+        Some(Self {
+            natural_hz: last.measured_hz,
+            quality_factor: last.quality_factor,
+            parametric_threshold: 2.0 / last.quality_factor,
+        })
+    }
+}
+
 /// One tick of the history CSV.
 #[derive(Serialize)]
 struct HistoryRow {
@@ -69,6 +127,10 @@ pub struct RunReport {
     #[serde(skip)]
     plant_crossing_description: Option<&'static str>,
     pub final_membrane_volts: f64,
+    /// With the probe on: the stretch from the capacitance against the plant.
+    pub sensed: Option<SensedReport>,
+    /// With tracking on: its last measurement.
+    pub tracked: Option<TrackedReport>,
     pub events: Vec<EventReport>,
     pub run_seconds: f64,
     pub files: Vec<String>,
@@ -158,6 +220,25 @@ impl fmt::Display for RunReport {
                 self.ticks
             )?,
         }
+        if let Some(t) = self.tracked {
+            writeln!(
+                f,
+                "tracked         f {} Hz, Q {:.1}: parametric threshold h > 2/Q = {:.3} \
+                 (sweep --quality-factor {:.1})",
+                sig(t.natural_hz),
+                t.quality_factor,
+                t.parametric_threshold,
+                t.quality_factor
+            )?;
+        }
+        if let Some(s) = self.sensed {
+            writeln!(
+                f,
+                "sensed λ        {:.5} ± {:.1e} from C (last of {} windows); worst error \
+                 against the plant {:.1e} ({:.1} σ)",
+                s.stretch, s.sigma, s.windows, s.worst_error, s.worst_sigmas
+            )?;
+        }
         for e in &self.events {
             writeln!(f, "  {:>8.3} s     {}", e.time_seconds, e.what)?;
         }
@@ -233,6 +314,8 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<RunReport, String> {
         plant_crossing: Crossing::of(run.plant_crossing),
         plant_crossing_description: run.plant_crossing.map(|(mode, _)| mode.description()),
         final_membrane_volts: run.final_membrane_volts,
+        sensed: SensedReport::of(&run),
+        tracked: TrackedReport::of(&run),
         events: run
             .events
             .iter()

@@ -1,0 +1,128 @@
+//! The stretch from the capacitance in the tick (feature `probe`, `crate::sense`): each
+//! tick's current and voltage go to the probe's lock-in; each window's estimate, widened by
+//! `PROBE_SIGMAS` standard errors, is checked against MODEL.md §6 for the device flashed and
+//! the trim's estimate, one check a tick (the tick's budget).
+
+use super::fault::Fault;
+use super::watch::Inputs;
+use super::Controller;
+use crate::device::Device;
+use crate::sense::{ProbeLockIn, SensedStretch};
+
+/// The lock-in's memory between ticks.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Sensing {
+    lock_in: Option<ProbeLockIn>,
+    /// The probe's sign at the last tick (`None`: no probe then).
+    last_positive: Option<bool>,
+    /// The last window's estimate and the next of its checks (`Check::ORDER`).
+    checking: Option<(SensedStretch, usize)>,
+}
+
+/// One check of an estimate: the interval's ends against a device.
+#[derive(Clone, Copy)]
+enum Check {
+    /// A number, inside the stretches a device could have (`Device::plausible_stretch`).
+    Plausible,
+    /// An end of the widened interval (low: false) inside MODEL.md §6 for the device flashed
+    /// (true) or the trim's estimate.
+    Limit { high: bool, flashed: bool },
+}
+
+impl Check {
+    const ORDER: [Check; 5] = [
+        Check::Plausible,
+        Check::Limit {
+            high: false,
+            flashed: true,
+        },
+        Check::Limit {
+            high: true,
+            flashed: true,
+        },
+        Check::Limit {
+            high: false,
+            flashed: false,
+        },
+        Check::Limit {
+            high: true,
+            flashed: false,
+        },
+    ];
+}
+
+impl Controller {
+    /// The last window's stretch from the capacitance, if any.
+    pub fn sensed(&self) -> Option<SensedStretch> {
+        self.sensing.lock_in.and_then(|l| l.last())
+    }
+
+    /// Tick `k`'s measurements to the lock-in (the current over the tick before, under the
+    /// last command's probe sign; the voltage now, measured or the last command), and one
+    /// check of the last estimate.
+    pub(super) fn sense(&mut self, k: u32, inputs: &Inputs) -> Option<Fault> {
+        self.settings.probe_volts?;
+        if let Some(fault) = self.check_sensed(k) {
+            return Some(fault);
+        }
+        let positive = self.plan.probe_positive(k, self.plan.ramp_volts(k));
+        let was = core::mem::replace(&mut self.sensing.last_positive, positive);
+        let (Some(amps), Some(now), Some(was)) = (inputs.current_amps, positive, was) else {
+            // No probe, or no current: the halves start again with the next edge.
+            if let Some(lock_in) = self.sensing.lock_in.as_mut() {
+                lock_in.restart();
+            }
+            return None;
+        };
+        let s = self.settings;
+        let flashed = &self.flashed;
+        let lock_in = self
+            .sensing
+            .lock_in
+            .get_or_insert_with(|| ProbeLockIn::new(flashed, s.probe_hz, s.tick_hz));
+        // The leakage's part moves with the probe's sign: out, once the watch measures it.
+        lock_in.set_conductance(self.leakage.siemens().unwrap_or(0.0));
+        let volts = inputs.amplifier_volts.unwrap_or(self.last_volts);
+        let edge = (now != was).then_some(was);
+        if let Some(estimate) = lock_in.observe(amps, volts, edge) {
+            self.sensing.checking = Some((estimate, 0));
+        }
+        None
+    }
+
+    /// The next check of the last estimate, if one is due.
+    fn check_sensed(&mut self, k: u32) -> Option<Fault> {
+        let (estimate, next) = self.sensing.checking?;
+        let check = Check::ORDER.get(next).copied();
+        self.sensing.checking = check.map(|_| (estimate, next + 1));
+        match check? {
+            Check::Plausible => {
+                let value = estimate.stretch;
+                if !(value.is_finite() && estimate.sigma.is_finite()) {
+                    let value = if value.is_finite() {
+                        estimate.sigma
+                    } else {
+                        value
+                    };
+                    return Some(Fault::Sensor { value });
+                }
+                let (low, high) = self.flashed.plausible_stretch();
+                let (from, to) = estimate.widened();
+                let outside = [from, to].into_iter().find(|x| !(*x > low && *x < high));
+                outside.map(|value| Fault::SensorImplausible { value, low, high })
+            }
+            Check::Limit { high, flashed } => {
+                let device: &Device<f32> = if flashed {
+                    &self.flashed
+                } else {
+                    self.estimate.as_ref()?
+                };
+                let (from, to) = estimate.widened();
+                let stretch = if high { to } else { from };
+                let p = estimate.volts / device.volts_per_unit();
+                let mode = device.first_failure(stretch, p * p)?;
+                Some(Fault::Limit { mode, tick: k })
+            }
+        }
+    }
+}
