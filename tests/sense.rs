@@ -4,12 +4,10 @@
 
 mod common;
 
-use common::{made_table, Rng};
+use common::Rng;
 use de_resonator::device::Device;
 use de_resonator::sense::{ProbeLockIn, SensedStretch};
-use de_resonator::{
-    Amplifier, Controller, Event, FailureMode, Fault, Inputs, Settings, REFERENCE_DEVICE,
-};
+use de_resonator::REFERENCE_DEVICE;
 
 /// C(λ) of the reference device, F: ε0·εr·(L1A·λ)·(L2·λ2p)/(H/(λ·λ2p)) over λ (plate area
 /// L1A·λ × L2·λ2p, thickness H/(λ·λ2p) by incompressibility), that is ε·L1A·L2·λ²·λ2p²/H.
@@ -134,70 +132,85 @@ fn the_standard_error_is_the_noise_the_arithmetic_predicts() {
     }
 }
 
-/// The reference controller with the probe on, its current from a membrane written out
-/// here at `stretch(bias)` (the ramp's voltage: the membrane does not follow the probe, far
-/// above its resonance): the first fault within `ticks`, if any.
-fn controller_reading(stretch: impl Fn(f64) -> f64, noise_amps: f64, ticks: u32) -> Option<Fault> {
-    let settings = Settings {
-        probe_volts: Some(20.0),
-        probe_hz: 500.0,
-        ..Settings::for_target(44.0)
+/// The controller with the probe on (feature `probe`).
+#[cfg(feature = "probe")]
+mod controller {
+    use super::{capacitance, gaussian};
+    use crate::common::{made_table, Rng};
+    use de_resonator::device::Device;
+    use de_resonator::{
+        Amplifier, Controller, Event, FailureMode, Fault, Inputs, Settings, REFERENCE_DEVICE,
     };
-    let table = made_table(REFERENCE_DEVICE, 0.05, 64);
-    let amplifier = Amplifier::new(2.5, 4000.0).unwrap();
-    let (mut c, _) =
-        Controller::start(REFERENCE_DEVICE.cast(), &table, amplifier, settings).unwrap();
-    let mut rng = Rng(7);
-    let (mut volts, mut bias, mut charge) = (0.0f64, 0.0f64, 0.0f64);
-    for k in 0..ticks {
-        let inputs = if k == 0 {
-            Inputs::NONE
-        } else {
-            let now = capacitance(stretch(bias)) * volts;
-            let amps = (now - charge) / 1e-3 + noise_amps * gaussian(&mut rng);
-            charge = now;
-            Inputs::current(amps as f32)
-        };
-        let out = c.tick(inputs);
-        if let Some(Event::Fault(fault)) = out.event {
-            return Some(fault);
-        }
-        volts = f64::from(out.volts);
-        bias = f64::from(c.plan().ramp_volts(k));
-    }
-    assert!(c.sensed().is_some());
-    None
-}
 
-/// The monitor checks the stretch from C widened by its uncertainty: a membrane at its
-/// equilibrium passes for 3 s; one 1.55 times as stretched (past 3.29, where the passive
-/// membrane goes slack at the biases the ramp reaches: MODEL.md §6.3) is a `Limit` fault;
-/// noise so large that the widened estimate leaves the stretches any device could have is a
-/// fault, never a pass.
-#[test]
-fn the_monitor_checks_the_stretch_from_c_widened() {
-    let device = Device::new(REFERENCE_DEVICE).unwrap();
-    let (_, high) = device.plausible_stretch();
-    let rest = |volts: f64| device.stretch_for_bias(volts, high).unwrap();
-    assert_eq!(controller_reading(rest, 1e-6, 3000), None);
-    let stretched = |volts: f64| 1.55 * rest(volts);
-    let fault = controller_reading(stretched, 1e-6, 3000);
-    assert!(
-        matches!(
-            fault,
-            Some(Fault::Limit {
-                mode: FailureMode::LossOfTension1,
-                ..
-            })
-        ),
-        "{fault:?}"
-    );
-    let noisy = controller_reading(rest, 3e-3, 3000);
-    assert!(
-        matches!(
-            noisy,
-            Some(Fault::SensorImplausible { .. } | Fault::Sensor { .. } | Fault::Limit { .. })
-        ),
-        "{noisy:?}"
-    );
+    /// The reference controller with the probe on, its current from a membrane written out
+    /// here at `stretch(bias)` (the ramp's voltage: the membrane does not follow the probe, far
+    /// above its resonance): the first fault within `ticks`, if any.
+    fn controller_reading(
+        stretch: impl Fn(f64) -> f64,
+        noise_amps: f64,
+        ticks: u32,
+    ) -> Option<Fault> {
+        let settings = Settings {
+            probe_volts: Some(20.0),
+            probe_hz: 500.0,
+            ..Settings::for_target(44.0)
+        };
+        let table = made_table(REFERENCE_DEVICE, 0.05, 64);
+        let amplifier = Amplifier::new(2.5, 4000.0).unwrap();
+        let (mut c, _) =
+            Controller::start(REFERENCE_DEVICE.cast(), &table, amplifier, settings).unwrap();
+        let mut rng = Rng(7);
+        let (mut volts, mut bias, mut charge) = (0.0f64, 0.0f64, 0.0f64);
+        for k in 0..ticks {
+            let inputs = if k == 0 {
+                Inputs::NONE
+            } else {
+                let now = capacitance(stretch(bias)) * volts;
+                let amps = (now - charge) / 1e-3 + noise_amps * gaussian(&mut rng);
+                charge = now;
+                Inputs::current(amps as f32)
+            };
+            let out = c.tick(inputs);
+            if let Some(Event::Fault(fault)) = out.event {
+                return Some(fault);
+            }
+            volts = f64::from(out.volts);
+            bias = f64::from(c.plan().ramp_volts(k));
+        }
+        assert!(c.sensed().is_some());
+        None
+    }
+
+    /// The monitor checks the stretch from C widened by its uncertainty: a membrane at its
+    /// equilibrium passes for 3 s; one 1.55 times as stretched (past 3.29, where the passive
+    /// membrane goes slack at the biases the ramp reaches: MODEL.md §6.3) is a `Limit` fault;
+    /// noise so large that the widened estimate leaves the stretches any device could have is a
+    /// fault, never a pass.
+    #[test]
+    fn the_monitor_checks_the_stretch_from_c_widened() {
+        let device = Device::new(REFERENCE_DEVICE).unwrap();
+        let (_, high) = device.plausible_stretch();
+        let rest = |volts: f64| device.stretch_for_bias(volts, high).unwrap();
+        assert_eq!(controller_reading(rest, 1e-6, 3000), None);
+        let stretched = |volts: f64| 1.55 * rest(volts);
+        let fault = controller_reading(stretched, 1e-6, 3000);
+        assert!(
+            matches!(
+                fault,
+                Some(Fault::Limit {
+                    mode: FailureMode::LossOfTension1,
+                    ..
+                })
+            ),
+            "{fault:?}"
+        );
+        let noisy = controller_reading(rest, 3e-3, 3000);
+        assert!(
+            matches!(
+                noisy,
+                Some(Fault::SensorImplausible { .. } | Fault::Sensor { .. } | Fault::Limit { .. })
+            ),
+            "{noisy:?}"
+        );
+    }
 }

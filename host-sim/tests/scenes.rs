@@ -307,6 +307,25 @@ fn sensorless_scenes_trim_on_the_current_within_half_a_percent() {
     }
 }
 
+/// Self-sensing on the creeping VHB plant (`sensorless-vhb`, the current monitor only, the
+/// probe on): as `viscoelastic-vhb` with its displacement sensor, the plant ends within 1e-3
+/// of 47 Hz, never outside its safe region; λ from C in every window within the interval the
+/// monitor checks.
+#[test]
+fn sensorless_vhb_trims_a_creeping_plant_and_reads_its_stretch() {
+    let file = "sensorless-vhb.toml";
+    let r = run(file);
+    assert!(r.refused.is_none() && r.fault.is_none(), "{r:?}");
+    assert_eq!(r.plant_crossing, None);
+    let error = (r.natural_frequency_hz - 47.0) / 47.0;
+    assert!(error.abs() < 1e-3, "{error}");
+    assert!(r.sensed.len() >= 40, "{}", r.sensed.len());
+    for w in &r.sensed {
+        let error = w.stretch - w.plant_stretch;
+        assert!(error.abs() <= f64::from(PROBE_SIGMAS) * w.sigma, "{w:?}");
+    }
+}
+
 /// Where self-sensing stops: at 30 and 100 times the monitor's noise the ring is lost in it;
 /// the controller then faults (down to 0 V) or still lands within 0.5%, never mistunes
 /// silently, and the plant stays safe.
