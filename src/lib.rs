@@ -45,7 +45,7 @@ pub use controller::{
     Replanned, Setting, Settings,
 };
 #[cfg(feature = "trim")]
-pub use controller::{TrimJob, TrimResult};
+pub use controller::{TrimDone, TrimJob, TrimResult};
 pub use decimal::Decimal;
 pub use device::{Device, DeviceParams, Field, ParamError, Problem, REFERENCE_DEVICE};
 pub use drive::{Amplifier, CodeError, Dac8551, DacCode, DacError, PowerMode};

@@ -1082,8 +1082,8 @@ fn a_trim_on_a_stiffer_plant_never_lifts_the_ceiling() {
     let held = events.iter().find_map(|&(_, e)| match e {
         Event::AboveCeiling {
             needed_volts,
-            ceiling_volts,
-        } => Some((needed_volts, ceiling_volts)),
+            cap_volts,
+        } => Some((needed_volts, cap_volts)),
         _ => None,
     });
     assert!(

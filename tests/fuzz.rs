@@ -2,8 +2,14 @@
 //! amplifiers and tables (made by the project's writer, then corrupted: bits flipped, or
 //! values changed and resealed with a fresh CRC), and sensor and amplifier-monitor samples
 //! (a simulated plant, mismatched or not, noisy, NaN, stuck, wild). Every tick's command is
-//! checked against (1 − margin)·Φlimit of the device flashed, computed in f64; after a fault
-//! the output goes down at the slew rate, no faster, to 0 V and stays; the final gate never fires (the boot checks catch everything first).
+//! checked against the boot ceiling, (1 − margin)·Φlimit of the device flashed computed in
+//! f64, and against the operator's cap, the same at the margin of the plan in force;
+//! above the cap in force only on the way down to it. Between ticks an operator acts at
+//! random (a new plan with another margin, AC or target, adopted at once or late; `stop`;
+//! `trim`; `clear` once down) and the trim's and tracking's jobs are answered at once, late,
+//! stale, never, or tampered with (issue 25). After a fault and after `stop` the output goes
+//! down from the voltage sent at the slew rate, never faster (at once on a dead bus), never
+//! up, to 0 V in the ticks the slew needs; the final gate never fires. Both are counted.
 //!
 //! `FUZZ_TICKS` (default 10⁶) sets how many ticks to check, `FUZZ_SEED` the seed. A longer
 //! run: `FUZZ_TICKS=100000000 cargo test --release --test fuzz -- --nocapture`.
@@ -18,8 +24,10 @@ use common::{made_table, random_device, Rng};
 use de_resonator::table::{self, HEADER_BYTES, POINT_BYTES};
 use de_resonator::{
     Amplifier, Controller, DacCode, Device, DeviceParams, Drive, Event, Fault, FaultStage, Inputs,
-    Integrator, Method, Settings, State, Tuner,
+    Integrator, Method, Phase, Replanned, Settings, State, Tuner,
 };
+#[cfg(feature = "trim")]
+use de_resonator::{TrimDone, TrimResult};
 
 /// A value that breaks something: NaN, infinities, zero, negatives, huge and tiny.
 fn wild(rng: &mut Rng) -> f64 {
@@ -141,10 +149,17 @@ fn settings(
         s.ac_volts = (most * rng.log_range(1e-3, 1.0)) as f32;
         s.ac_hz = (f0 * rng.range(0.1, 2.5)).min(0.45 * f64::from(s.tick_hz)) as f32;
     }
-    if cfg!(feature = "trim") && rng.unit() < 0.25 {
+    if cfg!(feature = "trim") && rng.unit() < 0.4 {
         s.trim_tolerance = Some(1e-3);
         s.trim_window_seconds = 0.25;
         s.trim_every_seconds = [None, Some(0.5)][rng.below(2)];
+        if cfg!(feature = "track") && rng.unit() < 0.4 {
+            s.track_seconds = Some(rng.range(0.05, 0.5) as f32);
+        }
+    }
+    if cfg!(feature = "probe") && rng.unit() < 0.15 {
+        s.probe_volts = Some((0.01 * bias_volts * rng.range(0.1, 2.0)) as f32);
+        s.probe_hz = s.tick_hz / 4.0;
     }
     if rng.unit() < 0.15 {
         let v = wild(rng) as f32;
@@ -172,6 +187,210 @@ enum Sensor {
     Wild,
 }
 
+/// What the operator did between two ticks, as far as the checks care.
+enum Operated {
+    Stopped,
+    /// A new plan adopted, with its margin: the operator's cap from the next tick.
+    Adopted {
+        margin: f32,
+    },
+    /// A faulted controller at 0 V booted again from its image (`clear`).
+    Cleared,
+}
+
+/// The operator at random ticks (a new plan with another margin, AC or target, adopted at
+/// once or late; `stop`; `trim` now; `clear` once down), and the trim and tracking jobs'
+/// results: given back at once, late, after the controller moved on (stale), never, or
+/// tampered with.
+struct Operations {
+    boot: Settings,
+    params: DeviceParams<f32>,
+    amplifier: Amplifier,
+    tick: u32,
+    /// A new plan solved, to adopt at a tick, with its margin.
+    replanned: Option<(u32, Replanned, f32)>,
+    /// Results to give back at a tick.
+    #[cfg(feature = "trim")]
+    results: Vec<(u32, TrimDone)>,
+}
+
+impl Operations {
+    fn new(boot: Settings, params: DeviceParams<f32>, amplifier: Amplifier) -> Self {
+        Self {
+            boot,
+            params,
+            amplifier,
+            tick: 0,
+            replanned: None,
+            #[cfg(feature = "trim")]
+            results: Vec::new(),
+        }
+    }
+
+    fn between_ticks(
+        &mut self,
+        rng: &mut Rng,
+        c: &mut Controller,
+        table: &[u8],
+        tally: &mut Tally,
+    ) -> Option<Operated> {
+        self.tick += 1;
+        #[cfg(feature = "trim")]
+        self.background(rng, c, tally);
+        let mut said = |what: &str| *tally.operations.entry(what.to_string()).or_default() += 1;
+        let mut operated = None;
+        if self
+            .replanned
+            .as_ref()
+            .is_some_and(|(at, ..)| *at <= self.tick)
+        {
+            let (_, replanned, margin) = self.replanned.take()?;
+            match c.adopt(replanned) {
+                Ok(_) => {
+                    said("adopted");
+                    operated = Some(Operated::Adopted { margin });
+                }
+                Err(refusal) => said(&format!("adopt refused: {}", kind(&refusal))),
+            }
+        }
+        if rng.unit() >= 1.0 / 300.0 {
+            return operated;
+        }
+        match rng.below(4) {
+            0 => {
+                let now = *c.settings();
+                let margin = match rng.below(4) {
+                    0 | 1 => now.margin + rng.range(0.0, 0.4) as f32,
+                    2 => now.margin * rng.unit() as f32,
+                    _ => now.margin,
+                };
+                let new = Settings {
+                    margin,
+                    ac_volts: now.ac_volts * rng.range(0.0, 1.5) as f32,
+                    target_hz: now.target_hz * rng.range(0.995, 1.005) as f32,
+                    ..now
+                };
+                match c.replan(new).map(|job| job.solve(table)) {
+                    Ok(Ok(replanned)) => {
+                        let late = if rng.unit() < 0.5 {
+                            0
+                        } else {
+                            1 + rng.below(500) as u32
+                        };
+                        said(if late == 0 { "replan" } else { "replan, late" });
+                        self.replanned = Some((self.tick + late, replanned, margin));
+                    }
+                    Ok(Err(refusal)) | Err(refusal) => {
+                        said(&format!("replan refused: {}", kind(&refusal)))
+                    }
+                }
+            }
+            1 => {
+                said("stop");
+                c.stop();
+                operated = Some(Operated::Stopped);
+            }
+            2 => match c.trim_now() {
+                Ok(()) => said("trim now"),
+                Err(refusal) => said(&format!("trim refused: {}", kind(&refusal))),
+            },
+            _ if c.phase() == Phase::Faulted && c.last_volts() == 0.0 => {
+                if let Ok((fresh, _)) =
+                    Controller::start(self.params, table, self.amplifier, self.boot)
+                {
+                    said("clear");
+                    *c = fresh;
+                    self.replanned = None;
+                    operated = Some(Operated::Cleared);
+                }
+            }
+            _ => {}
+        }
+        operated
+    }
+
+    /// The background jobs: each handed out is answered at once, late, stale (after other
+    /// ticks and operations), never, or tampered with (fields changed, another job's
+    /// number); what is due is given back.
+    #[cfg(feature = "trim")]
+    fn background(&mut self, rng: &mut Rng, c: &mut Controller, tally: &mut Tally) {
+        let mut said = |what: &'static str| *tally.results.entry(what).or_default() += 1;
+        if let Some(job) = c.trim_job() {
+            let done = job.solve();
+            match rng.below(8) {
+                0..=2 => {
+                    said("now");
+                    c.trim_done(done);
+                }
+                3 => {
+                    said("late");
+                    self.results
+                        .push((self.tick + 1 + rng.below(200) as u32, done));
+                }
+                4 => {
+                    said("stale");
+                    self.results
+                        .push((self.tick + 200 + rng.below(3000) as u32, done));
+                }
+                5 => said("never"),
+                _ => {
+                    said("tampered");
+                    c.trim_done(tampered(rng, done));
+                }
+            }
+        }
+        let tick = self.tick;
+        for (_, done) in self.results.iter().filter(|(at, _)| *at <= tick) {
+            c.trim_done(*done);
+        }
+        self.results.retain(|(at, _)| *at > tick);
+    }
+}
+
+/// A result changed: a cap or a bias scaled up, NaN, infinite or negative; another kind of
+/// result; another job's number.
+#[cfg(feature = "trim")]
+fn tampered(rng: &mut Rng, mut done: TrimDone) -> TrimDone {
+    let wild_volts = |rng: &mut Rng, v: f32| match rng.below(5) {
+        0 => f32::NAN,
+        1 => f32::INFINITY,
+        2 => -v,
+        _ => v * rng.range(1.0, 10.0) as f32,
+    };
+    done.result = match (rng.below(4), done.result) {
+        (
+            0,
+            TrimResult::Retune {
+                measured_hz,
+                shear_modulus,
+                bias_volts,
+                max_volts,
+                device,
+            },
+        ) => TrimResult::Retune {
+            measured_hz,
+            shear_modulus,
+            bias_volts: wild_volts(rng, bias_volts),
+            max_volts: wild_volts(rng, max_volts),
+            device,
+        },
+        (1, _) => TrimResult::Converged {
+            measured_hz: wild(rng) as f32,
+            shear_modulus: wild(rng) as f32,
+        },
+        (2, _) => TrimResult::AboveCeiling {
+            measured_hz: 0.0,
+            shear_modulus: wild(rng) as f32,
+            needed_volts: wild(rng) as f32,
+        },
+        (_, result) => {
+            done.job = done.job.wrapping_add(1 + rng.below(3) as u32);
+            result
+        }
+    };
+    done
+}
+
 #[derive(Default)]
 struct Tally {
     cases: u64,
@@ -181,6 +400,12 @@ struct Tally {
     faults: BTreeMap<String, u64>,
     tables: BTreeMap<&'static str, u64>,
     held: u64,
+    above_cap_descending: u64,
+    descent_violations: u64,
+    first_violation: Option<String>,
+    gates: u64,
+    operations: BTreeMap<String, u64>,
+    results: BTreeMap<&'static str, u64>,
 }
 
 fn kind<T: std::fmt::Debug>(x: &T) -> String {
@@ -292,6 +517,13 @@ fn fuzz_the_controller() {
         let (mut faulted, mut last_volts, mut stuck) = (None, 0.0f32, f32::NAN);
         let slew_step = s.slew_volts_per_second / s.tick_hz;
         let lsb_volts = amplifier.volts(DacCode(1));
+        // The operator's cap in force, from the f64 model: (1 − margin of the plan in force)
+        // · Φlimit of the device flashed; the boot ceiling is `cap`.
+        let limit64 = cap / (1.0 - f64::from(s.margin));
+        let mut operator_cap = cap;
+        let mut ops = Operations::new(s, flashed.cast(), amplifier);
+        // Where `stop` started the way down (the tick and the voltage sent), until a new plan.
+        let mut stopped: Option<(u32, f32)> = None;
         for k in 0..ticks {
             let truth = model.as_ref().map(|m| m.state().stretch as f32);
             let stretch = match sensor {
@@ -341,47 +573,80 @@ fn fuzz_the_controller() {
             tally.ticks += 1;
             assert!(
                 out.volts >= 0.0 && f64::from(out.volts) <= cap,
-                "tick {k}: {} V above {cap} V: {flashed:?} {s:?}",
+                "tick {k}: {} V above the boot ceiling {cap} V: {flashed:?} {s:?}",
                 out.volts
             );
             assert_eq!(out.volts, amplifier.volts(out.code));
-            if let Some(Event::Fault(fault)) = out.event {
+            // The cap in force: never above the operator's; a voltage above it (or above the
+            // operator's) only on the way down to it, one slew step a tick at most, never up.
+            assert!(
+                f64::from(c.max_volts()) <= operator_cap,
+                "tick {k}: cap in force {} V above the operator's {operator_cap} V",
+                c.max_volts()
+            );
+            let cap_now = operator_cap.min(f64::from(c.max_volts()));
+            // One slew step and one DAC step, and the f32 rounding of the difference.
+            let down_most = slew_step + lsb_volts + 4.0 * f32::EPSILON * last_volts;
+            let dead_bus = bus_fails.is_some_and(|b| b <= k);
+            if f64::from(out.volts) > cap_now {
+                let drop = last_volts - out.volts;
+                tally.above_cap_descending += 1;
                 assert!(
-                    !matches!(fault, Fault::Gate { .. }),
-                    "the final gate fired: {fault} {flashed:?} {s:?}"
+                    drop >= 0.0 && (dead_bus || drop <= down_most),
+                    "tick {k}: {last_volts} V to {} V above the cap in force {cap_now} V",
+                    out.volts
                 );
+            }
+            if let Some(Event::Fault(fault)) = out.event {
+                if matches!(fault, Fault::Gate { .. }) {
+                    tally.gates += 1;
+                }
                 *tally.faults.entry(kind(&fault)).or_default() += 1;
                 faulted = Some((k, last_volts));
             }
-            if let Some((at, from_volts)) = faulted {
-                // After a fault: down at the slew rate, never faster (at once where the bus
-                // died), to 0 V within the ticks the slew needs, and 0 V from then on.
-                let dead_bus = bus_fails.is_some_and(|b| b <= k);
+            // After a fault, and after `stop`: down at the slew rate, never faster (at once
+            // where the bus died), never up, to 0 V within the ticks the slew needs, and 0 V
+            // from then on.
+            for (at, from_volts) in [faulted, stopped].into_iter().flatten() {
                 let drop = last_volts - out.volts;
-                assert!(drop >= 0.0, "tick {k}: up {} V after a fault", -drop);
-                assert!(
-                    dead_bus || drop <= slew_step + lsb_volts,
-                    "tick {k}: down {drop} V in a tick after a fault, slew {slew_step} V"
-                );
-                let needed = (from_volts / slew_step).ceil() as u32 + 1;
-                assert!(
-                    k - at < needed || out.code.0 == 0,
-                    "tick {k}: {} V, {} ticks after the fault from {from_volts} V",
-                    out.volts,
-                    k - at
-                );
+                let ok = drop >= 0.0
+                    && (dead_bus || drop <= down_most)
+                    && (k - at < (from_volts / slew_step).ceil() as u32 + 1 || out.code.0 == 0);
+                if !ok {
+                    tally.descent_violations += 1;
+                    tally.first_violation.get_or_insert_with(|| {
+                        format!(
+                            "tick {k}: {last_volts} V to {} V, {} ticks after a fault or stop \
+                             at {from_volts} V, slew step {slew_step} V, DAC step {lsb_volts} V, \
+                             fault {:?}, plan {:?}",
+                            out.volts,
+                            k - at,
+                            c.latched_fault(),
+                            c.plan()
+                        )
+                    });
+                }
             }
             if let Some(Event::AboveCeiling { .. }) = out.event {
                 tally.held += 1;
             }
-            // The trim's solve, outside the tick (now and then late, as a busy task is).
-            #[cfg(feature = "trim")]
-            if rng.unit() < 0.5 {
-                if let Some(job) = c.trim_job() {
-                    c.trim_done(job.solve());
-                }
-            }
             last_volts = out.volts;
+            // The operator, and the background jobs, between ticks.
+            match ops.between_ticks(&mut rng, &mut c, &bytes, &mut tally) {
+                // A stop during a stop's way down starts it again from the voltage sent.
+                Some(Operated::Stopped) if faulted.is_none() => {
+                    stopped = Some((k, last_volts));
+                }
+                Some(Operated::Adopted { margin }) => {
+                    operator_cap = cap.min((1.0 - f64::from(margin)) * limit64);
+                    stopped = None;
+                }
+                Some(Operated::Cleared) => {
+                    operator_cap = cap;
+                    (faulted, stopped) = (None, None);
+                }
+                _ => {}
+            }
             if let Some(m) = model.as_mut() {
                 let d = *m.device();
                 let moved = m
@@ -394,13 +659,28 @@ fn fuzz_the_controller() {
         }
     }
     println!(
-        "fuzz: {} cases ({} started), {} checked ticks, 0 above (1 - margin)·limit, every fault \
-         down at the slew rate to 0 V, {} trims held at the ceiling",
-        tally.cases, tally.started, tally.ticks, tally.held
+        "fuzz: {} cases ({} started), {} checked ticks: 0 above the boot ceiling or the \
+         operator's cap, {} ticks above a cap just lowered (each on the way down), {} descent \
+         violations, {} final gates, {} holds below the cap",
+        tally.cases,
+        tally.started,
+        tally.ticks,
+        tally.above_cap_descending,
+        tally.descent_violations,
+        tally.gates,
+        tally.held
     );
+    println!("fuzz: operations {:?}", tally.operations);
+    println!("fuzz: background results {:?}", tally.results);
     println!("fuzz: tables {:?}", tally.tables);
     println!("fuzz: refused at boot {:?}", tally.refused);
     println!("fuzz: faults while running {:?}", tally.faults);
+    assert_eq!(tally.gates, 0, "the final gate fired");
+    assert_eq!(
+        tally.descent_violations, 0,
+        "the way down broken, first: {:?}",
+        tally.first_violation
+    );
     // Most cases with a clean table must start, or the ticks check little.
     let clean = tally.tables.get("clean").copied().unwrap_or_default();
     assert!(

@@ -1,14 +1,20 @@
-//! Work the tick hands to the low-priority task: a trim's solve (the `trim` feature). The
-//! tick only asks for it (`trim_wanted`); the task takes the job from the controller under
-//! the lock, solves it outside, and gives the result back, so no 2 KB job is copied through
-//! the task queue.
+//! Work the tick hands to the low-priority task: a trim's solve or tracking's slope (the
+//! `trim` feature). The tick only asks for it (`trim_wanted`); the task takes the job from
+//! the controller under the lock, solves it outside, and gives the result back, so no 2 KB
+//! job is copied through the task queue.
 
-use de_resonator::{Controller, Phase};
+use de_resonator::Controller;
 
-/// Whether the controller waits for a trim's solve (the task may be asked again: it then
-/// finds no job and returns).
+/// Whether the controller waits for a job (a trim's window, or tracking's slope while
+/// driving; the task may be asked again: it then finds no job and returns).
 pub fn trim_wanted(controller: &Controller) -> bool {
-    cfg!(feature = "trim") && controller.phase() == Phase::Solving
+    #[cfg(feature = "trim")]
+    return controller.job_pending();
+    #[cfg(not(feature = "trim"))]
+    {
+        let _ = controller;
+        false
+    }
 }
 
 /// Take the job, solve it, give the result back; `with` runs a closure on the controller

@@ -256,9 +256,9 @@ impl Run {
             ),
             Event::AboveCeiling {
                 needed_volts,
-                ceiling_volts,
+                cap_volts,
             } => format!(
-                "trim needs {needed_volts:.1} V, above the ceiling {ceiling_volts:.1} V of the \
+                "trim needs {needed_volts:.1} V, above the cap in force {cap_volts:.1} V of the \
                  device flashed: holding the bias"
             ),
             Event::Fault(fault) => {

@@ -24,6 +24,9 @@ pub enum Refusal {
     Checks(Fault),
     /// No trim is set (`trim_tolerance`), or this build has none.
     NoTrim,
+    /// Stopped at 0 V: a trim would switch the high voltage back on; a new plan (`target`)
+    /// does that, by name.
+    Stopped,
 }
 
 impl fmt::Display for Refusal {
@@ -37,6 +40,10 @@ impl fmt::Display for Refusal {
             }
             Refusal::Checks(fault) => write!(f, "{fault}"),
             Refusal::NoTrim => write!(f, "no trim: set trim_tolerance (needs the trim build)"),
+            Refusal::Stopped => write!(
+                f,
+                "stopped at 0 V: a trim would switch the high voltage on; `target` drives"
+            ),
         }
     }
 }
@@ -133,8 +140,11 @@ impl Controller {
     }
 
     /// Take a checked new plan from the next tick: the ramp from the present bias, then the
-    /// hold and the AC. The cap stays the lower of the one in force and the new plan's (the
-    /// ceiling fixed at boot never rises). Refused if the plan changed since the job was
+    /// hold and the AC. Its cap becomes the operator's (never above the ceiling fixed at
+    /// boot); the cap in force is the lowest of that, the ceiling and the measured
+    /// estimate's. Where the voltage last sent is above the new cap in force (an AC peak, a
+    /// larger margin), the ramp starts there instead, the probe off until the bias: down at
+    /// the slew rate before anything else. Refused if the plan changed since the job was
     /// made.
     pub fn adopt(&mut self, replanned: Replanned) -> Result<Boot, Refusal> {
         self.steady()?;
@@ -144,20 +154,30 @@ impl Controller {
             });
         }
         let fresh = replanned.controller;
-        let max_volts = fresh.max_volts.min(self.max_volts);
-        let plan = fresh.plan.delayed(self.tick);
+        let max_volts = self
+            .ceiling_volts
+            .min(fresh.max_volts)
+            .min(self.estimate_volts);
+        let mut plan = fresh.plan.delayed(self.tick);
+        if !(self.last_volts <= max_volts) {
+            plan.start_volts = self.last_volts;
+        }
+        plan.probe_off_above(max_volts);
         plan.check_range(fresh.plan.bias_volts, max_volts)
             .map_err(Refusal::Checks)?;
         self.settings = fresh.settings;
-        self.max_volts = max_volts;
+        self.set_caps(fresh.max_volts, self.estimate_volts);
         self.plan = plan;
         self.state = fresh.state;
         #[cfg(feature = "trim")]
         {
+            let job = self.trim.job;
             self.trim = fresh.trim;
+            self.trim.job = job;
+            self.trim.drop_job();
         }
         Ok(Boot {
-            max_volts,
+            max_volts: self.max_volts,
             ..replanned.boot
         })
     }
@@ -169,6 +189,7 @@ impl Controller {
             return;
         }
         self.ramp_down(self.last_volts);
+        self.drop_job();
         self.set_tuned(false);
         self.state = State::Ramping {
             then_measure: false,
@@ -180,6 +201,9 @@ impl Controller {
         self.steady()?;
         if !self.trim_wanted() {
             return Err(Refusal::NoTrim);
+        }
+        if !(self.plan.bias_volts > 0.0) {
+            return Err(Refusal::Stopped);
         }
         #[cfg(feature = "trim")]
         {

@@ -243,14 +243,12 @@ pub enum Event {
         shear_modulus: f32,
         next_bias_volts: f32,
     },
-    /// The trim's next bias (with the AC on top) would be `needed_volts`, above the ceiling
-    /// fixed at boot from the device flashed: the controller holds the present bias instead
-    /// (`Phase::Held`). A plant stiffer than the device flashed is not driven past that
-    /// device's limit on the strength of a measurement.
-    AboveCeiling {
-        needed_volts: f32,
-        ceiling_volts: f32,
-    },
+    /// The plant needs `needed_volts` (bias and swing: the trim's next bias, tracking's, or
+    /// the plan in force under a cap a measurement just lowered), above the cap in force:
+    /// the controller holds below it instead (`Phase::Held`), the AC and the probe off. A
+    /// plant stiffer than the device flashed is not driven past that device's limit, nor
+    /// past the operator's cap, on the strength of a measurement.
+    AboveCeiling { needed_volts: f32, cap_volts: f32 },
     /// A fault: from now on down to 0 V at the slew rate (at once for `Bus`), and held there.
     Fault(Fault),
 }

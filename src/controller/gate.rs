@@ -3,14 +3,16 @@
 use super::fault::Fault;
 use crate::drive::{Amplifier, DacCode};
 
-/// The voltage is a number in [0, `max_volts`], and so is what its code gives; else
-/// `Fault::Gate` (never expected: the boot checks the plan's whole range first).
+/// The voltage is a number ≥ 0 the amplifier gives, and its code's voltage is at most
+/// `max_volts`; else `Fault::Gate` (never expected: the boot checks the plan's whole range
+/// first). The bound is on the code sent, so a ramp down from a voltage sent (the bound)
+/// passes whatever its step, however small against the DAC's.
 pub(super) fn gate(amplifier: &Amplifier, volts: f32, max_volts: f32) -> Result<DacCode, Fault> {
     let refuse = Fault::Gate { volts, max_volts };
-    if !(volts >= 0.0 && volts <= max_volts) {
+    if !(volts >= 0.0) {
         return Err(refuse);
     }
-    let code = amplifier.code(volts).map_err(Fault::Amplifier)?;
+    let code = amplifier.code(volts).map_err(|_| refuse)?;
     if !(amplifier.volts(code) <= max_volts) {
         return Err(refuse);
     }
@@ -38,5 +40,24 @@ mod tests {
             gate(&amplifier, 100.0, 100.0),
             amplifier.code(100.0).map_err(Fault::Amplifier)
         );
+        // Beyond the amplifier's range: the gate's refusal too.
+        assert!(matches!(
+            gate(&amplifier, 10_001.0, 20_000.0),
+            Err(Fault::Gate { .. })
+        ));
+    }
+
+    /// The bound is on the code's voltage: a request a hair above a code's voltage rounds
+    /// down to that code and passes a bound at it (a slow ramp down from the voltage sent).
+    #[test]
+    fn the_bound_is_on_the_code_sent() {
+        let amplifier = Amplifier::new(2.5, 4000.0).unwrap_or_else(|_| unreachable!());
+        let sent = amplifier.volts(DacCode(30_000));
+        let step = amplifier.volts(DacCode(1));
+        assert_eq!(
+            gate(&amplifier, sent + 0.5 * step, sent),
+            Ok(DacCode(30_000))
+        );
+        assert!(gate(&amplifier, sent + 1.01 * step, sent).is_err());
     }
 }

@@ -11,12 +11,15 @@
 //!   the fixed-step model under the safety monitor (MODEL.md §6).
 //!
 //! Then `tick`, at a fixed rate, gives the DAC code for that tick; every code passes one
-//! final check against the cap. The cap is fixed at boot from the device flashed, at most
-//! (1 − margin)·Φlimit: nothing measured ever raises it (a trim may only lower it). A fault
-//! of any kind brings the output down to 0 V at the slew rate (at once on a dead bus), holds
-//! it there, and says what happened once. The tick never
-//! solves: a trim's solve is handed out (`trim_job`) and its result given back
-//! (`trim_done`).
+//! final check (`gate`). The cap in force is the lowest of three: the ceiling fixed at boot
+//! from the device flashed, at most (1 − margin)·Φlimit; the cap of the operator's plan in
+//! force (a replan sets it, never above the ceiling); and the measured estimate's (a trim's
+//! or tracking's result may lower it, never raise it). A plan above a cap just lowered comes
+//! down to it at the slew rate first. A fault of any kind brings the output down from the
+//! voltage last sent to 0 V at the slew rate (at once on a dead bus), whatever the cap,
+//! never up; holds it there, and says what happened once. The tick never solves: a trim's
+//! solve is handed out (`trim_job`) and its result given back (`trim_done`), taken only if
+//! it answers the job still wanted.
 //!
 //! One idea a module: `settings` (what is asked, and its checks), `fault` (`Fault`, `Event`,
 //! `Output`), `plan` (the voltage at every tick, its range, its model run), `boot` (the
@@ -43,7 +46,7 @@ pub use fault::{Event, Fault, FaultStage, Output};
 pub use plan::{Plan, MAX_PLAN_TICKS};
 pub use settings::{Setting, Settings, F32_GUARD, MAX_TRIMS, TRIM_SECANT_STEP};
 #[cfg(feature = "trim")]
-pub use trim::{TrimJob, TrimResult};
+pub use trim::{TrimDone, TrimJob, TrimResult};
 pub use watch::{Inputs, AMPLIFIER_TICKS, LEAKAGE_WINDOW_SECONDS};
 
 use crate::device::Device;
@@ -115,14 +118,20 @@ pub struct Controller {
     /// Checked by `from_table`.
     settings: Settings,
     /// The cap fixed at boot from the device flashed, at most (1 − margin)·Φlimit, V.
-    /// Nothing measured raises it.
+    /// Nothing raises it.
     ceiling_volts: f32,
+    /// The cap of the operator's plan in force (the boot's, or the last adopted replan's,
+    /// at most the ceiling), V.
+    operator_volts: f32,
 
     // State.
     state: State,
     /// The trim's estimate of the device, once it has one.
     estimate: Option<Device<f32>>,
-    /// The cap in force: the ceiling, or lower after a trim found a softer plant, V.
+    /// The lowest cap the measured estimates gave (trim, tracking; ∞ before any), V: it only
+    /// falls.
+    estimate_volts: f32,
+    /// The cap in force: the lowest of the ceiling, the operator's and the estimate's, V.
     max_volts: f32,
     plan: Plan,
     tick: u32,
@@ -149,10 +158,12 @@ impl Controller {
             amplifier,
             settings,
             ceiling_volts: max_volts,
+            operator_volts: max_volts,
             state: State::Ramping {
                 then_measure: false,
             },
             estimate: None,
+            estimate_volts: f32::INFINITY,
             max_volts,
             plan: Plan::idle(),
             tick: 0,
@@ -202,9 +213,68 @@ impl Controller {
         self.ceiling_volts
     }
 
-    /// The cap in force now (the ceiling, or lower after a trim found a softer plant), V.
+    /// The cap in force now: the lowest of the ceiling, the operator's plan's cap and the
+    /// measured estimate's, V.
     pub fn max_volts(&self) -> f32 {
         self.max_volts
+    }
+
+    /// The cap of the operator's plan in force (at most the ceiling), V.
+    pub fn operator_volts(&self) -> f32 {
+        self.operator_volts
+    }
+
+    /// The lowest cap the measured estimates gave (∞ before any), V.
+    pub fn estimate_volts(&self) -> f32 {
+        self.estimate_volts
+    }
+
+    /// The one rule for the cap in force: the lowest of the three (a NaN is no cap: `min`
+    /// keeps the number).
+    fn set_caps(&mut self, operator_volts: f32, estimate_volts: f32) {
+        self.operator_volts = operator_volts.min(self.ceiling_volts);
+        self.estimate_volts = estimate_volts;
+        self.max_volts = self
+            .ceiling_volts
+            .min(self.operator_volts)
+            .min(self.estimate_volts);
+    }
+
+    /// A background result's cap (trim, tracking): it may lower the cap in force, never
+    /// raise it. A plan that no longer fits under it comes down to it first (`hold`).
+    #[cfg(feature = "track")]
+    fn lower_estimate_cap(&mut self, k: u32, volts: f32) -> Option<Event> {
+        self.set_caps(self.operator_volts, self.estimate_volts.min(volts));
+        let peak = self.plan.ramp_volts(k).max(self.plan.bias_volts) + self.plan.swing_volts();
+        (!(peak <= self.max_volts)).then(|| self.hold(k, peak))
+    }
+
+    /// Hold below the cap in force, the AC and the probe off, the plant needing
+    /// `needed_volts` (bias and swing): from the voltage last sent at the slew rate to the
+    /// bias, or to the cap if the bias is above it; said as `Event::AboveCeiling`.
+    #[cfg(feature = "trim")]
+    fn hold(&mut self, k: u32, needed_volts: f32) -> Event {
+        self.plan = Plan {
+            start_tick: k,
+            start_volts: self.last_volts,
+            bias_volts: self.plan.bias_volts.min(self.max_volts).max(0.0),
+            pulse_ticks: (0, 0),
+            ac_tick: None,
+            probe_volts: 0.0,
+            ..self.plan
+        };
+        self.drop_job();
+        self.state = State::Held { needed_volts };
+        Event::AboveCeiling {
+            needed_volts,
+            cap_volts: self.max_volts,
+        }
+    }
+
+    /// No background job is wanted any more: a result of one handed out is dropped.
+    fn drop_job(&mut self) {
+        #[cfg(feature = "trim")]
+        self.trim.drop_job();
     }
 
     pub fn plan(&self) -> &Plan {
@@ -240,7 +310,9 @@ impl Controller {
         let k = self.tick;
         self.tick = self.tick.saturating_add(1);
         let volts = self.plan.volts(k);
-        let code = match gate(&self.amplifier, volts, self.max_volts) {
+        // Above the cap in force only on the way down to a cap just lowered: never up.
+        let bound = self.max_volts.max(self.last_volts);
+        let code = match gate(&self.amplifier, volts, bound) {
             Ok(code) => code,
             Err(fault) => return self.fault(fault),
         };
@@ -310,6 +382,8 @@ impl Controller {
         let _ = ring;
         match self.state {
             State::Ramping { then_measure } if self.plan.ramp_volts(k) == self.plan.bias_volts => {
+                // The probe, off on a way down from above the cap (`adopt`), rides again.
+                self.plan.probe_volts = self.settings.probe_volts.unwrap_or(0.0);
                 self.hold_from(k, then_measure);
                 Ok(Some(Event::AtBias {
                     volts: self.plan.bias_volts,
@@ -330,6 +404,13 @@ impl Controller {
                 self.state = State::Driving {
                     next_trim: self.next_trim(k),
                 };
+                // A drive (re)started tracks from scratch, at the plan's frequency: a tracker
+                // of an earlier drive (before a trim, another plan) measures against a
+                // frequency no longer driven.
+                #[cfg(feature = "track")]
+                {
+                    self.tracking = tracking::Tracking::default();
+                }
                 Ok(Some(Event::DriveOn))
             }
             #[cfg(feature = "trim")]
@@ -420,10 +501,11 @@ impl Controller {
     }
 
     /// The descent's output at this tick: the ramp down one step on from the last (the first
-    /// a step below the voltage sent when the fault came), through the final gate.
+    /// a step below the voltage sent when the fault came), through the final gate bounded by
+    /// the voltage last sent, not by the cap in force (which may have moved): never up.
     fn descend(&mut self, event: Option<Event>) -> Output {
         let volts = self.plan.ramp_volts(self.tick.saturating_add(1));
-        let code = gate(&self.amplifier, volts, self.max_volts).unwrap_or(DacCode(0));
+        let code = gate(&self.amplifier, volts, self.last_volts).unwrap_or(DacCode(0));
         self.last_volts = self.amplifier.volts(code);
         Output {
             code,
@@ -439,20 +521,34 @@ impl Controller {
     /// `TrimJob::solve` outside the tick (a low-priority task) and give its result to
     /// `trim_done`; the bias holds meanwhile.
     pub fn trim_job(&mut self) -> Option<TrimJob> {
-        let wanted = self.state == State::Solving || self.trim.tracked_hz.is_some();
-        if !wanted || self.trim.handed_out {
+        if !self.job_wanted() || self.trim.handed_out {
             return None;
         }
         self.trim.handed_out = true;
-        let (bias, ceiling) = (self.plan.bias_volts, self.ceiling_volts);
-        Some(TrimJob::new(&self.trim, self.settings, bias, ceiling))
+        let (bias, cap) = (self.plan.bias_volts, self.max_volts);
+        Some(TrimJob::new(&self.trim, self.settings, bias, cap))
     }
 
-    /// The result of the job handed out: the next tick applies it.
-    pub fn trim_done(&mut self, result: TrimResult) {
-        let wanted = self.state == State::Solving || self.trim.tracked_hz.is_some();
-        if wanted && self.trim.handed_out {
-            self.trim.result = Some(result);
+    /// Whether a job waits to be handed out (`trim_job`): the window's solve, or tracking's
+    /// slope while driving. What a firmware's tick asks before it wakes its work task.
+    pub fn job_pending(&self) -> bool {
+        self.job_wanted() && !self.trim.handed_out
+    }
+
+    /// Whether a job is wanted now: a measured window's solve, or tracking's slope.
+    fn job_wanted(&self) -> bool {
+        let tracking =
+            matches!(self.state, State::Driving { .. }) && self.trim.tracked_hz.is_some();
+        self.state == State::Solving || tracking
+    }
+
+    /// The result of the job handed out: the next tick applies it. A result of a job no
+    /// longer wanted (late, or stale: the controller moved on), or a second result, is
+    /// dropped.
+    pub fn trim_done(&mut self, done: TrimDone) {
+        let current = self.trim.handed_out && done.job == self.trim.job;
+        if self.job_wanted() && current && self.trim.result.is_none() {
+            self.trim.result = Some(done.result);
         }
     }
 
@@ -468,8 +564,7 @@ impl Controller {
         self.trim.charge = 0.0;
         // The probe's charge would swamp the ring's: off until the trim is applied.
         self.plan.probe_volts = 0.0;
-        self.trim.handed_out = false;
-        self.trim.result = None;
+        self.trim.drop_job();
         self.state = State::Measuring;
     }
 
@@ -507,6 +602,7 @@ impl Controller {
     /// Pause the AC and trim again from the bias held (the old secant pair is stale: the
     /// plant has drifted since).
     fn pause_for_trim(&mut self, k: u32) {
+        self.trim.drop_job();
         self.plan.ac_tick = None;
         self.trim.tuned = true;
         self.trim.count = 0;
@@ -549,18 +645,20 @@ impl Controller {
                 self.trim.params.shear_modulus = shear_modulus;
                 self.trim.count = self.trim.count.saturating_add(1);
                 self.trim.previous = Some((bias_volts * bias_volts, measured_hz));
-                let plan = Plan {
+                let mut plan = Plan {
                     start_tick: k.saturating_add(1),
                     start_volts: bias_volts,
                     bias_volts: next_bias_volts,
                     pulse_ticks: (0, 0),
                     ..self.plan
                 };
-                plan.check_range(next_bias_volts, max_volts.min(self.ceiling_volts))?;
+                let bound = max_volts.min(self.max_volts);
+                plan.probe_off_above(bound);
+                plan.check_range(next_bias_volts, bound)?;
                 self.amplifier
                     .code(next_bias_volts + plan.swing_volts())
                     .map_err(Fault::Amplifier)?;
-                self.max_volts = max_volts.min(self.ceiling_volts);
+                self.set_caps(self.operator_volts, max_volts.min(self.estimate_volts));
                 self.estimate = Some(device);
                 self.trim.tuned = true;
                 self.plan = plan;
@@ -578,11 +676,7 @@ impl Controller {
                 ..
             } => {
                 self.trim.params.shear_modulus = shear_modulus;
-                self.state = State::Held { needed_volts };
-                Ok(Some(Event::AboveCeiling {
-                    needed_volts,
-                    ceiling_volts: self.ceiling_volts,
-                }))
+                Ok(Some(self.hold(k, needed_volts)))
             }
             TrimResult::Failed(fault) => Err(fault),
         }

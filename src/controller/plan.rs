@@ -178,18 +178,33 @@ impl Plan {
         on.then(|| (k / half).is_multiple_of(2))
     }
 
+    /// The probe off on a ramp whose top with the probe would pass `max_volts` (a ramp down
+    /// from above a cap since lowered): the controller sets it back at the bias.
+    pub(super) fn probe_off_above(&mut self, max_volts: f32) {
+        let top = self.start_volts.max(self.bias_volts);
+        if !(top + self.probe_volts <= max_volts) {
+            self.probe_volts = 0.0;
+        }
+    }
+
     /// The most the voltage swings about the bias: the AC and the probe, V.
     pub fn swing_volts(&self) -> f32 {
         self.ac_volts + self.probe_volts
     }
 
     /// The whole voltage range against [0, `max_volts`], before anything is driven: the ramp
-    /// and the bias below the cap (else `AboveSafe`), and the AC and the probe about the bias
+    /// and the bias below the cap (else `AboveSafe`; a ramp may start above it when it comes
+    /// down, from a voltage already sent to a cap since lowered), and the AC and the probe about the bias
     /// they will ride on (`ac_bias_volts`: the tuned bias, also while a trim probes lower)
     /// neither below 0 V (the amplifier is unipolar) nor above the cap (else a `Setting`
     /// fault naming the AC amplitude, or the probe's if the AC alone fits).
     pub(super) fn check_range(&self, ac_bias_volts: f32, max_volts: f32) -> Result<(), Fault> {
-        let bias_peak = self.start_volts.max(self.bias_volts);
+        let descends = self.start_volts > self.bias_volts;
+        let bias_peak = if descends {
+            self.bias_volts
+        } else {
+            self.start_volts.max(self.bias_volts)
+        };
         if !(bias_peak <= max_volts && self.bias_volts >= 0.0) {
             return Err(Fault::AboveSafe {
                 volts: bias_peak,

@@ -8,7 +8,7 @@ use super::fault::Fault;
 use super::plan::Plan;
 use super::trim::TrimResult;
 use super::watch::Ring;
-use super::{Controller, Event, State};
+use super::{Controller, Event};
 use crate::track::{drive_force_per_stretch, Lock, Tracker, MAX_DETUNING};
 
 /// The tracker's memory between ticks.
@@ -46,8 +46,8 @@ impl Controller {
     /// and at a cycle's end the drive moved in phase and the bias moved by the integral law.
     pub(super) fn track(&mut self, k: u32, ring: Ring) -> Result<Option<Event>, Fault> {
         if let Some(result) = self.trim.result.take() {
-            self.trim.tracked_hz = None;
-            return self.take_slope(result);
+            self.trim.drop_job();
+            return self.take_slope(k, result);
         }
         let s = self.settings;
         let track_seconds = s.track_seconds.unwrap_or(1.0);
@@ -110,9 +110,7 @@ impl Controller {
         let stale = self.tracking.volts_squared_per_hz.is_none()
             || since_solve >= ticks_of(SLOPE_TIME_CONSTANTS);
         if stale && self.trim.tracked_hz.is_none() {
-            self.trim.tracked_hz = Some(hz);
-            self.trim.handed_out = false;
-            self.trim.result = None;
+            self.trim.want_job(Some(hz));
             self.tracking.solved_at = k;
         }
         let Some(slope) = self.tracking.volts_squared_per_hz else {
@@ -128,14 +126,7 @@ impl Controller {
         let ac = self.plan.swing_volts();
         if !(next_bias_volts + ac <= self.max_volts) {
             // The plant needs more than the cap: hold the bias, the drive off, and say so.
-            self.plan.ac_tick = None;
-            self.state = State::Held {
-                needed_volts: next_bias_volts + ac,
-            };
-            return Ok(Some(Event::AboveCeiling {
-                needed_volts: next_bias_volts + ac,
-                ceiling_volts: self.ceiling_volts,
-            }));
+            return Ok(Some(self.hold(k, next_bias_volts + ac)));
         }
         // From this tick (its voltage is sent): a step within the ramp's is done by the next.
         let plan = Plan {
@@ -151,7 +142,7 @@ impl Controller {
 
     /// A solve's result under a tracked drive: the model's slope dΦ²/df between the bias
     /// and the bias it gives for the target, and the estimate's cap; or a fault.
-    fn take_slope(&mut self, result: TrimResult) -> Result<Option<Event>, Fault> {
+    fn take_slope(&mut self, k: u32, result: TrimResult) -> Result<Option<Event>, Fault> {
         let bias = self.plan.bias_volts;
         match result {
             TrimResult::Converged { shear_modulus, .. } => {
@@ -175,9 +166,8 @@ impl Controller {
                 if slope.is_finite() && slope != 0.0 {
                     self.tracking.volts_squared_per_hz = Some(slope);
                 }
-                self.max_volts = max_volts.min(self.ceiling_volts);
                 self.estimate = Some(device);
-                Ok(None)
+                Ok(self.lower_estimate_cap(k, max_volts))
             }
             TrimResult::AboveCeiling {
                 shear_modulus,
@@ -185,12 +175,7 @@ impl Controller {
                 ..
             } => {
                 self.trim.params.shear_modulus = shear_modulus;
-                self.plan.ac_tick = None;
-                self.state = State::Held { needed_volts };
-                Ok(Some(Event::AboveCeiling {
-                    needed_volts,
-                    ceiling_volts: self.ceiling_volts,
-                }))
+                Ok(Some(self.hold(k, needed_volts)))
             }
             TrimResult::Failed(fault) => Err(fault),
         }

@@ -35,8 +35,10 @@ pub(super) struct TrimState {
     pub(super) charge: f32,
     /// The solve's answer, once the caller has given it.
     pub(super) result: Option<TrimResult>,
-    /// Whether the job for the window just measured was handed out.
+    /// Whether the job wanted now was handed out.
     pub(super) handed_out: bool,
+    /// The number of the job wanted now (`TrimDone::job`): a result of another is stale.
+    pub(super) job: u32,
     /// A tracked drive's measured natural frequency, Hz, whose retune is wanted (instead of
     /// a window's ring).
     pub(super) tracked_hz: Option<f32>,
@@ -54,8 +56,23 @@ impl TrimState {
             charge: 0.0,
             result: None,
             handed_out: false,
+            job: 0,
             tracked_hz: None,
         }
+    }
+
+    /// A new job is wanted (a window measured, a tracked frequency to solve at): a result of
+    /// any job handed out before is stale from now on.
+    pub(super) fn want_job(&mut self, tracked_hz: Option<f32>) {
+        self.job = self.job.wrapping_add(1);
+        self.handed_out = false;
+        self.result = None;
+        self.tracked_hz = tracked_hz;
+    }
+
+    /// No job is wanted: a result of one handed out is dropped when it comes.
+    pub(super) fn drop_job(&mut self) {
+        self.want_job(None);
     }
 }
 
@@ -70,9 +87,21 @@ pub struct TrimJob {
     tuned: bool,
     count: u8,
     previous: Option<(f32, f32)>,
-    ceiling_volts: f32,
+    /// The cap in force when the job was made, V: the result never goes above it.
+    cap_volts: f32,
     /// Measured by the tracker (the window is not read), Hz.
     measured_hz: Option<f32>,
+    /// Its number, carried by its result.
+    job: u32,
+}
+
+/// A job's result, for `Controller::trim_done`: taken only if the job is still the one
+/// wanted (a late result of an older job is dropped).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TrimDone {
+    /// The job it answers.
+    pub job: u32,
+    pub result: TrimResult,
 }
 
 /// What a trim's solve found, given back by `Controller::trim_done`.
@@ -83,8 +112,9 @@ pub enum TrimResult {
         measured_hz: f32,
         shear_modulus: f32,
     },
-    /// Ramp to `bias_volts` and measure again, under the cap `max_volts` (the estimate's,
-    /// never above the ceiling); `device` is the estimate (built here, not in the tick).
+    /// Ramp to `bias_volts` and measure again; `max_volts` is the estimate's own cap (the
+    /// controller takes the lowest of it and the caps in force); `device` is the estimate
+    /// (built here, not in the tick).
     Retune {
         measured_hz: f32,
         shear_modulus: f32,
@@ -92,7 +122,7 @@ pub enum TrimResult {
         max_volts: f32,
         device: Device<f32>,
     },
-    /// The estimate needs `needed_volts` (bias and AC) above the ceiling: hold.
+    /// The estimate needs `needed_volts` (bias and AC) above the cap in force: hold.
     AboveCeiling {
         measured_hz: f32,
         shear_modulus: f32,
@@ -108,7 +138,7 @@ impl TrimJob {
         state: &TrimState,
         settings: Settings,
         bias_volts: f32,
-        ceiling_volts: f32,
+        cap_volts: f32,
     ) -> Self {
         let len = (settings.trim_window_seconds * settings.tick_hz) as usize;
         Self {
@@ -120,8 +150,9 @@ impl TrimJob {
             tuned: state.tuned,
             count: state.count,
             previous: state.previous,
-            ceiling_volts,
+            cap_volts,
             measured_hz: state.tracked_hz,
+            job: state.job,
         }
     }
 
@@ -129,11 +160,15 @@ impl TrimJob {
     /// next step: converged, or the next bias (by the secant through the last two
     /// measurements in (Φ², f) once there are two, each step at most `TRIM_SECANT_STEP` of
     /// the bias; else the estimated device's bias for the target), under the lower of the
-    /// estimate's cap and the ceiling.
-    pub fn solve(&self) -> TrimResult {
-        match self.try_solve() {
+    /// estimate's cap and the cap in force.
+    pub fn solve(&self) -> TrimDone {
+        let result = match self.try_solve() {
             Ok(result) => result,
             Err(fault) => TrimResult::Failed(fault),
+        };
+        TrimDone {
+            job: self.job,
+            result,
         }
     }
 
@@ -172,12 +207,10 @@ impl TrimJob {
         let device = Device::new(params).map_err(Fault::Device)?;
         let tuner = Tuner::new(device);
         let margin = guarded(s.margin);
-        // The estimate may lower the cap (a softer plant), never raise it past the ceiling.
-        let max_volts = tuner
-            .max_bias(margin)
-            .map_err(Fault::Tune)?
-            .volts
-            .min(self.ceiling_volts);
+        // The estimate may lower the cap (a softer plant), never raise it past the cap in
+        // force (the operator's, the ceiling, an earlier estimate's).
+        let estimate_volts = tuner.max_bias(margin).map_err(Fault::Tune)?.volts;
+        let max_volts = estimate_volts.min(self.cap_volts);
         let from = self.bias_volts;
         let squared = from * from;
         let secant = self.previous.and_then(|(p2, pf)| {
@@ -203,7 +236,7 @@ impl TrimJob {
             });
         }
         let needed_volts = bias_volts + s.swing_volts();
-        if !(needed_volts <= max_volts) && max_volts == self.ceiling_volts {
+        if !(needed_volts <= max_volts) && max_volts == self.cap_volts {
             return Ok(TrimResult::AboveCeiling {
                 measured_hz,
                 shear_modulus,
@@ -214,7 +247,7 @@ impl TrimJob {
             measured_hz,
             shear_modulus,
             bias_volts,
-            max_volts,
+            max_volts: estimate_volts,
             device,
         })
     }
@@ -247,13 +280,14 @@ mod tests {
             tuned: true,
             count: 1,
             previous,
-            ceiling_volts: 9361.9,
+            cap_volts: 9361.9,
             measured_hz: None,
+            job: 0,
         }
     }
 
-    fn retune_bias(result: TrimResult) -> f32 {
-        match result {
+    fn retune_bias(done: TrimDone) -> f32 {
+        match done.result {
             TrimResult::Retune { bias_volts, .. } => bias_volts,
             other => panic!("{other:?}"),
         }
@@ -280,7 +314,7 @@ mod tests {
         // whose 300 V of AC would pass the 9361.9 V cap.
         let mut near = job(8500.0, 44.5, Some((8300.0 * 8300.0, 44.55)));
         near.settings.ac_volts = 300.0;
-        match near.solve() {
+        match near.solve().result {
             TrimResult::AboveCeiling { needed_volts, .. } => {
                 assert!(needed_volts > 9361.9 && (needed_volts - 9650.0).abs() > 1.0);
             }

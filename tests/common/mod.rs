@@ -205,3 +205,59 @@ pub fn reseal(bytes: &mut [u8]) {
     let crc = de_resonator::table::crc32(&bytes[..body]);
     bytes[body..].copy_from_slice(&crc.to_le_bytes());
 }
+
+/// The plant for the controller's closed-loop tests: the device `p` (f64 RK4, one step a
+/// tick, at rest at its pre-stretch), driven by each tick's command.
+pub struct Plant {
+    model: de_resonator::Integrator<f64>,
+}
+
+impl Plant {
+    pub fn new(p: DeviceParams<f64>, tick_hz: f64) -> Self {
+        use de_resonator::{Device, Drive, Integrator, Method, State};
+        let device = Device::new(p).unwrap();
+        let rest = State {
+            stretch: p.prestretch_1,
+            velocity: 0.0,
+        };
+        let drive = Drive::constant(&device, 0.0);
+        let range = device.model_range();
+        let model =
+            Integrator::new(device, drive, Method::Rk4, 1.0 / tick_hz, range, rest, true).unwrap();
+        Self { model }
+    }
+
+    /// The stretch now.
+    pub fn stretch(&self) -> f64 {
+        self.model.state().stretch
+    }
+
+    /// One tick at `volts`.
+    pub fn step(&mut self, volts: f32) {
+        let device = *self.model.device();
+        let drive = de_resonator::Drive::constant(&device, f64::from(volts));
+        self.model.set_drive(drive).unwrap();
+        self.model.step().unwrap();
+    }
+}
+
+/// The way down (issue 25): from `from_volts`, never up, at most one slew step (`step_volts`)
+/// and one DAC step (`lsb_volts`) down a tick, at 0 V within the ticks the slew needs (and
+/// one for the rounding) and there from then on. `volts` are the ticks after `from_volts`.
+pub fn assert_way_down(volts: &[f32], from_volts: f32, step_volts: f32, lsb_volts: f32) {
+    let needed = (from_volts / step_volts).ceil() as usize + 1;
+    let mut last = from_volts;
+    for (n, &v) in volts.iter().enumerate() {
+        assert!(
+            v <= last,
+            "tick {n} of the way down: up from {last} V to {v} V"
+        );
+        assert!(
+            last - v <= step_volts + lsb_volts,
+            "tick {n} of the way down: {last} V to {v} V, a slew step is {step_volts} V"
+        );
+        assert!(n < needed || v == 0.0, "tick {n} of the way down: {v} V");
+        last = v;
+    }
+    assert!(volts.len() >= needed, "{} ticks checked", volts.len());
+}

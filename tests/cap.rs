@@ -1,0 +1,260 @@
+//! The cap in force and the way down on every path (issue 25): a fault's descent does not
+//! depend on a cap that moved; the cap is the lowest of the boot ceiling, the operator's and
+//! the measured estimate's, and a background result (trim, tracking) only lowers it; a plan
+//! above a cap just lowered comes down to it at the slew rate; a late or stale result of a
+//! background job is dropped. The yardsticks are the f64 model's limit and the slew rate.
+
+mod common;
+
+#[cfg(feature = "trim")]
+use common::Plant;
+use common::{assert_way_down, made_table};
+use de_resonator::{
+    Amplifier, Controller, DacCode, Device, DeviceParams, Event, Inputs, Phase, Settings, Tuner,
+    REFERENCE_DEVICE,
+};
+
+/// 0..10 kV over the full scale: a 2.5 V reference and an amplifier gain of 4000.
+fn amplifier() -> Amplifier {
+    Amplifier::new(2.5, 4000.0).unwrap()
+}
+
+/// One DAC step of `amplifier()`, V.
+fn lsb_volts() -> f32 {
+    amplifier().volts(DacCode(1))
+}
+
+/// The f64 model's first limit on the loading branch of `p`, V.
+fn limit_volts(p: DeviceParams<f64>) -> f64 {
+    Tuner::new(Device::new(p).unwrap()).limit().at.volts
+}
+
+fn started(p: DeviceParams<f64>, settings: Settings) -> Controller {
+    let table = made_table(p, 0.05, 64);
+    Controller::start(p.cast(), &table, amplifier(), settings)
+        .unwrap()
+        .0
+}
+
+/// Tick with no sensor until `done` says so (at most `limit` ticks).
+fn tick_until(c: &mut Controller, limit: u32, done: impl Fn(&Controller, f32) -> bool) {
+    for _ in 0..limit {
+        let out = c.tick(Inputs::NONE);
+        if done(c, out.volts) {
+            return;
+        }
+    }
+    panic!("not reached in {limit} ticks: {:?}", c.phase());
+}
+
+/// The issue's reproduction, up to the fault: the reference device at 44 Hz with 300 V of
+/// AC at 40 Hz, at an AC peak; a new plan with a larger margin (0.22) and 200 V of AC,
+/// adopted, lowers the cap below the voltage just sent. The controller, the voltage sent and
+/// the settings it booted with.
+fn a_cap_lowered_below_an_ac_peak() -> (Controller, f32, Settings) {
+    let settings = Settings {
+        ac_volts: 300.0,
+        ac_hz: 40.0,
+        ..Settings::for_target(44.0)
+    };
+    let mut c = started(REFERENCE_DEVICE, settings);
+    let bias = c.plan().bias_volts;
+    tick_until(&mut c, 10_000, |c, volts| {
+        c.phase() == Phase::Driving && volts > bias + 299.0
+    });
+    let sent = c.last_volts();
+    let tighter = Settings {
+        margin: 0.22,
+        ac_volts: 200.0,
+        ..settings
+    };
+    let table = made_table(REFERENCE_DEVICE, 0.05, 64);
+    c.adopt(c.replan(tighter).unwrap().solve(&table).unwrap())
+        .unwrap();
+    // The new cap, from the f64 model: (1 − 0.22)·Φlimit, below the voltage sent.
+    let cap = 0.78 * limit_volts(REFERENCE_DEVICE);
+    assert!(f64::from(c.max_volts()) <= cap && f64::from(sent) > cap);
+    (c, sent, settings)
+}
+
+/// Issue 25.1: then the stretch is NaN. The way down starts from the voltage sent, one slew
+/// step a tick, never up, whatever the cap in force (on the old main: 0 V at once, then up
+/// again while latched).
+#[test]
+fn a_fault_after_a_lowered_cap_comes_down_from_the_voltage_sent() {
+    let (mut c, sent, settings) = a_cap_lowered_below_an_ac_peak();
+    let first = c.tick(Inputs::stretch(f32::NAN));
+    assert!(matches!(first.event, Some(Event::Fault(_))), "{first:?}");
+    let mut volts = vec![first.volts];
+    for _ in 0..1_000 {
+        volts.push(c.tick(Inputs::NONE).volts);
+    }
+    let step = settings.slew_volts_per_second / settings.tick_hz;
+    assert_way_down(&volts, sent, step, lsb_volts());
+    assert_eq!(c.phase(), Phase::Faulted);
+}
+
+/// The same new plan without a fault: from the AC peak above the new cap the output comes
+/// down at the slew rate, never up while above the cap, then stays under it.
+#[test]
+fn a_plan_above_a_lowered_cap_comes_down_to_it_at_the_slew_rate() {
+    let (mut c, mut last, settings) = a_cap_lowered_below_an_ac_peak();
+    let cap = c.max_volts();
+    assert!(cap < last);
+    let step = settings.slew_volts_per_second / settings.tick_hz;
+    let mut below_from = None;
+    for n in 0..5_000 {
+        let volts = c.tick(Inputs::NONE).volts;
+        if last > cap {
+            assert!(
+                volts <= last && last - volts <= step + lsb_volts(),
+                "tick {n}: {last} V to {volts} V from above the cap {cap} V"
+            );
+        } else {
+            assert!(volts <= cap, "tick {n}: {volts} V above {cap} V");
+        }
+        if below_from.is_none() && volts <= cap {
+            below_from = Some(n);
+        }
+        last = volts;
+    }
+    // The peak sent was less than 70 V above the new cap: 7 slew steps.
+    assert!(below_from.is_some_and(|n| n <= 7), "{below_from:?}");
+    assert_eq!(c.phase(), Phase::Driving);
+}
+
+/// Issue 25.2: a margin the operator raised at run time holds through the trims after it.
+/// The plant is 5% stiffer than the device flashed, so the trim's estimate (the plant) has
+/// a higher limit than the device flashed: at the new margin its cap lies above the
+/// operator's, below the boot ceiling (on the old main the trim's result raised the cap
+/// in force to it). The new margin leaves the plant's bias and AC 3% under the operator's
+/// cap, so the trims converge there.
+#[cfg(feature = "trim")]
+#[test]
+fn a_margin_raised_at_run_time_holds_through_the_trims() {
+    let plant_params = DeviceParams {
+        shear_modulus: 1.05 * REFERENCE_DEVICE.shear_modulus,
+        ..REFERENCE_DEVICE
+    };
+    let plant_limit = limit_volts(plant_params);
+    let flashed_limit = limit_volts(REFERENCE_DEVICE);
+    assert!(plant_limit > 1.01 * flashed_limit);
+    let f0 = Tuner::new(Device::new(plant_params).unwrap())
+        .zero_bias()
+        .natural_frequency_hz;
+    let damped = DeviceParams {
+        damping: plant_params.effective_mass() * std::f64::consts::TAU * f0 / 200.0,
+        ..plant_params
+    };
+    let settings = Settings {
+        ac_volts: 100.0,
+        ac_hz: 40.0,
+        trim_tolerance: Some(1e-3),
+        trim_every_seconds: Some(1.0),
+        ..Settings::for_target(45.5)
+    };
+    let mut c = started(REFERENCE_DEVICE, settings);
+    let mut plant = Plant::new(damped, 1000.0);
+    let mut run = |c: &mut Controller, ticks: u32, cap: Option<f64>| {
+        let mut trims = 0;
+        for _ in 0..ticks {
+            let out = c.tick(Inputs::stretch(plant.stretch() as f32));
+            if let Some(job) = c.trim_job() {
+                c.trim_done(job.solve());
+            }
+            if let Some(Event::Trimmed { .. }) = out.event {
+                trims += 1;
+            }
+            assert!(
+                out.event.is_none_or(|e| !matches!(e, Event::Fault(_))),
+                "{out:?}"
+            );
+            if let Some(cap) = cap {
+                assert!(f64::from(out.volts) <= cap, "{} V above {cap} V", out.volts);
+                assert!(
+                    f64::from(c.max_volts()) <= cap,
+                    "cap in force {}",
+                    c.max_volts()
+                );
+            }
+            plant.step(out.volts);
+        }
+        trims
+    };
+    run(&mut c, 4_000, None);
+    assert_eq!(c.phase(), Phase::Driving);
+    let plant_bias = Tuner::new(Device::new(plant_params).unwrap())
+        .tune(45.5, 0.05)
+        .unwrap()
+        .volts;
+    let margin = 1.0 - 1.03 * (plant_bias + 100.0) / flashed_limit;
+    assert!(margin > 0.1, "{margin}");
+    let raised = Settings {
+        margin: margin as f32,
+        ..*c.settings()
+    };
+    let table = made_table(REFERENCE_DEVICE, 0.05, 64);
+    c.adopt(c.replan(raised).unwrap().solve(&table).unwrap())
+        .unwrap();
+    // The operator's cap from the f64 model: (1 − margin)·Φlimit of the device flashed; the
+    // plant's at the same margin is above it, the boot ceiling (margin 0.05) above both.
+    let operator_cap = (1.0 - margin) * flashed_limit;
+    assert!((1.0 - margin) * plant_limit > operator_cap * 1.01);
+    let trims = run(&mut c, 6_000, Some(operator_cap));
+    assert!(trims >= 2, "{trims} trims after the new margin");
+}
+
+/// A late result of a job the controller no longer wants is dropped: a window's job handed
+/// out, then `stop` and a new plan whose trim hands out its own; the old result, given back
+/// after the new job was handed out (here a failure), is not taken for the new one.
+#[cfg(feature = "trim")]
+#[test]
+fn a_late_result_of_an_old_job_is_dropped() {
+    let settings = Settings {
+        trim_tolerance: Some(1e-3),
+        ..Settings::for_target(45.5)
+    };
+    let table = made_table(REFERENCE_DEVICE, 0.05, 64);
+    let mut c = started(REFERENCE_DEVICE, settings);
+    let mut plant = Plant::new(REFERENCE_DEVICE, 1000.0);
+    let mut tick = |c: &mut Controller| {
+        let out = c.tick(Inputs::stretch(plant.stretch() as f32));
+        plant.step(out.volts);
+        out
+    };
+    let mut old = None;
+    for _ in 0..5_000 {
+        tick(&mut c);
+        old = c.trim_job();
+        if old.is_some() {
+            break;
+        }
+    }
+    let old = old.expect("a window's job").solve();
+    c.stop();
+    while c.phase() != Phase::Holding {
+        tick(&mut c);
+    }
+    c.adopt(c.replan(settings).unwrap().solve(&table).unwrap())
+        .unwrap();
+    let mut new = None;
+    for _ in 0..10_000 {
+        tick(&mut c);
+        new = c.trim_job();
+        if new.is_some() {
+            break;
+        }
+    }
+    let new = new.expect("the new plan's job");
+    let late = de_resonator::TrimDone {
+        result: de_resonator::TrimResult::Failed(de_resonator::Fault::Bus),
+        ..old
+    };
+    c.trim_done(late);
+    let out = tick(&mut c);
+    assert_eq!(c.phase(), Phase::Solving, "{out:?}");
+    // The new job's own result is taken.
+    c.trim_done(new.solve());
+    let out = tick(&mut c);
+    assert!(matches!(out.event, Some(Event::Trimmed { .. })), "{out:?}");
+}
