@@ -200,3 +200,164 @@ impl ProbeLockIn {
         Some(estimate)
     }
 }
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::indexing_slicing)] // a test fails by panicking
+mod tests {
+    extern crate std;
+    use std::vec::Vec;
+
+    use super::*;
+    use crate::device::REFERENCE_DEVICE;
+
+    /// The reference device as the firmware holds it.
+    fn device() -> Device<f32> {
+        Device::new(REFERENCE_DEVICE.cast()).unwrap_or_else(|_| unreachable!())
+    }
+
+    /// A membrane under a ±`probe` square (`half` ticks a half, at 1 kHz) on a bias ramping
+    /// `ramp` V a tick from 3 kV, read by `lock`: each tick's current is the charge C·ΔΦ of
+    /// its voltage step (C the half's, `farads(n)` for the half ending at edge n) and the
+    /// leakage `siemens`·Φ. The estimates, each with the edge it came at, and the voltages at
+    /// the edges.
+    fn feed(
+        lock: &mut ProbeLockIn,
+        edges: u32,
+        half: u32,
+        ramp: f32,
+        farads: impl Fn(u32) -> f32,
+        siemens: f32,
+    ) -> (Vec<(u32, SensedStretch)>, Vec<f32>) {
+        let tick = 1e-3f32;
+        let volts_at = |i: u32| {
+            let sign = if (i / half).is_multiple_of(2) {
+                1.0
+            } else {
+                -1.0
+            };
+            3000.0 + ramp * i as f32 + 20.0 * sign
+        };
+        let (mut estimates, mut at_edges) = (Vec::new(), Vec::new());
+        let mut edge = 0;
+        for i in 1..=edges * half {
+            let (before, now) = (volts_at(i - 1), volts_at(i));
+            let flipped = (i % half) == 0;
+            if flipped {
+                edge += 1;
+            }
+            let amps = farads(edge) * (now - before) / tick + siemens * now;
+            // The half that ends here was the + one when the voltage came down.
+            let ended = flipped.then_some(now < before);
+            if flipped {
+                at_edges.push(now);
+            }
+            if let Some(estimate) = lock.observe(amps, now, ended) {
+                estimates.push((edge, estimate));
+            }
+        }
+        (estimates, at_edges)
+    }
+
+    /// A still membrane reads C and λ = √(C/C1) to f32's digits, its σ 0, under a ramp; the
+    /// voltage reported is the mean at the blocks' ends.
+    #[test]
+    fn a_still_membrane_reads_c_and_the_mean_voltage() {
+        let d = device();
+        let c1 = d.params().farads_per_stretch_squared();
+        let farads = c1 * 2.1 * 2.1;
+        let mut lock = ProbeLockIn::new(&d, 500.0, 1000.0);
+        let (estimates, at_edges) = feed(&mut lock, 101, 2, 0.5, |_| farads, 0.0);
+        let (edge, e) = estimates[0];
+        assert_eq!(edge, 101);
+        assert!((e.farads / farads - 1.0).abs() < 1e-5, "{e:?}");
+        assert!((e.stretch / 2.1 - 1.0).abs() < 1e-5, "{e:?}");
+        assert!(e.sigma.abs() < 1e-5, "{e:?}");
+        // The blocks end at edges 5, 9, …, 101.
+        let ends: Vec<f32> = (1..=25).map(|b| at_edges[4 * b]).collect();
+        let mean = ends.iter().sum::<f32>() / 25.0;
+        assert!((e.volts - mean).abs() < 1e-3, "{} against {mean}", e.volts);
+    }
+
+    /// A window is max(⌈0.05·probe_hz⌉, 8) blocks of four halves after the first edge: the
+    /// estimate comes at exactly that edge, not one block sooner or later.
+    #[test]
+    fn a_window_is_its_blocks_exactly() {
+        let d = device();
+        let farads = d.params().farads_per_stretch_squared() * 4.0;
+        for (probe_hz, blocks) in [(500.0, 25), (160.0, 8), (100.0, 8), (330.0, 17)] {
+            let mut lock = ProbeLockIn::new(&d, probe_hz, 1000.0);
+            let (estimates, _) = feed(&mut lock, 4 * blocks + 9, 1, 0.0, |_| farads, 0.0);
+            assert_eq!(
+                estimates.first().map(|e| e.0),
+                Some(4 * blocks + 1),
+                "{probe_hz}"
+            );
+            assert_eq!(estimates.len(), 1, "{probe_hz}");
+        }
+    }
+
+    /// The standard error is that of the blocks' mean C: blocks alternating C(1 ± e) give
+    /// C, and σ(C) = C·e/√(n − 1) over n blocks (the sample variance n/(n − 1)·(Ce)² over n),
+    /// halved relative for λ.
+    #[test]
+    fn the_standard_error_is_the_blocks_scatter() {
+        let d = device();
+        let c = d.params().farads_per_stretch_squared() * 4.0;
+        let e = 1e-3;
+        let mut lock = ProbeLockIn::new(&d, 100.0, 1000.0);
+        // The first edge starts the first half: the half ending at edge n is block (n − 2)/4.
+        let block_of = |edge: u32| (edge.max(2) - 2) / 4;
+        let farads = |edge: u32| {
+            if block_of(edge).is_multiple_of(2) {
+                c * (1.0 + e)
+            } else {
+                c * (1.0 - e)
+            }
+        };
+        let (estimates, _) = feed(&mut lock, 33, 3, 0.0, farads, 0.0);
+        let (_, got) = estimates[0];
+        assert!((got.farads / c - 1.0).abs() < 1e-5, "{got:?}");
+        let sigma = 0.5 * got.stretch * e / 7.0f32.sqrt();
+        assert!(
+            (got.sigma / sigma - 1.0).abs() < 1e-2,
+            "{got:?} against {sigma}"
+        );
+    }
+
+    /// The leakage's part (G·Φ over each half) is taken out exactly given the conductance;
+    /// without it, C reads high.
+    #[test]
+    fn the_leakage_given_is_taken_out() {
+        let d = device();
+        let c = d.params().farads_per_stretch_squared() * 4.0;
+        let siemens = 1e-9;
+        let mut with = ProbeLockIn::new(&d, 500.0, 1000.0);
+        with.set_conductance(siemens);
+        let (estimates, _) = feed(&mut with, 101, 4, 0.0, |_| c, siemens);
+        assert!(
+            (estimates[0].1.farads / c - 1.0).abs() < 1e-5,
+            "{estimates:?}"
+        );
+        let mut without = ProbeLockIn::new(&d, 500.0, 1000.0);
+        let (estimates, _) = feed(&mut without, 101, 4, 0.0, |_| c, siemens);
+        assert!(
+            (estimates[0].1.farads / c - 1.0).abs() > 1e-3,
+            "{estimates:?}"
+        );
+    }
+
+    /// `restart` forgets the halves and blocks summed (the probe was off): a window begun at
+    /// another capacitance, then a restart, reads the new one exactly.
+    #[test]
+    fn restart_forgets_what_was_summed() {
+        let d = device();
+        let c1 = d.params().farads_per_stretch_squared();
+        let mut lock = ProbeLockIn::new(&d, 500.0, 1000.0);
+        let (none, _) = feed(&mut lock, 51, 1, 0.0, |_| c1 * 9.0, 0.0);
+        assert!(none.is_empty());
+        lock.restart();
+        let (estimates, _) = feed(&mut lock, 101, 1, 0.0, |_| c1 * 4.0, 0.0);
+        assert_eq!(estimates.first().map(|e| e.0), Some(101));
+        assert!((estimates[0].1.stretch - 2.0).abs() < 1e-5, "{estimates:?}");
+    }
+}

@@ -258,3 +258,46 @@ fn a_late_result_of_an_old_job_is_dropped() {
     let out = tick(&mut c);
     assert!(matches!(out.event, Some(Event::Trimmed { .. })), "{out:?}");
 }
+
+/// The boot's plan's cap is the one the boot ends with (the direct solve's, not the table's
+/// top, which lies a headroom lower): a trim's result on a plant that is the model (its
+/// estimate's cap the device flashed's, within the trim's tolerance) leaves the cap in force
+/// where the boot put it, within that tolerance (before, the table's lower top came back as
+/// the operator's cap at the first result, under a plan already ramping above it).
+#[cfg(feature = "trim")]
+#[test]
+fn a_trim_on_the_model_leaves_the_boot_cap() {
+    let f0 = Tuner::new(Device::new(REFERENCE_DEVICE).unwrap())
+        .zero_bias()
+        .natural_frequency_hz;
+    let plant = DeviceParams {
+        damping: REFERENCE_DEVICE.effective_mass() * std::f64::consts::TAU * f0 / 200.0,
+        ..REFERENCE_DEVICE
+    };
+    let settings = Settings {
+        trim_tolerance: Some(1e-3),
+        ..Settings::for_target(44.0)
+    };
+    let mut c = started(REFERENCE_DEVICE, settings);
+    let boot_cap = c.max_volts();
+    assert_eq!(c.operator_volts(), boot_cap);
+    let mut p = Plant::new(plant, 1000.0);
+    let mut trims = 0;
+    for _ in 0..6_000 {
+        let out = c.tick(Inputs::stretch(p.stretch() as f32));
+        if let Some(job) = c.trim_job() {
+            c.trim_done(job.solve());
+        }
+        trims += usize::from(matches!(out.event, Some(Event::Trimmed { .. })));
+        p.step(out.volts);
+    }
+    assert!(trims >= 2, "{trims}");
+    // The ring's frequency within 1e-4 (the crossings' fit) gives μ within 2e-4 and the
+    // limit (∝ √μ near it) within 1e-4: 5e-4 holds it; the table's top is 1e-3 lower.
+    assert!(
+        c.max_volts() >= boot_cap * (1.0 - 5e-4),
+        "{} from {boot_cap}",
+        c.max_volts()
+    );
+    assert_eq!(c.operator_volts(), boot_cap);
+}

@@ -403,6 +403,7 @@ struct Tally {
     above_cap_descending: u64,
     descent_violations: u64,
     first_violation: Option<String>,
+    first_gate: Option<String>,
     gates: u64,
     operations: BTreeMap<String, u64>,
     results: BTreeMap<&'static str, u64>,
@@ -600,6 +601,12 @@ fn fuzz_the_controller() {
             if let Some(Event::Fault(fault)) = out.event {
                 if matches!(fault, Fault::Gate { .. }) {
                     tally.gates += 1;
+                    tally.first_gate.get_or_insert_with(|| {
+                        format!(
+                            "tick {k}: {fault}, last {last_volts} V, {s:?}, {:?}",
+                            c.plan()
+                        )
+                    });
                 }
                 *tally.faults.entry(kind(&fault)).or_default() += 1;
                 faulted = Some((k, last_volts));
@@ -675,7 +682,11 @@ fn fuzz_the_controller() {
     println!("fuzz: tables {:?}", tally.tables);
     println!("fuzz: refused at boot {:?}", tally.refused);
     println!("fuzz: faults while running {:?}", tally.faults);
-    assert_eq!(tally.gates, 0, "the final gate fired");
+    assert_eq!(
+        tally.gates, 0,
+        "the final gate fired, first: {:?}",
+        tally.first_gate
+    );
     assert_eq!(
         tally.descent_violations, 0,
         "the way down broken, first: {:?}",

@@ -211,3 +211,33 @@ fn tracking_slope_is_a_pending_job_while_driving() {
     }
     assert!(pending_while_driving >= 1, "{pending_while_driving}");
 }
+
+/// The drive's force per unit stretch (`drive_force_per_stretch`) is the part of MODEL.md
+/// §4's λ'' at the drive's frequency per unit λ, from the tests' plain-SI restatement: half
+/// the difference of λ'' at Φdc ± Φac, over λ (the Φ² term is 2·Φdc·Φac·sin Ωt there), on
+/// the reference device and a random one.
+#[test]
+fn the_drive_force_is_the_models_phi_squared_term() {
+    use de_resonator::track::drive_force_per_stretch;
+    use de_resonator::{Device, REFERENCE_DEVICE};
+    let mut rng = common::Rng(0x5eed_f0ce);
+    let mut devices = vec![REFERENCE_DEVICE];
+    while devices.len() < 6 {
+        let p = common::random_device(&mut rng);
+        if Device::new(p).is_ok() && Device::new(p.cast::<f32>()).is_ok() {
+            devices.push(p);
+        }
+    }
+    for p in devices {
+        let device = Device::new(p.cast::<f32>()).unwrap();
+        let (dc, ac, l) = (1500.0f64, 70.0f64, 1.3 * p.prestretch_1);
+        let expected = (common::acceleration(&p, l, dc + ac)
+            - common::acceleration(&p, l, dc - ac))
+            / (2.0 * l);
+        let got = f64::from(drive_force_per_stretch(&device, dc as f32, ac as f32));
+        assert!(
+            (got / expected - 1.0).abs() < 1e-4,
+            "{got} against {expected}: {p:?}"
+        );
+    }
+}

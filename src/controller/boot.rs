@@ -121,8 +121,9 @@ impl Controller {
                 solved_hz,
             });
         }
-        self.max_volts = max_volts;
+        // The ceiling, and the boot's plan's cap with it: the solve's, not the table's.
         self.ceiling_volts = max_volts;
+        self.set_caps(max_volts, self.estimate_volts);
         let plan_ticks = self.set_plan(solved.volts)?;
         let boot = Boot {
             bias_volts: solved.volts,

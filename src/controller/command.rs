@@ -159,10 +159,7 @@ impl Controller {
             .min(fresh.max_volts)
             .min(self.estimate_volts);
         let mut plan = fresh.plan.delayed(self.tick);
-        if !(self.last_volts <= max_volts) {
-            plan.start_volts = self.last_volts;
-        }
-        plan.probe_off_above(max_volts);
+        plan.start_under(max_volts, self.last_volts);
         plan.check_range(fresh.plan.bias_volts, max_volts)
             .map_err(Refusal::Checks)?;
         self.settings = fresh.settings;

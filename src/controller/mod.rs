@@ -653,7 +653,7 @@ impl Controller {
                     ..self.plan
                 };
                 let bound = max_volts.min(self.max_volts);
-                plan.probe_off_above(bound);
+                plan.start_under(bound, self.last_volts);
                 plan.check_range(next_bias_volts, bound)?;
                 self.amplifier
                     .code(next_bias_volts + plan.swing_volts())

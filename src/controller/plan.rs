@@ -178,9 +178,20 @@ impl Plan {
         on.then(|| (k / half).is_multiple_of(2))
     }
 
+    /// A new plan under a cap `max_volts` that may have just been lowered, the voltage last
+    /// sent `last_volts`: where the ramp's start or the voltage sent is above the cap, the
+    /// ramp starts from the voltage sent (down at the slew rate from there, never up from
+    /// it), and the probe is off where the ramp with it would pass the cap.
+    pub(super) fn start_under(&mut self, max_volts: f32, last_volts: f32) {
+        if !(self.start_volts <= max_volts && last_volts <= max_volts) {
+            self.start_volts = last_volts;
+        }
+        self.probe_off_above(max_volts);
+    }
+
     /// The probe off on a ramp whose top with the probe would pass `max_volts` (a ramp down
     /// from above a cap since lowered): the controller sets it back at the bias.
-    pub(super) fn probe_off_above(&mut self, max_volts: f32) {
+    fn probe_off_above(&mut self, max_volts: f32) {
         let top = self.start_volts.max(self.bias_volts);
         if !(top + self.probe_volts <= max_volts) {
             self.probe_volts = 0.0;
