@@ -123,11 +123,10 @@ impl ProbeLockIn {
         self.last
     }
 
-    /// Start again (the probe was off): the halves are summed from the next edge.
+    /// Start again (the probe was off): the halves are summed from the next edge (the half
+    /// under way, its start unknown, is dropped there with its charge).
     pub fn restart(&mut self) {
         *self = Self {
-            charge: 0.0,
-            volt_seconds: 0.0,
             start_volts: None,
             block: Block::default(),
             sums: Sums::default(),
@@ -343,6 +342,40 @@ mod tests {
         assert!(
             (estimates[0].1.farads / c - 1.0).abs() > 1e-3,
             "{estimates:?}"
+        );
+    }
+
+    /// The reference c0 (kept so that f32 holds the scatter's digits) follows the last
+    /// window whose C is a positive number: after a window at C, one at 4·C, and one where a
+    /// half's charge is infinite (its C too), a window at 4·C(1 ± 1e-4) by block reads its C
+    /// and the standard error of its blocks' scatter (4·C·1e-4/√24 in C), which a reference
+    /// left at C or taken from the infinite window would lose.
+    #[test]
+    fn the_reference_follows_the_last_good_window() {
+        let d = device();
+        let c = d.params().farads_per_stretch_squared();
+        let e = 1e-4;
+        // The half ending at edge n is in block (n − 2)/4, window block/25.
+        let window = |edge: u32| (edge.max(2) - 2) / 4 / 25;
+        let farads = |edge: u32| match window(edge) {
+            0 => c,
+            1 => 4.0 * c,
+            2 if edge == 250 => f32::INFINITY,
+            2 => 4.0 * c,
+            _ if ((edge - 2) / 4).is_multiple_of(2) => 4.0 * c * (1.0 + e),
+            _ => 4.0 * c * (1.0 - e),
+        };
+        let mut lock = ProbeLockIn::new(&d, 500.0, 1000.0);
+        let (estimates, _) = feed(&mut lock, 401, 1, 0.0, farads, 0.0);
+        let ends: Vec<u32> = estimates.iter().map(|e| e.0).collect();
+        assert_eq!(ends, [101, 201, 301, 401]);
+        assert!(!(estimates[2].1.farads.is_finite()), "{estimates:?}");
+        let last = estimates[3].1;
+        assert!((last.stretch / 2.0 - 1.0).abs() < 1e-5, "{last:?}");
+        let sigma = 0.5 * last.stretch * e / 24.0f32.sqrt();
+        assert!(
+            (last.sigma / sigma - 1.0).abs() < 0.05,
+            "{last:?} against {sigma}"
         );
     }
 

@@ -126,3 +126,72 @@ impl Controller {
         }
     }
 }
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::indexing_slicing)] // a test fails by panicking
+mod tests {
+    extern crate std;
+    use std::vec;
+
+    use super::*;
+    use crate::device::REFERENCE_DEVICE;
+    use crate::{table, Amplifier, Settings, Tuner};
+
+    /// The reference device's controller with the probe on (its table as `host-sim lut`
+    /// makes it).
+    fn controller() -> Controller {
+        let device = Device::new(REFERENCE_DEVICE).unwrap();
+        let top = Tuner::new(device)
+            .max_bias(table::table_margin(0.05))
+            .unwrap();
+        let mut points = vec![(0.0f32, 0.0f32); 64];
+        table::fill(&device, &top, &[], &mut points).unwrap();
+        let mut bytes = vec![0u8; table::table_bytes(64)];
+        table::write(&mut bytes, &REFERENCE_DEVICE.cast(), 0.05, 0.0, &points).unwrap();
+        let settings = Settings {
+            probe_volts: Some(20.0),
+            ..Settings::for_target(44.0)
+        };
+        let amplifier = Amplifier::new(2.5, 4000.0).unwrap();
+        Controller::start(REFERENCE_DEVICE.cast(), &bytes, amplifier, settings)
+            .unwrap()
+            .0
+    }
+
+    /// The five checks of an estimate at 0 V, one a tick: the first fault.
+    fn checked(stretch: f32, sigma: f32) -> Option<Fault> {
+        let mut c = controller();
+        let estimate = SensedStretch {
+            stretch,
+            sigma,
+            farads: 1e-9,
+            volts: 0.0,
+        };
+        c.sensing.checking = Some((estimate, 0));
+        (0..5).find_map(|k| c.check_sensed(k))
+    }
+
+    /// An estimate that is not a number, or whose standard error is not, is a sensor fault
+    /// naming the value; one outside the stretches any device could have (its ends included,
+    /// σ 0) is implausible; the pre-stretch at 0 V passes.
+    #[test]
+    fn an_estimate_is_checked_for_numbers_and_plausibility() {
+        let (low, high) = controller().flashed.plausible_stretch();
+        let prestretch = REFERENCE_DEVICE.prestretch_1 as f32;
+        assert_eq!(checked(prestretch, 1e-4), None);
+        assert!(matches!(checked(f32::NAN, 1e-4), Some(Fault::Sensor { value }) if value.is_nan()));
+        assert!(
+            matches!(checked(prestretch, f32::NAN), Some(Fault::Sensor { value }) if value.is_nan())
+        );
+        assert!(matches!(
+            checked(prestretch, f32::INFINITY),
+            Some(Fault::Sensor { .. })
+        ));
+        for at in [low, high] {
+            assert!(
+                matches!(checked(at, 0.0), Some(Fault::SensorImplausible { value, .. }) if value == at),
+                "{at}"
+            );
+        }
+    }
+}
