@@ -17,6 +17,10 @@ pub const MAX_STEP: f32 = 0.01;
 /// Fewest samples a cycle for a fit (three unknowns, and some to spare).
 pub const MIN_SAMPLES: f32 = 6.0;
 
+/// The fit's determinant against its bound below which the samples cannot tell m, A and B
+/// apart.
+const SINGULAR: f32 = 1e-4;
+
 /// The tracked drive may stray this fraction of the target at most: further, the lock is
 /// lost (`Fault::TrackLost`).
 pub const MAX_DETUNING: f32 = 0.2;
@@ -82,7 +86,9 @@ impl Sums {
                 + a[2] * (a[3] * a[7] - a[4] * a[6])
         };
         let d = det3([n, s, c, s, ss, sc, c, sc, cc]);
-        if !(n >= MIN_SAMPLES && d.abs() > 0.0) {
+        // Singular, or so near it that f32's rounding decides: the determinant against its
+        // bound n·Σs²·Σc² (Hadamard's; about 1 over a whole cycle, 0 at one angle).
+        if !(n >= MIN_SAMPLES && d.abs() > SINGULAR * n * ss * cc) {
             return None;
         }
         let m = det3([x, s, c, xs, ss, sc, xc, sc, cc]) / d;
@@ -206,4 +212,108 @@ pub fn drive_force_per_stretch(device: &crate::Device<f32>, bias_volts: f32, ac_
     let v = device.volts_per_unit();
     let l2 = device.prestretch_2();
     w * w * 2.0 * (bias_volts / v) * (ac_volts / v) * l2 * l2
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)] // a test fails by panicking
+mod tests {
+    use super::*;
+
+    /// Sums of `x = m + A·sin θ + B·cos θ` at the angles `angles`.
+    fn sums(angles: impl Iterator<Item = f32>, (m, a, b): (f32, f32, f32)) -> Sums {
+        let mut sums = Sums::default();
+        for theta in angles {
+            let (s, c) = (libm::sinf(theta), libm::cosf(theta));
+            sums.add(m + a * s + b * c, s, c);
+        }
+        sums
+    }
+
+    /// The least-squares fit is exact on exact data at any angles, not only over whole
+    /// cycles (where the sums of sin and cos vanish and half the normal equations with them).
+    #[test]
+    fn the_fit_is_exact_at_any_angles() {
+        let truth = (0.25, -1.5, 0.75);
+        let angles = (0..9).map(|i| 0.3 + 0.45 * i as f32);
+        let (m, a, b) = sums(angles, truth).fit().unwrap();
+        assert!(
+            (m - truth.0).abs() < 1e-4 && (a - truth.1).abs() < 1e-4,
+            "{m} {a} {b}"
+        );
+        assert!((b - truth.2).abs() < 1e-4, "{m} {a} {b}");
+    }
+
+    /// Fewer samples than `MIN_SAMPLES`, or samples that cannot tell the three apart (all at
+    /// one angle: a singular system), give no fit.
+    #[test]
+    fn too_few_or_singular_samples_give_no_fit() {
+        let truth = (0.25, -1.5, 0.75);
+        let five = (0..5).map(|i| 0.3 + 0.9 * i as f32);
+        assert_eq!(sums(five, truth).fit(), None);
+        let one_angle = (0..12).map(|_| 0.7f32);
+        assert_eq!(sums(one_angle, truth).fit(), None);
+    }
+
+    /// A tracker that has summed one cycle of `x(θ)` sampled 26 times (a 40 Hz drive at
+    /// 1 kHz), set aside for its fit.
+    fn one_cycle(x: impl Fn(f32) -> f32) -> Tracker {
+        let mut t = Tracker::new(40.0, 2.2);
+        let step = (40.0f64 / 1000.0 * 4_294_967_296.0) as u32;
+        for k in 0..27u32 {
+            let phase = k.wrapping_mul(step);
+            let theta = phase as f32 * (core::f32::consts::TAU / 4_294_967_296.0);
+            t.observe(phase, x(theta));
+        }
+        assert!(t.pending());
+        t
+    }
+
+    /// The drive moves `gain` of the way to the natural frequency found (within the step's
+    /// bound): here F/Z with Z = −A (a response in antiphase) gives ω0² = Ω² − F/A, and the
+    /// drive moves half of that way.
+    #[test]
+    fn the_drive_moves_its_gain_of_the_way() {
+        let amplitude = 1e-3f32;
+        let mut t = one_cycle(|theta| 2.2 - amplitude * libm::sinf(theta));
+        let omega = core::f32::consts::TAU * 40.0;
+        // F = force_per_stretch·λ̄ chosen so that ω0 is 1% below Ω: ω0² = Ω² − F/A.
+        let omega0 = 0.99 * omega;
+        let force = (omega * omega - omega0 * omega0) * amplitude;
+        let lock = t.fit(force / 2.2, 0.5).unwrap();
+        assert!((lock.natural_hz / 39.6 - 1.0).abs() < 1e-4, "{lock:?}");
+        assert!((t.drive_hz() - (40.0 + 0.5 * (lock.natural_hz - 40.0))).abs() < 1e-4);
+    }
+
+    /// A response that no positive stiffness explains (ω0² ≤ 0: F/Z's real part below −Ω²)
+    /// gives no lock, and the drive stays.
+    #[test]
+    fn no_positive_stiffness_no_lock() {
+        let amplitude = 1e-3f32;
+        let mut t = one_cycle(|theta| 2.2 - amplitude * libm::sinf(theta));
+        let omega = core::f32::consts::TAU * 40.0;
+        let force = 2.0 * omega * omega * amplitude;
+        assert_eq!(t.fit(force / 2.2, 0.5), None);
+        assert_eq!(t.drive_hz(), 40.0);
+    }
+
+    /// A cycle ends when the drive's phase goes back (wraps), not when it holds; the last
+    /// fit is the tracker's lock.
+    #[test]
+    fn a_cycle_ends_when_the_phase_wraps() {
+        let mut t = Tracker::new(44.0, 2.2);
+        assert!(!t.observe(1 << 30, 2.2));
+        assert!(!t.observe(1 << 30, 2.2));
+        assert!(!t.pending());
+        let step = 1u32 << 28;
+        let mut phase = 0u32;
+        let mut wrapped = false;
+        for _ in 0..40 {
+            phase = phase.wrapping_add(step);
+            let theta = phase as f32 * (core::f32::consts::TAU / 4_294_967_296.0);
+            wrapped |= t.observe(phase, 2.2 + 1e-3 * libm::sinf(theta));
+        }
+        assert!(wrapped && t.pending());
+        let lock = t.fit(2000.0, 0.0).unwrap();
+        assert_eq!(t.lock(), Some(lock));
+    }
 }

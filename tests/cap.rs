@@ -232,7 +232,10 @@ fn a_late_result_of_an_old_job_is_dropped() {
     }
     let old = old.expect("a window's job").solve();
     c.stop();
-    while c.phase() != Phase::Holding {
+    for _ in 0..20_000 {
+        if c.phase() == Phase::Holding {
+            break;
+        }
         tick(&mut c);
     }
     c.adopt(c.replan(settings).unwrap().solve(&table).unwrap())

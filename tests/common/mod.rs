@@ -210,6 +210,7 @@ pub fn reseal(bytes: &mut [u8]) {
 /// tick, at rest at its pre-stretch), driven by each tick's command.
 pub struct Plant {
     model: de_resonator::Integrator<f64>,
+    tick_seconds: f64,
 }
 
 impl Plant {
@@ -224,7 +225,21 @@ impl Plant {
         let range = device.model_range();
         let model =
             Integrator::new(device, drive, Method::Rk4, 1.0 / tick_hz, range, rest, true).unwrap();
-        Self { model }
+        Self {
+            model,
+            tick_seconds: 1.0 / tick_hz,
+        }
+    }
+
+    /// The plant's parameters from now on (a plant that creeps), its state kept.
+    pub fn set_params(&mut self, p: DeviceParams<f64>) {
+        use de_resonator::{Device, Drive, Integrator, Method};
+        let device = Device::new(p).unwrap();
+        let state = self.model.state();
+        let step = self.tick_seconds;
+        let drive = Drive::constant(&device, 0.0);
+        let range = device.model_range();
+        self.model = Integrator::new(device, drive, Method::Rk4, step, range, state, true).unwrap();
     }
 
     /// The stretch now.
