@@ -104,6 +104,19 @@ fn the_drive_locks_to_the_resonance_whatever_the_force() {
 
 mod common;
 
+/// The reference device damped to quality factor `q`.
+#[cfg(feature = "track")]
+fn damped_reference(q: f64) -> de_resonator::DeviceParams<f64> {
+    use de_resonator::{Device, Tuner, REFERENCE_DEVICE};
+    let f0 = Tuner::new(Device::new(REFERENCE_DEVICE).unwrap())
+        .zero_bias()
+        .natural_frequency_hz;
+    de_resonator::DeviceParams {
+        damping: REFERENCE_DEVICE.effective_mass() * std::f64::consts::TAU * f0 / q,
+        ..REFERENCE_DEVICE
+    }
+}
+
 /// The reference device's controller tracking 45.5 Hz (30 V of AC, trimmed to 5e-4 first,
 /// tracker constant 0.2 s), and its table.
 #[cfg(feature = "track")]
@@ -203,9 +216,9 @@ fn tracking_holds_the_bias_on_a_plant_that_is_the_model() {
 #[cfg(feature = "track")]
 #[test]
 fn tracking_slope_is_a_pending_job_while_driving() {
-    use de_resonator::{Inputs, Phase, REFERENCE_DEVICE};
+    use de_resonator::{Inputs, Phase};
     let (mut c, _) = tracked_reference();
-    let mut p = common::Plant::new(REFERENCE_DEVICE, 1000.0);
+    let mut p = common::Plant::new(damped_reference(50.0), 1000.0);
     let mut pending_while_driving = 0;
     for _ in 0..10_000 {
         let out = c.tick(Inputs::stretch(p.stretch() as f32));
@@ -309,4 +322,62 @@ fn tracking_follows_a_creeping_plant() {
         (bias / own - 1.0).abs() < 5e-3,
         "{bias} V against the plant's {own} V"
     );
+}
+
+/// The tracked drive's timing, on the reference device as plant (Q 50): for three of the
+/// loop's time after the drive starts the bias holds (the estimate and the plant's ring
+/// settle first), the loop's time the longer of `track_seconds` and the plant's ring time
+/// Q/(π·f) (before, at Q 200 the bias swung wider each time and faulted); and a drive
+/// started 0.5 Hz below the resonance ends on it.
+#[cfg(feature = "track")]
+#[test]
+fn the_tracker_settles_then_follows_with_its_time_constant() {
+    use de_resonator::{Amplifier, Controller, Event, Inputs, Settings, REFERENCE_DEVICE};
+    let settings = Settings {
+        ac_volts: 30.0,
+        ac_hz: 45.0,
+        trim_tolerance: Some(5e-4),
+        track_seconds: Some(0.2),
+        ..Settings::for_target(45.5)
+    };
+    let table = common::made_table(REFERENCE_DEVICE, 0.05, 64);
+    let amplifier = Amplifier::new(2.5, 4000.0).unwrap();
+    let (mut c, _) =
+        Controller::start(REFERENCE_DEVICE.cast(), &table, amplifier, settings).unwrap();
+    let q = 50.0;
+    let mut p = common::Plant::new(damped_reference(q), 1000.0);
+    let mut drive_on = None;
+    let (mut bias_at_start, mut moved_at) = (0.0, None);
+    let mut drive_hz = Vec::new();
+    for k in 0..6_000u32 {
+        let out = c.tick(Inputs::stretch(p.stretch() as f32));
+        assert!(
+            !matches!(out.event, Some(Event::Fault(_))),
+            "tick {k}: {out:?}"
+        );
+        if out.event == Some(Event::DriveOn) {
+            drive_on = Some(k);
+            bias_at_start = c.plan().bias_volts;
+        }
+        if let Some(job) = c.trim_job() {
+            c.trim_done(job.solve());
+        }
+        p.step(out.volts);
+        if let Some(on) = drive_on {
+            if moved_at.is_none() && c.plan().bias_volts != bias_at_start {
+                moved_at = Some(k - on);
+            }
+            drive_hz.push(c.tracked().map_or(45.0, |l| l.drive_hz));
+        }
+    }
+    let moved = moved_at.expect("the bias moves once settled") as f64;
+    // Three of the loop's time: the plant's ring time Q/(π·f) here, longer than 0.2 s.
+    let settle = 3.0 * q / (std::f64::consts::PI * 45.5) * 1000.0;
+    assert!(
+        moved >= 0.9 * settle && moved <= 1.3 * settle,
+        "moved {moved} ticks after the drive started, {settle} expected"
+    );
+    // The drive, started 0.5 Hz below, ends on the resonance the target's bias gives.
+    let last = *drive_hz.last().unwrap();
+    assert!((last / 45.5 - 1.0).abs() < 1e-3, "{last} Hz");
 }

@@ -29,6 +29,9 @@ pub(super) struct Tracking {
 /// Time constants of the tracker the estimate waits before the bias moves on it.
 const SETTLE_TIME_CONSTANTS: f32 = 3.0;
 
+/// The longest ring time the loop waits for, s.
+const MAX_RING_SECONDS: f32 = 10.0;
+
 /// The bias's integral time, in the tracker's time constants: slower than the tracker, so
 /// that the drive's estimate leads the bias that moves it.
 const INTEGRAL_TIME_CONSTANTS: f32 = 1.5;
@@ -101,7 +104,16 @@ impl Controller {
             ac_phase_step: (hz / s.tick_hz * 4_294_967_296.0) as u32,
             ..self.plan
         };
-        let ticks_of = |constants: f32| constants * track_seconds * s.tick_hz;
+        // The loop's time: the tracker's constant, or the plant's own ring time Q/(π·f) if
+        // longer (none measured: the longest). A loop faster than the ring chases the beat of
+        // the ring against the drive: the bias swung wider each time above Q ≈ 100 at 0.2 s.
+        let ring_seconds = lock.quality_factor / (core::f32::consts::PI * hz);
+        let loop_seconds = if ring_seconds.is_nan() {
+            MAX_RING_SECONDS
+        } else {
+            ring_seconds.clamp(track_seconds, MAX_RING_SECONDS.max(track_seconds))
+        };
+        let ticks_of = |constants: f32| constants * loop_seconds * s.tick_hz;
         let steady = (k - self.tracking.steady_from.min(k)) as f32;
         if steady < ticks_of(SETTLE_TIME_CONSTANTS) {
             return Ok(None);
@@ -119,7 +131,7 @@ impl Controller {
         // The integral law over this cycle (1/hz s long): Φ² moves by slope·error·dt/Ti, the
         // error the cycle's own estimate's (the drive's frequency lags it by the tracker's
         // smoothing).
-        let integral_seconds = INTEGRAL_TIME_CONSTANTS * track_seconds;
+        let integral_seconds = INTEGRAL_TIME_CONSTANTS * loop_seconds;
         let error_hz = s.target_hz - lock.natural_hz;
         let squared = bias * bias + slope * error_hz / (hz * integral_seconds);
         let next_bias_volts = libm::sqrtf(squared.max(0.0));
