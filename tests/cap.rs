@@ -139,13 +139,7 @@ fn a_margin_raised_at_run_time_holds_through_the_trims() {
     let plant_limit = limit_volts(plant_params);
     let flashed_limit = limit_volts(REFERENCE_DEVICE);
     assert!(plant_limit > 1.01 * flashed_limit);
-    let f0 = Tuner::new(Device::new(plant_params).unwrap())
-        .zero_bias()
-        .natural_frequency_hz;
-    let damped = DeviceParams {
-        damping: plant_params.effective_mass() * std::f64::consts::TAU * f0 / 200.0,
-        ..plant_params
-    };
+    let damped = common::with_quality_factor(plant_params, 200.0);
     let settings = Settings {
         ac_volts: 100.0,
         ac_hz: 40.0,
@@ -270,13 +264,7 @@ fn a_late_result_of_an_old_job_is_dropped() {
 #[cfg(feature = "trim")]
 #[test]
 fn a_trim_on_the_model_leaves_the_boot_cap() {
-    let f0 = Tuner::new(Device::new(REFERENCE_DEVICE).unwrap())
-        .zero_bias()
-        .natural_frequency_hz;
-    let plant = DeviceParams {
-        damping: REFERENCE_DEVICE.effective_mass() * std::f64::consts::TAU * f0 / 200.0,
-        ..REFERENCE_DEVICE
-    };
+    let plant = common::with_quality_factor(REFERENCE_DEVICE, 200.0);
     let settings = Settings {
         trim_tolerance: Some(1e-3),
         ..Settings::for_target(44.0)

@@ -104,19 +104,6 @@ fn the_drive_locks_to_the_resonance_whatever_the_force() {
 
 mod common;
 
-/// The reference device damped to quality factor `q`.
-#[cfg(feature = "track")]
-fn damped_reference(q: f64) -> de_resonator::DeviceParams<f64> {
-    use de_resonator::{Device, Tuner, REFERENCE_DEVICE};
-    let f0 = Tuner::new(Device::new(REFERENCE_DEVICE).unwrap())
-        .zero_bias()
-        .natural_frequency_hz;
-    de_resonator::DeviceParams {
-        damping: REFERENCE_DEVICE.effective_mass() * std::f64::consts::TAU * f0 / q,
-        ..REFERENCE_DEVICE
-    }
-}
-
 /// The reference device's controller tracking 45.5 Hz (30 V of AC, trimmed to 5e-4 first,
 /// tracker constant 0.2 s), and its table.
 #[cfg(feature = "track")]
@@ -144,21 +131,15 @@ fn tracked_reference() -> (de_resonator::Controller, Vec<u8>) {
 #[cfg(feature = "track")]
 #[test]
 fn tracking_holds_the_bias_on_a_plant_that_is_the_model() {
-    use de_resonator::{
-        Device, DeviceParams, Event, Inputs, Phase, Settings, Tuner, REFERENCE_DEVICE,
-    };
+    use de_resonator::{Device, Event, Inputs, Phase, Settings, Tuner, REFERENCE_DEVICE};
     let device = Device::new(REFERENCE_DEVICE).unwrap();
     let tuner = Tuner::new(device);
     let limit = *tuner.limit();
-    let f0 = tuner.zero_bias().natural_frequency_hz;
     let model_hz = |volts: f32| {
         let offset = device.offset_for_bias(f64::from(volts), limit.at.offset);
         device.natural_frequency_hz_at(offset.unwrap())
     };
-    let plant = DeviceParams {
-        damping: REFERENCE_DEVICE.effective_mass() * std::f64::consts::TAU * f0 / 50.0,
-        ..REFERENCE_DEVICE
-    };
+    let plant = common::with_quality_factor(REFERENCE_DEVICE, 50.0);
     let (mut c, table) = tracked_reference();
     let mut p = common::Plant::new(plant, 1000.0);
     let mut drive_on = Vec::new();
@@ -218,7 +199,10 @@ fn tracking_holds_the_bias_on_a_plant_that_is_the_model() {
 fn tracking_slope_is_a_pending_job_while_driving() {
     use de_resonator::{Inputs, Phase};
     let (mut c, _) = tracked_reference();
-    let mut p = common::Plant::new(damped_reference(50.0), 1000.0);
+    let mut p = common::Plant::new(
+        common::with_quality_factor(de_resonator::REFERENCE_DEVICE, 50.0),
+        1000.0,
+    );
     let mut pending_while_driving = 0;
     for _ in 0..10_000 {
         let out = c.tick(Inputs::stretch(p.stretch() as f32));
@@ -345,7 +329,7 @@ fn the_tracker_settles_then_follows_with_its_time_constant() {
     let (mut c, _) =
         Controller::start(REFERENCE_DEVICE.cast(), &table, amplifier, settings).unwrap();
     let q = 50.0;
-    let mut p = common::Plant::new(damped_reference(q), 1000.0);
+    let mut p = common::Plant::new(common::with_quality_factor(REFERENCE_DEVICE, q), 1000.0);
     let mut drive_on = None;
     let (mut bias_at_start, mut moved_at) = (0.0, None);
     let mut drive_hz = Vec::new();

@@ -276,3 +276,15 @@ pub fn assert_way_down(volts: &[f32], from_volts: f32, step_volts: f32, lsb_volt
     }
     assert!(volts.len() >= needed, "{} ticks checked", volts.len());
 }
+
+/// `p` damped to quality factor `q` at its natural frequency at zero bias.
+pub fn with_quality_factor(p: DeviceParams<f64>, q: f64) -> DeviceParams<f64> {
+    use de_resonator::{Device, Tuner};
+    let f0 = Tuner::new(Device::new(p).unwrap())
+        .zero_bias()
+        .natural_frequency_hz;
+    DeviceParams {
+        damping: p.effective_mass() * std::f64::consts::TAU * f0 / q,
+        ..p
+    }
+}
