@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # A scene run, whole process, side by side: `host-sim simulate` (reference DOP853) against
 # SciPy's solve_ivp (DOP853) on the same equations (scripts/scipy_scene.py, restated from
-# MODEL.md independently), at the same tolerance. Checks that both reach the same final
+# model.md independently), at the same tolerance. Checks that both reach the same final
 # state, then times each run from process start to exit.
 # Usage: scripts/bench-scipy.sh [RUNS]   (installs SciPy into target/scipy-venv)
 set -euo pipefail

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """One scene of the reference device, solved with SciPy's solve_ivp (DOP853): the comparison
-side of `scripts/bench-scipy.sh`. The equations are restated here from MODEL.md §§2-4 in
+side of `scripts/bench-scipy.sh`. The equations are restated here from model.md §§2-4 in
 plain SI, sharing no code with the Rust core.
 
 Usage: scipy_scene.py BIAS_V AC_V DRIVE_HZ DURATION_S TOLERANCE
@@ -13,7 +13,7 @@ import sys
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-# The reference device of MODEL.md §9 (devices/reference.toml).
+# The reference device of model.md §9 (devices/reference.toml).
 MU, JLIM, EPS = 45e3, 120.0, 4.7 * 8.8541878128e-12
 RHO, H, L1A, L1B, L2, BAR = 960.0, 1.0e-3, 20e-3, 20e-3, 40e-3, 2e-3
 L1P, L2P = 2.0, 2.0
@@ -22,13 +22,13 @@ MASS = BAR * L1A + RHO * L2 * H * L1A * L1 / 3.0
 
 
 def s1(l1, l2):
-    """Gent nominal stress in direction 1, Pa (MODEL.md §3)."""
+    """Gent nominal stress in direction 1, Pa (model.md §3)."""
     i1 = l1 * l1 + l2 * l2 + 1.0 / (l1 * l1 * l2 * l2)
     return MU * (l1 - l1**-3 * l2**-2) / (1.0 - (i1 - 3.0) / JLIM)
 
 
 def acceleration(stretch, volts):
-    """λ'' of MODEL.md §4 without damping, 1/s²."""
+    """λ'' of model.md §4 without damping, 1/s²."""
     passive = (L1 * L1P - L1A * stretch) / L1B
     field = volts / H
     return L2 * H * (s1(passive, L2P) - s1(stretch, L2P)

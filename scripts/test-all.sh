@@ -29,6 +29,9 @@ defmt-print --version
 step "format"
 cargo fmt --all -- --check
 
+step "docs: every model.md citation names a section of docs/model.md; nothing points outside"
+scripts/check-citations.sh
+
 step "clippy, host"
 cargo clippy --locked --workspace --all-targets -- -D warnings
 

@@ -1,4 +1,4 @@
-//! Dynamics (MODEL.md §4, §7): the equation of motion under Φ(t) = Φdc + Φac·sin(Ωt), and
+//! Dynamics (model.md §4, §7): the equation of motion under Φ(t) = Φdc + Φac·sin(Ωt), and
 //! fixed-step integrators a microcontroller can afford, one step at a time, behind a guard
 //! that refuses a step too large to be stable. Dimensionless time τ = t/T0 throughout.
 
@@ -77,7 +77,7 @@ pub struct State<T> {
 }
 
 impl<T: Real> Device<T> {
-    /// The elastic and electric part of λ'' (MODEL.md §4, dimensionless):
+    /// The elastic and electric part of λ'' (model.md §4, dimensionless):
     /// s̄1(λB) − s̄1(λ) + Φ̄²·λ·λ2p².
     pub fn restoring_acceleration(&self, stretch: T, bias_dimless_squared: T) -> T {
         let m = self.material();
@@ -86,7 +86,7 @@ impl<T: Real> Device<T> {
             + bias_dimless_squared * stretch * l2p * l2p
     }
 
-    /// λ'' = restoring − c̄·λ' (MODEL.md §4, dimensionless).
+    /// λ'' = restoring − c̄·λ' (model.md §4, dimensionless).
     pub fn acceleration(&self, state: State<T>, bias_dimless_squared: T) -> T {
         self.restoring_acceleration(state.stretch, bias_dimless_squared)
             - self.damping_dimless() * state.velocity

@@ -4,7 +4,7 @@
 //! the target, `f64` on the host. Data flows one way: the [`model`] (device parameters →
 //! statics → safe region) → [`tuning`] decisions → [`controller`] → [`shell`] and [`drive`];
 //! [`integration`] steps the dynamics; [`table`] reads and writes tuning tables. Equations
-//! cite `MODEL.md` sections.
+//! cite the sections of `docs/model.md` as `model.md §n`.
 #![no_std]
 #![forbid(unsafe_code)]
 // "No panic on any input" checked by the compiler: no unwrap, expect, panic or indexing in

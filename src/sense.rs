@@ -1,4 +1,4 @@
-//! The stretch from the membrane's capacitance (MODEL.md §8, self-sensing): a square probe
+//! The stretch from the membrane's capacitance (model.md §8, self-sensing): a square probe
 //! of ±p volts rides on the bias, its sign flipping every few ticks; the charge the
 //! amplifier delivers over each half period is C·ΔΦ (ΔΦ ≈ ±2p) plus the leakage, the bias's
 //! drift and the motion's Φ·ΔC. Over a block of four halves, each half's charge and voltage

@@ -15,9 +15,9 @@
 //! | 68 + 8·N | 4 | CRC-32 (IEEE 802.3) of every byte before it, u32 |
 //!
 //! Between points the bias is interpolated as Φ² linear in f: Φ² enters the model linearly
-//! (MODEL.md §5), so near zero bias, where f − f(0) ∝ Φ², this is exact to first order.
-//! f(Φ) need not be monotone (MODEL.md §5): the lookup takes the first interval, in rising
-//! bias, that holds the target, which is the smallest bias (MODEL.md §7), as `Tuner::tune`
+//! (model.md §5), so near zero bias, where f − f(0) ∝ Φ², this is exact to first order.
+//! f(Φ) need not be monotone (model.md §5): the lookup takes the first interval, in rising
+//! bias, that holds the target, which is the smallest bias (model.md §7), as `Tuner::tune`
 //! takes; the maker puts f's turning points in as points, so extrema are not cut off.
 
 use core::fmt;
@@ -38,7 +38,7 @@ pub const HEADER_BYTES: usize = 68;
 pub const POINT_BYTES: usize = 8;
 /// The most points a table may hold.
 pub const MAX_POINTS: usize = 1024;
-/// The most times the frequency column may change direction: f(Φ) of MODEL.md §5 turns
+/// The most times the frequency column may change direction: f(Φ) of model.md §5 turns
 /// once or twice at most on the devices tried; more is corruption.
 pub const MAX_TURNS: usize = 4;
 
@@ -324,7 +324,7 @@ impl<'a> Table<'a> {
     }
 
     /// The bias for a target frequency: the first interval, in rising bias, whose two points
-    /// bracket the target (the smallest bias, MODEL.md §7), with Φ² interpolated linearly in
+    /// bracket the target (the smallest bias, model.md §7), with Φ² interpolated linearly in
     /// f between them.
     pub fn bias_volts(&self, target_hz: f32) -> Result<f32, TableError> {
         let mut points = self.each_point();

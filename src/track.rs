@@ -2,7 +2,7 @@
 //!
 //! Over each drive cycle the stretch is fitted as m + A·sin θ + B·cos θ (θ the drive's
 //! phase at the sample). Near the equilibrium the membrane is the linear resonator
-//! λ'' + (ω0/Q)·λ' + ω0²·λ = F·sin Ωt (MODEL.md §5; F from the bias times the AC in the
+//! λ'' + (ω0/Q)·λ' + ω0²·λ = F·sin Ωt (model.md §5; F from the bias times the AC in the
 //! Φ² term of §4), so its response Z = A + jB obeys F/Z = ω0² − Ω² + j·Ω·ω0/Q: one cycle
 //! gives the natural frequency and Q. The drive moves toward the estimate each cycle (a
 //! phase-locked loop): its fixed point is the phase quadrature (A = 0, Ω = ω0 whatever the
@@ -205,7 +205,7 @@ impl Tracker {
     }
 }
 
-/// F/λ̄ of the drive (MODEL.md §4): the Φ² term ε(Φ/H)²·λ·λ2p² per unit mass holds
+/// F/λ̄ of the drive (model.md §4): the Φ² term ε(Φ/H)²·λ·λ2p² per unit mass holds
 /// 2·Φdc·Φac·sin Ωt; in the model's units that is ω_unit²·2·Φ̄dc·Φ̄ac·λ2p², (rad/s)².
 pub fn drive_force_per_stretch(device: &crate::Device<f32>, bias_volts: f32, ac_volts: f32) -> f32 {
     let w = device.rad_per_s_per_unit();

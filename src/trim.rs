@@ -1,6 +1,6 @@
 //! Closed-loop trim (beyond the paper): measure the natural frequency the plant actually
 //! has, from the ring-down after a short voltage pulse, and re-estimate its shear modulus μ
-//! so that the model's f at the applied bias (MODEL.md §5) is the one measured.
+//! so that the model's f at the applied bias (model.md §5) is the one measured.
 
 use core::fmt;
 

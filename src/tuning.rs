@@ -1,5 +1,5 @@
 //! Tuning: the bias on the loading branch that sets a target natural frequency, inside the
-//! safe region with a voltage margin (MODEL.md §7).
+//! safe region with a voltage margin (model.md §7).
 //!
 //! f(λ) need not be monotone, so the allowed part of the branch is cut into monotone pieces
 //! (a scan finds the turning points, golden section refines them) and the first piece that

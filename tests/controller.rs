@@ -63,7 +63,7 @@ fn table_interpolation_is_exact_where_bias_squared_is_linear_in_f() {
     assert_eq!(t.params(), REFERENCE_DEVICE.cast());
 }
 
-/// Issue 12.5. A device whose f first falls, then rises past f0 (MODEL.md §5): its table is
+/// Issue 12.5. A device whose f first falls, then rises past f0 (model.md §5): its table is
 /// made (the turning point is one of its points) and its range is the tunable range (less
 /// the headroom at the top); for targets across it the table's bias lies on the piece
 /// `tune` takes (the smallest bias: below the minimum's bias while f0 is not passed) and
@@ -1806,7 +1806,7 @@ fn the_trim_keeps_its_timeline_and_its_secant() {
     assert!(volts.iter().all(|&v| v <= c.ceiling_volts()));
 }
 
-/// Self-sensing (MODEL.md §8): with no stretch sample, the trim times the ring in the
+/// Self-sensing (model.md §8): with no stretch sample, the trim times the ring in the
 /// amplifier's current. The plant is the model with μ 2% above the device told (so 44.5 Hz
 /// lies in both tunable ranges); the current over each tick is the change of the membrane's
 /// charge C(λ)·Φ, C = ε·L1A·L2·λ²·λ2p²/H (paper eq. 1), written out here from the geometry.

@@ -1,4 +1,4 @@
-//! Fixed-step dynamics (MODEL.md §4, §7): convergence orders, energy, the small-oscillation
+//! Fixed-step dynamics (model.md §4, §7): convergence orders, energy, the small-oscillation
 //! period of §5, the stability guard, and the dynamic safety monitor.
 
 mod common;
@@ -64,7 +64,7 @@ fn convergence_orders() {
 }
 
 /// Energy E = ½λ'² + U(λ) with U = Ws(λ)/μ + Ws(λB)/(μ·r) − ½Φ̄²λ²λ2p² (the potential of
-/// MODEL.md §4's force, from the plain-SI energy) stays bounded for Verlet over 10⁵ steps.
+/// model.md §4's force, from the plain-SI energy) stays bounded for Verlet over 10⁵ steps.
 #[test]
 fn verlet_energy_is_bounded() {
     let p = REFERENCE_DEVICE;
@@ -102,7 +102,7 @@ fn verlet_energy_is_bounded() {
     assert!(late < 1.5 * early, "early {early}, late {late}");
 }
 
-/// As the amplitude → 0 the period is 1/f with f from MODEL.md §5.
+/// As the amplitude → 0 the period is 1/f with f from model.md §5.
 #[test]
 fn small_oscillation_period() {
     let d = reference();

@@ -1,4 +1,4 @@
-//! The reference device of MODEL.md §9 against the figures an independent implementation
+//! The reference device of model.md §9 against the figures an independent implementation
 //! gave (issue 2): f at zero bias 45.9527 Hz; limit `emi` at 9854.73 V, stretch 2.36254,
 //! f 42.7292 Hz; with margin 0, 44 Hz needs 7449.88 V. Six significant figures in f64.
 
@@ -39,7 +39,7 @@ fn forty_four_hertz_with_no_margin() {
 }
 
 /// f32 on the target, against 30-digit values of an independent mpmath evaluation of
-/// MODEL.md (they round to the published figures). Worst case is the tuned
+/// model.md (they round to the published figures). Worst case is the tuned
 /// bias, where f is flat in Φ and f32 rounding of f is amplified (1.2e-6 measured).
 #[test]
 fn f32_accuracy() {

@@ -1,4 +1,4 @@
-//! The six checks of MODEL.md §6 and the limit of the loading branch: each mode's limit
+//! The six checks of model.md §6 and the limit of the loading branch: each mode's limit
 //! meets its own analytic boundary condition, computed here in plain SI.
 
 mod common;
@@ -101,7 +101,7 @@ fn breakdown_at_the_breakdown_field() {
     assert!(rel(field, p.breakdown_field) < 1e-12, "E = {field}");
 }
 
-/// Stretch limit: I1 reaches Jlim in A or B (MODEL.md §6.6 as written: I1 < Jlim).
+/// Stretch limit: I1 reaches Jlim in A or B (model.md §6.6 as written: I1 < Jlim).
 #[test]
 fn stretch_limit_at_jlim() {
     let p = DeviceParams {
@@ -247,7 +247,7 @@ fn states_outside_the_model_are_loss_of_tension_1() {
     }
 }
 
-/// Issue 12.2, MODEL.md §6.3: along a trajectory A's own tension in direction 1,
+/// Issue 12.2, model.md §6.3: along a trajectory A's own tension in direction 1,
 /// s1(λ) − ε(Φ/H)²·λ·λ2p², is checked as well as B's. A state off the branch with A short
 /// (λ = 0.8) and B taut (λB = 3.2), under a voltage 5% past the one that takes A's tension
 /// to zero: every other check holds (by the plain-SI stresses here), and the first failure
@@ -348,7 +348,7 @@ fn a_nan_part_fails_its_margin_in_either_position() {
     }
 }
 
-/// Every margin of MODEL.md §6, on and off the branch, against its plain-SI value (over μ,
+/// Every margin of model.md §6, on and off the branch, against its plain-SI value (over μ,
 /// fields over √(μ/ε)), at states with both membranes taut: A's and B's stresses, the field,
 /// the invariants; the stiffness and the Hessian's definiteness by finite differences of the
 /// plain force law and energy.

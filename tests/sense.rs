@@ -1,5 +1,5 @@
 //! The stretch from the capacitance (`de_resonator::sense`) against a membrane written out
-//! here: the charge C(λ)·Φ of a parallel-plate capacitor (MODEL.md §8, paper eq. 1, from the
+//! here: the charge C(λ)·Φ of a parallel-plate capacitor (model.md §8, paper eq. 1, from the
 //! geometry, not the core's formula), the leakage Φ/R, and Gaussian noise on the current.
 
 mod common;
@@ -183,7 +183,7 @@ mod controller {
 
     /// The monitor checks the stretch from C widened by its uncertainty: a membrane at its
     /// equilibrium passes for 3 s; one 1.55 times as stretched (past 3.29, where the passive
-    /// membrane goes slack at the biases the ramp reaches: MODEL.md §6.3) is a `Limit` fault;
+    /// membrane goes slack at the biases the ramp reaches: model.md §6.3) is a `Limit` fault;
     /// noise so large that the widened estimate leaves the stretches any device could have is a
     /// fault, never a pass.
     #[test]

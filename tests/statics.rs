@@ -1,4 +1,4 @@
-//! Statics and small oscillation (MODEL.md §5) against closed forms and a second method.
+//! Statics and small oscillation (model.md §5) against closed forms and a second method.
 
 mod common;
 
@@ -105,7 +105,7 @@ fn no_fold_while_b_is_taut() {
     }
 }
 
-/// A second method: Φ(λ) puts the plain-SI force of MODEL.md §4 at rest, and ω² from the
+/// A second method: Φ(λ) puts the plain-SI force of model.md §4 at rest, and ω² from the
 /// core matches −∂λ''/∂λ by finite differences of that force.
 #[test]
 fn equilibrium_and_frequency_match_the_force_law() {

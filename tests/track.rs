@@ -1,6 +1,6 @@
 //! Resonance tracking's lock-in (`de_resonator::track`) against the linear resonator's
 //! steady response written out analytically: λ = m + Im[Z·e^{jΩt}], Z = F/(ω0² − Ω² + jΩω0/Q)
-//! (MODEL.md §5 linearised, forced at Ω).
+//! (model.md §5 linearised, forced at Ω).
 
 use de_resonator::track::{Lock, Tracker};
 
@@ -219,7 +219,7 @@ fn tracking_slope_is_a_pending_job_while_driving() {
     assert!(pending_while_driving >= 1, "{pending_while_driving}");
 }
 
-/// The drive's force per unit stretch (`drive_force_per_stretch`) is the part of MODEL.md
+/// The drive's force per unit stretch (`drive_force_per_stretch`) is the part of model.md
 /// §4's λ'' at the drive's frequency per unit λ, from the tests' plain-SI restatement: half
 /// the difference of λ'' at Φdc ± Φac, over λ (the Φ² term is 2·Φdc·Φac·sin Ωt there), on
 /// the reference device and a random one.

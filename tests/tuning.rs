@@ -1,4 +1,4 @@
-//! Tuning (MODEL.md §7): the bias reproduces the target, checked against the plain-SI
+//! Tuning (model.md §7): the bias reproduces the target, checked against the plain-SI
 //! force law; it is the smallest such bias; it lies inside the safe region with the margin.
 
 mod common;
@@ -153,7 +153,7 @@ proptest! {
     #![proptest_config(ProptestConfig::with_cases(300))]
 
     /// The tuned bias reproduces the target (second method: the plain-SI force law of
-    /// MODEL.md §4 is at rest there, and −∂λ''/∂λ gives the target frequency), stays within
+    /// model.md §4 is at rest there, and −∂λ''/∂λ gives the target frequency), stays within
     /// (1 − margin)·Φlimit, and every check holds along the whole path up to it.
     #[test]
     fn tuned_bias_hits_the_target_inside_the_safe_region(

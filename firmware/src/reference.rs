@@ -1,4 +1,4 @@
-//! The reference device (MODEL.md §9), its table and the reference run, compiled in for the
+//! The reference device (model.md §9), its table and the reference run, compiled in for the
 //! on-target checks and counts only (`check`, `count`): the product (`firmware`) takes its
 //! device from the configuration image, and nothing here is linked into it.
 
@@ -7,7 +7,7 @@ use de_resonator::{Amplifier, DeviceParams, Settings, REFERENCE_DEVICE};
 /// The tuning table for the reference device, from `host-sim lut` (tables/reference.bin).
 pub static TABLE: &[u8] = include_bytes!("../../tables/reference.bin");
 
-/// The reference device of MODEL.md §9, in f32.
+/// The reference device of model.md §9, in f32.
 pub fn device() -> DeviceParams<f32> {
     REFERENCE_DEVICE.cast()
 }

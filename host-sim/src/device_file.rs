@@ -1,5 +1,5 @@
 //! Device files: TOML, SI units, flat keys named as the fields of `DeviceParams`; every key
-//! optional, defaulting to the reference device of MODEL.md §9. Unknown keys are an error.
+//! optional, defaulting to the reference device of model.md §9. Unknown keys are an error.
 
 use std::collections::BTreeMap;
 use std::path::Path;

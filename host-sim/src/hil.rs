@@ -100,7 +100,7 @@ pub struct Sensor {
 }
 
 /// The amplifier's current monitor as the controller reads it: the mean over a tick of the
-/// output current (MODEL.md §8), with noise and a quantum.
+/// output current (model.md §8), with noise and a quantum.
 #[derive(Clone, Copy, Debug)]
 pub struct CurrentMonitor {
     /// RMS noise of a tick's mean, A.
@@ -280,7 +280,7 @@ pub struct Sample {
     pub seconds: f64,
     pub stretch: f64,
     pub membrane_volts: f64,
-    /// The amplifier's mean output current over the tick, A (MODEL.md §8).
+    /// The amplifier's mean output current over the tick, A (model.md §8).
     pub current_amps: f64,
 }
 

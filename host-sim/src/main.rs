@@ -40,7 +40,7 @@ enum Command {
     ///
     /// Run a scene: the firmware's controller (the core's, unchanged) tunes and drives the full
     /// plant simulator through its DAC driver, reading the simulated sensor; host-sim checks
-    /// the true plant against MODEL.md §6 at every tick. Prints a short report and writes what
+    /// the true plant against model.md §6 at every tick. Prints a short report and writes what
     /// the scene asks for (a plot, the time history) into --out/<scene name>. Without a scene:
     /// the built-in reference scene (scenes/reference.toml).
     Run(cmd::run::RunArgs),
@@ -64,7 +64,7 @@ enum Command {
     /// Integrate the motion under bias + AC, watched by the safety monitor.
     ///
     /// Integrate the motion from rest under Φ(t) = bias + ac·sin(2π·f·t), watched by the
-    /// dynamic safety monitor (the six checks of MODEL.md §6 at every step).
+    /// dynamic safety monitor (the six checks of model.md §6 at every step).
     Simulate(cmd::simulate::SimulateArgs),
     /// Run the stiff and extreme cases with every core method against the reference.
     ///
@@ -90,7 +90,7 @@ enum Command {
     Report(cmd::precision::PrecisionArgs),
     /// Frequency response under parametric drive: peaks and crossings.
     ///
-    /// Frequency response under parametric drive Φ = bias + ac·sin(2π·f·t) (MODEL.md §7): one
+    /// Frequency response under parametric drive Φ = bias + ac·sin(2π·f·t) (model.md §7): one
     /// run from rest per drive frequency, the amplitude once settled, and the peaks (expected
     /// near f0/2, f0 and 2·f0, f0 the small-oscillation frequency at the bias). Writes
     /// sweep.csv and sweep.svg into --out.

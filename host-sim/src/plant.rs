@@ -1,4 +1,4 @@
-//! The plant: the resonator as it is, not as the controller is told it is. MODEL.md §§2–6
+//! The plant: the resonator as it is, not as the controller is told it is. model.md §§2–6
 //! written out again in SI units and f64, with the extras of §8 a scene switches on: viscous
 //! damping, viscoelastic networks (Zhao–Koh–Suo, several branches), and the amplifier's
 //! bandwidth, slew limit and rail. Its safety checks (§6, with the networks' stresses) are
@@ -44,7 +44,7 @@ pub struct Plant {
     pub params: DeviceParams<f64>,
     pub branches: Vec<Branch>,
     pub amplifier: AmplifierModel,
-    /// The membrane's leakage resistance over time (MODEL.md §8).
+    /// The membrane's leakage resistance over time (model.md §8).
     pub leakage: Leakage,
 }
 
@@ -87,7 +87,7 @@ impl Leakage {
 /// ε0, F/m (CODATA 2018).
 const VACUUM_PERMITTIVITY: f64 = 8.854_187_812_8e-12;
 
-/// Gent nominal stresses (s1, s2) of MODEL.md §3, Pa, and I1 (NaN past lock-up). With
+/// Gent nominal stresses (s1, s2) of model.md §3, Pa, and I1 (NaN past lock-up). With
 /// q = λ1²λ2² and D = q·(1 − (I1 − 3)/Jlim) = q·(1 − (λ1² + λ2² − 3)/Jlim) − 1/Jlim:
 /// s1 = μ(λ1²q − 1)/(λ1·D) and s2 = μ(λ2²q − 1)/(λ2·D), one division each. The dynamics'
 /// right-hand side waits on this (its time is the chain of divisions), so it has no more.
@@ -120,7 +120,7 @@ fn network(modulus: f64, l1: f64, l2: f64, x1: f64, x2: f64) -> (f64, f64) {
     )
 }
 
-/// dξ1/dt, dξ2/dt of one branch (MODEL.md §8).
+/// dξ1/dt, dξ2/dt of one branch (model.md §8).
 fn flow(b: &Branch, l1: f64, l2: f64, x1: f64, x2: f64) -> (f64, f64) {
     let rate = 1.0 / (6.0 * b.relaxation_seconds);
     let (a1, a2) = ((l1 / x1).powi(2), (l2 / x2).powi(2));
@@ -132,7 +132,7 @@ fn flow(b: &Branch, l1: f64, l2: f64, x1: f64, x2: f64) -> (f64, f64) {
 }
 
 impl Plant {
-    /// M = m·L1A + ρ·L2·H·L1A·L1/3 (MODEL.md §4), kg.
+    /// M = m·L1A + ρ·L2·H·L1A·L1/3 (model.md §4), kg.
     pub fn mass(&self) -> f64 {
         let p = &self.params;
         let l1 = p.length_active + p.length_passive;
@@ -144,7 +144,7 @@ impl Plant {
         self.params.relative_permittivity * VACUUM_PERMITTIVITY
     }
 
-    /// λB from λ (MODEL.md §2), as λB = L1·λ1p/L1B − (L1A/L1B)·λ: the divisions are of
+    /// λB from λ (model.md §2), as λB = L1·λ1p/L1B − (L1A/L1B)·λ: the divisions are of
     /// constants, off the right-hand side's chain.
     pub fn passive_stretch(&self, stretch: f64) -> f64 {
         let p = &self.params;
@@ -166,7 +166,7 @@ impl Plant {
         (s1, s2)
     }
 
-    /// λ'' at state `y` under `volts` on A (MODEL.md §4 with the networks), 1/s².
+    /// λ'' at state `y` under `volts` on A (model.md §4 with the networks), 1/s².
     fn acceleration(&self, y: &Vector, volts: f64) -> f64 {
         let p = &self.params;
         let (l, v) = (y[0], y[1]);
@@ -213,7 +213,7 @@ impl Plant {
     }
 
     /// The voltage on the membrane in state `y` with `input` volts at the amplifier's input.
-    /// Membrane A's capacitance at stretch λ (λ2 held at λ2p), MODEL.md §8 (paper eq. 1):
+    /// Membrane A's capacitance at stretch λ (λ2 held at λ2p), model.md §8 (paper eq. 1):
     /// C = ε·L1A·L2·λ²·λ2p²/H, F.
     pub fn capacitance(&self, stretch: f64) -> f64 {
         let p = &self.params;
@@ -230,7 +230,7 @@ impl Plant {
 
     /// The amplifier's mean output current over an interval from (λ, Φ) at its start to
     /// (λ, Φ) at its end, `seconds` long, ending at `at_seconds`: the charge's change, dQ/dt
-    /// with Q = C(λ)·Φ, plus the leakage at the mean voltage (MODEL.md §8), A.
+    /// with Q = C(λ)·Φ, plus the leakage at the mean voltage (model.md §8), A.
     pub fn mean_current_amps(
         &self,
         from: (f64, f64),
@@ -268,7 +268,7 @@ impl Plant {
         self.stiffness(y, volts).sqrt() / std::f64::consts::TAU
     }
 
-    /// The six checks of MODEL.md §6 at state `y` under `volts`, with the networks' stresses
+    /// The six checks of model.md §6 at state `y` under `volts`, with the networks' stresses
     /// (frozen): the first that fails, if any.
     pub fn first_failure(&self, y: &Vector, volts: f64) -> Option<FailureMode> {
         let p = &self.params;

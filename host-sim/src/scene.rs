@@ -1,5 +1,5 @@
 //! Scenes: a TOML file names the device the controller is told about, the plant as it is
-//! (mismatch and the extras of MODEL.md §8), the amplifier, the sensor, the controller's
+//! (mismatch and the extras of model.md §8), the amplifier, the sensor, the controller's
 //! settings, faults to inject, and what to output. `host-sim run [SCENE]`.
 
 use std::path::{Path, PathBuf};
@@ -64,7 +64,7 @@ struct PlantFile {
     bar_mass_scale: f64,
     #[serde(default = "one")]
     prestretch_scale: f64,
-    /// `vhb-4910`: the equilibrium modulus and three branches of MODEL.md §9.
+    /// `vhb-4910`: the equilibrium modulus and three branches of model.md §9.
     preset: Option<String>,
     /// Viscous damping c, N·s; or a quality factor at the target frequency.
     damping: Option<f64>,
@@ -216,7 +216,7 @@ pub struct Scene {
     pub plot: bool,
 }
 
-/// The VHB 4910 data of MODEL.md §9 (Wang et al. 2016): equilibrium modulus, branches.
+/// The VHB 4910 data of model.md §9 (Wang et al. 2016): equilibrium modulus, branches.
 const VHB_4910: (f64, [(f64, f64); 3]) = (15e3, [(26.1e3, 0.61), (26.5e3, 6.6), (10.8e3, 61.0)]);
 
 /// Parse a scene's text. Errors are one line.

@@ -372,7 +372,7 @@ impl ODE<f64, [f64; 2]> for Motion<'_> {
             .acceleration(state, self.drive.bias_dimless_squared_at(tau));
     }
 
-    /// ∂(λ', λ'')/∂(λ, λ'): the local stiffness of MODEL.md §5 and the damping, exact.
+    /// ∂(λ', λ'')/∂(λ, λ'): the local stiffness of model.md §5 and the damping, exact.
     fn jacobian(&self, tau: f64, y: &[f64; 2], j: &mut Matrix<f64>) {
         let p2 = self.drive.bias_dimless_squared_at(tau);
         j[(0, 0)] = 0.0;
@@ -718,7 +718,7 @@ mod tests {
     use de_resonator::REFERENCE_DEVICE;
 
     /// Closed form first: at zero bias, small amplitude, the reference follows
-    /// λ* + a·cos(ωt) with ω from MODEL.md §5, to the level of the neglected nonlinearity.
+    /// λ* + a·cos(ωt) with ω from model.md §5, to the level of the neglected nonlinearity.
     #[test]
     fn reference_matches_the_small_oscillation_closed_form() {
         let device = Device::new(REFERENCE_DEVICE).unwrap();

@@ -1,4 +1,4 @@
-//! `host-sim sweep`: the frequency response under parametric drive (MODEL.md §7). Each drive
+//! `host-sim sweep`: the frequency response under parametric drive (model.md §7). Each drive
 //! frequency is a run from rest at the bias's equilibrium with the core's RK4 in f64, long
 //! enough for the response to settle; its amplitude is half the peak-to-peak stretch over the
 //! last quarter. Peaks are local maxima that stand out from the valleys on both sides.
@@ -29,7 +29,7 @@ pub struct Point {
     /// Half the peak-to-peak stretch over the last quarter of the run; `None` when the run
     /// stopped (the motion left the model's range: no amplitude was measured).
     pub amplitude: Option<f64>,
-    /// The first check of MODEL.md §6 that failed along the run, and when (s).
+    /// The first check of model.md §6 that failed along the run, and when (s).
     pub first_limit: Option<(FailureMode, f64)>,
     /// Why the run ended early (after the monitor's crossing: the motion left the range in
     /// which the model is defined).
@@ -51,7 +51,7 @@ pub const MIN_PROMINENCE: f64 = 2.0;
 /// A whole sweep's result.
 #[derive(Clone, Debug)]
 pub struct Response {
-    /// Small-oscillation natural frequency at the bias (MODEL.md §5), Hz.
+    /// Small-oscillation natural frequency at the bias (model.md §5), Hz.
     pub natural_frequency_hz: f64,
     pub points: Vec<Point>,
     pub peaks: Vec<Peak>,

@@ -121,7 +121,7 @@ fn tune_json_with_no_margin() {
     rounds_to(&v["natural_frequency_hz"], 44.0, 9);
 }
 
-/// A neo-Hookean device from a file: f at zero bias in closed form (MODEL.md §5),
+/// A neo-Hookean device from a file: f at zero bias in closed form (model.md §5),
 /// ω² = μ·L2·H·(1 + 3λ1p⁻⁴λ2p⁻²)·(1 + L1A/L1B)/M.
 #[test]
 fn device_file_changes_the_device() {
@@ -390,7 +390,7 @@ fn out_dir(name: &str) -> String {
     dir.to_str().unwrap().to_string()
 }
 
-/// The frequency response of MODEL.md §7 on the reference device: resonance where the drive
+/// The frequency response of model.md §7 on the reference device: resonance where the drive
 /// meets the natural frequency f0 at the bias (Φ·Φ forcing at Ω), at f0/2 (the Φac² term
 /// forces at 2Ω) and at 2·f0 (principal parametric resonance, the stiffness pumped at Ω).
 #[test]
@@ -777,7 +777,7 @@ fn sweep_counts_stopped_points_and_takes_no_peak_from_them() {
 }
 
 /// A plant softer than the device told (μ halved): its limit is √0.5 of the device's (Φ
-/// scales with √μ, MODEL.md §5), below the bias tuned for the device; the report gives that
+/// scales with √μ, model.md §5), below the bias tuned for the device; the report gives that
 /// limit and a negative margin, not 0% "below" a limit searched upward from the bias.
 #[test]
 fn a_bias_past_a_softer_plants_limit_shows_a_negative_margin() {

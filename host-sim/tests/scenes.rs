@@ -54,7 +54,7 @@ fn plant_statics_and_limit_match_the_published_figures() {
     assert!((volts - 9854.73).abs() < 0.01, "{volts}");
 }
 
-/// MODEL.md §6.3 in the plant: A short (λ = 0.8) and B taut, under a voltage that puts A's
+/// model.md §6.3 in the plant: A short (λ = 0.8) and B taut, under a voltage that puts A's
 /// tension along 1 just below zero (its value from the core's stress, independent of the
 /// plant's code): loss of tension 1; at 0.95 of that voltage, safe. Past the far end
 /// (λB < 0) loss of tension 1 too.

@@ -1,6 +1,6 @@
 /* SUNDIALS CVODE's BDF (variable order 1-5, Newton with a dense difference-quotient
  * Jacobian) on the scene `host-sim simulate --method reference-bdf` runs: the reference
- * device in MODEL.md §4's dimensionless form (restated as in scene.py), from the
+ * device in model.md §4's dimensionless form (restated as in scene.py), from the
  * pre-stretch at rest, output at host-sim's sample times.
  *
  * Usage: cvode_scene BIAS_V AC_V DRIVE_HZ DAMPING_NS DURATION_S STEP_S TOLERANCE RUNS

@@ -1,10 +1,10 @@
-"""The reference device's equations in MODEL.md §4's dimensionless form, restated for the
+"""The reference device's equations in model.md §4's dimensionless form, restated for the
 peers of `scripts/bench-peers.sh` (sharing no code with the Rust core). Time τ = t/T0,
 T0² = M/(μ·L2·H); Φ̄ = (Φ/H)·√(ε/μ); c̄ = c·T0/M; d²λ/dτ² = s̄1(λB) − s̄1(λ) + Φ̄²λλ2p² − c̄λ'.
 """
 import math
 
-# The reference device of MODEL.md §9 (devices/reference.toml).
+# The reference device of model.md §9 (devices/reference.toml).
 MU, JLIM, EPS = 45e3, 120.0, 4.7 * 8.8541878128e-12
 RHO, H, L1A, L1B, L2, BAR = 960.0, 1.0e-3, 20e-3, 20e-3, 40e-3, 2e-3
 L1P, L2P = 2.0, 2.0
@@ -20,7 +20,7 @@ def dimensionless(bias_volts, ac_volts, drive_hz, damping):
 
 
 def s1(l1):
-    """Gent s̄1 at (λ1, λ2p) (MODEL.md §3)."""
+    """Gent s̄1 at (λ1, λ2p) (model.md §3)."""
     i1 = l1 * l1 + L2P * L2P + 1.0 / (l1 * l1 * L2P * L2P)
     return (l1 - 1.0 / (l1 ** 3 * L2P * L2P)) / (1.0 - (i1 - 3.0) / JLIM)
 

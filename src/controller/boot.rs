@@ -1,6 +1,6 @@
 //! The boot stages, in order: `from_table` (device, settings, table), `cross_check` (the
-//! direct solve on the chip, MODEL.md §6–§7) and `check_plan` (the plan through the model,
-//! MODEL.md §6). A firmware may take the first alone, or the first two.
+//! direct solve on the chip, model.md §6–§7) and `check_plan` (the plan through the model,
+//! model.md §6). A firmware may take the first alone, or the first two.
 
 use super::fault::Fault;
 use super::plan::Plan;

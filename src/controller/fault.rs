@@ -65,7 +65,7 @@ pub enum Fault {
         commanded_volts: f32,
         measured_volts: f32,
     },
-    /// The measured motion crossed a limit of MODEL.md §6.
+    /// The measured motion crossed a limit of model.md §6.
     Limit { mode: FailureMode, tick: u32 },
     /// The DAC bus failed (reported by the IO side).
     Bus,

@@ -5,10 +5,10 @@
 //! - `from_table`: the device parameters, the settings, the tuning table (CRC, order, made
 //!   for this device); the bias for the target from the table, and commands capped below the
 //!   table's top, which its maker put at (1 − margin)·limit;
-//! - `cross_check`: the limit and the bias by the core's direct solve on the chip (MODEL.md
+//! - `cross_check`: the limit and the bias by the core's direct solve on the chip (model.md
 //!   §6–§7), which must agree with the table; the cap becomes (1 − margin)·limit;
 //! - `check_plan`: the whole plan (ramp at a bounded slew rate, hold, AC drive) run through
-//!   the fixed-step model under the safety monitor (MODEL.md §6).
+//!   the fixed-step model under the safety monitor (model.md §6).
 //!
 //! Then `tick`, at a fixed rate, gives the DAC code for that tick; every code passes one
 //! final check (`gate`). The cap in force is the lowest of three: the ceiling fixed at boot
@@ -136,7 +136,7 @@ pub struct Controller {
     plan: Plan,
     tick: u32,
     watch: Watch,
-    /// The leakage watch's sums (MODEL.md §8).
+    /// The leakage watch's sums (model.md §8).
     leakage: Leakage,
     /// The voltage commanded at the last tick, V.
     last_volts: f32,
@@ -287,7 +287,7 @@ impl Controller {
     }
 
     /// One tick: the code to write now. `inputs` are this tick's measurements: the stretch
-    /// is checked (`watch`) against MODEL.md §6 at this tick's voltage, and for a stuck or
+    /// is checked (`watch`) against model.md §6 at this tick's voltage, and for a stuck or
     /// implausible sensor; the amplifier's output against the last command.
     pub fn tick(&mut self, inputs: Inputs) -> Output {
         if matches!(self.state, State::Faulted(_)) {
@@ -465,7 +465,7 @@ impl Controller {
 
     /// A fault (the tick's own, or one the IO side reports): the output goes down from the
     /// last command at the slew rate, no faster (a step down rings the membrane below its
-    /// equilibrium, toward loss of tension, MODEL.md §6), then stays at 0 V until a new boot.
+    /// equilibrium, toward loss of tension, model.md §6), then stays at 0 V until a new boot.
     /// A dead bus (`Fault::Bus`) cannot ramp: 0 V at once (the IO side drops the enable
     /// line). Only the first fault is latched and said.
     pub fn fault(&mut self, fault: Fault) -> Output {
@@ -569,7 +569,7 @@ impl Controller {
     }
 
     /// Record this tick's sample; at the window's end, hand the solve out. From the current,
-    /// the ring is its running sum, the charge (Q = C(λ)·Φ at a constant bias, MODEL.md §8,
+    /// the ring is its running sum, the charge (Q = C(λ)·Φ at a constant bias, model.md §8,
     /// so it follows λ): the sum turns the monitor's noise into a slow wander, which the
     /// crossings' fit averages out, where the current's own crossings would multiply. The
     /// window's first tenth of a target period is skipped (NaN): the step back from the

@@ -1,6 +1,6 @@
 //! The plan: the voltage at every tick (ramp from a voltage to the bias, hold, with the
 //! trim's pulse, then the AC drive), its range against [0, cap], and its run through the
-//! model under the monitor (MODEL.md §6).
+//! model under the monitor (model.md §6).
 
 use core::f32::consts::TAU;
 

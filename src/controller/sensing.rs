@@ -1,6 +1,6 @@
 //! The stretch from the capacitance in the tick (feature `probe`, `crate::sense`): each
 //! tick's current and voltage go to the probe's lock-in; each window's estimate, widened by
-//! `PROBE_SIGMAS` standard errors, is checked against MODEL.md §6 for the device flashed and
+//! `PROBE_SIGMAS` standard errors, is checked against model.md §6 for the device flashed and
 //! the trim's estimate, one check a tick (the tick's budget).
 
 use super::fault::Fault;
@@ -24,7 +24,7 @@ pub(super) struct Sensing {
 enum Check {
     /// A number, inside the stretches a device could have (`Device::plausible_stretch`).
     Plausible,
-    /// An end of the widened interval (low: false) inside MODEL.md §6 for the device flashed
+    /// An end of the widened interval (low: false) inside model.md §6 for the device flashed
     /// (true) or the trim's estimate.
     Limit { high: bool, flashed: bool },
 }

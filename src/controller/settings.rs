@@ -48,7 +48,7 @@ pub struct Settings {
     /// Trim again after this long of AC drive, s (`None`: once): for a plant that drifts,
     /// as a viscoelastic membrane creeps. The AC pauses while the ring is measured.
     pub trim_every_seconds: Option<f32>,
-    /// The leakage watch (MODEL.md §8): the membrane's leakage resistance, from the DC part
+    /// The leakage watch (model.md §8): the membrane's leakage resistance, from the DC part
     /// of the amplifier's current against the voltage over each `LEAKAGE_WINDOW_SECONDS` at
     /// a steady bias, must stay above this, Ω (`None`: no watch). A falling leakage
     /// resistance is a precursor of breakdown. Needs the current monitor.
@@ -64,7 +64,7 @@ pub struct Settings {
     pub track_seconds: Option<f32>,
     /// The stretch from the capacitance (feature `probe`, `crate::sense`): a square probe of
     /// this amplitude, V, rides on the bias (`None`: off). The current monitor's lock-in on
-    /// it gives λ with its uncertainty, checked against MODEL.md §6 widened by it. Off while
+    /// it gives λ with its uncertainty, checked against model.md §6 widened by it. Off while
     /// the trim measures a ring.
     pub probe_volts: Option<f32>,
     /// The probe's frequency, Hz: half the tick rate over a whole number (its sign flips

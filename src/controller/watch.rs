@@ -1,5 +1,5 @@
 //! What the controller measures each tick (`Inputs`) and the checks on it: the stretch
-//! sample (a number, one a device could give, not stuck, inside MODEL.md §6) and the
+//! sample (a number, one a device could give, not stuck, inside model.md §6) and the
 //! amplifier's monitored output against the last command.
 
 use super::fault::Fault;
@@ -19,7 +19,7 @@ pub struct Inputs {
     /// The amplifier's monitor output, V.
     pub amplifier_volts: Option<f32>,
     /// The amplifier's output current, A, averaged over the tick (its current monitor).
-    /// At a constant bias it is Φ·C'(λ)·dλ/dt plus the leakage (MODEL.md §8, the electrical
+    /// At a constant bias it is Φ·C'(λ)·dλ/dt plus the leakage (model.md §8, the electrical
     /// port): a ring in it has the stretch's frequency. The trim measures it when there is
     /// no stretch sample (self-sensing).
     pub current_amps: Option<f32>,
@@ -74,7 +74,7 @@ pub(super) enum Ring {
 /// seconds.
 pub const LEAKAGE_WINDOW_SECONDS: f32 = 1.0;
 
-/// The leakage watch's sums over its window at a steady bias (MODEL.md §8): the current's
+/// The leakage watch's sums over its window at a steady bias (model.md §8): the current's
 /// DC part against the voltage is the leakage conductance.
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct Leakage {
@@ -194,7 +194,7 @@ impl Watch {
 
     /// A stretch sample at tick `k` under `volts`: a number (`Sensor`), one a device could
     /// give (`SensorImplausible`), not the same `stuck_samples` times in a row (`SensorStuck`;
-    /// `None`: no such check), and inside MODEL.md §6 for the device flashed and for the
+    /// `None`: no such check), and inside model.md §6 for the device flashed and for the
     /// trim's estimate, if any (`Limit`; a state outside the model is loss of tension 1).
     pub(super) fn stretch(
         &mut self,

@@ -1,5 +1,5 @@
 //! Device parameters in SI units, their validation, and the dimensionless model they give
-//! (MODEL.md §§1–4, §9).
+//! (model.md §§1–4, §9).
 
 use core::fmt;
 
@@ -10,7 +10,7 @@ use crate::real::Real;
 /// Vacuum permittivity ε0 in F/m (CODATA 2018).
 pub const VACUUM_PERMITTIVITY: f64 = 8.854_187_812_8e-12;
 
-/// The parameters of a resonator, SI units (MODEL.md §1). Field names are the device file's keys.
+/// The parameters of a resonator, SI units (model.md §1). Field names are the device file's keys.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct DeviceParams<T> {
@@ -38,11 +38,11 @@ pub struct DeviceParams<T> {
     pub prestretch_1: T,
     /// λ2p.
     pub prestretch_2: T,
-    /// c, N·s: viscous damping of MODEL.md §4.
+    /// c, N·s: viscous damping of model.md §4.
     pub damping: T,
 }
 
-/// The reference device of MODEL.md §9 (VHB-4910-like).
+/// The reference device of model.md §9 (VHB-4910-like).
 pub const REFERENCE_DEVICE: DeviceParams<f64> = DeviceParams {
     shear_modulus: 45.0e3,
     jlim: Some(120.0),
@@ -138,7 +138,7 @@ pub enum Problem {
     NoTension2AtZeroBias,
     /// The pre-stretch already reaches the stretch limit: needs I1(λ1p, λ2p) < Jlim.
     StretchLimitAtZeroBias,
-    /// A check of MODEL.md §6 already fails at zero bias (a guard behind the specific checks
+    /// A check of model.md §6 already fails at zero bias (a guard behind the specific checks
     /// above; the field named is the likeliest cause).
     UnsafeAtZeroBias { mode: FailureMode },
     /// The parameters are finite but, together, give a scale that is zero or not finite.
@@ -196,7 +196,7 @@ impl fmt::Display for ParamError {
     }
 }
 
-/// A validated device: the dimensionless model of MODEL.md §4 and the scales back to SI.
+/// A validated device: the dimensionless model of model.md §4 and the scales back to SI.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Device<T> {
@@ -305,7 +305,7 @@ impl<T: Real> DeviceParams<T> {
         *slot = value;
     }
 
-    /// Effective mass M = m·L1A + ρ·L2·H·L1A·L1/3 (MODEL.md §4), kg·m.
+    /// Effective mass M = m·L1A + ρ·L2·H·L1A·L1/3 (model.md §4), kg·m.
     pub fn effective_mass(&self) -> T {
         let l1 = self.length_active + self.length_passive;
         self.bar_mass * self.length_active
@@ -317,7 +317,7 @@ impl<T: Real> DeviceParams<T> {
         self.relative_permittivity * T::of(VACUUM_PERMITTIVITY)
     }
 
-    /// Membrane A's capacitance per λ², F: C(λ) = this·λ² (MODEL.md §8, paper eq. 1:
+    /// Membrane A's capacitance per λ², F: C(λ) = this·λ² (model.md §8, paper eq. 1:
     /// C = ε·L1A·L2·λ²·λ2p²/H, λ2 held at λ2p).
     pub fn farads_per_stretch_squared(&self) -> T {
         self.permittivity()
@@ -328,7 +328,7 @@ impl<T: Real> DeviceParams<T> {
             / self.thickness
     }
 
-    /// Membrane A's capacitance at stretch λ, F (MODEL.md §8).
+    /// Membrane A's capacitance at stretch λ, F (model.md §8).
     pub fn capacitance_farads(&self, stretch: T) -> T {
         self.farads_per_stretch_squared() * stretch * stretch
     }
@@ -473,7 +473,7 @@ impl<T: Real> Device<T> {
         self.volts_per_unit
     }
 
-    /// Rad/s per unit of dimensionless angular frequency (1/T0, MODEL.md §4).
+    /// Rad/s per unit of dimensionless angular frequency (1/T0, model.md §4).
     pub fn rad_per_s_per_unit(&self) -> T {
         self.rad_per_s_per_unit
     }
@@ -488,7 +488,7 @@ impl<T: Real> Device<T> {
         &self.at_prestretch
     }
 
-    /// Dimensionless damping c̄ = c·T0/M (MODEL.md §4).
+    /// Dimensionless damping c̄ = c·T0/M (model.md §4).
     pub fn damping_dimless(&self) -> T {
         self.damping_dimless
     }

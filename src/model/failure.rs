@@ -1,8 +1,8 @@
-//! The ways the resonator fails (MODEL.md §6): a leaf every other piece of the model names.
+//! The ways the resonator fails (model.md §6): a leaf every other piece of the model names.
 
 use core::fmt;
 
-/// A way the resonator fails (MODEL.md §6), in the order the checks are listed there.
+/// A way the resonator fails (model.md §6), in the order the checks are listed there.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum FailureMode {
@@ -23,7 +23,7 @@ pub enum FailureMode {
 }
 
 impl FailureMode {
-    /// All modes, in the order of MODEL.md §6 (and of [`Margins::values`]).
+    /// All modes, in the order of model.md §6 (and of [`Margins::values`]).
     pub const ALL: [FailureMode; 7] = [
         FailureMode::DeviceInstability,
         FailureMode::Emi,

@@ -1,4 +1,4 @@
-//! Ideal dielectric with Gent elasticity (MODEL.md §3), in units of the shear modulus μ.
+//! Ideal dielectric with Gent elasticity (model.md §3), in units of the shear modulus μ.
 //!
 //! Every stress and stiffness here is divided by μ, so the numbers stay near 1 in `f32`.
 //! Neo-Hookean is the Gent model with `Jlim = ∞`, held as `1/Jlim = 0`.
@@ -60,7 +60,7 @@ impl<T: Real> Gent<T> {
         T::one() - (Self::first_invariant(l1, l2) - T::of(3.0)) * self.inv_jlim
     }
 
-    /// Free energy `Ws/μ` (MODEL.md §3).
+    /// Free energy `Ws/μ` (model.md §3).
     pub fn energy(&self, l1: T, l2: T) -> T {
         if self.inv_jlim == T::zero() {
             (Self::first_invariant(l1, l2) - T::of(3.0)) * T::of(0.5)
@@ -69,7 +69,7 @@ impl<T: Real> Gent<T> {
         }
     }
 
-    /// Nominal stress `s1/μ = ∂(Ws/μ)/∂λ1` (MODEL.md §3).
+    /// Nominal stress `s1/μ = ∂(Ws/μ)/∂λ1` (model.md §3).
     pub fn stress_1(&self, l1: T, l2: T) -> T {
         (l1 - T::one() / (l1 * l1 * l1 * l2 * l2)) / self.softening(l1, l2)
     }
@@ -114,7 +114,7 @@ impl<T: Real> Gent<T> {
         (dh * gb + hb * di1 * self.inv_jlim) / (ga * gb)
     }
 
-    /// Nominal stress `s2/μ = ∂(Ws/μ)/∂λ2` (MODEL.md §3).
+    /// Nominal stress `s2/μ = ∂(Ws/μ)/∂λ2` (model.md §3).
     pub fn stress_2(&self, l1: T, l2: T) -> T {
         self.stress_1(l2, l1)
     }
@@ -137,7 +137,7 @@ impl<T: Real> Gent<T> {
     }
 
     /// Hessian of the free energy under voltage control, `F/μ = Ws/μ − ½·Φ̄²·λ1²·λ2²`
-    /// (MODEL.md §6.2), with Φ̄ = (Φ/H)·√(ε/μ).
+    /// (model.md §6.2), with Φ̄ = (Φ/H)·√(ε/μ).
     pub fn hessian_under_bias(&self, l1: T, l2: T, bias_dimless_squared: T) -> Hessian<T> {
         let p2 = bias_dimless_squared;
         let h = self.hessian(l1, l2);
@@ -158,7 +158,7 @@ impl<T: Real> Gent<T> {
         (T::one() + T::of(3.0) * c * inv_l1_sq) / g + T::of(2.0) * self.inv_jlim * h1 * h1 / (g * g)
     }
 
-    /// Stretch-limit margin `1 − I1/Jlim`: the check `I1 < Jlim` of MODEL.md §6.6
+    /// Stretch-limit margin `1 − I1/Jlim`: the check `I1 < Jlim` of model.md §6.6
     /// (always 1 for neo-Hookean).
     pub fn lock_up_margin(&self, l1: T, l2: T) -> T {
         T::one() - Self::first_invariant(l1, l2) * self.inv_jlim

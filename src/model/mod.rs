@@ -1,4 +1,4 @@
-//! The model of MODEL.md §§1–6, in one place: the device's parameters and scales
+//! The model of model.md §§1–6, in one place: the device's parameters and scales
 //! (`device`), the material (`material`), the loading branch and small oscillation
 //! (`statics`), the safe region (`safety`), and the failure modes they name (`failure`, a
 //! leaf). The parameters' validation asks the safe region whether the device is safe at zero

@@ -1,4 +1,4 @@
-//! The safe region: the six failure checks of MODEL.md §6 and the limit of the loading branch.
+//! The safe region: the six failure checks of model.md §6 and the limit of the loading branch.
 
 pub use super::failure::FailureMode;
 use crate::device::Device;
@@ -17,7 +17,7 @@ pub struct Margins<T> {
 }
 
 impl<T: Real> Margins<T> {
-    /// The first check (in MODEL.md order) that fails; NaN counts as a failure.
+    /// The first check (in model.md order) that fails; NaN counts as a failure.
     pub fn first_failure(&self) -> Option<FailureMode> {
         FailureMode::ALL
             .into_iter()
@@ -46,13 +46,13 @@ impl<T: Real> Margins<T> {
 
 impl<T: Real> Device<T> {
     /// Whether the model is defined at stretch λ: both membranes have length, λ > 0 and
-    /// λB > 0 (MODEL.md §6.3). Outside it, stresses are not stresses (s1 of a negative
+    /// λB > 0 (model.md §6.3). Outside it, stresses are not stresses (s1 of a negative
     /// stretch comes out positive), so no check may pass there.
     pub fn in_model(&self, stretch: T) -> bool {
         stretch > T::zero() && self.passive_stretch(stretch) > T::zero()
     }
 
-    /// The six checks of MODEL.md §6 at stretch λ under the dimensionless bias Φ̄²
+    /// The six checks of model.md §6 at stretch λ under the dimensionless bias Φ̄²
     /// (on or off equilibrium: the dynamic monitor uses the same checks). §6.3 checks the
     /// tension in direction 1 of both B and A (A's less the electrostatic stress: the two
     /// differ along a trajectory by the bars' inertia). Outside the model (see
@@ -89,7 +89,7 @@ impl<T: Real> Device<T> {
         }
     }
 
-    /// The first check (in MODEL.md order) that fails at stretch λ under Φ̄²; loss of
+    /// The first check (in model.md order) that fails at stretch λ under Φ̄²; loss of
     /// tension 1 for a state outside the model.
     pub fn first_failure(&self, stretch: T, bias_dimless_squared: T) -> Option<FailureMode> {
         if !self.in_model(stretch) {
@@ -108,7 +108,7 @@ impl<T: Real> Device<T> {
     /// stress and invariant is its value at the pre-stretch plus a difference factored by
     /// δ, so a limit just past the pre-stretch is found to f32's relative precision in δ,
     /// not to one unit of λ's last place. On the branch A's tension in direction 1 equals
-    /// B's (that is the equilibrium, MODEL.md §5), so B's stands for both.
+    /// B's (that is the equilibrium, model.md §5), so B's stands for both.
     pub fn margins_on_branch_at(&self, offset: T) -> Margins<T> {
         let m = self.material();
         let (l1p, l2p) = (self.prestretch_1(), self.prestretch_2());
@@ -264,8 +264,8 @@ pub struct Crossing<T> {
     pub stretch: T,
 }
 
-/// The dynamic safety monitor: the six checks of MODEL.md §6 at every observed state
-/// λ(t), Φ(t), remembering the first crossing (MODEL.md §6, last paragraph).
+/// The dynamic safety monitor: the six checks of model.md §6 at every observed state
+/// λ(t), Φ(t), remembering the first crossing (model.md §6, last paragraph).
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Monitor<T> {

@@ -1,4 +1,4 @@
-//! Equilibrium on the loading branch and small oscillation about it (MODEL.md §5).
+//! Equilibrium on the loading branch and small oscillation about it (model.md §5).
 //!
 //! The branch is parametrised by the stretch λ = λ1A: the bias is explicit in λ,
 //! Φ(λ) = H·√((s1(λ) − s1(λB))/(ε·λ·λ2p²)). These are the raw physics, defined beyond the
@@ -29,7 +29,7 @@ fn two_pi<T: Real>() -> T {
 }
 
 impl<T: Real> Device<T> {
-    /// λB = (L1·λ1p − L1A·λ)/L1B, the passive membrane's stretch (MODEL.md §2).
+    /// λB = (L1·λ1p − L1A·λ)/L1B, the passive membrane's stretch (model.md §2).
     pub fn passive_stretch(&self, stretch: T) -> T {
         // Written so that λ = λ1p gives λB = λ1p exactly (and Φ = 0, not a rounding NaN).
         self.prestretch_1() + self.length_ratio() * (self.prestretch_1() - stretch)
@@ -65,7 +65,7 @@ impl<T: Real> Device<T> {
     }
 
     /// Dimensionless ω² = s̄1'(λ) + (L1A/L1B)·s̄1'(λB) − Φ̄²·λ2p² at stretch λ under Φ̄²
-    /// (MODEL.md §5): the local stiffness, also away from equilibrium.
+    /// (model.md §5): the local stiffness, also away from equilibrium.
     pub fn stiffness_dimless(&self, stretch: T, bias_dimless_squared: T) -> T {
         let m = self.material();
         let l2p = self.prestretch_2();

@@ -1,4 +1,4 @@
-//! An independent, plain-SI restatement of MODEL.md §§2–4 for the tests: no dimensionless
+//! An independent, plain-SI restatement of model.md §§2–4 for the tests: no dimensionless
 //! scaling, no shared code with the core beyond the parameter struct.
 #![allow(dead_code)]
 
@@ -14,7 +14,7 @@ pub fn first_invariant(l1: f64, l2: f64) -> f64 {
     l1 * l1 + l2 * l2 + 1.0 / (l1 * l1 * l2 * l2)
 }
 
-/// Free energy density Ws, J/m³ (MODEL.md §3).
+/// Free energy density Ws, J/m³ (model.md §3).
 pub fn energy(p: &DeviceParams<f64>, l1: f64, l2: f64) -> f64 {
     let x = first_invariant(l1, l2) - 3.0;
     match p.jlim {
@@ -43,18 +43,18 @@ pub fn length_1(p: &DeviceParams<f64>) -> f64 {
     p.length_active + p.length_passive
 }
 
-/// λB from the fixed total length (MODEL.md §2).
+/// λB from the fixed total length (model.md §2).
 pub fn passive_stretch(p: &DeviceParams<f64>, l: f64) -> f64 {
     (length_1(p) * p.prestretch_1 - p.length_active * l) / p.length_passive
 }
 
-/// M = m·L1A + ρ·L2·H·L1A·L1/3, kg·m (MODEL.md §4).
+/// M = m·L1A + ρ·L2·H·L1A·L1/3, kg·m (model.md §4).
 pub fn effective_mass(p: &DeviceParams<f64>) -> f64 {
     p.bar_mass * p.length_active
         + p.density * p.width * p.thickness * p.length_active * length_1(p) / 3.0
 }
 
-/// λ'' from MODEL.md §4 at rest (no damping), 1/s².
+/// λ'' from model.md §4 at rest (no damping), 1/s².
 pub fn acceleration(p: &DeviceParams<f64>, l: f64, volts: f64) -> f64 {
     let l2p = p.prestretch_2;
     let field = volts / p.thickness;

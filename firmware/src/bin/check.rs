@@ -37,7 +37,7 @@ fn main() -> ! {
     let mut failures = 0;
     let f = &mut failures;
 
-    // The f32 core on the chip against the f64 figures (MODEL.md §9 device, issue 2).
+    // The f32 core on the chip against the f64 figures (model.md §9 device, issue 2).
     match Device::new(REFERENCE_DEVICE.cast::<f32>()) {
         Ok(dev) => {
             let tuner = Tuner::new(dev);

@@ -226,11 +226,11 @@ enum Sensing {
     /// The displacement sensor's stretch.
     Stretch,
     /// The amplifier's current only (self-sensing): the change of the membrane's charge
-    /// C(λ)·Φ over the tick (MODEL.md §8).
+    /// C(λ)·Φ over the tick (model.md §8).
     Current,
 }
 
-/// The membrane's charge C(λ)·Φ, C(λ) = ε·L1A·L2·λ²·λ2p²/H (MODEL.md §8), C.
+/// The membrane's charge C(λ)·Φ, C(λ) = ε·L1A·L2·λ²·λ2p²/H (model.md §8), C.
 #[cfg(feature = "trim")]
 fn charge_coulombs(p: &de_resonator::DeviceParams<f32>, stretch: f32, volts: f32) -> f32 {
     p.capacitance_farads(stretch) * volts

@@ -1,4 +1,4 @@
-//! `curve`: the tuning curve, natural frequency against bias on the loading branch (MODEL.md
+//! `curve`: the tuning curve, natural frequency against bias on the loading branch (model.md
 //! §5), with the limit (§6), the margin's highest bias, the tunable range and a target; over
 //! ranges of pre-stretch, a family of curves and the safe region's boundary through their
 //! limits (the paper's figures). curve.csv and curve.svg.
@@ -244,7 +244,7 @@ pub fn curve(args: &CurveArgs) -> Result<CurveReport, String> {
 }
 
 /// The loading branch of one device from 0 V to its limit, at offsets evenly spaced in √δ
-/// (so evenly spaced in bias near 0 V, where Φ ∝ √δ, MODEL.md §5).
+/// (so evenly spaced in bias near 0 V, where Φ ∝ √δ, model.md §5).
 fn one_curve(
     p: de_resonator::DeviceParams<f64>,
     margin: f64,

@@ -15,7 +15,7 @@ use serde::Serialize;
 use super::{sig, DeviceArgs, Report};
 use crate::lut;
 
-/// The reference job's target (MODEL.md §9, scenes/reference.toml), Hz.
+/// The reference job's target (model.md §9, scenes/reference.toml), Hz.
 const REFERENCE_TARGET_HZ: f32 = 44.0;
 
 #[derive(Args, Debug)]

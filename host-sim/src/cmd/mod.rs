@@ -64,7 +64,7 @@ impl DeviceArgs {
 pub struct DeviceInfo {
     /// The device file, or `reference device (built in)`.
     pub source: String,
-    /// `gent` or `neo_hookean` (MODEL.md §3).
+    /// `gent` or `neo_hookean` (model.md §3).
     pub material: &'static str,
     /// Gent's limit on I1 − 3 (`null`: neo-Hookean).
     pub jlim: Option<f64>,

@@ -1,4 +1,4 @@
-//! `run`: a scene, the firmware's controller against the full plant simulator (MODEL.md §8);
+//! `run`: a scene, the firmware's controller against the full plant simulator (model.md §8);
 //! a short report, and what the scene asks for (a plot, the time history).
 
 use std::fmt;
@@ -216,7 +216,7 @@ impl fmt::Display for RunReport {
             )?,
             _ => writeln!(
                 f,
-                "plant safe      yes: no check of MODEL.md §6 failed at any of {} ticks",
+                "plant safe      yes: no check of model.md §6 failed at any of {} ticks",
                 self.ticks
             )?,
         }

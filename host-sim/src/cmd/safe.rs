@@ -1,5 +1,5 @@
 //! `safe` and `tune`: where the loading branch fails first, the frequencies reachable before
-//! it, and the smallest bias for a target (MODEL.md §§5–7).
+//! it, and the smallest bias for a target (model.md §§5–7).
 
 use std::fmt;
 

@@ -1,5 +1,5 @@
 //! `simulate`: the motion from rest under Φ(t) = bias + ac·sin(2π·f·t), watched by the
-//! dynamic safety monitor (the six checks of MODEL.md §6 at every step).
+//! dynamic safety monitor (the six checks of model.md §6 at every step).
 
 use std::fmt;
 use std::path::PathBuf;

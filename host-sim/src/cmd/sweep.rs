@@ -1,4 +1,4 @@
-//! `sweep`: the frequency response under parametric drive (MODEL.md §7), its peaks, and
+//! `sweep`: the frequency response under parametric drive (model.md §7), its peaks, and
 //! which drive frequencies crossed a limit or stopped; sweep.csv and sweep.svg.
 
 use std::fmt;
@@ -35,7 +35,7 @@ pub struct SweepArgs {
     #[arg(long, value_name = "V", allow_negative_numbers = true)]
     pub ac_volts: Option<f64>,
     /// Quality factor Q of the small oscillation at the bias: sets the damping c = M·ω0/Q (M the
-    /// effective mass of MODEL.md §4).
+    /// effective mass of model.md §4).
     ///
     /// 0 keeps the device's damping.
     #[arg(
@@ -97,7 +97,7 @@ pub struct Point {
     pub ratio: f64,
     /// Half the peak-to-peak stretch once settled; null when the run stopped.
     pub amplitude: Option<f64>,
-    /// The first check of MODEL.md §6 the motion failed (`null`: none).
+    /// The first check of model.md §6 the motion failed (`null`: none).
     pub first_limit_mode: Option<&'static str>,
     pub first_limit_time_seconds: Option<f64>,
     /// The motion left the range in which the model is defined: nothing measured.
@@ -129,7 +129,7 @@ pub struct SweepReport {
     pub natural_frequency_hz: f64,
     pub peaks: Vec<Peak>,
     pub points: Vec<Point>,
-    /// How many points crossed a limit of MODEL.md §6 (exit status 1 if any).
+    /// How many points crossed a limit of model.md §6 (exit status 1 if any).
     pub crossed_limit: usize,
     /// How many points stopped (no amplitude; never a peak).
     pub stopped: usize,
@@ -175,7 +175,7 @@ impl fmt::Display for SweepReport {
         }
         write!(
             f,
-            "limits          {} of {} drive frequencies crossed a limit of MODEL.md §6\n\
+            "limits          {} of {} drive frequencies crossed a limit of model.md §6\n\
              stopped         {} of {} runs left the model's range (no amplitude, never a peak)\n\
              wrote           {}",
             self.crossed_limit,
@@ -192,7 +192,7 @@ impl Report for SweepReport {
     fn failure(&self) -> Option<String> {
         (self.crossed_limit > 0).then(|| {
             format!(
-                "{} of {} drive frequencies crossed a limit of MODEL.md §6",
+                "{} of {} drive frequencies crossed a limit of model.md §6",
                 self.crossed_limit,
                 self.points.len()
             )
