@@ -292,3 +292,106 @@ fn a_trim_on_the_model_leaves_the_boot_cap() {
     );
     assert_eq!(c.operator_volts(), boot_cap);
 }
+
+/// A trim whose retuned bias and AC the amplifier cannot give is a fault when its result
+/// comes back (`Fault::Amplifier`), not a code refused later by the final gate: the plant
+/// 3% stiffer than flashed, the amplifier's full scale 10 V above the plant's own bias for
+/// 44 Hz (its f64 solve), under that bias and its 30 V of AC.
+#[cfg(feature = "trim")]
+#[test]
+fn a_retune_past_the_amplifier_is_refused_when_it_comes() {
+    let settings = Settings {
+        ac_volts: 30.0,
+        ac_hz: 40.0,
+        trim_tolerance: Some(1e-3),
+        ..Settings::for_target(44.0)
+    };
+    let table = common::made_table(REFERENCE_DEVICE, 0.05, 64);
+    let plant = DeviceParams {
+        shear_modulus: 1.03 * REFERENCE_DEVICE.shear_modulus,
+        ..common::with_quality_factor(REFERENCE_DEVICE, 50.0)
+    };
+    let needs = Tuner::new(Device::new(plant).unwrap())
+        .tune(44.0, 0.05)
+        .unwrap()
+        .volts as f32;
+    let full_scale = needs + 10.0;
+    let amplifier = Amplifier::new(2.5, full_scale / 2.5).unwrap();
+    let (mut c, _) =
+        Controller::start(REFERENCE_DEVICE.cast(), &table, amplifier, settings).unwrap();
+    let mut p = common::Plant::new(plant, 1000.0);
+    let mut fault = None;
+    for k in 0..20_000 {
+        let out = c.tick(Inputs::stretch(p.stretch() as f32));
+        assert!(out.volts <= full_scale, "tick {k}: {} V", out.volts);
+        if let Some(Event::Fault(f)) = out.event {
+            fault = Some(f);
+            break;
+        }
+        if let Some(job) = c.trim_job() {
+            c.trim_done(job.solve());
+        }
+        p.step(out.volts);
+    }
+    assert!(
+        matches!(fault, Some(de_resonator::Fault::Amplifier(_))),
+        "{fault:?}, the plan {:?}",
+        c.plan()
+    );
+}
+
+/// A hold turns the probe off with the AC (issue 25): a target whose bias, with 30 V of AC
+/// and a 20 V probe, is 40 V under the cap of margin 0.5; the plant 2% stiffer than flashed,
+/// so the trim finds it needs more than the cap (`AboveCeiling`). Held: no AC, no probe, the
+/// output at most the cap from then on.
+#[cfg(all(feature = "trim", feature = "probe"))]
+#[test]
+fn a_hold_turns_the_probe_off() {
+    let settings = |target_hz: f32| Settings {
+        ac_volts: 30.0,
+        ac_hz: target_hz,
+        margin: 0.5,
+        probe_volts: Some(20.0),
+        trim_tolerance: Some(1e-3),
+        ..Settings::for_target(target_hz)
+    };
+    let table = made_table(REFERENCE_DEVICE, 0.05, 64);
+    let start = |target_hz: f32| {
+        Controller::start(
+            REFERENCE_DEVICE.cast(),
+            &table,
+            amplifier(),
+            settings(target_hz),
+        )
+        .unwrap()
+        .0
+    };
+    let cap = start(45.5).max_volts();
+    let target_hz = common::natural_hz_at(&REFERENCE_DEVICE, cap - 50.0 - 40.0) as f32;
+    let mut c = start(target_hz);
+    let plant = DeviceParams {
+        shear_modulus: 1.02 * REFERENCE_DEVICE.shear_modulus,
+        ..common::with_quality_factor(REFERENCE_DEVICE, 50.0)
+    };
+    let mut p = Plant::new(plant, 1000.0);
+    let mut held = None;
+    for k in 0..20_000 {
+        let out = c.tick(Inputs::stretch(p.stretch() as f32));
+        assert!(out.volts <= cap + lsb_volts(), "tick {k}: {} V", out.volts);
+        match out.event {
+            Some(Event::Fault(fault)) => panic!("tick {k}: {fault:?}"),
+            Some(Event::AboveCeiling { .. }) => held = Some(k),
+            _ => {}
+        }
+        if let Some(job) = c.trim_job() {
+            c.trim_done(job.solve());
+        }
+        p.step(out.volts);
+        if held.is_some_and(|at| k > at + 1_000) {
+            break;
+        }
+    }
+    assert!(held.is_some(), "no hold: {:?}", c.phase());
+    assert_eq!(c.phase(), Phase::Held);
+    assert_eq!((c.plan().ac_tick, c.plan().probe_volts), (None, 0.0));
+}

@@ -382,6 +382,7 @@ fn tampered(rng: &mut Rng, mut done: TrimDone) -> TrimDone {
             measured_hz: 0.0,
             shear_modulus: wild(rng) as f32,
             needed_volts: wild(rng) as f32,
+            max_volts: wild(rng) as f32,
         },
         (_, result) => {
             done.job = done.job.wrapping_add(1 + rng.below(3) as u32);
@@ -563,6 +564,9 @@ fn fuzz_the_controller() {
                     rng.range(-1e-5, 1e-5) as f32
                 }),
             };
+            // The cap this tick's output is decided under: a result the tick takes may lower
+            // it for the ticks after.
+            let cap_before = c.max_volts();
             let mut out = c.tick(Inputs {
                 stretch,
                 amplifier_volts,
@@ -585,7 +589,7 @@ fn fuzz_the_controller() {
                 "tick {k}: cap in force {} V above the operator's {operator_cap} V",
                 c.max_volts()
             );
-            let cap_now = operator_cap.min(f64::from(c.max_volts()));
+            let cap_now = operator_cap.min(f64::from(cap_before));
             // One slew step and one DAC step, and the f32 rounding of the difference.
             let down_most = slew_step + lsb_volts + 4.0 * f32::EPSILON * last_volts;
             let dead_bus = bus_fails.is_some_and(|b| b <= k);
@@ -594,8 +598,11 @@ fn fuzz_the_controller() {
                 tally.above_cap_descending += 1;
                 assert!(
                     drop >= 0.0 && (dead_bus || drop <= down_most),
-                    "tick {k}: {last_volts} V to {} V above the cap in force {cap_now} V",
-                    out.volts
+                    "tick {k}: {last_volts} V to {} V above the cap in force {cap_now} V, slew \
+                     step {slew_step} V, event {:?}, plan {:?}",
+                    out.volts,
+                    out.event,
+                    c.plan()
                 );
             }
             if let Some(Event::Fault(fault)) = out.event {

@@ -289,6 +289,48 @@ fn a_trim_is_refused_without_a_trim_tolerance() {
     assert_eq!(c.phase(), Phase::Holding);
 }
 
+/// Issue 25: a trim asked for once `stop` has brought the output down is refused as
+/// `Stopped` (it would hold a bias of 0 V and measure nothing), where the same request on a
+/// running drive pauses the AC and measures. (The reference device as its own plant.)
+#[cfg(feature = "trim")]
+#[test]
+fn a_trim_after_stop_is_refused_and_one_while_driving_is_taken() {
+    let settings = Settings {
+        ac_volts: 30.0,
+        ac_hz: 40.0,
+        trim_tolerance: Some(1e-3),
+        ..Settings::for_target(44.0)
+    };
+    let plant = common::with_quality_factor(REFERENCE_DEVICE, 50.0);
+    let drive = |c: &mut Controller, p: &mut common::Plant, ticks: u32| {
+        let mut last = 0.0;
+        for _ in 0..ticks {
+            let out = c.tick(Inputs::stretch(p.stretch() as f32));
+            if let Some(job) = c.trim_job() {
+                c.trim_done(job.solve());
+            }
+            p.step(out.volts);
+            last = out.volts;
+        }
+        last
+    };
+    let mut running = started(settings);
+    let mut p = common::Plant::new(plant, 1000.0);
+    drive(&mut running, &mut p, 10_000);
+    assert_eq!(running.phase(), Phase::Driving);
+    assert_eq!(running.trim_now(), Ok(()));
+    assert_ne!(running.phase(), Phase::Driving);
+    let mut stopped = started(settings);
+    let mut p = common::Plant::new(plant, 1000.0);
+    drive(&mut stopped, &mut p, 10_000);
+    stopped.stop();
+    assert_eq!(drive(&mut stopped, &mut p, 3_000), 0.0);
+    let phase = stopped.phase();
+    assert_eq!(stopped.trim_now(), Err(Refusal::Stopped));
+    assert_eq!(stopped.phase(), phase);
+    assert_eq!(drive(&mut stopped, &mut p, 100), 0.0);
+}
+
 /// `stop` during a trim's pulse: the ramp down never dips below itself (the pulse is
 /// dropped) and no AC is left in the plan.
 #[cfg(feature = "trim")]

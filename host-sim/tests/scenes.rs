@@ -54,7 +54,7 @@ fn plant_statics_and_limit_match_the_published_figures() {
     assert!((volts - 9854.73).abs() < 0.01, "{volts}");
 }
 
-/// model.md §6.3 in the plant: A short (λ = 0.8) and B taut, under a voltage that puts A's
+/// MODEL.md §6.3 in the plant: A short (λ = 0.8) and B taut, under a voltage that puts A's
 /// tension along 1 just below zero (its value from the core's stress, independent of the
 /// plant's code): loss of tension 1; at 0.95 of that voltage, safe. Past the far end
 /// (λB < 0) loss of tension 1 too.
@@ -212,17 +212,19 @@ fn viscoelastic_scene_trims_within_half_a_percent() {
 }
 
 /// Resonance tracking (issue 15): the VHB plant creeps for 60 s (its 6.6 s and 61 s
-/// branches relax under the bias); the drive, once on, is never paused, and from 5 s on the
-/// true plant's natural frequency (its own statics, networks frozen as they are, every
+/// branches relax under the bias); the drive, once on, is never paused, and from 5.5 s on
+/// the true plant's natural frequency (its own statics, networks frozen as they are, every
 /// 0.1 s) stays within 0.1% of the target, while the bias it needs falls by hundreds of
 /// volts. The tracker's Q is the plant's order of magnitude (30 set, the branches add loss).
+/// (From 5 s before issue 25: the bias now waits until the drive has settled on the
+/// resonance it measures, and the error was 1.09e-3 at 5.0 s, under 1e-3 from 5.2 s.)
 #[test]
 fn tracking_holds_a_creeping_plant_within_a_tenth_of_a_percent() {
     let r = run("tracking-vhb.toml");
     assert!(r.refused.is_none() && r.fault.is_none(), "{r:?}");
     assert_eq!(r.plant_crossing, None);
     assert!(!r.events.iter().any(|e| e.what.contains("paused")));
-    let from = r.tracking.iter().filter(|t| t.seconds >= 5.0 - 1e-9);
+    let from = r.tracking.iter().filter(|t| t.seconds >= 5.5 - 1e-9);
     let mut worst: f64 = 0.0;
     for t in from {
         // The drive on at every sample from 5 s (never paused), the plant on target.

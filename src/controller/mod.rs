@@ -65,8 +65,9 @@ pub enum Phase {
     /// The ring is measured; the bias holds while the trim's job is solved outside the tick.
     Solving,
     Driving,
-    /// The trim found the plant needs a bias above the ceiling fixed at boot: the bias holds
-    /// where it is, no AC, no further trim (said once by `Event::AboveCeiling`).
+    /// The plant needs a bias and AC above the cap in force (the trim's or tracking's
+    /// estimate), or a lowered cap left the plan above it: the bias holds at or under the
+    /// cap, no AC, no further trim (said once by `Event::AboveCeiling`).
     Held,
     Faulted,
 }
@@ -333,16 +334,22 @@ impl Controller {
         if let Some(fault) = self.sense(k, &inputs) {
             return self.fault(fault);
         }
+        // While the tick decides what comes next, the voltage last sent is this tick's: a hold
+        // or a plan under a lowered cap comes down from it (from the one before, the first
+        // step down was larger than the slew's by the AC's last step). A fault's descent
+        // starts from what was sent before.
+        let sent_before = self.last_volts;
+        self.last_volts = commanded_volts;
         match self.advance(k, inputs.ring()) {
-            Ok(event) => {
-                self.last_volts = commanded_volts;
-                Output {
-                    code,
-                    volts: commanded_volts,
-                    event,
-                }
+            Ok(event) => Output {
+                code,
+                volts: commanded_volts,
+                event,
+            },
+            Err(fault) => {
+                self.last_volts = sent_before;
+                self.fault(fault)
             }
-            Err(fault) => self.fault(fault),
         }
     }
 
@@ -673,9 +680,11 @@ impl Controller {
             TrimResult::AboveCeiling {
                 shear_modulus,
                 needed_volts,
+                max_volts,
                 ..
             } => {
                 self.trim.params.shear_modulus = shear_modulus;
+                self.set_caps(self.operator_volts, max_volts.min(self.estimate_volts));
                 Ok(Some(self.hold(k, needed_volts)))
             }
             TrimResult::Failed(fault) => Err(fault),

@@ -294,3 +294,46 @@ impl Plan {
         Ok((low, high))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A plan from 3 kV to 4 kV with a 20 V probe, made by `ramp` at the default settings.
+    fn probed(from_volts: f32, bias_volts: f32) -> Plan {
+        let s = Settings {
+            probe_volts: Some(20.0),
+            ..Settings::for_target(44.0)
+        };
+        let (mut plan, _) = Plan::ramp(&s, from_volts, bias_volts, true)
+            .unwrap_or_else(|_| unreachable!("the default settings make a plan"));
+        plan.probe_volts = 20.0;
+        plan
+    }
+
+    /// Under a cap it fits (ramp top 4 kV + 20 V ≤ 4.02 kV, to the volt), the plan is left as
+    /// made; from a voltage sent above a lowered cap, the ramp starts there and the probe is
+    /// off (5 kV + 20 V past 4.99 kV); a start above the cap from a plan made before (the
+    /// voltage sent under it) starts from the voltage sent too.
+    #[test]
+    fn a_plan_under_a_lowered_cap_starts_from_the_voltage_sent_without_the_probe() {
+        let mut fits = probed(3000.0, 4000.0);
+        fits.start_under(4020.0, 3000.0);
+        assert_eq!((fits.start_volts, fits.probe_volts), (3000.0, 20.0));
+        let mut one_over = probed(3000.0, 4000.0);
+        one_over.start_under(4019.0, 3000.0);
+        assert_eq!((one_over.start_volts, one_over.probe_volts), (3000.0, 0.0));
+        let mut sent_above = probed(3000.0, 4000.0);
+        sent_above.start_under(4990.0, 5000.0);
+        assert_eq!(
+            (sent_above.start_volts, sent_above.probe_volts),
+            (5000.0, 0.0)
+        );
+        let mut start_above = probed(5000.0, 4000.0);
+        start_above.start_under(4990.0, 4500.0);
+        assert_eq!(
+            (start_above.start_volts, start_above.probe_volts),
+            (4500.0, 20.0)
+        );
+    }
+}

@@ -16,18 +16,26 @@ use crate::track::{drive_force_per_stretch, Lock, Tracker, MAX_DETUNING};
 pub(super) struct Tracking {
     /// The tracker, once the tracked drive has a sample.
     pub(super) tracker: Option<Tracker>,
-    /// The tick the tracked drive's first sample came.
+    /// The tick the settling counts from: the drive's first sample, or the last cycle whose
+    /// drive was off the resonance it measured.
     pub(super) steady_from: u32,
     /// The model's dΦ²/df at the bias, V²/Hz, once a solve has given it.
     pub(super) volts_squared_per_hz: Option<f32>,
-    /// The tick of the last solve asked for.
-    pub(super) solved_at: u32,
+    /// The tick of the last solve asked for, once one was.
+    pub(super) solved_at: Option<u32>,
     /// The last cycle's fit, applied on the tick after it.
     pub(super) to_apply: Option<Lock>,
 }
 
 /// Time constants of the tracker the estimate waits before the bias moves on it.
 const SETTLE_TIME_CONSTANTS: f32 = 3.0;
+
+/// The drive is settled on the resonance when it is within this fraction of the resonance's
+/// half-width f/(2Q) of the cycle's estimate (about 6° of phase); until then the estimate
+/// is of a plant still ringing from the drive's moves, and the settling starts again. (A
+/// creeping plant's drive follows the resonance within it; measured from where the drive
+/// was instead, the settling never ended on the VHB plant.)
+const SETTLED_HALF_WIDTHS: f32 = 0.1;
 
 /// The longest ring time the loop waits for, s.
 const MAX_RING_SECONDS: f32 = 10.0;
@@ -114,16 +122,27 @@ impl Controller {
             ring_seconds.clamp(track_seconds, MAX_RING_SECONDS.max(track_seconds))
         };
         let ticks_of = |constants: f32| constants * loop_seconds * s.tick_hz;
+        // A drive still walking to the resonance (the first cycles see the AC's start): the
+        // plant has not settled at its frequency, so neither has the estimate (on the
+        // reference device at 4.5 kV it read 0.3% high one second in, and the bias moved on
+        // it). Once settled, the loop runs on: its integral time is longer than the estimate's.
         let steady = (k - self.tracking.steady_from.min(k)) as f32;
         if steady < ticks_of(SETTLE_TIME_CONSTANTS) {
+            let half_width = hz / (2.0 * lock.quality_factor);
+            if !((lock.natural_hz - lock.drive_hz).abs() <= SETTLED_HALF_WIDTHS * half_width) {
+                self.tracking.steady_from = k;
+            }
             return Ok(None);
         }
-        let since_solve = k.wrapping_sub(self.tracking.solved_at) as f32;
-        let stale = self.tracking.volts_squared_per_hz.is_none()
-            || since_solve >= ticks_of(SLOPE_TIME_CONSTANTS);
+        // A solve now and then, whatever it gave: one within the trim's tolerance gives no
+        // slope (the bias is where it should be) and is not asked again at once.
+        let stale = self
+            .tracking
+            .solved_at
+            .is_none_or(|at| k.wrapping_sub(at) as f32 >= ticks_of(SLOPE_TIME_CONSTANTS));
         if stale && self.trim.tracked_hz.is_none() {
             self.trim.want_job(Some(hz));
-            self.tracking.solved_at = k;
+            self.tracking.solved_at = Some(k);
         }
         let Some(slope) = self.tracking.volts_squared_per_hz else {
             return Ok(None);
@@ -170,8 +189,8 @@ impl Controller {
             } => {
                 self.trim.params.shear_modulus = shear_modulus;
                 // A drift's solves are not counted against `MAX_TRIMS` (a lost lock is
-                // `TrackLost`), and take no secant (two points apart in time differ by the
-                // drift too).
+                // `TrackLost`), take no secant (`TrimJob::solve`) and leave no point for a
+                // later trim's: two points apart in time differ by the drift too.
                 self.trim.previous = None;
                 let slope = (bias_volts * bias_volts - bias * bias)
                     / (self.settings.target_hz - measured_hz);
@@ -184,9 +203,11 @@ impl Controller {
             TrimResult::AboveCeiling {
                 shear_modulus,
                 needed_volts,
+                max_volts,
                 ..
             } => {
                 self.trim.params.shear_modulus = shear_modulus;
+                self.set_caps(self.operator_volts, max_volts.min(self.estimate_volts));
                 Ok(Some(self.hold(k, needed_volts)))
             }
             TrimResult::Failed(fault) => Err(fault),

@@ -9,7 +9,7 @@ use super::fault::Fault;
 use super::settings::{guarded, Settings, MAX_TRIMS, TRIM_SECANT_STEP};
 use crate::device::{Device, DeviceParams};
 use crate::trim::{estimate_shear_modulus, ring_frequency_hz, TrimError, MAX_WINDOW};
-use crate::tuning::Tuner;
+use crate::tuning::{TuneError, Tuner};
 
 /// The relative frequency error at which the trim before a tracked drive hands over to the
 /// tracker.
@@ -122,11 +122,13 @@ pub enum TrimResult {
         max_volts: f32,
         device: Device<f32>,
     },
-    /// The estimate needs `needed_volts` (bias and AC) above the cap in force: hold.
+    /// The estimate needs `needed_volts` (bias and AC) above the lower of the cap in force
+    /// and its own cap `max_volts` (which the controller takes as Retune's): hold.
     AboveCeiling {
         measured_hz: f32,
         shear_modulus: f32,
         needed_volts: f32,
+        max_volts: f32,
     },
     /// No ring, no estimate, no convergence, or no safe bias: a fault.
     Failed(Fault),
@@ -209,11 +211,15 @@ impl TrimJob {
         let margin = guarded(s.margin);
         // The estimate may lower the cap (a softer plant), never raise it past the cap in
         // force (the operator's, the ceiling, an earlier estimate's).
-        let estimate_volts = tuner.max_bias(margin).map_err(Fault::Tune)?.volts;
+        let at_cap = tuner.max_bias(margin).map_err(Fault::Tune)?;
+        let estimate_volts = at_cap.volts;
         let max_volts = estimate_volts.min(self.cap_volts);
         let from = self.bias_volts;
         let squared = from * from;
-        let secant = self.previous.and_then(|(p2, pf)| {
+        // Tracking's solves take no secant: its two points, apart in time, differ by the
+        // drift too (a plant that stiffened sent the secant, and the bias, the wrong way).
+        let previous = self.previous.filter(|_| self.measured_hz.is_none());
+        let secant = previous.and_then(|(p2, pf)| {
             let next = squared + (s.target_hz - measured_hz) * (squared - p2) / (measured_hz - pf);
             // No slope (two equal frequencies): the model decides.
             if !next.is_finite() {
@@ -227,20 +233,35 @@ impl TrimJob {
         });
         let bias_volts = match secant {
             Some(volts) => volts,
-            None => tuner.tune(s.target_hz, margin).map_err(Fault::Tune)?.volts,
+            None => match tuner.tune(s.target_hz, margin) {
+                Ok(solved) => solved.volts,
+                // Past the estimate's reach under the margin on the side more bias goes
+                // (f falls with the bias on most devices, rises on some: model.md §5): the
+                // target needs more than the cap (the bias for it at no margin, at least
+                // the limit's), a hold that says so below, not a fault.
+                Err(TuneError::OutOfRange { .. })
+                    if (s.target_hz - at_cap.natural_frequency_hz)
+                        * (at_cap.natural_frequency_hz
+                            - tuner.zero_bias().natural_frequency_hz)
+                        > 0.0 =>
+                {
+                    tuner
+                        .tune(s.target_hz, 0.0)
+                        .map_or(tuner.limit().at.volts, |solved| solved.volts)
+                }
+                Err(error) => return Err(Fault::Tune(error)),
+            },
         };
-        if !(from <= max_volts) {
-            return Err(Fault::AboveSafe {
-                volts: from,
-                max_volts,
-            });
-        }
+        // A bias above the estimate's cap is no fault here: the controller takes the lower
+        // cap and comes down to it at the slew rate (from where it is, `Plan::start_under`;
+        // while tracking, a hold).
         let needed_volts = bias_volts + s.swing_volts();
-        if !(needed_volts <= max_volts) && max_volts == self.cap_volts {
+        if !(needed_volts <= max_volts) {
             return Ok(TrimResult::AboveCeiling {
                 measured_hz,
                 shear_modulus,
                 needed_volts,
+                max_volts: estimate_volts,
             });
         }
         Ok(TrimResult::Retune {
@@ -320,5 +341,89 @@ mod tests {
             }
             other => panic!("{other:?}"),
         }
+    }
+
+    /// A ring that tells of a plant so stiff that the target is below its reach under the
+    /// margin (47 Hz at 3 kV, 44 Hz asked; the reference device gives 45.6 Hz there): the
+    /// trim holds and says what the plant needs (the estimate's bias for the target at no
+    /// margin, from an f64 solve of the device whose μ gives 47 Hz at 3 kV, found by
+    /// bisection here), not a tuning fault that latches at zero volts.
+    #[test]
+    #[allow(clippy::unwrap_used)] // a test fails by panicking
+    fn a_target_past_the_estimates_reach_is_a_hold() {
+        use crate::tuning::Tuner;
+        let stiff_hz = |mu: f64| {
+            let device = Device::new(DeviceParams {
+                shear_modulus: mu,
+                ..REFERENCE_DEVICE
+            })
+            .unwrap();
+            let limit = *Tuner::new(device).limit();
+            let offset = device.offset_for_bias(3000.0, limit.at.offset).unwrap();
+            device.natural_frequency_hz_at(offset)
+        };
+        let (mut low, mut high) = (
+            REFERENCE_DEVICE.shear_modulus,
+            2.0 * REFERENCE_DEVICE.shear_modulus,
+        );
+        for _ in 0..60 {
+            let mid = 0.5 * (low + high);
+            if stiff_hz(mid) < 47.0 {
+                low = mid;
+            } else {
+                high = mid;
+            }
+        }
+        let stiff = Device::new(DeviceParams {
+            shear_modulus: low,
+            ..REFERENCE_DEVICE
+        })
+        .unwrap();
+        let tuner = Tuner::new(stiff);
+        assert!(
+            tuner.tune(44.0, 0.05).is_err(),
+            "the target is within reach"
+        );
+        let needs = tuner.tune(44.0, 0.0).unwrap().volts;
+        match job(3000.0, 47.0, None).solve().result {
+            TrimResult::AboveCeiling { needed_volts, .. } => {
+                let expected = needs + f64::from(Settings::for_target(44.0).swing_volts());
+                assert!(
+                    (f64::from(needed_volts) / expected - 1.0).abs() < 1e-3,
+                    "{needed_volts} V, {expected} V"
+                );
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+
+    /// A ring that tells of a plant so soft that the target lies above its frequency at no
+    /// bias (40 Hz at 3 kV where the reference device gives 45.6 Hz, 44 Hz asked): no bias
+    /// reaches it, more or less, so a tuning fault whose range tops out under 44 Hz, not a
+    /// hold.
+    #[test]
+    fn a_target_no_bias_reaches_is_a_fault() {
+        match job(3000.0, 40.0, None).solve().result {
+            TrimResult::Failed(Fault::Tune(TuneError::OutOfRange { high_hz, .. })) => {
+                assert!(high_hz < 44.0, "{high_hz}");
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+
+    /// Tracking's solves (a measured frequency handed in) take no secant: the previous point
+    /// is from another time, and the plant drifted since. With one or without, the same.
+    #[test]
+    fn a_tracked_solve_takes_no_secant() {
+        let tracked = |previous| TrimJob {
+            measured_hz: Some(44.3),
+            ..job(4000.0, 44.3, previous)
+        };
+        let with = retune_bias(tracked(Some((3000.0 * 3000.0, 45.9))).solve());
+        let without = retune_bias(tracked(None).solve());
+        assert_eq!(with, without);
+        // And a ring trim with that point does take it: the point matters.
+        let ring = retune_bias(job(4000.0, 44.3, Some((3000.0 * 3000.0, 45.9))).solve());
+        assert_ne!(ring, without);
     }
 }

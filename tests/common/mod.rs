@@ -288,3 +288,34 @@ pub fn with_quality_factor(p: DeviceParams<f64>, q: f64) -> DeviceParams<f64> {
         ..p
     }
 }
+
+/// The natural frequency of device `p` (f64 statics) at a bias of `volts`, on the branch
+/// below its limit (model.md §5).
+#[allow(dead_code)]
+pub fn natural_hz_at(p: &DeviceParams<f64>, volts: f32) -> f64 {
+    use de_resonator::{Device, Tuner};
+    let device = Device::new(*p).unwrap();
+    let limit = *Tuner::new(device).limit();
+    let offset = device.offset_for_bias(f64::from(volts), limit.at.offset);
+    device.natural_frequency_hz_at(offset.unwrap())
+}
+
+/// 0..10 kV over the full scale: a 2.5 V reference and an amplifier gain of 4000.
+pub fn amplifier() -> de_resonator::Amplifier {
+    de_resonator::Amplifier::new(2.5, 4000.0).unwrap()
+}
+
+/// The reference device's 64-point table as `host-sim lut` makes it (the f64 model).
+pub fn reference_table() -> Vec<u8> {
+    made_table(de_resonator::REFERENCE_DEVICE, 0.05, 64)
+}
+
+/// The reference device's controller (f32, as flashed) on `reference_table()` and
+/// `amplifier()`.
+pub fn start_reference(
+    settings: de_resonator::Settings,
+) -> Result<de_resonator::Controller, de_resonator::Fault> {
+    let params = de_resonator::REFERENCE_DEVICE.cast::<f32>();
+    de_resonator::Controller::start(params, &reference_table(), amplifier(), settings)
+        .map(|(c, _)| c)
+}
