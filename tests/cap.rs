@@ -395,3 +395,61 @@ fn a_hold_turns_the_probe_off() {
     assert_eq!(c.phase(), Phase::Held);
     assert_eq!((c.plan().ac_tick, c.plan().probe_volts), (None, 0.0));
 }
+
+/// A retune whose bias and AC fit under its cap but whose probe would not (a result that
+/// lies, as the fuzz test's tampered ones: 3 kV with a cap of 3,010 V, room for the 5 V of
+/// AC, not for the 20 V probe) is refused when it comes (`Fault::Setting` naming the probe),
+/// not taken and then stopped by the final gate when the probe rides again at the bias
+/// (found by the fuzz test, seed 11, 10⁸ ticks).
+#[cfg(all(feature = "trim", feature = "probe"))]
+#[test]
+fn a_retune_whose_probe_would_pass_the_cap_is_refused_when_it_comes() {
+    use de_resonator::{Fault, Setting, TrimResult};
+    let settings = Settings {
+        ac_volts: 5.0,
+        ac_hz: 40.0,
+        probe_volts: Some(20.0),
+        trim_tolerance: Some(1e-3),
+        ..Settings::for_target(44.0)
+    };
+    let mut c = started(REFERENCE_DEVICE, settings);
+    let mut p = Plant::new(common::with_quality_factor(REFERENCE_DEVICE, 50.0), 1000.0);
+    let mut faults = Vec::new();
+    let (mut lied, mut last) = (false, 0.0f32);
+    for k in 0..20_000 {
+        let out = c.tick(Inputs::stretch(p.stretch() as f32));
+        assert!(
+            out.volts <= c.max_volts().max(last) + lsb_volts(),
+            "tick {k}: {} V",
+            out.volts
+        );
+        last = out.volts;
+        if let Some(Event::Fault(fault)) = out.event {
+            faults.push(fault);
+        }
+        if let Some(job) = c.trim_job() {
+            let mut done = job.solve();
+            if !lied {
+                let device = Device::new(REFERENCE_DEVICE.cast()).unwrap();
+                done.result = TrimResult::Retune {
+                    measured_hz: 44.1,
+                    shear_modulus: REFERENCE_DEVICE.shear_modulus as f32,
+                    bias_volts: 3000.0,
+                    max_volts: 3010.0,
+                    device,
+                };
+                lied = true;
+            }
+            c.trim_done(done);
+        }
+        p.step(out.volts);
+    }
+    assert!(lied);
+    assert_eq!(
+        faults,
+        [Fault::Setting {
+            setting: Setting::ProbeVolts,
+            value: 20.0
+        }]
+    );
+}

@@ -162,6 +162,7 @@ impl Controller {
         plan.start_under(max_volts, self.last_volts);
         plan.check_range(fresh.plan.bias_volts, max_volts)
             .map_err(Refusal::Checks)?;
+        plan.probe_off_above(max_volts);
         self.settings = fresh.settings;
         self.set_caps(fresh.max_volts, self.estimate_volts);
         self.plan = plan;

@@ -662,6 +662,7 @@ impl Controller {
                 let bound = max_volts.min(self.max_volts);
                 plan.start_under(bound, self.last_volts);
                 plan.check_range(next_bias_volts, bound)?;
+                plan.probe_off_above(bound);
                 self.amplifier
                     .code(next_bias_volts + plan.swing_volts())
                     .map_err(Fault::Amplifier)?;

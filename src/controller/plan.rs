@@ -181,17 +181,18 @@ impl Plan {
     /// A new plan under a cap `max_volts` that may have just been lowered, the voltage last
     /// sent `last_volts`: where the ramp's start or the voltage sent is above the cap, the
     /// ramp starts from the voltage sent (down at the slew rate from there, never up from
-    /// it), and the probe is off where the ramp with it would pass the cap.
+    /// it). Check its range next (`check_range`, the probe counted: it rides again at the
+    /// bias), then `probe_off_above`.
     pub(super) fn start_under(&mut self, max_volts: f32, last_volts: f32) {
         if !(self.start_volts <= max_volts && last_volts <= max_volts) {
             self.start_volts = last_volts;
         }
-        self.probe_off_above(max_volts);
     }
 
     /// The probe off on a ramp whose top with the probe would pass `max_volts` (a ramp down
-    /// from above a cap since lowered): the controller sets it back at the bias.
-    fn probe_off_above(&mut self, max_volts: f32) {
+    /// from above a cap since lowered): the controller sets it back at the bias, where
+    /// `check_range` has made sure it fits.
+    pub(super) fn probe_off_above(&mut self, max_volts: f32) {
         let top = self.start_volts.max(self.bias_volts);
         if !(top + self.probe_volts <= max_volts) {
             self.probe_volts = 0.0;
@@ -311,26 +312,29 @@ mod tests {
         plan
     }
 
+    /// `start_under` then `probe_off_above`, as the controller calls them around its check.
+    fn under(mut plan: Plan, max_volts: f32, last_volts: f32) -> Plan {
+        plan.start_under(max_volts, last_volts);
+        plan.probe_off_above(max_volts);
+        plan
+    }
+
     /// Under a cap it fits (ramp top 4 kV + 20 V ≤ 4.02 kV, to the volt), the plan is left as
     /// made; from a voltage sent above a lowered cap, the ramp starts there and the probe is
     /// off (5 kV + 20 V past 4.99 kV); a start above the cap from a plan made before (the
     /// voltage sent under it) starts from the voltage sent too.
     #[test]
     fn a_plan_under_a_lowered_cap_starts_from_the_voltage_sent_without_the_probe() {
-        let mut fits = probed(3000.0, 4000.0);
-        fits.start_under(4020.0, 3000.0);
+        let fits = under(probed(3000.0, 4000.0), 4020.0, 3000.0);
         assert_eq!((fits.start_volts, fits.probe_volts), (3000.0, 20.0));
-        let mut one_over = probed(3000.0, 4000.0);
-        one_over.start_under(4019.0, 3000.0);
+        let one_over = under(probed(3000.0, 4000.0), 4019.0, 3000.0);
         assert_eq!((one_over.start_volts, one_over.probe_volts), (3000.0, 0.0));
-        let mut sent_above = probed(3000.0, 4000.0);
-        sent_above.start_under(4990.0, 5000.0);
+        let sent_above = under(probed(3000.0, 4000.0), 4990.0, 5000.0);
         assert_eq!(
             (sent_above.start_volts, sent_above.probe_volts),
             (5000.0, 0.0)
         );
-        let mut start_above = probed(5000.0, 4000.0);
-        start_above.start_under(4990.0, 4500.0);
+        let start_above = under(probed(5000.0, 4000.0), 4990.0, 4500.0);
         assert_eq!(
             (start_above.start_volts, start_above.probe_volts),
             (4500.0, 20.0)
