@@ -245,9 +245,16 @@ impl Controller {
     /// raise it. A plan that no longer fits under it comes down to it first (`hold`).
     #[cfg(feature = "track")]
     fn lower_estimate_cap(&mut self, k: u32, volts: f32) -> Option<Event> {
-        self.set_caps(self.operator_volts, self.estimate_volts.min(volts));
+        self.take_estimate_cap(volts);
         let peak = self.plan.ramp_volts(k).max(self.plan.bias_volts) + self.plan.swing_volts();
         (!(peak <= self.max_volts)).then(|| self.hold(k, peak))
+    }
+
+    /// An estimate's own cap `volts` (trim, tracking): it may lower the cap in force, never
+    /// raise it.
+    #[cfg(feature = "trim")]
+    fn take_estimate_cap(&mut self, volts: f32) {
+        self.set_caps(self.operator_volts, volts.min(self.estimate_volts));
     }
 
     /// Hold below the cap in force, the AC and the probe off, the plant needing
@@ -666,7 +673,7 @@ impl Controller {
                 self.amplifier
                     .code(next_bias_volts + plan.swing_volts())
                     .map_err(Fault::Amplifier)?;
-                self.set_caps(self.operator_volts, max_volts.min(self.estimate_volts));
+                self.take_estimate_cap(max_volts);
                 self.estimate = Some(device);
                 self.trim.tuned = true;
                 self.plan = plan;
@@ -685,7 +692,7 @@ impl Controller {
                 ..
             } => {
                 self.trim.params.shear_modulus = shear_modulus;
-                self.set_caps(self.operator_volts, max_volts.min(self.estimate_volts));
+                self.take_estimate_cap(max_volts);
                 Ok(Some(self.hold(k, needed_volts)))
             }
             TrimResult::Failed(fault) => Err(fault),

@@ -207,7 +207,7 @@ impl Controller {
                 ..
             } => {
                 self.trim.params.shear_modulus = shear_modulus;
-                self.set_caps(self.operator_volts, max_volts.min(self.estimate_volts));
+                self.take_estimate_cap(max_volts);
                 Ok(Some(self.hold(k, needed_volts)))
             }
             TrimResult::Failed(fault) => Err(fault),
