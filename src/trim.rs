@@ -10,8 +10,13 @@ use crate::device::{Device, DeviceParams};
 use crate::roots::bisect;
 use crate::safety::Limit;
 
-/// Most samples a measurement window may hold (0.5 s at 1 kHz; 2 KB of the controller).
+/// Most samples a measurement window may hold (0.5 s at 1 kHz; 2 KB of the controller). At
+/// a faster tick each sample is the mean of a stride of ticks (`Settings::trim_window`).
 pub const MAX_WINDOW: usize = 512;
+
+/// Fewest window samples per target period (the crossings' linear interpolation stays
+/// within the fit's averaging at 8).
+pub const MIN_SAMPLES_PER_PERIOD: f32 = 8.0;
 
 /// Fewest crossings (both ways) a ring must show to be measured (three periods).
 pub const MIN_CROSSINGS: usize = 6;

@@ -10,8 +10,8 @@ mod common;
 use common::Plant;
 use common::{assert_way_down, made_table};
 use de_resonator::{
-    Amplifier, Controller, DacCode, Device, DeviceParams, Event, Inputs, Phase, Settings, Tuner,
-    REFERENCE_DEVICE,
+    Amplifier, Controller, DacCode, Device, DeviceParams, Event, Inputs, Phase, Refusal, Settings,
+    Tuner, REFERENCE_DEVICE,
 };
 
 /// 0..10 kV over the full scale: a 2.5 V reference and an amplifier gain of 4000.
@@ -343,16 +343,18 @@ fn a_retune_past_the_amplifier_is_refused_when_it_comes() {
 /// A hold turns the probe off with the AC (issue 25): a target whose bias, with 30 V of AC
 /// and a 20 V probe, is 40 V under the cap of margin 0.5; the plant 2% stiffer than flashed,
 /// so the trim finds it needs more than the cap (`AboveCeiling`). Held: no AC, no probe, the
-/// output at most the cap from then on.
+/// output at most the cap from then on, and a trim asked for is refused (`Refusal::Held`).
 #[cfg(all(feature = "trim", feature = "probe"))]
 #[test]
-fn a_hold_turns_the_probe_off() {
+fn a_hold_turns_the_probe_off_and_refuses_a_trim() {
     let settings = |target_hz: f32| Settings {
         ac_volts: 30.0,
         ac_hz: target_hz,
         margin: 0.5,
         probe_volts: Some(20.0),
         trim_tolerance: Some(1e-3),
+        // Held, the noise-free plant comes to rest bit for bit: no stuck-sensor check.
+        stuck_samples: None,
         ..Settings::for_target(target_hz)
     };
     let table = made_table(REFERENCE_DEVICE, 0.05, 64);
@@ -394,6 +396,33 @@ fn a_hold_turns_the_probe_off() {
     assert!(held.is_some(), "no hold: {:?}", c.phase());
     assert_eq!(c.phase(), Phase::Held);
     assert_eq!((c.plan().ac_tick, c.plan().probe_volts), (None, 0.0));
+    // A trim asked for now would measure at the cap and bring the probe back on top of it
+    // (the final gate's refusal, fuzz seed 11): refused, saying why.
+    match c.trim_now() {
+        Err(Refusal::Held {
+            needed_volts,
+            cap_volts,
+        }) => assert!(
+            needed_volts > cap_volts && cap_volts <= cap,
+            "{needed_volts} {cap_volts}"
+        ),
+        other => panic!("{other:?}"),
+    }
+    for k in 0..5_000 {
+        let out = c.tick(Inputs::stretch(p.stretch() as f32));
+        assert!(
+            out.volts <= c.max_volts() + lsb_volts(),
+            "after: tick {k}: {} V",
+            out.volts
+        );
+        assert!(
+            !matches!(out.event, Some(Event::Fault(_))),
+            "after: tick {k}: {:?}",
+            out.event
+        );
+        p.step(out.volts);
+    }
+    assert_eq!(c.phase(), Phase::Held);
 }
 
 /// A retune whose bias and AC fit under its cap but whose probe would not (a result that

@@ -106,7 +106,7 @@ fn code(refusal: &Refusal) -> ErrorCode {
     match refusal {
         Refusal::Busy { .. } => ErrorCode::Busy,
         Refusal::Faulted { .. } => ErrorCode::Faulted,
-        Refusal::Checks(_) | Refusal::Stopped => ErrorCode::Refused,
+        Refusal::Checks(_) | Refusal::Stopped | Refusal::Held { .. } => ErrorCode::Refused,
         Refusal::NoTrim => ErrorCode::Unsupported,
     }
 }

@@ -27,6 +27,10 @@ pub enum Refusal {
     /// Stopped at 0 V: a trim would switch the high voltage back on; a new plan (`target`)
     /// does that, by name.
     Stopped,
+    /// Held below the cap (`Phase::Held`): the plant needs `needed_volts` (bias and AC) above
+    /// `cap_volts`; a trim would measure at the cap and ask for the same. A new plan
+    /// (`target`) or `stop` leaves it.
+    Held { needed_volts: f32, cap_volts: f32 },
 }
 
 impl fmt::Display for Refusal {
@@ -43,6 +47,14 @@ impl fmt::Display for Refusal {
             Refusal::Stopped => write!(
                 f,
                 "stopped at 0 V: a trim would switch the high voltage on; `target` drives"
+            ),
+            Refusal::Held {
+                needed_volts,
+                cap_volts,
+            } => write!(
+                f,
+                "held below the cap: the plant needs {needed_volts:.1} V, the cap is \
+                 {cap_volts:.1} V; `target` a reachable frequency, or `stop`"
             ),
         }
     }
@@ -197,6 +209,12 @@ impl Controller {
     /// Measure the natural frequency and trim now (AC paused), as a periodic trim does.
     pub fn trim_now(&mut self) -> Result<(), Refusal> {
         self.steady()?;
+        if let State::Held { needed_volts } = self.state {
+            return Err(Refusal::Held {
+                needed_volts,
+                cap_volts: self.max_volts,
+            });
+        }
         if !self.trim_wanted() {
             return Err(Refusal::NoTrim);
         }

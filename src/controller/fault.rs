@@ -80,9 +80,10 @@ impl fmt::Display for Fault {
             Fault::Setting { setting, value } => {
                 write!(
                     f,
-                    "setting `{}` = {} is invalid",
+                    "setting `{}` = {} is invalid: it must be {}",
                     setting.key(),
-                    Decimal(*value)
+                    Decimal(*value),
+                    setting.rule()
                 )
             }
             Fault::Table(e) => write!(f, "table: {e}"),

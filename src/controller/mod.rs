@@ -397,7 +397,8 @@ impl Controller {
         match self.state {
             State::Ramping { then_measure } if self.plan.ramp_volts(k) == self.plan.bias_volts => {
                 // The probe, off on a way down from above the cap (`adopt`), rides again.
-                self.plan.probe_volts = self.settings.probe_volts.unwrap_or(0.0);
+                self.plan
+                    .probe_back(self.settings.probe_volts.unwrap_or(0.0), self.max_volts);
                 self.hold_from(k, then_measure);
                 Ok(Some(Event::AtBias {
                     volts: self.plan.bias_volts,
@@ -590,12 +591,11 @@ impl Controller {
     /// pulse charges the membrane then (C·dΦ/dt, far above the ring's Φ·C'·dλ/dt).
     fn record(&mut self, k: u32, ring: Ring) {
         let s = self.settings;
-        let len = (s.trim_window_seconds * s.tick_hz) as usize;
+        let (stride, len) = s.trim_window();
         let Some(at) = k.checked_sub(self.trim.window_from) else {
             return;
         };
-        let at = at as usize;
-        let settling = (0.1 * s.tick_hz / s.target_hz) as usize + 1;
+        let settling = (0.1 * s.tick_hz / s.target_hz) as u32 + 1;
         let sample = match ring {
             Ring::Stretch(stretch) => stretch,
             Ring::Current(amps) if at >= settling => {
@@ -604,12 +604,15 @@ impl Controller {
             }
             Ring::Current(_) | Ring::Nothing => f32::NAN,
         };
-        if let Some(slot) = self.trim.window.get_mut(at) {
-            *slot = sample;
+        // The mean of each stride of ticks (a NaN in it: none).
+        let part = sample / stride as f32;
+        if let Some(slot) = self.trim.window.get_mut((at / stride) as usize) {
+            *slot = if at % stride == 0 { part } else { *slot + part };
         }
-        if at + 1 >= len {
+        if at.saturating_add(1) >= stride.saturating_mul(len as u32) {
             self.state = State::Solving;
-            self.plan.probe_volts = s.probe_volts.unwrap_or(0.0);
+            self.plan
+                .probe_back(s.probe_volts.unwrap_or(0.0), self.max_volts);
         }
     }
 

@@ -199,6 +199,15 @@ impl Plan {
         }
     }
 
+    /// The probe of `probe_volts` back on at the bias (after a trim's window, at the end of a
+    /// way down it was off for), where the bias, the AC and it fit under `max_volts`; off
+    /// otherwise (`check_range` made sure it fits on every path planned: this keeps the
+    /// final gate from being the one to say no where a path was not).
+    pub(super) fn probe_back(&mut self, probe_volts: f32, max_volts: f32) {
+        let fits = self.bias_volts + self.ac_volts + probe_volts <= max_volts;
+        self.probe_volts = if fits { probe_volts } else { 0.0 };
+    }
+
     /// The most the voltage swings about the bias: the AC and the probe, V.
     pub fn swing_volts(&self) -> f32 {
         self.ac_volts + self.probe_volts
@@ -339,5 +348,17 @@ mod tests {
             (start_above.start_volts, start_above.probe_volts),
             (4500.0, 20.0)
         );
+    }
+
+    /// The probe comes back where bias + AC + probe fits the cap (4000 + 30 + 20 V ≤ 4050 V),
+    /// not a volt under it (a bias held at the cap has no room for it).
+    #[test]
+    fn the_probe_comes_back_only_where_it_fits() {
+        let mut plan = probed(3000.0, 4000.0);
+        plan.ac_volts = 30.0;
+        plan.probe_back(20.0, 4050.0);
+        assert_eq!(plan.probe_volts, 20.0);
+        plan.probe_back(20.0, 4049.0);
+        assert_eq!(plan.probe_volts, 0.0);
     }
 }

@@ -2,6 +2,7 @@
 //! before anything is driven.
 
 use super::fault::Fault;
+use crate::trim::MAX_WINDOW;
 use crate::tuning::TuneError;
 
 /// What the controller is asked to do, and how.
@@ -110,6 +111,15 @@ impl Settings {
     /// The most the voltage swings about the bias: the AC and the probe, V.
     pub fn swing_volts(&self) -> f32 {
         self.ac_volts + self.probe_volts.unwrap_or(0.0)
+    }
+
+    /// The trim's window as recorded: the ticks each sample averages (the stride: 1 while
+    /// the window fits `MAX_WINDOW` ticks, more at a faster tick) and the samples it holds.
+    pub fn trim_window(&self) -> (u32, usize) {
+        let ticks = self.trim_window_seconds * self.tick_hz;
+        let stride = libm::ceilf(ticks / MAX_WINDOW as f32).max(1.0);
+        let samples = (ticks / stride) as usize;
+        (stride as u32, samples.min(MAX_WINDOW))
     }
 
     /// Defaults for a target: 5% margin, 10 kV/s, 1 kHz, 0.25 s hold, no AC, 0.5 s of
@@ -238,8 +248,16 @@ impl Settings {
             });
         }
         non_negative(Setting::TrimPulseVolts, self.trim_pulse_volts)?;
-        let window = positive(Setting::TrimWindowSeconds, self.trim_window_seconds)?;
-        if self.trim_tolerance.is_some() && !(window * tick_hz <= crate::trim::MAX_WINDOW as f32) {
+        positive(Setting::TrimWindowSeconds, self.trim_window_seconds)?;
+        let (stride, _) = self.trim_window();
+        let per_period = tick_hz / (stride as f32 * self.target_hz);
+        // (A target out of range is the tuner's to refuse, by name.)
+        let target_ok = self.target_hz > 0.0 && self.target_hz.is_finite();
+        if self.trim_tolerance.is_some()
+            && target_ok
+            && !(per_period >= crate::trim::MIN_SAMPLES_PER_PERIOD)
+        {
+            let window = self.trim_window_seconds;
             return Err(Fault::Setting {
                 setting: Setting::TrimWindowSeconds,
                 value: window,
@@ -392,6 +410,44 @@ impl Setting {
             Setting::TrackSeconds => "track_seconds",
             Setting::ProbeVolts => "probe_volts",
             Setting::ProbeHz => "probe_hz",
+        }
+    }
+}
+
+impl Setting {
+    /// What the checks ask of it, said when they refuse it.
+    pub fn rule(self) -> &'static str {
+        match self {
+            Setting::TargetHz => "a frequency in the device's tunable range",
+            Setting::Margin => "in [0, 1)",
+            Setting::SlewVoltsPerSecond => "> 0",
+            Setting::TickHz => {
+                "> 0, and fast enough for the model to step the device stably in substeps"
+            }
+            Setting::SettleSeconds | Setting::CheckSeconds => ">= 0",
+            Setting::AcVolts => {
+                ">= 0, the AC (and the probe) about the bias within [0 V, the cap in force]"
+            }
+            Setting::AcHz => "below half the tick rate, and > 0 where ac_volts is",
+            Setting::Agreement | Setting::AmplifierToleranceVolts => "> 0",
+            Setting::TrimTolerance => "> 0 or off, in a build with the trim",
+            Setting::TrimWindowSeconds => {
+                "> 0, and once its ticks are averaged into 512 samples, at least 8 samples per \
+                 target period (at most 64 periods)"
+            }
+            Setting::TrimPulseVolts => ">= 0",
+            Setting::TrimProbeFraction => "in (0, 1]",
+            Setting::TrimEverySeconds => "> 0 or off",
+            Setting::StuckSamples => ">= 1 or off",
+            Setting::LeakageFloorOhms | Setting::LeakageFallPerSecond => "> 0 or off",
+            Setting::TrackSeconds => {
+                "> 0 or off; with the track build, a trim, ac_volts > 0 and no trim_every_seconds"
+            }
+            Setting::ProbeVolts => {
+                "> 0 or off, in a build with the probe; the probe and the AC about the bias \
+                 within [0 V, the cap in force]"
+            }
+            Setting::ProbeHz => "at least 4x target_hz, a whole number of ticks per half period",
         }
     }
 }

@@ -142,10 +142,9 @@ impl TrimJob {
         bias_volts: f32,
         cap_volts: f32,
     ) -> Self {
-        let len = (settings.trim_window_seconds * settings.tick_hz) as usize;
         Self {
             window: state.window,
-            len: len.min(MAX_WINDOW),
+            len: settings.trim_window().1,
             settings,
             params: state.params,
             bias_volts,
@@ -179,7 +178,10 @@ impl TrimJob {
         let window = self.window.get(..self.len).unwrap_or(&self.window);
         let measured_hz = match self.measured_hz {
             Some(hz) => hz,
-            None => ring_frequency_hz(window, s.tick_hz).map_err(Fault::Trim)?,
+            None => {
+                let (stride, _) = s.trim_window();
+                ring_frequency_hz(window, s.tick_hz / stride as f32).map_err(Fault::Trim)?
+            }
         };
         let shear_modulus = estimate_shear_modulus(&self.params, self.bias_volts, measured_hz)
             .map_err(Fault::Trim)?;
