@@ -10,8 +10,8 @@ mod common;
 use common::Plant;
 use common::{assert_way_down, made_table};
 use de_resonator::{
-    Amplifier, Controller, DacCode, Device, DeviceParams, Event, Inputs, Phase, Refusal, Settings,
-    Tuner, REFERENCE_DEVICE,
+    Amplifier, Controller, DacCode, Device, DeviceParams, Event, Inputs, Phase, Settings, Tuner,
+    REFERENCE_DEVICE,
 };
 
 /// 0..10 kV over the full scale: a 2.5 V reference and an amplifier gain of 4000.
@@ -399,7 +399,7 @@ fn a_hold_turns_the_probe_off_and_refuses_a_trim() {
     // A trim asked for now would measure at the cap and bring the probe back on top of it
     // (the final gate's refusal, fuzz seed 11): refused, saying why.
     match c.trim_now() {
-        Err(Refusal::Held {
+        Err(de_resonator::Refusal::Held {
             needed_volts,
             cap_volts,
         }) => assert!(

@@ -496,3 +496,71 @@ fn two_failures_in_one_cell_report_the_earlier() {
     assert!((field / q.breakdown_field - 1.0).abs() < 1e-9, "{field}");
     assert!(limit.at.stretch < emi.at.stretch);
 }
+
+/// The trim's estimate is the device flashed with another μ, and the monitor checks it with
+/// the flashed device's stretch terms (the tick's budget): on random devices, μ scaled by
+/// 1/4 to 4, at random stretches in and out of the model and random voltages, the shared
+/// terms give the estimate's own margins bit for bit (every stress is in units of μ; the
+/// bias and the breakdown field carry μ, and they are the estimate's). A device that also
+/// differs elsewhere (λ2p) is not taken for one that shares them.
+#[test]
+fn a_device_differing_only_in_mu_shares_the_stretch_terms() {
+    let mut rng = Rng(0x5eed_7e55);
+    let (mut checked, mut agreed) = (0, 0);
+    while checked < 300 {
+        let p = random_device(&mut rng);
+        let Ok(flashed) = Device::new(p.cast::<f32>()) else {
+            continue;
+        };
+        let scaled = DeviceParams {
+            shear_modulus: p.shear_modulus * rng.log_range(0.25, 4.0),
+            damping: rng.range(0.0, 1.0),
+            ..p
+        };
+        let Ok(estimate) = Device::new(scaled.cast::<f32>()) else {
+            continue;
+        };
+        assert!(flashed.differs_only_in_modulus(&estimate));
+        let other = DeviceParams {
+            prestretch_2: p.prestretch_2 * 1.01,
+            ..scaled
+        };
+        if let Ok(other) = Device::new(other.cast::<f32>()) {
+            assert!(!flashed.differs_only_in_modulus(&other));
+        }
+        let (low, high) = flashed.plausible_stretch();
+        for _ in 0..20 {
+            let stretch = rng.range(f64::from(low), f64::from(high)) as f32;
+            let volts = rng.range(0.0, 3.0) as f32 * flashed.volts_per_unit();
+            let p2 = (volts / estimate.volts_per_unit()).powi(2);
+            let own = estimate.margins(stretch, p2);
+            let shared = flashed
+                .stretch_terms(stretch)
+                .margins(p2, estimate.breakdown_field_dimless());
+            let bits = |m: &de_resonator::Margins<f32>| m.values.map(f32::to_bits);
+            assert_eq!(bits(&own), bits(&shared), "{p:?} at {stretch}, {volts} V");
+            let first = estimate.first_failure(stretch, p2);
+            assert_eq!(
+                first,
+                flashed
+                    .stretch_terms(stretch)
+                    .first_failure(p2, estimate.breakdown_field_dimless())
+            );
+            // The monitor's first failure (the breakdown's sign from squares) is the
+            // margins' own, but within a rounding of the breakdown's boundary (outside the
+            // model both say loss of tension 1, the margins' NaN elsewhere aside).
+            let breakdown = own.of(FailureMode::Breakdown);
+            if !estimate.in_model(stretch) {
+                assert_eq!(first, Some(FailureMode::LossOfTension1));
+            } else if breakdown.abs() > 1e-5 * estimate.breakdown_field_dimless() {
+                assert_eq!(first, own.first_failure(), "{p:?} at {stretch}, {volts} V");
+                agreed += 1;
+            }
+        }
+        checked += 1;
+    }
+    assert!(
+        agreed > 1_000,
+        "{agreed} states in the model, off the breakdown's boundary"
+    );
+}

@@ -127,8 +127,11 @@ pub struct Controller {
 
     // State.
     state: State,
-    /// The trim's estimate of the device, once it has one.
+    /// The trim's estimate of the device, once it has one (`set_estimate`).
     estimate: Option<Device<f32>>,
+    /// Whether the estimate is the device flashed but for μ: the monitor then checks it on
+    /// the flashed device's stretch terms (`Watch::stretch`). Worked out once, when it comes.
+    estimate_shares_terms: bool,
     /// The lowest cap the measured estimates gave (trim, tracking; ∞ before any), V: it only
     /// falls.
     estimate_volts: f32,
@@ -164,6 +167,7 @@ impl Controller {
                 then_measure: false,
             },
             estimate: None,
+            estimate_shares_terms: false,
             estimate_volts: f32::INFINITY,
             max_volts,
             plan: Plan::idle(),
@@ -279,6 +283,13 @@ impl Controller {
         }
     }
 
+    /// The trim's estimate of the device from now on.
+    #[cfg(feature = "trim")]
+    fn set_estimate(&mut self, device: Device<f32>) {
+        self.estimate_shares_terms = device.differs_only_in_modulus(&self.flashed);
+        self.estimate = Some(device);
+    }
+
     /// No background job is wanted any more: a result of one handed out is dropped.
     fn drop_job(&mut self) {
         #[cfg(feature = "trim")]
@@ -329,7 +340,10 @@ impl Controller {
         let commanded_volts = self.amplifier.volts(code);
         if let Some(stretch) = inputs.stretch {
             let stuck = self.settings.stuck_samples;
-            let estimate = self.estimate.as_ref();
+            let estimate = self
+                .estimate
+                .as_ref()
+                .map(|device| (device, self.estimate_shares_terms));
             if let Some(fault) =
                 self.watch
                     .stretch(k, stretch, volts, &self.flashed, estimate, stuck)
@@ -677,7 +691,7 @@ impl Controller {
                     .code(next_bias_volts + plan.swing_volts())
                     .map_err(Fault::Amplifier)?;
                 self.take_estimate_cap(max_volts);
-                self.estimate = Some(device);
+                self.set_estimate(device);
                 self.trim.tuned = true;
                 self.plan = plan;
                 self.state = State::Ramping { then_measure: true };

@@ -197,7 +197,7 @@ impl Controller {
                 if slope.is_finite() && slope != 0.0 {
                     self.tracking.volts_squared_per_hz = Some(slope);
                 }
-                self.estimate = Some(device);
+                self.set_estimate(device);
                 Ok(self.lower_estimate_cap(k, max_volts))
             }
             TrimResult::AboveCeiling {

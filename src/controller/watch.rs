@@ -195,14 +195,15 @@ impl Watch {
     /// A stretch sample at tick `k` under `volts`: a number (`Sensor`), one a device could
     /// give (`SensorImplausible`), not the same `stuck_samples` times in a row (`SensorStuck`;
     /// `None`: no such check), and inside model.md §6 for the device flashed and for the
-    /// trim's estimate, if any (`Limit`; a state outside the model is loss of tension 1).
+    /// trim's estimate, if any, with whether it is the flashed device but for μ (`Limit`; a
+    /// state outside the model is loss of tension 1).
     pub(super) fn stretch(
         &mut self,
         k: u32,
         stretch: f32,
         volts: f32,
         flashed: &Device<f32>,
-        estimate: Option<&Device<f32>>,
+        estimate: Option<(&Device<f32>, bool)>,
         stuck_samples: Option<u32>,
     ) -> Option<Fault> {
         if !stretch.is_finite() {
@@ -228,9 +229,20 @@ impl Watch {
             });
         }
         let tick = u64::from(k);
-        for device in core::iter::once(flashed).chain(estimate) {
+        let terms = flashed.stretch_terms(stretch);
+        for (device, shares) in core::iter::once((flashed, true)).chain(estimate) {
+            // The trim's estimate is the device flashed with another μ: the stretch's terms
+            // are the same (the tick's budget: they are most of the checks' work).
+            let own;
+            let terms = if shares {
+                &terms
+            } else {
+                own = device.stretch_terms(stretch);
+                &own
+            };
             let p = volts / device.volts_per_unit();
-            if let Some(mode) = self.monitor.observe(device, tick, stretch, p * p) {
+            let breakdown = device.breakdown_field_dimless();
+            if let Some(mode) = self.monitor.observe_terms(terms, tick, p * p, breakdown) {
                 return Some(Fault::Limit { mode, tick: k });
             }
         }

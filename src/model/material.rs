@@ -22,6 +22,17 @@ pub struct Hessian<T> {
 }
 
 impl<T: Real> Hessian<T> {
+    /// This elastic Hessian at (λ1, λ2) with the electrical energy −½·Φ̄²·λ1²·λ2² added
+    /// (model.md §6.2).
+    pub fn under_bias(self, l1: T, l2: T, bias_dimless_squared: T) -> Self {
+        let p2 = bias_dimless_squared;
+        Hessian {
+            d11: self.d11 - p2 * l2 * l2,
+            d12: self.d12 - T::of(2.0) * p2 * l1 * l2,
+            d22: self.d22 - p2 * l1 * l1,
+        }
+    }
+
     /// Positive-definiteness margin: `min(d11, det)`, positive exactly when definite (NaN,
     /// and so failing, when either part is NaN).
     pub fn definiteness(&self) -> T {
@@ -139,13 +150,8 @@ impl<T: Real> Gent<T> {
     /// Hessian of the free energy under voltage control, `F/μ = Ws/μ − ½·Φ̄²·λ1²·λ2²`
     /// (model.md §6.2), with Φ̄ = (Φ/H)·√(ε/μ).
     pub fn hessian_under_bias(&self, l1: T, l2: T, bias_dimless_squared: T) -> Hessian<T> {
-        let p2 = bias_dimless_squared;
-        let h = self.hessian(l1, l2);
-        Hessian {
-            d11: h.d11 - p2 * l2 * l2,
-            d12: h.d12 - T::of(2.0) * p2 * l1 * l2,
-            d22: h.d22 - p2 * l1 * l1,
-        }
+        self.hessian(l1, l2)
+            .under_bias(l1, l2, bias_dimless_squared)
     }
 
     /// Stiffness `s1'/μ = ∂²(Ws/μ)/∂λ1²`.

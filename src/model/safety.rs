@@ -2,7 +2,7 @@
 
 pub use super::failure::FailureMode;
 use crate::device::Device;
-use crate::material::Gent;
+use crate::material::{Gent, Hessian};
 use crate::real::Real;
 use crate::roots::bisect;
 use crate::statics::Equilibrium;
@@ -44,6 +44,79 @@ impl<T: Real> Margins<T> {
     }
 }
 
+/// The checks of model.md §6 at one stretch without the bias: what a second device that
+/// differs only in μ (the trim's estimate beside the device flashed) shares with the first,
+/// so that its checks cost a few products, not the stresses again.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StretchTerms<T> {
+    in_model: bool,
+    stretch: T,
+    prestretch_2: T,
+    /// The elastic stiffness (`Device::elastic_stiffness_dimless`).
+    stiffness: T,
+    /// The elastic Hessian of A (model.md §6.2).
+    hessian: Hessian<T>,
+    tension_1b: T,
+    stress_1a: T,
+    /// λ2p·s̄2 of A and of B.
+    tension_2a: T,
+    tension_2b: T,
+    lock_up: T,
+}
+
+impl<T: Real> StretchTerms<T> {
+    /// The margins under the dimensionless bias Φ̄² for a device whose breakdown field over
+    /// √(μ/ε) is `breakdown_field_dimless` (see `Device::margins`).
+    pub fn margins(&self, bias_dimless_squared: T, breakdown_field_dimless: T) -> Margins<T> {
+        if !self.in_model {
+            return Margins::outside_model();
+        }
+        let p2 = bias_dimless_squared;
+        // §6.5: E/√(μ/ε) = Φ̄·λ·λ2p (a negative Φ̄² gives NaN, which fails).
+        let field = p2.sqrt() * self.stretch * self.prestretch_2;
+        self.with_breakdown(p2, breakdown_field_dimless - field)
+    }
+
+    /// The first check that fails under Φ̄² (see `Device::first_failure`): `margins`' signs,
+    /// the breakdown's as Ē_B² − Ē² (no square root: the monitor's every tick).
+    pub fn first_failure(
+        &self,
+        bias_dimless_squared: T,
+        breakdown_field_dimless: T,
+    ) -> Option<FailureMode> {
+        if !self.in_model {
+            return Some(FailureMode::LossOfTension1);
+        }
+        let p2 = bias_dimless_squared;
+        let b = breakdown_field_dimless;
+        let field_squared = p2 * (self.stretch * self.prestretch_2).squared();
+        let breakdown = if b > T::zero() && p2 >= T::zero() {
+            b * b - field_squared
+        } else {
+            T::of(f64::NAN)
+        };
+        self.with_breakdown(p2, breakdown).first_failure()
+    }
+
+    /// Every margin under Φ̄², the breakdown's as given.
+    fn with_breakdown(&self, p2: T, breakdown: T) -> Margins<T> {
+        let (l, l2p) = (self.stretch, self.prestretch_2);
+        let field_squared = p2 * (l * l2p).squared();
+        let tension_1a = self.stress_1a - p2 * l * l2p * l2p;
+        Margins {
+            values: [
+                self.stiffness - p2 * l2p * l2p,
+                self.hessian.under_bias(l, l2p, p2).definiteness(),
+                self.tension_1b.min_margin(tension_1a),
+                self.tension_2a - field_squared,
+                self.tension_2b,
+                breakdown,
+                self.lock_up,
+            ],
+        }
+    }
+}
+
 impl<T: Real> Device<T> {
     /// Whether the model is defined at stretch λ: both membranes have length, λ > 0 and
     /// λB > 0 (model.md §6.3). Outside it, stresses are not stresses (s1 of a negative
@@ -66,37 +139,49 @@ impl<T: Real> Device<T> {
 
     /// `margins` for a state known to be inside the model.
     fn margins_in_model(&self, stretch: T, bias_dimless_squared: T) -> Margins<T> {
+        self.stretch_terms(stretch)
+            .margins(bias_dimless_squared, self.breakdown_field_dimless())
+    }
+
+    /// The parts of the checks at stretch λ that the bias does not enter (every stress in
+    /// units of μ, so the same for devices that differ only in μ: `StretchTerms`).
+    pub fn stretch_terms(&self, stretch: T) -> StretchTerms<T> {
         let m = self.material();
         let l = stretch;
         let l2p = self.prestretch_2();
         let lb = self.passive_stretch(l);
-        let p2 = bias_dimless_squared;
-        // §6.5: E/√(μ/ε) = Φ̄·λ·λ2p (a negative Φ̄² gives NaN, which fails).
-        let field_squared = p2 * (l * l2p).squared();
-        let field = p2.sqrt() * l * l2p;
-        let tension_1a = m.stress_1(l, l2p) - p2 * l * l2p * l2p;
-        Margins {
-            values: [
-                self.stiffness_dimless(l, p2),
-                m.hessian_under_bias(l, l2p, p2).definiteness(),
-                m.stress_1(lb, l2p).min_margin(tension_1a),
-                l2p * m.stress_2(l, l2p) - field_squared,
-                l2p * m.stress_2(lb, l2p),
-                self.breakdown_field_dimless() - field,
-                m.lock_up_margin(l, l2p)
-                    .min_margin(m.lock_up_margin(lb, l2p)),
-            ],
+        StretchTerms {
+            in_model: self.in_model(l),
+            stretch: l,
+            prestretch_2: l2p,
+            stiffness: self.elastic_stiffness_dimless(l),
+            hessian: m.hessian(l, l2p),
+            tension_1b: m.stress_1(lb, l2p),
+            stress_1a: m.stress_1(l, l2p),
+            tension_2a: l2p * m.stress_2(l, l2p),
+            tension_2b: l2p * m.stress_2(lb, l2p),
+            lock_up: m
+                .lock_up_margin(l, l2p)
+                .min_margin(m.lock_up_margin(lb, l2p)),
         }
+    }
+
+    /// Whether `other` has this device's every parameter but μ (and the damping, which no
+    /// check reads): then the two share `stretch_terms`.
+    pub fn differs_only_in_modulus(&self, other: &Device<T>) -> bool {
+        let (mine, theirs) = (self.params(), other.params());
+        crate::device::DeviceParams {
+            shear_modulus: mine.shear_modulus,
+            damping: mine.damping,
+            ..*theirs
+        } == *mine
     }
 
     /// The first check (in model.md order) that fails at stretch λ under Φ̄²; loss of
     /// tension 1 for a state outside the model.
     pub fn first_failure(&self, stretch: T, bias_dimless_squared: T) -> Option<FailureMode> {
-        if !self.in_model(stretch) {
-            return Some(FailureMode::LossOfTension1);
-        }
-        self.margins_in_model(stretch, bias_dimless_squared)
-            .first_failure()
+        self.stretch_terms(stretch)
+            .first_failure(bias_dimless_squared, self.breakdown_field_dimless())
     }
 
     /// The checks at the equilibrium of the loading branch at stretch λ.
@@ -285,12 +370,30 @@ impl<T: Real> Monitor<T> {
         stretch: T,
         bias_dimless_squared: T,
     ) -> Option<FailureMode> {
-        let mode = device.first_failure(stretch, bias_dimless_squared)?;
+        let terms = device.stretch_terms(stretch);
+        self.observe_terms(
+            &terms,
+            tick,
+            bias_dimless_squared,
+            device.breakdown_field_dimless(),
+        )
+    }
+
+    /// `observe` with the stretch's terms already worked out (shared by devices that differ
+    /// only in μ), for a device of this breakdown field over √(μ/ε).
+    pub fn observe_terms(
+        &mut self,
+        terms: &StretchTerms<T>,
+        tick: u64,
+        bias_dimless_squared: T,
+        breakdown_field_dimless: T,
+    ) -> Option<FailureMode> {
+        let mode = terms.first_failure(bias_dimless_squared, breakdown_field_dimless)?;
         if self.first.is_none() {
             self.first = Some(Crossing {
                 mode,
                 tick,
-                stretch,
+                stretch: terms.stretch,
             });
         }
         Some(mode)

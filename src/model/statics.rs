@@ -67,11 +67,16 @@ impl<T: Real> Device<T> {
     /// Dimensionless ω² = s̄1'(λ) + (L1A/L1B)·s̄1'(λB) − Φ̄²·λ2p² at stretch λ under Φ̄²
     /// (model.md §5): the local stiffness, also away from equilibrium.
     pub fn stiffness_dimless(&self, stretch: T, bias_dimless_squared: T) -> T {
+        let l2p = self.prestretch_2();
+        self.elastic_stiffness_dimless(stretch) - bias_dimless_squared * l2p * l2p
+    }
+
+    /// The elastic part of `stiffness_dimless`: s̄1'(λ) + (L1A/L1B)·s̄1'(λB).
+    pub fn elastic_stiffness_dimless(&self, stretch: T) -> T {
         let m = self.material();
         let l2p = self.prestretch_2();
         m.stiffness_1(stretch, l2p)
             + self.length_ratio() * m.stiffness_1(self.passive_stretch(stretch), l2p)
-            - bias_dimless_squared * l2p * l2p
     }
 
     /// ω², rad²/s², of small oscillation about the equilibrium at stretch λ.
