@@ -18,14 +18,13 @@ cd firmware
 step "firmware: fmt, clippy on every build ($(rustc --version))"
 cargo fmt -- --check
 # QEMU builds, and the silicon builds (HSE + PLL, RTT logs) that CI cannot run.
-for f in qemu,log-semihosting qemu qemu,log-semihosting,trim qemu,log-semihosting,trim,model-sensor \
-    qemu,log-semihosting,track,probe rtt rtt,trim; do
+for f in qemu,log-semihosting qemu qemu,log-semihosting,model-sensor rtt; do
     cargo clippy --locked --release -q --bins --no-default-features --features "$f" -- -D warnings
 done
 
 step "feature sets: flash and static RAM (the budget: 128 KB of flash, sectors 0-4, and 32 KB of RAM; BENCHMARKS.md)"
-sets=(qemu qemu,log-semihosting qemu,log-semihosting,trim rtt,trim)
-names=("no logs" "+ defmt (QEMU default)" "+ trim" "silicon: RTT + trim")
+sets=(qemu qemu,log-semihosting rtt)
+names=("no logs" "+ defmt (QEMU default)" "silicon: RTT")
 printf '%-24s %-30s %8s %8s\n' "set" "features" "flash" "RAM"
 for i in "${!sets[@]}"; do
     f="${sets[$i]}"
@@ -41,7 +40,7 @@ for i in "${!sets[@]}"; do
 done
 
 step "the tick's budget: whole trim cycles (stretch; current only with λ from C under the probe) and a tracked drive counted under -icount"
-QEMU_ICOUNT=1 cargo run --locked --release -q --bin count --features trim,track,probe >../target/count-trim.log 2>&1 ||
+QEMU_ICOUNT=1 cargo run --locked --release -q --bin count >../target/count-trim.log 2>&1 ||
     { cat ../target/count-trim.log; echo "count (trim, track) failed" >&2; exit 1; }
 grep -E "trim|track" ../target/count-trim.log
 # The tick within the 1,500 instruction budget: the trim on the stretch, the trim on the
@@ -71,7 +70,7 @@ echo "on-target checks match firmware/expected/check.log"
 
 step "the firmware end to end: command port, DAC frames, a second device, bad images, tick rate"
 elf=target/thumbv7em-none-eabihf/release/firmware
-cargo build --locked --release -q --bin firmware --features trim,model-sensor
+cargo build --locked --release -q --bin firmware --features model-sensor
 cp "$elf" ../target/firmware-trim.elf
 cargo build --locked --release -q --bin firmware
 python3 ../scripts/firmware_e2e.py "$PWD/$elf" "$host_sim" "$PWD/../target/e2e" \

@@ -7,7 +7,7 @@ Unix socket, and checks every reply. The DAC frames are rebuilt from QEMU's MMIO
 (SPI1's data register) and the amplifier-enable line from GPIOB's BSRR writes.
 
 Usage: scripts/firmware_e2e.py ELF HOST_SIM WORKDIR [TRIM_ELF]
-TRIM_ELF: the firmware built with `trim,model-sensor` (the flashed device's model as the
+TRIM_ELF: the firmware built with `model-sensor` (the flashed device's model as the
 displacement sensor), for the trim on the chip.
 """
 

@@ -143,12 +143,8 @@ fn main() -> ! {
         n
     );
 
-    #[cfg(feature = "trim")]
-    {
-        trim_cycle(Sensing::Stretch, None, 0);
-        trim_cycle(Sensing::Current, None, 0);
-    }
-    #[cfg(feature = "track")]
+    trim_cycle(Sensing::Stretch, None, 0);
+    trim_cycle(Sensing::Current, None, 0);
     trim_cycle(Sensing::Stretch, Some(0.2), 3000);
 
     defmt::info!(
@@ -220,7 +216,6 @@ fn math_kernels() {
 }
 
 /// How the controller senses the plant in a counted cycle.
-#[cfg(feature = "trim")]
 #[derive(Clone, Copy, PartialEq)]
 enum Sensing {
     /// The displacement sensor's stretch.
@@ -231,7 +226,6 @@ enum Sensing {
 }
 
 /// The membrane's charge C(λ)·Φ, C(λ) = ε·L1A·L2·λ²·λ2p²/H (model.md §8), C.
-#[cfg(feature = "trim")]
 fn charge_coulombs(p: &de_resonator::DeviceParams<f32>, stretch: f32, volts: f32) -> f32 {
     p.capacitance_farads(stretch) * volts
 }
@@ -241,7 +235,6 @@ fn charge_coulombs(p: &de_resonator::DeviceParams<f32>, stretch: f32, volts: f32
 /// stretch (or its current) the sensor: the worst tick of the cycle, and the solve (outside
 /// the tick) apart. With `track_seconds`, on for `track_ticks` of tracked drive (the plant
 /// damped to Q = 30, as a driven resonance needs), counting the tracked ticks' worst too.
-#[cfg(feature = "trim")]
 fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
     use de_resonator::{Phase, Settings};
     let Ok(amp) = amplifier() else { exit(1) };
@@ -251,8 +244,7 @@ fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
         ac_hz: if track_seconds.is_some() { 44.0 } else { 40.0 },
         track_seconds,
         // Self-sensing with the `probe` feature: λ from C as well, under a ±20 V probe.
-        probe_volts: (cfg!(feature = "probe") && matches!(sensing, Sensing::Current))
-            .then_some(20.0),
+        probe_volts: matches!(sensing, Sensing::Current).then_some(20.0),
         probe_hz: 500.0,
         ..settings()
     };
@@ -325,10 +317,7 @@ fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
     let what = match (sensing, track_seconds) {
         (Sensing::Stretch, None) => "trim",
         (Sensing::Stretch, Some(_)) => "trim then tracking",
-        (Sensing::Current, _) if s.probe_volts.is_some() => {
-            "sensorless trim (the current only, and λ from C under the probe)"
-        }
-        (Sensing::Current, _) => "sensorless trim (the current only)",
+        (Sensing::Current, _) => "sensorless trim (the current only, and λ from C under the probe)",
     };
     defmt::info!(
         "controller tick with {=str}, worst over a whole trim cycle: {=u32} instructions ({})",
@@ -342,7 +331,6 @@ fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
         solves,
         solve_most
     );
-    #[cfg(feature = "probe")]
     if let Some(sensed) = c.sensed() {
         let (_, high) = dev.plausible_stretch();
         let rest = dev.stretch_for_bias(c.plan().bias_volts, high);
@@ -353,7 +341,6 @@ fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
             rest.unwrap_or(f32::NAN)
         );
     }
-    #[cfg(feature = "track")]
     if track_seconds.is_some() {
         let hz = c.tracked().map_or(f32::NAN, |l| l.natural_hz);
         let q = c.tracked().map_or(f32::NAN, |l| l.quality_factor);
