@@ -1336,7 +1336,7 @@ fn the_leakage_watch_measures_the_dc_current_against_the_voltage() {
 }
 
 /// At faster ticks the trim's window averages strides of ticks into its 512 samples: with
-/// default settings (0.5 s window) the trim tunes at 2 and 4 kHz as at 1 kHz, on the model's
+/// default settings (0.5 s window) the trim tunes at 1.5, 2, 3 and 4 kHz as at 1 kHz, on the model's
 /// plant with μ 2% above the device told (Q 200): the plant's own frequency at the bias it
 /// ends at (f64 statics, model.md §5) within the tolerance, 1e-3, of the target.
 #[cfg(feature = "trim")]
@@ -1351,7 +1351,8 @@ fn the_trim_tunes_at_faster_ticks_with_default_settings() {
         200.0,
     );
     let target_hz = 44.5;
-    for tick_hz in [1000.0f32, 2000.0, 4000.0] {
+    // Strides of 1 (500 samples), 2 (375), 2 (500), 3 (500) and 4 (500).
+    for tick_hz in [1000.0f32, 1500.0, 2000.0, 3000.0, 4000.0] {
         let settings = Settings {
             trim_tolerance: Some(1e-3),
             tick_hz,
@@ -1385,7 +1386,7 @@ fn the_trim_tunes_at_faster_ticks_with_default_settings() {
     }
 }
 
-/// The window's limit, said: at 1 kHz a 1 s window (averaged in strides of 2, 500 Hz, 11
+/// The window's limits, said: at least three target periods; at 1 kHz a 1 s window (averaged in strides of 2, 500 Hz, 11
 /// samples a period at 44.5 Hz) is taken; a 2 s one (strides of 4, 5.6 samples a period, past
 /// the 64 periods 512 samples hold at 8 a period) is refused, the message saying the limit.
 #[cfg(feature = "trim")]
@@ -1397,6 +1398,15 @@ fn a_trim_window_too_long_for_its_samples_is_refused_saying_why() {
         ..Settings::for_target(44.5)
     };
     assert!(start(with_window(1.0)).is_ok());
+    // Three periods at least (MIN_CROSSINGS both ways): 3/44.5 Hz = 67.4 ms.
+    assert!(start(with_window(0.068)).is_ok());
+    assert!(matches!(
+        start(with_window(0.067)),
+        Err(Fault::Setting {
+            setting: Setting::TrimWindowSeconds,
+            ..
+        })
+    ));
     let fault = start(with_window(2.0)).unwrap_err();
     assert_eq!(
         fault,

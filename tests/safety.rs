@@ -217,6 +217,24 @@ fn nan_state_is_not_safe() {
     let d = Device::new(REFERENCE_DEVICE).unwrap();
     assert!(d.margins(f64::NAN, 0.0).first_failure().is_some());
     assert!(d.margins(2.1, f64::NAN).first_failure().is_some());
+    // The monitor's path (the breakdown's sign from squares, on the stretch terms): a NaN or
+    // negative Φ̄², or a breakdown field that is not a positive number, fails too, in f32 as
+    // flashed (2.1: inside the model, every check passing at zero bias).
+    let d = Device::new(REFERENCE_DEVICE.cast::<f32>()).unwrap();
+    assert_eq!(d.first_failure(2.1, 0.0), None);
+    let terms = d.stretch_terms(2.1);
+    for p2 in [f32::NAN, -1e-6, f32::NEG_INFINITY] {
+        assert!(d.first_failure(2.1, p2).is_some(), "{p2}");
+    }
+    for b in [f32::NAN, 0.0, -1.0] {
+        assert_eq!(
+            terms.first_failure(0.0, b),
+            Some(FailureMode::Breakdown),
+            "{b}"
+        );
+    }
+    let mut monitor = de_resonator::Monitor::new();
+    assert!(monitor.observe(&d, 0, 2.1, f32::NAN).is_some());
 }
 
 /// Issue 12.2. A state with λB ≤ 0 (the bars at or past the far end: λ ≥ L1·λ1p/L1A) is

@@ -106,8 +106,10 @@ fn code(refusal: &Refusal) -> ErrorCode {
     match refusal {
         Refusal::Busy { .. } => ErrorCode::Busy,
         Refusal::Faulted { .. } => ErrorCode::Faulted,
-        Refusal::Checks(_) | Refusal::Stopped | Refusal::Held { .. } => ErrorCode::Refused,
-        Refusal::NoTrim => ErrorCode::Unsupported,
+        // Every build has the trim: no trim means no `trim_tolerance` set, a refusal.
+        Refusal::Checks(_) | Refusal::Stopped | Refusal::Held { .. } | Refusal::NoTrim => {
+            ErrorCode::Refused
+        }
     }
 }
 

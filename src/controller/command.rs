@@ -43,7 +43,10 @@ impl fmt::Display for Refusal {
                 write!(f, "faulted, down to 0 V ({fault}): `clear` once there")
             }
             Refusal::Checks(fault) => write!(f, "{fault}"),
-            Refusal::NoTrim => write!(f, "no trim: set trim_tolerance (needs the trim build)"),
+            Refusal::NoTrim => write!(
+                f,
+                "no trim: set trim_tolerance (in a build with the trim: every firmware build)"
+            ),
             Refusal::Stopped => write!(
                 f,
                 "stopped at 0 V: a trim would switch the high voltage on; `target` drives"

@@ -412,7 +412,7 @@ impl Controller {
             State::Ramping { then_measure } if self.plan.ramp_volts(k) == self.plan.bias_volts => {
                 // The probe, off on a way down from above the cap (`adopt`), rides again.
                 self.plan
-                    .probe_back(self.settings.probe_volts.unwrap_or(0.0), self.max_volts);
+                    .probe_back(self.settings.probe_volts.unwrap_or(0.0), self.max_volts)?;
                 self.hold_from(k, then_measure);
                 Ok(Some(Event::AtBias {
                     volts: self.plan.bias_volts,
@@ -451,7 +451,7 @@ impl Controller {
             }
             #[cfg(feature = "trim")]
             State::Measuring => {
-                self.record(k, ring);
+                self.record(k, ring)?;
                 Ok(None)
             }
             #[cfg(feature = "trim")]
@@ -597,17 +597,18 @@ impl Controller {
         self.state = State::Measuring;
     }
 
-    /// Record this tick's sample; at the window's end, hand the solve out. From the current,
+    /// Record this tick's sample; at the window's end, hand the solve out and bring the probe
+    /// back (`Plan::probe_back`: a fault if it no longer fits). From the current,
     /// the ring is its running sum, the charge (Q = C(λ)·Φ at a constant bias, model.md §8,
     /// so it follows λ): the sum turns the monitor's noise into a slow wander, which the
     /// crossings' fit averages out, where the current's own crossings would multiply. The
     /// window's first tenth of a target period is skipped (NaN): the step back from the
     /// pulse charges the membrane then (C·dΦ/dt, far above the ring's Φ·C'·dλ/dt).
-    fn record(&mut self, k: u32, ring: Ring) {
+    fn record(&mut self, k: u32, ring: Ring) -> Result<(), Fault> {
         let s = self.settings;
         let (stride, len) = s.trim_window();
         let Some(at) = k.checked_sub(self.trim.window_from) else {
-            return;
+            return Ok(());
         };
         let settling = (0.1 * s.tick_hz / s.target_hz) as u32 + 1;
         let sample = match ring {
@@ -626,8 +627,9 @@ impl Controller {
         if at.saturating_add(1) >= stride.saturating_mul(len as u32) {
             self.state = State::Solving;
             self.plan
-                .probe_back(s.probe_volts.unwrap_or(0.0), self.max_volts);
+                .probe_back(s.probe_volts.unwrap_or(0.0), self.max_volts)?;
         }
+        Ok(())
     }
 
     /// Pause the AC and trim again from the bias held (the old secant pair is stale: the

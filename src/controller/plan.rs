@@ -200,12 +200,21 @@ impl Plan {
     }
 
     /// The probe of `probe_volts` back on at the bias (after a trim's window, at the end of a
-    /// way down it was off for), where the bias, the AC and it fit under `max_volts`; off
-    /// otherwise (`check_range` made sure it fits on every path planned: this keeps the
-    /// final gate from being the one to say no where a path was not).
-    pub(super) fn probe_back(&mut self, probe_volts: f32, max_volts: f32) {
-        let fits = self.bias_volts + self.ac_volts + probe_volts <= max_volts;
-        self.probe_volts = if fits { probe_volts } else { 0.0 };
+    /// way down it was off for), where the bias, the AC and it fit under `max_volts`: `Ok`.
+    /// Otherwise it stays off and a `Setting` fault names it (`check_range` made sure it fits
+    /// on every path planned: this keeps the final gate from being the one to say no where a
+    /// path was not, and a sensorless drive from going on without the probe it reads).
+    pub(super) fn probe_back(&mut self, probe_volts: f32, max_volts: f32) -> Result<(), Fault> {
+        if self.bias_volts + self.ac_volts + probe_volts <= max_volts {
+            self.probe_volts = probe_volts;
+            Ok(())
+        } else {
+            self.probe_volts = 0.0;
+            Err(Fault::Setting {
+                setting: Setting::ProbeVolts,
+                value: probe_volts,
+            })
+        }
     }
 
     /// The most the voltage swings about the bias: the AC and the probe, V.
@@ -351,14 +360,22 @@ mod tests {
     }
 
     /// The probe comes back where bias + AC + probe fits the cap (4000 + 30 + 20 V ≤ 4050 V),
-    /// not a volt under it (a bias held at the cap has no room for it).
+    /// not a volt under it (a bias held at the cap has no room for it): a fault naming it.
     #[test]
     fn the_probe_comes_back_only_where_it_fits() {
         let mut plan = probed(3000.0, 4000.0);
         plan.ac_volts = 30.0;
-        plan.probe_back(20.0, 4050.0);
+        assert_eq!(plan.probe_back(20.0, 4050.0), Ok(()));
         assert_eq!(plan.probe_volts, 20.0);
-        plan.probe_back(20.0, 4049.0);
+        assert_eq!(
+            plan.probe_back(20.0, 4049.0),
+            Err(Fault::Setting {
+                setting: Setting::ProbeVolts,
+                value: 20.0
+            })
+        );
         assert_eq!(plan.probe_volts, 0.0);
+        // No probe asked for: nothing to bring back, whatever the cap.
+        assert_eq!(plan.probe_back(0.0, 4030.0), Ok(()));
     }
 }

@@ -38,7 +38,8 @@ pub struct Settings {
     /// stretch sensor or the amplifier's current monitor (`Inputs`), and the `cross_check`
     /// stage (the model is re-solved on the chip).
     pub trim_tolerance: Option<f32>,
-    /// The ring measured after each pulse, s (at most `MAX_WINDOW` ticks).
+    /// The ring measured after each pulse, s: at least `MIN_CROSSINGS`/2 target periods, and
+    /// averaged into at most `MAX_WINDOW` samples, at least `MIN_SAMPLES_PER_PERIOD` a period.
     pub trim_window_seconds: f32,
     /// The pulse's drop below the bias, V, for half a period of the target.
     pub trim_pulse_volts: f32,
@@ -251,11 +252,13 @@ impl Settings {
         positive(Setting::TrimWindowSeconds, self.trim_window_seconds)?;
         let (stride, _) = self.trim_window();
         let per_period = tick_hz / (stride as f32 * self.target_hz);
+        let periods = self.trim_window_seconds * self.target_hz;
         // (A target out of range is the tuner's to refuse, by name.)
         let target_ok = self.target_hz > 0.0 && self.target_hz.is_finite();
         if self.trim_tolerance.is_some()
             && target_ok
-            && !(per_period >= crate::trim::MIN_SAMPLES_PER_PERIOD)
+            && !(per_period >= crate::trim::MIN_SAMPLES_PER_PERIOD
+                && periods >= crate::trim::MIN_CROSSINGS as f32 / 2.0)
         {
             let window = self.trim_window_seconds;
             return Err(Fault::Setting {
@@ -432,8 +435,8 @@ impl Setting {
             Setting::Agreement | Setting::AmplifierToleranceVolts => "> 0",
             Setting::TrimTolerance => "> 0 or off, in a build with the trim",
             Setting::TrimWindowSeconds => {
-                "> 0, and once its ticks are averaged into 512 samples, at least 8 samples per \
-                 target period (at most 64 periods)"
+                "at least 3 target periods long, and once its ticks are averaged into 512 \
+                 samples, at least 8 samples per target period (at most 64 periods)"
             }
             Setting::TrimPulseVolts => ">= 0",
             Setting::TrimProbeFraction => "in (0, 1]",

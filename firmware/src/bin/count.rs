@@ -243,7 +243,7 @@ fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
         ac_volts: 100.0,
         ac_hz: if track_seconds.is_some() { 44.0 } else { 40.0 },
         track_seconds,
-        // Self-sensing with the `probe` feature: λ from C as well, under a ±20 V probe.
+        // Self-sensing: λ from C as well, under a ±20 V probe.
         probe_volts: matches!(sensing, Sensing::Current).then_some(20.0),
         probe_hz: 500.0,
         ..settings()
@@ -288,6 +288,9 @@ fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
             worst_tracked = worst_tracked.max(n);
         }
         if let Some(job) = c.trim_job() {
+            if solves == 0 && sensing == Sensing::Stretch && track_seconds.is_none() {
+                let _ = deepest("the trim's solve (the work task)", || job.solve());
+            }
             let mut result = None;
             let n = count(1, || result = Some(job.solve()));
             solves += 1;
