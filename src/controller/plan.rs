@@ -205,7 +205,9 @@ impl Plan {
     /// on every path planned: this keeps the final gate from being the one to say no where a
     /// path was not, and a sensorless drive from going on without the probe it reads).
     pub(super) fn probe_back(&mut self, probe_volts: f32, max_volts: f32) -> Result<(), Fault> {
-        if self.bias_volts + self.ac_volts + probe_volts <= max_volts {
+        // No probe asked for: nothing comes back, whatever the cap (a cap below the bias is
+        // the way down's business, not the probe's).
+        if !(probe_volts > 0.0) || self.bias_volts + self.ac_volts + probe_volts <= max_volts {
             self.probe_volts = probe_volts;
             Ok(())
         } else {
@@ -375,7 +377,10 @@ mod tests {
             })
         );
         assert_eq!(plan.probe_volts, 0.0);
-        // No probe asked for: nothing to bring back, whatever the cap.
+        // No probe asked for: nothing to bring back, whatever the cap (found by the fuzz test:
+        // tampered results had lowered the cap below zero).
         assert_eq!(plan.probe_back(0.0, 4030.0), Ok(()));
+        assert_eq!(plan.probe_back(0.0, -1.0), Ok(()));
+        assert_eq!(plan.probe_volts, 0.0);
     }
 }
