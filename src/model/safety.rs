@@ -74,7 +74,8 @@ impl<T: Real> StretchTerms<T> {
         let p2 = bias_dimless_squared;
         // §6.5: E/√(μ/ε) = Φ̄·λ·λ2p (a negative Φ̄² gives NaN, which fails).
         let field = p2.sqrt() * self.stretch * self.prestretch_2;
-        self.with_breakdown(p2, breakdown_field_dimless - field)
+        let field_squared = p2 * (self.stretch * self.prestretch_2).squared();
+        self.with_breakdown(p2, field_squared, breakdown_field_dimless - field)
     }
 
     /// The first check that fails under Φ̄² (see `Device::first_failure`): `margins`' signs,
@@ -95,13 +96,13 @@ impl<T: Real> StretchTerms<T> {
         } else {
             T::of(f64::NAN)
         };
-        self.with_breakdown(p2, breakdown).first_failure()
+        self.with_breakdown(p2, field_squared, breakdown)
+            .first_failure()
     }
 
-    /// Every margin under Φ̄², the breakdown's as given.
-    fn with_breakdown(&self, p2: T, breakdown: T) -> Margins<T> {
+    /// Every margin under Φ̄² (the field's square (Φ̄·λ·λ2p)² given), the breakdown's as given.
+    fn with_breakdown(&self, p2: T, field_squared: T, breakdown: T) -> Margins<T> {
         let (l, l2p) = (self.stretch, self.prestretch_2);
-        let field_squared = p2 * (l * l2p).squared();
         let tension_1a = self.stress_1a - p2 * l * l2p * l2p;
         Margins {
             values: [
@@ -131,14 +132,6 @@ impl<T: Real> Device<T> {
     /// differ along a trajectory by the bars' inertia). Outside the model (see
     /// [`Device::in_model`]) loss of tension 1 is −1 and every other margin NaN: none holds.
     pub fn margins(&self, stretch: T, bias_dimless_squared: T) -> Margins<T> {
-        if !self.in_model(stretch) {
-            return Margins::outside_model();
-        }
-        self.margins_in_model(stretch, bias_dimless_squared)
-    }
-
-    /// `margins` for a state known to be inside the model.
-    fn margins_in_model(&self, stretch: T, bias_dimless_squared: T) -> Margins<T> {
         self.stretch_terms(stretch)
             .margins(bias_dimless_squared, self.breakdown_field_dimless())
     }
