@@ -38,6 +38,22 @@ def check(ok, what):
         failures.append(what)
 
 
+def static_ram(elf):
+    """The ELF's static RAM: .data, .bss and .uninit, bytes (as scripts/firmware.sh sizes it)."""
+    out = subprocess.run(["size", "-A", elf], capture_output=True, text=True, check=True).stdout
+    return sum(int(line.split()[1]) for line in out.splitlines()
+               if line.split()[:1] and line.split()[0] in (".data", ".bss", ".uninit"))
+
+
+def ram_within_budget(status, elf, after):
+    """The stack's high-water mark (painted at boot) on top of the static RAM: within the
+    32 KB budget (BENCHMARKS.md)."""
+    stack, ram = int(status["stack_bytes"]), static_ram(elf)
+    check(stack + ram <= 32 * 1024,
+          f"RAM after {after}: stack high-water {stack} B + static {ram} B = {stack + ram} B "
+          f"(budget 32 KB)")
+
+
 def host_sim(*args):
     done = subprocess.run([HOST_SIM, *args], capture_output=True, text=True)
     if done.returncode != 0:
@@ -403,7 +419,6 @@ def main():
         check(reply == "ok trim: measuring", f"trim: {reply}")
         time.sleep(0.5)
         s = fw.wait_phase(("driving", "faulted"))
-        fw.stop()
         log = open(fw.log).read()
         trims = re.findall(r"Trimmed \{ bias_volts: ([0-9.]+), measured_hz: ([0-9.]+), "
                            r"shear_modulus: ([0-9.]+)", log)
@@ -414,12 +429,14 @@ def main():
         check(worst <= 1e-3, f"the trims' shear modulus within {worst:.1e} of the device's")
         check(abs(float(trims[-1][1]) - 44.0) <= 44.0 * 1e-3,
               f"the asked trim measured {trims[-1][1]} Hz for 44 Hz (tolerance 1e-3)")
-        # RAM: the stack's high-water mark (painted) after three trims and the drive, on top of
-        # the static RAM (scripts/firmware.sh sizes it). With the static RAM it is over the
-        # 32 KB budget (31,856 B measured on 2026-12-02: BENCHMARKS.md, issue 27), held below
-        # 34 KB here so that it does not grow unseen.
-        stack = int(s["stack_bytes"])
-        check(stack <= 34 * 1024, f"stack high-water {stack} B after the trims (held below 34 KB)")
+        # A replan while driving (the new plan's checks in the command task, the tick
+        # preempting it): the deepest stack the port reaches, after the boot's.
+        reply = fw.ask("target 43.5")
+        check(reply.startswith("ok target_hz=43.5"), f"a replan while driving: {reply}")
+        s = fw.wait_phase(("driving", "faulted"))
+        check(s["fault"] == "none", f"driving the new plan: {s['phase']}")
+        fw.stop()
+        ram_within_budget(s, TRIM_ELF, "the boot's trims, a trim asked for and a replan")
 
         print("== a runtime fault latches: down at the slew rate, 0 V, until clear; clear with the "
               "cause still there stays faulted")
@@ -464,6 +481,7 @@ def main():
         check(s["phase"] == "faulted" and "not a number" in s["fault"],
               f"the sensor still fails: faulted again at once: {s['phase']}, {s['fault']}")
         fw.stop()
+        ram_within_budget(s, TRIM_ELF, "a fault's descent and a clear (a whole boot) while ticking")
         frames, enable = fw.frames()
         later = [(f[1] << 8) | f[2] for f in frames[sent:]]
         check(all(c == 0 for c in later) and enable.count("high") == highs,

@@ -102,11 +102,29 @@ fn stages_one_by_one_are_start() {
     };
     let table = reference_table();
     let (all, boot_all) = Controller::start(params, &table, amplifier(), settings).unwrap();
-    let (c, boot) = Controller::from_table(params, &table, amplifier(), settings).unwrap();
-    let (c, boot) = c.cross_check(boot).unwrap();
-    let (c, boot) = c.check_plan(boot).unwrap();
+    let (mut c, boot) = Controller::from_table(params, &table, amplifier(), settings).unwrap();
+    let boot = c.cross_check(boot).unwrap();
+    let boot = c.check_plan(boot).unwrap();
     assert_eq!(boot, boot_all);
     assert_eq!(c.plan(), all.plan());
+    // In place, as the firmware boots: the same controller in the slot, over whatever the
+    // slot held; a refusal leaves it empty, never the old controller nor a half-checked one.
+    let mut slot = Some(c);
+    let boot = Controller::start_in(&mut slot, params, &table, amplifier(), settings).unwrap();
+    assert_eq!(boot, boot_all);
+    assert_eq!(slot.as_ref().unwrap().plan(), all.plan());
+    // Refused before the controller is built (a torn table, a target off the table) and
+    // after (an amplifier that cannot reach the bias: the plan's stage).
+    let small = Amplifier::new(2.5, 1000.0).unwrap();
+    for (table, amplifier, settings) in [
+        (&table[..table.len() - 1], amplifier(), settings),
+        (&table[..], amplifier(), Settings::for_target(1e6)),
+        (&table[..], small, settings),
+    ] {
+        let mut slot = Some(all.clone());
+        let fault = Controller::start_in(&mut slot, params, table, amplifier, settings);
+        assert!(fault.is_err() && slot.is_none(), "{fault:?}");
+    }
 }
 
 #[test]

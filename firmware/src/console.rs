@@ -360,13 +360,20 @@ impl Console {
             );
             return;
         }
-        match Controller::start(image.params, image.table, amplifier, self.settings) {
-            Ok((fresh, boot)) => {
+        let mut fresh = None;
+        match Controller::start_in(
+            &mut fresh,
+            image.params,
+            image.table,
+            amplifier,
+            self.settings,
+        ) {
+            Ok(boot) => {
                 let bias = boot.bias_volts;
                 let swapped = controller.with(|c| {
                     let idle = c.as_ref().is_none_or(|c| c.last_volts() == 0.0);
                     if idle {
-                        *c = Some(fresh);
+                        *c = fresh.take();
                     }
                     idle
                 });

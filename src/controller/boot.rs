@@ -33,6 +33,55 @@ pub struct Boot {
     pub plan_stretch: Option<(f32, f32)>,
 }
 
+/// What `from_table` checks before a controller exists (small: the boot builds the controller
+/// once, in place, and never moves it through the stages).
+struct Checked {
+    device: Device<f32>,
+    /// The table's top, its bias for the target and the cap it gives, V.
+    top_volts: f32,
+    table_volts: f32,
+    max_volts: f32,
+}
+
+impl Checked {
+    /// Check the device, the settings and the table; the cap from the table's top scaled to
+    /// the settings' margin, top·min(1, (1 − margin)/(1 − table margin)), at most
+    /// (1 − margin)·limit.
+    fn new(params: DeviceParams<f32>, table: &[u8], settings: &Settings) -> Result<Self, Fault> {
+        let device = Device::new(params).map_err(Fault::Device)?;
+        settings.check()?;
+        let table = Table::parse(table).map_err(Fault::Table)?;
+        table.check_device(&params).map_err(Fault::Table)?;
+        let top_volts = table.max_volts();
+        Ok(Self {
+            device,
+            top_volts,
+            table_volts: table.bias_volts(settings.target_hz).map_err(Fault::Table)?,
+            max_volts: top_volts * ((1.0 - settings.margin) / (1.0 - table.margin())).min(1.0),
+        })
+    }
+
+    /// A controller with its first plan from the table, ramping from `from_volts`.
+    fn controller(&self, amplifier: Amplifier, settings: Settings, from_volts: f32) -> Controller {
+        let mut controller = Controller::new(self.device, amplifier, settings, self.max_volts);
+        controller.plan.start_volts = from_volts;
+        controller
+    }
+
+    /// The first plan set, the boot so far.
+    fn plan(&self, controller: &mut Controller) -> Result<Boot, Fault> {
+        Ok(Boot {
+            bias_volts: self.table_volts,
+            table_volts: self.table_volts,
+            table_top_volts: self.top_volts,
+            max_volts: self.max_volts,
+            limit: None,
+            plan_ticks: controller.set_plan(self.table_volts)?,
+            plan_stretch: None,
+        })
+    }
+}
+
 impl Controller {
     /// Every check: `from_table`, then `cross_check`, then `check_plan`.
     pub fn start(
@@ -41,50 +90,57 @@ impl Controller {
         amplifier: Amplifier,
         settings: Settings,
     ) -> Result<(Self, Boot), Fault> {
-        let (controller, boot) = Self::from_table(params, table, amplifier, settings)?;
-        let (controller, boot) = controller.cross_check(boot)?;
-        controller.check_plan(boot)
+        let (mut controller, boot) = Self::from_table(params, table, amplifier, settings)?;
+        let boot = controller.cross_check(boot)?;
+        let boot = controller.check_plan(boot)?;
+        Ok((controller, boot))
+    }
+
+    /// `start` with the controller built in `slot`, where it stays: no copy of it on the
+    /// stack (the firmware's RAM). On a refusal the slot is left empty.
+    pub fn start_in(
+        slot: &mut Option<Self>,
+        params: DeviceParams<f32>,
+        table: &[u8],
+        amplifier: Amplifier,
+        settings: Settings,
+    ) -> Result<Boot, Fault> {
+        let result =
+            Self::checks_in(slot, params, table, amplifier, settings, 0.0).map(|(_, boot)| boot);
+        if result.is_err() {
+            *slot = None;
+        }
+        result
+    }
+
+    /// Every boot stage on the controller built in `slot`, the plan ramping from `from_volts`.
+    pub(super) fn checks_in<'s>(
+        slot: &'s mut Option<Self>,
+        params: DeviceParams<f32>,
+        table: &[u8],
+        amplifier: Amplifier,
+        settings: Settings,
+        from_volts: f32,
+    ) -> Result<(&'s mut Self, Boot), Fault> {
+        let checked = Checked::new(params, table, &settings)?;
+        let controller = slot.insert(checked.controller(amplifier, settings, from_volts));
+        let boot = checked.plan(controller)?;
+        let boot = controller.cross_check(boot)?;
+        let boot = controller.check_plan(boot)?;
+        Ok((controller, boot))
     }
 
     /// Check the device, the settings and the table, and plan from the table alone: the bias
-    /// by interpolation, commands capped at the table's top scaled to the settings' margin,
-    /// top·min(1, (1 − margin)/(1 − table margin)), which is at most (1 − margin)·limit.
+    /// by interpolation, commands capped at the table's top scaled to the settings' margin.
     pub fn from_table(
         params: DeviceParams<f32>,
         table: &[u8],
         amplifier: Amplifier,
         settings: Settings,
     ) -> Result<(Self, Boot), Fault> {
-        Self::from_table_at(params, table, amplifier, settings, 0.0)
-    }
-
-    /// `from_table` for a plan that ramps from `from_volts` (a replan while running).
-    pub(super) fn from_table_at(
-        params: DeviceParams<f32>,
-        table: &[u8],
-        amplifier: Amplifier,
-        settings: Settings,
-        from_volts: f32,
-    ) -> Result<(Self, Boot), Fault> {
-        let device = Device::new(params).map_err(Fault::Device)?;
-        settings.check()?;
-        let table = Table::parse(table).map_err(Fault::Table)?;
-        table.check_device(&params).map_err(Fault::Table)?;
-        let top = table.max_volts();
-        let max_volts = top * ((1.0 - settings.margin) / (1.0 - table.margin())).min(1.0);
-        let table_volts = table.bias_volts(settings.target_hz).map_err(Fault::Table)?;
-        let mut controller = Controller::new(device, amplifier, settings, max_volts);
-        controller.plan.start_volts = from_volts;
-        let plan_ticks = controller.set_plan(table_volts)?;
-        let boot = Boot {
-            bias_volts: table_volts,
-            table_volts,
-            table_top_volts: top,
-            max_volts,
-            limit: None,
-            plan_ticks,
-            plan_stretch: None,
-        };
+        let checked = Checked::new(params, table, &settings)?;
+        let mut controller = checked.controller(amplifier, settings, 0.0);
+        let boot = checked.plan(&mut controller)?;
         Ok((controller, boot))
     }
 
@@ -92,7 +148,7 @@ impl Controller {
     /// scaled down to a larger margin than the table's) must lie below (1 − margin)·limit,
     /// and the natural frequencies at the two biases must agree. The controller then drives
     /// the solve's bias, capped at (1 − margin)·(1 − F32_GUARD)·limit.
-    pub fn cross_check(mut self, boot: Boot) -> Result<(Self, Boot), Fault> {
+    pub fn cross_check(&mut self, boot: Boot) -> Result<Boot, Fault> {
         let settings = self.settings;
         let tuner = Tuner::new(self.flashed);
         let limit = tuner.limit();
@@ -125,20 +181,19 @@ impl Controller {
         self.ceiling_volts = max_volts;
         self.set_caps(max_volts, self.estimate_volts);
         let plan_ticks = self.set_plan(solved.volts)?;
-        let boot = Boot {
+        Ok(Boot {
             bias_volts: solved.volts,
             max_volts,
             limit: Some(*limit),
             plan_ticks,
             ..boot
-        };
-        Ok((self, boot))
+        })
     }
 
     /// Run the whole plan through the model (f32 RK4 under the monitor, from rest at the
     /// equilibrium of its first voltage: the pre-stretch from 0 V) and refuse it if a limit
     /// is crossed on the way.
-    pub fn check_plan(self, boot: Boot) -> Result<(Self, Boot), Fault> {
+    pub fn check_plan(&self, boot: Boot) -> Result<Boot, Fault> {
         let from_volts = self.plan.start_volts;
         let device = &self.flashed;
         let start = if from_volts > 0.0 {
@@ -156,11 +211,10 @@ impl Controller {
         let stretch =
             self.plan
                 .run_in_model(device, self.settings.tick_hz, boot.plan_ticks, start)?;
-        let boot = Boot {
+        Ok(Boot {
             plan_stretch: Some(stretch),
             ..boot
-        };
-        Ok((self, boot))
+        })
     }
 
     /// Plan a ramp from where the present plan starts (0 V at boot) to the bias for

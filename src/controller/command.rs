@@ -73,12 +73,19 @@ pub struct ReplanJob {
     plan: Plan,
 }
 
-/// A checked new plan, for `adopt`.
-#[derive(Clone, Debug)]
+/// A checked new plan, for `adopt`: what the boot stages left in a fresh controller (its
+/// plan, settings, cap and state), not the controller itself (3 KB on the firmware's stack).
+#[derive(Clone, Copy, Debug)]
 pub struct Replanned {
-    controller: Controller,
-    boot: Boot,
     plan: Plan,
+    settings: Settings,
+    max_volts: f32,
+    state: State,
+    /// Whether the fresh plan holds the tuned bias (not a trim's probe bias).
+    tuned: bool,
+    boot: Boot,
+    /// The plan in force when the job was made.
+    was: Plan,
 }
 
 impl Replanned {
@@ -92,22 +99,24 @@ impl ReplanJob {
     /// Every boot check for the new settings (`from_table`, `cross_check`, `check_plan`),
     /// the ramp starting at the present bias; long work, for a low-priority task.
     pub fn solve(&self, table: &[u8]) -> Result<Replanned, Refusal> {
-        let from_volts = self.plan.bias_volts;
-        let started = Controller::from_table_at(
+        let mut slot = None;
+        let (fresh, boot) = Controller::checks_in(
+            &mut slot,
             self.params,
             table,
             self.amplifier,
             self.settings,
-            from_volts,
+            self.plan.bias_volts,
         )
-        .and_then(|(c, boot)| c.cross_check(boot))
-        .and_then(|(c, boot)| c.check_plan(boot))
         .map_err(Refusal::Checks)?;
-        let (controller, boot) = started;
         Ok(Replanned {
-            controller,
+            plan: fresh.plan,
+            settings: fresh.settings,
+            max_volts: fresh.max_volts,
+            state: fresh.state,
+            tuned: fresh.tuned(),
             boot,
-            plan: self.plan,
+            was: self.plan,
         })
     }
 }
@@ -163,32 +172,27 @@ impl Controller {
     /// made.
     pub fn adopt(&mut self, replanned: Replanned) -> Result<Boot, Refusal> {
         self.steady()?;
-        if self.plan != replanned.plan {
+        if self.plan != replanned.was {
             return Err(Refusal::Busy {
                 phase: self.phase(),
             });
         }
-        let fresh = replanned.controller;
         let max_volts = self
             .ceiling_volts
-            .min(fresh.max_volts)
+            .min(replanned.max_volts)
             .min(self.estimate_volts);
-        let mut plan = fresh.plan.delayed(self.tick);
+        let mut plan = replanned.plan.delayed(self.tick);
         plan.start_under(max_volts, self.last_volts);
-        plan.check_range(fresh.plan.bias_volts, max_volts)
+        plan.check_range(replanned.plan.bias_volts, max_volts)
             .map_err(Refusal::Checks)?;
         plan.probe_off_above(max_volts);
-        self.settings = fresh.settings;
-        self.set_caps(fresh.max_volts, self.estimate_volts);
+        self.settings = replanned.settings;
+        self.set_caps(replanned.max_volts, self.estimate_volts);
         self.plan = plan;
-        self.state = fresh.state;
+        self.state = replanned.state;
         #[cfg(feature = "trim")]
-        {
-            let job = self.trim.job;
-            self.trim = fresh.trim;
-            self.trim.job = job;
-            self.trim.drop_job();
-        }
+        self.trim.restart(*self.flashed.params());
+        self.set_tuned(replanned.tuned);
         Ok(Boot {
             max_volts: self.max_volts,
             ..replanned.boot

@@ -484,6 +484,15 @@ impl Controller {
     }
 
     /// Whether the bias planned is the one the estimate gives for the target.
+    /// Whether the bias held is the one tuned for the target (not a trim's probe bias;
+    /// always without the trim).
+    fn tuned(&self) -> bool {
+        #[cfg(feature = "trim")]
+        return self.trim.tuned;
+        #[cfg(not(feature = "trim"))]
+        true
+    }
+
     fn set_tuned(&mut self, tuned: bool) {
         #[cfg(feature = "trim")]
         {

@@ -70,6 +70,20 @@ impl TrimState {
         self.tracked_hz = tracked_hz;
     }
 
+    /// Start afresh on a new plan (the estimate, the window and the secant's history
+    /// dropped, as at boot), in place; the job wanted is dropped, its number kept counting so
+    /// that a result of the old plan's is stale.
+    pub(super) fn restart(&mut self, params: DeviceParams<f32>) {
+        self.params = params;
+        self.tuned = true;
+        self.count = 0;
+        self.previous = None;
+        self.window_from = 0;
+        self.window.fill(f32::NAN);
+        self.charge = 0.0;
+        self.drop_job();
+    }
+
     /// No job is wanted: a result of one handed out is dropped when it comes.
     pub(super) fn drop_job(&mut self) {
         self.want_job(None);

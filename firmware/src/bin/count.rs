@@ -152,15 +152,21 @@ fn main() -> ! {
         stack::used_below(stack::top())
     );
     // Stack high-water of each boot stage and of a tick with its DAC frame, from here.
-    let Ok((c, boot)) = deepest("boot from the table", || {
+    let mut slot = None;
+    let Ok(_) = deepest("the whole boot, in place as the firmware boots", || {
+        Controller::start_in(&mut slot, device(), TABLE, amp, settings())
+    }) else {
+        exit(1)
+    };
+    let Ok((mut c, boot)) = deepest("boot from the table", || {
         Controller::from_table(device(), TABLE, amp, settings())
     }) else {
         exit(1)
     };
-    let Ok((c, boot)) = deepest("cross-check by the direct solve", || c.cross_check(boot)) else {
+    let Ok(boot) = deepest("cross-check by the direct solve", || c.cross_check(boot)) else {
         exit(1)
     };
-    let Ok((mut c, _)) = deepest("plan run through the model", || c.check_plan(boot)) else {
+    let Ok(_) = deepest("plan run through the model", || c.check_plan(boot)) else {
         exit(1)
     };
     let mut dac = Dac8551::new(RecordingBus::new(None));

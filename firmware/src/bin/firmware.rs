@@ -17,6 +17,7 @@ use de_resonator_firmware as _;
 #[rtic::app(device = stm32f4xx_hal::pac, peripherals = true, dispatchers = [EXTI0])]
 mod app {
     use core::fmt::Write as _;
+    use core::mem::MaybeUninit;
 
     use de_resonator::protocol::NOTICE;
     use de_resonator::{Controller, Dac8551, Decimal, Event, OutputStage, Phase};
@@ -44,8 +45,9 @@ mod app {
 
     #[shared]
     struct Shared {
-        /// `None`: nothing is driven (no usable image, or the boot refused).
-        controller: Option<Controller>,
+        /// `None`: nothing is driven (no usable image, or the boot refused). A static of
+        /// init's, where the boot builds the controller in place (3 KB never on the stack).
+        controller: &'static mut Option<Controller>,
         /// The longest tick so far, core cycles.
         tick_cycles_max: u32,
         /// QEMU builds: the independent clock (TIM2, µs) at the last tick's start.
@@ -78,7 +80,8 @@ mod app {
         tick_hz: f32,
     }
 
-    #[init]
+    // The slot uninitialized (in .bss, not a 3 KB `None` copied from flash to `.data`).
+    #[init(local = [slot: MaybeUninit<Option<Controller>> = MaybeUninit::uninit()])]
     fn init(cx: init::Context) -> (Shared, Local) {
         #[cfg(feature = "qemu")]
         board::qemu_clock::start(&cx.device.TIM2);
@@ -108,10 +111,11 @@ mod app {
         if let Some(cause) = cause {
             let _ = writeln!(tx, "{NOTICE}reset: {}", cause.name());
         }
-        let mut controller = boot(&mut console, &mut notice, &mut warning);
+        let controller = cx.local.slot.write(None);
+        boot(controller, &mut console, &mut notice, &mut warning);
         if cause == Some(ResetCause::Watchdog) && controller.is_some() {
             // Up faulted: nothing driven until someone has looked (`clear`).
-            controller = None;
+            *controller = None;
             let why = "reset by the watchdog (a task missed its deadline): `clear` to boot";
             notice.clear();
             let _ = write!(notice, "refused {why}");
@@ -166,14 +170,15 @@ mod app {
         )
     }
 
-    /// Read the image and the saved settings, and run every boot check: the controller, or
-    /// `None` with why in `console.refusal`. Saved settings that cannot be read, or that the
-    /// boot checks refuse, are ignored (said in `warning`): the image's are used.
+    /// Read the image and the saved settings, and run every boot check: the controller in
+    /// `slot`, or `None` with why in `console.refusal`. Saved settings that cannot be read, or
+    /// that the boot checks refuse, are ignored (said in `warning`): the image's are used.
     fn boot(
+        slot: &mut Option<Controller>,
         console: &mut Console,
         notice: &mut ReplyLine,
         warning: &mut ReplyLine,
-    ) -> Option<Controller> {
+    ) {
         let refuse =
             |console: &mut Console, notice: &mut ReplyLine, why: &dyn core::fmt::Display| {
                 let mut reason = heapless::String::new();
@@ -182,7 +187,6 @@ mod app {
                 defmt::error!("refusing to drive: {=str}", reason.as_str());
                 let _ = write!(notice, "refused {reason}");
                 console.refusal = Some(reason);
-                None
             };
         let image = match config::image() {
             Ok(image) => image,
@@ -195,15 +199,16 @@ mod app {
         console.image = Some(image);
         console.amplifier = Some(amplifier);
         console.settings = image.settings;
-        let boot_with = |settings| start(&image, amplifier, settings);
+        let mut boot_with =
+            |settings| Controller::start_in(slot, image.params, image.table, amplifier, settings);
         let mut source = "image";
         let mut started = None;
         match saved_settings(console) {
             Ok(Some(saved)) => match boot_with(saved) {
-                Ok(ok) => {
+                Ok(boot) => {
                     console.settings = saved;
                     source = "saved";
-                    started = Some(ok);
+                    started = Some(boot);
                 }
                 Err(fault) => {
                     let _ = write!(
@@ -222,7 +227,7 @@ mod app {
             defmt::warn!("{=str}", warning.as_str());
         }
         match started.map_or_else(|| boot_with(image.settings), Ok) {
-            Ok((controller, boot)) => {
+            Ok(boot) => {
                 #[cfg(feature = "defmt")]
                 defmt::info!(
                     "boot checks pass: bias {=f32} V for {=f32} Hz, cap {=f32} V",
@@ -238,20 +243,9 @@ mod app {
                     Decimal(boot.bias_volts),
                     Decimal(boot.max_volts)
                 );
-                Some(controller)
             }
             Err(fault) => refuse(console, notice, &fault),
         }
-    }
-
-    /// Every boot check (one call site: the boot tries the saved settings, then the image's).
-    #[inline(never)]
-    fn start(
-        image: &de_resonator::Image<'static>,
-        amplifier: de_resonator::Amplifier,
-        settings: de_resonator::Settings,
-    ) -> Result<(Controller, de_resonator::Boot), de_resonator::Fault> {
-        Controller::start(image.params, image.table, amplifier, settings)
     }
 
     /// The settings `save` stored, if any.
@@ -294,7 +288,7 @@ mod app {
         let sensor = cx.local.sensor;
         let inputs = sensor.sample();
         let (event, trim_wanted, running) = cx.shared.controller.lock(|c| {
-            let Some(c) = c else {
+            let Some(c) = c.as_mut() else {
                 // No controller (refused, or a reset on its way): the output off.
                 if !stage.is_safe() {
                     let _ = stage.safe();
@@ -454,11 +448,11 @@ mod app {
     /// The controller under the lock it shares with the tick.
     struct Locked<'a, M>(&'a mut M);
 
-    impl<M: rtic::Mutex<T = Option<Controller>>> de_resonator_firmware::console::Shared
+    impl<M: rtic::Mutex<T = &'static mut Option<Controller>>> de_resonator_firmware::console::Shared
         for Locked<'_, M>
     {
         fn with<R>(&mut self, f: impl FnOnce(&mut Option<Controller>) -> R) -> R {
-            self.0.lock(f)
+            self.0.lock(|c| f(c))
         }
     }
 
@@ -507,7 +501,7 @@ mod app {
     async fn trim(mut cx: trim::Context) {
         work::trim(|f| {
             cx.shared.controller.lock(|c| {
-                if let Some(c) = c {
+                if let Some(c) = c.as_mut() {
                     f(c);
                 }
             })
