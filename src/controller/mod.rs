@@ -483,7 +483,6 @@ impl Controller {
         Some(k.saturating_add(((every * s.tick_hz) as u32).max(1)))
     }
 
-    /// Whether the bias planned is the one the estimate gives for the target.
     /// Whether the bias held is the one tuned for the target (not a trim's probe bias;
     /// always without the trim).
     fn tuned(&self) -> bool {
@@ -493,6 +492,7 @@ impl Controller {
         true
     }
 
+    /// Whether the bias planned is the one the estimate gives for the target.
     fn set_tuned(&mut self, tuned: bool) {
         #[cfg(feature = "trim")]
         {
