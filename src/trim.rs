@@ -21,6 +21,21 @@ pub const MIN_SAMPLES_PER_PERIOD: f32 = 8.0;
 /// Fewest crossings (both ways) a ring must show to be measured (three periods).
 pub const MIN_CROSSINGS: usize = 6;
 
+/// Fewest target periods a window must span: the crossings' three, and the one the charge's
+/// high-pass takes off its ends (`high_passed`).
+pub const MIN_WINDOW_PERIODS: f32 = MIN_CROSSINGS as f32 / 2.0 + 1.0;
+
+/// The least resolution (`ChargeRing::resolution`) a ring in the charge must show to be
+/// timed. On the reference device (BENCHMARKS.md) the crossings locked onto the noise's wander
+/// in some seeds at 39 and below (the frequency percent off); none did in twelve at 44 and
+/// more. A quarter above that edge.
+pub const MIN_RESOLUTION: f32 = 50.0;
+
+/// The relative error of the ring's frequency from the charge, times its resolution (one
+/// standard deviation; measured, BENCHMARKS.md): the trim asks twice that below its
+/// tolerance before it calls the frequency on target.
+pub const TIMING_ERROR_TIMES_RESOLUTION: f32 = 0.013;
+
 /// The estimate of μ is searched within this factor of the nominal, both ways.
 pub const MODULUS_RANGE: f32 = 4.0;
 
@@ -35,6 +50,14 @@ pub enum TrimError {
     NoEstimate { measured_hz: f32, volts: f32 },
     /// After the most trims allowed, the frequency is still off the target.
     NotConverged { measured_hz: f32, target_hz: f32 },
+    /// The ring in the charge is too weak against the current monitor's noise to be timed
+    /// to the tolerance (`ChargeRing`): no estimate is made from it.
+    Unresolvable {
+        resolution: f32,
+        needed: f32,
+        ring_coulombs: f32,
+        noise_amps: f32,
+    },
 }
 
 impl core::error::Error for TrimError {}
@@ -54,6 +77,22 @@ impl fmt::Display for TrimError {
                 Decimal(measured_hz),
                 Decimal(volts)
             ),
+            TrimError::Unresolvable {
+                resolution,
+                needed,
+                ring_coulombs,
+                noise_amps,
+            } => write!(
+                f,
+                "the ring in the current is too weak to time: {} C of charge against the \
+                 monitor's noise of {} A a tick gives a resolution of {} over the window, {} \
+                 needed; fit a displacement sensor, raise trim_pulse_volts or \
+                 trim_window_seconds, or widen trim_tolerance",
+                Decimal(ring_coulombs),
+                Decimal(noise_amps),
+                Decimal(resolution),
+                Decimal(needed)
+            ),
             TrimError::NotConverged {
                 measured_hz,
                 target_hz,
@@ -67,25 +106,28 @@ impl fmt::Display for TrimError {
     }
 }
 
-/// The frequency of the ring in `samples` (one per tick, NaN where there was none), Hz.
+/// The frequency of the ring in `samples` (at `sample_hz`, NaN where there was none), Hz.
 /// The trend (creep, drift) is taken off by a least-squares line; the crossings of zero, both
 /// ways, are found by linear interpolation; f = 1/(2·slope) of the least-squares line
 /// through crossing time against crossing number. The line's error (a ring is never quite
 /// orthogonal to it: 1e-3 of f over 14 periods, measured) shifts upward and downward
 /// crossings in opposite directions, and the slope fit averages that out.
-pub fn ring_frequency_hz(samples: &[f32], tick_hz: f32) -> Result<f32, TrimError> {
-    let (mut n, mut st, mut sy, mut stt, mut sty) = line_sums(samples.iter().copied());
+pub fn ring_frequency_hz(
+    samples: impl Iterator<Item = f32> + Clone,
+    sample_hz: f32,
+) -> Result<f32, TrimError> {
+    let (mut n, mut st, mut sy, mut stt, mut sty) = line_sums(samples.clone());
     let det = n * stt - st * st;
     if !(n >= 3.0 && det > 0.0) {
         return Err(TrimError::NoRing { crossings: 0 });
     }
     let slope = (n * sty - st * sy) / det;
     let offset = (sy - slope * st) / n;
-    let middle = samples.len() as f32 * 0.5;
+    let middle = samples.clone().count() as f32 * 0.5;
     // Crossing number against crossing time, summed as they come.
     (n, st, sy, stt, sty) = (0.0, 0.0, 0.0, 0.0, 0.0);
     let mut previous: Option<(usize, f32)> = None;
-    for (k, &y) in samples.iter().enumerate() {
+    for (k, y) in samples.enumerate() {
         if !y.is_finite() {
             continue;
         }
@@ -108,8 +150,88 @@ pub fn ring_frequency_hz(samples: &[f32], tick_hz: f32) -> Result<f32, TrimError
             crossings: n.min(f32::from(u16::MAX)) as u16,
         });
     }
-    let ticks_per_crossing = (n * sty - st * sy) / det;
-    Ok(tick_hz / (2.0 * ticks_per_crossing))
+    let samples_per_crossing = (n * sty - st * sy) / det;
+    Ok(sample_hz / (2.0 * samples_per_crossing))
+}
+
+/// Each sample less the mean of the `2·half + 1` centred on it (about one period of the
+/// ring; NaN where that span is not all in the window). The charge's ring rides on the
+/// running sum of the monitor's noise, a random walk whose slow wander no trend line takes
+/// off and which moves the crossings; the mean over a period follows the wander and leaves
+/// the ring. A centred mean delays nothing, so the crossings stay where they are.
+pub fn high_passed(samples: &[f32], half: usize) -> impl Iterator<Item = f32> + Clone + '_ {
+    let span = (2 * half + 1) as f32;
+    (0..samples.len()).map(move |k| {
+        let around = k
+            .checked_sub(half)
+            .and_then(|from| samples.get(from..=k.saturating_add(half)));
+        match (around, samples.get(k)) {
+            // Differences to the sample itself: the charge's offset cancels before the sum.
+            (Some(around), Some(&y)) => -around.iter().map(|&x| x - y).sum::<f32>() / span,
+            _ => f32::NAN,
+        }
+    })
+}
+
+/// What a window of the charge (the current's running sum, in A·ticks, a sample the mean of
+/// a stride of ticks) tells of its own ring and noise, from the window alone.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ChargeRing {
+    /// The ring's amplitude, A·ticks: from the high-passed window's mean square less the
+    /// noise's share of it.
+    pub amplitude: f32,
+    /// The noise of the charge's steps from sample to sample, A·ticks: the current monitor's
+    /// noise summed over a stride. From the fourth differences of the charge (the third of
+    /// the current, variance 20·σ² for white noise), which a ring of eight or more samples a
+    /// period passes at most (2·sin(π/8))⁴ = 0.34 of, far less at the usual 20 and more.
+    pub noise: f32,
+    /// The ring against the noise it is timed through: its amplitude over the high-passed
+    /// noise of a period, √P·noise, times the periods in the window N/P. The frequency's
+    /// relative error goes as its inverse (`TIMING_ERROR_TIMES_RESOLUTION`).
+    pub resolution: f32,
+}
+
+impl ChargeRing {
+    /// The ring and noise of `samples`, high-passed over `2·half + 1` of them (a period).
+    pub fn of(samples: &[f32], half: usize) -> Self {
+        let (mut sum, mut count) = (0.0f32, 0.0f32);
+        for d in samples.windows(5) {
+            if let [a, b, c, d, e] = *d {
+                let fourth = a - 4.0 * b + 6.0 * c - 4.0 * d + e;
+                if fourth.is_finite() {
+                    sum += fourth * fourth;
+                    count += 1.0;
+                }
+            }
+        }
+        let noise_squared = sum / (20.0 * count);
+        let (mut square, mut n) = (0.0f32, 0.0f32);
+        for y in high_passed(samples, half) {
+            if y.is_finite() {
+                square += y * y;
+                n += 1.0;
+            }
+        }
+        // A random walk less its centred mean over L = 2h + 1 steps: variance
+        // σ²·h(h + 1)/(3L).
+        let h = half as f32;
+        let span = 2.0 * h + 1.0;
+        let walk = noise_squared * h * (h + 1.0) / (3.0 * span);
+        let amplitude = libm::sqrtf(2.0 * (square / n - walk).max(0.0));
+        let noise = libm::sqrtf(noise_squared);
+        let resolution = amplitude / (noise * libm::sqrtf(span)) * (n / span);
+        Self {
+            amplitude,
+            noise,
+            resolution: if resolution.is_nan() { 0.0 } else { resolution },
+        }
+    }
+
+    /// The resolution the trim needs to time the ring to `tolerance` (relative): at least
+    /// `MIN_RESOLUTION`, and its timing error's two deviations within half the tolerance.
+    pub fn needed(tolerance: f32) -> f32 {
+        MIN_RESOLUTION.max(4.0 * TIMING_ERROR_TIMES_RESOLUTION / tolerance)
+    }
 }
 
 /// Sums for a least-squares line through (k − middle, y_k) over the finite samples:
@@ -133,7 +255,7 @@ fn line_sums(samples: impl Iterator<Item = f32> + Clone) -> (f32, f32, f32, f32,
 /// The natural frequency the model gives at `volts` on the loading branch before its limit,
 /// Hz (NaN if `volts` is past the limit: beyond it a soft device finds far equilibria,
 /// stiffened by lock-up, that would fool the search).
-fn model_hz(params: &DeviceParams<f32>, volts: f32) -> f32 {
+pub(crate) fn model_hz(params: &DeviceParams<f32>, volts: f32) -> f32 {
     let Ok(d) = Device::new(*params) else {
         return f32::NAN;
     };

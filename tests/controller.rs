@@ -1404,7 +1404,7 @@ fn the_trim_tunes_at_faster_ticks_with_default_settings() {
     }
 }
 
-/// The window's limits, said: at least three target periods; at 1 kHz a 1 s window (averaged in strides of 2, 500 Hz, 11
+/// The window's limits, said: at least four target periods; at 1 kHz a 1 s window (averaged in strides of 2, 500 Hz, 11
 /// samples a period at 44.5 Hz) is taken; a 2 s one (strides of 4, 5.6 samples a period, past
 /// the 64 periods 512 samples hold at 8 a period) is refused, the message saying the limit.
 #[cfg(feature = "trim")]
@@ -1416,10 +1416,11 @@ fn a_trim_window_too_long_for_its_samples_is_refused_saying_why() {
         ..Settings::for_target(44.5)
     };
     assert!(start(with_window(1.0)).is_ok());
-    // Three periods at least (MIN_CROSSINGS both ways): 3/44.5 Hz = 67.4 ms.
-    assert!(start(with_window(0.068)).is_ok());
+    // Four periods at least (MIN_CROSSINGS both ways, and one for the charge's high-pass):
+    // 4/44.5 Hz = 89.9 ms.
+    assert!(start(with_window(0.090)).is_ok());
     assert!(matches!(
-        start(with_window(0.067)),
+        start(with_window(0.089)),
         Err(Fault::Setting {
             setting: Setting::TrimWindowSeconds,
             ..

@@ -600,6 +600,7 @@ impl Controller {
         // No clearing (512 stores): every tick of the window writes its slot.
         self.trim.window_from = from.saturating_add(pulse);
         self.trim.charge = 0.0;
+        self.trim.from_charge = false;
         // The probe's charge would swamp the ring's: off until the trim is applied.
         self.plan.probe_volts = 0.0;
         self.trim.drop_job();
@@ -623,6 +624,7 @@ impl Controller {
         let sample = match ring {
             Ring::Stretch(stretch) => stretch,
             Ring::Current(amps) if at >= settling => {
+                self.trim.from_charge = true;
                 self.trim.charge += amps;
                 self.trim.charge
             }

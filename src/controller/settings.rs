@@ -38,7 +38,7 @@ pub struct Settings {
     /// stretch sensor or the amplifier's current monitor (`Inputs`), and the `cross_check`
     /// stage (the model is re-solved on the chip).
     pub trim_tolerance: Option<f32>,
-    /// The ring measured after each pulse, s: at least `MIN_CROSSINGS`/2 target periods, and
+    /// The ring measured after each pulse, s: at least `MIN_WINDOW_PERIODS` target periods, and
     /// averaged into at most `MAX_WINDOW` samples, at least `MIN_SAMPLES_PER_PERIOD` a period.
     pub trim_window_seconds: f32,
     /// The pulse's drop below the bias, V, for half a period of the target.
@@ -258,7 +258,7 @@ impl Settings {
         if self.trim_tolerance.is_some()
             && target_ok
             && !(per_period >= crate::trim::MIN_SAMPLES_PER_PERIOD
-                && periods >= crate::trim::MIN_CROSSINGS as f32 / 2.0)
+                && periods >= crate::trim::MIN_WINDOW_PERIODS)
         {
             let window = self.trim_window_seconds;
             return Err(Fault::Setting {
@@ -435,7 +435,7 @@ impl Setting {
             Setting::Agreement | Setting::AmplifierToleranceVolts => "> 0",
             Setting::TrimTolerance => "> 0 or off, in a build with the trim",
             Setting::TrimWindowSeconds => {
-                "at least 3 target periods long, and once its ticks are averaged into 512 \
+                "at least 4 target periods long, and once its ticks are averaged into 512 \
                  samples, at least 8 samples per target period (at most 64 periods)"
             }
             Setting::TrimPulseVolts => ">= 0",

@@ -8,7 +8,10 @@
 use super::fault::Fault;
 use super::settings::{guarded, Settings, MAX_TRIMS, TRIM_SECANT_STEP};
 use crate::device::{Device, DeviceParams};
-use crate::trim::{estimate_shear_modulus, ring_frequency_hz, TrimError, MAX_WINDOW};
+use crate::trim::{
+    estimate_shear_modulus, high_passed, model_hz, ring_frequency_hz, ChargeRing, TrimError,
+    MAX_WINDOW, TIMING_ERROR_TIMES_RESOLUTION,
+};
 use crate::tuning::{TuneError, Tuner};
 
 /// The relative frequency error at which the trim before a tracked drive hands over to the
@@ -33,6 +36,8 @@ pub(super) struct TrimState {
     /// The current's running sum over the window (its charge, in A·ticks), when the ring
     /// comes from the current.
     pub(super) charge: f32,
+    /// Whether the window holds that charge (no displacement sensor).
+    pub(super) from_charge: bool,
     /// The solve's answer, once the caller has given it.
     pub(super) result: Option<TrimResult>,
     /// Whether the job wanted now was handed out.
@@ -54,6 +59,7 @@ impl TrimState {
             window_from: 0,
             window: [f32::NAN; MAX_WINDOW],
             charge: 0.0,
+            from_charge: false,
             result: None,
             handed_out: false,
             job: 0,
@@ -81,6 +87,7 @@ impl TrimState {
         self.window_from = 0;
         self.window.fill(f32::NAN);
         self.charge = 0.0;
+        self.from_charge = false;
         self.drop_job();
     }
 
@@ -103,6 +110,8 @@ pub struct TrimJob {
     previous: Option<(f32, f32)>,
     /// The cap in force when the job was made, V: the result never goes above it.
     cap_volts: f32,
+    /// Whether the window holds the charge (high-passed before its crossings are found).
+    from_charge: bool,
     /// Measured by the tracker (the window is not read), Hz.
     measured_hz: Option<f32>,
     /// Its number, carried by its result.
@@ -166,6 +175,7 @@ impl TrimJob {
             count: state.count,
             previous: state.previous,
             cap_volts,
+            from_charge: state.from_charge,
             measured_hz: state.tracked_hz,
             job: state.job,
         }
@@ -190,22 +200,55 @@ impl TrimJob {
     fn try_solve(&self) -> Result<TrimResult, Fault> {
         let s = self.settings;
         let window = self.window.get(..self.len).unwrap_or(&self.window);
-        let measured_hz = match self.measured_hz {
-            Some(hz) => hz,
-            None => {
-                let (stride, _) = s.trim_window();
-                ring_frequency_hz(window, s.tick_hz / stride as f32).map_err(Fault::Trim)?
-            }
-        };
-        let shear_modulus = estimate_shear_modulus(&self.params, self.bias_volts, measured_hz)
-            .map_err(Fault::Trim)?;
         let mut tolerance = s.trim_tolerance.unwrap_or(0.0);
         if s.track_seconds.is_some() && self.measured_hz.is_none() {
             // Before a tracked drive, the ring's trim need only bring the resonance within
             // the tracker's reach: the tracker holds the target with the drive on.
             tolerance = tolerance.max(TRACK_HANDOVER);
         }
-        let converged = self.tuned && (measured_hz - s.target_hz).abs() <= tolerance * s.target_hz;
+        // What the timing may be off by, relative (the charge's; a sensor's is far below).
+        let mut timing_error = 0.0;
+        let measured_hz = match self.measured_hz {
+            Some(hz) => hz,
+            None => {
+                let (stride, _) = s.trim_window();
+                let sample_hz = s.tick_hz / stride as f32;
+                if self.from_charge {
+                    // A period of the ring the model expects at the bias (the target's if
+                    // none): a mismatch of a few percent only scales the ring a little.
+                    let expected_hz = model_hz(&self.params, self.bias_volts);
+                    let hz = if expected_hz > 0.0 {
+                        expected_hz
+                    } else {
+                        s.target_hz
+                    };
+                    let half = libm::roundf(0.5 * sample_hz / hz) as usize;
+                    let measured_hz = ring_frequency_hz(high_passed(window, half), sample_hz)
+                        .map_err(Fault::Trim)?;
+                    // Too weak a ring is said, not estimated from.
+                    let ring = ChargeRing::of(window, half);
+                    let needed = ChargeRing::needed(tolerance);
+                    if !(ring.resolution >= needed) {
+                        return Err(Fault::Trim(TrimError::Unresolvable {
+                            resolution: ring.resolution,
+                            needed,
+                            ring_coulombs: ring.amplitude / s.tick_hz,
+                            noise_amps: ring.noise / libm::sqrtf(stride as f32),
+                        }));
+                    }
+                    timing_error = TIMING_ERROR_TIMES_RESOLUTION / ring.resolution;
+                    measured_hz
+                } else {
+                    ring_frequency_hz(window.iter().copied(), sample_hz).map_err(Fault::Trim)?
+                }
+            }
+        };
+        let shear_modulus = estimate_shear_modulus(&self.params, self.bias_volts, measured_hz)
+            .map_err(Fault::Trim)?;
+        // On target when within the tolerance less twice the timing's error: then the
+        // frequency itself is within it.
+        let converged = self.tuned
+            && (measured_hz - s.target_hz).abs() <= (tolerance - 2.0 * timing_error) * s.target_hz;
         if converged {
             return Ok(TrimResult::Converged {
                 measured_hz,
@@ -318,6 +361,7 @@ mod tests {
             count: 1,
             previous,
             cap_volts: 9361.9,
+            from_charge: false,
             measured_hz: None,
             job: 0,
         }
