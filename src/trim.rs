@@ -31,10 +31,11 @@ pub const MIN_WINDOW_PERIODS: f32 = MIN_CROSSINGS as f32 / 2.0 + 1.0;
 /// more. A quarter above that edge.
 pub const MIN_RESOLUTION: f32 = 50.0;
 
-/// The relative error of the ring's frequency from the charge, times its resolution (one
-/// standard deviation; measured, BENCHMARKS.md): the trim asks twice that below its
-/// tolerance before it calls the frequency on target.
-pub const TIMING_ERROR_TIMES_RESOLUTION: f32 = 0.013;
+/// The relative error of the ring's frequency from the charge, times its resolution: one
+/// standard deviation, measured (BENCHMARKS.md: 0.029–0.039 in each fifth of 143 trims in the
+/// closed loop against the plant's own frequency, resolutions 69 to 988; 0.031 on a white-noise
+/// ring). The trim asks twice that below its tolerance before it calls the frequency on target.
+pub const TIMING_ERROR_TIMES_RESOLUTION: f32 = 0.031;
 
 /// The estimate of μ is searched within this factor of the nominal, both ways.
 pub const MODULUS_RANGE: f32 = 4.0;
@@ -227,10 +228,14 @@ impl ChargeRing {
         }
     }
 
-    /// The resolution the trim needs to time the ring to `tolerance` (relative): at least
-    /// `MIN_RESOLUTION`, and its timing error's two deviations within half the tolerance.
-    pub fn needed(tolerance: f32) -> f32 {
-        MIN_RESOLUTION.max(4.0 * TIMING_ERROR_TIMES_RESOLUTION / tolerance)
+    /// The resolution a measurement needs: `MIN_RESOLUTION`; and one that may find the
+    /// frequency on target within `tolerance` (relative; the bias the tuned one), its timing
+    /// error's two deviations within two thirds of the tolerance, so that a third is left
+    /// for the trim to land in.
+    pub fn needed(tolerance: Option<f32>) -> f32 {
+        tolerance.map_or(MIN_RESOLUTION, |tolerance| {
+            MIN_RESOLUTION.max(3.0 * TIMING_ERROR_TIMES_RESOLUTION / tolerance)
+        })
     }
 }
 
@@ -250,6 +255,28 @@ fn line_sums(samples: impl Iterator<Item = f32> + Clone) -> (f32, f32, f32, f32,
         }
     }
     sums
+}
+
+/// The ring the trim's pulse leaves in the charge, per volt of pulse and per volt² of bias,
+/// C/V³ (NaN where `volts` has no equilibrium below `limit_offset`). The pulse, ΔΦ down for
+/// `pulse_seconds`, moves the equilibrium by Δλ = Φ·C'(λ)·ΔΦ/(L1A·M·ω²) (model.md §4: the
+/// electrical term of M·λ'' is Φ²·C'(λ)/(2·L1A); §5: the stiffness is M·ω²) and leaves a ring
+/// of 2·Δλ·|sin(ω·T/2)| in the stretch, which the charge Q = C(λ)·Φ carries as Φ·C'(λ) times
+/// it (model.md §8). Undamped: the plant's damping only lowers it.
+pub fn ring_charge_gain(
+    device: &Device<f32>,
+    limit_offset: f32,
+    volts: f32,
+    pulse_seconds: f32,
+) -> f32 {
+    let Some(offset) = device.offset_for_bias(volts, limit_offset) else {
+        return f32::NAN;
+    };
+    let p = device.params();
+    let slope = 2.0 * p.farads_per_stretch_squared() * device.stretch_at(offset);
+    let omega = core::f32::consts::TAU * device.natural_frequency_hz_at(offset);
+    let sine = libm::fabsf(libm::sinf(0.5 * omega * pulse_seconds));
+    2.0 * slope * slope * sine / (p.length_active * p.effective_mass() * omega * omega)
 }
 
 /// The natural frequency the model gives at `volts` on the loading branch before its limit,

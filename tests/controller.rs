@@ -1217,31 +1217,21 @@ fn the_trim_keeps_its_timeline_and_its_secant() {
     assert!(volts.iter().all(|&v| v <= c.ceiling_volts()));
 }
 
-/// Self-sensing (model.md §8): with no stretch sample, the trim times the ring in the
-/// amplifier's current. The plant is the model with μ 2% above the device told (so 44.5 Hz
-/// lies in both tunable ranges); the current over each tick is the change of the membrane's
-/// charge C(λ)·Φ, C = ε·L1A·L2·λ²·λ2p²/H (paper eq. 1), written out here from the geometry.
-/// The trim converges as it does on the stretch: the plant's frequency at the final bias
-/// within 0.1% of the target, μ estimated within 0.1% of the plant's.
+/// The controller on the amplifier's current alone against `plant` (the core's model,
+/// integrated by RK4 at the tick): the current over each tick is the change of the membrane's
+/// charge C(λ)·Φ, C = ε·L1A·L2·λ²·λ2p²/H (paper eq. 1), written out here from the geometry,
+/// plus white noise of `noise_amps` (a tick). `each` sees the controller, the charge and the
+/// tick's output; the trim's jobs are solved as they come.
 #[cfg(feature = "trim")]
-#[test]
-fn the_trim_measures_the_ring_in_the_current() {
+fn run_on_the_charge(
+    plant: DeviceParams<f64>,
+    settings: Settings,
+    ticks: usize,
+    noise_amps: f64,
+    mut each: impl FnMut(&Controller, f64, &de_resonator::Output),
+) {
     use de_resonator::{Drive, Integrator, Method, State};
-    let told = REFERENCE_DEVICE;
-    let mut plant = DeviceParams {
-        shear_modulus: 1.02 * told.shear_modulus,
-        ..told
-    };
-    let f0 = Tuner::new(Device::new(plant).unwrap())
-        .zero_bias()
-        .natural_frequency_hz;
-    plant.damping = plant.effective_mass() * std::f64::consts::TAU * f0 / 200.0;
-    let settings = Settings {
-        trim_tolerance: Some(1e-3),
-        ..Settings::for_target(44.5)
-    };
-    let (mut c, _) =
-        Controller::start(told.cast(), &reference_table(), amplifier(), settings).unwrap();
+    let mut c = start(settings).unwrap();
     let capacitance = |stretch: f64| {
         8.8541878128e-12
             * plant.relative_permittivity
@@ -1266,15 +1256,49 @@ fn the_trim_measures_the_ring_in_the_current() {
         true,
     )
     .unwrap();
-    let (mut volts, mut last_charge, mut estimates) = (0.0f32, None, Vec::new());
-    for _ in 0..6000 {
+    let mut rng = common::Rng(0x5eed);
+    let (mut volts, mut last_charge) = (0.0f32, None);
+    for _ in 0..ticks {
         let charge = capacitance(model.state().stretch) * f64::from(volts);
         let inputs = match last_charge {
-            Some(q) => Inputs::current(((charge - q) / 1e-3) as f32),
+            Some(q) => Inputs::current(((charge - q) / 1e-3 + noise_amps * rng.gaussian()) as f32),
             None => Inputs::NONE,
         };
         last_charge = Some(charge);
         let out = c.tick(inputs);
+        each(&c, charge, &out);
+        if let Some(job) = c.trim_job() {
+            c.trim_done(job.solve());
+        }
+        volts = out.volts;
+        model.set_drive(drive(volts)).unwrap();
+        model.step().unwrap();
+    }
+}
+
+/// Self-sensing (model.md §8): with no stretch sample, the trim times the ring in the
+/// amplifier's current. The plant is the model with μ 2% above the device told (so 44.5 Hz
+/// lies in both tunable ranges), Q = 200, the monitor's noise 0.1 µA a tick. The trim
+/// converges as it does on the stretch: the plant's frequency at the final bias within 0.1%
+/// of the target, μ estimated within 0.1% of the plant's.
+#[cfg(feature = "trim")]
+#[test]
+fn the_trim_measures_the_ring_in_the_current() {
+    let told = REFERENCE_DEVICE;
+    let mut plant = DeviceParams {
+        shear_modulus: 1.02 * told.shear_modulus,
+        ..told
+    };
+    let f0 = Tuner::new(Device::new(plant).unwrap())
+        .zero_bias()
+        .natural_frequency_hz;
+    plant.damping = plant.effective_mass() * std::f64::consts::TAU * f0 / 200.0;
+    let settings = Settings {
+        trim_tolerance: Some(1e-3),
+        ..Settings::for_target(44.5)
+    };
+    let (mut estimates, mut bias) = (Vec::new(), 0.0);
+    run_on_the_charge(plant, settings, 6000, 1e-7, |c, _, out| {
         if let Some(Event::Trimmed { shear_modulus, .. }) = out.event {
             estimates.push(shear_modulus);
         }
@@ -1283,22 +1307,99 @@ fn the_trim_measures_the_ring_in_the_current() {
             "{:?}",
             out.event
         );
-        if let Some(job) = c.trim_job() {
-            c.trim_done(job.solve());
-        }
-        volts = out.volts;
-        model.set_drive(drive(volts)).unwrap();
-        model.step().unwrap();
-    }
+        bias = f64::from(c.plan().bias_volts);
+    });
+    let device = Device::new(plant).unwrap();
     let last = *estimates.last().expect("a trim");
     assert!(
         (f64::from(last) / plant.shear_modulus - 1.0).abs() < 1e-3,
         "{estimates:?}"
     );
-    let bias = f64::from(c.plan().bias_volts);
     let at = device.stretch_for_bias(bias, 3.0).unwrap();
     let error = device.natural_frequency_hz(at) / 44.5 - 1.0;
     assert!(error.abs() < 1e-3, "{error} at {bias} V");
+}
+
+/// The ring the trim's pulse leaves in the charge, as `trim::ring_charge_gain` predicts it
+/// from the statics, against the charge of the model integrated through the pulse (undamped,
+/// noise-free, the plant as told): its first swing after the pulse within 5% (the prediction
+/// is linear in the pulse). A slow ramp (1 kV/s), so that the ring its end leaves is a
+/// hundredth of the pulse's.
+#[cfg(feature = "trim")]
+#[test]
+fn the_ring_in_the_charge_is_the_one_the_statics_predict() {
+    use de_resonator::trim::ring_charge_gain;
+    let settings = Settings {
+        trim_tolerance: Some(1e-3),
+        slew_volts_per_second: 1000.0,
+        ..Settings::for_target(44.0)
+    };
+    let pulse_ticks = (0.5f32 * 1000.0 / 44.0).round();
+    let (mut charges, mut bias) = (Vec::new(), None);
+    run_on_the_charge(REFERENCE_DEVICE, settings, 6000, 0.0, |c, charge, out| {
+        // From the pulse's end (the voltage back at the bias, measuring) for two periods.
+        let at_bias = (out.volts - c.plan().bias_volts).abs() < 1.0;
+        if c.phase() == de_resonator::Phase::Measuring && at_bias {
+            bias = Some(c.plan().bias_volts);
+            charges.push(charge);
+        }
+    });
+    let bias = bias.expect("a pulse");
+    // (The first sample is the tick before the pulse; the second still holds the pulse's
+    // voltage, Q = C·Φ of the tick before.)
+    let first: Vec<f64> = charges.iter().copied().skip(2).take(46).collect();
+    let swing = first.iter().copied().fold(f64::MIN, f64::max)
+        - first.iter().copied().fold(f64::MAX, f64::min);
+    let device = Device::new(REFERENCE_DEVICE.cast::<f32>()).unwrap();
+    let limit = Tuner::new(device).limit().at.offset;
+    let gain = ring_charge_gain(&device, limit, bias, pulse_ticks / 1000.0);
+    let predicted = f64::from(gain * bias * bias * settings.trim_pulse_volts);
+    assert!(
+        (0.5 * swing / predicted - 1.0).abs() < 0.05,
+        "{} C measured, {predicted} C predicted at {bias} V",
+        0.5 * swing
+    );
+}
+
+/// Before it pulses, the trim on the charge weighs the ring the pulse would leave against the
+/// monitor's noise heard in the hold: far too noisy a monitor (30 µA a tick) is refused then,
+/// saying so, before any pulse (the voltage never below the bias); a quiet one (0.1 µA)
+/// pulses and trims.
+#[cfg(feature = "trim")]
+#[test]
+fn a_ring_too_weak_to_time_is_refused_before_the_pulse() {
+    use de_resonator::TrimError;
+    let settings = Settings {
+        trim_tolerance: Some(1e-3),
+        ..Settings::for_target(44.0)
+    };
+    for (noise_amps, refused) in [(3e-5, true), (1e-7, false)] {
+        let (mut fault, mut pulsed, mut trimmed) = (None, false, false);
+        run_on_the_charge(REFERENCE_DEVICE, settings, 2500, noise_amps, |c, _, out| {
+            let bias = c.plan().bias_volts;
+            if fault.is_none() && bias > 0.0 && out.volts < bias - 1.0 {
+                pulsed = pulsed || c.phase() == de_resonator::Phase::Measuring;
+            }
+            match out.event {
+                Some(Event::Fault(f)) => fault = fault.or(Some(f)),
+                Some(Event::Trimmed { .. }) => trimmed = true,
+                _ => {}
+            }
+        });
+        if refused {
+            assert!(
+                matches!(fault, Some(Fault::Trim(TrimError::Unresolvable { .. }))) && !pulsed,
+                "{noise_amps}: {fault:?}, pulsed {pulsed}"
+            );
+            let said = fault.unwrap().to_string();
+            assert!(said.contains("too weak to time"), "{said}");
+        } else {
+            assert!(
+                fault.is_none() && pulsed && trimmed,
+                "{noise_amps}: {fault:?}"
+            );
+        }
+    }
 }
 
 /// The leakage watch: at a steady bias the current is the leakage Φ/R (and noise that

@@ -249,9 +249,11 @@ impl Run {
                 measured_hz,
                 shear_modulus,
                 next_bias_volts,
+                resolution,
             } => format!(
-                "trim: {measured_hz:.4} Hz measured at {bias_volts:.1} V, μ estimated \
+                "trim: {measured_hz:.4} Hz measured at {bias_volts:.1} V{}, μ estimated \
                  {:.2} kPa, next bias {next_bias_volts:.1} V",
+                resolution.map_or(String::new(), |r| format!(" (resolution {r:.0})")),
                 shear_modulus / 1e3
             ),
             Event::AboveCeiling {

@@ -229,6 +229,19 @@ impl Controller {
         } else {
             tuned_volts
         };
+        #[cfg(feature = "trim")]
+        if trimming {
+            // The ring the first pulse will leave in the charge (the tick weighs it against
+            // the noise before it pulses).
+            let limit = Limit::of(&self.flashed);
+            let pulse_seconds = super::trim::pulse_ticks(&s) as f32 / s.tick_hz;
+            self.trim.ring_gain = crate::trim::ring_charge_gain(
+                &self.flashed,
+                limit.at.offset,
+                bias_volts,
+                pulse_seconds,
+            );
+        }
         let from_volts = self.plan.start_volts;
         let (plan, ticks) = Plan::ramp(&s, from_volts, bias_volts, !trimming)?;
         plan.check_range(tuned_volts, self.max_volts)?;

@@ -83,6 +83,9 @@ pub struct Replanned {
     state: State,
     /// Whether the fresh plan holds the tuned bias (not a trim's probe bias).
     tuned: bool,
+    /// The ring its first pulse leaves in the charge, C/V³ (NaN: none, or not known).
+    #[cfg_attr(not(feature = "trim"), allow(dead_code))]
+    ring_gain: f32,
     boot: Boot,
     /// The plan in force when the job was made.
     was: Plan,
@@ -115,6 +118,7 @@ impl ReplanJob {
             max_volts: fresh.max_volts,
             state: fresh.state,
             tuned: fresh.tuned(),
+            ring_gain: fresh.ring_gain(),
             boot,
             was: self.plan,
         })
@@ -191,7 +195,10 @@ impl Controller {
         self.plan = plan;
         self.state = replanned.state;
         #[cfg(feature = "trim")]
-        self.trim.restart(*self.flashed.params());
+        {
+            self.trim.restart(*self.flashed.params());
+            self.trim.ring_gain = replanned.ring_gain;
+        }
         self.set_tuned(replanned.tuned);
         Ok(Boot {
             max_volts: self.max_volts,

@@ -243,6 +243,10 @@ pub enum Event {
         measured_hz: f32,
         shear_modulus: f32,
         next_bias_volts: f32,
+        /// How well the ring was resolved, where it was timed in the charge
+        /// (`crate::trim::ChargeRing::resolution`; its relative timing error is about
+        /// `TIMING_ERROR_TIMES_RESOLUTION` over it).
+        resolution: Option<f32>,
     },
     /// The plant needs `needed_volts` (bias and swing: the trim's next bias, tracking's, or
     /// the plan in force under a cap a measurement just lowered), above the cap in force:

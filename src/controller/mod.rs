@@ -423,7 +423,22 @@ impl Controller {
                 until,
                 then_measure: true,
             } if k >= until => {
-                self.start_measuring(k);
+                self.start_measuring(k)?;
+                Ok(None)
+            }
+            #[cfg(feature = "trim")]
+            State::Holding {
+                until,
+                then_measure: true,
+            } => {
+                // The monitor's noise, over the hold's last three quarters (the probe's last
+                // edge, and the ramp's end, settled before), with no probe on.
+                let settle = self.settings.settle_seconds * self.settings.tick_hz;
+                if let (Ring::Current(amps), 0.0) = (ring, self.plan.probe_volts) {
+                    if (until.saturating_sub(k) as f32) < 0.75 * settle {
+                        self.trim.hold_noise.observe(amps);
+                    }
+                }
                 Ok(None)
             }
             State::Holding {
@@ -465,6 +480,13 @@ impl Controller {
     /// Hold the bias from tick `k` for the settle time, then measure or drive.
     fn hold_from(&mut self, k: u32, then_measure: bool) {
         let settle = self.settings.settle_seconds * self.settings.tick_hz;
+        #[cfg(feature = "trim")]
+        if then_measure && !self.trim.hold_noise.heard() {
+            // The probe's edges would drown the noise the hold listens to: off until the
+            // trim is applied, as for the window, until the noise has been heard once.
+            self.plan.probe_volts = 0.0;
+            self.trim.hold_noise = trim::HoldNoise::default();
+        }
         self.state = State::Holding {
             until: k.saturating_add(settle as u32),
             then_measure,
@@ -490,6 +512,14 @@ impl Controller {
         return self.trim.tuned;
         #[cfg(not(feature = "trim"))]
         true
+    }
+
+    /// The ring the next pulse leaves in the charge, C/V³ (NaN: none, or not known).
+    fn ring_gain(&self) -> f32 {
+        #[cfg(feature = "trim")]
+        return self.trim.ring_gain;
+        #[cfg(not(feature = "trim"))]
+        f32::NAN
     }
 
     /// Whether the bias planned is the one the estimate gives for the target.
@@ -590,10 +620,14 @@ impl Controller {
         }
     }
 
-    /// Pulse now; measure the ring from the pulse's end.
-    fn start_measuring(&mut self, k: u32) {
+    /// Pulse now; measure the ring from the pulse's end. Not where the ring it would leave in
+    /// the charge is too weak against the noise heard in the hold: that is said first.
+    fn start_measuring(&mut self, k: u32) -> Result<(), Fault> {
         let s = self.settings;
-        let pulse = libm::roundf(0.5 * s.tick_hz / s.target_hz).max(1.0) as u32;
+        if let Some(error) = self.trim.unresolvable(&s, self.plan.bias_volts) {
+            return Err(Fault::Trim(error));
+        }
+        let pulse = trim::pulse_ticks(&s);
         let from = k.saturating_add(1);
         self.plan.pulse_ticks = (from, from.saturating_add(pulse));
         self.plan.pulse_volts = s.trim_pulse_volts;
@@ -605,6 +639,7 @@ impl Controller {
         self.plan.probe_volts = 0.0;
         self.trim.drop_job();
         self.state = State::Measuring;
+        Ok(())
     }
 
     /// Record this tick's sample; at the window's end, hand the solve out and bring the probe
@@ -664,6 +699,7 @@ impl Controller {
             TrimResult::Converged {
                 measured_hz,
                 shear_modulus,
+                resolution,
             } => {
                 self.trim.params.shear_modulus = shear_modulus;
                 self.trim.count = self.trim.count.saturating_add(1);
@@ -677,6 +713,7 @@ impl Controller {
                     measured_hz,
                     shear_modulus,
                     next_bias_volts: bias_volts,
+                    resolution,
                 }))
             }
             TrimResult::Retune {
@@ -684,10 +721,13 @@ impl Controller {
                 shear_modulus,
                 bias_volts: next_bias_volts,
                 max_volts,
+                ring_gain,
+                resolution,
                 device,
             } => {
                 self.trim.params.shear_modulus = shear_modulus;
                 self.trim.count = self.trim.count.saturating_add(1);
+                self.trim.ring_gain = ring_gain;
                 self.trim.previous = Some((bias_volts * bias_volts, measured_hz));
                 let mut plan = Plan {
                     start_tick: k.saturating_add(1),
@@ -713,6 +753,7 @@ impl Controller {
                     measured_hz,
                     shear_modulus,
                     next_bias_volts,
+                    resolution,
                 }))
             }
             TrimResult::AboveCeiling {

@@ -186,6 +186,7 @@ impl Controller {
                 bias_volts,
                 max_volts,
                 device,
+                ..
             } => {
                 self.trim.params.shear_modulus = shear_modulus;
                 // A drift's solves are not counted against `MAX_TRIMS` (a lost lock is

@@ -9,8 +9,8 @@ use super::fault::Fault;
 use super::settings::{guarded, Settings, MAX_TRIMS, TRIM_SECANT_STEP};
 use crate::device::{Device, DeviceParams};
 use crate::trim::{
-    estimate_shear_modulus, high_passed, model_hz, ring_frequency_hz, ChargeRing, TrimError,
-    MAX_WINDOW, TIMING_ERROR_TIMES_RESOLUTION,
+    estimate_shear_modulus, high_passed, model_hz, ring_charge_gain, ring_frequency_hz, ChargeRing,
+    TrimError, MAX_WINDOW, TIMING_ERROR_TIMES_RESOLUTION,
 };
 use crate::tuning::{TuneError, Tuner};
 
@@ -38,6 +38,11 @@ pub(super) struct TrimState {
     pub(super) charge: f32,
     /// Whether the window holds that charge (no displacement sensor).
     pub(super) from_charge: bool,
+    /// The ring the next pulse leaves in the charge, C/V³ (`ring_charge_gain` at the bias
+    /// planned; NaN: not known), and the current monitor's noise heard in the hold before
+    /// it: with the two the tick says before it pulses whether the ring can be timed.
+    pub(super) ring_gain: f32,
+    pub(super) hold_noise: HoldNoise,
     /// The solve's answer, once the caller has given it.
     pub(super) result: Option<TrimResult>,
     /// Whether the job wanted now was handed out.
@@ -60,6 +65,8 @@ impl TrimState {
             window: [f32::NAN; MAX_WINDOW],
             charge: 0.0,
             from_charge: false,
+            ring_gain: f32::NAN,
+            hold_noise: HoldNoise::default(),
             result: None,
             handed_out: false,
             job: 0,
@@ -88,12 +95,99 @@ impl TrimState {
         self.window.fill(f32::NAN);
         self.charge = 0.0;
         self.from_charge = false;
+        self.ring_gain = f32::NAN;
+        self.hold_noise = HoldNoise::default();
         self.drop_job();
     }
 
     /// No job is wanted: a result of one handed out is dropped when it comes.
     pub(super) fn drop_job(&mut self) {
         self.want_job(None);
+    }
+}
+
+/// The current monitor's noise in the holds before the pulses (no probe then, the bias still;
+/// the probe is taken off for a hold only until the noise has been heard, then stays on):
+/// the sums of the current's fourth differences, whose variance is 70·σ² for white noise and
+/// which pass a ring of eight or more ticks a period at most (2·sin(π/8))⁴ = 0.34 of its
+/// amplitude, far less at the usual twenty and more (the AC's ring after a drive stops).
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct HoldNoise {
+    last: [f32; 4],
+    seen: u8,
+    sum: f32,
+    count: f32,
+}
+
+impl HoldNoise {
+    /// Fewest differences the noise is told from.
+    const MIN_COUNT: f32 = 32.0;
+
+    pub(super) fn observe(&mut self, amps: f32) {
+        let [a, b, c, d] = self.last;
+        if self.seen >= 4 {
+            let fourth = a - 4.0 * b + 6.0 * c - 4.0 * d + amps;
+            if fourth.is_finite() {
+                self.sum += fourth * fourth;
+                self.count += 1.0;
+            }
+        } else {
+            self.seen += 1;
+        }
+        self.last = [b, c, d, amps];
+    }
+
+    /// Whether enough of the noise has been heard to tell it.
+    pub(super) fn heard(&self) -> bool {
+        self.count >= Self::MIN_COUNT
+    }
+
+    /// The noise's variance a tick, A² (none heard: no current, or a sensor's stretch).
+    fn variance(&self) -> Option<f32> {
+        self.heard().then_some(self.sum / (70.0 * self.count))
+    }
+}
+
+/// The tolerance a ring's measurement must meet: the trim's, or before a tracked drive the
+/// tracker's reach.
+fn ring_tolerance(s: &Settings) -> f32 {
+    let tolerance = s.trim_tolerance.unwrap_or(0.0);
+    if s.track_seconds.is_some() {
+        tolerance.max(TRACK_HANDOVER)
+    } else {
+        tolerance
+    }
+}
+
+/// How long the trim's pulse lasts, s: half a target period in whole ticks.
+pub(super) fn pulse_ticks(s: &Settings) -> u32 {
+    libm::roundf(0.5 * s.tick_hz / s.target_hz).max(1.0) as u32
+}
+
+impl TrimState {
+    /// Before the pulse at `bias_volts`: the ring it would leave in the charge against the
+    /// noise heard in the hold, as `ChargeRing::resolution` would find it (undamped), and a
+    /// refusal where that is below what the tolerance needs. Nothing to say with a sensor's
+    /// stretch, or the ring's gain unknown.
+    pub(super) fn unresolvable(&self, s: &Settings, bias_volts: f32) -> Option<TrimError> {
+        let variance = self.hold_noise.variance()?;
+        // A·ticks of charge, the periods in the window, and the ticks of a period.
+        let amplitude = self.ring_gain * bias_volts * bias_volts * s.trim_pulse_volts * s.tick_hz;
+        // (The window's periods less the one its high-pass takes, as `ChargeRing` counts.)
+        let periods = s.trim_window_seconds * s.target_hz - 1.0;
+        let resolution_squared =
+            amplitude * amplitude * periods * periods * s.target_hz / (s.tick_hz * variance);
+        let needed = ChargeRing::needed(self.tuned.then_some(ring_tolerance(s)));
+        // An unknown gain (NaN) says nothing; a ring too weak, or no ring, is refused.
+        if self.ring_gain.is_nan() || resolution_squared >= needed * needed {
+            return None;
+        }
+        Some(TrimError::Unresolvable {
+            resolution: libm::sqrtf(resolution_squared),
+            needed,
+            ring_coulombs: amplitude / s.tick_hz,
+            noise_amps: libm::sqrtf(variance),
+        })
     }
 }
 
@@ -112,6 +206,8 @@ pub struct TrimJob {
     cap_volts: f32,
     /// Whether the window holds the charge (high-passed before its crossings are found).
     from_charge: bool,
+    /// The ring the statics gave its pulse, C/V³ (`TrimState::ring_gain`).
+    ring_gain: f32,
     /// Measured by the tracker (the window is not read), Hz.
     measured_hz: Option<f32>,
     /// Its number, carried by its result.
@@ -134,15 +230,19 @@ pub enum TrimResult {
     Converged {
         measured_hz: f32,
         shear_modulus: f32,
+        resolution: Option<f32>,
     },
     /// Ramp to `bias_volts` and measure again; `max_volts` is the estimate's own cap (the
     /// controller takes the lowest of it and the caps in force); `device` is the estimate
-    /// (built here, not in the tick).
+    /// (built here, not in the tick), `ring_gain` the ring its next pulse leaves in the
+    /// charge (`crate::trim::ring_charge_gain`).
     Retune {
         measured_hz: f32,
         shear_modulus: f32,
         bias_volts: f32,
         max_volts: f32,
+        ring_gain: f32,
+        resolution: Option<f32>,
         device: Device<f32>,
     },
     /// The estimate needs `needed_volts` (bias and AC) above the lower of the cap in force
@@ -176,6 +276,7 @@ impl TrimJob {
             previous: state.previous,
             cap_volts,
             from_charge: state.from_charge,
+            ring_gain: state.ring_gain,
             measured_hz: state.tracked_hz,
             job: state.job,
         }
@@ -200,14 +301,19 @@ impl TrimJob {
     fn try_solve(&self) -> Result<TrimResult, Fault> {
         let s = self.settings;
         let window = self.window.get(..self.len).unwrap_or(&self.window);
-        let mut tolerance = s.trim_tolerance.unwrap_or(0.0);
-        if s.track_seconds.is_some() && self.measured_hz.is_none() {
-            // Before a tracked drive, the ring's trim need only bring the resonance within
-            // the tracker's reach: the tracker holds the target with the drive on.
-            tolerance = tolerance.max(TRACK_HANDOVER);
-        }
-        // What the timing may be off by, relative (the charge's; a sensor's is far below).
+        // Before a tracked drive, the ring's trim need only bring the resonance within the
+        // tracker's reach: the tracker holds the target with the drive on.
+        let tolerance = match self.measured_hz {
+            Some(_) => s.trim_tolerance.unwrap_or(0.0),
+            None => ring_tolerance(&s),
+        };
+        // What the timing may be off by, relative (the charge's; a sensor's is far below),
+        // and the resolution that says so.
         let mut timing_error = 0.0;
+        let mut resolution = None;
+        // The ring seen against the one the statics gave for this bias: the plant's damping
+        // and the window's settling, which the next pulse's reckoning then takes in.
+        let mut ring_seen = 1.0;
         let measured_hz = match self.measured_hz {
             Some(hz) => hz,
             None => {
@@ -227,7 +333,7 @@ impl TrimJob {
                         .map_err(Fault::Trim)?;
                     // Too weak a ring is said, not estimated from.
                     let ring = ChargeRing::of(window, half);
-                    let needed = ChargeRing::needed(tolerance);
+                    let needed = ChargeRing::needed(self.tuned.then_some(tolerance));
                     if !(ring.resolution >= needed) {
                         return Err(Fault::Trim(TrimError::Unresolvable {
                             resolution: ring.resolution,
@@ -237,6 +343,16 @@ impl TrimJob {
                         }));
                     }
                     timing_error = TIMING_ERROR_TIMES_RESOLUTION / ring.resolution;
+                    resolution = Some(ring.resolution);
+                    let expected = self.ring_gain
+                        * self.bias_volts
+                        * self.bias_volts
+                        * s.trim_pulse_volts
+                        * s.tick_hz;
+                    let seen = ring.amplitude / expected;
+                    if seen > 0.0 && seen.is_finite() {
+                        ring_seen = seen;
+                    }
                     measured_hz
                 } else {
                     ring_frequency_hz(window.iter().copied(), sample_hz).map_err(Fault::Trim)?
@@ -253,6 +369,7 @@ impl TrimJob {
             return Ok(TrimResult::Converged {
                 measured_hz,
                 shear_modulus,
+                resolution,
             });
         }
         if self.count.saturating_add(1) >= MAX_TRIMS {
@@ -323,11 +440,15 @@ impl TrimJob {
                 max_volts: estimate_volts,
             });
         }
+        let pulse_seconds = pulse_ticks(&s) as f32 / s.tick_hz;
         Ok(TrimResult::Retune {
             measured_hz,
             shear_modulus,
             bias_volts,
             max_volts: estimate_volts,
+            ring_gain: ring_seen
+                * ring_charge_gain(&device, tuner.limit().at.offset, bias_volts, pulse_seconds),
+            resolution,
             device,
         })
     }
@@ -362,6 +483,7 @@ mod tests {
             previous,
             cap_volts: 9361.9,
             from_charge: false,
+            ring_gain: f32::NAN,
             measured_hz: None,
             job: 0,
         }

@@ -165,6 +165,11 @@ impl Rng {
     pub fn below(&mut self, n: usize) -> usize {
         (self.unit() * n as f64) as usize % n.max(1)
     }
+
+    /// Near-Gaussian, mean 0 and variance 1: the sum of twelve uniforms less six.
+    pub fn gaussian(&mut self) -> f64 {
+        (0..12).map(|_| self.unit()).sum::<f64>() - 6.0
+    }
 }
 
 /// Parameters of a random device, over the ranges the tuning tests use; one case in three
