@@ -27,13 +27,13 @@ pub const MIN_WINDOW_PERIODS: f32 = MIN_CROSSINGS as f32 / 2.0 + 1.0;
 
 /// The least resolution (`ChargeRing::resolution`) a ring in the charge must show to be
 /// timed. On the reference device (BENCHMARKS.md) the crossings locked onto the noise's wander
-/// in some seeds at 39 and below (the frequency percent off); none did in twelve at 44 and
-/// more. A quarter above that edge.
+/// in some seeds at 39 and below (the frequency percent off); none did in twelve at 43 and
+/// more. The bound is a quarter above the highest lost.
 pub const MIN_RESOLUTION: f32 = 50.0;
 
 /// The relative error of the ring's frequency from the charge, times its resolution: one
-/// standard deviation, measured (BENCHMARKS.md: 0.029–0.039 in each fifth of 143 trims in the
-/// closed loop against the plant's own frequency, resolutions 69 to 988; 0.031 on a white-noise
+/// standard deviation, measured (BENCHMARKS.md: 0.026–0.038 in each fifth of 143 trims in the
+/// closed loop against the plant's own frequency, resolutions 70 to 995; 0.031 on a white-noise
 /// ring). The trim asks twice that below its tolerance before it calls the frequency on target.
 pub const TIMING_ERROR_TIMES_RESOLUTION: f32 = 0.031;
 

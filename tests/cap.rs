@@ -466,6 +466,7 @@ fn a_retune_whose_probe_would_pass_the_cap_is_refused_when_it_comes() {
                     bias_volts: 3000.0,
                     max_volts: 3010.0,
                     ring_gain: f32::NAN,
+                    ring_seen: 1.0,
                     resolution: None,
                     device,
                 };

@@ -113,6 +113,17 @@ fn stages_one_by_one_are_start() {
     let boot = Controller::start_in(&mut slot, params, &table, amplifier(), settings).unwrap();
     assert_eq!(boot, boot_all);
     assert_eq!(slot.as_ref().unwrap().plan(), all.plan());
+    // A stage's refusal leaves the controller faulted at 0 V, whoever carries on with it:
+    // here the table and the direct solve made to disagree.
+    let strict = Settings {
+        agreement: 1e-9,
+        ..settings
+    };
+    let (mut c, boot) = Controller::from_table(params, &table, amplifier(), strict).unwrap();
+    let fault = c.cross_check(boot);
+    assert!(matches!(fault, Err(Fault::Disagree { .. })), "{fault:?}");
+    assert_eq!(c.phase(), de_resonator::Phase::Faulted);
+    assert!((0..100).all(|_| c.tick(Inputs::NONE).volts == 0.0));
     // Refused before the controller is built (a torn table, a target off the table) and
     // after (an amplifier that cannot reach the bias: the plan's stage).
     let small = Amplifier::new(2.5, 1000.0).unwrap();

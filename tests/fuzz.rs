@@ -366,11 +366,13 @@ fn tampered(rng: &mut Rng, mut done: TrimDone) -> TrimDone {
                 bias_volts,
                 max_volts,
                 ring_gain,
+                ring_seen,
                 resolution,
                 device,
             },
         ) => TrimResult::Retune {
             resolution,
+            ring_seen: wild(rng) as f32 * ring_seen,
             measured_hz,
             shear_modulus,
             bias_volts: wild_volts(rng, bias_volts),

@@ -148,7 +148,17 @@ impl Controller {
     /// scaled down to a larger margin than the table's) must lie below (1 − margin)·limit,
     /// and the natural frequencies at the two biases must agree. The controller then drives
     /// the solve's bias, capped at (1 − margin)·(1 − F32_GUARD)·limit.
+    /// On a refusal the controller is left faulted at 0 V: a stage's caller that carried
+    /// on with it would drive nothing.
     pub fn cross_check(&mut self, boot: Boot) -> Result<Boot, Fault> {
+        let checked = self.cross_checked(boot);
+        if let Err(fault) = checked {
+            self.fault(fault);
+        }
+        checked
+    }
+
+    fn cross_checked(&mut self, boot: Boot) -> Result<Boot, Fault> {
         let settings = self.settings;
         let tuner = Tuner::new(self.flashed);
         let limit = tuner.limit();
@@ -192,8 +202,16 @@ impl Controller {
 
     /// Run the whole plan through the model (f32 RK4 under the monitor, from rest at the
     /// equilibrium of its first voltage: the pre-stretch from 0 V) and refuse it if a limit
-    /// is crossed on the way.
-    pub fn check_plan(&self, boot: Boot) -> Result<Boot, Fault> {
+    /// is crossed on the way; refused, the controller is left faulted at 0 V.
+    pub fn check_plan(&mut self, boot: Boot) -> Result<Boot, Fault> {
+        let checked = self.plan_checked(boot);
+        if let Err(fault) = checked {
+            self.fault(fault);
+        }
+        checked
+    }
+
+    fn plan_checked(&self, boot: Boot) -> Result<Boot, Fault> {
         let from_volts = self.plan.start_volts;
         let device = &self.flashed;
         let start = if from_volts > 0.0 {
@@ -229,6 +247,14 @@ impl Controller {
         } else {
             tuned_volts
         };
+        let from_volts = self.plan.start_volts;
+        let (plan, ticks) = Plan::ramp(&s, from_volts, bias_volts, !trimming)?;
+        plan.check_range(tuned_volts, self.max_volts)?;
+        // The amplifier must give the highest voltage: the AC's and the probe's peak on the
+        // tuned bias (the ramp starts at 0 V and ends at a bias no higher, the trim's first
+        // bias included).
+        let peak_volts = tuned_volts + plan.swing_volts();
+        self.amplifier.code(peak_volts).map_err(Fault::Amplifier)?;
         #[cfg(feature = "trim")]
         if trimming {
             // The ring the first pulse will leave in the charge (the tick weighs it against
@@ -242,14 +268,6 @@ impl Controller {
                 pulse_seconds,
             );
         }
-        let from_volts = self.plan.start_volts;
-        let (plan, ticks) = Plan::ramp(&s, from_volts, bias_volts, !trimming)?;
-        plan.check_range(tuned_volts, self.max_volts)?;
-        // The amplifier must give the highest voltage: the AC's and the probe's peak on the
-        // tuned bias (the ramp starts at 0 V and ends at a bias no higher, the trim's first
-        // bias included).
-        let peak_volts = tuned_volts + plan.swing_volts();
-        self.amplifier.code(peak_volts).map_err(Fault::Amplifier)?;
         self.plan = plan;
         self.state = State::Ramping {
             then_measure: trimming,

@@ -74,7 +74,8 @@ pub struct ReplanJob {
 }
 
 /// A checked new plan, for `adopt`: what the boot stages left in a fresh controller (its
-/// plan, settings, cap and state), not the controller itself (3 KB on the firmware's stack).
+/// plan, settings, cap and state), not the controller itself: its 3 KB stay in the solve's
+/// frame instead of travelling on through the command task's.
 #[derive(Clone, Copy, Debug)]
 pub struct Replanned {
     plan: Plan,

@@ -431,11 +431,17 @@ impl Controller {
                 until,
                 then_measure: true,
             } => {
-                // The monitor's noise, over the hold's last three quarters (the probe's last
-                // edge, and the ramp's end, settled before), with no probe on.
+                // The monitor's noise, when the ring will come from the current, over the
+                // hold's last three quarters (the probe's last edge, and the ramp's end,
+                // settled before). The probe's edges would drown it: off until the trim is
+                // applied, as for the window, while the noise is still to be heard.
                 let settle = self.settings.settle_seconds * self.settings.tick_hz;
-                if let (Ring::Current(amps), 0.0) = (ring, self.plan.probe_volts) {
-                    if (until.saturating_sub(k) as f32) < 0.75 * settle {
+                if let Ring::Current(amps) = ring {
+                    if !self.trim.hold_noise.heard() {
+                        self.plan.probe_volts = 0.0;
+                    }
+                    let settled = (until.saturating_sub(k) as f32) < 0.75 * settle;
+                    if settled && self.plan.probe_volts == 0.0 {
                         self.trim.hold_noise.observe(amps);
                     }
                 }
@@ -480,11 +486,10 @@ impl Controller {
     /// Hold the bias from tick `k` for the settle time, then measure or drive.
     fn hold_from(&mut self, k: u32, then_measure: bool) {
         let settle = self.settings.settle_seconds * self.settings.tick_hz;
+        // The noise is heard afresh in each hold before a pulse, but under a probe: then
+        // only until it has been heard once (the probe is taken off for that, below).
         #[cfg(feature = "trim")]
-        if then_measure && !self.trim.hold_noise.heard() {
-            // The probe's edges would drown the noise the hold listens to: off until the
-            // trim is applied, as for the window, until the noise has been heard once.
-            self.plan.probe_volts = 0.0;
+        if then_measure && !(self.trim.hold_noise.heard() && self.plan.probe_volts > 0.0) {
             self.trim.hold_noise = trim::HoldNoise::default();
         }
         self.state = State::Holding {
@@ -722,12 +727,14 @@ impl Controller {
                 bias_volts: next_bias_volts,
                 max_volts,
                 ring_gain,
+                ring_seen,
                 resolution,
                 device,
             } => {
                 self.trim.params.shear_modulus = shear_modulus;
                 self.trim.count = self.trim.count.saturating_add(1);
                 self.trim.ring_gain = ring_gain;
+                self.trim.ring_seen = ring_seen;
                 self.trim.previous = Some((bias_volts * bias_volts, measured_hz));
                 let mut plan = Plan {
                     start_tick: k.saturating_add(1),

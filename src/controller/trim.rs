@@ -39,9 +39,12 @@ pub(super) struct TrimState {
     /// Whether the window holds that charge (no displacement sensor).
     pub(super) from_charge: bool,
     /// The ring the next pulse leaves in the charge, C/V³ (`ring_charge_gain` at the bias
-    /// planned; NaN: not known), and the current monitor's noise heard in the hold before
-    /// it: with the two the tick says before it pulses whether the ring can be timed.
+    /// planned; NaN: not known), the share of it the last window showed (the plant's
+    /// damping, the window's settling: 1 before any), and the current monitor's noise heard
+    /// in the hold before it: with these the tick says before it pulses whether the ring can
+    /// be timed.
     pub(super) ring_gain: f32,
+    pub(super) ring_seen: f32,
     pub(super) hold_noise: HoldNoise,
     /// The solve's answer, once the caller has given it.
     pub(super) result: Option<TrimResult>,
@@ -66,6 +69,7 @@ impl TrimState {
             charge: 0.0,
             from_charge: false,
             ring_gain: f32::NAN,
+            ring_seen: 1.0,
             hold_noise: HoldNoise::default(),
             result: None,
             handed_out: false,
@@ -83,9 +87,10 @@ impl TrimState {
         self.tracked_hz = tracked_hz;
     }
 
-    /// Start afresh on a new plan (the estimate, the window and the secant's history
-    /// dropped, as at boot), in place; the job wanted is dropped, its number kept counting so
-    /// that a result of the old plan's is stale.
+    /// Start afresh on a new plan (the trim's own μ, the window, the secant's history and
+    /// the noise heard dropped, as at boot; the controller's estimated device and its cap
+    /// stay), in place; the job wanted is dropped, its number kept counting so that a result
+    /// of the old plan's is stale.
     pub(super) fn restart(&mut self, params: DeviceParams<f32>) {
         self.params = params;
         self.tuned = true;
@@ -96,6 +101,7 @@ impl TrimState {
         self.charge = 0.0;
         self.from_charge = false;
         self.ring_gain = f32::NAN;
+        self.ring_seen = 1.0;
         self.hold_noise = HoldNoise::default();
         self.drop_job();
     }
@@ -107,7 +113,8 @@ impl TrimState {
 }
 
 /// The current monitor's noise in the holds before the pulses (no probe then, the bias still;
-/// the probe is taken off for a hold only until the noise has been heard, then stays on):
+/// heard afresh in each, but under a probe only until it has been heard once: the probe is
+/// taken off for that hold, and stays on in the later ones):
 /// the sums of the current's fourth differences, whose variance is 70·σ² for white noise and
 /// which pass a ring of eight or more ticks a period at most (2·sin(π/8))⁴ = 0.34 of its
 /// amplitude, far less at the usual twenty and more (the AC's ring after a drive stops).
@@ -172,7 +179,12 @@ impl TrimState {
     pub(super) fn unresolvable(&self, s: &Settings, bias_volts: f32) -> Option<TrimError> {
         let variance = self.hold_noise.variance()?;
         // A·ticks of charge, the periods in the window, and the ticks of a period.
-        let amplitude = self.ring_gain * bias_volts * bias_volts * s.trim_pulse_volts * s.tick_hz;
+        let amplitude = self.ring_gain
+            * self.ring_seen
+            * bias_volts
+            * bias_volts
+            * s.trim_pulse_volts
+            * s.tick_hz;
         // (The window's periods less the one its high-pass takes, as `ChargeRing` counts.)
         let periods = s.trim_window_seconds * s.target_hz - 1.0;
         let resolution_squared =
@@ -206,8 +218,10 @@ pub struct TrimJob {
     cap_volts: f32,
     /// Whether the window holds the charge (high-passed before its crossings are found).
     from_charge: bool,
-    /// The ring the statics gave its pulse, C/V³ (`TrimState::ring_gain`).
+    /// The ring the statics gave its pulse, C/V³, and the share of it the window before
+    /// showed (`TrimState::ring_gain`, `ring_seen`).
     ring_gain: f32,
+    ring_seen: f32,
     /// Measured by the tracker (the window is not read), Hz.
     measured_hz: Option<f32>,
     /// Its number, carried by its result.
@@ -235,13 +249,15 @@ pub enum TrimResult {
     /// Ramp to `bias_volts` and measure again; `max_volts` is the estimate's own cap (the
     /// controller takes the lowest of it and the caps in force); `device` is the estimate
     /// (built here, not in the tick), `ring_gain` the ring its next pulse leaves in the
-    /// charge (`crate::trim::ring_charge_gain`).
+    /// charge (`crate::trim::ring_charge_gain`) and `ring_seen` the share of such a ring the
+    /// window showed.
     Retune {
         measured_hz: f32,
         shear_modulus: f32,
         bias_volts: f32,
         max_volts: f32,
         ring_gain: f32,
+        ring_seen: f32,
         resolution: Option<f32>,
         device: Device<f32>,
     },
@@ -277,6 +293,7 @@ impl TrimJob {
             cap_volts,
             from_charge: state.from_charge,
             ring_gain: state.ring_gain,
+            ring_seen: state.ring_seen,
             measured_hz: state.tracked_hz,
             job: state.job,
         }
@@ -313,7 +330,7 @@ impl TrimJob {
         let mut resolution = None;
         // The ring seen against the one the statics gave for this bias: the plant's damping
         // and the window's settling, which the next pulse's reckoning then takes in.
-        let mut ring_seen = 1.0;
+        let mut ring_seen = self.ring_seen;
         let measured_hz = match self.measured_hz {
             Some(hz) => hz,
             None => {
@@ -328,13 +345,13 @@ impl TrimJob {
                     } else {
                         s.target_hz
                     };
-                    let half = libm::roundf(0.5 * sample_hz / hz) as usize;
-                    let measured_hz = ring_frequency_hz(high_passed(window, half), sample_hz)
-                        .map_err(Fault::Trim)?;
-                    // Too weak a ring is said, not estimated from.
+                    let half = (libm::roundf(0.5 * sample_hz / hz) as usize).min(window.len());
+                    // Too weak a ring is said, not estimated from (a window with neither
+                    // ring nor noise has no ring to time: `NoRing`, below).
                     let ring = ChargeRing::of(window, half);
                     let needed = ChargeRing::needed(self.tuned.then_some(tolerance));
-                    if !(ring.resolution >= needed) {
+                    let heard = ring.amplitude > 0.0 || ring.noise > 0.0;
+                    if heard && !(ring.resolution >= needed) {
                         return Err(Fault::Trim(TrimError::Unresolvable {
                             resolution: ring.resolution,
                             needed,
@@ -342,6 +359,8 @@ impl TrimJob {
                             noise_amps: ring.noise / libm::sqrtf(stride as f32),
                         }));
                     }
+                    let measured_hz = ring_frequency_hz(high_passed(window, half), sample_hz)
+                        .map_err(Fault::Trim)?;
                     timing_error = TIMING_ERROR_TIMES_RESOLUTION / ring.resolution;
                     resolution = Some(ring.resolution);
                     let expected = self.ring_gain
@@ -446,8 +465,13 @@ impl TrimJob {
             shear_modulus,
             bias_volts,
             max_volts: estimate_volts,
-            ring_gain: ring_seen
-                * ring_charge_gain(&device, tuner.limit().at.offset, bias_volts, pulse_seconds),
+            ring_gain: ring_charge_gain(
+                &device,
+                tuner.limit().at.offset,
+                bias_volts,
+                pulse_seconds,
+            ),
+            ring_seen,
             resolution,
             device,
         })
@@ -484,6 +508,7 @@ mod tests {
             cap_volts: 9361.9,
             from_charge: false,
             ring_gain: f32::NAN,
+            ring_seen: 1.0,
             measured_hz: None,
             job: 0,
         }
