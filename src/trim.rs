@@ -220,12 +220,18 @@ impl ChargeRing {
         let walk = noise_squared * h * (h + 1.0) / (3.0 * span);
         let amplitude = libm::sqrtf(2.0 * (square / n - walk).max(0.0));
         let noise = libm::sqrtf(noise_squared);
-        let resolution = amplitude / (noise * libm::sqrtf(span)) * (n / span);
+        let resolution = Self::resolution_of(amplitude, noise, span, n / span);
         Self {
             amplitude,
             noise,
             resolution: if resolution.is_nan() { 0.0 } else { resolution },
         }
+    }
+
+    /// The resolution of a ring of `amplitude` through steps of `noise` (the same unit, a
+    /// sample), `per_period` samples a period over `periods` periods (see `resolution`).
+    pub fn resolution_of(amplitude: f32, noise: f32, per_period: f32, periods: f32) -> f32 {
+        amplitude / (noise * libm::sqrtf(per_period)) * periods
     }
 
     /// The resolution a measurement needs: `MIN_RESOLUTION`; and one that may find the

@@ -191,6 +191,17 @@ impl Controller {
         self.ceiling_volts = max_volts;
         self.set_caps(max_volts, self.estimate_volts);
         let plan_ticks = self.set_plan(solved.volts)?;
+        // The ring the first pulse will leave in the charge, at the bias it measures at (the
+        // tick weighs it against the noise before it pulses).
+        #[cfg(feature = "trim")]
+        if self.trim_wanted() {
+            self.trim.ring_gain = crate::trim::ring_charge_gain(
+                &self.flashed,
+                limit.at.offset,
+                self.plan.bias_volts,
+                super::trim::pulse_seconds(&settings),
+            );
+        }
         Ok(Boot {
             bias_volts: solved.volts,
             max_volts,
@@ -255,19 +266,6 @@ impl Controller {
         // bias included).
         let peak_volts = tuned_volts + plan.swing_volts();
         self.amplifier.code(peak_volts).map_err(Fault::Amplifier)?;
-        #[cfg(feature = "trim")]
-        if trimming {
-            // The ring the first pulse will leave in the charge (the tick weighs it against
-            // the noise before it pulses).
-            let limit = Limit::of(&self.flashed);
-            let pulse_seconds = super::trim::pulse_ticks(&s) as f32 / s.tick_hz;
-            self.trim.ring_gain = crate::trim::ring_charge_gain(
-                &self.flashed,
-                limit.at.offset,
-                bias_volts,
-                pulse_seconds,
-            );
-        }
         self.plan = plan;
         self.state = State::Ramping {
             then_measure: trimming,

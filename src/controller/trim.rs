@@ -166,9 +166,20 @@ fn ring_tolerance(s: &Settings) -> f32 {
     }
 }
 
-/// How long the trim's pulse lasts, s: half a target period in whole ticks.
+/// How long the trim's pulse lasts, ticks: half a target period in whole ticks.
 pub(super) fn pulse_ticks(s: &Settings) -> u32 {
     libm::roundf(0.5 * s.tick_hz / s.target_hz).max(1.0) as u32
+}
+
+/// How long the trim's pulse lasts, s.
+pub(super) fn pulse_seconds(s: &Settings) -> f32 {
+    pulse_ticks(s) as f32 / s.tick_hz
+}
+
+/// The ring a pulse at `bias_volts` leaves in the charge, A·ticks (the window's unit), for a
+/// ring gain of `gain` C/V³ (`crate::trim::ring_charge_gain`).
+fn ring_ticks(gain: f32, bias_volts: f32, s: &Settings) -> f32 {
+    gain * bias_volts * bias_volts * s.trim_pulse_volts * s.tick_hz
 }
 
 impl TrimState {
@@ -178,27 +189,26 @@ impl TrimState {
     /// stretch, or the ring's gain unknown.
     pub(super) fn unresolvable(&self, s: &Settings, bias_volts: f32) -> Option<TrimError> {
         let variance = self.hold_noise.variance()?;
-        // A·ticks of charge, the periods in the window, and the ticks of a period.
-        let amplitude = self.ring_gain
-            * self.ring_seen
-            * bias_volts
-            * bias_volts
-            * s.trim_pulse_volts
-            * s.tick_hz;
+        // An unknown gain (NaN) says nothing.
+        if self.ring_gain.is_nan() {
+            return None;
+        }
+        let amplitude = ring_ticks(self.ring_gain * self.ring_seen, bias_volts, s);
+        let noise_amps = libm::sqrtf(variance);
         // (The window's periods less the one its high-pass takes, as `ChargeRing` counts.)
         let periods = s.trim_window_seconds * s.target_hz - 1.0;
-        let resolution_squared =
-            amplitude * amplitude * periods * periods * s.target_hz / (s.tick_hz * variance);
+        let resolution =
+            ChargeRing::resolution_of(amplitude, noise_amps, s.tick_hz / s.target_hz, periods);
         let needed = ChargeRing::needed(self.tuned.then_some(ring_tolerance(s)));
-        // An unknown gain (NaN) says nothing; a ring too weak, or no ring, is refused.
-        if self.ring_gain.is_nan() || resolution_squared >= needed * needed {
+        // A ring too weak, or no ring (NaN), is refused.
+        if resolution >= needed {
             return None;
         }
         Some(TrimError::Unresolvable {
-            resolution: libm::sqrtf(resolution_squared),
+            resolution,
             needed,
             ring_coulombs: amplitude / s.tick_hz,
-            noise_amps: libm::sqrtf(variance),
+            noise_amps,
         })
     }
 }
@@ -363,12 +373,7 @@ impl TrimJob {
                         .map_err(Fault::Trim)?;
                     timing_error = TIMING_ERROR_TIMES_RESOLUTION / ring.resolution;
                     resolution = Some(ring.resolution);
-                    let expected = self.ring_gain
-                        * self.bias_volts
-                        * self.bias_volts
-                        * s.trim_pulse_volts
-                        * s.tick_hz;
-                    let seen = ring.amplitude / expected;
+                    let seen = ring.amplitude / ring_ticks(self.ring_gain, self.bias_volts, &s);
                     if seen > 0.0 && seen.is_finite() {
                         ring_seen = seen;
                     }
@@ -459,7 +464,6 @@ impl TrimJob {
                 max_volts: estimate_volts,
             });
         }
-        let pulse_seconds = pulse_ticks(&s) as f32 / s.tick_hz;
         Ok(TrimResult::Retune {
             measured_hz,
             shear_modulus,
@@ -469,7 +473,7 @@ impl TrimJob {
                 &device,
                 tuner.limit().at.offset,
                 bias_volts,
-                pulse_seconds,
+                pulse_seconds(&s),
             ),
             ring_seen,
             resolution,
