@@ -270,6 +270,14 @@ def main():
     check(reply.startswith("ok "), f"set: {reply}")
     fw.wait_phase(("holding",))
     check(fw.ask("save").startswith("ok save"), "save")
+    # A reset at 0 V only (the core's board): refused under the bias, done after `stop`.
+    reply = fw.ask("reset")
+    check(reply.startswith("err 3 reset at 0 V only"), f"reset under the bias: {reply}")
+    check(fw.ask("stop").startswith("ok stop"), "stop")
+    for _ in range(600):
+        if float(fw.wait_phase(("holding",))["volts"]) == 0.0:
+            break
+        time.sleep(0.05)
     reply = fw.ask("reset")
     check(reply.startswith("ok reset"), f"reset: {reply}")
     lines = [fw.line(), fw.line()]

@@ -248,6 +248,43 @@ pub async fn erase<F: NorFlash>(mut flash: F, range: Range<u32>) -> Result<(), S
         .map_err(flash_error)
 }
 
+/// A flash and the range of it the settings use, as the board keeps them
+/// ([`crate::board::Keeper`]): each call run to its end at once, for a flash that never waits
+/// (RAM, or the STM32F4's flash controller, which blocks in each call).
+pub struct FlashKeeper<F> {
+    pub flash: F,
+    pub range: Range<u32>,
+}
+
+impl<F: NorFlash> crate::board::Keeper for FlashKeeper<F> {
+    type Error = StoreError;
+
+    fn load(&mut self) -> Result<Option<Settings>, StoreError> {
+        block_on(load(&mut self.flash, self.range.clone()))
+            .unwrap_or(Err(StoreError::Flash(FlashKind::Other)))
+    }
+
+    fn save(&mut self, settings: &Settings) -> Result<(), StoreError> {
+        block_on(save(&mut self.flash, self.range.clone(), settings))
+            .unwrap_or(Err(StoreError::Flash(FlashKind::Other)))
+    }
+}
+
+/// Run a future whose flash never waits to its end, without an executor (a boot cannot
+/// await). `None` if it still waits after a few polls.
+pub fn block_on<T>(future: impl core::future::Future<Output = T>) -> Option<T> {
+    use core::task::{Context, Poll, Waker};
+    let mut future = core::pin::pin!(future);
+    let mut cx = Context::from_waker(Waker::noop());
+    // A future over a blocking flash is ready at its first poll; a few more are allowed.
+    for _ in 0..4 {
+        if let Poll::Ready(out) = future.as_mut().poll(&mut cx) {
+            return Some(out);
+        }
+    }
+    None
+}
+
 /// A NOR flash in RAM: erased bytes read 0xFF, a write can only clear bits, writes are whole
 /// `WORD`-byte words and erases whole pages (else `NotAligned`, as real flash refuses). For
 /// QEMU (whose flash controller is not emulated) and tests: `fail_after` bytes written from

@@ -1,25 +1,9 @@
 //! Runtime glue: exit codes, the panic and HardFault handlers, and the stack meter. The only
 //! `unsafe` of the firmware lives here and in `config` (raw memory the linker names).
 
-/// Why the firmware restarted, kept across the reset in `.uninit` RAM with a check word
-/// (QEMU has no reset flags; on silicon the same record works).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum ResetCause {
-    /// The command port asked (`reset`).
-    Asked,
-    /// The watchdog was not fed in time.
-    Watchdog,
-}
-
-impl ResetCause {
-    pub fn name(self) -> &'static str {
-        match self {
-            ResetCause::Asked => "asked",
-            ResetCause::Watchdog => "watchdog",
-        }
-    }
-}
+/// Why the firmware restarted (the core's board reads it at boot), kept across the reset in
+/// `.uninit` RAM with a check word (QEMU has no reset flags; on silicon the same record works).
+pub use de_resonator::board::ResetCause;
 
 const CAUSE_CHECK: u32 = 0x5E5E_7C0D;
 

@@ -4,10 +4,7 @@
 //! a power cycle). The layout and the power-cut safety are the core's `store`
 //! (sequential-storage).
 
-use core::future::Future;
-use core::ops::Range;
-use core::pin::pin;
-use core::task::{Context, Poll, Waker};
+use de_resonator::store::FlashKeeper;
 
 /// The settings' flash as this build has it.
 #[cfg(feature = "qemu")]
@@ -16,14 +13,17 @@ pub type SettingsFlash = de_resonator::store::RamFlash<'static>;
 pub type SettingsFlash = ChipFlash;
 
 /// The flash (from the chip's flash controller, unused under QEMU) and the range of it the
-/// settings use.
-pub fn open(controller: stm32f4xx_hal::pac::FLASH) -> Option<(SettingsFlash, Range<u32>)> {
+/// settings use, as the board keeps them.
+pub fn open(controller: stm32f4xx_hal::pac::FLASH) -> Option<FlashKeeper<SettingsFlash>> {
     #[cfg(feature = "qemu")]
     {
         let _ = controller;
         let ram = crate::runtime::settings_ram()?;
         let len = ram.len() as u32;
-        Some((de_resonator::store::RamFlash::new(ram), 0..len))
+        Some(FlashKeeper {
+            flash: de_resonator::store::RamFlash::new(ram),
+            range: 0..len,
+        })
     }
     #[cfg(not(feature = "qemu"))]
     {
@@ -35,22 +35,11 @@ pub fn open(controller: stm32f4xx_hal::pac::FLASH) -> Option<(SettingsFlash, Ran
         let from = core::ptr::addr_of!(_settings_offset) as u32;
         let to = core::ptr::addr_of!(_settings_end) as u32;
         let flash = stm32f4xx_hal::flash::LockedFlash::new(controller);
-        Some((ChipFlash(flash), from..to))
+        Some(FlashKeeper {
+            flash: ChipFlash(flash),
+            range: from..to,
+        })
     }
-}
-
-/// Run a future whose flash never waits (RAM, or the chip's flash controller, which blocks
-/// in each call) to its end: for `init`, which cannot await. `None` if it ever waits.
-pub fn block_on<F: Future>(future: F) -> Option<F::Output> {
-    let mut future = pin!(future);
-    let mut cx = Context::from_waker(Waker::noop());
-    // A future over a blocking flash is ready at its first poll; a few more are allowed.
-    for _ in 0..4 {
-        if let Poll::Ready(out) = future.as_mut().poll(&mut cx) {
-            return Some(out);
-        }
-    }
-    None
 }
 
 /// The STM32F4's flash controller as embedded-storage's async `NorFlash` (each call blocks

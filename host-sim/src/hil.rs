@@ -15,6 +15,8 @@ use de_resonator::{
 use embedded_hal::digital::{self, OutputPin};
 use embedded_hal::spi::{ErrorKind, ErrorType, Operation, SpiDevice};
 
+use de_resonator::board;
+
 use crate::plant::{self, Plant, Vector};
 use crate::simulate::{Solver, Tolerance};
 use crate::text::sig;
@@ -143,6 +145,41 @@ impl Noise {
     }
 }
 
+/// The board's outputs as the plant sees them: the DAC on its bus, the amplifier's enable line
+/// (the output stage borrows both).
+#[derive(Default)]
+pub struct Wires {
+    pub bus: SimulatedDac,
+    pub enable: EnableLine,
+}
+
+/// What a tick of `Loop::step` did.
+#[derive(Clone, Copy, Debug)]
+pub struct Stepped {
+    /// The board's tick, when a controller runs.
+    pub ticked: Option<board::tick::Ticked>,
+    /// The plant's stretch at the tick's start.
+    pub start_stretch: f64,
+    /// The membrane's voltage at the tick's end, V.
+    pub volts: f64,
+}
+
+/// The plant's side of a loop between ticks: its state, the solver's next step, the
+/// sensors' noise and last reading, the amplifier's current. `Loop::sense` reads it before a
+/// tick, `Loop::advance` steps it over the tick.
+pub struct Bench {
+    pub y: Vector,
+    next_step: Option<f64>,
+    noise: Noise,
+    /// The stretch sensor's last reading (a stuck sensor repeats it).
+    reading: f64,
+    /// The membrane's (stretch, volts) at the tick's start.
+    port: (f64, f64),
+    /// The mean output current over the last tick, A (none before the first).
+    pub last_current: Option<f64>,
+    current_wanted: bool,
+}
+
 /// A whole loop: the controller's side (what it is told), the plant's, and the run.
 #[derive(Clone, Debug)]
 pub struct Loop {
@@ -240,39 +277,46 @@ impl Run {
     /// Record what the controller said at `seconds`, and the fault if it is one.
     fn said(&mut self, seconds: f64, event: Option<Event>) {
         let Some(event) = event else { return };
-        let what = match event {
-            Event::AtBias { volts } => format!("at bias, {volts} V"),
-            Event::DriveOn => "AC drive on".to_string(),
-            Event::DriveOff => "AC drive paused, to trim again".to_string(),
-            Event::Trimmed {
-                bias_volts,
-                measured_hz,
-                shear_modulus,
-                next_bias_volts,
-                resolution,
-            } => format!(
-                "trim: {measured_hz:.4} Hz measured at {bias_volts:.1} V{}, μ estimated \
-                 {:.2} kPa, next bias {next_bias_volts:.1} V",
-                resolution.map_or(String::new(), |r| format!(" (resolution {r:.0})")),
-                shear_modulus / 1e3
-            ),
-            Event::AboveCeiling {
-                needed_volts,
-                cap_volts,
-            } => format!(
-                "trim needs {needed_volts:.1} V, above the cap in force {cap_volts:.1} V of the \
-                 device flashed: holding the bias"
-            ),
-            Event::Fault(fault) => {
-                self.fault = Some(fault);
-                if fault == Fault::Bus {
-                    format!("fault, amplifier disabled at once: {fault}")
-                } else {
-                    format!("fault, down to 0 V at the slew rate: {fault}")
-                }
-            }
-        };
+        if let Event::Fault(fault) = event {
+            self.fault = Some(fault);
+        }
+        let what = said(event);
         self.events.push(Said { seconds, what });
+    }
+}
+
+/// What the controller said, in words.
+pub fn said(event: Event) -> String {
+    match event {
+        Event::AtBias { volts } => format!("at bias, {volts} V"),
+        Event::DriveOn => "AC drive on".to_string(),
+        Event::DriveOff => "AC drive paused, to trim again".to_string(),
+        Event::Trimmed {
+            bias_volts,
+            measured_hz,
+            shear_modulus,
+            next_bias_volts,
+            resolution,
+        } => format!(
+            "trim: {measured_hz:.4} Hz measured at {bias_volts:.1} V{}, μ estimated \
+             {:.2} kPa, next bias {next_bias_volts:.1} V",
+            resolution.map_or(String::new(), |r| format!(" (resolution {r:.0})")),
+            shear_modulus / 1e3
+        ),
+        Event::AboveCeiling {
+            needed_volts,
+            cap_volts,
+        } => format!(
+            "trim needs {needed_volts:.1} V, above the cap in force {cap_volts:.1} V of the \
+             device flashed: holding the bias"
+        ),
+        Event::Fault(fault) => {
+            if fault == Fault::Bus {
+                format!("fault, amplifier disabled at once: {fault}")
+            } else {
+                format!("fault, down to 0 V at the slew rate: {fault}")
+            }
+        }
     }
 }
 
@@ -335,15 +379,8 @@ impl Loop {
         let progress = crate::work::bar("run", ticks as usize);
         let every = (ticks / 200).max(1);
         // The driver borrows the bus for each write, as firmware sharing a bus would.
-        let bus = SimulatedDac {
-            reference_volts: self.dac_reference_volts,
-            ..SimulatedDac::default()
-        };
-        let enable = EnableLine::default();
-        // The core's output stage, as the firmware's: the DAC and the enable line, and the
-        // one reaction to a fault (enable low at once, since a dead bus keeps the DAC's last
-        // code, then the DAC powered down).
-        let mut stage = OutputStage::new(Dac8551::new(&bus), &enable);
+        let wires = self.wires();
+        let mut stage = OutputStage::new(Dac8551::new(&wires.bus), &wires.enable);
         let _ = stage.safe();
         let mut run = Run {
             boot: None,
@@ -363,9 +400,6 @@ impl Loop {
             ticks: 0,
             run_seconds: 0.0,
         };
-        let mut y = self.plant.at_rest();
-        // The solver's first step after the drive's jump, carried from tick to tick.
-        let mut next_step = None;
         let mut controller = match Controller::start(
             self.nominal.cast(),
             &made.bytes,
@@ -374,7 +408,6 @@ impl Loop {
         ) {
             Ok((c, boot)) => {
                 run.boot = Some(boot);
-                let _ = stage.enable();
                 Some(c)
             }
             Err(fault) => {
@@ -382,22 +415,8 @@ impl Loop {
                 None
             }
         };
-        let mut noise = Noise(self.seed);
-        // The amplifier's current, worked out only when a monitor or the history reads it:
-        // the membrane's (stretch, volts) at the tick's start, and the mean current over the
-        // last tick (none before the first).
-        let current_wanted = self.current_monitor.is_some() || self.history;
-        let mut port = (y[0], self.plant.volts(&y, 0.0));
-        let mut last_current: Option<f64> = None;
-        let mut reading = f64::NAN;
-        let gain = self.plant.amplifier.gain;
-        let amplifier_input = || {
-            if enable.high.get() {
-                gain * bus.output_volts.get()
-            } else {
-                0.0
-            }
-        };
+        // The amplifier's current, worked out only when a monitor or the history reads it.
+        let mut bench = self.bench(self.current_monitor.is_some() || self.history);
         let tracked = self.settings.track_seconds.is_some();
         // The plant's stretch summed since the last window of the probe's lock-in.
         let (mut stretch_sum, mut stretch_ticks) = (0.0, 0u32);
@@ -409,26 +428,12 @@ impl Loop {
                 progress.set_position(k);
             }
             let t = k as f64 * tick_seconds;
-            let failing = self.bus_fails_after_seconds.is_some_and(|at| t >= at);
-            if failing && bus.fail_after.get().is_none() {
-                bus.fail_after.set(Some(bus.frames.get()));
-            }
-            let membrane_volts = self.plant.volts(&y, amplifier_input());
-            if let Some(c) = controller.as_mut() {
-                let mut inputs = self.inputs(&mut noise, &mut reading, k, t, &y, membrane_volts);
-                inputs.current_amps = self
-                    .current_monitor
-                    .zip(last_current)
-                    .map(|(monitor, amps)| monitor.read(amps, &mut noise) as f32);
-                let out = c.tick(inputs);
-                let out = stage.send(c, out);
-                // The trim's solve, as the firmware's low-priority task runs it: between
-                // ticks; the next tick applies the result.
-                if let Some(job) = c.trim_job() {
-                    c.trim_done(job.solve());
-                }
-                stretch_sum += y[0];
+            let stepped = self.step(k, &mut bench, &mut controller, &mut stage, &wires)?;
+            if let Some(ticked) = stepped.ticked {
+                let out = ticked.output;
+                stretch_sum += stepped.start_stretch;
                 stretch_ticks += 1;
+                let c = controller.as_ref().ok_or("the controller left its slot")?;
                 let sensed = c.sensed();
                 if sensed.is_some() && sensed != last_sensed {
                     if let Some(s) = sensed {
@@ -450,40 +455,13 @@ impl Loop {
                 run.max_command_volts = run.max_command_volts.max(f64::from(out.volts));
                 run.said(t, out.event);
             }
-            let input = amplifier_input();
-            (y, next_step) = plant::Tick {
-                plant: &self.plant,
-                solver: self.solver,
-                tolerance: self.tolerance,
-                y,
-                t0: t,
-                t1: t + tick_seconds,
-                input_volts: input,
-                first_step: next_step,
-            }
-            .solve()
-            .map(|(y, h)| (y, Some(h)))?;
-            let volts = self.plant.volts(&y, input);
+            let (y, volts) = (bench.y, stepped.volts);
             if run.plant_crossing.is_none() {
-                let broken = self
-                    .plant
-                    .leakage
-                    .breaks_down(t + tick_seconds, volts)
-                    .then_some(FailureMode::Breakdown);
-                if let Some(mode) = broken.or_else(|| self.plant.first_failure(&y, volts)) {
+                if let Some(mode) = self.crossing(&y, t + tick_seconds, volts) {
                     run.plant_crossing = Some((mode, t + tick_seconds));
                 }
             }
-            if current_wanted {
-                // The output current over this tick, from the membrane's charge (§8).
-                let end = (y[0], volts);
-                last_current =
-                    Some(
-                        self.plant
-                            .mean_current_amps(port, end, tick_seconds, t + tick_seconds),
-                    );
-                port = end;
-            }
+            let last_current = bench.last_current;
             if self.history {
                 run.history.push(Sample {
                     seconds: t + tick_seconds,
@@ -500,6 +478,7 @@ impl Loop {
             run.ticks = k + 1;
         }
         progress.finish_and_clear();
+        let y = bench.y;
         run.run_seconds = started.elapsed().as_secs_f64();
         let bias = controller
             .as_ref()
@@ -516,6 +495,142 @@ impl Loop {
             .equilibrium(&y, 0.0)
             .and_then(|unbiased| self.plant.limit_volts(&unbiased, 0.0));
         Ok(run)
+    }
+
+    /// The board's outputs as the plant sees them, idle: the DAC on its bus, the enable line.
+    pub fn wires(&self) -> Wires {
+        Wires {
+            bus: SimulatedDac {
+                reference_volts: self.dac_reference_volts,
+                ..SimulatedDac::default()
+            },
+            enable: EnableLine::default(),
+        }
+    }
+
+    /// One tick of the board against the plant: the board's tick on the plant's measurements
+    /// (the firmware's tick, its enable policy), its background job between ticks (as the
+    /// firmware's low-priority task runs it; the next tick applies the result), then the
+    /// plant over the tick under the amplifier's input. No controller: no sensor read (its
+    /// noise not drawn), the stage kept off.
+    pub fn step(
+        &self,
+        k: u64,
+        bench: &mut Bench,
+        slot: &mut Option<Controller>,
+        stage: &mut OutputStage<&SimulatedDac, &EnableLine>,
+        wires: &Wires,
+    ) -> Result<Stepped, String> {
+        let t = k as f64 * (1.0 / f64::from(self.settings.tick_hz));
+        let bus = &wires.bus;
+        if self.bus_fails_after_seconds.is_some_and(|at| t >= at) && bus.fail_after.get().is_none()
+        {
+            bus.fail_after.set(Some(bus.frames.get()));
+        }
+        let inputs = match slot {
+            Some(_) => self.sense(bench, k, self.amplifier_input(wires)),
+            None => Inputs::NONE,
+        };
+        let ticked = board::tick::drive(slot, stage, inputs);
+        if ticked.is_some_and(|t| t.job_wanted) {
+            board::tick::run_job(|f| {
+                if let Some(c) = slot.as_mut() {
+                    f(c);
+                }
+            });
+        }
+        let start_stretch = bench.y[0];
+        let volts = self.advance(bench, k, self.amplifier_input(wires))?;
+        Ok(Stepped {
+            ticked,
+            start_stretch,
+            volts,
+        })
+    }
+
+    /// The amplifier's input: the DAC's output while the enable line is high, V.
+    fn amplifier_input(&self, wires: &Wires) -> f64 {
+        if wires.enable.high.get() {
+            self.plant.amplifier.gain * wires.bus.output_volts.get()
+        } else {
+            0.0
+        }
+    }
+
+    /// The first check of §6 the true plant fails at `seconds` in state `y` at `volts` (the
+    /// leakage's breakdown first), if any.
+    pub fn crossing(&self, y: &Vector, seconds: f64, volts: f64) -> Option<FailureMode> {
+        let broken = self
+            .plant
+            .leakage
+            .breaks_down(seconds, volts)
+            .then_some(FailureMode::Breakdown);
+        broken.or_else(|| self.plant.first_failure(y, volts))
+    }
+
+    /// The plant at rest, ready for the first tick; `current_wanted`: the amplifier's current
+    /// worked out at each tick (for a monitor or a history).
+    pub fn bench(&self, current_wanted: bool) -> Bench {
+        let y = self.plant.at_rest();
+        Bench {
+            port: (y[0], self.plant.volts(&y, 0.0)),
+            y,
+            next_step: None,
+            noise: Noise(self.seed),
+            reading: f64::NAN,
+            last_current: None,
+            current_wanted,
+        }
+    }
+
+    /// Tick `k`'s measurements of the plant, the amplifier's input at `input_volts`.
+    pub fn sense(&self, bench: &mut Bench, k: u64, input_volts: f64) -> Inputs {
+        let t = k as f64 * (1.0 / f64::from(self.settings.tick_hz));
+        let membrane_volts = self.plant.volts(&bench.y, input_volts);
+        let mut inputs = self.inputs(
+            &mut bench.noise,
+            &mut bench.reading,
+            k,
+            t,
+            &bench.y,
+            membrane_volts,
+        );
+        inputs.current_amps = self
+            .current_monitor
+            .zip(bench.last_current)
+            .map(|(monitor, amps)| monitor.read(amps, &mut bench.noise) as f32);
+        inputs
+    }
+
+    /// The plant over tick `k` with the amplifier's input at `input_volts`: the membrane's
+    /// voltage at its end.
+    pub fn advance(&self, bench: &mut Bench, k: u64, input_volts: f64) -> Result<f64, String> {
+        let tick_seconds = 1.0 / f64::from(self.settings.tick_hz);
+        let t = k as f64 * tick_seconds;
+        (bench.y, bench.next_step) = plant::Tick {
+            plant: &self.plant,
+            solver: self.solver,
+            tolerance: self.tolerance,
+            y: bench.y,
+            t0: t,
+            t1: t + tick_seconds,
+            input_volts,
+            first_step: bench.next_step,
+        }
+        .solve()
+        .map(|(y, h)| (y, Some(h)))?;
+        let volts = self.plant.volts(&bench.y, input_volts);
+        if bench.current_wanted {
+            // The output current over this tick, from the membrane's charge (§8).
+            let end = (bench.y[0], volts);
+            bench.last_current =
+                Some(
+                    self.plant
+                        .mean_current_amps(bench.port, end, tick_seconds, t + tick_seconds),
+                );
+            bench.port = end;
+        }
+        Ok(volts)
     }
 
     /// The plant against the tracker at `seconds`.

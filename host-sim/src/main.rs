@@ -109,6 +109,15 @@ enum Command {
     /// request gets one reply line, `ok …` or `err <code> <message>` (the core's `protocol`
     /// module). With --script, status 1 if any request got an `err`.
     Console(cmd::console::ConsoleArgs),
+    /// A virtual board: the firmware's logic and a scene's plant behind a command port.
+    ///
+    /// A virtual board on a socket: the core's board and controller (what the firmware runs)
+    /// at the scene's tick rate against the scene's full plant, in real time (--speed X: X
+    /// times it; --speed max: as fast as it computes), serving the firmware's command port
+    /// protocol. Talk to it with `host-sim console --tcp/--unix`: the same replies, error
+    /// codes and start-up line as the board. Events go to stderr as they happen; with
+    /// --seconds it stops there and reports (status 1 if the plant crossed a limit).
+    Serve(cmd::serve::ServeArgs),
 }
 
 fn main() -> ExitCode {
@@ -133,6 +142,7 @@ fn main() -> ExitCode {
         Command::Sweep(args) => cmd::sweep::sweep(&args).map(|r| emit(&r, json)),
         Command::Image(args) => cmd::image::image(&args).map(|r| emit(&r, json)),
         Command::Console(args) => cmd::console::console(&args, json).map(|r| emit(&r, json)),
+        Command::Serve(args) => cmd::serve::serve(&args).map(|r| emit(&r, json)),
     };
     match result {
         Ok((out, failure)) => {

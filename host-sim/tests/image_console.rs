@@ -1,9 +1,7 @@
 //! `host-sim image` and `host-sim console`, run as a user runs them: the image written, read
-//! back and refused when wrong; the console against a stand-in firmware on a Unix socket that
-//! answers in the core's protocol.
+//! back and refused when wrong; the console without a board. The console against a board is
+//! in `serve.rs` (the virtual board).
 
-use std::io::{BufRead, BufReader, Write};
-use std::os::unix::net::UnixListener;
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
@@ -84,74 +82,6 @@ fn an_image_needs_a_target_for_another_device_and_refuses_what_the_firmware_woul
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("would refuse"));
     assert!(!out_path.exists());
-}
-
-/// A stand-in firmware: the start-up notice, then `ok …` to `status`, `err 2 …` to the rest.
-fn stand_in(socket: &PathBuf) -> std::thread::JoinHandle<Vec<String>> {
-    let _ = std::fs::remove_file(socket);
-    let listener = UnixListener::bind(socket).unwrap();
-    std::thread::spawn(move || {
-        let (stream, _) = listener.accept().unwrap();
-        let mut writer = stream.try_clone().unwrap();
-        writeln!(writer, "# ready target_hz=44").unwrap();
-        let mut seen = Vec::new();
-        for line in BufReader::new(stream).lines() {
-            let line = line.unwrap();
-            let reply = if line == "status" {
-                "ok phase=holding fault=none".to_string()
-            } else {
-                format!("err 2 refused: {line}")
-            };
-            writeln!(writer, "{reply}").unwrap();
-            seen.push(line);
-        }
-        seen
-    })
-}
-
-#[test]
-fn a_console_script_reports_each_reply_and_fails_on_an_err() {
-    let socket = scratch("fw-ok.sock");
-    let firmware = stand_in(&socket);
-    let script = scratch("ok.txt");
-    std::fs::write(&script, "# a comment\nstatus\n\nstatus\n").unwrap();
-    let out = host_sim(&[
-        "--json",
-        "console",
-        "--unix",
-        socket.to_str().unwrap(),
-        "--script",
-        script.to_str().unwrap(),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let report = stdout_json(&out);
-    assert_eq!(report["exchanges"].as_array().unwrap().len(), 2);
-    assert_eq!(report["notices"][0], "# ready target_hz=44");
-    assert_eq!(firmware.join().unwrap(), ["status", "status"]);
-
-    let socket = scratch("fw-err.sock");
-    let firmware = stand_in(&socket);
-    let script = scratch("err.txt");
-    std::fs::write(&script, "status\ntarget 47\nstatus\n").unwrap();
-    let out = host_sim(&[
-        "console",
-        "--unix",
-        socket.to_str().unwrap(),
-        "--script",
-        script.to_str().unwrap(),
-    ]);
-    assert_eq!(out.status.code(), Some(1));
-    let text = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        text.contains("> target 47\nerr 2 refused: target 47"),
-        "{text}"
-    );
-    assert!(String::from_utf8_lossy(&out.stderr).contains("`target 47` got `err 2"));
-    assert_eq!(firmware.join().unwrap().len(), 3);
 }
 
 #[test]

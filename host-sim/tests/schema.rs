@@ -134,31 +134,28 @@ fn the_work_precision_report_matches_the_schema() {
     conforms("report", &["--out", &scratch("report")]);
 }
 
-/// `console --json` against a stand-in for the firmware's port on TCP: a banner, then `ok`
-/// to `status` and an `err` to anything else.
+mod common;
+
+/// `console --json` against the virtual board (`serve`) on TCP, and `serve --json` itself.
 #[test]
-fn the_console_matches_the_schema() {
-    use std::io::{BufRead, BufReader, Write};
-    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
-    let address = listener.local_addr().unwrap().to_string();
-    let port = std::thread::spawn(move || {
-        let (stream, _) = listener.accept().unwrap();
-        let mut writer = stream.try_clone().unwrap();
-        writer.write_all(b"# ready stand-in\n").unwrap();
-        for line in BufReader::new(stream).lines().map_while(Result::ok) {
-            let reply = if line == "status" {
-                "ok phase=holding\n"
-            } else {
-                "err 1 unknown request\n"
-            };
-            if writer.write_all(reply.as_bytes()).is_err() {
-                break;
-            }
-        }
-    });
+fn the_console_and_the_virtual_board_match_the_schema() {
+    let board = common::Served::start(None, "max", "tcp");
     let dir = scratch("console");
     let script = format!("{dir}/script.txt");
-    std::fs::write(&script, "status\nnonsense\n").unwrap();
-    conforms("console", &["--tcp", &address, "--script", &script]);
-    port.join().unwrap();
+    std::fs::write(
+        &script,
+        "status
+nonsense
+",
+    )
+    .unwrap();
+    let mut args: Vec<&str> = board.connection.iter().map(String::as_str).collect();
+    args.extend(["--script", &script]);
+    conforms("console", &args);
+    drop(board);
+    let socket = format!("{dir}/serve.sock");
+    conforms(
+        "serve",
+        &["--unix", &socket, "--speed", "max", "--seconds", "0.5"],
+    );
 }

@@ -4,11 +4,15 @@
 //! the command port (`# refused …`) and in the log.
 //!
 //! Tasks, highest priority first:
-//! - `tick` (SysTick, at the settings' `tick_hz`): one controller tick, its DAC frame on SPI1,
-//!   the enable line; hands a trim's solve to `trim`;
+//! - `tick` (SysTick, at the settings' `tick_hz`): one tick of the core's board (the
+//!   controller, its DAC frame on SPI1, the enable line); wakes `job` when a job waits;
 //! - `rx` (USART2): bytes into request lines, queued to `command`;
-//! - `command` and `trim` (software, lowest): each request answered on USART2; the long work
-//!   (a new plan's checks, a boot, a trim's solve) runs here, preempted by the tick.
+//! - `command` and `job` (software, lowest): each request answered on USART2 by the core's
+//!   board; the long work (a new plan's checks, a boot, a trim's solve, tracking's slope)
+//!   runs here, preempted by the tick.
+//!
+//! What the board decides (the boot and its fallbacks, the replies, when the amplifier is on)
+//! is the core's `board`, tested on the host; this file wires it to the peripherals.
 #![no_std]
 #![no_main]
 
@@ -19,20 +23,21 @@ mod app {
     use core::fmt::Write as _;
     use core::mem::MaybeUninit;
 
+    use de_resonator::board::port::Extras;
+    use de_resonator::board::{self as logic, Line, Lines, ReplyLine, Shared as _, Then};
     use de_resonator::protocol::NOTICE;
-    use de_resonator::{Controller, Dac8551, Decimal, Event, OutputStage, Phase};
+    use de_resonator::store::FlashKeeper;
+    use de_resonator::{Controller, Dac8551, Decimal, Event, OutputStage};
     use de_resonator_firmware::board::{self, Board, DacSpi, EnablePin};
-    use de_resonator_firmware::console::{
-        Console, Extras, Line, Lines, ReplyLine, Shared as _, Then,
-    };
     use de_resonator_firmware::runtime::{self, ResetCause};
     #[cfg(feature = "model-sensor")]
     use de_resonator_firmware::sensor::ModelSensor as Sensors;
     #[cfg(not(feature = "model-sensor"))]
     use de_resonator_firmware::sensor::NoSensor as Sensors;
     use de_resonator_firmware::sensor::Sensor;
+    use de_resonator_firmware::storage::SettingsFlash;
     use de_resonator_firmware::watchdog::{self, Dog, Watchdog as _};
-    use de_resonator_firmware::{config, stack, storage, work};
+    use de_resonator_firmware::{config, stack, storage};
     use embedded_hal_nb::serial::Read as _;
     use rtic_sync::channel::{Receiver, Sender, TrySendError};
     use rtic_sync::make_channel;
@@ -69,7 +74,8 @@ mod app {
         to_command: Sender<'static, Line, QUEUE>,
         from_rx: Receiver<'static, Line, QUEUE>,
         tx: Tx<USART2>,
-        console: Console,
+        /// The core's board: the image, the settings, the refusal, the command port's answers.
+        logic: logic::Board<'static, FlashKeeper<SettingsFlash>>,
         /// Idle without `wfi` (QEMU runs that measure the tick rate).
         busy_idle: bool,
         /// QEMU's test of a stuck tick (semihosting argument `tick-hangs`): the tick hangs
@@ -98,41 +104,35 @@ mod app {
         if let Some(e) = board.clock_error {
             defmt::warn!("clock: {}; running on the 16 MHz HSI", e);
         }
-        let mut console = Console {
-            image: None,
-            amplifier: None,
-            settings: de_resonator::Settings::for_target(0.0),
-            refusal: None,
-            limit: None,
-            store: storage::open(board.flash),
-        };
-        let (mut notice, mut warning) = (ReplyLine::new(), ReplyLine::new());
         let cause = runtime::take_reset_cause();
         if let Some(cause) = cause {
             let _ = writeln!(tx, "{NOTICE}reset: {}", cause.name());
         }
         let controller = cx.local.slot.write(None);
-        boot(controller, &mut console, &mut notice, &mut warning);
-        if cause == Some(ResetCause::Watchdog) && controller.is_some() {
-            // Up faulted: nothing driven until someone has looked (`clear`).
-            *controller = None;
-            let why = "reset by the watchdog (a task missed its deadline): `clear` to boot";
-            notice.clear();
-            let _ = write!(notice, "refused {why}");
-            console.refusal = heapless::String::try_from(why).ok();
-        }
-        if !warning.is_empty() {
+        let (mut logic, started) = logic::Board::boot(
+            controller,
+            config::image(),
+            storage::open(board.flash),
+            cause,
+        );
+        let mut notice = started.notice;
+        #[cfg(feature = "defmt")]
+        defmt::info!("{=str}", notice.as_str());
+        if let Some(warning) = started.warning {
+            #[cfg(feature = "defmt")]
+            defmt::warn!("{=str}", warning.as_str());
             let _ = writeln!(tx, "{NOTICE}warning: {warning}");
         }
-        let tick_hz = console.settings.tick_hz;
-        if console.image.is_some()
+        let tick_hz = logic.tick_hz(controller);
+        if logic.image().is_some()
             && board::start_tick(&mut core.SYST, board.core_hz, tick_hz).is_none()
         {
             // The controller's own checks bound tick_hz; this is the timer's 24-bit reach.
-            let _ = write!(
-                notice,
-                "refused: tick_hz = {} is beyond SysTick's reach",
-                Decimal(tick_hz)
+            let why = Decimal(tick_hz);
+            logic.refuse(
+                controller,
+                &format_args!("tick_hz = {why} is beyond SysTick's reach"),
+                &mut notice,
             );
         }
         let _ = writeln!(tx, "{NOTICE}{notice}");
@@ -153,7 +153,7 @@ mod app {
                 #[cfg(not(feature = "model-sensor"))]
                 sensor: Sensors,
                 #[cfg(feature = "model-sensor")]
-                sensor: Sensors::new(console.image.map(|i| i.params), tick_hz)
+                sensor: Sensors::new(logic.image().map(|i| i.params), tick_hz)
                     .failing_after(board::asked("sensor-fails").then_some(2.0 * tick_hz)),
                 serial_rx: board.rx,
                 lines: Lines::default(),
@@ -161,103 +161,13 @@ mod app {
                 to_command,
                 from_rx,
                 tx,
-                console,
+                logic,
                 busy_idle: board::asked("busy-idle"),
                 hang_after_ticks: board::asked("tick-hangs").then_some(2 * tick_hz as u32),
                 dog: Dog::new(board.iwdg),
                 tick_hz,
             },
         )
-    }
-
-    /// Read the image and the saved settings, and run every boot check: the controller in
-    /// `slot`, or `None` with why in `console.refusal`. Saved settings that cannot be read, or
-    /// that the boot checks refuse, are ignored (said in `warning`): the image's are used.
-    fn boot(
-        slot: &mut Option<Controller>,
-        console: &mut Console,
-        notice: &mut ReplyLine,
-        warning: &mut ReplyLine,
-    ) {
-        let refuse =
-            |console: &mut Console, notice: &mut ReplyLine, why: &dyn core::fmt::Display| {
-                let mut reason = heapless::String::new();
-                let _ = write!(reason, "{why}");
-                #[cfg(feature = "defmt")]
-                defmt::error!("refusing to drive: {=str}", reason.as_str());
-                let _ = write!(notice, "refused {reason}");
-                console.refusal = Some(reason);
-            };
-        let image = match config::image() {
-            Ok(image) => image,
-            Err(e) => return refuse(console, notice, &e),
-        };
-        let amplifier = match image.amplifier.amplifier() {
-            Ok(amplifier) => amplifier,
-            Err(e) => return refuse(console, notice, &e),
-        };
-        console.image = Some(image);
-        console.amplifier = Some(amplifier);
-        console.settings = image.settings;
-        let mut boot_with =
-            |settings| Controller::start_in(slot, image.params, image.table, amplifier, settings);
-        let mut source = "image";
-        let mut started = None;
-        match saved_settings(console) {
-            Ok(Some(saved)) => match boot_with(saved) {
-                Ok(boot) => {
-                    console.settings = saved;
-                    source = "saved";
-                    started = Some(boot);
-                }
-                Err(fault) => {
-                    let _ = write!(
-                        warning,
-                        "saved settings refused ({fault}): the image's used"
-                    );
-                }
-            },
-            Ok(None) => {}
-            Err(e) => {
-                let _ = write!(warning, "{e}: the image's settings used");
-            }
-        }
-        #[cfg(feature = "defmt")]
-        if !warning.is_empty() {
-            defmt::warn!("{=str}", warning.as_str());
-        }
-        match started.map_or_else(|| boot_with(image.settings), Ok) {
-            Ok(boot) => {
-                #[cfg(feature = "defmt")]
-                defmt::info!(
-                    "boot checks pass: bias {=f32} V for {=f32} Hz, cap {=f32} V",
-                    boot.bias_volts,
-                    console.settings.target_hz,
-                    boot.max_volts
-                );
-                console.limit = boot.limit.map(|l| l.mode);
-                let _ = write!(
-                    notice,
-                    "ready target_hz={} bias_volts={} max_volts={} settings={source}",
-                    Decimal(console.settings.target_hz),
-                    Decimal(boot.bias_volts),
-                    Decimal(boot.max_volts)
-                );
-            }
-            Err(fault) => refuse(console, notice, &fault),
-        }
-    }
-
-    /// The settings `save` stored, if any.
-    fn saved_settings(
-        console: &mut Console,
-    ) -> Result<Option<de_resonator::Settings>, de_resonator::store::StoreError> {
-        use de_resonator::store::{self, FlashKind, StoreError};
-        let Some((flash, range)) = &mut console.store else {
-            return Ok(None);
-        };
-        storage::block_on(store::load(&mut *flash, range.clone()))
-            .unwrap_or(Err(StoreError::Flash(FlashKind::Other)))
     }
 
     /// Silicon sleeps until the next interrupt (an explicit `wfi`: RTIC's default
@@ -287,33 +197,14 @@ mod app {
         let stage = cx.local.stage;
         let sensor = cx.local.sensor;
         let inputs = sensor.sample();
-        let (event, trim_wanted, running) = cx.shared.controller.lock(|c| {
-            let Some(c) = c.as_mut() else {
-                // No controller (refused, or a reset on its way): the output off.
-                if !stage.is_safe() {
-                    let _ = stage.safe();
-                }
-                return (None, false, false);
-            };
-            // The amplifier on while a plan that passed its checks drives; off (the DAC
-            // powered down, the enable line low) at rest at 0 V after `stop`, and at the end
-            // of a fault's descent (the stage's own reaction, in `send`).
-            let at_rest = c.phase() == Phase::Holding && c.plan().bias_volts == 0.0;
-            let out = c.tick(inputs);
-            let rest = at_rest && out.volts == 0.0;
-            if !rest && c.latched_fault().is_none() && stage.is_safe() {
-                let _ = stage.enable();
-            } else if rest && !stage.is_safe() {
-                let _ = stage.safe();
+        let ticked = cx.shared.controller.lock(|c| {
+            let ticked = logic::tick::drive(c, stage, inputs);
+            if let Some(t) = ticked {
+                sensor.commanded(t.output.volts);
             }
-            let out = stage.send(c, out);
-            sensor.commanded(out.volts);
-            (
-                out.event.map(|e| (e, c.ticks())),
-                work::trim_wanted(c),
-                true,
-            )
+            ticked
         });
+        let running = ticked.is_some();
         // QEMU's test switch only: no cost on silicon's tick.
         #[cfg(feature = "qemu")]
         if running {
@@ -338,12 +229,14 @@ mod app {
             checked_in,
             running,
         );
-        if trim_wanted {
-            // Already queued or running: it takes the job when it runs.
-            let _ = trim::spawn();
-        }
-        if let Some((event, ticks)) = event {
-            log(event, ticks);
+        if let Some(t) = ticked {
+            if t.job_wanted {
+                // Already queued or running: it takes the job when it runs.
+                let _ = job::spawn();
+            }
+            if let Some(event) = t.output.event {
+                log(event, t.ticks);
+            }
         }
         let off = stage.is_safe();
         cx.shared.output_off.lock(|o| *o = off);
@@ -448,16 +341,14 @@ mod app {
     /// The controller under the lock it shares with the tick.
     struct Locked<'a, M>(&'a mut M);
 
-    impl<M: rtic::Mutex<T = &'static mut Option<Controller>>> de_resonator_firmware::console::Shared
-        for Locked<'_, M>
-    {
+    impl<M: rtic::Mutex<T = &'static mut Option<Controller>>> logic::Shared for Locked<'_, M> {
         fn with<R>(&mut self, f: impl FnOnce(&mut Option<Controller>) -> R) -> R {
             self.0.lock(|c| f(c))
         }
     }
 
     /// Each request answered, one reply line each.
-    #[task(priority = 1, shared = [controller, tick_cycles_max, last_tick_us, output_off], local = [from_rx, tx, console])]
+    #[task(priority = 1, shared = [controller, tick_cycles_max, last_tick_us, output_off], local = [from_rx, tx, logic])]
     async fn command(mut cx: command::Context) {
         let mut reply = ReplyLine::new();
         while let Ok(line) = cx.local.from_rx.recv().await {
@@ -478,7 +369,7 @@ mod app {
             let mut controller = Locked(&mut cx.shared.controller);
             let then = cx
                 .local
-                .console
+                .logic
                 .serve(&line, &mut controller, &extras, &mut reply);
             let _ = writeln!(cx.local.tx, "{reply}");
             if then == Then::Reset {
@@ -496,10 +387,11 @@ mod app {
         }
     }
 
-    /// A trim's solve, outside the tick; its result back at the next tick.
+    /// The tick's background job (a trim's solve, tracking's slope), outside the tick; its
+    /// result back at the next tick.
     #[task(priority = 1, shared = [controller])]
-    async fn trim(mut cx: trim::Context) {
-        work::trim(|f| {
+    async fn job(mut cx: job::Context) {
+        logic::tick::run_job(|f| {
             cx.shared.controller.lock(|c| {
                 if let Some(c) = c.as_mut() {
                     f(c);

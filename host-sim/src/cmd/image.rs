@@ -219,12 +219,7 @@ pub fn image(args: &ImageArgs) -> Result<ImageReport, String> {
         rail_volts: args.rail_volts.unwrap_or(full_scale),
         dac_bits: DAC_BITS,
     };
-    let made =
-        lut::make(params, f64::from(settings.margin), None).map_err(|e| format!("{name}: {e}"))?;
-    let mut bytes = vec![0; image::image_bytes(made.bytes.len())];
-    let params32: DeviceParams<f32> = params.cast();
-    Image::write(&mut bytes, &params32, &amplifier, &settings, &made.bytes)
-        .map_err(|e| e.to_string())?;
+    let bytes = made(params, &amplifier, &settings).map_err(|e| format!("{name}: {e}"))?;
     // Checked before writing: an image the firmware would refuse is not written.
     let mut report = describe(&bytes, out.display().to_string())?;
     if let Verdict::Refuses { reason } = &report.verdict {
@@ -235,6 +230,21 @@ pub fn image(args: &ImageArgs) -> Result<ImageReport, String> {
     std::fs::write(out, &bytes).map_err(|e| format!("cannot write {}: {e}", out.display()))?;
     report.written = true;
     Ok(report)
+}
+
+/// The image of a device, an amplifier and settings, its table made for the settings'
+/// margin: the bytes `host-sim image` writes and `host-sim serve` boots from.
+pub fn made(
+    params: DeviceParams<f64>,
+    amplifier: &AmplifierSpec,
+    settings: &Settings,
+) -> Result<Vec<u8>, String> {
+    let made = lut::make(params, f64::from(settings.margin), None)?;
+    let mut bytes = vec![0; image::image_bytes(made.bytes.len())];
+    let params32: DeviceParams<f32> = params.cast();
+    Image::write(&mut bytes, &params32, amplifier, settings, &made.bytes)
+        .map_err(|e| e.to_string())?;
+    Ok(bytes)
 }
 
 fn check(path: &PathBuf) -> Result<ImageReport, String> {

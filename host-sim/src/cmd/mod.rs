@@ -8,6 +8,7 @@ pub mod lut;
 pub mod precision;
 pub mod run;
 pub mod safe;
+pub mod serve;
 pub mod simulate;
 pub mod stress;
 pub mod sweep;

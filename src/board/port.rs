@@ -1,18 +1,15 @@
-//! The command port's firmware side: bytes from USART2 into request lines (`Lines`, in the
-//! receive interrupt), and the reply to each request (`Console::serve`, in the low-priority
-//! command task). The protocol itself (parse, replies, status) is the core's `protocol`.
+//! The command port's board side: bytes into request lines ([`Lines`]), and the reply to each
+//! request ([`Board::serve`]). The protocol itself (parse, replies, status) is
+//! [`crate::protocol`].
 
-use core::fmt::Write;
-use core::ops::Range;
+use core::fmt::Write as _;
 
-use de_resonator::protocol::{self, Command, ErrorCode, ParseError, Status, MAX_LINE};
-use de_resonator::store;
-use de_resonator::{
-    Amplifier, Controller, Decimal, FailureMode, Image, Refusal, Setting, Settings,
-};
 use heapless::{String, Vec};
 
-use crate::storage::{block_on, SettingsFlash};
+use super::{Board, Keeper};
+use crate::controller::{Controller, Phase, Refusal, Setting, Settings};
+use crate::decimal::Decimal;
+use crate::protocol::{self, Command, ErrorCode, ParseError, Status, MAX_LINE};
 
 /// One request as received: its bytes, or why it has none.
 #[derive(Clone, Debug)]
@@ -66,37 +63,37 @@ impl Lines {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Then {
     Reply,
-    /// Turn the output off and restart the firmware.
+    /// Turn the output off (the slot emptied: the tick makes the stage safe) and restart.
     Reset,
 }
 
 /// A reply line (one `ok …` or `err …`, without its `\n`); cut short if it would not fit.
 pub type ReplyLine = String<256>;
 
-/// What the command task needs besides the controller: the image, the settings asked for
-/// (the boot's, then as changed by `target`, `ac`, `set`), and why it refuses, if it does.
-pub struct Console {
-    pub image: Option<Image<'static>>,
-    pub amplifier: Option<Amplifier>,
-    pub settings: Settings,
-    /// Why nothing is driven: no usable image, or the boot checks refused.
-    pub refusal: Option<String<200>>,
-    /// The limit the last boot or plan found on the chip (its mode).
-    pub limit: Option<FailureMode>,
-    /// Where `save` keeps the settings (`None`: nowhere in this build or boot).
-    pub store: Option<(SettingsFlash, Range<u32>)>,
-}
-
-/// Where the reply's extra status fields come from, read by the command task.
+/// What the reply's status fields take from the hardware, read by the command task.
+#[derive(Clone, Copy, Debug, Default)]
 pub struct Extras {
     /// The longest tick so far, core cycles.
     pub tick_cycles_max: u32,
     pub stack_bytes: u32,
+    /// An independent clock at the last tick, µs (QEMU builds).
     pub clock_us: Option<u32>,
 }
 
+/// The controller as the command task reaches it: under a lock shared with the tick.
+pub trait Shared {
+    fn with<R>(&mut self, f: impl FnOnce(&mut Option<Controller>) -> R) -> R;
+}
+
+/// A slot the caller owns outright (no tick to share it with between requests).
+impl Shared for &mut Option<Controller> {
+    fn with<R>(&mut self, f: impl FnOnce(&mut Option<Controller>) -> R) -> R {
+        f(self)
+    }
+}
+
 /// `err <code> <message>` into `out`.
-pub fn err(out: &mut ReplyLine, code: ErrorCode, message: impl core::fmt::Display) {
+fn err(out: &mut ReplyLine, code: ErrorCode, message: impl core::fmt::Display) {
     out.clear();
     let _ = write!(out, "err {code} {message}");
 }
@@ -113,29 +110,7 @@ fn code(refusal: &Refusal) -> ErrorCode {
     }
 }
 
-/// The controller as the command task reaches it: under a lock shared with the tick.
-pub trait Shared {
-    fn with<R>(&mut self, f: impl FnOnce(&mut Option<Controller>) -> R) -> R;
-}
-
-impl Console {
-    /// The status line of a controller.
-    fn status(&self, c: &Controller, extras: &Extras) -> Status {
-        Status {
-            phase: c.phase(),
-            target_hz: c.settings().target_hz,
-            bias_volts: c.plan().bias_volts,
-            volts: c.last_volts(),
-            max_volts: c.max_volts(),
-            limit: self.limit,
-            ticks: c.ticks(),
-            tick_cycles_max: extras.tick_cycles_max,
-            stack_bytes: extras.stack_bytes,
-            clock_us: extras.clock_us,
-            fault: c.latched_fault(),
-        }
-    }
-
+impl<K: Keeper> Board<'_, K> {
     /// Answer one request into `out`. Long work (a new plan's checks, a new boot) runs here,
     /// outside the controller's lock; the tick preempts it.
     pub fn serve(
@@ -146,16 +121,6 @@ impl Console {
         out: &mut ReplyLine,
     ) -> Then {
         out.clear();
-        self.answer(line, controller, extras, out)
-    }
-
-    fn answer(
-        &mut self,
-        line: &Line,
-        controller: &mut impl Shared,
-        extras: &Extras,
-        out: &mut ReplyLine,
-    ) -> Then {
         let parsed = match line {
             Line::Text(bytes) => protocol::parse(bytes),
             Line::TooLong => Err(ParseError::TooLong),
@@ -179,38 +144,36 @@ impl Console {
             let _ = write!(out, "ok {}", protocol::HELP);
             return Then::Reply;
         }
-        let (Some(image), Some(amplifier)) = (self.image, self.amplifier) else {
-            err(
-                out,
-                ErrorCode::Config,
-                self.refusal.as_deref().unwrap_or("no image"),
-            );
+        if self.image.is_none() {
+            err(out, ErrorCode::Config, self.refusal().unwrap_or("no image"));
             return Then::Reply;
-        };
-        let running = controller.with(|c| c.is_some());
+        }
+        // The settings in force: the controller's; while none runs, those `clear` boots with.
+        let running = controller.with(|c| c.as_ref().map(|c| *c.settings()));
+        let settings = running.unwrap_or(self.idle_settings);
         match command {
             Command::Get(setting) => {
                 let _ = write!(
                     out,
                     "ok {}={}",
                     setting.key(),
-                    Decimal(self.settings.get(setting))
+                    Decimal(settings.get(setting))
                 );
             }
             Command::Set(setting, value) => {
-                let mut next = self.settings;
-                next.set(setting, value);
-                if setting == Setting::TickHz && value != self.settings.tick_hz {
+                if setting == Setting::TickHz && value != settings.tick_hz {
                     err(
                         out,
                         ErrorCode::Refused,
-                        "tick_hz sets SysTick at power-up: make an image with it",
+                        "tick_hz sets the tick's timer at power-up: make an image with it",
                     );
                     return Then::Reply;
                 }
-                if !running {
+                let mut next = settings;
+                next.set(setting, value);
+                if running.is_none() {
                     // Refused at boot: kept for `clear` to boot with, and check.
-                    self.settings = next;
+                    self.idle_settings = next;
                     let _ = write!(
                         out,
                         "ok {}={} (applies at `clear`)",
@@ -219,57 +182,45 @@ impl Console {
                     );
                     return Then::Reply;
                 }
-                self.replan(image, next, controller, out);
+                self.replan(next, controller, out);
             }
-            Command::Clear => self.clear(image, amplifier, controller, out),
-            Command::Save => {
-                let saved = match &mut self.store {
-                    // The flash never waits (RAM, or the chip's controller blocking in each
-                    // call): run to its end here.
-                    Some((flash, range)) => {
-                        block_on(store::save(flash, range.clone(), &self.settings))
-                            .unwrap_or(Err(store::StoreError::Flash(store::FlashKind::Other)))
-                    }
-                    None => {
-                        err(out, ErrorCode::Unsupported, "no settings storage");
-                        return Then::Reply;
-                    }
-                };
-                match saved {
-                    Ok(()) => {
-                        let _ = write!(out, "ok save: the settings in force boot from now on");
-                    }
-                    Err(e) => err(out, ErrorCode::Refused, e),
+            Command::Clear => self.clear(controller, out),
+            Command::Save => match self.keeper.as_mut().map(|k| k.save(&settings)) {
+                Some(Ok(())) => {
+                    let _ = write!(out, "ok save: the settings in force boot from now on");
                 }
-            }
-            _ if !running => {
+                Some(Err(e)) => err(out, ErrorCode::Refused, e),
+                None => err(out, ErrorCode::Unsupported, "no settings storage"),
+            },
+            _ if running.is_none() => {
                 err(
                     out,
                     ErrorCode::Config,
-                    self.refusal.as_deref().unwrap_or("not booted"),
+                    self.refusal().unwrap_or("not booted"),
                 );
             }
             Command::Status => {
+                let limit = self.limit;
                 controller.with(|c| {
                     if let Some(c) = c {
-                        let _ = write!(out, "ok {}", self.status(c, extras));
+                        let _ = write!(out, "ok {}", status(c, limit, extras));
                     }
                 });
             }
             Command::Target { hz } => {
                 let next = Settings {
                     target_hz: hz,
-                    ..self.settings
+                    ..settings
                 };
-                self.replan(image, next, controller, out);
+                self.replan(next, controller, out);
             }
             Command::Ac { volts, hz } => {
                 let next = Settings {
                     ac_volts: volts,
                     ac_hz: hz,
-                    ..self.settings
+                    ..settings
                 };
-                self.replan(image, next, controller, out);
+                self.replan(next, controller, out);
             }
             Command::Stop => {
                 let from = controller.with(|c| {
@@ -292,6 +243,18 @@ impl Console {
                 None => {}
             },
             Command::Reset => {
+                // At 0 V only, as `clear`: switching the output off under a bias would drop
+                // the membrane's charge at once, and the next boot would ramp from 0 V while
+                // the amplifier still slews down (its monitor's fault, found on `host-sim
+                // serve`'s plant).
+                if !at_zero(controller) {
+                    err(
+                        out,
+                        ErrorCode::Busy,
+                        "reset at 0 V only: `stop` first, or wait for a fault's descent",
+                    );
+                    return Then::Reply;
+                }
                 let _ = write!(out, "ok reset: output off, restarting");
                 return Then::Reset;
             }
@@ -301,14 +264,9 @@ impl Console {
     }
 
     /// A new plan with `next`: its job made under the lock, solved outside it, adopted under
-    /// it; the settings kept only once adopted.
-    fn replan(
-        &mut self,
-        image: Image<'static>,
-        next: Settings,
-        controller: &mut impl Shared,
-        out: &mut ReplyLine,
-    ) {
+    /// it; the controller then holds `next`.
+    fn replan(&mut self, next: Settings, controller: &mut impl Shared, out: &mut ReplyLine) {
+        let Some((image, _)) = self.image else { return };
         let job = controller.with(|c| c.as_ref().map(|c| c.replan(next)));
         let result = match job {
             Some(Ok(job)) => job.solve(image.table),
@@ -319,13 +277,12 @@ impl Console {
             controller.with(|c| match c {
                 Some(c) => c.adopt(replanned).map(|boot| (boot, c.plan().start_volts)),
                 None => Err(Refusal::Busy {
-                    phase: de_resonator::Phase::Faulted,
+                    phase: Phase::Faulted,
                 }),
             })
         });
         match adopted {
             Ok((boot, from_volts)) => {
-                self.settings = next;
                 let _ = write!(
                     out,
                     "ok target_hz={} bias_volts={} from_volts={} max_volts={} ac_volts={} ac_hz={}",
@@ -343,16 +300,13 @@ impl Console {
     }
 
     /// Boot again with the settings asked for, once the output is at 0 V (a fault's descent
-    /// over, stopped, or never booted); the new controller replaces the old only if every check passes.
-    fn clear(
-        &mut self,
-        image: Image<'static>,
-        amplifier: Amplifier,
-        controller: &mut impl Shared,
-        out: &mut ReplyLine,
-    ) {
-        let at_zero = controller.with(|c| c.as_ref().is_none_or(|c| c.last_volts() == 0.0));
-        if !at_zero {
+    /// over, stopped, or never booted); the new controller replaces the old only if every
+    /// check passes.
+    fn clear(&mut self, controller: &mut impl Shared, out: &mut ReplyLine) {
+        let Some((image, amplifier)) = self.image else {
+            return;
+        };
+        if !at_zero(controller) {
             err(
                 out,
                 ErrorCode::Busy,
@@ -360,16 +314,14 @@ impl Console {
             );
             return;
         }
+        // The settings the old controller ran on (a latched one keeps its own), else those
+        // asked for while none ran.
+        let settings = controller
+            .with(|c| c.as_ref().map(|c| *c.settings()))
+            .unwrap_or(self.idle_settings);
         let mut fresh = None;
-        match Controller::start_in(
-            &mut fresh,
-            image.params,
-            image.table,
-            amplifier,
-            self.settings,
-        ) {
+        match Controller::start_in(&mut fresh, image.params, image.table, amplifier, settings) {
             Ok(boot) => {
-                let bias = boot.bias_volts;
                 let swapped = controller.with(|c| {
                     let idle = c.as_ref().is_none_or(|c| c.last_volts() == 0.0);
                     if idle {
@@ -390,10 +342,32 @@ impl Console {
                 let _ = write!(
                     out,
                     "ok clear: boot checks pass, ramp to {} V",
-                    Decimal(bias)
+                    Decimal(boot.bias_volts)
                 );
             }
             Err(fault) => err(out, ErrorCode::Refused, fault),
         }
+    }
+}
+
+/// Whether the output is at 0 V: no controller, or its last command 0 V.
+fn at_zero(controller: &mut impl Shared) -> bool {
+    controller.with(|c| c.as_ref().is_none_or(|c| c.last_volts() == 0.0))
+}
+
+/// The status line of a controller.
+fn status(c: &Controller, limit: Option<crate::safety::FailureMode>, extras: &Extras) -> Status {
+    Status {
+        phase: c.phase(),
+        target_hz: c.settings().target_hz,
+        bias_volts: c.plan().bias_volts,
+        volts: c.last_volts(),
+        max_volts: c.max_volts(),
+        limit,
+        ticks: c.ticks(),
+        tick_cycles_max: extras.tick_cycles_max,
+        stack_bytes: extras.stack_bytes,
+        clock_us: extras.clock_us,
+        fault: c.latched_fault(),
     }
 }

@@ -1,0 +1,382 @@
+//! `serve`: a virtual board. The core's board and controller (the firmware's logic, as the
+//! firmware wires it: `de_resonator::board`) at the scene's tick rate against the scene's
+//! full plant, in real time or faster, serving the command port on a socket with exactly the
+//! firmware's protocol: the start-up line (`# ready …` or `# refused …`) to each client as
+//! it connects, one reply a request, `save` kept across `reset` in memory as flash keeps it.
+
+use std::fmt;
+use std::io::{ErrorKind, Read, Write};
+use std::net::TcpListener;
+use std::os::unix::fs::FileTypeExt;
+use std::os::unix::net::UnixListener;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use clap::Args;
+use de_resonator::board::port::Extras;
+use de_resonator::board::{self, Board, Keeper, Lines, ReplyLine, ResetCause, Then};
+use de_resonator::image::{AmplifierSpec, DAC_BITS};
+use de_resonator::protocol::NOTICE;
+use de_resonator::store::{self, FlashKeeper, RamFlash, StoreError, RAM_PAGE_BYTES};
+use de_resonator::{Controller, Dac8551, Image, Inputs, OutputStage, Settings};
+use serde::Serialize;
+
+use super::{sig, Report};
+use crate::hil;
+use crate::scene;
+
+#[derive(Args, Debug)]
+#[command(group(clap::ArgGroup::new("socket").required(true).args(["tcp", "unix"])))]
+pub struct ServeArgs {
+    /// The scene (TOML) whose device, image settings and plant the board runs.
+    ///
+    /// Default: the built-in reference scene (scenes/reference.toml).
+    pub scene: Option<PathBuf>,
+    /// Serve on a TCP socket, HOST:PORT (e.g. 127.0.0.1:4000).
+    #[arg(long, value_name = "HOST:PORT")]
+    pub tcp: Option<String>,
+    /// Serve on a Unix socket at PATH (a stale socket there is replaced).
+    #[arg(long, value_name = "PATH")]
+    pub unix: Option<PathBuf>,
+    /// Simulated seconds per wall-clock second, or `max`: as fast as it computes.
+    #[arg(long, value_name = "X|max", default_value = "1", value_parser = speed)]
+    pub speed: Speed,
+    /// Stop after this many simulated seconds, then print a report.
+    ///
+    /// Default: serve until interrupted.
+    #[arg(long, value_name = "S")]
+    pub seconds: Option<f64>,
+}
+
+/// How fast the virtual board runs against the wall clock.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Speed {
+    /// This many simulated seconds a wall second.
+    Times(f64),
+    /// No pacing.
+    Max,
+}
+
+fn speed(word: &str) -> Result<Speed, String> {
+    if word == "max" {
+        return Ok(Speed::Max);
+    }
+    match word.parse::<f64>() {
+        Ok(x) if x > 0.0 && x.is_finite() => Ok(Speed::Times(x)),
+        _ => Err(format!("{word}: a positive number, or `max`")),
+    }
+}
+
+/// What a session of the virtual board did (printed when `--seconds` ends it).
+#[derive(Serialize, Debug)]
+pub struct ServeReport {
+    pub scene: String,
+    pub ticks: u64,
+    pub simulated_seconds: f64,
+    pub wall_seconds: f64,
+    pub clients: usize,
+    pub requests: usize,
+    /// What the controller said, with the simulated time.
+    pub events: Vec<String>,
+    /// The first check of the true plant that failed, and when: must stay `null`.
+    pub plant_crossing: Option<super::Crossing>,
+}
+
+impl fmt::Display for ServeReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "served scene {}: {} ticks ({} s simulated in {} s), {} clients, {} requests",
+            self.scene,
+            self.ticks,
+            sig(self.simulated_seconds),
+            sig(self.wall_seconds),
+            self.clients,
+            self.requests
+        )
+    }
+}
+
+impl Report for ServeReport {
+    fn failure(&self) -> Option<String> {
+        self.plant_crossing
+            .as_ref()
+            .map(|c| format!("the plant crossed {} at {} s", c.mode, sig(c.time_seconds)))
+    }
+}
+
+/// The settings' flash: two RAM pages, as the chip's two sectors (kept across `reset`).
+struct Flash(Vec<u8>);
+
+impl Keeper for &mut Flash {
+    type Error = StoreError;
+    fn load(&mut self) -> Result<Option<Settings>, StoreError> {
+        self.keeper().load()
+    }
+    fn save(&mut self, settings: &Settings) -> Result<(), StoreError> {
+        self.keeper().save(settings)
+    }
+}
+
+impl Flash {
+    fn keeper(&mut self) -> FlashKeeper<RamFlash<'_>> {
+        let len = self.0.len() as u32;
+        FlashKeeper {
+            flash: store::RamFlash::new(&mut self.0),
+            range: 0..len,
+        }
+    }
+}
+
+trait Conn: Read + Write {}
+impl<T: Read + Write> Conn for T {}
+
+/// A connected client: its bytes into lines.
+struct Client {
+    stream: Box<dyn Conn>,
+    lines: Lines,
+}
+
+impl Client {
+    /// Write a whole line; a client gone is dropped by the caller.
+    fn send(&mut self, line: &str) -> bool {
+        let bytes = format!("{line}\n");
+        let mut rest = bytes.as_bytes();
+        let deadline = Instant::now() + Duration::from_secs(2);
+        while !rest.is_empty() {
+            match self.stream.write(rest) {
+                Ok(0) => return false,
+                Ok(n) => rest = &rest[n..],
+                Err(e) if e.kind() == ErrorKind::WouldBlock && Instant::now() < deadline => {
+                    std::thread::sleep(Duration::from_micros(100));
+                }
+                Err(e) if e.kind() == ErrorKind::Interrupted => {}
+                Err(_) => return false,
+            }
+        }
+        self.stream.flush().is_ok()
+    }
+}
+
+enum Listener {
+    Tcp(TcpListener),
+    Unix(UnixListener, PathBuf),
+}
+
+impl Listener {
+    fn bind(args: &ServeArgs) -> Result<(Self, String), String> {
+        if let Some(address) = &args.tcp {
+            let l = TcpListener::bind(address)
+                .map_err(|e| format!("cannot listen on {address}: {e}"))?;
+            l.set_nonblocking(true).map_err(|e| e.to_string())?;
+            let at = l.local_addr().map_err(|e| e.to_string())?;
+            return Ok((Listener::Tcp(l), format!("tcp {at}")));
+        }
+        let path = args.unix.clone().ok_or("give --tcp or --unix")?;
+        if let Ok(meta) = std::fs::symlink_metadata(&path) {
+            if !meta.file_type().is_socket() {
+                return Err(format!("{} exists and is not a socket", path.display()));
+            }
+            let _ = std::fs::remove_file(&path);
+        }
+        let l = UnixListener::bind(&path)
+            .map_err(|e| format!("cannot listen on {}: {e}", path.display()))?;
+        l.set_nonblocking(true).map_err(|e| e.to_string())?;
+        let at = format!("unix {}", path.display());
+        Ok((Listener::Unix(l, path), at))
+    }
+
+    /// A client waiting to connect, if any.
+    fn accept(&self) -> Option<Box<dyn Conn>> {
+        match self {
+            Listener::Tcp(l) => {
+                let (s, _) = l.accept().ok()?;
+                s.set_nonblocking(true).ok()?;
+                let _ = s.set_nodelay(true);
+                Some(Box::new(s))
+            }
+            Listener::Unix(l, _) => {
+                let (s, _) = l.accept().ok()?;
+                s.set_nonblocking(true).ok()?;
+                Some(Box::new(s))
+            }
+        }
+    }
+}
+
+impl Drop for Listener {
+    fn drop(&mut self) {
+        if let Listener::Unix(_, path) = self {
+            let _ = std::fs::remove_file(path);
+        }
+    }
+}
+
+/// How often the sockets are polled at `--speed max`, wall time.
+const POLL: Duration = Duration::from_millis(1);
+
+pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
+    let scene = match &args.scene {
+        Some(path) => scene::load(path)?,
+        None => {
+            scene::parse(scene::REFERENCE).map_err(|e| format!("built-in reference scene: {e}"))?
+        }
+    };
+    let lp = &scene.run;
+    let tick_seconds = 1.0 / f64::from(lp.settings.tick_hz);
+    let ticks_limit = match args.seconds {
+        None => None,
+        Some(s) if s > 0.0 && s.is_finite() && s * f64::from(lp.settings.tick_hz) < 4e9 => {
+            Some((s / tick_seconds).round() as u64)
+        }
+        Some(s) => {
+            return Err(format!(
+                "--seconds {s}: a positive number of simulated seconds"
+            ))
+        }
+    };
+    // The image `host-sim image` would write for the scene's device, amplifier and settings.
+    let full_scale = lp.dac_reference_volts * lp.plant.amplifier.gain;
+    let spec = AmplifierSpec {
+        dac_reference_volts: lp.dac_reference_volts as f32,
+        gain: lp.plant.amplifier.gain as f32,
+        rail_volts: lp.plant.amplifier.rail_volts.min(full_scale) as f32,
+        dac_bits: DAC_BITS,
+    };
+    let bytes = super::image::made(lp.nominal, &spec, &lp.settings)?;
+    let mut flash = Flash(vec![0xFF; 2 * RAM_PAGE_BYTES]);
+    let (listener, at) = Listener::bind(args)?;
+    eprintln!(
+        "serving scene {} on {at} at {}; the command port's protocol (`help`)",
+        scene.name,
+        match args.speed {
+            Speed::Max => "full speed".to_string(),
+            Speed::Times(x) => format!("{}× real time", sig(x)),
+        }
+    );
+
+    let wires = lp.wires();
+    let mut stage = OutputStage::new(Dac8551::new(&wires.bus), &wires.enable);
+    let _ = stage.safe();
+    let mut slot: Option<Controller> = None;
+    let boot = |slot: &mut Option<Controller>, keeper, cause| {
+        let (board, started) = Board::boot(slot, Image::parse(&bytes), keeper, cause);
+        let mut said = Vec::new();
+        if let Some(cause) = cause {
+            said.push(format!("{NOTICE}reset: {}", cause.name()));
+        }
+        if let Some(w) = started.warning {
+            said.push(format!("{NOTICE}warning: {w}"));
+        }
+        said.push(format!("{NOTICE}{}", started.notice));
+        (board, said)
+    };
+    let (mut logic, mut banner) = boot(&mut slot, Some(&mut flash), None);
+    for line in &banner {
+        eprintln!("{line}");
+    }
+    let mut bench = lp.bench(lp.current_monitor.is_some());
+    let mut clients: Vec<Client> = Vec::new();
+    let mut report = ServeReport {
+        scene: scene.name.clone(),
+        ticks: 0,
+        simulated_seconds: 0.0,
+        wall_seconds: 0.0,
+        clients: 0,
+        requests: 0,
+        events: Vec::new(),
+        plant_crossing: None,
+    };
+    let started = Instant::now();
+    let mut next_poll = started;
+    let mut k: u64 = 0;
+    while ticks_limit.is_none_or(|n| k < n) {
+        let now = Instant::now();
+        let due = match args.speed {
+            Speed::Max => None,
+            Speed::Times(x) => Some(started + Duration::from_secs_f64(k as f64 * tick_seconds / x)),
+        };
+        if now >= next_poll || due.is_some_and(|d| d > now) {
+            next_poll = now + POLL;
+            // New clients hear the start-up line, as a terminal on the board's port would.
+            while let Some(stream) = listener.accept() {
+                let mut client = Client {
+                    stream,
+                    lines: Lines::default(),
+                };
+                if banner.iter().all(|line| client.send(line)) {
+                    clients.push(client);
+                    report.clients += 1;
+                }
+            }
+            let extras = Extras {
+                clock_us: Some((k as f64 * tick_seconds * 1e6) as u32),
+                ..Extras::default()
+            };
+            let mut reset = false;
+            clients.retain_mut(|client| {
+                let mut buf = [0u8; 512];
+                loop {
+                    let n = match client.stream.read(&mut buf) {
+                        Ok(0) => return false,
+                        Ok(n) => n,
+                        Err(e) if e.kind() == ErrorKind::WouldBlock => return true,
+                        Err(e) if e.kind() == ErrorKind::Interrupted => continue,
+                        Err(_) => return false,
+                    };
+                    for &byte in &buf[..n] {
+                        let Some(line) = client.lines.push(byte) else {
+                            continue;
+                        };
+                        report.requests += 1;
+                        let mut reply = ReplyLine::new();
+                        let then = logic.serve(&line, &mut &mut slot, &extras, &mut reply);
+                        if !client.send(&reply) {
+                            return false;
+                        }
+                        if then == Then::Reset {
+                            // The rest of the line's bytes go to the board booted anew.
+                            reset = true;
+                            return true;
+                        }
+                    }
+                }
+            });
+            if reset {
+                // The output off at once (the firmware's tick finds the slot empty), then
+                // the boot, the settings' flash kept.
+                slot = None;
+                let _ = board::tick::drive(&mut slot, &mut stage, Inputs::NONE);
+                let keeper = logic.into_keeper();
+                (logic, banner) = boot(&mut slot, keeper, Some(ResetCause::Asked));
+                for line in &banner {
+                    eprintln!("{line}");
+                }
+                clients.retain_mut(|client| banner.iter().all(|line| client.send(line)));
+            }
+            if let Some(due) = due.filter(|&d| d > Instant::now()) {
+                std::thread::sleep((due - Instant::now().min(due)).min(POLL));
+                continue;
+            }
+        }
+        let t = k as f64 * tick_seconds;
+        let stepped = lp.step(k, &mut bench, &mut slot, &mut stage, &wires)?;
+        if let Some(event) = stepped.ticked.and_then(|t| t.output.event) {
+            let line = format!("{} s: {}", sig(t), hil::said(event));
+            eprintln!("{line}");
+            report.events.push(line);
+        }
+        let end = t + tick_seconds;
+        if report.plant_crossing.is_none() {
+            if let Some(mode) = lp.crossing(&bench.y, end, stepped.volts) {
+                eprintln!("{} s: the plant crossed {}", sig(end), mode.name());
+                report.plant_crossing = super::Crossing::of(Some((mode, end)));
+            }
+        }
+        k += 1;
+    }
+    report.ticks = k;
+    report.simulated_seconds = k as f64 * tick_seconds;
+    report.wall_seconds = started.elapsed().as_secs_f64();
+    Ok(report)
+}

@@ -1,0 +1,161 @@
+//! A virtual board for the tests: `host-sim serve` started on a scene, stopped when dropped.
+#![allow(dead_code)]
+
+use std::io::{BufRead, BufReader};
+use std::path::PathBuf;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use serde_json::Value;
+
+pub fn host_sim() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_host-sim"))
+}
+
+/// A scratch directory of this test process.
+pub fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("host-sim-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// `host-sim serve` running; killed when dropped.
+pub struct Served {
+    child: Child,
+    /// `--unix PATH` or `--tcp HOST:PORT`, as `console` takes it.
+    pub connection: [String; 2],
+}
+
+impl Served {
+    /// Serve `scene` (`None`: the reference scene) at `speed` on a Unix socket named `name`,
+    /// or on TCP (`name` = `tcp`, a port the system picks).
+    pub fn start(scene: Option<&str>, speed: &str, name: &str) -> Self {
+        let mut command = host_sim();
+        command.arg("serve");
+        if let Some(scene) = scene {
+            command.arg(scene);
+        }
+        let socket = scratch("serve").join(format!("{name}.sock"));
+        let socket = socket.to_str().unwrap().to_string();
+        let tcp = name == "tcp";
+        if tcp {
+            command.args(["--tcp", "127.0.0.1:0"]);
+        } else {
+            command.args(["--unix", &socket]);
+        }
+        // A bound: a test that dies leaves no board running for long.
+        command.args(["--speed", speed, "--seconds", "3000"]);
+        let mut child = command
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("host-sim serve starts");
+        // Its first line says where it serves.
+        let mut stderr = BufReader::new(child.stderr.take().unwrap());
+        let mut first = String::new();
+        stderr.read_line(&mut first).unwrap();
+        let at = first
+            .split(" on ")
+            .nth(1)
+            .and_then(|rest| rest.split(" at ").next())
+            .unwrap_or_else(|| panic!("serve's first line: {first:?}"))
+            .to_string();
+        // The rest of stderr drained, so the board never blocks on it.
+        std::thread::spawn(move || for _ in stderr.lines() {});
+        let connection = if tcp {
+            [
+                "--tcp".to_string(),
+                at.trim_start_matches("tcp ").to_string(),
+            ]
+        } else {
+            ["--unix".to_string(), socket]
+        };
+        Self { child, connection }
+    }
+
+    /// `console --script` (text) with the script `text`, saved as `name`.
+    pub fn script(&self, name: &str, text: &str) -> std::process::Output {
+        let script = scratch("serve").join(format!("{name}.txt"));
+        std::fs::write(&script, text).unwrap();
+        host_sim()
+            .arg("console")
+            .args(&self.connection)
+            .args(["--script", script.to_str().unwrap()])
+            .output()
+            .unwrap()
+    }
+
+    /// `console --json --script` with `requests`: its report, and whether it exited 0.
+    pub fn console(&self, requests: &[&str]) -> (Value, bool) {
+        let script = scratch("serve").join(format!(
+            "script-{}.txt",
+            SCRIPTS.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+        ));
+        std::fs::write(&script, requests.join("\n")).unwrap();
+        let out = host_sim()
+            .args(["--json", "console"])
+            .args(&self.connection)
+            .args(["--script", script.to_str().unwrap()])
+            .output()
+            .unwrap();
+        let report: Value = serde_json::from_slice(&out.stdout)
+            .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&out.stderr)));
+        (report, out.status.success())
+    }
+
+    /// The replies to `requests`, in order.
+    pub fn replies(&self, requests: &[&str]) -> Vec<String> {
+        let (report, _) = self.console(requests);
+        report["exchanges"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|e| e["reply"].as_str().unwrap().to_string())
+            .collect()
+    }
+
+    /// `status` until `done` holds of its reply (at most 60 s of wall time).
+    pub fn wait_for(&self, what: &str, done: impl Fn(&str) -> bool) -> String {
+        let end = Instant::now() + Duration::from_secs(60);
+        loop {
+            let status = self.replies(&["status"]).remove(0);
+            if done(&status) {
+                return status;
+            }
+            assert!(Instant::now() < end, "never {what}: {status}");
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    }
+}
+
+static SCRIPTS: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
+
+impl Drop for Served {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// A `key=value` field of a reply or notice.
+pub fn field<'a>(line: &'a str, key: &str) -> Option<&'a str> {
+    line.split(' ')
+        .find_map(|word| word.strip_prefix(key)?.strip_prefix('='))
+}
+
+/// A field as a number.
+pub fn number(line: &str, key: &str) -> f64 {
+    field(line, key)
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("no {key} in {line}"))
+}
+
+/// The voltage a reply ends with (`… ramp to 7449.878 V`).
+pub fn last_volts(reply: &str) -> f64 {
+    reply
+        .trim_end_matches(" V")
+        .rsplit(' ')
+        .next()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("no volts at the end of {reply}"))
+}

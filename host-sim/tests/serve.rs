@@ -1,0 +1,180 @@
+//! `host-sim serve`, the virtual board, through `host-sim console --script` as an engineer
+//! would use them: every request of the command port and its reply, the start-up line, a
+//! fault's latch and `clear`, settings saved across `reset`. The board is the core's (the
+//! firmware's logic); the plant is the scene's.
+
+mod common;
+
+use common::{number, Served};
+use serde_json::Value;
+
+/// The bias `host-sim tune` (the f64 solve, a second method) gives for `hz`, V.
+fn tuned_bias(hz: f64) -> f64 {
+    let out = common::host_sim()
+        .args(["--json", "tune", "--target-hz", &hz.to_string()])
+        .output()
+        .unwrap();
+    let report: Value = serde_json::from_slice(&out.stdout).unwrap();
+    report["bias_volts"].as_f64().unwrap()
+}
+
+fn close(a: f64, b: f64, rel: f64) -> bool {
+    (a / b - 1.0).abs() <= rel
+}
+
+fn settled(status: &str) -> bool {
+    status.contains("phase=holding") || status.contains("phase=driving")
+}
+
+#[test]
+fn the_virtual_board_answers_every_request_as_the_firmware() {
+    let board = Served::start(None, "20", "reference");
+    // The start-up line to each client as it connects; the image's 44 Hz at f64's bias.
+    let (report, ok) = board.console(&["status", "get target_hz", "help"]);
+    assert!(ok, "{report}");
+    let ready = report["notices"][0].as_str().unwrap();
+    assert!(ready.starts_with("# ready target_hz=44 "), "{ready}");
+    assert!(ready.ends_with(" settings=image"), "{ready}");
+    assert!(
+        close(number(ready, "bias_volts"), tuned_bias(44.0), 1e-4),
+        "{ready}"
+    );
+    let replies: Vec<&str> = report["exchanges"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e["reply"].as_str().unwrap())
+        .collect();
+    assert!(replies[0].starts_with("ok phase="), "{}", replies[0]);
+    assert_eq!(replies[1], "ok target_hz=44");
+    assert!(replies[2].starts_with("ok commands: help | status"));
+
+    board.wait_for("driving", |s| s.contains("phase=driving"));
+    // In range: the bias of the f64 solve for 45 Hz, ramped from 44 Hz's.
+    let moved = board.replies(&["target 45"]).remove(0);
+    assert!(moved.starts_with("ok target_hz=45 "), "{moved}");
+    assert!(
+        close(number(&moved, "bias_volts"), tuned_bias(45.0), 1e-4),
+        "{moved}"
+    );
+    assert!(
+        close(number(&moved, "from_volts"), tuned_bias(44.0), 1e-4),
+        "{moved}"
+    );
+    board.wait_for("at the new bias", settled);
+    let replies = board.replies(&[
+        "target 300",
+        "ac 20 45",
+        "get ac_volts",
+        "set tick_hz 2000",
+        "frobnicate",
+        "get target_hz",
+    ]);
+    // Out of range: refused by the checks (code 2), the plan in force kept.
+    assert!(replies[0].starts_with("err 2 "), "{}", replies[0]);
+    assert!(
+        replies[1].starts_with("ok target_hz=45 ") && replies[1].ends_with("ac_volts=20 ac_hz=45")
+    );
+    assert_eq!(replies[2], "ok ac_volts=20");
+    assert!(replies[3].starts_with("err 2 tick_hz"), "{}", replies[3]);
+    assert!(replies[4].starts_with("err 1 "), "{}", replies[4]);
+    assert_eq!(replies[5], "ok target_hz=45");
+    board.wait_for("settled after the AC", settled);
+    let replies = board.replies(&["set margin 0.1", "save", "reset"]);
+    assert!(replies[0].starts_with("ok target_hz=45 "), "{}", replies[0]);
+    assert_eq!(
+        replies[1],
+        "ok save: the settings in force boot from now on"
+    );
+    // A reset under the bias is refused: at 0 V only.
+    assert!(
+        replies[2].starts_with("err 3 reset at 0 V only"),
+        "{}",
+        replies[2]
+    );
+    assert!(board.replies(&["stop"])[0].starts_with("ok stop: ramp from "));
+    board.wait_for("at 0 V", |s| {
+        s.contains("phase=holding") && number(s, "volts") == 0.0
+    });
+    let (report, ok) = board.console(&["reset", "get margin", "get target_hz", "status"]);
+    assert!(ok, "{report}");
+    let exchanges = report["exchanges"].as_array().unwrap();
+    assert_eq!(exchanges[0]["reply"], "ok reset: output off, restarting");
+    // The restart says so, and boots the saved settings.
+    let notices: Vec<&str> = report["notices"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|n| n.as_str().unwrap())
+        .collect();
+    assert_eq!(notices[1], "# reset: asked", "{notices:?}");
+    assert!(
+        notices[2].starts_with("# ready target_hz=45 ") && notices[2].ends_with("settings=saved")
+    );
+    assert_eq!(exchanges[1]["reply"], "ok margin=0.1");
+    assert_eq!(exchanges[2]["reply"], "ok target_hz=45");
+    let status = exchanges[3]["reply"].as_str().unwrap();
+    assert!(status.ends_with("fault=none"), "{status}");
+}
+
+/// The stuck sensor's scene (stuck at 3 s): the fault latches, requests answer `err 4`,
+/// `clear` waits for 0 V and then boots again, and the sensor, still stuck, faults the new
+/// controller as it did the first.
+#[test]
+fn a_fault_latches_on_the_virtual_board_until_clear() {
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../scenes/fault-sensor-stuck.toml"
+    );
+    let board = Served::start(Some(scene), "20", "stuck");
+    let faulted = board.wait_for("faulted", |s| !s.ends_with("fault=none"));
+    assert!(faulted.contains("phase=faulted"), "{faulted}");
+    assert!(faulted.contains("fault=stretch sensor stuck"), "{faulted}");
+    let replies = board.replies(&["target 45", "trim"]);
+    assert!(replies[0].starts_with("err 4 faulted"), "{}", replies[0]);
+    assert!(replies[1].starts_with("err 4 "), "{}", replies[1]);
+    board.wait_for("at 0 V", |s| number(s, "volts") == 0.0);
+    let cleared = board.replies(&["clear", "status"]);
+    assert!(
+        cleared[0].starts_with("ok clear: boot checks pass, ramp to "),
+        "{}",
+        cleared[0]
+    );
+    let bias = common::last_volts(&cleared[0]);
+    assert!(close(bias, tuned_bias(44.0), 1e-4), "{bias}");
+    // A fresh controller (its tick count from 0) on a sensor still stuck: it faults again
+    // within its 100 equal samples' watch, not later.
+    let before = number(&faulted, "ticks");
+    assert!(
+        number(&cleared[1], "ticks") < before,
+        "{} after {faulted}",
+        cleared[1]
+    );
+    let again = board.wait_for("faulted again", |s| !s.ends_with("fault=none"));
+    assert!(again.contains("fault=stretch sensor stuck"), "{again}");
+    assert!(number(&again, "ticks") < 1000.0, "{again}");
+}
+
+/// `console` against the board on TCP: a script's replies in order, status 1 and the first
+/// `err` named on stderr when one fails.
+#[test]
+fn a_console_script_reports_each_reply_and_fails_on_an_err() {
+    let board = Served::start(None, "max", "tcp");
+    let out = board.script("ok", "# a comment\nhelp\n\nget target_hz\n");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("> get target_hz\nok target_hz=44\n"),
+        "{text}"
+    );
+    assert!(text.ends_with("2 requests, 0 answered `err`\n"), "{text}");
+    let out = board.script("err", "help\ntarget 300\nhelp\n");
+    assert_eq!(out.status.code(), Some(1));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("> target 300\nerr "), "{text}");
+    assert!(String::from_utf8_lossy(&out.stderr).contains("`target 300` got `err "));
+}

@@ -1,0 +1,229 @@
+//! The board: everything the firmware decides, without its hardware, so the host tests it and
+//! host-sim's virtual board (`host-sim serve`) runs it. It boots from an image and the saved
+//! settings (the fallback, the watchdog's refusal: [`Board::boot`]), answers the command port
+//! ([`port`]), turns a tick's output into what the output stage does ([`tick`]: the one
+//! enable policy) and runs the tick's background job ([`tick::run_job`]). What only hardware
+//! has comes in behind [`Keeper`] (where `save` keeps the settings) and as arguments (the
+//! reset's cause, the clock).
+//!
+//! The controller's slot is not in [`Board`]: the tick owns it under a lock the command task
+//! takes only briefly ([`port::Shared`]), so the long work of a request (a new plan's checks,
+//! a boot) runs outside the lock while the tick preempts it.
+
+pub mod port;
+pub mod tick;
+
+use core::fmt::{self, Write as _};
+
+use heapless::String;
+
+use crate::controller::{Controller, Settings};
+use crate::decimal::Decimal;
+use crate::drive::Amplifier;
+use crate::image::{Image, ImageError};
+use crate::safety::FailureMode;
+
+pub use port::{Line, Lines, ReplyLine, Shared, Then};
+
+/// Why the firmware restarted, as it recorded it before the reset.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ResetCause {
+    /// The command port asked (`reset`).
+    Asked,
+    /// The watchdog was not fed in time.
+    Watchdog,
+}
+
+impl ResetCause {
+    pub fn name(self) -> &'static str {
+        match self {
+            ResetCause::Asked => "asked",
+            ResetCause::Watchdog => "watchdog",
+        }
+    }
+}
+
+/// Where `save` keeps the settings across a reset or a power cut (flash on the chip, RAM that
+/// survives a reset under QEMU, memory in host-sim's virtual board).
+pub trait Keeper {
+    type Error: fmt::Display;
+    /// The settings saved last, if any.
+    fn load(&mut self) -> Result<Option<Settings>, Self::Error>;
+    fn save(&mut self, settings: &Settings) -> Result<(), Self::Error>;
+}
+
+/// No settings storage: `save` answers that it is unsupported.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NoKeeper;
+
+impl Keeper for NoKeeper {
+    type Error = &'static str;
+    fn load(&mut self) -> Result<Option<Settings>, Self::Error> {
+        Ok(None)
+    }
+    fn save(&mut self, _: &Settings) -> Result<(), Self::Error> {
+        Err("no settings storage")
+    }
+}
+
+/// Why the board drives nothing, one line.
+pub type Reason = String<200>;
+
+/// The board's state besides the controller: the image, the settings `clear` boots with
+/// while nothing runs (a running controller holds the settings in force: one copy), why it
+/// refuses, if it does, and where the settings are saved.
+pub struct Board<'a, K> {
+    image: Option<(Image<'a>, Amplifier)>,
+    /// The settings asked for while no controller runs (refused at boot, or by the image).
+    idle_settings: Settings,
+    refusal: Option<Reason>,
+    /// The limit the last boot or plan found on the chip (its mode).
+    limit: Option<FailureMode>,
+    keeper: Option<K>,
+}
+
+/// What the boot says on the command port before any request: the start-up line (after
+/// [`crate::protocol::NOTICE`]: `ready …` or `refused …`), and a warning, if any.
+#[derive(Clone, Debug, Default)]
+pub struct Started {
+    pub notice: ReplyLine,
+    pub warning: Option<ReplyLine>,
+}
+
+impl<'a, K: Keeper> Board<'a, K> {
+    /// Boot: check the image, then start the controller in `slot` with the saved settings if
+    /// the boot checks pass them, else with the image's (said in the warning). After a
+    /// watchdog reset nothing is driven until `clear`: someone has to look first.
+    pub fn boot(
+        slot: &mut Option<Controller>,
+        image: Result<Image<'a>, ImageError>,
+        keeper: Option<K>,
+        cause: Option<ResetCause>,
+    ) -> (Self, Started) {
+        *slot = None;
+        let mut board = Board {
+            image: None,
+            idle_settings: Settings::for_target(0.0),
+            refusal: None,
+            limit: None,
+            keeper,
+        };
+        let mut started = Started::default();
+        let image = match image.and_then(|i| Ok((i, i.amplifier.amplifier()?))) {
+            Ok(pair) => pair,
+            Err(e) => {
+                board.refuse(slot, &e, &mut started.notice);
+                return (board, started);
+            }
+        };
+        board.image = Some(image);
+        board.idle_settings = image.0.settings;
+        let mut source = "image";
+        let mut warning = ReplyLine::new();
+        let saved = match board.keeper.as_mut().map(Keeper::load) {
+            Some(Ok(saved)) => saved,
+            Some(Err(e)) => {
+                let _ = write!(warning, "{e}: the image's settings used");
+                None
+            }
+            None => None,
+        };
+        let mut booted = None;
+        if let Some(saved) = saved {
+            match board.start(slot, image, saved) {
+                Ok(bias) => {
+                    source = "saved";
+                    booted = Some(bias);
+                }
+                Err(fault) => {
+                    let _ = write!(
+                        warning,
+                        "saved settings refused ({fault}): the image's used"
+                    );
+                }
+            }
+        }
+        if !warning.is_empty() {
+            started.warning = Some(warning);
+        }
+        let booted = match booted {
+            Some(bias) => Ok(bias),
+            None => board.start(slot, image, image.0.settings),
+        };
+        match booted {
+            Err(fault) => board.refuse(slot, &fault, &mut started.notice),
+            Ok(_) if cause == Some(ResetCause::Watchdog) => board.refuse(
+                slot,
+                &"reset by the watchdog (a task missed its deadline): `clear` to boot",
+                &mut started.notice,
+            ),
+            Ok(bias_volts) => {
+                let (target_hz, max_volts) = slot
+                    .as_ref()
+                    .map_or((0.0, 0.0), |c| (c.settings().target_hz, c.max_volts()));
+                let _ = write!(
+                    started.notice,
+                    "ready target_hz={} bias_volts={} max_volts={} settings={source}",
+                    Decimal(target_hz),
+                    Decimal(bias_volts),
+                    Decimal(max_volts)
+                );
+            }
+        }
+        (board, started)
+    }
+
+    /// Start a controller in `slot` with `settings` (every boot check): its bias, V. The
+    /// settings are kept for `clear` either way; the slot is `None` on a refusal.
+    fn start(
+        &mut self,
+        slot: &mut Option<Controller>,
+        (image, amplifier): (Image<'a>, Amplifier),
+        settings: Settings,
+    ) -> Result<f32, crate::controller::Fault> {
+        self.idle_settings = settings;
+        let boot = Controller::start_in(slot, image.params, image.table, amplifier, settings)?;
+        self.limit = boot.limit.map(|l| l.mode);
+        self.refusal = None;
+        Ok(boot.bias_volts)
+    }
+
+    /// Drive nothing, and say why (in `notice`, and to every request that needs a controller).
+    /// Also for what only the firmware finds (a tick rate beyond its timer's reach).
+    pub fn refuse(
+        &mut self,
+        slot: &mut Option<Controller>,
+        why: &dyn fmt::Display,
+        notice: &mut ReplyLine,
+    ) {
+        *slot = None;
+        let mut reason = Reason::new();
+        let _ = write!(reason, "{why}");
+        notice.clear();
+        let _ = write!(notice, "refused {reason}");
+        self.refusal = Some(reason);
+    }
+
+    /// Where the settings are kept, back for the next boot (a reset).
+    pub fn into_keeper(self) -> Option<K> {
+        self.keeper
+    }
+
+    /// Why nothing is driven, if it is not.
+    pub fn refusal(&self) -> Option<&str> {
+        self.refusal.as_deref()
+    }
+
+    /// The image booted from (`None`: none that reads).
+    pub fn image(&self) -> Option<Image<'a>> {
+        self.image.map(|(image, _)| image)
+    }
+
+    /// The tick rate the board runs at: the settings in force, or those `clear` would boot
+    /// with (the timer is set once, at power-up).
+    pub fn tick_hz(&self, slot: &Option<Controller>) -> f32 {
+        slot.as_ref()
+            .map_or(self.idle_settings.tick_hz, |c| c.settings().tick_hz)
+    }
+}

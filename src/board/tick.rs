@@ -1,0 +1,76 @@
+//! A tick of the board: the controller's output through the output stage, with the one
+//! policy for when the amplifier is on (the firmware's tick and host-sim's loops both call
+//! [`drive`]), and the background job the tick asks for ([`run_job`]).
+
+use embedded_hal::digital::OutputPin;
+use embedded_hal::spi::SpiDevice;
+
+use crate::controller::{Controller, Inputs, Output, Phase};
+use crate::shell::OutputStage;
+
+/// What a tick did, when a controller runs.
+#[derive(Clone, Copy, Debug)]
+pub struct Ticked {
+    /// The output as sent (a failed send is the controller's bus fault).
+    pub output: Output,
+    /// The controller's tick count after it.
+    pub ticks: u32,
+    /// A job waits for the background task ([`run_job`]).
+    pub job_wanted: bool,
+}
+
+/// One tick: the controller's output to the stage. The amplifier is on while a plan that
+/// passed its checks drives; off (the DAC powered down, the enable line low) with no
+/// controller, at rest at 0 V after `stop`, and at the end of a fault's descent (the stage's
+/// own reaction, in `OutputStage::send`). `None`: no controller, the output off.
+pub fn drive<SPI: SpiDevice, EN: OutputPin>(
+    slot: &mut Option<Controller>,
+    stage: &mut OutputStage<SPI, EN>,
+    inputs: Inputs,
+) -> Option<Ticked> {
+    let Some(c) = slot.as_mut() else {
+        if !stage.is_safe() {
+            let _ = stage.safe();
+        }
+        return None;
+    };
+    let at_rest = c.phase() == Phase::Holding && c.plan().bias_volts == 0.0;
+    let out = c.tick(inputs);
+    let rest = at_rest && out.volts == 0.0;
+    if !rest && c.latched_fault().is_none() && stage.is_safe() {
+        let _ = stage.enable();
+    } else if rest && !stage.is_safe() {
+        let _ = stage.safe();
+    }
+    let output = stage.send(c, out);
+    Some(Ticked {
+        output,
+        ticks: c.ticks(),
+        job_wanted: job_wanted(c),
+    })
+}
+
+/// Whether the controller waits for a background job: a trim's solve, or tracking's slope
+/// while driving (the task may be woken again: it then finds no job and returns).
+#[cfg(feature = "trim")]
+fn job_wanted(c: &Controller) -> bool {
+    c.job_pending()
+}
+
+#[cfg(not(feature = "trim"))]
+fn job_wanted(_: &Controller) -> bool {
+    false
+}
+
+/// The background job, at low priority: take it from the controller under the lock, solve it
+/// outside, give the result back (the next tick applies it). `with` runs a closure on the
+/// controller under its lock. Whether there was one.
+#[cfg(feature = "trim")]
+pub fn run_job(mut with: impl FnMut(&mut dyn FnMut(&mut Controller))) -> bool {
+    let mut job = None;
+    with(&mut |c| job = c.trim_job());
+    let Some(job) = job else { return false };
+    let result = job.solve();
+    with(&mut |c| c.trim_done(result));
+    true
+}

@@ -1,0 +1,459 @@
+//! The core's board on the host, as the firmware runs it: the boot from an image and the
+//! saved settings (the fallback, the watchdog's refusal), every request of the command port
+//! and its reply, the one enable policy, and the tick's background job. The protocol's
+//! grammar is in `src/protocol.rs`'s tests; the controller's decisions in `controller.rs`.
+
+mod common;
+
+use std::cell::Cell;
+
+use de_resonator::board::port::Extras;
+use de_resonator::board::{tick, Board, Keeper, Line, NoKeeper, ReplyLine, ResetCause, Then};
+use de_resonator::image::{self, AmplifierSpec, Image, DAC_BITS};
+use de_resonator::{Controller, Dac8551, Inputs, OutputStage, Settings, REFERENCE_DEVICE};
+use embedded_hal::digital::{ErrorType as PinErrorType, OutputPin};
+use embedded_hal::spi::{ErrorKind, ErrorType, Operation, SpiDevice};
+
+/// 0..10 kV: a 2.5 V reference, gain 4000 (as `common::amplifier`).
+fn spec() -> AmplifierSpec {
+    AmplifierSpec {
+        dac_reference_volts: 2.5,
+        gain: 4000.0,
+        rail_volts: 10_000.0,
+        dac_bits: DAC_BITS,
+    }
+}
+
+/// The reference device's image with `settings`.
+fn image_with(settings: &Settings) -> Vec<u8> {
+    let table = common::reference_table();
+    let mut out = vec![0; image::image_bytes(table.len())];
+    Image::write(
+        &mut out,
+        &REFERENCE_DEVICE.cast(),
+        &spec(),
+        settings,
+        &table,
+    )
+    .unwrap();
+    out
+}
+
+fn line(text: &str) -> Line {
+    Line::Text(heapless::Vec::from_slice(text.as_bytes()).unwrap())
+}
+
+/// Settings kept in memory, as a flash would keep them; `broken` fails every read.
+#[derive(Default)]
+struct Memory {
+    saved: Option<Settings>,
+    broken: bool,
+}
+
+impl Keeper for &mut Memory {
+    type Error = &'static str;
+    fn load(&mut self) -> Result<Option<Settings>, Self::Error> {
+        if self.broken {
+            return Err("the settings' flash does not read");
+        }
+        Ok(self.saved)
+    }
+    fn save(&mut self, settings: &Settings) -> Result<(), Self::Error> {
+        self.saved = Some(*settings);
+        Ok(())
+    }
+}
+
+/// A board and its controller slot, asked line by line.
+struct Bench<'a, K> {
+    board: Board<'a, K>,
+    slot: Option<Controller>,
+    notice: String,
+    warning: Option<String>,
+}
+
+impl<'a, K: Keeper> Bench<'a, K> {
+    fn boot(image: &'a [u8], keeper: Option<K>, cause: Option<ResetCause>) -> Self {
+        let mut slot = None;
+        let (board, started) = Board::boot(&mut slot, Image::parse(image), keeper, cause);
+        Self {
+            board,
+            slot,
+            notice: started.notice.to_string(),
+            warning: started.warning.map(|w| w.to_string()),
+        }
+    }
+
+    fn ask_then(&mut self, request: &Line) -> (String, Then) {
+        let mut out = ReplyLine::new();
+        let then = self
+            .board
+            .serve(request, &mut &mut self.slot, &Extras::default(), &mut out);
+        (out.to_string(), then)
+    }
+
+    fn ask(&mut self, request: &str) -> String {
+        let (reply, then) = self.ask_then(&line(request));
+        assert_eq!(then, Then::Reply, "{request}: {reply}");
+        reply
+    }
+
+    /// `ticks` ticks with `inputs` through a stage that works; the last output's volts.
+    fn run(&mut self, ticks: u32, inputs: Inputs) -> f32 {
+        let (bus, pin) = (Bus::default(), Pin::default());
+        let mut stage = OutputStage::new(Dac8551::new(&bus), &pin);
+        let mut volts = 0.0;
+        for _ in 0..ticks {
+            if let Some(t) = tick::drive(&mut self.slot, &mut stage, inputs) {
+                volts = t.output.volts;
+            }
+        }
+        volts
+    }
+}
+
+/// A `key=value` field of a reply or the start-up line, as a number.
+fn field(reply: &str, key: &str) -> f32 {
+    reply
+        .split(' ')
+        .find_map(|word| word.strip_prefix(key)?.strip_prefix('='))
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("no {key} in {reply}"))
+}
+
+/// The reply's error code, or `None` for an `ok`.
+fn code(reply: &str) -> Option<u8> {
+    reply
+        .strip_prefix("err ")
+        .map(|rest| rest.split(' ').next().unwrap().parse().unwrap())
+}
+
+/// An image of 44 Hz boots and says so: the published 7449.88 V (issue 2) and the image's
+/// settings; `get` reads the settings in force.
+#[test]
+fn the_image_boots_and_says_ready() {
+    let bytes = image_with(&Settings::for_target(44.0));
+    let mut b = Bench::boot(&bytes, None::<NoKeeper>, None);
+    assert!(b.notice.starts_with("ready "), "{}", b.notice);
+    assert!(b.notice.ends_with("settings=image"), "{}", b.notice);
+    assert!((field(&b.notice, "bias_volts") - 7449.88).abs() < 0.05);
+    assert_eq!(b.warning, None);
+    assert_eq!(b.ask("get target_hz"), "ok target_hz=44");
+    let status = b.ask("status");
+    assert!(status.contains("phase=ramping"), "{status}");
+    assert!(status.ends_with("fault=none"), "{status}");
+    // `save` without storage says so by its code.
+    assert_eq!(code(&b.ask("save")), Some(6));
+}
+
+/// A corrupt image drives nothing: the start-up line says why, every request but `help`
+/// answers it with code 5, and the slot stays empty.
+#[test]
+fn a_corrupt_image_is_refused_with_its_reason() {
+    let mut bytes = image_with(&Settings::for_target(44.0));
+    let last = bytes.len() - 1;
+    bytes[last] ^= 1;
+    let mut b = Bench::boot(&bytes, None::<NoKeeper>, None);
+    assert!(b.notice.starts_with("refused "), "{}", b.notice);
+    assert!(b.slot.is_none());
+    assert!(b.ask("help").starts_with("ok commands:"));
+    for request in [
+        "status",
+        "target 44",
+        "clear",
+        "get target_hz",
+        "save",
+        "trim",
+    ] {
+        let reply = b.ask(request);
+        assert_eq!(code(&reply), Some(5), "{request}: {reply}");
+        assert!(reply.contains(&b.notice["refused ".len()..]), "{reply}");
+    }
+    assert_eq!(b.run(10, Inputs::NONE), 0.0);
+}
+
+/// Saved settings boot when their checks pass (`settings=saved`); refused or unreadable,
+/// the image's are used and a warning says which and why.
+#[test]
+fn saved_settings_boot_or_fall_back_to_the_image() {
+    let bytes = image_with(&Settings::for_target(44.0));
+    let mut memory = Memory {
+        saved: Some(Settings::for_target(45.0)),
+        ..Memory::default()
+    };
+    let b = Bench::boot(&bytes, Some(&mut memory), None);
+    assert!(b.notice.ends_with("settings=saved"), "{}", b.notice);
+    assert_eq!(field(&b.notice, "target_hz"), 45.0);
+    let hz = common::natural_hz_at(&REFERENCE_DEVICE, field(&b.notice, "bias_volts"));
+    assert!((hz / 45.0 - 1.0).abs() < 1e-4, "{hz}");
+    // 300 Hz is beyond the reference device's range: refused, the image's 44 Hz boots.
+    let mut memory = Memory {
+        saved: Some(Settings::for_target(300.0)),
+        ..Memory::default()
+    };
+    let b = Bench::boot(&bytes, Some(&mut memory), None);
+    assert!(b.notice.ends_with("settings=image"), "{}", b.notice);
+    assert_eq!(field(&b.notice, "target_hz"), 44.0);
+    let warning = b.warning.unwrap();
+    assert!(warning.starts_with("saved settings refused"), "{warning}");
+    let mut memory = Memory {
+        broken: true,
+        ..Memory::default()
+    };
+    let b = Bench::boot(&bytes, Some(&mut memory), None);
+    assert!(b.notice.ends_with("settings=image"), "{}", b.notice);
+    assert!(b.warning.unwrap().contains("does not read"));
+}
+
+/// After a watchdog reset the board boots refused, whatever the image: nothing is driven
+/// until `clear`, which runs every check and ramps to the image's bias.
+#[test]
+fn a_watchdog_reset_waits_for_clear() {
+    let bytes = image_with(&Settings::for_target(44.0));
+    let mut b = Bench::boot(&bytes, None::<NoKeeper>, Some(ResetCause::Watchdog));
+    assert!(
+        b.notice.starts_with("refused reset by the watchdog"),
+        "{}",
+        b.notice
+    );
+    assert!(b.slot.is_none());
+    assert_eq!(code(&b.ask("status")), Some(5));
+    assert_eq!(b.run(5, Inputs::NONE), 0.0);
+    // A setting asked for now applies at `clear`.
+    assert_eq!(
+        b.ask("set target_hz 45"),
+        "ok target_hz=45 (applies at `clear`)"
+    );
+    let cleared = b.ask("clear");
+    assert!(
+        cleared.starts_with("ok clear: boot checks pass, ramp to "),
+        "{cleared}"
+    );
+    let bias: f32 = cleared
+        .trim_end_matches(" V")
+        .rsplit(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!((common::natural_hz_at(&REFERENCE_DEVICE, bias) / 45.0 - 1.0).abs() < 1e-4);
+    assert!(b.run(3, Inputs::NONE) > 0.0);
+    assert_eq!(b.ask("get target_hz"), "ok target_hz=45");
+}
+
+/// Every request to a running board: its reply, and what it did to the controller.
+#[test]
+fn every_request_gets_its_reply() {
+    let bytes = image_with(&Settings::for_target(44.0));
+    let mut memory = Memory::default();
+    let mut b = Bench::boot(&bytes, Some(&mut memory), None);
+    // Not while the bias ramps.
+    assert_eq!(code(&b.ask("target 45")), Some(3));
+    b.run(30_000, Inputs::NONE);
+    assert!(b.ask("status").contains("phase=holding"));
+    // In range: the new bias is the model's for 45 Hz, ramped from the old one.
+    let moved = b.ask("target 45");
+    assert!(moved.starts_with("ok target_hz=45 "), "{moved}");
+    let bias = field(&moved, "bias_volts");
+    assert!((common::natural_hz_at(&REFERENCE_DEVICE, bias) / 45.0 - 1.0).abs() < 1e-4);
+    assert!(
+        (field(&moved, "from_volts") - 7449.88).abs() < 0.05,
+        "{moved}"
+    );
+    assert_eq!(b.ask("get target_hz"), "ok target_hz=45");
+    b.run(30_000, Inputs::NONE);
+    // Out of range: refused by the checks, the plan in force kept.
+    let refused = b.ask("target 300");
+    assert_eq!(code(&refused), Some(2), "{refused}");
+    assert_eq!(b.ask("get target_hz"), "ok target_hz=45");
+    assert_eq!(b.slot.as_ref().unwrap().plan().bias_volts, bias);
+    // AC on: the settings in force carry it.
+    let ac = b.ask("ac 50 45");
+    assert!(ac.contains("ac_volts=50 ac_hz=45"), "{ac}");
+    assert_eq!(b.ask("get ac_volts"), "ok ac_volts=50");
+    b.run(30_000, Inputs::NONE);
+    // A setting by name; the tick rate only in an image.
+    assert!(b.ask("set margin 0.1").starts_with("ok target_hz=45 "));
+    assert_eq!(b.ask("get margin"), "ok margin=0.1");
+    assert_eq!(code(&b.ask("set tick_hz 2000")), Some(2));
+    b.run(30_000, Inputs::NONE);
+    // No trim set: refused by name.
+    assert_eq!(code(&b.ask("trim")), Some(2));
+    // Bad lines.
+    assert_eq!(code(&b.ask("frobnicate")), Some(1));
+    assert_eq!(code(&b.ask_then(&Line::TooLong).0), Some(1));
+    assert_eq!(code(&b.ask_then(&Line::Garbled).0), Some(1));
+    // Save: the settings in force, as the next boot reads them.
+    assert!(b.ask("save").starts_with("ok save"));
+    // Stop: down to 0 V; `clear` only there.
+    b.run(30_000, Inputs::NONE);
+    assert!(b.ask("stop").starts_with("ok stop: ramp from "));
+    assert_eq!(code(&b.ask("clear")), Some(3));
+    assert_eq!(b.run(60_000, Inputs::NONE), 0.0);
+    assert!(b.ask("status").contains("phase=holding"));
+    assert_eq!(code(&b.ask("trim")), Some(2));
+    let (reply, then) = b.ask_then(&line("reset"));
+    assert_eq!(
+        (reply.as_str(), then),
+        ("ok reset: output off, restarting", Then::Reset)
+    );
+    drop(b);
+    let saved = memory.saved.unwrap();
+    assert_eq!(
+        (saved.target_hz, saved.ac_volts, saved.margin),
+        (45.0, 50.0, 0.1)
+    );
+    // The restart boots the saved settings.
+    let b = Bench::boot(&bytes, Some(&mut memory), Some(ResetCause::Asked));
+    assert!(b.notice.ends_with("settings=saved"), "{}", b.notice);
+}
+
+/// A fault latches: the output comes down (never up) to 0 V, requests answer `faulted`,
+/// `clear` is refused on the way down and boots again at 0 V.
+#[test]
+fn a_fault_latches_until_clear_at_zero() {
+    let bytes = image_with(&Settings::for_target(44.0));
+    let mut b = Bench::boot(&bytes, None::<NoKeeper>, None);
+    b.run(30_000, Inputs::NONE);
+    // A stretch sensor that reads NaN is a fault at once.
+    let (bus, pin) = (Bus::default(), Pin::default());
+    let mut stage = OutputStage::new(Dac8551::new(&bus), &pin);
+    let first = tick::drive(&mut b.slot, &mut stage, Inputs::stretch(f32::NAN)).unwrap();
+    assert!(matches!(
+        first.output.event,
+        Some(de_resonator::Event::Fault(_))
+    ));
+    assert_eq!(code(&b.ask("target 45")), Some(4));
+    assert_eq!(code(&b.ask("clear")), Some(3));
+    let mut last = first.output.volts;
+    for _ in 0..60_000 {
+        let t = tick::drive(&mut b.slot, &mut stage, Inputs::NONE).unwrap();
+        assert!(t.output.volts <= last);
+        last = t.output.volts;
+    }
+    assert_eq!(last, 0.0);
+    assert!(
+        stage.is_safe() && !pin.high.get(),
+        "the stage off at the descent's end"
+    );
+    assert!(b.ask("status").contains("fault="));
+    assert!(b.ask("clear").starts_with("ok clear"));
+    assert!(b.ask("status").ends_with("fault=none"));
+}
+
+/// The one enable policy: off with no controller, on while a plan drives, off again at
+/// rest at 0 V after `stop`, on at the next plan; a dead bus drops the line at once.
+#[test]
+fn the_amplifier_is_on_only_while_a_plan_drives() {
+    let bytes = image_with(&Settings::for_target(44.0));
+    let mut b = Bench::boot(&bytes, None::<NoKeeper>, None);
+    let (bus, pin) = (Bus::default(), Pin::default());
+    let mut stage = OutputStage::new(Dac8551::new(&bus), &pin);
+    let _ = stage.safe();
+    assert!(tick::drive(&mut None, &mut stage, Inputs::NONE).is_none());
+    assert!(!pin.high.get());
+    tick::drive(&mut b.slot, &mut stage, Inputs::NONE);
+    assert!(pin.high.get());
+    for _ in 0..30_000 {
+        tick::drive(&mut b.slot, &mut stage, Inputs::NONE);
+    }
+    b.ask("stop");
+    for _ in 0..60_000 {
+        tick::drive(&mut b.slot, &mut stage, Inputs::NONE);
+    }
+    assert!(!pin.high.get() && stage.is_safe());
+    assert!(b.ask("target 44").starts_with("ok "));
+    tick::drive(&mut b.slot, &mut stage, Inputs::NONE);
+    assert!(pin.high.get());
+    bus.fails.set(true);
+    let t = tick::drive(&mut b.slot, &mut stage, Inputs::NONE).unwrap();
+    assert_eq!(
+        t.output.event,
+        Some(de_resonator::Event::Fault(de_resonator::Fault::Bus))
+    );
+    assert!(!pin.high.get());
+}
+
+/// Issue 26: tracking's slope solve reaches the background job through the board's tick,
+/// as the firmware wires it (its work task once woke only for a trim's solve, so the bias's
+/// integral law never got its slope).
+#[cfg(feature = "track")]
+#[test]
+fn tracking_slope_reaches_the_background_job() {
+    use de_resonator::Phase;
+    let settings = Settings {
+        ac_volts: 30.0,
+        ac_hz: 45.5,
+        trim_tolerance: Some(5e-4),
+        track_seconds: Some(0.2),
+        ..Settings::for_target(45.5)
+    };
+    let bytes = image_with(&settings);
+    let mut b = Bench::boot(&bytes, None::<NoKeeper>, None);
+    let mut plant = common::Plant::new(common::with_quality_factor(REFERENCE_DEVICE, 50.0), 1e3);
+    let (bus, pin) = (Bus::default(), Pin::default());
+    let mut stage = OutputStage::new(Dac8551::new(&bus), &pin);
+    let (mut while_driving, mut jobs) = (0, 0);
+    for _ in 0..10_000 {
+        let t = tick::drive(
+            &mut b.slot,
+            &mut stage,
+            Inputs::stretch(plant.stretch() as f32),
+        )
+        .unwrap();
+        plant.step(t.output.volts);
+        if t.job_wanted {
+            let driving = b.slot.as_ref().unwrap().phase() == Phase::Driving;
+            let ran = tick::run_job(|f| f(b.slot.as_mut().unwrap()));
+            assert!(ran);
+            jobs += 1;
+            while_driving += usize::from(driving);
+        }
+    }
+    assert!(
+        jobs >= 2 && while_driving >= 1,
+        "{jobs} jobs, {while_driving} while driving"
+    );
+    assert_eq!(b.slot.as_ref().unwrap().latched_fault(), None);
+}
+
+/// The DAC's bus: counts nothing, fails when told.
+#[derive(Default)]
+struct Bus {
+    fails: Cell<bool>,
+}
+
+impl ErrorType for &Bus {
+    type Error = ErrorKind;
+}
+
+impl SpiDevice for &Bus {
+    fn transaction(&mut self, _: &mut [Operation<'_, u8>]) -> Result<(), ErrorKind> {
+        if self.fails.get() {
+            Err(ErrorKind::Other)
+        } else {
+            Ok(())
+        }
+    }
+}
+
+/// The amplifier's enable line.
+#[derive(Default)]
+struct Pin {
+    high: Cell<bool>,
+}
+
+impl PinErrorType for &Pin {
+    type Error = core::convert::Infallible;
+}
+
+impl OutputPin for &Pin {
+    fn set_low(&mut self) -> Result<(), Self::Error> {
+        self.high.set(false);
+        Ok(())
+    }
+    fn set_high(&mut self) -> Result<(), Self::Error> {
+        self.high.set(true);
+        Ok(())
+    }
+}
