@@ -457,3 +457,38 @@ impl OutputPin for &Pin {
         Ok(())
     }
 }
+
+/// The watchdog's feeding: at 1 kHz the low-priority tasks may go 0.5 s (500 ticks) without
+/// checking in; the dog starts with the first controller, is fed while they check in, asked
+/// for a heartbeat four times a deadline while they are late, and starves after 500 ticks.
+#[test]
+fn the_dog_is_fed_only_while_the_tasks_check_in() {
+    use de_resonator::board::watchdog::{CheckIn, Feed, CHECK_IN_SECONDS};
+    let deadline = (CHECK_IN_SECONDS * 1000.0) as u32;
+    assert_eq!(deadline, 500);
+    let mut dog = CheckIn::new(1000.0);
+    // Nothing runs: not started (fed or not, it does not bite before its start).
+    assert!(!dog.tick(true, false).start);
+    let first = dog.tick(true, true);
+    assert_eq!(
+        first,
+        Feed {
+            start: true,
+            feed: true,
+            heartbeat: false
+        }
+    );
+    assert!(!dog.tick(true, true).start, "started once");
+    let (mut fed, mut heartbeats) = (0, Vec::new());
+    for k in 1..=600u32 {
+        let f = dog.tick(false, true);
+        fed += u32::from(f.feed);
+        if f.heartbeat {
+            heartbeats.push(k);
+        }
+    }
+    assert_eq!(fed, deadline, "fed up to the deadline, then starved");
+    assert_eq!(heartbeats[..4], [125, 250, 375, 500]);
+    // A check-in feeds it again at once.
+    assert!(dog.tick(true, true).feed);
+}

@@ -1,23 +1,15 @@
-//! A watchdog only a healthy control loop can feed. The tick feeds it, and only while the
-//! low-priority tasks have checked in within `CHECK_IN_TICKS` (a heartbeat task the tick asks
-//! for at their priority: a task that hangs, or runs past the deadline, starves the dog).
+//! The watchdog's hardware; when to start and feed it is the core's `board::watchdog` (the
+//! tick feeds it only while the low-priority tasks check in).
 //!
 //! On the chip it is the IWDG (its own oscillator: it resets a stuck tick too). QEMU does not
 //! emulate the IWDG (QEMU-STM32F405.md §6), so QEMU builds keep the time of the last feed on
 //! TIM2's microsecond clock and check it from TIM3's interrupt, above the tick's priority
 //! (`bite_if_starved`): a stuck tick or a hung task ends in `SCB::sys_reset` with the cause
 //! recorded. QEMU's TIM3 period is not exact (set up at boot it is about 100 ms); the check
-//! compares clock readings, so it only decides how late the bite may come.
-//!
-//! A latched fault keeps the dog fed: the output is already at 0 V, and a reset would only
-//! lose the fault's reason. After a watchdog reset the firmware comes up refusing to drive,
-//! says so, and starts the dog again at `clear`.
+//! compares clock readings, so it only decides how late the bite may come. After a watchdog
+//! reset the firmware comes up refusing to drive, says so, and starts the dog again at `clear`.
 
-/// The dog's timeout, ms.
-pub const TIMEOUT_MS: u32 = 1_000;
-/// Ticks the low-priority tasks may go without checking in (at 1 kHz: 0.5 s, longer than
-/// their longest work: a boot's checks, about 12 ms on the chip).
-pub const CHECK_IN_SECONDS: f32 = 0.5;
+pub use de_resonator::board::watchdog::TIMEOUT_MS;
 
 /// A watchdog: started once, then fed.
 pub trait Watchdog {

@@ -2,7 +2,8 @@
 //! host-sim's virtual board (`host-sim serve`) runs it. It boots from an image and the saved
 //! settings (the fallback, the watchdog's refusal: [`Board::boot`]), answers the command port
 //! ([`port`]), turns a tick's output into what the output stage does ([`tick`]: the one
-//! enable policy) and runs the tick's background job ([`tick::run_job`]). What only hardware
+//! enable policy), runs the tick's background job ([`tick::run_job`]) and feeds the watchdog
+//! only while the low-priority tasks check in ([`watchdog`]). What only hardware
 //! has comes in behind [`Keeper`] (where `save` keeps the settings) and as arguments (the
 //! reset's cause, the clock).
 //!
@@ -12,6 +13,7 @@
 
 pub mod port;
 pub mod tick;
+pub mod watchdog;
 
 use core::fmt::{self, Write as _};
 

@@ -24,6 +24,7 @@ mod app {
     use core::mem::MaybeUninit;
 
     use de_resonator::board::port::Extras;
+    use de_resonator::board::watchdog::CheckIn;
     use de_resonator::board::{self as logic, Line, Lines, ReplyLine, Shared as _, Then};
     use de_resonator::protocol::NOTICE;
     use de_resonator::store::FlashKeeper;
@@ -82,8 +83,8 @@ mod app {
         /// after this many ticks of driving.
         hang_after_ticks: Option<u32>,
         dog: Dog,
-        /// The tick rate booted with, Hz (the watchdog's deadlines are counted in ticks).
-        tick_hz: f32,
+        /// The low-priority tasks' check-ins, counted in ticks (when the dog is fed).
+        check_in: CheckIn,
     }
 
     // The slot uninitialized (in .bss, not a 3 KB `None` copied from flash to `.data`).
@@ -165,7 +166,7 @@ mod app {
                 busy_idle: board::asked("busy-idle"),
                 hang_after_ticks: board::asked("tick-hangs").then_some(2 * tick_hz as u32),
                 dog: Dog::new(board.iwdg),
-                tick_hz,
+                check_in: CheckIn::new(tick_hz),
             },
         )
     }
@@ -188,7 +189,7 @@ mod app {
     }
 
     /// One controller tick: its code to the DAC, the enable line held, the events logged.
-    #[task(binds = SysTick, priority = 3, shared = [controller, tick_cycles_max, last_tick_us, output_off, checked_in], local = [stage, sensor, dog, tick_hz, hang_after_ticks, dog_started: bool = false, since_check_in: u32 = 0, driven_ticks: u32 = 0])]
+    #[task(binds = SysTick, priority = 3, shared = [controller, tick_cycles_max, last_tick_us, output_off, checked_in], local = [stage, sensor, dog, check_in, hang_after_ticks, driven_ticks: u32 = 0])]
     fn tick(mut cx: tick::Context) {
         #[cfg(feature = "qemu")]
         cx.shared
@@ -221,14 +222,17 @@ mod app {
             }
         }
         let checked_in = cx.shared.checked_in.lock(|c| core::mem::replace(c, false));
-        feed(
-            cx.local.dog,
-            cx.local.dog_started,
-            cx.local.since_check_in,
-            *cx.local.tick_hz,
-            checked_in,
-            running,
-        );
+        let feed = cx.local.check_in.tick(checked_in, running);
+        let dog = cx.local.dog;
+        if feed.start {
+            dog.start(watchdog::TIMEOUT_MS);
+        }
+        if feed.heartbeat {
+            let _ = heartbeat::spawn();
+        }
+        if feed.feed {
+            dog.feed();
+        }
         if let Some(t) = ticked {
             if t.job_wanted {
                 // Already queued or running: it takes the job when it runs.
@@ -244,34 +248,6 @@ mod app {
         cx.shared
             .tick_cycles_max
             .lock(|most| *most = (*most).max(cycles));
-    }
-
-    /// The watchdog at a tick: started with the first controller, fed while the low-priority
-    /// tasks check in (the heartbeat, asked for four times a deadline).
-    fn feed(
-        dog: &mut Dog,
-        started: &mut bool,
-        since_check_in: &mut u32,
-        tick_hz: f32,
-        checked_in: bool,
-        running: bool,
-    ) {
-        if running && !*started {
-            dog.start(watchdog::TIMEOUT_MS);
-            *started = true;
-        }
-        let deadline = (watchdog::CHECK_IN_SECONDS * tick_hz) as u32;
-        *since_check_in = if checked_in {
-            0
-        } else {
-            since_check_in.saturating_add(1)
-        };
-        if *since_check_in > 0 && since_check_in.is_multiple_of((deadline / 4).max(1)) {
-            let _ = heartbeat::spawn();
-        }
-        if *since_check_in <= deadline {
-            dog.feed();
-        }
     }
 
     /// QEMU's watchdog stand-in: its own clock, above the tick (a stuck tick starves it too).
