@@ -3,7 +3,7 @@
 resolution"): the reference device without a displacement sensor, the plant's μ scaled, at
 each window and noise level, one run per seed. Prints each run's outcome: its frequency's
 relative error, or its fault (the resolution it said, when the ring was too weak to time).
-Built with `MIN_RESOLUTION` lifted (src/trim.rs), every run says its first resolution.
+Built with `MIN_RESOLUTION` lifted (src/estimate/ring.rs), every run says its first resolution.
 
 Usage: scripts/charge_resolution.py HOST_SIM [SEEDS]
 """

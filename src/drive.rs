@@ -14,7 +14,7 @@
 
 use core::fmt;
 
-use crate::decimal::Decimal;
+use crate::numerics::decimal::Decimal;
 
 use embedded_hal::spi::SpiDevice;
 

@@ -1,10 +1,12 @@
 //! de-resonator: model, safe region and bias tuning of a dielectric elastomer resonator.
 //!
 //! `no_std`, no allocation, no panics on any input. Generic over the float type: `f32` on
-//! the target, `f64` on the host. Data flows one way: the [`model`] (device parameters →
-//! statics → safe region) → [`tuning`] decisions → [`controller`] → [`shell`] and [`drive`];
-//! [`integration`] steps the dynamics; [`table`] reads and writes tuning tables. Equations
-//! cite the sections of `docs/model.md` as `model.md §n`.
+//! the target, `f64` on the host. Data flows one way: [`numerics`] → the [`model`] (device
+//! parameters → statics → safe region) → [`tuning`] decisions and their [`table`] → the
+//! [`estimate`]s of the plant → the [`controller`] (its output in [`drive`]'s DAC codes) →
+//! the [`board`] (boot, command port, output stage, watchdog). [`image`] and [`store`] are
+//! the formats the board boots from and saves to. Equations cite the sections of
+//! `docs/model.md` as `model.md §n`.
 #![no_std]
 #![forbid(unsafe_code)]
 // "No panic on any input" checked by the compiler: no unwrap, expect, panic or indexing in
@@ -21,41 +23,34 @@
 
 pub mod board;
 pub mod controller;
-pub mod decimal;
 pub mod drive;
+pub mod estimate;
 pub mod image;
-pub mod integration;
 pub mod model;
-pub mod protocol;
-pub mod real;
-pub mod roots;
-pub mod sense;
-pub mod shell;
+pub mod numerics;
 #[cfg(feature = "storage")]
 pub mod store;
 pub mod table;
-pub mod track;
-pub mod trim;
 pub mod tuning;
 
 // The model's modules at the crate's root too, as every caller names them.
 pub use model::{device, material, safety, statics};
 
+pub use board::stage::{OutputStage, StageError};
 pub use controller::{
     Boot, Controller, Event, Fault, FaultStage, Inputs, Output, Phase, Plan, Refusal, ReplanJob,
     Replanned, Setting, Settings,
 };
 #[cfg(feature = "trim")]
 pub use controller::{TrimDone, TrimJob, TrimResult};
-pub use decimal::Decimal;
 pub use device::{Device, DeviceParams, Field, ParamError, Problem, REFERENCE_DEVICE};
 pub use drive::{Amplifier, CodeError, Dac8551, DacCode, DacError, PowerMode};
+pub use estimate::ring::TrimError;
 pub use image::{AmplifierSpec, Image, ImageError};
-pub use integration::{Drive, Integrator, Method, State, StepError};
-pub use real::Real;
+pub use numerics::decimal::Decimal;
+pub use numerics::integration::{Drive, Integrator, Method, State, StepError};
+pub use numerics::real::Real;
 pub use safety::{Crossing, FailureMode, Limit, Margins, Monitor};
-pub use shell::{OutputStage, StageError};
 pub use statics::Equilibrium;
 pub use table::{Table, TableError};
-pub use trim::TrimError;
 pub use tuning::{TunableRange, TuneError, Tuner, DEFAULT_MARGIN};

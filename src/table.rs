@@ -22,10 +22,10 @@
 
 use core::fmt;
 
-use crate::decimal::Decimal;
+use crate::numerics::decimal::Decimal;
 
 use crate::device::{Device, DeviceParams, Field};
-use crate::real::Real;
+use crate::numerics::real::Real;
 use crate::statics::Equilibrium;
 
 /// The first four bytes of a table.

@@ -7,11 +7,11 @@
 
 use core::fmt;
 
-use crate::decimal::Decimal;
+use crate::numerics::decimal::Decimal;
 
 use crate::device::Device;
-use crate::real::Real;
-use crate::roots::{argmax, bisect};
+use crate::numerics::real::Real;
+use crate::numerics::roots::{argmax, bisect};
 use crate::safety::Limit;
 use crate::statics::Equilibrium;
 

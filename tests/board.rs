@@ -1,7 +1,7 @@
 //! The core's board on the host, as the firmware runs it: the boot from an image and the
 //! saved settings (the fallback, the watchdog's refusal), every request of the command port
 //! and its reply, the one enable policy, and the tick's background job. The protocol's
-//! grammar is in `src/protocol.rs`'s tests; the controller's decisions in `controller*.rs`.
+//! grammar is in `src/board/protocol.rs`'s tests; the controller's decisions in `controller*.rs`.
 
 mod common;
 

@@ -7,8 +7,8 @@ mod common;
 
 use common::reseal;
 
+use de_resonator::board::protocol::{self, Command, Reply};
 use de_resonator::image::{self, AmplifierSpec, Image, ImageError, DAC_BITS};
-use de_resonator::protocol::{self, Command, Reply};
 use de_resonator::table::TableError;
 use de_resonator::{
     Amplifier, Controller, Device, Fault, Inputs, Phase, Refusal, Settings, TuneError, Tuner,

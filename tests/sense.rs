@@ -1,4 +1,4 @@
-//! The stretch from the capacitance (`de_resonator::sense`) against a membrane written out
+//! The stretch from the capacitance (`de_resonator::estimate::capacitance`) against a membrane written out
 //! here: the charge C(λ)·Φ of a parallel-plate capacitor (model.md §8, paper eq. 1, from the
 //! geometry, not the core's formula), the leakage Φ/R, and Gaussian noise on the current.
 
@@ -6,7 +6,7 @@ mod common;
 
 use common::Rng;
 use de_resonator::device::Device;
-use de_resonator::sense::{ProbeLockIn, SensedStretch};
+use de_resonator::estimate::capacitance::{ProbeLockIn, SensedStretch};
 use de_resonator::REFERENCE_DEVICE;
 
 /// C(λ) of the reference device, F: ε0·εr·(L1A·λ)·(L2·λ2p)/(H/(λ·λ2p)) over λ (plate area

@@ -1,8 +1,8 @@
-//! Resonance tracking's lock-in (`de_resonator::track`) against the linear resonator's
+//! Resonance tracking's lock-in (`de_resonator::estimate::lockin`) against the linear resonator's
 //! steady response written out analytically: λ = m + Im[Z·e^{jΩt}], Z = F/(ω0² − Ω² + jΩω0/Q)
 //! (model.md §5 linearised, forced at Ω).
 
-use de_resonator::track::{Lock, Tracker};
+use de_resonator::estimate::lockin::{Lock, Tracker};
 
 /// The stretch at phase `turns` (of the drive) for a resonator of `f0_hz`, `q`, forced by
 /// `force` (1/s²) at `drive_hz`, about `mean`.
@@ -237,7 +237,7 @@ fn tracking_slope_is_a_pending_job_while_driving() {
 /// the reference device and a random one.
 #[test]
 fn the_drive_force_is_the_models_phi_squared_term() {
-    use de_resonator::track::drive_force_per_stretch;
+    use de_resonator::estimate::lockin::drive_force_per_stretch;
     use de_resonator::{Device, REFERENCE_DEVICE};
     let mut rng = common::Rng(0x5eed_f0ce);
     let mut devices = vec![REFERENCE_DEVICE];
@@ -325,7 +325,13 @@ fn first_slope(
     plant: de_resonator::DeviceParams<f64>,
     ac_hz: f32,
     tau: f32,
-) -> (u32, u32, Vec<de_resonator::track::Lock>, f32, f32) {
+) -> (
+    u32,
+    u32,
+    Vec<de_resonator::estimate::lockin::Lock>,
+    f32,
+    f32,
+) {
     use de_resonator::Event;
     let (mut c, _) = tracked_from(ac_hz, tau);
     let mut p = common::Plant::new(plant, 1000.0);
@@ -464,7 +470,7 @@ fn the_drive_closes_on_the_resonance_at_the_trackers_rate() {
 #[cfg(feature = "track")]
 #[test]
 fn a_resonance_past_the_detuning_bound_loses_the_lock() {
-    use de_resonator::track::{MAX_DETUNING, MAX_STEP};
+    use de_resonator::estimate::lockin::{MAX_DETUNING, MAX_STEP};
     use de_resonator::{DeviceParams, Event, Fault, REFERENCE_DEVICE};
     // A tracker slow enough (0.6 s) that the drive gets there before the loop moves the bias.
     let (mut c, _) = tracked_from(45.5, 0.6);

@@ -2,7 +2,7 @@
 
 mod common;
 
-use de_resonator::trim::{
+use de_resonator::estimate::ring::{
     estimate_shear_modulus, high_passed, ring_frequency_hz, ChargeRing, MAX_WINDOW,
     TIMING_ERROR_TIMES_RESOLUTION,
 };

@@ -4,7 +4,7 @@
 #![no_main]
 
 use de_resonator::image::Image;
-use de_resonator::protocol::{self, Command};
+use de_resonator::board::protocol::{self, Command};
 use de_resonator::Controller;
 use libfuzzer_sys::fuzz_target;
 

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use de_resonator::sense::PROBE_SIGMAS;
+use de_resonator::estimate::capacitance::PROBE_SIGMAS;
 use de_resonator::{Device, DeviceParams, FailureMode, Fault, Tuner, REFERENCE_DEVICE};
 use host_sim::hil::Run;
 use host_sim::plant::{AmplifierModel, Leakage, Plant};

@@ -1,8 +1,8 @@
 //! The board: everything the firmware decides, without its hardware, so the host tests it and
 //! host-sim's virtual board (`host-sim serve`) runs it. It boots from an image and the saved
 //! settings (the fallback, the watchdog's refusal: [`Board::boot`]), answers the command port
-//! ([`port`]), turns a tick's output into what the output stage does ([`tick`]: the one
-//! enable policy), runs the tick's background job ([`tick::run_job`]) and feeds the watchdog
+//! ([`port`], in the line [`protocol`] the host shares), turns a tick's output into what the
+//! output stage ([`stage`]) does ([`tick`]: the one enable policy), runs the tick's background job ([`tick::run_job`]) and feeds the watchdog
 //! only while the low-priority tasks check in ([`watchdog`]). What only hardware
 //! has comes in behind [`Keeper`] (where `save` keeps the settings) and as arguments (the
 //! reset's cause, the clock).
@@ -12,6 +12,8 @@
 //! a boot) runs outside the lock while the tick preempts it.
 
 pub mod port;
+pub mod protocol;
+pub mod stage;
 pub mod tick;
 pub mod watchdog;
 
@@ -20,9 +22,9 @@ use core::fmt::{self, Write as _};
 use heapless::String;
 
 use crate::controller::{Controller, Settings};
-use crate::decimal::Decimal;
 use crate::drive::Amplifier;
 use crate::image::{Image, ImageError};
+use crate::numerics::decimal::Decimal;
 use crate::safety::FailureMode;
 
 pub use port::{Line, Lines, ReplyLine, Shared, Then};
@@ -86,7 +88,7 @@ pub struct Board<'a, K> {
 }
 
 /// What the boot says on the command port before any request: the start-up line (after
-/// [`crate::protocol::NOTICE`]: `ready …` or `refused …`), and a warning, if any.
+/// [`crate::board::protocol::NOTICE`]: `ready …` or `refused …`), and a warning, if any.
 #[derive(Clone, Debug, Default)]
 pub struct Started {
     pub notice: ReplyLine,

@@ -1,15 +1,15 @@
 //! The command port's board side: bytes into request lines ([`Lines`]), and the reply to each
 //! request ([`Board::serve`]). The protocol itself (parse, replies, status) is
-//! [`crate::protocol`].
+//! [`crate::board::protocol`].
 
 use core::fmt::Write as _;
 
 use heapless::{String, Vec};
 
 use super::{Board, Keeper};
+use crate::board::protocol::{self, Command, ErrorCode, ParseError, Status, MAX_LINE};
 use crate::controller::{Controller, Phase, Refusal, Setting, Settings};
-use crate::decimal::Decimal;
-use crate::protocol::{self, Command, ErrorCode, ParseError, Status, MAX_LINE};
+use crate::numerics::decimal::Decimal;
 
 /// One request as received: its bytes, or why it has none.
 #[derive(Clone, Debug)]

@@ -5,8 +5,8 @@
 use embedded_hal::digital::OutputPin;
 use embedded_hal::spi::SpiDevice;
 
+use crate::board::stage::OutputStage;
 use crate::controller::{Controller, Inputs, Output, Phase};
-use crate::shell::OutputStage;
 
 /// What a tick did, when a controller runs.
 #[derive(Clone, Copy, Debug)]

@@ -195,7 +195,7 @@ impl Controller {
         // tick weighs it against the noise before it pulses).
         #[cfg(feature = "trim")]
         if self.trim_wanted() {
-            self.trim.ring_gain = crate::trim::ring_charge_gain(
+            self.trim.ring_gain = crate::estimate::ring::ring_charge_gain(
                 &self.flashed,
                 limit.at.offset,
                 self.plan.bias_volts,

@@ -3,15 +3,15 @@
 
 use core::fmt;
 
-use crate::decimal::Decimal;
+use crate::numerics::decimal::Decimal;
 
 use super::settings::Setting;
 use crate::device::ParamError;
 use crate::drive::{CodeError, DacCode};
-use crate::integration::StepError;
+use crate::estimate::ring::TrimError;
+use crate::numerics::integration::StepError;
 use crate::safety::FailureMode;
 use crate::table::TableError;
-use crate::trim::TrimError;
 use crate::tuning::TuneError;
 
 /// Why the controller will not drive, or stopped driving. Each leaves the output at 0 V.
@@ -57,7 +57,7 @@ pub enum Fault {
     /// The leakage resistance fell from one window to the next faster than
     /// `leakage_fall_per_second` allows, beyond the current's scatter.
     LeakageFalling { ohms: f32, previous_ohms: f32 },
-    /// The tracked drive left the target by more than `track::MAX_DETUNING` (the lock is
+    /// The tracked drive left the target by more than `estimate::lockin::MAX_DETUNING` (the lock is
     /// lost, or the plant is far from the model): Hz.
     TrackLost { drive_hz: f32, target_hz: f32 },
     /// The amplifier's output stayed off the command for `AMPLIFIER_TICKS` ticks.
@@ -244,7 +244,7 @@ pub enum Event {
         shear_modulus: f32,
         next_bias_volts: f32,
         /// How well the ring was resolved, where it was timed in the charge
-        /// (`crate::trim::ChargeRing::resolution`; its relative timing error is about
+        /// (`crate::estimate::ring::ChargeRing::resolution`; its relative timing error is about
         /// `TIMING_ERROR_TIMES_RESOLUTION` over it).
         resolution: Option<f32>,
     },

@@ -7,8 +7,8 @@ use core::f32::consts::TAU;
 use super::fault::Fault;
 use super::settings::{Setting, Settings};
 use crate::device::Device;
-use crate::integration::{Drive, Integrator, Method, State, StepError};
-use crate::real::Real;
+use crate::numerics::integration::{Drive, Integrator, Method, State, StepError};
+use crate::numerics::real::Real;
 use crate::safety::Monitor;
 
 /// The longest plan, in ticks (about 18 hours at 1 kHz before the AC starts).
@@ -37,7 +37,7 @@ pub struct Plan {
     pub ac_phase_step: u32,
     /// The AC's phase at `ac_tick` (a tracked drive changes its frequency there, in phase).
     pub ac_phase_start: u32,
-    /// The self-sensing probe (`crate::sense`): ±`probe_volts` on the ramp wherever the ramp
+    /// The self-sensing probe (`crate::estimate::capacitance`): ±`probe_volts` on the ramp wherever the ramp
     /// is at least that high, its sign flipping every `probe_half_ticks` ticks (0: none).
     pub probe_volts: f32,
     pub probe_half_ticks: u32,

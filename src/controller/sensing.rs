@@ -1,4 +1,4 @@
-//! The stretch from the capacitance in the tick (feature `probe`, `crate::sense`): each
+//! The stretch from the capacitance in the tick (feature `probe`, `crate::estimate::capacitance`): each
 //! tick's current and voltage go to the probe's lock-in; each window's estimate, widened by
 //! `PROBE_SIGMAS` standard errors, is checked against model.md §6 for the device flashed and
 //! the trim's estimate, one check a tick (the tick's budget).
@@ -7,7 +7,7 @@ use super::fault::Fault;
 use super::watch::Inputs;
 use super::Controller;
 use crate::device::Device;
-use crate::sense::{ProbeLockIn, SensedStretch};
+use crate::estimate::capacitance::{ProbeLockIn, SensedStretch};
 
 /// The lock-in's memory between ticks.
 #[derive(Clone, Copy, Debug, Default)]

@@ -2,7 +2,7 @@
 //! before anything is driven.
 
 use super::fault::Fault;
-use crate::trim::MAX_WINDOW;
+use crate::estimate::ring::MAX_WINDOW;
 use crate::tuning::TuneError;
 
 /// What the controller is asked to do, and how.
@@ -59,12 +59,12 @@ pub struct Settings {
     /// may fall by at most this fraction a second, where the fall stands out of the current's
     /// scatter (`None`: no such test). A fast fall comes before breakdown, far above a floor.
     pub leakage_fall_per_second: Option<f32>,
-    /// Resonance tracking while driving (feature `track`, `crate::track`): the drive follows
+    /// Resonance tracking while driving (feature `track`, `crate::estimate::lockin`): the drive follows
     /// the resonance measured in the stretch with this time constant, s, and the bias is
     /// retuned to the target within `trim_tolerance` without pausing the drive (`None`: off).
     /// Needs the stretch sensor and a trim; not with `trim_every_seconds`.
     pub track_seconds: Option<f32>,
-    /// The stretch from the capacitance (feature `probe`, `crate::sense`): a square probe of
+    /// The stretch from the capacitance (feature `probe`, `crate::estimate::capacitance`): a square probe of
     /// this amplitude, V, rides on the bias (`None`: off). The current monitor's lock-in on
     /// it gives λ with its uncertainty, checked against model.md §6 widened by it. Off while
     /// the trim measures a ring.
@@ -257,8 +257,8 @@ impl Settings {
         let target_ok = self.target_hz > 0.0 && self.target_hz.is_finite();
         if self.trim_tolerance.is_some()
             && target_ok
-            && !(per_period >= crate::trim::MIN_SAMPLES_PER_PERIOD
-                && periods >= crate::trim::MIN_WINDOW_PERIODS)
+            && !(per_period >= crate::estimate::ring::MIN_SAMPLES_PER_PERIOD
+                && periods >= crate::estimate::ring::MIN_WINDOW_PERIODS)
         {
             let window = self.trim_window_seconds;
             return Err(Fault::Setting {
@@ -300,7 +300,7 @@ impl Settings {
             }
             self.probe_half_ticks()?;
             // Well above the resonance: the motion the probe drives stays small against the
-            // AC's (it is not in the edges' charge, `crate::sense`, but moves λ).
+            // AC's (it is not in the edges' charge, `crate::estimate::capacitance`, but moves λ).
             if !(self.probe_hz >= PROBE_ABOVE_TARGET * self.target_hz) {
                 return Err(Fault::Setting {
                     setting: Setting::ProbeHz,

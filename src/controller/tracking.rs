@@ -1,5 +1,5 @@
 //! Resonance tracking while driving (feature `track`): each tick of a tracked drive feeds
-//! the stretch to `crate::track::Tracker`; at each cycle's end the drive follows the
+//! the stretch to `crate::estimate::lockin::Tracker`; at each cycle's end the drive follows the
 //! resonance (in phase) and the bias moves by an integral law on the frequency error, its
 //! gain the model's slope dΦ²/df, which the trim's solve gives outside the tick (`TrimJob`
 //! with the measured frequency) now and then.
@@ -9,7 +9,7 @@ use super::plan::Plan;
 use super::trim::TrimResult;
 use super::watch::Ring;
 use super::{Controller, Event};
-use crate::track::{drive_force_per_stretch, Lock, Tracker, MAX_DETUNING};
+use crate::estimate::lockin::{drive_force_per_stretch, Lock, Tracker, MAX_DETUNING};
 
 /// The tracker's memory between ticks.
 #[derive(Clone, Copy, Debug, Default)]

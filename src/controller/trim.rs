@@ -2,13 +2,13 @@
 //! tick never solves: the tick pulses the bias and records the ring; at the window's end it
 //! holds the bias and hands out a `TrimJob` (a copy of everything the solve needs); a
 //! low-priority caller runs `TrimJob::solve` (the ring's frequency, μ re-estimated, the next
-//! bias: `crate::trim`, `crate::tuning`) and gives the `TrimResult` back; a later tick
+//! bias: `crate::estimate::ring`, `crate::tuning`) and gives the `TrimResult` back; a later tick
 //! applies it.
 
 use super::fault::Fault;
 use super::settings::{guarded, Settings, MAX_TRIMS, TRIM_SECANT_STEP};
 use crate::device::{Device, DeviceParams};
-use crate::trim::{
+use crate::estimate::ring::{
     estimate_shear_modulus, high_passed, model_hz, ring_charge_gain, ring_frequency_hz, ChargeRing,
     TrimError, MAX_WINDOW, TIMING_ERROR_TIMES_RESOLUTION,
 };
@@ -177,7 +177,7 @@ pub(super) fn pulse_seconds(s: &Settings) -> f32 {
 }
 
 /// The ring a pulse at `bias_volts` leaves in the charge, A·ticks (the window's unit), for a
-/// ring gain of `gain` C/V³ (`crate::trim::ring_charge_gain`).
+/// ring gain of `gain` C/V³ (`crate::estimate::ring::ring_charge_gain`).
 fn ring_ticks(gain: f32, bias_volts: f32, s: &Settings) -> f32 {
     gain * bias_volts * bias_volts * s.trim_pulse_volts * s.tick_hz
 }
@@ -259,7 +259,7 @@ pub enum TrimResult {
     /// Ramp to `bias_volts` and measure again; `max_volts` is the estimate's own cap (the
     /// controller takes the lowest of it and the caps in force); `device` is the estimate
     /// (built here, not in the tick), `ring_gain` the ring its next pulse leaves in the
-    /// charge (`crate::trim::ring_charge_gain`) and `ring_seen` the share of such a ring the
+    /// charge (`crate::estimate::ring::ring_charge_gain`) and `ring_seen` the share of such a ring the
     /// window showed.
     Retune {
         measured_hz: f32,

@@ -5,7 +5,7 @@ use core::fmt;
 
 use super::failure::FailureMode;
 use crate::material::Gent;
-use crate::real::Real;
+use crate::numerics::real::Real;
 
 /// Vacuum permittivity ε0 in F/m (CODATA 2018).
 pub const VACUUM_PERMITTIVITY: f64 = 8.854_187_812_8e-12;

@@ -3,7 +3,7 @@
 //! Every stress and stiffness here is divided by μ, so the numbers stay near 1 in `f32`.
 //! Neo-Hookean is the Gent model with `Jlim = ∞`, held as `1/Jlim = 0`.
 
-use crate::real::Real;
+use crate::numerics::real::Real;
 
 /// Gent hyperelastic material, dimensionless (stresses over μ).
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -3,8 +3,8 @@
 pub use super::failure::FailureMode;
 use crate::device::Device;
 use crate::material::{Gent, Hessian};
-use crate::real::Real;
-use crate::roots::bisect;
+use crate::numerics::real::Real;
+use crate::numerics::roots::bisect;
 use crate::statics::Equilibrium;
 
 /// How far a state is from each failure: each value is positive exactly when its check holds.

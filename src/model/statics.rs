@@ -5,8 +5,8 @@
 //! safe region too; `safety` decides where they may be used.
 
 use crate::device::Device;
-use crate::real::Real;
-use crate::roots::bisect;
+use crate::numerics::real::Real;
+use crate::numerics::roots::bisect;
 
 /// An equilibrium on the loading branch, SI units.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -24,9 +24,9 @@ mod app {
     use core::mem::MaybeUninit;
 
     use de_resonator::board::port::Extras;
+    use de_resonator::board::protocol::NOTICE;
     use de_resonator::board::watchdog::CheckIn;
     use de_resonator::board::{self as logic, Line, Lines, ReplyLine, Shared as _, Then};
-    use de_resonator::protocol::NOTICE;
     use de_resonator::store::FlashKeeper;
     use de_resonator::{Controller, Dac8551, Decimal, Event, OutputStage};
     use de_resonator_firmware::board::{self, Board, DacSpi, EnablePin};

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use clap::Args;
-use de_resonator::protocol::{Reply, NOTICE};
+use de_resonator::board::protocol::{Reply, NOTICE};
 use serde::Serialize;
 
 use super::Report;

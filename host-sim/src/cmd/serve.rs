@@ -14,9 +14,9 @@ use std::time::{Duration, Instant};
 
 use clap::Args;
 use de_resonator::board::port::Extras;
+use de_resonator::board::protocol::NOTICE;
 use de_resonator::board::{self, Board, Keeper, Lines, ReplyLine, ResetCause, Then};
 use de_resonator::image::{AmplifierSpec, DAC_BITS};
-use de_resonator::protocol::NOTICE;
 use de_resonator::store::{self, FlashKeeper, RamFlash, StoreError, RAM_PAGE_BYTES};
 use de_resonator::{Controller, Dac8551, Image, Inputs, OutputStage, Settings};
 use serde::Serialize;

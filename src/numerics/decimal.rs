@@ -5,7 +5,7 @@
 
 use core::fmt;
 
-use crate::real::Real;
+use crate::numerics::real::Real;
 
 /// Powers of ten exact in f64 (10²² is the last).
 const POWERS: [f64; 23] = [

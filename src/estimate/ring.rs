@@ -4,10 +4,10 @@
 
 use core::fmt;
 
-use crate::decimal::Decimal;
+use crate::numerics::decimal::Decimal;
 
 use crate::device::{Device, DeviceParams};
-use crate::roots::bisect;
+use crate::numerics::roots::bisect;
 use crate::safety::Limit;
 
 /// Most samples a measurement window may hold (0.5 s at 1 kHz; 2 KB of the controller). At

@@ -13,7 +13,7 @@
 use core::fmt;
 
 use crate::controller::{Fault, Phase, Setting};
-use crate::decimal::{scale10, Decimal};
+use crate::numerics::decimal::{scale10, Decimal};
 use crate::safety::FailureMode;
 
 /// What starts a line the firmware says on its own (not a reply).

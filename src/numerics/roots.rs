@@ -3,7 +3,7 @@
 //! Bisection halves until the midpoint is no longer distinct from an end, so the answer is
 //! exact to the last bit the type can hold, and it cannot loop: the iteration count is bounded.
 
-use crate::real::Real;
+use crate::numerics::real::Real;
 
 /// Enough halvings to reach adjacent floats on any bracket `f64` can hold.
 const MAX_HALVINGS: usize = 2100;

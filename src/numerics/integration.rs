@@ -4,10 +4,10 @@
 
 use core::fmt;
 
-use crate::decimal::Decimal;
+use crate::numerics::decimal::Decimal;
 
 use crate::device::Device;
-use crate::real::Real;
+use crate::numerics::real::Real;
 
 /// The voltage Φ(τ) = Φ̄dc + Φ̄ac·sin(Ω̄τ), dimensionless (Φ̄ = (Φ/H)·√(ε/μ), Ω̄ = Ω·T0).
 #[derive(Clone, Copy, Debug, PartialEq)]
