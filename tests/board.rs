@@ -336,7 +336,11 @@ fn a_fault_latches_until_clear_at_zero() {
         stage.is_safe() && !pin.high.get(),
         "the stage off at the descent's end"
     );
-    assert!(b.ask("status").contains("fault="));
+    let status = b.ask("status");
+    assert!(
+        status.contains("phase=faulted") && !status.ends_with("fault=none"),
+        "{status}"
+    );
     assert!(b.ask("clear").starts_with("ok clear"));
     assert!(b.ask("status").ends_with("fault=none"));
 }
@@ -491,4 +495,74 @@ fn the_dog_is_fed_only_while_the_tasks_check_in() {
     assert_eq!(heartbeats[..4], [125, 250, 375, 500]);
     // A check-in feeds it again at once.
     assert!(dog.tick(true, true).feed);
+}
+
+/// `reset` and `clear` wait for rest at 0 V: refused under the bias; after a dead bus (the
+/// command dropped at once, the output following through the amplifier at best at the slew
+/// rate) refused for the time the slew rate needs from the bias, then done.
+#[test]
+fn reset_and_clear_wait_for_rest_at_zero() {
+    let bytes = image_with(&Settings::for_target(44.0));
+    let mut b = Bench::boot(&bytes, None::<NoKeeper>, None);
+    b.run(30_000, Inputs::NONE);
+    let (reply, then) = b.ask_then(&line("reset"));
+    assert_eq!(code(&reply), Some(3), "{reply}");
+    assert_eq!(then, Then::Reply);
+    assert!(b.slot.is_some(), "the controller stays");
+    // The bus dies at the bias.
+    let slew = field(&b.ask("get slew_volts_per_second"), "slew_volts_per_second");
+    let bias = b.slot.as_ref().unwrap().plan().bias_volts;
+    let settle_ticks = (bias / slew * 1000.0) as u32;
+    assert!(settle_ticks > 100, "{settle_ticks}");
+    let (bus, pin) = (Bus::default(), Pin::default());
+    let mut stage = OutputStage::new(Dac8551::new(&bus), &pin);
+    tick::drive(&mut b.slot, &mut stage, Inputs::NONE);
+    bus.fails.set(true);
+    let t = tick::drive(&mut b.slot, &mut stage, Inputs::NONE).unwrap();
+    assert_eq!(t.output.volts, 0.0, "0 V commanded at once");
+    for _ in 0..settle_ticks * 9 / 10 {
+        tick::drive(&mut b.slot, &mut stage, Inputs::NONE);
+    }
+    assert_eq!(code(&b.ask("clear")), Some(3));
+    assert_eq!(code(&b.ask_then(&line("reset")).0), Some(3));
+    for _ in 0..settle_ticks / 5 {
+        tick::drive(&mut b.slot, &mut stage, Inputs::NONE);
+    }
+    let (reply, then) = b.ask_then(&line("reset"));
+    assert_eq!(
+        (reply.as_str(), then),
+        ("ok reset: output off, restarting", Then::Reset)
+    );
+    assert!(b.slot.is_none(), "taken out with the check");
+}
+
+/// A refusal only the firmware finds (a tick rate beyond its timer) holds for good: `clear`
+/// cannot lift it. A boot refusal `clear` can lift keeps the settings asked for meanwhile,
+/// and `save` saves those.
+#[test]
+fn refusals_hold_or_lift_as_they_say() {
+    let bytes = image_with(&Settings::for_target(44.0));
+    let mut b = Bench::boot(&bytes, None::<NoKeeper>, None);
+    let mut notice = ReplyLine::new();
+    b.board.refuse(
+        &mut b.slot,
+        &"tick_hz = 1e9 is beyond the timer's reach",
+        &mut notice,
+    );
+    assert_eq!(
+        notice.as_str(),
+        "refused tick_hz = 1e9 is beyond the timer's reach"
+    );
+    assert!(b.slot.is_none());
+    for request in ["clear", "status", "set target_hz 45"] {
+        let reply = b.ask(request);
+        assert_eq!(code(&reply), Some(5), "{request}: {reply}");
+        assert!(reply.contains("beyond the timer's reach"), "{reply}");
+    }
+    let mut memory = Memory::default();
+    let mut b = Bench::boot(&bytes, Some(&mut memory), Some(ResetCause::Watchdog));
+    assert!(b.ask("set target_hz 45").ends_with("(applies at `clear`)"));
+    assert!(b.ask("save").starts_with("ok save"));
+    drop(b);
+    assert_eq!(memory.saved.unwrap().target_hz, 45.0);
 }

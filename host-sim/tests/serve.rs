@@ -178,3 +178,28 @@ fn a_console_script_reports_each_reply_and_fails_on_an_err() {
     assert!(text.contains("> target 300\nerr "), "{text}");
     assert!(String::from_utf8_lossy(&out.stderr).contains("`target 300` got `err "));
 }
+
+/// Lines sent in one write are each answered, in order, those after a `reset` by the board
+/// booted anew (its start-up line between them), as a terminal pasting lines would see.
+#[test]
+fn lines_in_one_write_are_answered_in_order_across_a_reset() {
+    use std::io::{BufRead, BufReader, Write};
+    let board = Served::start(None, "max", "pasted");
+    assert!(board.replies(&["stop"])[0].starts_with("ok stop"));
+    board.wait_for("at rest at 0 V", |s| {
+        s.contains("phase=holding") && number(s, "volts") == 0.0
+    });
+    let mut stream = std::os::unix::net::UnixStream::connect(&board.connection[1]).unwrap();
+    stream
+        .set_read_timeout(Some(std::time::Duration::from_secs(10)))
+        .unwrap();
+    stream.write_all(b"help\nreset\nget target_hz\n").unwrap();
+    let mut lines = BufReader::new(stream).lines().map(Result::unwrap);
+    let mut next = || lines.next().unwrap();
+    assert!(next().starts_with("# ready "), "the banner first");
+    assert!(next().starts_with("ok commands:"));
+    assert_eq!(next(), "ok reset: output off, restarting");
+    assert_eq!(next(), "# reset: asked");
+    assert!(next().starts_with("# ready target_hz=44 "));
+    assert_eq!(next(), "ok target_hz=44");
+}

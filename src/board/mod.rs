@@ -117,7 +117,7 @@ impl<'a, K: Keeper> Board<'a, K> {
         let image = match image.and_then(|i| Ok((i, i.amplifier.amplifier()?))) {
             Ok(pair) => pair,
             Err(e) => {
-                board.refuse(slot, &e, &mut started.notice);
+                board.refuse_boot(slot, &e, &mut started.notice);
                 return (board, started);
             }
         };
@@ -156,8 +156,8 @@ impl<'a, K: Keeper> Board<'a, K> {
             None => board.start(slot, image, image.0.settings),
         };
         match booted {
-            Err(fault) => board.refuse(slot, &fault, &mut started.notice),
-            Ok(_) if cause == Some(ResetCause::Watchdog) => board.refuse(
+            Err(fault) => board.refuse_boot(slot, &fault, &mut started.notice),
+            Ok(_) if cause == Some(ResetCause::Watchdog) => board.refuse_boot(
                 slot,
                 &"reset by the watchdog (a task missed its deadline): `clear` to boot",
                 &mut started.notice,
@@ -193,9 +193,9 @@ impl<'a, K: Keeper> Board<'a, K> {
         Ok(boot.bias_volts)
     }
 
-    /// Drive nothing, and say why (in `notice`, and to every request that needs a controller).
-    /// Also for what only the firmware finds (a tick rate beyond its timer's reach).
-    pub fn refuse(
+    /// Drive nothing, and say why (in `notice`, and to every request that needs a controller);
+    /// `clear` may boot again (a watchdog's reset, settings the checks refused).
+    fn refuse_boot(
         &mut self,
         slot: &mut Option<Controller>,
         why: &dyn fmt::Display,
@@ -207,6 +207,19 @@ impl<'a, K: Keeper> Board<'a, K> {
         notice.clear();
         let _ = write!(notice, "refused {reason}");
         self.refusal = Some(reason);
+    }
+
+    /// Drive nothing with this image, for good (until a new image and a power-up): what only
+    /// the firmware finds, such as a tick rate beyond its timer's reach. Every request but
+    /// `help` answers why; `clear` cannot lift it.
+    pub fn refuse(
+        &mut self,
+        slot: &mut Option<Controller>,
+        why: &dyn fmt::Display,
+        notice: &mut ReplyLine,
+    ) {
+        self.refuse_boot(slot, why, notice);
+        self.image = None;
     }
 
     /// Where the settings are kept, back for the next boot (a reset).

@@ -63,7 +63,7 @@ impl Lines {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Then {
     Reply,
-    /// Turn the output off (the slot emptied: the tick makes the stage safe) and restart.
+    /// Restart: the slot is already empty (the next tick makes the stage safe).
     Reset,
 }
 
@@ -243,11 +243,19 @@ impl<K: Keeper> Board<'_, K> {
                 None => {}
             },
             Command::Reset => {
-                // At 0 V only, as `clear`: switching the output off under a bias would drop
-                // the membrane's charge at once, and the next boot would ramp from 0 V while
-                // the amplifier still slews down (its monitor's fault, found on `host-sim
-                // serve`'s plant).
-                if !at_zero(controller) {
+                // At rest at 0 V only, as `clear`: switching the output off under a bias
+                // would drop the membrane's charge at once, and the next boot would ramp from
+                // 0 V while the amplifier still slews down (its monitor's fault, found on
+                // `host-sim serve`'s plant). The controller leaves its slot under the same
+                // lock as the check: nothing moves between them.
+                let taken = controller.with(|c| {
+                    let rest = c.as_ref().is_none_or(Controller::at_rest);
+                    if rest {
+                        *c = None;
+                    }
+                    rest
+                });
+                if !taken {
                     err(
                         out,
                         ErrorCode::Busy,
@@ -323,7 +331,7 @@ impl<K: Keeper> Board<'_, K> {
         match Controller::start_in(&mut fresh, image.params, image.table, amplifier, settings) {
             Ok(boot) => {
                 let swapped = controller.with(|c| {
-                    let idle = c.as_ref().is_none_or(|c| c.last_volts() == 0.0);
+                    let idle = c.as_ref().is_none_or(Controller::at_rest);
                     if idle {
                         *c = fresh.take();
                     }
@@ -350,9 +358,9 @@ impl<K: Keeper> Board<'_, K> {
     }
 }
 
-/// Whether the output is at 0 V: no controller, or its last command 0 V.
+/// Whether the output is at rest at 0 V: no controller, or one at rest (`Controller::at_rest`).
 fn at_zero(controller: &mut impl Shared) -> bool {
-    controller.with(|c| c.as_ref().is_none_or(|c| c.last_volts() == 0.0))
+    controller.with(|c| c.as_ref().is_none_or(Controller::at_rest))
 }
 
 /// The status line of a controller.

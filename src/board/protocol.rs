@@ -52,7 +52,7 @@ pub enum Command {
     Set(Setting, f32),
     /// Store the settings in force in flash: the firmware boots with them from then on.
     Save,
-    /// Restart the firmware (the output off first; the boot checks run again).
+    /// Restart the firmware, at rest at 0 V only (`stop` first); the boot checks run again.
     Reset,
 }
 

@@ -207,6 +207,22 @@ impl Controller {
         })
     }
 
+    /// Whether the output is at rest at 0 V: stopped (a plan of 0 V, its ramp over) or
+    /// faulted with its descent over, and, after a dead bus dropped the command at once,
+    /// long enough for the output to have followed at the slew rate. Not in a trim's pulse
+    /// or an AC trough, which may command 0 V for a tick. What `clear` and `reset` wait for.
+    pub fn at_rest(&self) -> bool {
+        let resting = match self.state {
+            State::Faulted(_) => true,
+            State::Ramping { .. } | State::Holding { .. } => self.plan.bias_volts == 0.0,
+            _ => false,
+        };
+        resting
+            && self.last_volts == 0.0
+            && self.plan.ramp_volts(self.tick) == 0.0
+            && self.tick >= self.settled_from_tick
+    }
+
     /// Ramp from the voltage now to 0 V at the slew rate, no AC, and hold there (always
     /// allowed: the voltage only falls; a trim under way is dropped).
     pub fn stop(&mut self) {

@@ -144,6 +144,9 @@ pub struct Controller {
     leakage: Leakage,
     /// The voltage commanded at the last tick, V.
     last_volts: f32,
+    /// The first tick at which an output dropped at once (a dead bus) has had the time to
+    /// follow to 0 V at the slew rate (`at_rest`).
+    settled_from_tick: u32,
     #[cfg(feature = "trim")]
     trim: trim::TrimState,
     /// The resonance tracker, while a tracked drive is on.
@@ -175,6 +178,7 @@ impl Controller {
             watch: Watch::new(),
             leakage: Leakage::default(),
             last_volts: 0.0,
+            settled_from_tick: 0,
             #[cfg(feature = "trim")]
             trim: trim::TrimState::new(*device.params(), true),
             #[cfg(feature = "track")]
@@ -551,6 +555,21 @@ impl Controller {
             }
         };
         if fault == Fault::Bus {
+            // The command drops at once; the output, through the amplifier, at best at the
+            // slew rate: at rest only once the descent would have ended.
+            let step = self.plan.ramp_volts_per_tick;
+            let ticks = if step > 0.0 {
+                libm::ceilf(self.plan.start_volts / step)
+            } else {
+                0.0
+            };
+            // `as` saturates: a NaN or a huge count keeps it from rest for good.
+            let ticks = if ticks.is_nan() {
+                u32::MAX
+            } else {
+                ticks as u32
+            };
+            self.settled_from_tick = self.settled_from_tick.max(self.tick.saturating_add(ticks));
             self.plan.start_volts = 0.0;
         }
         self.descend(event)

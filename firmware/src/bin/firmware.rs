@@ -26,7 +26,7 @@ mod app {
     use de_resonator::board::port::Extras;
     use de_resonator::board::protocol::NOTICE;
     use de_resonator::board::watchdog::CheckIn;
-    use de_resonator::board::{self as logic, Line, Lines, ReplyLine, Shared as _, Then};
+    use de_resonator::board::{self as logic, Line, Lines, ReplyLine, Then};
     use de_resonator::store::FlashKeeper;
     use de_resonator::{Controller, Dac8551, Decimal, Event, OutputStage};
     use de_resonator_firmware::board::{self, Board, DacSpi, EnablePin};
@@ -117,8 +117,6 @@ mod app {
             cause,
         );
         let mut notice = started.notice;
-        #[cfg(feature = "defmt")]
-        defmt::info!("{=str}", notice.as_str());
         if let Some(warning) = started.warning {
             #[cfg(feature = "defmt")]
             defmt::warn!("{=str}", warning.as_str());
@@ -135,6 +133,12 @@ mod app {
                 &format_args!("tick_hz = {why} is beyond SysTick's reach"),
                 &mut notice,
             );
+        }
+        #[cfg(feature = "defmt")]
+        if controller.is_some() {
+            defmt::info!("{=str}", notice.as_str());
+        } else {
+            defmt::error!("{=str}", notice.as_str());
         }
         let _ = writeln!(tx, "{NOTICE}{notice}");
         let (to_command, from_rx) = make_channel!(Line, QUEUE);
@@ -349,8 +353,8 @@ mod app {
                 .serve(&line, &mut controller, &extras, &mut reply);
             let _ = writeln!(cx.local.tx, "{reply}");
             if then == Then::Reset {
-                // The controller gone, the tick turns the output off; then the restart.
-                controller.with(|c| *c = None);
+                // The board took the controller out of its slot: the tick turns the output
+                // off; then the restart.
                 cx.shared.output_off.lock(|o| *o = false);
                 for _ in 0..board::RESET_WAIT_POLLS {
                     if cx.shared.output_off.lock(|o| *o) {

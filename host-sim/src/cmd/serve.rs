@@ -15,7 +15,7 @@ use std::time::{Duration, Instant};
 use clap::Args;
 use de_resonator::board::port::Extras;
 use de_resonator::board::protocol::NOTICE;
-use de_resonator::board::{self, Board, Keeper, Lines, ReplyLine, ResetCause, Then};
+use de_resonator::board::{self, Board, Keeper, Line, Lines, ReplyLine, ResetCause, Then};
 use de_resonator::image::{AmplifierSpec, DAC_BITS};
 use de_resonator::store::{self, FlashKeeper, RamFlash, StoreError, RAM_PAGE_BYTES};
 use de_resonator::{Controller, Dac8551, Image, Inputs, OutputStage, Settings};
@@ -57,13 +57,18 @@ pub enum Speed {
     Max,
 }
 
+/// The slowest `--speed`: a thousandth of real time.
+const MIN_SPEED: f64 = 1e-3;
+
 fn speed(word: &str) -> Result<Speed, String> {
     if word == "max" {
         return Ok(Speed::Max);
     }
     match word.parse::<f64>() {
-        Ok(x) if x > 0.0 && x.is_finite() => Ok(Speed::Times(x)),
-        _ => Err(format!("{word}: a positive number, or `max`")),
+        Ok(x) if (MIN_SPEED..=1e9).contains(&x) => Ok(Speed::Times(x)),
+        _ => Err(format!(
+            "{word}: a number from {MIN_SPEED} to 1e9, or `max`"
+        )),
     }
 }
 
@@ -131,30 +136,72 @@ impl Flash {
 trait Conn: Read + Write {}
 impl<T: Read + Write> Conn for T {}
 
-/// A connected client: its bytes into lines.
+/// A connected client: its bytes into lines, its replies queued (nothing waits on a client
+/// that does not read).
 struct Client {
     stream: Box<dyn Conn>,
     lines: Lines,
+    out: Vec<u8>,
+    gone: bool,
 }
 
+/// Bytes read from one client at one poll, at most: a client that never stops sending
+/// cannot hold the board's ticks.
+const READ_BYTES: usize = 4096;
+/// Replies queued for a client that does not read, at most; beyond, it is dropped.
+const QUEUED_BYTES: usize = 1 << 16;
+
 impl Client {
-    /// Write a whole line; a client gone is dropped by the caller.
-    fn send(&mut self, line: &str) -> bool {
-        let bytes = format!("{line}\n");
-        let mut rest = bytes.as_bytes();
-        let deadline = Instant::now() + Duration::from_secs(2);
-        while !rest.is_empty() {
-            match self.stream.write(rest) {
-                Ok(0) => return false,
-                Ok(n) => rest = &rest[n..],
-                Err(e) if e.kind() == ErrorKind::WouldBlock && Instant::now() < deadline => {
-                    std::thread::sleep(Duration::from_micros(100));
+    fn new(stream: Box<dyn Conn>) -> Self {
+        Self {
+            stream,
+            lines: Lines::default(),
+            out: Vec::new(),
+            gone: false,
+        }
+    }
+
+    /// Queue a line for the client.
+    fn say(&mut self, line: &str) {
+        if self.out.len() > QUEUED_BYTES {
+            self.gone = true;
+            return;
+        }
+        self.out.extend_from_slice(line.as_bytes());
+        self.out.push(b'\n');
+    }
+
+    /// Write what is queued, as far as the socket takes it now.
+    fn flush(&mut self) {
+        while !self.out.is_empty() && !self.gone {
+            match self.stream.write(&self.out) {
+                Ok(0) => self.gone = true,
+                Ok(n) => {
+                    self.out.drain(..n);
                 }
+                Err(e) if e.kind() == ErrorKind::WouldBlock => break,
                 Err(e) if e.kind() == ErrorKind::Interrupted => {}
-                Err(_) => return false,
+                Err(_) => self.gone = true,
             }
         }
-        self.stream.flush().is_ok()
+    }
+
+    /// The request lines the client sent since the last poll (at most `READ_BYTES`).
+    fn read_lines(&mut self, lines: &mut Vec<Line>) {
+        let mut buf = [0u8; 512];
+        let mut left = READ_BYTES;
+        while left > 0 && !self.gone {
+            match self.stream.read(&mut buf[..left.min(512)]) {
+                Ok(0) => self.gone = true,
+                Ok(n) => {
+                    left -= n;
+                    lines.extend(buf[..n].iter().filter_map(|&b| self.lines.push(b)));
+                }
+                Err(e) if e.kind() == ErrorKind::WouldBlock => break,
+                Err(e) if e.kind() == ErrorKind::Interrupted => {}
+                Err(_) => self.gone = true,
+            }
+        }
     }
 }
 
@@ -176,6 +223,12 @@ impl Listener {
         if let Ok(meta) = std::fs::symlink_metadata(&path) {
             if !meta.file_type().is_socket() {
                 return Err(format!("{} exists and is not a socket", path.display()));
+            }
+            if std::os::unix::net::UnixStream::connect(&path).is_ok() {
+                return Err(format!(
+                    "{}: another server is listening there",
+                    path.display()
+                ));
             }
             let _ = std::fs::remove_file(&path);
         }
@@ -294,66 +347,53 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
         let now = Instant::now();
         let due = match args.speed {
             Speed::Max => None,
-            Speed::Times(x) => Some(started + Duration::from_secs_f64(k as f64 * tick_seconds / x)),
+            Speed::Times(x) => Duration::try_from_secs_f64(k as f64 * tick_seconds / x)
+                .ok()
+                .and_then(|d| started.checked_add(d)),
         };
         if now >= next_poll || due.is_some_and(|d| d > now) {
             next_poll = now + POLL;
-            // New clients hear the start-up line, as a terminal on the board's port would.
+            // New clients hear the last boot's start-up line, as a terminal on the board's
+            // port would have.
             while let Some(stream) = listener.accept() {
-                let mut client = Client {
-                    stream,
-                    lines: Lines::default(),
-                };
-                if banner.iter().all(|line| client.send(line)) {
-                    clients.push(client);
-                    report.clients += 1;
+                let mut client = Client::new(stream);
+                for line in &banner {
+                    client.say(line);
                 }
+                clients.push(client);
+                report.clients += 1;
             }
+            // The clock the firmware's status reports (a u32 of µs, wrapping).
             let extras = Extras {
-                clock_us: Some((k as f64 * tick_seconds * 1e6) as u32),
+                clock_us: Some((k as f64 * tick_seconds * 1e6) as u64 as u32),
                 ..Extras::default()
             };
-            let mut reset = false;
-            clients.retain_mut(|client| {
-                let mut buf = [0u8; 512];
-                loop {
-                    let n = match client.stream.read(&mut buf) {
-                        Ok(0) => return false,
-                        Ok(n) => n,
-                        Err(e) if e.kind() == ErrorKind::WouldBlock => return true,
-                        Err(e) if e.kind() == ErrorKind::Interrupted => continue,
-                        Err(_) => return false,
-                    };
-                    for &byte in &buf[..n] {
-                        let Some(line) = client.lines.push(byte) else {
-                            continue;
-                        };
-                        report.requests += 1;
-                        let mut reply = ReplyLine::new();
-                        let then = logic.serve(&line, &mut &mut slot, &extras, &mut reply);
-                        if !client.send(&reply) {
-                            return false;
-                        }
-                        if then == Then::Reset {
-                            // The rest of the line's bytes go to the board booted anew.
-                            reset = true;
-                            return true;
-                        }
+            let mut queue = Vec::new();
+            for (i, client) in clients.iter_mut().enumerate() {
+                let mut lines = Vec::new();
+                client.read_lines(&mut lines);
+                queue.extend(lines.into_iter().map(|line| (i, line)));
+            }
+            // In the order received; after a `reset`, the rest go to the board booted anew.
+            for (i, line) in queue {
+                report.requests += 1;
+                let mut reply = ReplyLine::new();
+                let then = logic.serve(&line, &mut &mut slot, &extras, &mut reply);
+                clients[i].say(&reply);
+                if then == Then::Reset {
+                    // The slot is empty: the output off at once (as the firmware's next tick
+                    // does), then the boot, the settings' flash kept.
+                    let _ = board::tick::drive(&mut slot, &mut stage, Inputs::NONE);
+                    let keeper = logic.into_keeper();
+                    (logic, banner) = boot(&mut slot, keeper, Some(ResetCause::Asked));
+                    for line in &banner {
+                        eprintln!("{line}");
+                        clients.iter_mut().for_each(|c| c.say(line));
                     }
                 }
-            });
-            if reset {
-                // The output off at once (the firmware's tick finds the slot empty), then
-                // the boot, the settings' flash kept.
-                slot = None;
-                let _ = board::tick::drive(&mut slot, &mut stage, Inputs::NONE);
-                let keeper = logic.into_keeper();
-                (logic, banner) = boot(&mut slot, keeper, Some(ResetCause::Asked));
-                for line in &banner {
-                    eprintln!("{line}");
-                }
-                clients.retain_mut(|client| banner.iter().all(|line| client.send(line)));
             }
+            clients.iter_mut().for_each(Client::flush);
+            clients.retain(|c| !c.gone);
             if let Some(due) = due.filter(|&d| d > Instant::now()) {
                 std::thread::sleep((due - Instant::now().min(due)).min(POLL));
                 continue;
