@@ -1,21 +1,20 @@
-//! host-sim's library: the std side of de-resonator (device files, the reference simulator,
-//! the plant, studies, and the commands with their typed reports in `cmd`), used by the
-//! `host-sim` binary and its benchmarks.
+//! host-sim's library: the std side of de-resonator, used by the `host-sim` binary and its
+//! benchmarks. The [`engine`]s (the plant simulator, the closed loop with the core's board,
+//! the reference solvers) apart from the [`study`]s built on them and the commands with their
+//! typed reports ([`cmd`]); the files a user writes ([`scene`], [`device_file`],
+//! [`settings_file`]) and what is written for people ([`plot`], [`text`], [`work`]'s
+//! progress).
 
 // Checks are written `!(x > 0)` on purpose: NaN must fail them (as in the core).
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod cmd;
 pub mod device_file;
-pub mod hil;
+pub mod engine;
 pub mod lut;
-pub mod plant;
 pub mod plot;
-pub mod precision;
 pub mod scene;
 pub mod settings_file;
-pub mod simulate;
-pub mod stress;
-pub mod sweep;
+pub mod study;
 pub mod text;
 pub mod work;

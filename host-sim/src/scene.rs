@@ -7,9 +7,9 @@ use std::path::{Path, PathBuf};
 use de_resonator::DeviceParams;
 use serde::Deserialize;
 
-use crate::hil::{CurrentMonitor, Loop, Sensor};
-use crate::plant::{AmplifierModel, Branch, Leakage, Plant, MAX_BRANCHES};
-use crate::simulate::{Solver, Tolerance};
+use crate::engine::hil::{CurrentMonitor, Loop, Sensor};
+use crate::engine::plant::{AmplifierModel, Branch, Leakage, Plant, MAX_BRANCHES};
+use crate::engine::simulate::{Solver, Tolerance};
 
 /// The reference scene, built in: the main job.
 pub const REFERENCE: &str = include_str!("../../scenes/reference.toml");

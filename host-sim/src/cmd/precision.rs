@@ -8,9 +8,9 @@ use clap::Args;
 use serde::Serialize;
 
 use super::{write_csv_and_plot, DeviceArgs, DeviceInfo, Report};
+use crate::engine::simulate::Choice;
 use crate::plot::{Marker, Panel, Series, Style, COLOURS};
-use crate::precision::{reference, rows, studies, Row, ToleranceRow};
-use crate::simulate::Choice;
+use crate::study::precision::{reference, rows, studies, Row, ToleranceRow};
 
 #[derive(Args, Debug)]
 pub struct PrecisionArgs {

@@ -8,7 +8,7 @@ use clap::Args;
 use serde::Serialize;
 
 use super::{finite, prepare_dir, sig, write_file, Crossing, DeviceInfo, Report};
-use crate::hil::{Run, Sample};
+use crate::engine::hil::{Run, Sample};
 use crate::plot::{svg, Marker, Panel, Series, RED};
 use crate::scene::{self, Scene};
 

@@ -22,7 +22,7 @@ use de_resonator::{Controller, Dac8551, Image, Inputs, OutputStage, Settings};
 use serde::Serialize;
 
 use super::{sig, Report};
-use crate::hil;
+use crate::engine::hil;
 use crate::scene;
 
 #[derive(Args, Debug)]

@@ -9,8 +9,8 @@ use de_resonator::Device;
 use serde::Serialize;
 
 use super::{prepare_dir, sig, write_path, Crossing, DeviceArgs, DeviceInfo, Report};
+use crate::engine::simulate::{self, Choice, OpenLoop, Solver, Start, Tolerance};
 use crate::plot::{svg, Marker, Panel, Series, RED};
-use crate::simulate::{self, Choice, Scene, Solver, Start, Tolerance};
 
 #[derive(Args, Debug)]
 pub struct SimulateArgs {
@@ -218,7 +218,7 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
             prepare_dir(dir)?;
         }
     }
-    let scene = Scene {
+    let scene = OpenLoop {
         params,
         bias_volts: args.bias_volts,
         ac_volts: args.ac_volts,
@@ -280,7 +280,7 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
 fn plot(
     device: &DeviceInfo,
     checked: &Device<f64>,
-    scene: &Scene,
+    scene: &OpenLoop,
     out: &simulate::Outcome,
     method: &str,
 ) -> Panel {

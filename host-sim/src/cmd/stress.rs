@@ -7,7 +7,7 @@ use clap::Args;
 use serde::Serialize;
 
 use super::{DeviceArgs, DeviceInfo, Report};
-use crate::stress::{self, CaseReport, Summary, Verdict, PERIODS, STEPS_PER_PERIOD};
+use crate::study::stress::{self, CaseReport, Summary, Verdict, PERIODS, STEPS_PER_PERIOD};
 
 #[derive(Args, Debug)]
 pub struct StressArgs {

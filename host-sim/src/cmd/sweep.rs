@@ -10,7 +10,7 @@ use serde::Serialize;
 
 use super::{prepare_dir, short, sig, write_csv_and_plot, DeviceArgs, DeviceInfo, Report};
 use crate::plot::{Panel, Series, Style, GREY, RED};
-use crate::sweep::{self, Sweep};
+use crate::study::sweep::{self, Sweep};
 
 /// The default bias and AC amplitude, as fractions of the device's limit voltage: a drive
 /// that means the same on every device (6000 V and 2000 V on the reference device).

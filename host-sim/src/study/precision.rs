@@ -12,7 +12,9 @@ use std::time::Instant;
 
 use de_resonator::{Device, DeviceParams, Tuner, DEFAULT_MARGIN};
 
-use crate::simulate::{simulate, Choice, Outcome, RunError, Scene, Solver, Start, Tolerance};
+use crate::engine::simulate::{
+    simulate, Choice, OpenLoop, Outcome, RunError, Solver, Start, Tolerance,
+};
 
 /// Steps a period each method runs at.
 pub const STEPS_PER_PERIOD: [u32; 7] = [8, 16, 32, 64, 128, 256, 512];
@@ -25,7 +27,7 @@ const GRID_PER_PERIOD: u32 = 8;
 pub struct Study {
     pub name: &'static str,
     pub what: String,
-    pub scene: Scene,
+    pub scene: OpenLoop,
     /// The frequency that sets the step: the faster of the oscillation and the drive, Hz.
     pub base_hz: f64,
 }
@@ -50,7 +52,7 @@ pub fn studies(params: DeviceParams<f64>) -> Result<Vec<Study>, String> {
             .ok_or_else(|| format!("no equilibrium at {volts} V"))?;
         Ok(device.natural_frequency_hz(stretch))
     };
-    let scene = |bias_volts, ac_volts, drive_hz, base_hz: f64| Scene {
+    let scene = |bias_volts, ac_volts, drive_hz, base_hz: f64| OpenLoop {
         params,
         bias_volts,
         ac_volts,
@@ -152,7 +154,7 @@ pub fn reference(study: &Study) -> Result<Reference, String> {
     let end = study.scene.duration_seconds * scale;
     let at = |tolerance| {
         let tolerance = Tolerance::both(tolerance);
-        crate::simulate::solve(Solver::Dop853, &device, drive, start, end, grid, tolerance)
+        crate::engine::simulate::solve(Solver::Dop853, &device, drive, start, end, grid, tolerance)
     };
     let tighter = at(1e-13)?;
     let mut tolerances = Vec::new();
@@ -178,7 +180,7 @@ pub fn reference(study: &Study) -> Result<Reference, String> {
     // The reference's own: one solve whatever its output times, so its run at 1e-12 is this.
     let floor = tolerances
         .iter()
-        .find(|t| t.tolerance == crate::simulate::REFERENCE_TOLERANCE)
+        .find(|t| t.tolerance == crate::engine::simulate::REFERENCE_TOLERANCE)
         .map_or(f64::NAN, |t| t.max_error);
     Ok(Reference {
         outcome,

@@ -144,9 +144,10 @@ impl clap::ValueEnum for Choice {
     }
 }
 
-/// What to simulate.
+/// An open-loop simulation: a device under a fixed drive from a start, for a duration (the
+/// closed loop with the controller is `crate::scene::Scene`).
 #[derive(Clone, Copy, Debug)]
-pub struct Scene {
+pub struct OpenLoop {
     pub params: DeviceParams<f64>,
     pub bias_volts: f64,
     pub ac_volts: f64,
@@ -180,7 +181,7 @@ pub struct Outcome {
     pub step_seconds: f64,
 }
 
-impl Scene {
+impl OpenLoop {
     /// The starting stretch, from rest.
     fn start_stretch(&self, device: &Device<f64>) -> Result<f64, String> {
         match self.start {
@@ -221,7 +222,7 @@ impl From<String> for RunError {
 }
 
 /// Run a scene with a method and a step (seconds; the reference samples at this spacing).
-pub fn simulate(scene: &Scene, choice: Choice, step_seconds: f64) -> Result<Outcome, RunError> {
+pub fn simulate(scene: &OpenLoop, choice: Choice, step_seconds: f64) -> Result<Outcome, RunError> {
     if !(scene.duration_seconds.is_finite() && scene.duration_seconds > 0.0) {
         let why = format!("duration {} s must be positive", scene.duration_seconds);
         return Err(why.into());
@@ -291,7 +292,7 @@ fn outcome(samples: Vec<f64>, velocities: Vec<f64>) -> Outcome {
 }
 
 fn core<T: Real>(
-    scene: &Scene,
+    scene: &OpenLoop,
     method: Method,
     start: f64,
     step_seconds: f64,
@@ -687,7 +688,7 @@ fn bdf<const N: usize, F: ODE<f64, [f64; N]>>(
 }
 
 fn reference(
-    scene: &Scene,
+    scene: &OpenLoop,
     device: &Device<f64>,
     start: f64,
     step_seconds: f64,
@@ -869,7 +870,7 @@ mod tests {
     #[test]
     fn the_run_ends_at_the_duration() {
         let device = Device::new(REFERENCE_DEVICE).unwrap();
-        let scene = Scene {
+        let scene = OpenLoop {
             params: REFERENCE_DEVICE,
             bias_volts: 7000.0,
             ac_volts: 200.0,
@@ -930,7 +931,7 @@ mod tests {
         let limit = Limit::of(&device).at.volts;
         for k in 0..=10 {
             let bias_volts = limit * f64::from(k) / 10.0;
-            let scene = Scene {
+            let scene = OpenLoop {
                 params,
                 bias_volts,
                 ac_volts: 0.0,

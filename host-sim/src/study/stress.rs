@@ -9,7 +9,7 @@
 use de_resonator::{Device, DeviceParams, Tuner};
 use serde::Serialize;
 
-use crate::simulate::{simulate, Choice, RunError, Scene, Start};
+use crate::engine::simulate::{simulate, Choice, OpenLoop, RunError, Start};
 
 /// A named extreme case: a device, a drive, and how it starts.
 struct Case {
@@ -228,7 +228,7 @@ fn run_case(case: &Case) -> Result<CaseReport, String> {
         .ok_or("no equilibrium at the case's bias")?;
     let f0 = device.natural_frequency_hz(at_bias);
     let period = 1.0 / f0;
-    let scene = Scene {
+    let scene = OpenLoop {
         params: case.params,
         bias_volts: bias,
         ac_volts: case.ac_of_limit * limit,

@@ -17,8 +17,8 @@ use embedded_hal::spi::{ErrorKind, ErrorType, Operation, SpiDevice};
 
 use de_resonator::board;
 
-use crate::plant::{self, Plant, Vector};
-use crate::simulate::{Solver, Tolerance};
+use crate::engine::plant::{self, Plant, Vector};
+use crate::engine::simulate::{Solver, Tolerance};
 use crate::text::sig;
 
 /// The DAC8551 as its datasheet has it: 24-bit frames (PD1 PD0, then the code MSB first),

@@ -7,7 +7,7 @@
 use de_resonator::{DeviceParams, FailureMode};
 use differential_equations::prelude::*;
 
-use crate::simulate::{Solver, Tolerance};
+use crate::engine::simulate::{Solver, Tolerance};
 
 /// Most viscoelastic branches a plant may have.
 pub const MAX_BRANCHES: usize = 3;
