@@ -3,8 +3,8 @@
 //! panic; a line parses or gets a typed error, and a number it parses is finite.
 #![no_main]
 
-use de_resonator::image::Image;
 use de_resonator::board::protocol::{self, Command};
+use de_resonator::image::Image;
 use de_resonator::Controller;
 use libfuzzer_sys::fuzz_target;
 
