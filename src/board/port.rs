@@ -200,12 +200,14 @@ impl<K: Keeper> Board<'_, K> {
                 );
             }
             Command::Status => {
+                // Read under the lock, written out after it: formatting the numbers takes
+                // thousands of instructions the tick must not wait for.
                 let limit = self.limit;
-                controller.with(|c| {
-                    if let Some(c) = c {
-                        let _ = write!(out, "ok {}", status(c, limit, extras));
-                    }
-                });
+                if let Some(status) =
+                    controller.with(|c| c.as_ref().map(|c| status(c, limit, extras)))
+                {
+                    let _ = write!(out, "ok {status}");
+                }
             }
             Command::Target { hz } => {
                 let next = Settings {
