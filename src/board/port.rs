@@ -250,14 +250,7 @@ impl<K: Keeper> Board<'_, K> {
                 // 0 V while the amplifier still slews down (its monitor's fault, found on
                 // `host-sim serve`'s plant). The controller leaves its slot under the same
                 // lock as the check: nothing moves between them.
-                let taken = controller.with(|c| {
-                    let rest = c.as_ref().is_none_or(Controller::at_rest);
-                    if rest {
-                        *c = None;
-                    }
-                    rest
-                });
-                if !taken {
+                if !replace_at_rest(controller, None) {
                     err(
                         out,
                         ErrorCode::Busy,
@@ -332,14 +325,7 @@ impl<K: Keeper> Board<'_, K> {
         let mut fresh = None;
         match Controller::start_in(&mut fresh, image.params, image.table, amplifier, settings) {
             Ok(boot) => {
-                let swapped = controller.with(|c| {
-                    let idle = c.as_ref().is_none_or(Controller::at_rest);
-                    if idle {
-                        *c = fresh.take();
-                    }
-                    idle
-                });
-                if !swapped {
+                if !replace_at_rest(controller, fresh) {
                     err(
                         out,
                         ErrorCode::Busy,
@@ -363,6 +349,18 @@ impl<K: Keeper> Board<'_, K> {
 /// Whether the output is at rest at 0 V: no controller, or one at rest (`Controller::at_rest`).
 fn at_zero(controller: &mut impl Shared) -> bool {
     controller.with(|c| c.as_ref().is_none_or(Controller::at_rest))
+}
+
+/// Put `next` in the slot if the output is at rest, the check and the swap under one lock
+/// (nothing moves between them); whether it did.
+fn replace_at_rest(controller: &mut impl Shared, next: Option<Controller>) -> bool {
+    controller.with(|c| {
+        let rest = c.as_ref().is_none_or(Controller::at_rest);
+        if rest {
+            *c = next;
+        }
+        rest
+    })
 }
 
 /// The status line of a controller.
