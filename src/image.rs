@@ -7,20 +7,24 @@
 //! | offset | size | what |
 //! |---|---|---|
 //! | 0 | 4 | magic `DERI` |
-//! | 4 | 2 | version, u16 = 1 |
+//! | 4 | 2 | version, u16 = 2 |
 //! | 6 | 2 | S, the number of settings, u16 = 21 (an image with another S is refused) |
 //! | 8 | 4 | L, the image's length in bytes with its CRC, u32 |
 //! | 12 | 52 | the 13 device parameters in `DeviceParams` order (`jlim` 0 = neo-Hookean) |
 //! | 64 | 16 | the amplifier: DAC reference V, gain V/V, rail V, DAC bits u16 (16), 0 u16 |
-//! | 80 | 4·S | the default settings in `Setting::ALL` order (0 = off for those that can be) |
-//! | 80 + 4·S | L − 84 − 4·S | the tuning table (`table`'s layout, with its own CRC) |
+//! | 80 | 4 | the front end's scans a second (`acquire::FrontEnd`) |
+//! | 84 | 3 · 20 | per channel in `Channel::ALL` order: ADC input u8 (0xFF = not fitted), 3 zero bytes, zero code, per count, plausible low, plausible high |
+//! | 144 | 4·S | the default settings in `Setting::ALL` order (0 = off for those that can be) |
+//! | 144 + 4·S | L − 148 − 4·S | the tuning table (`table`'s layout, with its own CRC) |
 //! | L − 4 | 4 | CRC-32 (IEEE 802.3) of every byte before it, u32 |
 //!
-//! `Image::parse` checks the frame (magic, version, length, CRC) and the amplifier; the
-//! device, the settings and the table are the controller's boot checks, as for any input.
+//! `Image::parse` checks the frame (magic, version, length, CRC), the amplifier and the front
+//! end (at the settings' tick rate); the device, the settings and the table are the
+//! controller's boot checks, as for any input.
 
 use core::fmt;
 
+use crate::acquire::{ChannelSpec, FrontEnd, FrontEndError};
 use crate::device::DeviceParams;
 use crate::drive::{Amplifier, CodeError};
 use crate::table::{crc32, f32_at, u16_at, u32_at, Table, TableError};
@@ -29,11 +33,16 @@ use crate::{Setting, Settings};
 /// The first four bytes of an image.
 pub const MAGIC: [u8; 4] = *b"DERI";
 /// The layout version this code reads and writes.
-pub const VERSION: u16 = 1;
+pub const VERSION: u16 = 2;
 /// The DAC this code drives (the DAC8551): its resolution.
 pub const DAC_BITS: u16 = 16;
+/// Where the front end starts, and its bytes a channel.
+const FRONT_END_AT: usize = 80;
+const CHANNEL_BYTES: usize = 20;
+/// The input byte of a channel not fitted.
+const NOT_FITTED: u8 = 0xFF;
 /// Bytes before the settings.
-const SETTINGS_AT: usize = 80;
+const SETTINGS_AT: usize = FRONT_END_AT + 4 + 3 * CHANNEL_BYTES;
 const SETTINGS: usize = Setting::ALL.len();
 /// Bytes before the table.
 pub const HEADER_BYTES: usize = SETTINGS_AT + 4 * SETTINGS;
@@ -93,6 +102,8 @@ pub enum ImageError {
     Amplifier(CodeError),
     /// The table inside is not a valid table.
     Table(TableError),
+    /// The analog front end cannot be used.
+    FrontEnd(FrontEndError),
     /// The output buffer is too small (writing).
     BufferTooSmall { needed: usize },
 }
@@ -127,6 +138,7 @@ impl fmt::Display for ImageError {
             ),
             ImageError::Amplifier(e) => write!(f, "image amplifier: {e}"),
             ImageError::Table(e) => write!(f, "image {e}"),
+            ImageError::FrontEnd(e) => write!(f, "image {e}"),
             ImageError::BufferTooSmall { needed } => {
                 write!(f, "image needs a buffer of {needed} bytes")
             }
@@ -141,6 +153,8 @@ impl core::error::Error for ImageError {}
 pub struct Image<'a> {
     pub params: DeviceParams<f32>,
     pub amplifier: AmplifierSpec,
+    /// The board's analog inputs (checked at the settings' tick rate).
+    pub front_end: FrontEnd,
     pub settings: Settings,
     /// The table's bytes, for `Controller::start` (which parses and checks them).
     pub table: &'a [u8],
@@ -197,11 +211,32 @@ impl<'a> Image<'a> {
         for (k, setting) in Setting::ALL.into_iter().enumerate() {
             settings.set(setting, f32_at(bytes, SETTINGS_AT + 4 * k));
         }
+        let mut front_end = FrontEnd {
+            scan_hz: f32_at(bytes, FRONT_END_AT),
+            channels: [None; 3],
+        };
+        for (k, channel) in front_end.channels.iter_mut().enumerate() {
+            let at = FRONT_END_AT + 4 + CHANNEL_BYTES * k;
+            let input = bytes.get(at).copied().unwrap_or(NOT_FITTED);
+            *channel = (input != NOT_FITTED).then(|| ChannelSpec {
+                input,
+                zero_code: f32_at(bytes, at + 4),
+                per_count: f32_at(bytes, at + 8),
+                low: f32_at(bytes, at + 12),
+                high: f32_at(bytes, at + 16),
+            });
+        }
+        // A tick rate that is no rate is the controller's to refuse, by name.
+        let tick_hz = settings.tick_hz;
+        if tick_hz > 0.0 && tick_hz.is_finite() {
+            front_end.check(tick_hz).map_err(ImageError::FrontEnd)?;
+        }
         let table = bytes.get(HEADER_BYTES..body).unwrap_or(&[]);
         Table::parse(table).map_err(ImageError::Table)?;
         Ok(Self {
             params: DeviceParams::from_values(values),
             amplifier,
+            front_end,
             settings,
             table,
         })
@@ -212,6 +247,7 @@ impl<'a> Image<'a> {
         out: &mut [u8],
         params: &DeviceParams<f32>,
         amplifier: &AmplifierSpec,
+        front_end: &FrontEnd,
         settings: &Settings,
         table: &[u8],
     ) -> Result<usize, ImageError> {
@@ -231,6 +267,16 @@ impl<'a> Image<'a> {
             .flat_map(f32::to_le_bytes)
             .chain(amplifier.dac_bits.to_le_bytes())
             .chain([0, 0])
+            .chain(front_end.scan_hz.to_le_bytes())
+            .chain(front_end.channels.iter().flat_map(|spec| {
+                let (input, numbers) = match spec {
+                    Some(c) => (c.input, [c.zero_code, c.per_count, c.low, c.high]),
+                    None => (NOT_FITTED, [0.0; 4]),
+                };
+                [input, 0, 0, 0]
+                    .into_iter()
+                    .chain(numbers.into_iter().flat_map(f32::to_le_bytes))
+            }))
             .chain(
                 Setting::ALL
                     .into_iter()

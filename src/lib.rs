@@ -21,6 +21,7 @@
 // Checks are written `!(x > 0)` on purpose: NaN must fail them, and that form says so.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod acquire;
 pub mod board;
 pub mod controller;
 pub mod drive;

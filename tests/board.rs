@@ -5,14 +5,11 @@
 
 mod common;
 
-use std::cell::Cell;
-
+use de_resonator::acquire::FrontEnd;
 use de_resonator::board::port::Extras;
 use de_resonator::board::{tick, Board, Keeper, Line, NoKeeper, ReplyLine, ResetCause, Then};
 use de_resonator::image::{self, AmplifierSpec, Image, DAC_BITS};
 use de_resonator::{Controller, Dac8551, Inputs, OutputStage, Settings, REFERENCE_DEVICE};
-use embedded_hal::digital::{ErrorType as PinErrorType, OutputPin};
-use embedded_hal::spi::{ErrorKind, ErrorType, Operation, SpiDevice};
 
 /// 0..10 kV: a 2.5 V reference, gain 4000 (as `common::amplifier`).
 fn spec() -> AmplifierSpec {
@@ -32,6 +29,7 @@ fn image_with(settings: &Settings) -> Vec<u8> {
         &mut out,
         &REFERENCE_DEVICE.cast(),
         &spec(),
+        &FrontEnd::NONE,
         settings,
         &table,
     )
@@ -100,11 +98,11 @@ impl<'a, K: Keeper> Bench<'a, K> {
 
     /// `ticks` ticks with `inputs` through a stage that works; the last output's volts.
     fn run(&mut self, ticks: u32, inputs: Inputs) -> f32 {
-        let (bus, pin) = (Bus::default(), Pin::default());
+        let (bus, pin) = (common::Bus::default(), common::Pin::default());
         let mut stage = OutputStage::new(Dac8551::new(&bus), &pin);
         let mut volts = 0.0;
         for _ in 0..ticks {
-            if let Some(t) = tick::drive(&mut self.slot, &mut stage, inputs) {
+            if let Some(t) = tick::drive(&mut self.slot, &mut stage, Ok(inputs)) {
                 volts = t.output.volts;
             }
         }
@@ -316,9 +314,9 @@ fn a_fault_latches_until_clear_at_zero() {
     let mut b = Bench::boot(&bytes, None::<NoKeeper>, None);
     b.run(30_000, Inputs::NONE);
     // A stretch sensor that reads NaN is a fault at once.
-    let (bus, pin) = (Bus::default(), Pin::default());
+    let (bus, pin) = (common::Bus::default(), common::Pin::default());
     let mut stage = OutputStage::new(Dac8551::new(&bus), &pin);
-    let first = tick::drive(&mut b.slot, &mut stage, Inputs::stretch(f32::NAN)).unwrap();
+    let first = tick::drive(&mut b.slot, &mut stage, Ok(Inputs::stretch(f32::NAN))).unwrap();
     assert!(matches!(
         first.output.event,
         Some(de_resonator::Event::Fault(_))
@@ -327,7 +325,7 @@ fn a_fault_latches_until_clear_at_zero() {
     assert_eq!(code(&b.ask("clear")), Some(3));
     let mut last = first.output.volts;
     for _ in 0..60_000 {
-        let t = tick::drive(&mut b.slot, &mut stage, Inputs::NONE).unwrap();
+        let t = tick::drive(&mut b.slot, &mut stage, Ok(Inputs::NONE)).unwrap();
         assert!(t.output.volts <= last);
         last = t.output.volts;
     }
@@ -351,26 +349,26 @@ fn a_fault_latches_until_clear_at_zero() {
 fn the_amplifier_is_on_only_while_a_plan_drives() {
     let bytes = image_with(&Settings::for_target(44.0));
     let mut b = Bench::boot(&bytes, None::<NoKeeper>, None);
-    let (bus, pin) = (Bus::default(), Pin::default());
+    let (bus, pin) = (common::Bus::default(), common::Pin::default());
     let mut stage = OutputStage::new(Dac8551::new(&bus), &pin);
     let _ = stage.safe();
-    assert!(tick::drive(&mut None, &mut stage, Inputs::NONE).is_none());
+    assert!(tick::drive(&mut None, &mut stage, Ok(Inputs::NONE)).is_none());
     assert!(!pin.high.get());
-    tick::drive(&mut b.slot, &mut stage, Inputs::NONE);
+    tick::drive(&mut b.slot, &mut stage, Ok(Inputs::NONE));
     assert!(pin.high.get());
     for _ in 0..30_000 {
-        tick::drive(&mut b.slot, &mut stage, Inputs::NONE);
+        tick::drive(&mut b.slot, &mut stage, Ok(Inputs::NONE));
     }
     b.ask("stop");
     for _ in 0..60_000 {
-        tick::drive(&mut b.slot, &mut stage, Inputs::NONE);
+        tick::drive(&mut b.slot, &mut stage, Ok(Inputs::NONE));
     }
     assert!(!pin.high.get() && stage.is_safe());
     assert!(b.ask("target 44").starts_with("ok "));
-    tick::drive(&mut b.slot, &mut stage, Inputs::NONE);
+    tick::drive(&mut b.slot, &mut stage, Ok(Inputs::NONE));
     assert!(pin.high.get());
     bus.fails.set(true);
-    let t = tick::drive(&mut b.slot, &mut stage, Inputs::NONE).unwrap();
+    let t = tick::drive(&mut b.slot, &mut stage, Ok(Inputs::NONE)).unwrap();
     assert_eq!(
         t.output.event,
         Some(de_resonator::Event::Fault(de_resonator::Fault::Bus))
@@ -395,14 +393,14 @@ fn tracking_slope_reaches_the_background_job() {
     let bytes = image_with(&settings);
     let mut b = Bench::boot(&bytes, None::<NoKeeper>, None);
     let mut plant = common::Plant::new(common::with_quality_factor(REFERENCE_DEVICE, 50.0), 1e3);
-    let (bus, pin) = (Bus::default(), Pin::default());
+    let (bus, pin) = (common::Bus::default(), common::Pin::default());
     let mut stage = OutputStage::new(Dac8551::new(&bus), &pin);
     let (mut while_driving, mut jobs) = (0, 0);
     for _ in 0..10_000 {
         let t = tick::drive(
             &mut b.slot,
             &mut stage,
-            Inputs::stretch(plant.stretch() as f32),
+            Ok(Inputs::stretch(plant.stretch() as f32)),
         )
         .unwrap();
         plant.step(t.output.volts);
@@ -419,47 +417,6 @@ fn tracking_slope_reaches_the_background_job() {
         "{jobs} jobs, {while_driving} while driving"
     );
     assert_eq!(b.slot.as_ref().unwrap().latched_fault(), None);
-}
-
-/// The DAC's bus: counts nothing, fails when told.
-#[derive(Default)]
-struct Bus {
-    fails: Cell<bool>,
-}
-
-impl ErrorType for &Bus {
-    type Error = ErrorKind;
-}
-
-impl SpiDevice for &Bus {
-    fn transaction(&mut self, _: &mut [Operation<'_, u8>]) -> Result<(), ErrorKind> {
-        if self.fails.get() {
-            Err(ErrorKind::Other)
-        } else {
-            Ok(())
-        }
-    }
-}
-
-/// The amplifier's enable line.
-#[derive(Default)]
-struct Pin {
-    high: Cell<bool>,
-}
-
-impl PinErrorType for &Pin {
-    type Error = core::convert::Infallible;
-}
-
-impl OutputPin for &Pin {
-    fn set_low(&mut self) -> Result<(), Self::Error> {
-        self.high.set(false);
-        Ok(())
-    }
-    fn set_high(&mut self) -> Result<(), Self::Error> {
-        self.high.set(true);
-        Ok(())
-    }
 }
 
 /// The watchdog's feeding: at 1 kHz the low-priority tasks may go 0.5 s (500 ticks) without
@@ -514,19 +471,19 @@ fn reset_and_clear_wait_for_rest_at_zero() {
     let bias = b.slot.as_ref().unwrap().plan().bias_volts;
     let settle_ticks = (bias / slew * 1000.0) as u32;
     assert!(settle_ticks > 100, "{settle_ticks}");
-    let (bus, pin) = (Bus::default(), Pin::default());
+    let (bus, pin) = (common::Bus::default(), common::Pin::default());
     let mut stage = OutputStage::new(Dac8551::new(&bus), &pin);
-    tick::drive(&mut b.slot, &mut stage, Inputs::NONE);
+    tick::drive(&mut b.slot, &mut stage, Ok(Inputs::NONE));
     bus.fails.set(true);
-    let t = tick::drive(&mut b.slot, &mut stage, Inputs::NONE).unwrap();
+    let t = tick::drive(&mut b.slot, &mut stage, Ok(Inputs::NONE)).unwrap();
     assert_eq!(t.output.volts, 0.0, "0 V commanded at once");
     for _ in 0..settle_ticks * 9 / 10 {
-        tick::drive(&mut b.slot, &mut stage, Inputs::NONE);
+        tick::drive(&mut b.slot, &mut stage, Ok(Inputs::NONE));
     }
     assert_eq!(code(&b.ask("clear")), Some(3));
     assert_eq!(code(&b.ask_then(&line("reset")).0), Some(3));
     for _ in 0..settle_ticks / 5 {
-        tick::drive(&mut b.slot, &mut stage, Inputs::NONE);
+        tick::drive(&mut b.slot, &mut stage, Ok(Inputs::NONE));
     }
     let (reply, then) = b.ask_then(&line("reset"));
     assert_eq!(

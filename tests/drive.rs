@@ -77,17 +77,19 @@ fn the_output_stage_reacts_to_every_fault_the_same_way() {
     stage.safe().unwrap();
     // Not enabled yet: a tick's output is not written.
     let out = c.tick(Inputs::NONE);
-    assert_eq!(stage.send(&mut c, out), out);
+    let mut sent = out;
+    stage.send(&mut c, &mut sent);
+    assert_eq!(sent, out);
     stage.enable().unwrap();
     assert!(!stage.is_safe());
-    let code = de_resonator::Output {
+    let mut code = de_resonator::Output {
         code: DacCode(0x1234),
         volts: 0.0,
         event: None,
     };
-    stage.send(&mut c, code);
-    let out = c.fault(Fault::Bus);
-    stage.send(&mut c, out);
+    stage.send(&mut c, &mut code);
+    let mut out = c.fault(Fault::Bus);
+    stage.send(&mut c, &mut out);
     assert!(stage.is_safe());
     let (dac, mut pin) = stage.release();
     dac.release().done();
@@ -109,8 +111,8 @@ fn the_output_stage_reacts_to_every_fault_the_same_way() {
     );
     stage.enable().unwrap();
     let mut c = start(Settings::for_target(44.0)).unwrap();
-    let out = c.tick(Inputs::NONE);
-    let sent = stage.send(&mut c, out);
+    let mut sent = c.tick(Inputs::NONE);
+    stage.send(&mut c, &mut sent);
     assert_eq!(sent.event, Some(Event::Fault(Fault::Bus)));
     assert_eq!(c.latched_fault(), Some(Fault::Bus));
     let (_, mut pin) = stage.release();

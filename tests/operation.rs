@@ -7,6 +7,7 @@ mod common;
 
 use common::reseal;
 
+use de_resonator::acquire::{FrontEnd, FrontEndError};
 use de_resonator::board::protocol::{self, Command, Reply};
 use de_resonator::image::{self, AmplifierSpec, Image, ImageError, DAC_BITS};
 use de_resonator::table::TableError;
@@ -405,7 +406,15 @@ fn spec() -> AmplifierSpec {
 fn made_image(settings: &Settings) -> Vec<u8> {
     let t = reference_table();
     let mut out = vec![0xAA; image::image_bytes(t.len()) + 100];
-    let n = Image::write(&mut out, &REFERENCE_DEVICE.cast(), &spec(), settings, &t).unwrap();
+    let n = Image::write(
+        &mut out,
+        &REFERENCE_DEVICE.cast(),
+        &spec(),
+        &FrontEnd::NONE,
+        settings,
+        &t,
+    )
+    .unwrap();
     out.truncate(n);
     out
 }
@@ -482,12 +491,27 @@ fn every_wrong_image_is_refused_with_its_reason() {
         ImageError::BadMagic
     );
     let mut version = good.clone();
-    version[4] = 2;
+    version[4] = 1;
     reseal(&mut version);
     assert_eq!(
         Image::parse(&version).unwrap_err(),
-        ImageError::UnsupportedVersion { version: 2 }
+        ImageError::UnsupportedVersion { version: 1 }
     );
+    // A front end the board cannot read: the current monitor on the command port's RX pin
+    // (IN3), or with no scale.
+    let mut front = good.clone();
+    front[84] = 3;
+    reseal(&mut front);
+    assert!(matches!(
+        Image::parse(&front),
+        Err(ImageError::FrontEnd(FrontEndError::Input { input: 3, .. }))
+    ));
+    front[84] = 10;
+    reseal(&mut front);
+    assert!(matches!(
+        Image::parse(&front),
+        Err(ImageError::FrontEnd(FrontEndError::Scale { .. }))
+    ));
     let mut bits = good.clone();
     bits[76] = 12;
     reseal(&mut bits);
@@ -501,7 +525,7 @@ fn every_wrong_image_is_refused_with_its_reason() {
     assert!(matches!(Image::parse(&rail), Err(ImageError::Amplifier(_))));
     // A setting out of range passes the frame and is the boot's to refuse, by name.
     let mut margin = good.clone();
-    margin[84..88].copy_from_slice(&1.5f32.to_le_bytes());
+    margin[148..152].copy_from_slice(&1.5f32.to_le_bytes());
     reseal(&mut margin);
     let read = Image::parse(&margin).unwrap();
     let a = read.amplifier.amplifier().unwrap();

@@ -526,16 +526,7 @@ fn a_device_differing_only_in_mu_shares_the_stretch_terms() {
     let mut rng = Rng(0x5eed_7e55);
     let (mut checked, mut agreed) = (0, 0);
     while checked < 300 {
-        let p = random_device(&mut rng);
-        let Ok(flashed) = Device::new(p.cast::<f32>()) else {
-            continue;
-        };
-        let scaled = DeviceParams {
-            shear_modulus: p.shear_modulus * rng.log_range(0.25, 4.0),
-            damping: rng.range(0.0, 1.0),
-            ..p
-        };
-        let Ok(estimate) = Device::new(scaled.cast::<f32>()) else {
+        let Some((p, flashed, scaled, estimate)) = device_and_estimate(&mut rng) else {
             continue;
         };
         assert!(flashed.differs_only_in_modulus(&estimate));
@@ -580,5 +571,81 @@ fn a_device_differing_only_in_mu_shares_the_stretch_terms() {
     assert!(
         agreed > 1_000,
         "{agreed} states in the model, off the breakdown's boundary"
+    );
+}
+
+/// A random valid device (f32, as flashed) and an estimate of it that differs only in μ
+/// (μ/4 to 4μ) and the damping (which no check reads); `None` where either is not valid.
+#[allow(clippy::type_complexity)]
+fn device_and_estimate(
+    rng: &mut Rng,
+) -> Option<(
+    DeviceParams<f64>,
+    Device<f32>,
+    DeviceParams<f64>,
+    Device<f32>,
+)> {
+    let p = random_device(rng);
+    let flashed = Device::new(p.cast::<f32>()).ok()?;
+    let scaled = DeviceParams {
+        shear_modulus: p.shear_modulus * rng.log_range(0.25, 4.0),
+        damping: rng.range(0.0, 1.0),
+        ..p
+    };
+    let estimate = Device::new(scaled.cast::<f32>()).ok()?;
+    Some((p, flashed, scaled, estimate))
+}
+
+/// The monitor's one check for two devices that differ only in μ (`StretchTerms::both_pass`)
+/// passes exactly when each device's own checks pass, on random devices, estimates of μ/4 to
+/// 4μ, stretches in and out of the model and voltages up to three times the unit, and near
+/// the pre-stretch at low voltages (where most pass): both outcomes counted.
+#[test]
+fn one_check_passes_exactly_when_both_devices_pass() {
+    let mut rng = Rng(0xb07_4a55);
+    let (mut both, mut one_fails, mut devices) = (0, 0, 0);
+    while devices < 300 {
+        let Some((p, flashed, scaled, estimate)) = device_and_estimate(&mut rng) else {
+            continue;
+        };
+        devices += 1;
+        let (low, high) = flashed.plausible_stretch();
+        for k in 0..40 {
+            // Half anywhere, half near the pre-stretch at low voltages (where most pass).
+            let (stretch, volts) = if k % 2 == 0 {
+                (
+                    rng.range(f64::from(low), f64::from(high)),
+                    rng.range(0.0, 3.0),
+                )
+            } else {
+                let l1p = f64::from(flashed.prestretch_1());
+                (l1p * rng.range(0.9, 1.3), rng.range(0.0, 0.5))
+            };
+            let (stretch, volts) = (stretch as f32, volts as f32 * flashed.volts_per_unit());
+            let of = |d: &Device<f32>| {
+                let p = volts / d.volts_per_unit();
+                (p * p, d.breakdown_field_dimless())
+            };
+            let (f, e) = (of(&flashed), of(&estimate));
+            let (larger, smaller) = if e.0 > f.0 { (e, f) } else { (f, e) };
+            let each = flashed.first_failure(stretch, f.0).is_none()
+                && estimate.first_failure(stretch, e.0).is_none();
+            let one = flashed.stretch_terms(stretch).both_pass(larger, smaller);
+            assert_eq!(
+                one, each,
+                "{p:?}, μ {} at {stretch}, {volts} V",
+                scaled.shear_modulus
+            );
+            if each {
+                both += 1;
+            } else {
+                one_fails += 1;
+            }
+        }
+    }
+    eprintln!("{both} pass, {one_fails} fail");
+    assert!(
+        both > 500 && one_fails > 500,
+        "{both} pass, {one_fails} fail"
     );
 }

@@ -7,6 +7,7 @@
 //! | DAC8551 SYNC (chip select) | PA4 | GPIO, in `ExclusiveDevice` |
 //! | amplifier enable (high: on) | PB0 | GPIO |
 //! | command port TX, RX | PA2, PA3 | USART2, 115200 8N1 |
+//! | analog inputs (the image's front end) | PA0, PA1, PB1, PC0..PC5 (IN0, IN1, IN9, IN10..IN15) | ADC1, triggered by TIM2, DMA2 stream 0 |
 //!
 //! Silicon runs from an 8 MHz crystal (HSE) and the PLL at 168 MHz; the `qemu` build leaves
 //! the clocks at reset (QEMU does not emulate RCC, and its SysTick runs at 168 MHz anyway).
@@ -68,6 +69,20 @@ pub struct Board {
     /// Set when the crystal or the PLL failed and the board runs on HSI (slower, still safe:
     /// every rate is computed from the clock in use).
     pub clock_error: Option<ClockError>,
+    /// The clocks, for the peripherals set up once the image is read (the ADC, its DMA).
+    pub rcc: Rcc,
+    /// The analog inputs' peripherals and pins (silicon; QEMU emulates no ADC sampling).
+    #[cfg(not(feature = "qemu"))]
+    pub analog: AnalogParts,
+}
+
+/// What the acquisition (`analog`) takes, apart from its buffers.
+#[cfg(not(feature = "qemu"))]
+pub struct AnalogParts {
+    pub adc1: pac::ADC1,
+    pub dma2: pac::DMA2,
+    pub tim2: pac::TIM2,
+    pub pins: crate::analog::AnalogPins,
 }
 
 /// Poll `ready` up to `CLOCK_POLLS` times.
@@ -133,6 +148,26 @@ impl Board {
         let _ = (HSE_HZ, Config::hsi);
         let gpioa = dp.GPIOA.split(&mut rcc);
         let gpiob = dp.GPIOB.split(&mut rcc);
+        #[cfg(not(feature = "qemu"))]
+        let analog = {
+            let gpioc = dp.GPIOC.split(&mut rcc);
+            AnalogParts {
+                adc1: dp.ADC1,
+                dma2: dp.DMA2,
+                tim2: dp.TIM2,
+                pins: crate::analog::AnalogPins {
+                    pa0: gpioa.pa0.into_analog(),
+                    pa1: gpioa.pa1.into_analog(),
+                    pb1: gpiob.pb1.into_analog(),
+                    pc0: gpioc.pc0.into_analog(),
+                    pc1: gpioc.pc1.into_analog(),
+                    pc2: gpioc.pc2.into_analog(),
+                    pc3: gpioc.pc3.into_analog(),
+                    pc4: gpioc.pc4.into_analog(),
+                    pc5: gpioc.pc5.into_analog(),
+                },
+            }
+        };
         let mut enable = gpiob.pb0.into_push_pull_output();
         enable.set_low();
         let spi = dp.SPI1.spi(
@@ -168,6 +203,9 @@ impl Board {
             flash: dp.FLASH,
             iwdg: dp.IWDG,
             clock_error,
+            rcc,
+            #[cfg(not(feature = "qemu"))]
+            analog,
         }
     }
 }

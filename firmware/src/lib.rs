@@ -3,8 +3,9 @@
 //! ticks the core's controller on SysTick, writes the DAC through SPI1, and serves the
 //! command port on USART2. The logic is in the `de-resonator` core; nothing here decides a
 //! voltage, answers a request or decides when the amplifier is on (the core's `board`). One
-//! module a part: `board` (clocks, pins, peripherals), `config` (the image), `sensor` (what
-//! the tick measures), `storage` (where `save` keeps the settings), `watchdog` (the IWDG, or its QEMU stand-in), `runtime` (exit codes,
+//! module a part: `board` (clocks, pins, peripherals), `analog` (silicon's ADC, its timer and
+//! DMA, filling the tick's block of codes), `config` (the image), `sensor` (QEMU's stand-ins
+//! for the analog inputs), `storage` (where `save` keeps the settings), `watchdog` (the IWDG, or its QEMU stand-in), `runtime` (exit codes,
 //! panic and fault handlers, the stack meter); `reference` and `stand_in` serve the
 //! on-target checks and counts only.
 #![no_std]
@@ -15,6 +16,23 @@ use defmt_rtt as _;
 #[cfg(feature = "log-semihosting")]
 use defmt_semihosting as _;
 
+#[cfg(not(feature = "qemu"))]
+pub mod analog;
+/// QEMU emulates no ADC sampling and no DMA: no acquisition ever starts (the type the app's
+/// resources and its DMA task name).
+#[cfg(feature = "qemu")]
+pub mod analog {
+    use de_resonator::acquire::Block;
+
+    /// Never made under QEMU.
+    pub enum Acquisition {}
+
+    impl Acquisition {
+        pub fn on_buffer(&mut self, _: &mut Block) {
+            match *self {}
+        }
+    }
+}
 pub mod board;
 pub mod config;
 pub mod reference;

@@ -98,3 +98,78 @@ fn a_console_without_a_firmware_says_so() {
     let out = host_sim(&["console", "--script", "/dev/null"]);
     assert_eq!(out.status.code(), Some(2));
 }
+
+/// The board's analog front end from a settings file's `[front_end]`: written into the image
+/// and read back as given (JSON and text); a front end the board cannot read (a channel on the
+/// command port's pin, a range reaching a rail) or a table with a key missing is refused by
+/// name and nothing is written.
+#[test]
+fn an_images_front_end_is_written_read_back_and_refused_when_wrong() {
+    let settings = scratch("front-end.toml");
+    let front_end = "target_hz = 44.0\n\
+        [front_end]\nscan_hz = 10000\n\
+        [front_end.current]\ninput = 10\nzero_code = 2047.5\nper_count = 1e-7\nlow = -1.9e-4\nhigh = 1.9e-4\n\
+        [front_end.stretch]\ninput = 12\nzero_code = -4116.6667\nper_count = 3.2432432e-4\nlow = 1.4\nhigh = 2.6\n";
+    std::fs::write(&settings, front_end).unwrap();
+    let s = settings.to_str().unwrap();
+    let path = scratch("front-end.img");
+    let p = path.to_str().unwrap();
+    let out = host_sim(&["image", "--settings", s, "--out", p]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let read = stdout_json(&host_sim(&["--json", "image", "--check", p]));
+    let fe = &read["front_end"];
+    assert_eq!(fe["scan_hz"].as_f64(), Some(10_000.0));
+    let channels = fe["channels"].as_array().unwrap();
+    assert_eq!(channels.len(), 2, "{fe}");
+    assert_eq!(channels[0]["channel"], "current");
+    assert_eq!(channels[0]["input"], 10);
+    assert_eq!(channels[0]["per_count"].as_f64().unwrap() as f32, 1e-7);
+    assert_eq!(channels[1]["channel"], "stretch");
+    assert_eq!(channels[1]["low"].as_f64().unwrap() as f32, 1.4);
+    assert_eq!(channels[1]["high"].as_f64().unwrap() as f32, 2.6);
+    let text = String::from_utf8_lossy(&host_sim(&["image", "--check", p]).stdout).to_string();
+    assert!(text.contains("current       ADC IN10"), "{text}");
+    assert!(!text.contains("amplifier     ADC"), "{text}");
+    // The default image: no analog input, said so.
+    let plain = scratch("plain.img");
+    host_sim(&[
+        "image",
+        "--target-hz",
+        "44",
+        "--out",
+        plain.to_str().unwrap(),
+    ]);
+    let text =
+        String::from_utf8_lossy(&host_sim(&["image", "--check", plain.to_str().unwrap()]).stdout)
+            .to_string();
+    assert!(text.contains("none fitted: open loop"), "{text}");
+
+    for (wrong, words) in [
+        (
+            front_end.replace("input = 12", "input = 3"),
+            "not an analog input",
+        ),
+        (
+            front_end.replace("zero_code = 2047.5", "zero_code = 0"),
+            "live zero",
+        ),
+        (front_end.replace("low = 1.4\n", ""), "needs `low`"),
+        (
+            front_end.replace("scan_hz = 10000", "scan_hz = 10500"),
+            "whole number of scans",
+        ),
+    ] {
+        std::fs::write(&settings, &wrong).unwrap();
+        let bad = scratch("bad-front-end.img");
+        let _ = std::fs::remove_file(&bad);
+        let out = host_sim(&["image", "--settings", s, "--out", bad.to_str().unwrap()]);
+        let said = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{said}");
+        assert!(said.contains(words), "{words}: {said}");
+        assert!(!bad.exists());
+    }
+}

@@ -8,7 +8,7 @@ use heapless::{String, Vec};
 
 use super::{Board, Keeper};
 use crate::board::protocol::{self, Command, ErrorCode, ParseError, Status, MAX_LINE};
-use crate::controller::{Controller, Phase, Refusal, Setting, Settings};
+use crate::controller::{Controller, Inputs, Phase, Refusal, Setting, Settings};
 use crate::numerics::decimal::Decimal;
 
 /// One request as received: its bytes, or why it has none.
@@ -68,7 +68,7 @@ pub enum Then {
 }
 
 /// A reply line (one `ok …` or `err …`, without its `\n`); cut short if it would not fit.
-pub type ReplyLine = String<256>;
+pub type ReplyLine = String<384>;
 
 /// What the reply's status fields take from the hardware, read by the command task.
 #[derive(Clone, Copy, Debug, Default)]
@@ -78,6 +78,8 @@ pub struct Extras {
     pub stack_bytes: u32,
     /// An independent clock at the last tick, µs (QEMU builds).
     pub clock_us: Option<u32>,
+    /// The last tick's readings of the analog inputs, in units (`acquire`).
+    pub readings: Inputs,
 }
 
 /// The controller as the command task reaches it: under a lock shared with the tick.
@@ -376,6 +378,7 @@ fn status(c: &Controller, limit: Option<crate::safety::FailureMode>, extras: &Ex
         tick_cycles_max: extras.tick_cycles_max,
         stack_bytes: extras.stack_bytes,
         clock_us: extras.clock_us,
+        readings: extras.readings,
         fault: c.latched_fault(),
     }
 }

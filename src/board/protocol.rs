@@ -12,7 +12,7 @@
 
 use core::fmt;
 
-use crate::controller::{Fault, Phase, Setting};
+use crate::controller::{Fault, Inputs, Phase, Setting};
 use crate::numerics::decimal::{scale10, Decimal};
 use crate::safety::FailureMode;
 
@@ -341,6 +341,8 @@ pub struct Status {
     pub stack_bytes: u32,
     /// Virtual time from an independent clock, µs (QEMU builds only).
     pub clock_us: Option<u32>,
+    /// The last tick's readings of the fitted analog inputs, in units.
+    pub readings: Inputs,
     /// The fault that brings the output down to 0 V and holds it there, if any.
     pub fault: Option<Fault>,
 }
@@ -363,6 +365,16 @@ impl fmt::Display for Status {
         )?;
         if let Some(us) = self.clock_us {
             write!(f, " clock_us={us}")?;
+        }
+        let r = &self.readings;
+        for (key, reading) in [
+            ("current_amps", r.current_amps),
+            ("amplifier_volts", r.amplifier_volts),
+            ("stretch", r.stretch),
+        ] {
+            if let Some(value) = reading {
+                write!(f, " {key}={}", Decimal(value))?;
+            }
         }
         match self.fault {
             Some(fault) => write!(f, " fault={fault}"),
@@ -466,6 +478,10 @@ mod tests {
             tick_cycles_max: 300,
             stack_bytes: 1024,
             clock_us: None,
+            readings: Inputs {
+                current_amps: Some(-2.5e-6),
+                ..Inputs::NONE
+            },
             fault: Some(Fault::Bus),
         };
         let mut line = heapless::String::<256>::new();
@@ -474,6 +490,11 @@ mod tests {
         assert_eq!(reply.field("phase"), Some("driving"));
         assert_eq!(reply.field("bias_volts"), Some("7449.5"));
         assert_eq!(reply.field("limit"), Some("emi"));
+        let amps = reply
+            .field("current_amps")
+            .and_then(|v| v.parse::<f32>().ok());
+        assert_eq!(amps, Some(-2.5e-6));
+        assert_eq!(reply.field("stretch"), None);
         assert_eq!(reply.field("fault"), Some("DAC bus error"));
         assert_eq!(
             Reply::parse("err 2 target out of range"),

@@ -8,7 +8,7 @@
 use embedded_hal::digital::OutputPin;
 use embedded_hal::spi::SpiDevice;
 
-use crate::controller::{Controller, Fault, Output};
+use crate::controller::{Controller, Fault, Output, Phase};
 use crate::drive::{Dac8551, DacError};
 
 /// What failed on the way out.
@@ -73,23 +73,19 @@ impl<SPI: SpiDevice, EN: OutputPin> OutputStage<SPI, EN> {
     /// Send one tick's output: its code, or the safe state once a fault's descent has
     /// reached 0 V (or the bus fails now, which faults the controller: the enable line drops
     /// at once). Nothing is written while the stage is safe (before `enable`, or after a
-    /// fault). The output as it was sent: a bus failure makes it code 0 with
-    /// `Event::Fault(Fault::Bus)`.
-    pub fn send(&mut self, controller: &mut Controller, out: Output) -> Output {
+    /// fault). `out` is left as it was sent: a bus failure makes it code 0 with
+    /// `Event::Fault(Fault::Bus)`. (In place, not a copy in and out: the tick's budget.)
+    pub fn send(&mut self, controller: &mut Controller, out: &mut Output) {
         if self.safe {
-            return out;
+            return;
         }
-        if controller.latched_fault().is_some() && out.volts == 0.0 {
+        if out.volts == 0.0 && controller.phase() == Phase::Faulted {
             let _ = self.safe();
-            return out;
+            return;
         }
-        match self.dac.write(out.code) {
-            Ok(()) => out,
-            Err(_) => {
-                let out = controller.fault(Fault::Bus);
-                let _ = self.safe();
-                out
-            }
+        if self.dac.write(out.code).is_err() {
+            *out = controller.fault(Fault::Bus);
+            let _ = self.safe();
         }
     }
 

@@ -5,8 +5,9 @@
 use embedded_hal::digital::OutputPin;
 use embedded_hal::spi::SpiDevice;
 
+use crate::acquire::InputError;
 use crate::board::stage::OutputStage;
-use crate::controller::{Controller, Inputs, Output, Phase};
+use crate::controller::{Controller, Fault, Inputs, Output, Phase};
 
 /// What a tick did, when a controller runs.
 #[derive(Clone, Copy, Debug)]
@@ -22,11 +23,13 @@ pub struct Ticked {
 /// One tick: the controller's output to the stage. The amplifier is on while a plan that
 /// passed its checks drives; off (the DAC powered down, the enable line low) with no
 /// controller, at rest at 0 V after `stop`, and at the end of a fault's descent (the stage's
-/// own reaction, in `OutputStage::send`). `None`: no controller, the output off.
+/// own reaction, in `OutputStage::send`). `inputs` are the acquisition's (`acquire`): an
+/// input that gave no reading trips the controller (`Fault::Input`); once it is faulted, the
+/// descent goes on whatever the inputs. `None`: no controller, the output off.
 pub fn drive<SPI: SpiDevice, EN: OutputPin>(
     slot: &mut Option<Controller>,
     stage: &mut OutputStage<SPI, EN>,
-    inputs: Inputs,
+    inputs: Result<Inputs, InputError>,
 ) -> Option<Ticked> {
     let Some(c) = slot.as_mut() else {
         if !stage.is_safe() {
@@ -35,14 +38,18 @@ pub fn drive<SPI: SpiDevice, EN: OutputPin>(
         return None;
     };
     let at_rest = c.phase() == Phase::Holding && c.plan().bias_volts == 0.0;
-    let out = c.tick(inputs);
-    let rest = at_rest && out.volts == 0.0;
-    if !rest && c.latched_fault().is_none() && stage.is_safe() {
+    let mut output = match inputs {
+        Ok(inputs) => c.tick(inputs),
+        Err(e) if c.phase() != Phase::Faulted => c.fault(Fault::Input(e)),
+        Err(_) => c.tick(Inputs::NONE),
+    };
+    let rest = at_rest && output.volts == 0.0;
+    if !rest && c.phase() != Phase::Faulted && stage.is_safe() {
         let _ = stage.enable();
     } else if rest && !stage.is_safe() {
         let _ = stage.safe();
     }
-    let output = stage.send(c, out);
+    stage.send(c, &mut output);
     Some(Ticked {
         output,
         ticks: c.ticks(),

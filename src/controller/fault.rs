@@ -6,6 +6,7 @@ use core::fmt;
 use crate::numerics::decimal::Decimal;
 
 use super::settings::Setting;
+use crate::acquire::InputError;
 use crate::device::ParamError;
 use crate::drive::{CodeError, DacCode};
 use crate::estimate::ring::TrimError;
@@ -69,6 +70,9 @@ pub enum Fault {
     Limit { mode: FailureMode, tick: u32 },
     /// The DAC bus failed (reported by the IO side).
     Bus,
+    /// An analog input gave no usable reading this tick (`acquire`): no sample, at a rail,
+    /// or outside its plausible range.
+    Input(InputError),
     /// The trim could not measure, estimate or converge.
     Trim(TrimError),
 }
@@ -180,6 +184,7 @@ impl fmt::Display for Fault {
                 write!(f, "measured motion at tick {tick}: {}", mode.description())
             }
             Fault::Bus => write!(f, "DAC bus error"),
+            Fault::Input(e) => write!(f, "sensor fault: {e}"),
             Fault::Trim(e) => write!(f, "trim: {e}"),
         }
     }
@@ -221,6 +226,7 @@ impl Fault {
             | Fault::AmplifierDisagrees { .. }
             | Fault::Limit { .. }
             | Fault::Bus
+            | Fault::Input(_)
             | Fault::Trim(_) => FaultStage::Running,
         }
     }

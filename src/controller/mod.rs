@@ -287,11 +287,15 @@ impl Controller {
         }
     }
 
-    /// The trim's estimate of the device from now on.
+    /// The trim's estimate of the device from now on: the waiting result's (a `Retune`'s),
+    /// copied from it once (the tick's budget: a device is large), with its comparison
+    /// `trim_done` worked out.
     #[cfg(feature = "trim")]
-    fn set_estimate(&mut self, device: Device<f32>) {
-        self.estimate_shares_terms = device.differs_only_in_modulus(&self.flashed);
-        self.estimate = Some(device);
+    fn take_estimate(&mut self) {
+        if let Some(TrimResult::Retune { device, .. }) = &self.trim.result {
+            self.estimate = Some(*device);
+            self.estimate_shares_terms = self.trim.result_shares_terms;
+        }
     }
 
     /// No background job is wanted any more: a result of one handed out is dropped.
@@ -365,7 +369,7 @@ impl Controller {
         // starts from what was sent before.
         let sent_before = self.last_volts;
         self.last_volts = commanded_volts;
-        match self.advance(k, inputs.ring()) {
+        match self.advance(k, Ring::of(&inputs)) {
             Ok(event) => Output {
                 code,
                 volts: commanded_volts,
@@ -640,6 +644,11 @@ impl Controller {
     pub fn trim_done(&mut self, done: TrimDone) {
         let current = self.trim.handed_out && done.job == self.trim.job;
         if self.job_wanted() && current && self.trim.result.is_none() {
+            // The estimate's comparison with the device flashed here, outside the tick.
+            self.trim.result_shares_terms = match &done.result {
+                TrimResult::Retune { device, .. } => device.differs_only_in_modulus(&self.flashed),
+                _ => false,
+            };
             self.trim.result = Some(done.result);
         }
     }
@@ -674,7 +683,7 @@ impl Controller {
     /// window's first tenth of a target period is skipped (NaN): the step back from the
     /// pulse charges the membrane then (C·dΦ/dt, far above the ring's Φ·C'·dλ/dt).
     fn record(&mut self, k: u32, ring: Ring) -> Result<(), Fault> {
-        let s = self.settings;
+        let s = &self.settings;
         let (stride, len) = s.trim_window();
         let Some(at) = k.checked_sub(self.trim.window_from) else {
             return Ok(());
@@ -713,12 +722,84 @@ impl Controller {
         self.hold_from(k, true);
     }
 
+    /// A `Retune`'s new plan at tick `k`: from `bias_volts` to `next_bias_volts` under the
+    /// lower of its cap and the cap in force, checked; the estimate taken from the result
+    /// (still waiting in `trim.result`). `(f, μ, ring gain, ring seen)` the trim's memory.
+    fn retune(
+        &mut self,
+        k: u32,
+        bias_volts: f32,
+        next_bias_volts: f32,
+        max_volts: f32,
+        (measured_hz, shear_modulus, ring_gain, ring_seen): (f32, f32, f32, f32),
+    ) -> Result<(), Fault> {
+        self.trim.params.shear_modulus = shear_modulus;
+        self.trim.count = self.trim.count.saturating_add(1);
+        self.trim.ring_gain = ring_gain;
+        self.trim.ring_seen = ring_seen;
+        self.trim.previous = Some((bias_volts * bias_volts, measured_hz));
+        let mut plan = Plan {
+            start_tick: k.saturating_add(1),
+            start_volts: bias_volts,
+            bias_volts: next_bias_volts,
+            pulse_ticks: (0, 0),
+            ..self.plan
+        };
+        let bound = max_volts.min(self.max_volts);
+        plan.start_under(bound, self.last_volts);
+        plan.check_range(next_bias_volts, bound)?;
+        plan.probe_off_above(bound);
+        self.amplifier
+            .code(next_bias_volts + plan.swing_volts())
+            .map_err(Fault::Amplifier)?;
+        self.take_estimate_cap(max_volts);
+        self.take_estimate();
+        self.trim.tuned = true;
+        self.plan = plan;
+        self.state = State::Ramping { then_measure: true };
+        Ok(())
+    }
+
     /// Apply the trim's result at tick `k`, once it has come back.
     fn apply_trim(&mut self, k: u32) -> Result<Option<Event>, Fault> {
-        let Some(result) = self.trim.result.take() else {
+        // Read in place (a `Retune` holds a device, large: copied once, into the estimate).
+        let Some(result) = &self.trim.result else {
             return Ok(None);
         };
         let bias_volts = self.plan.bias_volts;
+        let result = match *result {
+            TrimResult::Retune {
+                measured_hz,
+                shear_modulus,
+                bias_volts: next_bias_volts,
+                max_volts,
+                ring_gain,
+                ring_seen,
+                resolution,
+                ..
+            } => {
+                let applied = self.retune(
+                    k,
+                    bias_volts,
+                    next_bias_volts,
+                    max_volts,
+                    (measured_hz, shear_modulus, ring_gain, ring_seen),
+                );
+                self.trim.result = None;
+                applied?;
+                return Ok(Some(Event::Trimmed {
+                    bias_volts,
+                    measured_hz,
+                    shear_modulus,
+                    next_bias_volts,
+                    resolution,
+                }));
+            }
+            _ => self.trim.result.take(),
+        };
+        let Some(result) = result else {
+            return Ok(None);
+        };
         match result {
             TrimResult::Converged {
                 measured_hz,
@@ -740,48 +821,8 @@ impl Controller {
                     resolution,
                 }))
             }
-            TrimResult::Retune {
-                measured_hz,
-                shear_modulus,
-                bias_volts: next_bias_volts,
-                max_volts,
-                ring_gain,
-                ring_seen,
-                resolution,
-                device,
-            } => {
-                self.trim.params.shear_modulus = shear_modulus;
-                self.trim.count = self.trim.count.saturating_add(1);
-                self.trim.ring_gain = ring_gain;
-                self.trim.ring_seen = ring_seen;
-                self.trim.previous = Some((bias_volts * bias_volts, measured_hz));
-                let mut plan = Plan {
-                    start_tick: k.saturating_add(1),
-                    start_volts: bias_volts,
-                    bias_volts: next_bias_volts,
-                    pulse_ticks: (0, 0),
-                    ..self.plan
-                };
-                let bound = max_volts.min(self.max_volts);
-                plan.start_under(bound, self.last_volts);
-                plan.check_range(next_bias_volts, bound)?;
-                plan.probe_off_above(bound);
-                self.amplifier
-                    .code(next_bias_volts + plan.swing_volts())
-                    .map_err(Fault::Amplifier)?;
-                self.take_estimate_cap(max_volts);
-                self.set_estimate(device);
-                self.trim.tuned = true;
-                self.plan = plan;
-                self.state = State::Ramping { then_measure: true };
-                Ok(Some(Event::Trimmed {
-                    bias_volts,
-                    measured_hz,
-                    shear_modulus,
-                    next_bias_volts,
-                    resolution,
-                }))
-            }
+            // Taken above.
+            TrimResult::Retune { .. } => Ok(None),
             TrimResult::AboveCeiling {
                 shear_modulus,
                 needed_volts,

@@ -2,13 +2,11 @@
 //! trim's pulse, then the AC drive), its range against [0, cap], and its run through the
 //! model under the monitor (model.md §6).
 
-use core::f32::consts::TAU;
-
 use super::fault::Fault;
 use super::settings::{Setting, Settings};
 use crate::device::Device;
 use crate::numerics::integration::{Drive, Integrator, Method, State, StepError};
-use crate::numerics::real::Real;
+use crate::numerics::real::sin_cos_turns;
 use crate::safety::Monitor;
 
 /// The longest plan, in ticks (about 18 hours at 1 kHz before the AC starts).
@@ -153,8 +151,7 @@ impl Plan {
         };
         match self.ac_tick {
             Some(from) if k >= from => {
-                let angle = self.phase(k) as f32 * (TAU / 4_294_967_296.0);
-                ramp + self.ac_volts * Real::sin(angle) + probe
+                ramp + self.ac_volts * sin_cos_turns(self.phase(k)).0 + probe
             }
             _ => {
                 let (from, to) = self.pulse_ticks;

@@ -74,7 +74,7 @@ impl Controller {
             }
             return None;
         };
-        let s = self.settings;
+        let s = &self.settings;
         let flashed = &self.flashed;
         let lock_in = self
             .sensing

@@ -5,11 +5,11 @@
 //! with the measured frequency) now and then.
 
 use super::fault::Fault;
-use super::plan::Plan;
 use super::trim::TrimResult;
 use super::watch::Ring;
 use super::{Controller, Event};
 use crate::estimate::lockin::{drive_force_per_stretch, Lock, Tracker, MAX_DETUNING};
+use crate::numerics::real::sqrt_f32;
 
 /// The tracker's memory between ticks.
 #[derive(Clone, Copy, Debug, Default)]
@@ -25,6 +25,8 @@ pub(super) struct Tracking {
     pub(super) solved_at: Option<u32>,
     /// The last cycle's fit, applied on the tick after it.
     pub(super) to_apply: Option<Lock>,
+    /// The fit's force per stretch and gain, worked out when its cycle was set aside.
+    pub(super) fit_inputs: (f32, f32),
 }
 
 /// Time constants of the tracker the estimate waits before the bias moves on it.
@@ -56,12 +58,15 @@ impl Controller {
     /// The tracked drive at tick `k`: a solve's slope taken, the sample fed to the tracker,
     /// and at a cycle's end the drive moved in phase and the bias moved by the integral law.
     pub(super) fn track(&mut self, k: u32, ring: Ring) -> Result<Option<Event>, Fault> {
-        if let Some(result) = self.trim.result.take() {
+        if self.trim.result.is_some() {
+            let taken = self.take_slope(k);
+            // The result dropped with the job (read in place: a device is large).
             self.trim.drop_job();
-            return self.take_slope(k, result);
+            return taken;
         }
-        let s = self.settings;
-        let track_seconds = s.track_seconds.unwrap_or(1.0);
+        // The settings read here, not the whole copied (the tick's budget).
+        let (tick_hz, target_hz) = (self.settings.tick_hz, self.settings.target_hz);
+        let track_seconds = self.settings.track_seconds.unwrap_or(1.0);
         let bias = self.plan.bias_volts;
         let Ring::Stretch(stretch) = ring else {
             return Ok(None);
@@ -72,7 +77,7 @@ impl Controller {
         // behind this tick's.
         let phase = self.plan.phase(k).wrapping_sub(step / 2);
         // The drive's frequency as the plan runs it.
-        let drive_hz = || s.tick_hz * (step as f32 / 4_294_967_296.0);
+        let drive_hz = || tick_hz * (step as f32 / 4_294_967_296.0);
         if self.tracking.tracker.is_none() {
             // The drive's first sample: the estimate settles from here.
             self.tracking.steady_from = k;
@@ -81,16 +86,19 @@ impl Controller {
             .tracking
             .tracker
             .get_or_insert_with(|| Tracker::new(drive_hz(), stretch));
-        // One of three small things a tick (the budget): sum, set a cycle aside, fit it; the
-        // fit's result is applied on the tick after.
+        // One of three small things a tick (the budget): sum; set a cycle aside, solve its
+        // least squares and work out the fit's inputs; fit it. The fit's result is applied
+        // on the tick after.
         if tracker.observe(phase, stretch) {
-            return Ok(None);
-        }
-        if tracker.pending() {
-            // The fit's inputs, only on the tick that fits.
+            tracker.solve();
             let device = self.estimate.as_ref().unwrap_or(&self.flashed);
             let force = drive_force_per_stretch(device, bias, self.plan.ac_volts);
             let gain = (1.0 / (drive_hz() * track_seconds)).min(1.0);
+            self.tracking.fit_inputs = (force, gain);
+            return Ok(None);
+        }
+        if tracker.pending() {
+            let (force, gain) = self.tracking.fit_inputs;
             self.tracking.to_apply = tracker.fit(force, gain);
             return Ok(None);
         }
@@ -98,20 +106,19 @@ impl Controller {
             return Ok(None);
         };
         let hz = tracker.drive_hz();
-        if !((hz - s.target_hz).abs() <= MAX_DETUNING * s.target_hz) {
+        if !((hz - target_hz).abs() <= MAX_DETUNING * target_hz) {
             return Err(Fault::TrackLost {
                 drive_hz: hz,
-                target_hz: s.target_hz,
+                target_hz,
             });
         }
-        // The drive follows, in phase: from this tick at the new frequency.
-        self.plan = Plan {
-            ac_tick: Some(k),
-            ac_phase_start: self.plan.phase(k),
-            // In f32 (the tick's budget; f64 is software on the M4F): 2⁻²⁴ of the frequency.
-            ac_phase_step: (hz / s.tick_hz * 4_294_967_296.0) as u32,
-            ..self.plan
-        };
+        // The drive follows, in phase: from this tick at the new frequency. (Fields set in
+        // place, not a new plan: the tick's budget.)
+        let phase = self.plan.phase(k);
+        self.plan.ac_tick = Some(k);
+        self.plan.ac_phase_start = phase;
+        // In f32 (the tick's budget; f64 is software on the M4F): 2⁻²⁴ of the frequency.
+        self.plan.ac_phase_step = (hz / tick_hz * 4_294_967_296.0) as u32;
         // The loop's time: the tracker's constant, or the plant's own ring time Q/(π·f) if
         // longer (none measured: the longest). A loop faster than the ring chases the beat of
         // the ring against the drive: the bias swung wider each time above Q ≈ 100 at 0.2 s.
@@ -121,7 +128,7 @@ impl Controller {
         } else {
             ring_seconds.clamp(track_seconds, MAX_RING_SECONDS.max(track_seconds))
         };
-        let ticks_of = |constants: f32| constants * loop_seconds * s.tick_hz;
+        let ticks_of = |constants: f32| constants * loop_seconds * tick_hz;
         // A drive still walking to the resonance (the first cycles see the AC's start): the
         // plant has not settled at its frequency, so neither has the estimate (on the
         // reference device at 4.5 kV it read 0.3% high one second in, and the bias moved on
@@ -151,31 +158,42 @@ impl Controller {
         // error the cycle's own estimate's (the drive's frequency lags it by the tracker's
         // smoothing).
         let integral_seconds = INTEGRAL_TIME_CONSTANTS * loop_seconds;
-        let error_hz = s.target_hz - lock.natural_hz;
+        let error_hz = target_hz - lock.natural_hz;
         let squared = bias * bias + slope * error_hz / (hz * integral_seconds);
-        let next_bias_volts = libm::sqrtf(squared.max(0.0));
+        let next_bias_volts = sqrt_f32(squared.max(0.0));
         let ac = self.plan.swing_volts();
         if !(next_bias_volts + ac <= self.max_volts) {
             // The plant needs more than the cap: hold the bias, the drive off, and say so.
             return Ok(Some(self.hold(k, next_bias_volts + ac)));
         }
         // From this tick (its voltage is sent): a step within the ramp's is done by the next.
-        let plan = Plan {
-            start_tick: k,
-            start_volts: bias,
-            bias_volts: next_bias_volts,
-            ..self.plan
-        };
-        plan.check_range(next_bias_volts, self.max_volts)?;
-        self.plan = plan;
+        let before = (
+            self.plan.start_tick,
+            self.plan.start_volts,
+            self.plan.bias_volts,
+        );
+        self.plan.start_tick = k;
+        self.plan.start_volts = bias;
+        self.plan.bias_volts = next_bias_volts;
+        if let Err(fault) = self.plan.check_range(next_bias_volts, self.max_volts) {
+            (
+                self.plan.start_tick,
+                self.plan.start_volts,
+                self.plan.bias_volts,
+            ) = before;
+            return Err(fault);
+        }
         Ok(None)
     }
 
     /// A solve's result under a tracked drive: the model's slope dΦ²/df between the bias
     /// and the bias it gives for the target, and the estimate's cap; or a fault.
-    fn take_slope(&mut self, k: u32, result: TrimResult) -> Result<Option<Event>, Fault> {
+    fn take_slope(&mut self, k: u32) -> Result<Option<Event>, Fault> {
         let bias = self.plan.bias_volts;
-        match result {
+        let Some(result) = &self.trim.result else {
+            return Ok(None);
+        };
+        match *result {
             TrimResult::Converged { shear_modulus, .. } => {
                 self.trim.params.shear_modulus = shear_modulus;
                 Ok(None)
@@ -185,7 +203,6 @@ impl Controller {
                 shear_modulus,
                 bias_volts,
                 max_volts,
-                device,
                 ..
             } => {
                 self.trim.params.shear_modulus = shear_modulus;
@@ -198,7 +215,7 @@ impl Controller {
                 if slope.is_finite() && slope != 0.0 {
                     self.tracking.volts_squared_per_hz = Some(slope);
                 }
-                self.set_estimate(device);
+                self.take_estimate();
                 Ok(self.lower_estimate_cap(k, max_volts))
             }
             TrimResult::AboveCeiling {

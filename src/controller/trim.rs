@@ -48,6 +48,9 @@ pub(super) struct TrimState {
     pub(super) hold_noise: HoldNoise,
     /// The solve's answer, once the caller has given it.
     pub(super) result: Option<TrimResult>,
+    /// Whether the answer's estimate (a `Retune`'s device) is the device flashed but for μ:
+    /// worked out by `trim_done`, outside the tick.
+    pub(super) result_shares_terms: bool,
     /// Whether the job wanted now was handed out.
     pub(super) handed_out: bool,
     /// The number of the job wanted now (`TrimDone::job`): a result of another is stale.
@@ -72,6 +75,7 @@ impl TrimState {
             ring_seen: 1.0,
             hold_noise: HoldNoise::default(),
             result: None,
+            result_shares_terms: false,
             handed_out: false,
             job: 0,
             tracked_hz: None,

@@ -1,8 +1,9 @@
-//! What the controller measures each tick (`Inputs`) and the checks on it: the stretch
+//! The checks on what the controller measures each tick (`Inputs`, from `acquire`): the stretch
 //! sample (a number, one a device could give, not stuck, inside model.md §6) and the
 //! amplifier's monitored output against the last command.
 
 use super::fault::Fault;
+pub use crate::acquire::Inputs;
 use crate::device::Device;
 use crate::safety::Monitor;
 
@@ -10,48 +11,10 @@ use crate::safety::Monitor;
 /// and slew limit lag a step by a tick or two).
 pub const AMPLIFIER_TICKS: u32 = 3;
 
-/// What the IO side measured this tick, if anything.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Inputs {
-    /// The displacement sensor's stretch λ.
-    pub stretch: Option<f32>,
-    /// The amplifier's monitor output, V.
-    pub amplifier_volts: Option<f32>,
-    /// The amplifier's output current, A, averaged over the tick (its current monitor).
-    /// At a constant bias it is Φ·C'(λ)·dλ/dt plus the leakage (model.md §8, the electrical
-    /// port): a ring in it has the stretch's frequency. The trim measures it when there is
-    /// no stretch sample (self-sensing).
-    pub current_amps: Option<f32>,
-}
-
-impl Inputs {
-    /// Nothing measured.
-    pub const NONE: Inputs = Inputs {
-        stretch: None,
-        amplifier_volts: None,
-        current_amps: None,
-    };
-
-    /// A stretch sample only.
-    pub const fn stretch(stretch: f32) -> Self {
-        Inputs {
-            stretch: Some(stretch),
-            ..Inputs::NONE
-        }
-    }
-
-    /// A current sample only (no displacement sensor).
-    pub const fn current(amps: f32) -> Self {
-        Inputs {
-            current_amps: Some(amps),
-            ..Inputs::NONE
-        }
-    }
-
+impl Ring {
     /// What the trim records this tick: the stretch when there is one, else the current.
-    pub(super) fn ring(&self) -> Ring {
-        match (self.stretch, self.current_amps) {
+    pub(super) fn of(inputs: &Inputs) -> Ring {
+        match (inputs.stretch, inputs.current_amps) {
             (Some(stretch), _) => Ring::Stretch(stretch),
             (None, Some(amps)) => Ring::Current(amps),
             (None, None) => Ring::Nothing,
@@ -230,6 +193,19 @@ impl Watch {
         }
         let tick = u64::from(k);
         let terms = flashed.stretch_terms(stretch);
+        if let Some((device, true)) = estimate {
+            // Both pass: one device's checks (`StretchTerms::both_pass`). Otherwise each in
+            // turn below, which says the first that fails as it always has.
+            let of = |d: &Device<f32>| {
+                let p = volts / d.volts_per_unit();
+                (p * p, d.breakdown_field_dimless())
+            };
+            let (f, e) = (of(flashed), of(device));
+            let (larger, smaller) = if e.0 > f.0 { (e, f) } else { (f, e) };
+            if terms.both_pass(larger, smaller) {
+                return None;
+            }
+        }
         for (device, shares) in core::iter::once((flashed, true)).chain(estimate) {
             // The trim's estimate is the device flashed with another μ: the stretch's terms
             // are the same (the tick's budget: they are most of the checks' work).

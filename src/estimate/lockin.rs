@@ -10,6 +10,8 @@
 
 use core::f32::consts::TAU;
 
+use crate::numerics::real::{sin_cos_turns, sqrt_f32};
+
 /// The drive's frequency moves at most this fraction a cycle (a wild cycle cannot throw the
 /// drive off the resonance).
 pub const MAX_STEP: f32 = 0.01;
@@ -98,10 +100,21 @@ impl Sums {
     }
 }
 
+/// A cycle's least squares m + A·sin θ + B·cos θ, with |Z|² = A² + B², |Z| and the cycle's
+/// reference stretch.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Solved {
+    mab: (f32, f32, f32),
+    z2: f32,
+    amplitude: f32,
+    reference: f32,
+}
+
 /// The tracker between ticks: the drive's frequency and the cycle being summed.
 ///
 /// A tick does one of three small things (the tick's budget): sum a sample; at a cycle's
-/// end, set its sums aside (`observe` says so); on a later tick, fit them (`fit`).
+/// end, set its sums aside (`observe` says so) and solve their least squares (`solve`); on
+/// a later tick, fit them (`fit`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Tracker {
     /// The drive's frequency, Hz.
@@ -114,6 +127,9 @@ pub struct Tracker {
     next_reference: f32,
     /// The cycle that ended, and its reference, until fitted.
     pending: Option<(Sums, f32)>,
+    /// Its least squares, once solved (`solve`), until fitted: the fit in two ticks' parts
+    /// (the tick's budget).
+    solved: Option<Solved>,
     /// The last sample's phase: a smaller one starts a new cycle.
     last_phase: Option<u32>,
     lock: Option<Lock>,
@@ -128,6 +144,7 @@ impl Tracker {
             reference: stretch,
             next_reference: stretch,
             pending: None,
+            solved: None,
             last_phase: None,
             lock: None,
         }
@@ -145,7 +162,25 @@ impl Tracker {
 
     /// Whether a cycle waits for `fit`.
     pub fn pending(&self) -> bool {
-        self.pending.is_some()
+        self.pending.is_some() || self.solved.is_some()
+    }
+
+    /// The least squares of the cycle set aside, if one waits unsolved (the first part of
+    /// `fit`, on a tick of its own): whether there was one. A singular cycle is dropped.
+    pub fn solve(&mut self) -> bool {
+        let Some((sums, reference)) = self.pending.take() else {
+            return false;
+        };
+        self.solved = sums.fit().map(|(m, a, b)| {
+            let z2 = a * a + b * b;
+            Solved {
+                mab: (m, a, b),
+                z2,
+                amplitude: sqrt_f32(z2),
+                reference,
+            }
+        });
+        true
     }
 
     /// A stretch sample taken at the drive's phase `phase` (turns in units of 2⁻³²); when
@@ -158,9 +193,7 @@ impl Tracker {
             self.sums = Sums::default();
             self.reference = self.next_reference;
         }
-        let angle = phase as f32 * (TAU / 4_294_967_296.0);
-        let quarter = phase.wrapping_add(1 << 30) as f32 * (TAU / 4_294_967_296.0);
-        let (s, c) = (crate::Real::sin(angle), crate::Real::sin(quarter));
+        let (s, c) = sin_cos_turns(phase);
         self.sums.add(stretch - self.reference, s, c);
         wrapped
     }
@@ -170,11 +203,15 @@ impl Tracker {
     /// (`drive_force_per_stretch`). The drive moves `gain` (0..1] of the way to the natural
     /// frequency found, at most `MAX_STEP` of itself. The cycle's measurement.
     pub fn fit(&mut self, force_per_stretch: f32, gain: f32) -> Option<Lock> {
-        let (sums, reference) = self.pending.take()?;
-        let (m, a, b) = sums.fit()?;
+        self.solve();
+        let Solved {
+            mab: (m, a, b),
+            z2,
+            amplitude,
+            reference,
+        } = self.solved.take()?;
         let mean_stretch = reference + m;
         let force = force_per_stretch * mean_stretch;
-        let z2 = a * a + b * b;
         let omega = TAU * self.drive_hz;
         // F/Z = F·(A − jB)/|Z|².
         let omega0_squared = omega * omega + force * a / z2;
@@ -182,7 +219,7 @@ impl Tracker {
         if !(omega0_squared > 0.0 && mean_stretch.is_finite()) {
             return None;
         }
-        let omega0 = libm::sqrtf(omega0_squared);
+        let omega0 = sqrt_f32(omega0_squared);
         let natural_hz = omega0 / TAU;
         let quality_factor = if damping > 0.0 {
             omega * omega0 / damping
@@ -193,7 +230,7 @@ impl Tracker {
             natural_hz,
             drive_hz: self.drive_hz,
             quality_factor,
-            amplitude: libm::sqrtf(z2),
+            amplitude,
             mean_stretch,
         };
         let step = (gain * (natural_hz - self.drive_hz))
@@ -314,6 +351,17 @@ mod tests {
         }
         assert!(wrapped && t.pending());
         let lock = t.fit(2000.0, 0.0).unwrap();
-        assert_eq!(t.lock(), Some(lock));
+        // (Compared bit for bit: a pure sine has no damping term, and its Q may be NaN.)
+        let bits = |l: Lock| {
+            [
+                l.natural_hz,
+                l.drive_hz,
+                l.quality_factor,
+                l.amplitude,
+                l.mean_stretch,
+            ]
+            .map(f32::to_bits)
+        };
+        assert_eq!(t.lock().map(bits), Some(bits(lock)));
     }
 }

@@ -100,6 +100,28 @@ impl<T: Real> StretchTerms<T> {
             .first_failure()
     }
 
+    /// Whether every check passes for two devices that share these terms (they differ only
+    /// in μ), under Φ̄² = `larger` and `smaller` (`larger` ≥ `smaller`) with their breakdown
+    /// fields: all of `larger`'s checks, and `smaller`'s two that are not monotone in Φ̄²
+    /// (the Hessian under bias: its bias term is indefinite; the breakdown, whose field
+    /// moves with μ too). Every other margin is a term less Φ̄² times a positive factor,
+    /// monotone in f32 as in exact arithmetic: passing at `larger` it passes at `smaller`.
+    /// One device's checks and a few products, where both would be two (the tick's budget).
+    pub fn both_pass(
+        &self,
+        (larger, larger_breakdown): (T, T),
+        (smaller, smaller_breakdown): (T, T),
+    ) -> bool {
+        if !(larger >= smaller) || self.first_failure(larger, larger_breakdown).is_some() {
+            return false;
+        }
+        let (l, l2p) = (self.stretch, self.prestretch_2);
+        let field_squared = smaller * (l * l2p).squared();
+        let b = smaller_breakdown;
+        let breakdown = b > T::zero() && smaller >= T::zero() && b * b - field_squared > T::zero();
+        breakdown && self.hessian.under_bias(l, l2p, smaller).definiteness() > T::zero()
+    }
+
     /// Every margin under Φ̄² (the field's square (Φ̄·λ·λ2p)² given), the breakdown's as given.
     fn with_breakdown(&self, p2: T, field_squared: T, breakdown: T) -> Margins<T> {
         let (l, l2p) = (self.stretch, self.prestretch_2);

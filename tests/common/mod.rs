@@ -324,3 +324,47 @@ pub fn start_reference(
     de_resonator::Controller::start(params, &reference_table(), amplifier(), settings)
         .map(|(c, _)| c)
 }
+
+/// The DAC's bus: counts nothing, fails when told.
+#[derive(Default)]
+pub struct Bus {
+    pub fails: std::cell::Cell<bool>,
+}
+
+impl embedded_hal::spi::ErrorType for &Bus {
+    type Error = embedded_hal::spi::ErrorKind;
+}
+
+impl embedded_hal::spi::SpiDevice for &Bus {
+    fn transaction(
+        &mut self,
+        _: &mut [embedded_hal::spi::Operation<'_, u8>],
+    ) -> Result<(), embedded_hal::spi::ErrorKind> {
+        if self.fails.get() {
+            Err(embedded_hal::spi::ErrorKind::Other)
+        } else {
+            Ok(())
+        }
+    }
+}
+
+/// The amplifier's enable line.
+#[derive(Default)]
+pub struct Pin {
+    pub high: std::cell::Cell<bool>,
+}
+
+impl embedded_hal::digital::ErrorType for &Pin {
+    type Error = core::convert::Infallible;
+}
+
+impl embedded_hal::digital::OutputPin for &Pin {
+    fn set_low(&mut self) -> Result<(), Self::Error> {
+        self.high.set(false);
+        Ok(())
+    }
+    fn set_high(&mut self) -> Result<(), Self::Error> {
+        self.high.set(true);
+        Ok(())
+    }
+}

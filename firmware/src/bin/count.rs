@@ -10,12 +10,15 @@ use core::hint::black_box;
 
 use cortex_m::peripheral::syst::SystClkSource;
 use cortex_m::peripheral::SYST;
+use de_resonator::acquire::{Block, Channel, ChannelSpec, FrontEnd, Reader};
+use de_resonator::board::tick;
 use de_resonator::{
-    Controller, Dac8551, Device, Drive, Inputs, Integrator, Method, State, Table, Tuner,
-    REFERENCE_DEVICE,
+    Controller, Dac8551, Device, Drive, Inputs, Integrator, Method, OutputStage, State, Table,
+    Tuner, REFERENCE_DEVICE,
 };
 use de_resonator_firmware::reference::{amplifier, device, settings, TABLE};
-use de_resonator_firmware::{exit, stack, stand_in::RecordingBus};
+use de_resonator_firmware::stand_in::{EnableLine, RecordingBus};
+use de_resonator_firmware::{exit, stack};
 
 /// Instructions per call of `f`, averaged over `n` calls.
 fn count(n: u32, mut f: impl FnMut()) -> u32 {
@@ -136,6 +139,41 @@ fn main() -> ! {
         "controller tick with the AC drive and a sensor sample: {=u32} instructions",
         n
     );
+    for sensing in [Sensing::Current, Sensing::Stretch] {
+        let fe = front_end(sensing);
+        let block = block_of(&fe, [1e-6, 7450.0, 2.19], 10, 0);
+        let reader = Reader::new(fe, 10);
+        let n = count(1000, || {
+            let _ = black_box(reader.inputs(black_box(&block)));
+        });
+        defmt::info!(
+            "the block of a tick through the front end ({=usize} channels): {=u32} instructions",
+            fe.fitted().count(),
+            n
+        );
+        let mut b = Block::EMPTY;
+        let codes = [2047u16; 15];
+        let n = count(100, || {
+            b.add_scans(black_box(&fe), black_box(&codes[..5 * fe.fitted().count()]));
+        });
+        defmt::info!(
+            "a DMA buffer of 5 scans into the block (the DMA's task, not the tick): {=u32} instructions",
+            n
+        );
+    }
+    {
+        let mut bus = RecordingBus::new(None);
+        let mut enable = EnableLine::default();
+        let mut stage = OutputStage::new(Dac8551::new(&mut bus), &mut enable);
+        let mut slot = Some(c.clone());
+        let n = count(1000, || {
+            let _ = black_box(tick::drive(&mut slot, &mut stage, Ok(Inputs::NONE)));
+        });
+        defmt::info!(
+            "the board's tick with the AC drive (the controller's and the DAC frame): {=u32} instructions",
+            n
+        );
+    }
     let n = count(1, || {
         let _ = black_box(Controller::start(device(), TABLE, amp, settings()));
     });
@@ -232,16 +270,66 @@ enum Sensing {
     Current,
 }
 
+/// The counted board's analog front end (the e2e test's): the current monitor (±490 µA about
+/// mid-scale: a 200 V pulse's step in a tick is 106 µA, with the AC's more) and the HV monitor (0-10 kV from code 100) always, a displacement sensor (λ1
+/// 1.4-2.6 over codes 200-3900) where it senses the stretch; ten scans a tick.
+fn front_end(sensing: Sensing) -> FrontEnd {
+    let spec = |input, zero_code, per_count, low, high| {
+        Some(ChannelSpec {
+            input,
+            zero_code,
+            per_count,
+            low,
+            high,
+        })
+    };
+    FrontEnd {
+        scan_hz: 10_000.0,
+        channels: [
+            spec(10, 2047.5, 2.5e-7, -4.9e-4, 4.9e-4),
+            spec(11, 100.0, 10_000.0 / 3800.0, -100.0, 10_000.0),
+            match sensing {
+                Sensing::Stretch => {
+                    spec(12, 200.0 - 1.4 / 3.243_243_2e-4, 3.243_243_2e-4, 1.4, 2.6)
+                }
+                Sensing::Current => None,
+            },
+        ],
+    }
+}
+
+/// The block the DMA would give for one tick: `scans` scans of each fitted channel's reading
+/// as its (rounded, in-range) code, a count of noise alternating so no sample repeats for long.
+fn block_of(fe: &FrontEnd, readings: [f32; 3], scans: u32, k: u32) -> Block {
+    let mut block = Block::EMPTY;
+    for s in 0..scans {
+        for (channel, spec) in fe.fitted() {
+            let reading = match channel {
+                Channel::Current => readings[0],
+                Channel::Amplifier => readings[1],
+                Channel::Stretch => readings[2],
+            };
+            let dither = if (k + s).is_multiple_of(2) { 0.5 } else { -0.5 };
+            let code = libm::roundf(spec.code_of(reading) + dither).clamp(0.0, 4095.0);
+            block.add(channel, code as u16);
+        }
+    }
+    block
+}
+
 /// The membrane's charge C(λ)·Φ, C(λ) = ε·L1A·L2·λ²·λ2p²/H (model.md §8), C.
 fn charge_coulombs(p: &de_resonator::DeviceParams<f32>, stretch: f32, volts: f32) -> f32 {
     p.capacitance_farads(stretch) * volts
 }
 
 /// A whole trim cycle (ramp to the probe bias, hold, pulse, ring, solve, retune, ... to the AC
-/// drive), the reference device itself the plant (f32 RK4 between ticks, not counted) and its
-/// stretch (or its current) the sensor: the worst tick of the cycle, and the solve (outside
-/// the tick) apart. With `track_seconds`, on for `track_ticks` of tracked drive (the plant
-/// damped to Q = 30, as a driven resonance needs), counting the tracked ticks' worst too.
+/// drive), the reference device itself the plant (f32 RK4 between ticks, not counted) read
+/// through the board's front end (its block of ADC codes made between ticks, as the DMA's
+/// task does): the worst of the controller's tick (the budget's figure), of the board's
+/// (the block through the front end, the controller's tick, the DAC frame), and the solve
+/// (outside the tick) apart. With `track_seconds`, on for `track_ticks` of tracked drive
+/// (the plant damped to Q = 30, as a driven resonance needs), counting the tracked ticks'
+/// worst too.
 fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
     use de_resonator::{Phase, Settings};
     let Ok(amp) = amplifier() else { exit(1) };
@@ -255,9 +343,19 @@ fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
         probe_hz: 500.0,
         ..settings()
     };
-    let Ok((mut c, _)) = Controller::start(device(), TABLE, amp, s) else {
+    let Ok((c, _)) = Controller::start(device(), TABLE, amp, s) else {
         exit(1)
     };
+    let mut c = c;
+    let mut bus = RecordingBus::new(None);
+    let mut enable = EnableLine::default();
+    let mut stage = OutputStage::new(Dac8551::new(&mut bus), &mut enable);
+    if stage.enable().is_err() {
+        exit(1)
+    }
+    let fe = front_end(sensing);
+    let scans = fe.check(s.tick_hz).unwrap_or_else(|_| exit(1));
+    let reader = Reader::new(fe, scans);
     let mut params = device();
     if track_seconds.is_some() {
         // c = M·ω/Q at 44 Hz, Q = 30.
@@ -276,23 +374,35 @@ fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
         exit(1)
     };
     let (mut worst, mut worst_phase, mut solves, mut solve_most) = (0, Phase::Ramping, 0, 0);
-    let (mut tracked, mut worst_tracked) = (0u32, 0);
-    let (mut charge, mut amps) = (0.0f32, 0.0f32);
-    for _ in 0..40_000 {
+    let (mut worst_front_end, mut worst_frame, mut worst_board) = (0, 0, 0);
+    let (mut tracked, mut worst_tracked, mut worst_tracked_board) = (0u32, 0, 0);
+    let (mut charge, mut amps, mut volts) = (0.0f32, 0.0f32, 0.0f32);
+    for k in 0..40_000 {
         let phase = c.phase();
         let stretch = plant.state().stretch;
-        let inputs = match sensing {
-            Sensing::Stretch => Inputs::stretch(stretch),
-            Sensing::Current => Inputs::current(amps),
+        let block = block_of(&fe, [amps, volts, stretch], scans, k);
+        // The board's tick in its parts (`board::tick::drive`'s order): the block through the
+        // front end, the controller's tick, the DAC frame.
+        let mut inputs = Ok(Inputs::NONE);
+        let n_front_end = count(1, || inputs = reader.inputs(black_box(&block)));
+        let Ok(inputs) = inputs else {
+            defmt::error!("the counted board's block: {}", inputs);
+            exit(1)
         };
         let mut out = None;
         let n = count(1, || out = Some(c.tick(black_box(inputs))));
+        let Some(mut sent) = out else { exit(1) };
+        let n_frame = count(1, || stage.send(&mut c, black_box(&mut sent)));
+        worst_front_end = worst_front_end.max(n_front_end);
+        worst_frame = worst_frame.max(n_frame);
+        worst_board = worst_board.max(n_front_end + n + n_frame);
         if n > worst {
             (worst, worst_phase) = (n, phase);
         }
         if phase == Phase::Driving && track_seconds.is_some() {
             tracked += 1;
             worst_tracked = worst_tracked.max(n);
+            worst_tracked_board = worst_tracked_board.max(n_front_end + n + n_frame);
         }
         if let Some(job) = c.trim_job() {
             if solves == 0 && sensing == Sensing::Stretch && track_seconds.is_none() {
@@ -306,7 +416,7 @@ fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
                 c.trim_done(result);
             }
         }
-        let volts = out.map_or(0.0, |o| o.volts);
+        volts = sent.volts;
         if plant.set_drive(Drive::constant(&dev, volts)).is_err() || plant.step().is_err() {
             exit(1)
         }
@@ -321,6 +431,9 @@ fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
         }
     }
     if c.phase() != Phase::Driving {
+        if let Some(fault) = c.latched_fault() {
+            defmt::error!("fault: {}", fault);
+        }
         defmt::error!("the trim cycle did not reach the AC drive: {}", c.phase());
         exit(1)
     }
@@ -334,6 +447,13 @@ fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
         what,
         worst,
         worst_phase
+    );
+    defmt::info!(
+        "board tick with {=str}, worst over the cycle: {=u32} instructions (the block through the front end at most {=u32}, the DAC frame at most {=u32})",
+        what,
+        worst_board,
+        worst_front_end,
+        worst_frame
     );
     defmt::info!(
         "{=str} solve outside the tick ({=u32} solves): at most {=u32} instructions",
@@ -360,6 +480,11 @@ fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
             worst_tracked,
             hz,
             q
+        );
+        defmt::info!(
+            "board tick with tracking, worst over {=u32} tracked ticks: {=u32} instructions",
+            tracked,
+            worst_tracked_board
         );
     }
 }

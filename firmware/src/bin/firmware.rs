@@ -4,9 +4,11 @@
 //! the command port (`# refused …`) and in the log.
 //!
 //! Tasks, highest priority first:
-//! - `tick` (SysTick, at the settings' `tick_hz`): one tick of the core's board (the
-//!   controller, its DAC frame on SPI1, the enable line); wakes `job` when a job waits;
-//! - `rx` (USART2): bytes into request lines, queued to `command`;
+//! - `tick` (SysTick, at the settings' `tick_hz`): the block of ADC codes since the last tick
+//!   through the image's front end (the core's `acquire`), then one tick of the core's board
+//!   (the controller, its DAC frame on SPI1, the enable line); wakes `job` when a job waits;
+//! - `rx` (USART2): bytes into request lines, queued to `command`; `adc` (DMA2 stream 0,
+//!   silicon): each full buffer of ADC codes added to the tick's block;
 //! - `command` and `job` (software, lowest): each request answered on USART2 by the core's
 //!   board; the long work (a new plan's checks, a boot, a trim's solve, tracking's slope)
 //!   runs here, preempted by the tick.
@@ -23,12 +25,16 @@ mod app {
     use core::fmt::Write as _;
     use core::mem::MaybeUninit;
 
+    use de_resonator::acquire::{Block, FrontEnd, Reader, BUFFER_CODES};
     use de_resonator::board::port::Extras;
     use de_resonator::board::protocol::NOTICE;
     use de_resonator::board::watchdog::CheckIn;
     use de_resonator::board::{self as logic, Line, Lines, ReplyLine, Then};
     use de_resonator::store::FlashKeeper;
-    use de_resonator::{Controller, Dac8551, Decimal, Event, OutputStage};
+    use de_resonator::{Controller, Dac8551, Decimal, Event, Inputs, OutputStage};
+    use de_resonator_firmware::analog::Acquisition;
+    #[cfg(not(feature = "qemu"))]
+    use de_resonator_firmware::analog::Parts;
     use de_resonator_firmware::board::{self, Board, DacSpi, EnablePin};
     use de_resonator_firmware::runtime::{self, ResetCause};
     #[cfg(feature = "model-sensor")]
@@ -62,12 +68,21 @@ mod app {
         output_off: bool,
         /// Set by the heartbeat task (the low-priority tasks are not stuck), cleared by the tick.
         checked_in: bool,
+        /// The ADC's codes since the last tick: filled by `adc` (silicon) or the tick's
+        /// stand-in (QEMU), taken by the tick.
+        block: Block,
+        /// The last tick's readings, in units, for `status`.
+        readings: Inputs,
     }
 
     #[local]
     struct Local {
         stage: OutputStage<DacSpi, EnablePin>,
         sensor: Sensors,
+        /// The image's analog front end (none fitted without an image), ready for the tick.
+        reader: Reader,
+        /// Silicon's ADC, timer and DMA (none with no channel fitted, none under QEMU).
+        acquisition: Option<Acquisition>,
         serial_rx: Rx<USART2>,
         lines: Lines,
         /// A line that found the queue full, kept until the command task makes room.
@@ -88,7 +103,10 @@ mod app {
     }
 
     // The slot uninitialized (in .bss, not a 3 KB `None` copied from flash to `.data`).
-    #[init(local = [slot: MaybeUninit<Option<Controller>> = MaybeUninit::uninit()])]
+    #[init(local = [
+        slot: MaybeUninit<Option<Controller>> = MaybeUninit::uninit(),
+        buffers: [[u16; BUFFER_CODES]; 3] = [[0; BUFFER_CODES]; 3],
+    ])]
     fn init(cx: init::Context) -> (Shared, Local) {
         #[cfg(feature = "qemu")]
         board::qemu_clock::start(&cx.device.TIM2);
@@ -96,7 +114,7 @@ mod app {
         Dog::start_clock(&cx.device.TIM3);
         stack::paint();
         let mut core = cx.core;
-        let board = Board::new(cx.device);
+        let mut board = Board::new(cx.device);
         let mut tx = board.tx;
         let mut stage = OutputStage::new(Dac8551::new(board.dac), board.enable);
         // 0 V, DAC powered down, amplifier disabled, until the checks pass.
@@ -141,6 +159,26 @@ mod app {
             defmt::error!("{=str}", notice.as_str());
         }
         let _ = writeln!(tx, "{NOTICE}{notice}");
+        // The image's front end, checked at its tick rate when it was read.
+        let front_end = logic.image().map_or(FrontEnd::NONE, |i| i.front_end);
+        let scans_per_tick = front_end.check(tick_hz).unwrap_or(0);
+        #[cfg(not(feature = "qemu"))]
+        let acquisition = {
+            let analog = board.analog;
+            let parts = Parts {
+                adc1: analog.adc1,
+                dma2: analog.dma2,
+                tim2: analog.tim2,
+                pins: analog.pins,
+                buffers: cx.local.buffers,
+            };
+            Acquisition::start(parts, &mut board.rcc, &front_end, scans_per_tick)
+        };
+        #[cfg(feature = "qemu")]
+        let acquisition = {
+            let _ = (&mut board.rcc, cx.local.buffers, scans_per_tick);
+            None
+        };
         let (to_command, from_rx) = make_channel!(Line, QUEUE);
         if command::spawn().is_err() {
             de_resonator_firmware::exit(104);
@@ -152,14 +190,23 @@ mod app {
                 last_tick_us: 0,
                 output_off: true,
                 checked_in: true,
+                block: Block::EMPTY,
+                readings: Inputs::NONE,
             },
             Local {
                 stage,
                 #[cfg(not(feature = "model-sensor"))]
                 sensor: Sensors,
                 #[cfg(feature = "model-sensor")]
-                sensor: Sensors::new(logic.image().map(|i| i.params), tick_hz)
-                    .failing_after(board::asked("sensor-fails").then_some(2.0 * tick_hz)),
+                sensor: Sensors::new(
+                    logic.image().map(|i| i.params),
+                    front_end,
+                    scans_per_tick,
+                    tick_hz,
+                )
+                .failing_after(board::asked("sensor-fails").then_some(2.0 * tick_hz)),
+                reader: Reader::new(front_end, scans_per_tick),
+                acquisition,
                 serial_rx: board.rx,
                 lines: Lines::default(),
                 held: None,
@@ -193,7 +240,7 @@ mod app {
     }
 
     /// One controller tick: its code to the DAC, the enable line held, the events logged.
-    #[task(binds = SysTick, priority = 3, shared = [controller, tick_cycles_max, last_tick_us, output_off, checked_in], local = [stage, sensor, dog, check_in, hang_after_ticks, driven_ticks: u32 = 0])]
+    #[task(binds = SysTick, priority = 3, shared = [controller, tick_cycles_max, last_tick_us, output_off, checked_in, block, readings], local = [stage, sensor, reader, dog, check_in, hang_after_ticks, driven_ticks: u32 = 0])]
     fn tick(mut cx: tick::Context) {
         #[cfg(feature = "qemu")]
         cx.shared
@@ -201,7 +248,12 @@ mod app {
             .lock(|at| *at = board::qemu_clock::micros());
         let stage = cx.local.stage;
         let sensor = cx.local.sensor;
-        let inputs = sensor.sample();
+        let mut block = cx.shared.block.lock(Block::take);
+        sensor.fill(&mut block);
+        let inputs = cx.local.reader.inputs(&block);
+        if let Ok(readings) = inputs {
+            cx.shared.readings.lock(|r| *r = readings);
+        }
         let ticked = cx.shared.controller.lock(|c| {
             let ticked = logic::tick::drive(c, stage, inputs);
             if let Some(t) = ticked {
@@ -252,6 +304,14 @@ mod app {
         cx.shared
             .tick_cycles_max
             .lock(|most| *most = (*most).max(cycles));
+    }
+
+    /// A full buffer of ADC codes (silicon): its scans into the tick's block.
+    #[task(binds = DMA2_STREAM0, priority = 2, shared = [block], local = [acquisition])]
+    fn adc(mut cx: adc::Context) {
+        if let Some(acquisition) = cx.local.acquisition.as_mut() {
+            cx.shared.block.lock(|b| acquisition.on_buffer(b));
+        }
     }
 
     /// QEMU's watchdog stand-in: its own clock, above the tick (a stuck tick starves it too).
@@ -328,7 +388,7 @@ mod app {
     }
 
     /// Each request answered, one reply line each.
-    #[task(priority = 1, shared = [controller, tick_cycles_max, last_tick_us, output_off], local = [from_rx, tx, logic])]
+    #[task(priority = 1, shared = [controller, tick_cycles_max, last_tick_us, output_off, readings], local = [from_rx, tx, logic])]
     async fn command(mut cx: command::Context) {
         let mut reply = ReplyLine::new();
         while let Ok(line) = cx.local.from_rx.recv().await {
@@ -345,6 +405,7 @@ mod app {
                 clock_us: Some(cx.shared.last_tick_us.lock(|at| *at)),
                 #[cfg(not(feature = "qemu"))]
                 clock_us: None,
+                readings: cx.shared.readings.lock(|r| *r),
             };
             let mut controller = Locked(&mut cx.shared.controller);
             let then = cx

@@ -7,6 +7,7 @@ use std::fmt;
 use std::path::PathBuf;
 
 use clap::Args;
+use de_resonator::acquire::{Channel, FrontEnd};
 use de_resonator::image::{self, AmplifierSpec, Image, DAC_BITS};
 use de_resonator::table::{self, Table};
 use de_resonator::{Controller, DeviceParams, Field, Setting, Settings};
@@ -105,6 +106,8 @@ pub struct ImageReport {
     /// The device parameters the image holds, in `Field::ALL` order.
     pub device_parameters: Vec<Entry>,
     pub amplifier: Option<AmplifierSummary>,
+    /// The board's analog inputs (empty: none fitted, open loop).
+    pub front_end: Option<FrontEndSummary>,
     pub settings: Vec<Entry>,
     pub table: Option<TableSummary>,
     pub verdict: Verdict,
@@ -118,6 +121,45 @@ pub struct AmplifierSummary {
     pub gain: f32,
     pub rail_volts: f32,
     pub dac_bits: u16,
+}
+
+/// The front end an image states.
+#[derive(Serialize, Debug)]
+pub struct FrontEndSummary {
+    pub scan_hz: f32,
+    pub channels: Vec<ChannelSummary>,
+}
+
+/// One fitted channel: `reading = (code − zero_code) · per_count`, plausible in [low, high].
+#[derive(Serialize, Debug)]
+pub struct ChannelSummary {
+    pub channel: &'static str,
+    pub unit: &'static str,
+    pub input: u8,
+    pub zero_code: f32,
+    pub per_count: f32,
+    pub low: f32,
+    pub high: f32,
+}
+
+impl FrontEndSummary {
+    fn of(front_end: &FrontEnd) -> Self {
+        FrontEndSummary {
+            scan_hz: front_end.scan_hz,
+            channels: front_end
+                .fitted()
+                .map(|(c, s): (Channel, _)| ChannelSummary {
+                    channel: c.name(),
+                    unit: c.unit(),
+                    input: s.input,
+                    zero_code: s.zero_code,
+                    per_count: s.per_count,
+                    low: s.low,
+                    high: s.high,
+                })
+                .collect(),
+        }
+    }
 }
 
 impl fmt::Display for ImageReport {
@@ -144,6 +186,30 @@ impl fmt::Display for ImageReport {
                 "amplifier       {}-bit DAC, reference {} V, gain {}, rail {} V",
                 a.dac_bits, a.dac_reference_volts, a.gain, a.rail_volts
             )?;
+        }
+        if let Some(fe) = &self.front_end {
+            if fe.channels.is_empty() {
+                writeln!(
+                    f,
+                    "front end       none fitted: open loop (no trim, no monitor of the motion)"
+                )?;
+            } else {
+                writeln!(f, "front end       {} scans/s", fe.scan_hz)?;
+            }
+            for c in &fe.channels {
+                let n = |x: f32| sig(f64::from(x));
+                writeln!(
+                    f,
+                    "  {:<13} ADC IN{}: {} {} a count, 0 at code {}, plausible {} .. {}",
+                    c.channel,
+                    c.input,
+                    n(c.per_count),
+                    c.unit,
+                    n(c.zero_code),
+                    n(c.low),
+                    n(c.high)
+                )?;
+            }
         }
         if !self.settings.is_empty() {
             writeln!(f, "settings        {}", list(&self.settings))?;
@@ -199,11 +265,14 @@ pub fn image(args: &ImageArgs) -> Result<ImageReport, String> {
     let target_hz = args.target_hz.or_else(|| {
         (args.device.device.is_none() && args.settings.is_none()).then_some(REFERENCE_TARGET_HZ)
     });
-    let settings = match &args.settings {
+    let (settings, front_end) = match &args.settings {
         Some(path) => crate::settings_file::load(path, target_hz)?,
-        None => Settings::for_target(target_hz.ok_or_else(|| {
-            format!("{name}: give the target the firmware tunes to (--target-hz or --settings)")
-        })?),
+        None => (
+            Settings::for_target(target_hz.ok_or_else(|| {
+                format!("{name}: give the target the firmware tunes to (--target-hz or --settings)")
+            })?),
+            FrontEnd::NONE,
+        ),
     };
     let settings = match args.target_hz {
         Some(hz) => Settings {
@@ -219,7 +288,8 @@ pub fn image(args: &ImageArgs) -> Result<ImageReport, String> {
         rail_volts: args.rail_volts.unwrap_or(full_scale),
         dac_bits: DAC_BITS,
     };
-    let bytes = made(params, &amplifier, &settings).map_err(|e| format!("{name}: {e}"))?;
+    let bytes =
+        made(params, &amplifier, &front_end, &settings).map_err(|e| format!("{name}: {e}"))?;
     // Checked before writing: an image the firmware would refuse is not written.
     let mut report = describe(&bytes, out.display().to_string())?;
     if let Verdict::Refuses { reason } = &report.verdict {
@@ -232,18 +302,26 @@ pub fn image(args: &ImageArgs) -> Result<ImageReport, String> {
     Ok(report)
 }
 
-/// The image of a device, an amplifier and settings, its table made for the settings'
-/// margin: the bytes `host-sim image` writes and `host-sim serve` boots from.
+/// The image of a device, an amplifier, a front end and settings, its table made for the
+/// settings' margin: the bytes `host-sim image` writes and `host-sim serve` boots from.
 pub fn made(
     params: DeviceParams<f64>,
     amplifier: &AmplifierSpec,
+    front_end: &FrontEnd,
     settings: &Settings,
 ) -> Result<Vec<u8>, String> {
     let made = lut::make(params, f64::from(settings.margin), None)?;
     let mut bytes = vec![0; image::image_bytes(made.bytes.len())];
     let params32: DeviceParams<f32> = params.cast();
-    Image::write(&mut bytes, &params32, amplifier, settings, &made.bytes)
-        .map_err(|e| e.to_string())?;
+    Image::write(
+        &mut bytes,
+        &params32,
+        amplifier,
+        front_end,
+        settings,
+        &made.bytes,
+    )
+    .map_err(|e| e.to_string())?;
     Ok(bytes)
 }
 
@@ -285,6 +363,7 @@ fn describe(bytes: &[u8], file: String) -> Result<ImageReport, String> {
             bytes: bytes.len(),
             device_parameters: entries(&parsed.params()),
             amplifier: None,
+            front_end: None,
             settings: Vec::new(),
             table: Some(summary(&parsed, bytes.len())),
             verdict: refuse(
@@ -303,6 +382,7 @@ fn describe(bytes: &[u8], file: String) -> Result<ImageReport, String> {
                 bytes: bytes.len(),
                 device_parameters: Vec::new(),
                 amplifier: None,
+                front_end: None,
                 settings: Vec::new(),
                 table: None,
                 verdict: refuse(e.to_string()),
@@ -338,6 +418,7 @@ fn describe(bytes: &[u8], file: String) -> Result<ImageReport, String> {
             rail_volts: a.rail_volts,
             dac_bits: a.dac_bits,
         }),
+        front_end: Some(FrontEndSummary::of(&parsed.front_end)),
         settings: Setting::ALL
             .iter()
             .map(|&s| Entry {

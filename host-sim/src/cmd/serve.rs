@@ -13,6 +13,7 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use clap::Args;
+use de_resonator::acquire::FrontEnd;
 use de_resonator::board::port::Extras;
 use de_resonator::board::protocol::NOTICE;
 use de_resonator::board::{self, Board, Keeper, Line, Lines, ReplyLine, ResetCause, Then};
@@ -296,7 +297,7 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
         rail_volts: lp.plant.amplifier.rail_volts.min(full_scale) as f32,
         dac_bits: DAC_BITS,
     };
-    let bytes = super::image::made(lp.nominal, &spec, &lp.settings)?;
+    let bytes = super::image::made(lp.nominal, &spec, &FrontEnd::NONE, &lp.settings)?;
     let mut flash = Flash(vec![0xFF; 2 * RAM_PAGE_BYTES]);
     let (listener, at) = Listener::bind(args)?;
     eprintln!(
@@ -383,7 +384,7 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
                 if then == Then::Reset {
                     // The slot is empty: the output off at once (as the firmware's next tick
                     // does), then the boot, the settings' flash kept.
-                    let _ = board::tick::drive(&mut slot, &mut stage, Inputs::NONE);
+                    let _ = board::tick::drive(&mut slot, &mut stage, Ok(Inputs::NONE));
                     let keeper = logic.into_keeper();
                     (logic, banner) = boot(&mut slot, keeper, Some(ResetCause::Asked));
                     for line in &banner {

@@ -531,7 +531,7 @@ impl Loop {
             Some(_) => self.sense(bench, k, self.amplifier_input(wires)),
             None => Inputs::NONE,
         };
-        let ticked = board::tick::drive(slot, stage, inputs);
+        let ticked = board::tick::drive(slot, stage, Ok(inputs));
         if ticked.is_some_and(|t| t.job_wanted) {
             board::tick::run_job(|f| {
                 if let Some(c) = slot.as_mut() {

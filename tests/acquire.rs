@@ -1,0 +1,559 @@
+//! The acquisition's processing (`acquire`) on samples made from the plant's signals: the
+//! reference device ringing at a bias, its stretch, its current (the membrane's charge, model.md
+//! §8) and the amplifier's voltage, through a front end (noise, quantisation, the ADC's
+//! rails). Each tick's reading is right within its stated error (half a count and five
+//! standard errors of the noise), or a named fault: a rail-stuck input, an open input, a
+//! wrong gain in the image, a stopped DMA.
+
+mod common;
+
+use common::Rng;
+use de_resonator::acquire::{
+    Block, Channel, ChannelSpec, FrontEnd, FrontEndError, InputError, FULL_SCALE_CODE,
+};
+use de_resonator::board::stage::OutputStage;
+use de_resonator::board::tick;
+use de_resonator::{
+    Dac8551, Device, Drive, Fault, Inputs, Integrator, Method, Phase, Settings, State,
+    REFERENCE_DEVICE,
+};
+
+const TICK_HZ: f64 = 1_000.0;
+const SCANS_PER_TICK: usize = 10;
+/// One code of the reference amplifier (2.5 V reference, gain 4000, 16 bits), V.
+const DAC_VOLTS: f32 = 2.5 * 4000.0 / 65536.0;
+
+/// A standard normal draw (Box–Muller).
+fn normal(rng: &mut Rng) -> f64 {
+    let u = rng.unit().max(1e-300);
+    (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * rng.unit()).cos()
+}
+
+/// The ADC's code for a reading through `spec` with `sigma_counts` of noise: rounded, held
+/// within the rails as the converter is.
+fn code(spec: &ChannelSpec, reading: f64, sigma_counts: f64, rng: &mut Rng) -> u16 {
+    let c = f64::from(spec.zero_code) + reading / f64::from(spec.per_count);
+    (c + sigma_counts * normal(rng))
+        .round()
+        .clamp(0.0, f64::from(FULL_SCALE_CODE)) as u16
+}
+
+/// The plant's signals at one scan: stretch, the current over the scan's interval (the
+/// charge's change over it, A), the amplifier's voltage.
+#[derive(Clone, Copy)]
+struct Scan {
+    stretch: f64,
+    amps: f64,
+    volts: f64,
+}
+
+/// The reference device from rest at its pre-stretch, the bias applied at once (it rings),
+/// sampled `scans` times at the scan rate.
+fn plant_scans(bias_volts: f64, scans: usize) -> Vec<Scan> {
+    let device = Device::new(REFERENCE_DEVICE).unwrap();
+    let h = 1.0 / (TICK_HZ * SCANS_PER_TICK as f64);
+    let rest = State {
+        stretch: device.prestretch_1(),
+        velocity: 0.0,
+    };
+    let mut model = Integrator::new(
+        device,
+        Drive::constant(&device, bias_volts),
+        Method::Rk4,
+        h,
+        device.model_range(),
+        rest,
+        true,
+    )
+    .unwrap();
+    let mut out = Vec::with_capacity(scans);
+    let mut before = model.state().stretch;
+    for _ in 0..scans {
+        let after = model.step().unwrap().stretch;
+        let charge = |l: f64| bias_volts * REFERENCE_DEVICE.capacitance_farads(l);
+        out.push(Scan {
+            stretch: after,
+            amps: (charge(after) - charge(before)) / h,
+            volts: bias_volts,
+        });
+        before = after;
+    }
+    out
+}
+
+/// A board's front end for the reference device: the current monitor bipolar about
+/// mid-scale over ±`amps_full` A, the HV monitor 0..10 kV with a live zero at code 100, a
+/// displacement sensor over λ1 ± 30% from code 200 to 3900.
+fn front_end(amps_full: f32) -> FrontEnd {
+    let l = REFERENCE_DEVICE.prestretch_1 as f32;
+    let (low, high) = (0.7 * l, 1.3 * l);
+    let per_count = (high - low) / 3700.0;
+    FrontEnd {
+        scan_hz: (TICK_HZ * SCANS_PER_TICK as f64) as f32,
+        channels: [
+            Some(ChannelSpec {
+                input: 10,
+                zero_code: 2047.5,
+                per_count: amps_full / 2000.0,
+                low: -amps_full,
+                high: amps_full,
+            }),
+            Some(ChannelSpec {
+                input: 11,
+                zero_code: 100.0,
+                per_count: 10_000.0 / 3800.0,
+                low: -100.0,
+                high: 10_000.0,
+            }),
+            Some(ChannelSpec {
+                input: 12,
+                zero_code: 200.0 - low / per_count,
+                per_count,
+                low,
+                high,
+            }),
+        ],
+    }
+}
+
+/// The block of one tick's scans as the DMA writes them (interleaved in scan order), through
+/// the board's true front end `board`.
+fn block(board: &FrontEnd, scans: &[Scan], sigma_counts: f64, rng: &mut Rng) -> Block {
+    let mut dma = Vec::new();
+    for s in scans {
+        for (channel, spec) in board.fitted() {
+            let reading = match channel {
+                Channel::Current => s.amps,
+                Channel::Amplifier => s.volts,
+                Channel::Stretch => s.stretch,
+            };
+            dma.push(code(spec, reading, sigma_counts, rng));
+        }
+    }
+    let mut b = Block::EMPTY;
+    // The DMA's two halves, added as their interrupts come.
+    let (first, second) = dma.split_at(dma.len() / 2 / 3 * 3);
+    b.add_scans(board, first);
+    b.add_scans(board, second);
+    b
+}
+
+/// The peak of the ring's current at `bias_volts`, A.
+fn peak_amps(scans: &[Scan]) -> f64 {
+    scans.iter().map(|s| s.amps.abs()).fold(0.0, f64::max)
+}
+
+/// With noise of 0, 1 and 3 counts, every tick's three readings are the plant's means over
+/// the tick within half a count and five standard errors of the noise's mean; the current's
+/// mean is the charge's change over the tick (a conservation law, not a mean of samples).
+#[test]
+fn readings_are_the_plants_means_within_the_stated_error() {
+    let bias = 6000.0;
+    let ticks = 300;
+    let scans = plant_scans(bias, ticks * SCANS_PER_TICK);
+    let amps_full = (1.5 * peak_amps(&scans)) as f32;
+    let fe = front_end(amps_full);
+    assert_eq!(fe.check(TICK_HZ as f32), Ok(SCANS_PER_TICK as u32));
+    let device = Device::new(REFERENCE_DEVICE).unwrap();
+    for sigma in [0.0, 1.0, 3.0] {
+        let mut rng = Rng(0x5eed + sigma as u64);
+        let mut worst = [0.0f64; 3];
+        for k in 0..ticks {
+            let tick = &scans[k * SCANS_PER_TICK..(k + 1) * SCANS_PER_TICK];
+            let b = block(&fe, tick, sigma, &mut rng);
+            assert_eq!(b.samples(Channel::Stretch), SCANS_PER_TICK as u32);
+            let got = fe.inputs(&b).unwrap_or_else(|e| panic!("tick {k}: {e}"));
+            let n = SCANS_PER_TICK as f64;
+            let before = if k == 0 {
+                device.prestretch_1()
+            } else {
+                scans[k * SCANS_PER_TICK - 1].stretch
+            };
+            let after = tick[SCANS_PER_TICK - 1].stretch;
+            let charge_amps = bias
+                * (REFERENCE_DEVICE.capacitance_farads(after)
+                    - REFERENCE_DEVICE.capacitance_farads(before))
+                * TICK_HZ;
+            let truth = [
+                charge_amps,
+                bias,
+                tick.iter().map(|s| s.stretch).sum::<f64>() / n,
+            ];
+            let read = [
+                got.current_amps.unwrap(),
+                got.amplifier_volts.unwrap(),
+                got.stretch.unwrap(),
+            ];
+            for (i, (spec, (t, r))) in fe
+                .channels
+                .iter()
+                .flatten()
+                .zip(truth.iter().zip(read))
+                .enumerate()
+            {
+                let counts = (f64::from(r) - t).abs() / f64::from(spec.per_count).abs();
+                let bound = 0.5 + 5.0 * sigma / n.sqrt() + 1e-3;
+                assert!(
+                    counts <= bound,
+                    "σ {sigma}, tick {k}, channel {i}: {counts} counts off"
+                );
+                worst[i] = worst[i].max(counts);
+            }
+        }
+        eprintln!(
+            "σ {sigma} counts: worst error in counts (current, amplifier, stretch) {worst:?}"
+        );
+    }
+}
+
+/// An input stuck at either rail, and an open input pulled to ground by its bias resistor
+/// (a few counts of noise above 0), are faults that name the channel and the rail.
+#[test]
+fn rail_stuck_and_open_inputs_are_named_faults() {
+    let scans = plant_scans(6000.0, SCANS_PER_TICK);
+    let fe = front_end((1.5 * peak_amps(&plant_scans(6000.0, 200))) as f32);
+    let mut rng = Rng(7);
+    for channel in Channel::ALL {
+        for (what, make) in [
+            (
+                "stuck high",
+                (|_: &mut Rng| FULL_SCALE_CODE) as fn(&mut Rng) -> u16,
+            ),
+            ("stuck low", |_| 0),
+            ("open", |rng| (rng.unit() * 4.0) as u16),
+        ] {
+            let mut b = block(&fe, &scans, 1.0, &mut rng);
+            // The channel's samples replaced: a block made again with this channel's codes.
+            let mut dma = Vec::new();
+            for _ in 0..SCANS_PER_TICK {
+                for (c, spec) in fe.fitted() {
+                    let good = code(spec, 0.5 * f64::from(spec.low + spec.high), 1.0, &mut rng);
+                    dma.push(if c == channel { make(&mut rng) } else { good });
+                }
+            }
+            b = {
+                let _ = b.take();
+                let mut fresh = Block::EMPTY;
+                fresh.add_scans(&fe, &dma);
+                fresh
+            };
+            let err = fe.inputs(&b).unwrap_err();
+            match err {
+                InputError::AtRail { channel: c, .. } => assert_eq!(c, channel, "{what}"),
+                other => panic!("{what} {channel:?}: {other:?}"),
+            }
+            let said = Fault::Input(err).to_string();
+            assert!(
+                said.contains(channel.name()) && said.contains("rail"),
+                "{said}"
+            );
+        }
+    }
+}
+
+/// A wrong gain in the image: the stretch's gain about mid-span three times the board's,
+/// the ring's swing reads outside its plausible range at its extremes (named), and in
+/// between the reading is the wrong gain's exactly (the image's mapping, not noise); the
+/// amplifier monitor's at 1.5 times the board's is inside its range, and the controller's
+/// cross-check against its command names it (the amplifier disagrees) while the ramp
+/// climbs, and the output comes down at the slew rate.
+#[test]
+fn a_wrong_gain_in_the_image_is_a_named_fault() {
+    let ticks = 300;
+    let scans = plant_scans(6000.0, ticks * SCANS_PER_TICK);
+    let board = front_end((1.5 * peak_amps(&scans)) as f32);
+    let mut rng = Rng(11);
+    let mut image = board;
+    let stretch = image.channels[2].as_mut().unwrap();
+    let mid_code = 2047.5;
+    let mid = stretch.reading(mid_code);
+    stretch.per_count *= 3.0;
+    stretch.zero_code = mid_code - mid / stretch.per_count;
+    assert_eq!(image.check(TICK_HZ as f32).map(|_| ()), Ok(()));
+    let (mut named, mut read) = (0, 0);
+    for tick in scans.chunks(SCANS_PER_TICK) {
+        let b = block(&board, tick, 1.0, &mut rng);
+        let truth = tick.iter().map(|s| s.stretch).sum::<f64>() / SCANS_PER_TICK as f64;
+        match image.inputs(&b) {
+            Err(InputError::Implausible { channel, .. }) => {
+                assert_eq!(channel, Channel::Stretch);
+                named += 1;
+            }
+            Ok(i) => {
+                let wrong = f64::from(mid) + 3.0 * (truth - f64::from(mid));
+                let counts = (f64::from(i.stretch.unwrap()) - wrong).abs()
+                    / f64::from(image.channels[2].unwrap().per_count);
+                assert!(
+                    counts < 0.5 + 5.0 / (SCANS_PER_TICK as f64).sqrt(),
+                    "{counts}"
+                );
+                read += 1;
+            }
+            Err(other) => panic!("{other:?}"),
+        }
+    }
+    assert!(named > 0 && read > 0, "{named} named, {read} read");
+
+    // The amplifier's monitor read at 1.5 times its gain, the board driving the reference.
+    let mut image = board;
+    image.channels[0] = None;
+    image.channels[2] = None;
+    image.channels[1].as_mut().unwrap().per_count *= 1.5;
+    let settings = Settings::for_target(44.0);
+    let mut slot = Some(common::start_reference(settings).unwrap());
+    let (bus, pin) = (common::Bus::default(), common::Pin::default());
+    let mut stage = OutputStage::new(Dac8551::new(&bus), &pin);
+    let mut sent = 0.0f64;
+    let mut volts_seen = Vec::new();
+    for _ in 0..20_000 {
+        let mut dma = Vec::new();
+        for _ in 0..SCANS_PER_TICK {
+            dma.push(code(
+                board.channels[1].as_ref().unwrap(),
+                sent,
+                1.0,
+                &mut rng,
+            ));
+        }
+        let mut b = Block::EMPTY;
+        b.add_scans(&image, &dma);
+        let t = tick::drive(&mut slot, &mut stage, image.inputs(&b)).unwrap();
+        sent = f64::from(t.output.volts);
+        volts_seen.push(t.output.volts);
+        if slot.as_ref().unwrap().latched_fault().is_some() && sent == 0.0 {
+            break;
+        }
+    }
+    let fault = slot.as_ref().unwrap().latched_fault();
+    assert!(
+        matches!(fault, Some(Fault::AmplifierDisagrees { .. })),
+        "{fault:?}"
+    );
+    // A step at the slew rate, and the DAC's code below it (the gate rounds down).
+    let step = settings.slew_volts_per_second / settings.tick_hz + DAC_VOLTS;
+    let top = volts_seen.iter().cloned().fold(0.0, f32::max);
+    let peak = volts_seen.iter().position(|&v| v == top).unwrap();
+    for w in volts_seen[peak..].windows(2) {
+        assert!(w[1] <= w[0] && w[0] - w[1] <= step, "{w:?}");
+    }
+    assert_eq!(*volts_seen.last().unwrap(), 0.0);
+}
+
+/// An input error at the tick trips the controller (`Fault::Input`), latched: from the bias
+/// the output comes down at the slew rate, never up, to 0 V, however long the input stays
+/// bad; the fault says the channel.
+#[test]
+fn an_input_fault_descends_at_the_slew_rate() {
+    let settings = Settings::for_target(44.0);
+    let mut slot = Some(common::start_reference(settings).unwrap());
+    let (bus, pin) = (common::Bus::default(), common::Pin::default());
+    let mut stage = OutputStage::new(Dac8551::new(&bus), &pin);
+    let mut volts = 0.0;
+    while slot.as_ref().unwrap().phase() != Phase::Holding || volts == 0.0 {
+        volts = tick::drive(&mut slot, &mut stage, Ok(Inputs::NONE))
+            .unwrap()
+            .output
+            .volts;
+    }
+    let bias = volts;
+    let bad = InputError::NoSamples {
+        channel: Channel::Current,
+    };
+    let step = settings.slew_volts_per_second / settings.tick_hz + DAC_VOLTS;
+    let ticks = (bias / step).ceil() as usize + 50;
+    let mut last = bias;
+    for k in 0..ticks {
+        let t = tick::drive(&mut slot, &mut stage, Err(bad)).unwrap();
+        let v = t.output.volts;
+        assert!(v <= last && last - v <= step, "tick {k}: {last} -> {v}");
+        last = v;
+    }
+    assert_eq!(last, 0.0);
+    let fault = slot.as_ref().unwrap().latched_fault().unwrap();
+    assert_eq!(fault, Fault::Input(bad));
+    assert!(fault.to_string().contains("current input"), "{fault}");
+}
+
+/// A DMA buffer holds a whole part of a tick's scans, at most half of them, within its room:
+/// every tick takes the same number of buffers.
+#[test]
+fn buffers_divide_a_ticks_scans() {
+    use de_resonator::acquire::BUFFER_CODES;
+    let three = front_end(1e-3);
+    let mut one = three;
+    one.channels[1] = None;
+    one.channels[2] = None;
+    for fe in [one, three] {
+        let channels = fe.fitted().count() as u32;
+        for scans_per_tick in 1..=300u32 {
+            let b = fe.scans_per_buffer(scans_per_tick);
+            assert!(b >= 1 && scans_per_tick % b == 0, "{scans_per_tick}: {b}");
+            assert!((b * channels) as usize <= BUFFER_CODES);
+            assert!(
+                scans_per_tick == 1 || b <= scans_per_tick / 2,
+                "{scans_per_tick}: {b}"
+            );
+        }
+    }
+    assert_eq!(three.scans_per_buffer(10), 5);
+    assert_eq!(three.scans_per_buffer(100), 25);
+    assert_eq!(one.scans_per_buffer(1), 1);
+}
+
+/// What the tick cannot read is named: a channel with no sample (the DMA stopped) and a
+/// code above the ADC's full scale. Integers in the block: no code makes a NaN reading.
+#[test]
+fn no_samples_and_impossible_codes_are_named() {
+    let fe = front_end(1e-3);
+    assert_eq!(
+        fe.inputs(&Block::EMPTY),
+        Err(InputError::NoSamples {
+            channel: Channel::Current
+        })
+    );
+    let mut b = Block::EMPTY;
+    b.add_scans(&fe, &[2047, 2000, 1000, 2047, 4096, 1000]);
+    assert_eq!(
+        fe.inputs(&b),
+        Err(InputError::NotACode {
+            channel: Channel::Amplifier,
+            code: 4096
+        })
+    );
+    // A trailing part scan is not taken for whole ones.
+    let mut b = Block::EMPTY;
+    b.add_scans(&fe, &[2047, 2000, 1000, 2047]);
+    assert_eq!(b.samples(Channel::Current), 1);
+    assert_eq!(b.samples(Channel::Stretch), 1);
+    // Any codes: a reading is a number or an error, never NaN.
+    let mut rng = Rng(3);
+    for _ in 0..2_000 {
+        let mut b = Block::EMPTY;
+        let n = rng.below(40);
+        let codes: Vec<u16> = (0..n).map(|_| (rng.unit() * 65536.0) as u16).collect();
+        b.add_scans(&fe, &codes);
+        if let Ok(i) = fe.inputs(&b) {
+            for r in [i.current_amps, i.amplifier_volts, i.stretch] {
+                assert!(r.unwrap().is_finite());
+            }
+        }
+    }
+}
+
+/// The image's front end is checked: a plausible range that reaches a rail (no live zero),
+/// two channels on one input, an input that does not exist, a scale of zero or NaN, and a
+/// scan rate that is not a whole number a tick or beyond the ADC.
+#[test]
+fn a_front_end_the_board_cannot_use_is_refused() {
+    let good = front_end(1e-3);
+    let tick = TICK_HZ as f32;
+    let with = |f: &dyn Fn(&mut FrontEnd)| {
+        let mut fe = good;
+        f(&mut fe);
+        fe.check(tick)
+    };
+    assert!(matches!(
+        with(&|fe| fe.channels[1].as_mut().unwrap().zero_code = 0.0),
+        Err(FrontEndError::Range {
+            channel: Channel::Amplifier,
+            ..
+        })
+    ));
+    assert_eq!(
+        with(&|fe| fe.channels[2].as_mut().unwrap().input = 10),
+        Err(FrontEndError::SameInput { input: 10 })
+    );
+    // No such input; the command port's RX pin (PA3, IN3); the enable line's (PB0, IN8).
+    for input in [16, 3, 8] {
+        assert!(matches!(
+            with(&|fe| fe.channels[0].as_mut().unwrap().input = input),
+            Err(FrontEndError::Input { input: i, .. }) if i == input
+        ));
+    }
+    for bad in [0.0, f32::NAN, f32::INFINITY] {
+        assert!(matches!(
+            with(&|fe| fe.channels[0].as_mut().unwrap().per_count = bad),
+            Err(FrontEndError::Scale { .. })
+        ));
+    }
+    for scan_hz in [10_500.0, 500.0, 0.0, f32::NAN, 100_000.0] {
+        assert!(
+            matches!(
+                with(&|fe| fe.scan_hz = scan_hz),
+                Err(FrontEndError::ScanRate { .. })
+            ),
+            "{scan_hz}"
+        );
+    }
+    // None fitted: nothing to scan, at any rate.
+    assert_eq!(FrontEnd::NONE.check(tick), Ok(0));
+    assert_eq!(FrontEnd::NONE.scans_per_buffer(10), 0);
+    let said = with(&|fe| fe.channels[1].as_mut().unwrap().zero_code = 0.0)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        said.contains("amplifier") && said.contains("live zero"),
+        "{said}"
+    );
+}
+
+/// The tick's reader (`Reader`: whole sums against precomputed bounds) gives what the checked
+/// path (`FrontEnd::inputs`) gives, on blocks of every kind: full blocks of plausible codes
+/// (to f32 rounding), and the same named error on every other (short blocks, rails, codes
+/// out of range or beyond the ADC).
+#[test]
+fn the_ticks_reader_agrees_with_the_checked_path() {
+    use de_resonator::acquire::Reader;
+    let fe = front_end(1e-3);
+    let scans = fe.check(TICK_HZ as f32).unwrap();
+    let reader = Reader::new(fe, scans);
+    let mut rng = Rng(17);
+    let (mut fast, mut slow) = (0, 0);
+    for trial in 0..20_000 {
+        let mut b = Block::EMPTY;
+        let n = match trial % 4 {
+            0 => rng.below(2 * scans as usize + 1),
+            _ => scans as usize,
+        };
+        for _ in 0..n {
+            for (_, spec) in fe.fitted() {
+                // Mostly near the plausible range's edges, now and then anywhere.
+                let (lo, hi) = (spec.code_of(spec.low), spec.code_of(spec.high));
+                let code = match rng.below(8) {
+                    0 => rng.unit() * 4200.0,
+                    1 => f64::from(lo.min(hi)) + rng.range(-2.0, 2.0),
+                    2 => f64::from(lo.max(hi)) + rng.range(-2.0, 2.0),
+                    _ => f64::from(lo) + (f64::from(hi) - f64::from(lo)) * rng.unit(),
+                };
+                b.add(
+                    channel_of(&fe, spec),
+                    code.round().clamp(0.0, 65535.0) as u16,
+                );
+            }
+        }
+        let (want, got) = (fe.inputs(&b), reader.inputs(&b));
+        match (want, got) {
+            (Ok(w), Ok(g)) => {
+                for (x, y) in [
+                    (w.current_amps, g.current_amps),
+                    (w.amplifier_volts, g.amplifier_volts),
+                    (w.stretch, g.stretch),
+                ] {
+                    let (x, y) = (x.unwrap(), y.unwrap());
+                    assert!((x - y).abs() <= 1e-5 * x.abs().max(1e-3), "{x} against {y}");
+                }
+                fast += 1;
+            }
+            (w, g) => {
+                assert_eq!(w, g);
+                slow += 1;
+            }
+        }
+    }
+    assert!(fast > 1000 && slow > 1000, "{fast} read, {slow} refused");
+}
+
+/// The channel a spec of `fe` belongs to.
+fn channel_of(fe: &FrontEnd, spec: &ChannelSpec) -> Channel {
+    fe.fitted().find(|(_, s)| *s == spec).unwrap().0
+}
