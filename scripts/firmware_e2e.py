@@ -31,7 +31,8 @@ GPIOB_BSRR = 0x40020418
 FULL_SCALE_VOLTS = 2.5 * 4000.0  # the image's amplifier (host-sim image's defaults)
 # The trim's board: a current monitor (±190 µA about mid-scale: the
 # trim's 200 V step in a tick is 106 µA), the HV monitor (0-10 kV from
-# code 100), a displacement sensor (λ1 1.4-2.6 over codes 200-3900), ten scans a tick. Under
+# code 100), a displacement sensor (λ1 1.0-3.0 over codes 200-3900, the
+# reference device's whole range up to its cap and the ring on it), ten scans a tick. Under
 # QEMU the model sensor fills the ADC's block with their codes (no ADC sampling, no DMA).
 FRONT_END = """
 [front_end]
@@ -50,10 +51,10 @@ low = -100
 high = 10000
 [front_end.stretch]
 input = 12
-zero_code = -4116.6667
-per_count = 3.2432432e-4
-low = 1.4
-high = 2.6
+zero_code = -1650
+per_count = 5.4054054e-4
+low = 1.0
+high = 3.0
 """
 failures = []
 
@@ -330,12 +331,18 @@ def main():
     reply = fw.ask("status")
     check(reply.startswith("err 5 ") and "watchdog" in reply, f"status after it: {reply}")
     reply = fw.ask("clear")
-    check(reply.startswith("ok clear"), f"clear boots again: {reply}")
+    check(reply.startswith("ok clear") and "off at 0 V until `start`" in reply,
+          f"clear boots again, the output left off: {reply}")
+    time.sleep(0.3)
+    s = fw.status()
+    check(s["volts"] == "0" and s["bias_volts"] == "0", f"nothing driven after clear: {s}")
+    reply = fw.ask("start")
+    check(reply.startswith("ok target_hz=44 "), f"start switches it on: {reply}")
     s = fw.wait_phase(("holding",))
     check(s["fault"] == "none" and s["bias_volts"] != "0", f"driving again: {s['phase']}")
     fw.stop()
     frames, enable = fw.frames()
-    check(enable.count("high") >= 2, f"the amplifier enabled at the first boot and after clear: {enable}")
+    check(enable.count("high") >= 2, f"the amplifier enabled at the first boot and after start: {enable}")
 
     print("== the watchdog: a stuck tick (QEMU's `tick-hangs`: the tick hangs after 2 s) resets "
           "the chip, which comes up refusing")
@@ -469,7 +476,7 @@ def main():
         reply = fw.ask("target 43.5")
         check(reply.startswith("ok target_hz=43.5"), f"a replan while driving: {reply}")
         s = fw.wait_phase(("driving", "faulted"))
-        check(s["fault"] == "none", f"driving the new plan: {s['phase']}")
+        check(s["fault"] == "none", f"driving the new plan: {s['phase']} ({s['fault']})")
         fw.stop()
         ram_within_budget(s, TRIM_ELF, "the boot's trims, a trim asked for and a replan")
 

@@ -204,7 +204,8 @@ fn saved_settings_boot_or_fall_back_to_the_image() {
 }
 
 /// After a watchdog reset the board boots refused, whatever the image: nothing is driven
-/// until `clear`, which runs every check and ramps to the image's bias.
+/// until `clear`, which runs every check and re-arms with the output off at 0 V, and then
+/// `start`, which ramps to the image's bias (the settings asked for meanwhile).
 #[test]
 fn a_watchdog_reset_waits_for_clear() {
     let bytes = image_with(&Settings::for_target(44.0));
@@ -224,19 +225,25 @@ fn a_watchdog_reset_waits_for_clear() {
     );
     let cleared = b.ask("clear");
     assert!(
-        cleared.starts_with("ok clear: boot checks pass, ramp to "),
+        cleared.starts_with("ok clear: boot checks pass; the output off at 0 V until `start`"),
         "{cleared}"
     );
     let bias: f32 = cleared
-        .trim_end_matches(" V")
+        .trim_end_matches(" V)")
         .rsplit(' ')
         .next()
         .unwrap()
         .parse()
         .unwrap();
     assert!((common::natural_hz_at(&REFERENCE_DEVICE, bias) / 45.0 - 1.0).abs() < 1e-4);
-    assert!(b.run(3, Inputs::NONE) > 0.0);
+    // Re-armed, not switched on: nothing driven, whatever the ticks.
+    assert_eq!(b.run(2_000, Inputs::NONE), 0.0);
+    assert!(b.ask("status").contains("phase=holding"));
     assert_eq!(b.ask("get target_hz"), "ok target_hz=45");
+    let started = b.ask("start");
+    assert!(started.starts_with("ok target_hz=45 "), "{started}");
+    assert_eq!(field(&started, "bias_volts"), bias);
+    assert!(b.run(3, Inputs::NONE) > 0.0);
 }
 
 /// Every request to a running board: its reply, and what it did to the controller.
@@ -341,6 +348,12 @@ fn a_fault_latches_until_clear_at_zero() {
     );
     assert!(b.ask("clear").starts_with("ok clear"));
     assert!(b.ask("status").ends_with("fault=none"));
+    // Cleared, the output stays off until asked.
+    for _ in 0..2_000 {
+        let t = tick::drive(&mut b.slot, &mut stage, Ok(Inputs::NONE)).unwrap();
+        assert_eq!(t.output.volts, 0.0);
+    }
+    assert!(stage.is_safe() && !pin.high.get(), "off after clear");
 }
 
 /// The one enable policy: off with no controller, on while a plan drives, off again at

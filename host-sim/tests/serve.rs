@@ -118,8 +118,8 @@ fn the_virtual_board_answers_every_request_as_the_firmware() {
 }
 
 /// The stuck sensor's scene (stuck at 3 s): the fault latches, requests answer `err 4`,
-/// `clear` waits for 0 V and then boots again, and the sensor, still stuck, faults the new
-/// controller as it did the first.
+/// `clear` waits for 0 V and then boots again (the output left off until `start`), and the
+/// sensor, still stuck, faults the new controller as it did the first.
 #[test]
 fn a_fault_latches_on_the_virtual_board_until_clear() {
     let scene = concat!(
@@ -136,7 +136,7 @@ fn a_fault_latches_on_the_virtual_board_until_clear() {
     board.wait_for("at 0 V", |s| number(s, "volts") == 0.0);
     let cleared = board.replies(&["clear", "status"]);
     assert!(
-        cleared[0].starts_with("ok clear: boot checks pass, ramp to "),
+        cleared[0].starts_with("ok clear: boot checks pass; the output off at 0 V until `start`"),
         "{}",
         cleared[0]
     );

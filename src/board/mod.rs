@@ -159,7 +159,7 @@ impl<'a, K: Keeper> Board<'a, K> {
             Err(fault) => board.refuse_boot(slot, &fault, &mut started.notice),
             Ok(_) if cause == Some(ResetCause::Watchdog) => board.refuse_boot(
                 slot,
-                &"reset by the watchdog (a task missed its deadline): `clear` to boot",
+                &"reset by the watchdog (a task missed its deadline): `clear` to re-arm, `start` to drive",
                 &mut started.notice,
             ),
             Ok(bias_volts) => {

@@ -211,6 +211,7 @@ impl<K: Keeper> Board<'_, K> {
                     let _ = write!(out, "ok {status}");
                 }
             }
+            Command::Start => self.replan(settings, controller, out),
             Command::Target { hz } => {
                 let next = Settings {
                     target_hz: hz,
@@ -327,6 +328,11 @@ impl<K: Keeper> Board<'_, K> {
         let mut fresh = None;
         match Controller::start_in(&mut fresh, image.params, image.table, amplifier, settings) {
             Ok(boot) => {
+                // Re-armed, not switched on: the new controller stopped at 0 V (the stage
+                // off), until `start`, `target` or `ac`.
+                if let Some(c) = fresh.as_mut() {
+                    c.stop();
+                }
                 if !replace_at_rest(controller, fresh) {
                     err(
                         out,
@@ -339,7 +345,7 @@ impl<K: Keeper> Board<'_, K> {
                 self.limit = boot.limit.map(|l| l.mode);
                 let _ = write!(
                     out,
-                    "ok clear: boot checks pass, ramp to {} V",
+                    "ok clear: boot checks pass; the output off at 0 V until `start` (ramps to {} V)",
                     Decimal(boot.bias_volts)
                 );
             }

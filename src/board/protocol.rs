@@ -23,8 +23,8 @@ pub const NOTICE: &str = "# ";
 pub const MAX_LINE: usize = 96;
 
 /// What `help` answers, one line.
-pub const HELP: &str = "commands: help | status | target <Hz> | ac <volts> <Hz> | stop | trim | \
-                        clear | get <setting> | set <setting> <value> | save | reset";
+pub const HELP: &str = "commands: help | status | start | target <Hz> | ac <volts> <Hz> | stop | \
+                        trim | clear | get <setting> | set <setting> <value> | save | reset";
 
 /// A request.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -32,6 +32,9 @@ pub enum Command {
     Help,
     /// Phase, target, bias, cap, limit mode, last fault, ticks.
     Status,
+    /// Switch the high voltage on: the plan of the settings in force, checked as `target`
+    /// is, ramped to from the present voltage (after `clear` or `stop`, from 0 V).
+    Start,
     /// Tune to a new natural frequency: solve, check the plan in the model, ramp there from
     /// the present bias.
     Target {
@@ -46,7 +49,8 @@ pub enum Command {
     Stop,
     /// Measure the natural frequency and trim the bias now (the `trim` feature).
     Trim,
-    /// Re-arm after a latched fault, or at 0 V: the boot checks again, then the default plan.
+    /// Re-arm after a latched fault, or at 0 V: the boot checks again, the output left off at
+    /// 0 V (`start` switches it on: no command named `clear` does).
     Clear,
     Get(Setting),
     Set(Setting, f32),
@@ -157,6 +161,7 @@ pub fn parse(line: &[u8]) -> Result<Command, ParseError> {
     let command = match name {
         "help" => Command::Help,
         "status" => Command::Status,
+        "start" => Command::Start,
         "target" => Command::Target { hz: args.number()? },
         "ac" => Command::Ac {
             volts: args.number()?,
@@ -449,6 +454,7 @@ mod tests {
         assert_eq!(parse(b"stop now"), Err(ParseError::Extra));
         assert_eq!(parse(b"target 4x"), Err(ParseError::BadNumber { index: 1 }));
         assert_eq!(parse(b"get volume"), Err(ParseError::UnknownSetting));
+        assert_eq!(parse(b"start"), Ok(Command::Start));
         assert_eq!(parse(b"launch"), Err(ParseError::UnknownCommand));
         assert_eq!(parse(b"target \xff44"), Err(ParseError::NotText));
         assert_eq!(parse(&[b'a'; MAX_LINE + 1]), Err(ParseError::TooLong));

@@ -270,9 +270,10 @@ enum Sensing {
     Current,
 }
 
-/// The counted board's analog front end (the e2e test's): the current monitor (±490 µA about
-/// mid-scale: a 200 V pulse's step in a tick is 106 µA, with the AC's more) and the HV monitor (0-10 kV from code 100) always, a displacement sensor (λ1
-/// 1.4-2.6 over codes 200-3900) where it senses the stretch; ten scans a tick.
+/// The counted board's analog front end (the e2e test's, a wider current monitor): the
+/// current monitor (±490 µA about mid-scale: a 200 V pulse's step in a tick is 106 µA, with
+/// the AC's more) and the HV monitor (0-10 kV from code 100) always, a displacement sensor
+/// (λ1 1.0-3.0 over codes 200-3900) where it senses the stretch; ten scans a tick.
 fn front_end(sensing: Sensing) -> FrontEnd {
     let spec = |input, zero_code, per_count, low, high| {
         Some(ChannelSpec {
@@ -289,9 +290,7 @@ fn front_end(sensing: Sensing) -> FrontEnd {
             spec(10, 2047.5, 2.5e-7, -4.9e-4, 4.9e-4),
             spec(11, 100.0, 10_000.0 / 3800.0, -100.0, 10_000.0),
             match sensing {
-                Sensing::Stretch => {
-                    spec(12, 200.0 - 1.4 / 3.243_243_2e-4, 3.243_243_2e-4, 1.4, 2.6)
-                }
+                Sensing::Stretch => spec(12, -1650.0, 5.405_405_4e-4, 1.0, 3.0),
                 Sensing::Current => None,
             },
         ],

@@ -153,6 +153,7 @@ pub fn number(line: &str, key: &str) -> f64 {
 /// The voltage a reply ends with (`… ramp to 7449.878 V`).
 pub fn last_volts(reply: &str) -> f64 {
     reply
+        .trim_end_matches(')')
         .trim_end_matches(" V")
         .rsplit(' ')
         .next()
