@@ -25,6 +25,12 @@ pub const MAX_INPUT: u8 = 15;
 pub const BOARD_INPUTS: u16 = 0b1111_1110_0000_0011;
 /// The most codes a DMA buffer holds (each of the three buffers the firmware keeps).
 pub const BUFFER_CODES: usize = 128;
+/// The most DMA buffers a tick (their interrupt's rate: a tick's scans that no buffer size
+/// divides, a prime number of them, would otherwise take an interrupt a scan).
+pub const MAX_BUFFERS_PER_TICK: u32 = 16;
+/// Ticks at power-up whose block may be empty before the first DMA buffer has come (the
+/// timer, the ADC and the tick are not in phase): no reading then, not a fault.
+pub const FIRST_BUFFER_TICKS: u32 = 10;
 /// The most conversions a second the front end may ask for, all channels together (the
 /// ADC at 21 MHz, 15 cycles a 12-bit conversion, a sampling time of 56 cycles: ~296 kHz).
 pub const MAX_CONVERSIONS_HZ: f32 = 250_000.0;
@@ -189,10 +195,17 @@ impl FrontEnd {
         let per_tick = self.scan_hz / tick_hz;
         let whole = libm::roundf(per_tick);
         let conversions = self.scan_hz * used.count_ones() as f32;
-        if !(whole >= 1.0
+        // At least two buffers a tick (the DMA's are not locked to the tick: each tick then
+        // takes one or more), at most `MAX_BUFFERS_PER_TICK` (the DMA's interrupt rate).
+        let ok = whole >= 2.0
             && (per_tick - whole).abs() <= 1e-4 * whole
-            && conversions <= MAX_CONVERSIONS_HZ)
-        {
+            && conversions <= MAX_CONVERSIONS_HZ
+            && {
+                let scans = whole as u32;
+                let per_buffer = self.scans_per_buffer(scans).max(1);
+                scans / per_buffer <= MAX_BUFFERS_PER_TICK
+            };
+        if !ok {
             return Err(FrontEndError::ScanRate {
                 scan_hz: self.scan_hz,
                 tick_hz,
@@ -236,11 +249,15 @@ impl FrontEnd {
 /// full block that read plausibly (the plausible range, inside the rails, as whole sums) and
 /// the reading per sum. A full block within them is read with a multiply and an add; any
 /// other block takes [`FrontEnd::inputs`], which names what is wrong (the tick's budget).
+/// At power-up, until the first sample comes, an empty block is no reading (for at most
+/// [`FIRST_BUFFER_TICKS`] ticks), not a fault.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Reader {
     front_end: FrontEnd,
     scans: u32,
     fast: [Option<FastChannel>; 3],
+    /// Ticks left that may find no sample yet (0 once one has come).
+    waiting: u32,
 }
 
 /// A channel's full-block path: sums in `[low_sum, high_sum]` read `sum · per_sum − offset`.
@@ -262,14 +279,36 @@ impl Reader {
             let (a, b) = (spec.code_of(spec.low), spec.code_of(spec.high));
             let (low, high) = (a.min(b).max(RAIL_MARGIN_CODES), a.max(b));
             let high = high.min(f32::from(FULL_SCALE_CODE) - RAIL_MARGIN_CODES);
-            // Whole sums strictly inside, so that rounding never lets one through that the
-            // checked path would refuse.
-            let (low_sum, high_sum) = (libm::ceilf(low * n) + 1.0, libm::floorf(high * n) - 1.0);
-            let fits =
-                scans_per_tick > 0 && low_sum >= 0.0 && high_sum < 4.0e9 && low_sum <= high_sum;
-            fits.then(|| FastChannel {
-                low_sum: low_sum as u32,
-                high_sum: high_sum as u32,
+            let (low_sum, high_sum) = (libm::ceilf(low * n), libm::floorf(high * n));
+            if !(scans_per_tick > 0 && low_sum >= 0.0 && high_sum < 4.0e9) {
+                return None;
+            }
+            // Whole sums the checked path reads, found by it (its reading is monotone in the
+            // sum): the fast path never lets one through that it would refuse.
+            let checked = |sum: u32| {
+                let sums = Sums {
+                    sum,
+                    count: scans_per_tick,
+                    highest: 0,
+                };
+                sums.reading(Channel::Current, &spec).is_ok()
+            };
+            let (mut low_sum, mut high_sum) = (low_sum as u32, high_sum as u32);
+            for _ in 0..64 {
+                if low_sum > high_sum || checked(low_sum) {
+                    break;
+                }
+                low_sum = low_sum.saturating_add(1);
+            }
+            for _ in 0..64 {
+                if low_sum > high_sum || checked(high_sum) {
+                    break;
+                }
+                high_sum = high_sum.saturating_sub(1);
+            }
+            (low_sum <= high_sum && checked(low_sum) && checked(high_sum)).then(|| FastChannel {
+                low_sum,
+                high_sum,
                 per_sum: spec.per_count / n,
                 offset: spec.zero_code * spec.per_count,
             })
@@ -278,6 +317,7 @@ impl Reader {
             front_end,
             scans: scans_per_tick,
             fast,
+            waiting: FIRST_BUFFER_TICKS,
         }
     }
 
@@ -286,8 +326,18 @@ impl Reader {
         &self.front_end
     }
 
-    /// The block's readings, as [`FrontEnd::inputs`] gives them (to rounding), checked.
-    pub fn inputs(&self, block: &Block) -> Result<Inputs, InputError> {
+    /// The block's readings, as [`FrontEnd::inputs`] gives them (to rounding), checked; no
+    /// reading while the first sample has not come (at power-up, for a few ticks).
+    pub fn inputs(&mut self, block: &Block) -> Result<Inputs, InputError> {
+        if self.waiting > 0 {
+            let empty =
+                block.current.count == 0 && block.amplifier.count == 0 && block.stretch.count == 0;
+            if empty {
+                self.waiting -= 1;
+                return Ok(Inputs::NONE);
+            }
+            self.waiting = 0;
+        }
         let mut good = true;
         let mut read = |fitted: bool, fast: &Option<FastChannel>, sums: &Sums| {
             if !fitted {
@@ -568,7 +618,8 @@ impl fmt::Display for FrontEndError {
             FrontEndError::ScanRate { scan_hz, tick_hz } => write!(
                 f,
                 "front end: {} scans/s at a {} Hz tick must be a whole number of scans a tick, \
-                 at most {} conversions/s for all channels",
+                 at least 2, that the DMA's buffers divide into at most {MAX_BUFFERS_PER_TICK} \
+                 parts, and at most {} conversions/s for all channels",
                 Decimal(scan_hz),
                 Decimal(tick_hz),
                 Decimal(MAX_CONVERSIONS_HZ)

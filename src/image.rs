@@ -24,7 +24,7 @@
 
 use core::fmt;
 
-use crate::acquire::{ChannelSpec, FrontEnd, FrontEndError};
+use crate::acquire::{ChannelSpec, FrontEnd, FrontEndError, MAX_INPUT};
 use crate::device::DeviceParams;
 use crate::drive::{Amplifier, CodeError};
 use crate::table::{crc32, f32_at, u16_at, u32_at, Table, TableError};
@@ -252,6 +252,13 @@ impl<'a> Image<'a> {
         table: &[u8],
     ) -> Result<usize, ImageError> {
         Table::parse(table).map_err(ImageError::Table)?;
+        // An input the layout cannot hold (0xFF is "not fitted") would read back as none.
+        if let Some((channel, spec)) = front_end.fitted().find(|(_, s)| s.input > MAX_INPUT) {
+            return Err(ImageError::FrontEnd(FrontEndError::Input {
+                channel,
+                input: spec.input,
+            }));
+        }
         let needed = image_bytes(table.len());
         let Some(out) = out.get_mut(..needed) else {
             return Err(ImageError::BufferTooSmall { needed });

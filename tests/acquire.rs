@@ -506,8 +506,12 @@ fn the_ticks_reader_agrees_with_the_checked_path() {
     use de_resonator::acquire::Reader;
     let fe = front_end(1e-3);
     let scans = fe.check(TICK_HZ as f32).unwrap();
-    let reader = Reader::new(fe, scans);
+    let mut reader = Reader::new(fe, scans);
     let mut rng = Rng(17);
+    // Past the power-up's wait for a first sample (tested below).
+    let mut first = Block::EMPTY;
+    first.add(Channel::Current, 2047);
+    let _ = reader.inputs(&first);
     let (mut fast, mut slow) = (0, 0);
     for trial in 0..20_000 {
         let mut b = Block::EMPTY;
@@ -556,4 +560,51 @@ fn the_ticks_reader_agrees_with_the_checked_path() {
 /// The channel a spec of `fe` belongs to.
 fn channel_of(fe: &FrontEnd, spec: &ChannelSpec) -> Channel {
     fe.fitted().find(|(_, s)| *s == spec).unwrap().0
+}
+
+/// At power-up the timer, the ADC and the tick are not in phase: for the first
+/// `FIRST_BUFFER_TICKS` ticks an empty block is no reading (not a fault); after them, or once a
+/// sample has come, an empty block is `NoSamples` by name.
+#[test]
+fn an_empty_block_is_a_fault_once_the_first_samples_are_due() {
+    use de_resonator::acquire::{Reader, FIRST_BUFFER_TICKS};
+    let fe = front_end(1e-3);
+    let scans = fe.check(TICK_HZ as f32).unwrap();
+    let no_samples = Err(InputError::NoSamples {
+        channel: Channel::Current,
+    });
+    let mut reader = Reader::new(fe, scans);
+    for _ in 0..FIRST_BUFFER_TICKS {
+        assert_eq!(reader.inputs(&Block::EMPTY), Ok(Inputs::NONE));
+    }
+    assert_eq!(reader.inputs(&Block::EMPTY), no_samples);
+    // A sample in time: from then on an empty block is a fault at once.
+    let mut reader = Reader::new(fe, scans);
+    assert_eq!(reader.inputs(&Block::EMPTY), Ok(Inputs::NONE));
+    let scans = plant_scans(6000.0, SCANS_PER_TICK);
+    let mut rng = Rng(5);
+    assert!(reader.inputs(&block(&fe, &scans, 1.0, &mut rng)).is_ok());
+    assert_eq!(reader.inputs(&Block::EMPTY), no_samples);
+}
+
+/// The scan rate: at least two scans a tick (the DMA's buffers are not in phase with the
+/// tick: one buffer a tick would leave some ticks none), and not so many buffers a tick that
+/// the DMA's interrupt comes a scan (a prime number of scans larger than a buffer holds).
+#[test]
+fn the_scan_rate_leaves_every_tick_a_buffer_at_a_bounded_interrupt_rate() {
+    let mut fe = front_end(1e-3);
+    for (scan_hz, ok) in [
+        (1_000.0, false),
+        (2_000.0, true),
+        (10_000.0, true),
+        (40_000.0, true),
+        // 53 scans a tick, prime and more than a buffer of three channels holds (42):
+        // a buffer a scan, 53 interrupts a tick.
+        (53_000.0, false),
+        // Beyond the ADC: 270,000 conversions a second.
+        (90_000.0, false),
+    ] {
+        fe.scan_hz = scan_hz;
+        assert_eq!(fe.check(TICK_HZ as f32).is_ok(), ok, "{scan_hz}");
+    }
 }

@@ -236,10 +236,21 @@ fn a_watchdog_reset_waits_for_clear() {
         .parse()
         .unwrap();
     assert!((common::natural_hz_at(&REFERENCE_DEVICE, bias) / 45.0 - 1.0).abs() < 1e-4);
-    // Re-armed, not switched on: nothing driven, whatever the ticks.
+    // Re-armed, not switched on: nothing driven, whatever the ticks; a setting at rest is
+    // checked as a plan and leaves the output off.
     assert_eq!(b.run(2_000, Inputs::NONE), 0.0);
     assert!(b.ask("status").contains("phase=holding"));
     assert_eq!(b.ask("get target_hz"), "ok target_hz=45");
+    let set = b.ask("set slew_volts_per_second 5000");
+    assert!(
+        set.ends_with("(the output stays off: `start` to drive)"),
+        "{set}"
+    );
+    assert_eq!(b.run(500, Inputs::NONE), 0.0);
+    assert_eq!(
+        b.ask("get slew_volts_per_second"),
+        "ok slew_volts_per_second=5000"
+    );
     let started = b.ask("start");
     assert!(started.starts_with("ok target_hz=45 "), "{started}");
     assert_eq!(field(&started, "bias_volts"), bias);
@@ -348,12 +359,27 @@ fn a_fault_latches_until_clear_at_zero() {
     );
     assert!(b.ask("clear").starts_with("ok clear"));
     assert!(b.ask("status").ends_with("fault=none"));
-    // Cleared, the output stays off until asked.
-    for _ in 0..2_000 {
+    // Cleared, the output stays off until asked: the enable line never high, from the
+    // first tick on.
+    for k in 0..2_000 {
         let t = tick::drive(&mut b.slot, &mut stage, Ok(Inputs::NONE)).unwrap();
         assert_eq!(t.output.volts, 0.0);
+        assert!(
+            stage.is_safe() && !pin.high.get(),
+            "on at tick {k} after clear"
+        );
     }
-    assert!(stage.is_safe() && !pin.high.get(), "off after clear");
+    // `start` switches it on.
+    let started = b.ask("start");
+    assert!(started.starts_with("ok target_hz=44 "), "{started}");
+    let mut volts = 0.0;
+    for _ in 0..3 {
+        volts = tick::drive(&mut b.slot, &mut stage, Ok(Inputs::NONE))
+            .unwrap()
+            .output
+            .volts;
+    }
+    assert!(volts > 0.0 && pin.high.get(), "{volts} V after start");
 }
 
 /// The one enable policy: off with no controller, on while a plan drives, off again at

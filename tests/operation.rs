@@ -599,3 +599,37 @@ fn the_protocol_covers_what_help_says() {
         Some("7449.878")
     );
 }
+
+/// A fitted channel on an input the layout cannot hold (0xFF means "not fitted") is refused
+/// when the image is written, not read back as no channel.
+#[test]
+fn an_image_refuses_a_channel_it_could_not_read_back() {
+    use de_resonator::acquire::{Channel, ChannelSpec};
+    let t = reference_table();
+    let mut out = vec![0; image::image_bytes(t.len())];
+    let channel = ChannelSpec {
+        input: 0xFF,
+        zero_code: 2047.5,
+        per_count: 1e-7,
+        low: -1e-4,
+        high: 1e-4,
+    };
+    let front_end = FrontEnd {
+        scan_hz: 10_000.0,
+        channels: [Some(channel), None, None],
+    };
+    assert_eq!(
+        Image::write(
+            &mut out,
+            &REFERENCE_DEVICE.cast(),
+            &spec(),
+            &front_end,
+            &Settings::for_target(44.0),
+            &t,
+        ),
+        Err(ImageError::FrontEnd(FrontEndError::Input {
+            channel: Channel::Current,
+            input: 0xFF
+        }))
+    );
+}

@@ -129,9 +129,11 @@ impl Acquisition {
     }
 
     /// A buffer is full (DMA2 stream 0's transfer-complete interrupt): hand the stream the
-    /// spare, add the full one's scans to `block`, keep it as the next spare. A stream that
-    /// overran (the interrupt came too late: the HAL disables it) gives no more scans: the
-    /// next tick's block has none, a fault by name (`InputError::NoSamples`), at 0 V.
+    /// spare, add the full one's scans to `block`, keep it as the next spare. An interrupt late
+    /// by a whole buffer loses that buffer (a tick takes fewer scans: its checked path reads
+    /// them); one the chip's DMA stopped on (a transfer error) gives no more: the next ticks'
+    /// blocks are empty, a fault by name (`InputError::NoSamples`), down to 0 V, and only a
+    /// reset starts the DMA again.
     pub fn on_buffer(&mut self, block: &mut Block) {
         let Some(spare) = self.spare.take() else {
             return;

@@ -109,9 +109,10 @@ pub fn front_end(table: &toml::Table, section: &str) -> Result<FrontEnd, String>
             return Err(format!("{section} {key} needs `{missing}`"));
         }
         let [input, zero_code, per_count, low, high] = values;
-        if !((0.0..=255.0).contains(&input) && input.fract() == 0.0) {
+        let highest = f32::from(de_resonator::acquire::MAX_INPUT);
+        if !((0.0..=highest).contains(&input) && input.fract() == 0.0) {
             return Err(format!(
-                "{section} {key}.input must be an ADC input number, not {input}"
+                "{section} {key}.input must be an ADC input, 0 to {highest}, not {input}"
             ));
         }
         front_end.channels[k] = Some(ChannelSpec {

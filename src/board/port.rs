@@ -184,7 +184,13 @@ impl<K: Keeper> Board<'_, K> {
                     );
                     return Then::Reply;
                 }
-                self.replan(next, controller, out);
+                // At rest at 0 V (stopped, or re-armed by `clear`): checked as a new plan, the
+                // output left off (no command named `set` switches it on).
+                let at_rest = controller.with(|c| {
+                    c.as_ref()
+                        .is_some_and(|c| c.at_rest() && c.phase() != Phase::Faulted)
+                });
+                self.replan(next, controller, out, at_rest);
             }
             Command::Clear => self.clear(controller, out),
             Command::Save => match self.keeper.as_mut().map(|k| k.save(&settings)) {
@@ -211,13 +217,13 @@ impl<K: Keeper> Board<'_, K> {
                     let _ = write!(out, "ok {status}");
                 }
             }
-            Command::Start => self.replan(settings, controller, out),
+            Command::Start => self.replan(settings, controller, out, false),
             Command::Target { hz } => {
                 let next = Settings {
                     target_hz: hz,
                     ..settings
                 };
-                self.replan(next, controller, out);
+                self.replan(next, controller, out, false);
             }
             Command::Ac { volts, hz } => {
                 let next = Settings {
@@ -225,7 +231,7 @@ impl<K: Keeper> Board<'_, K> {
                     ac_hz: hz,
                     ..settings
                 };
-                self.replan(next, controller, out);
+                self.replan(next, controller, out, false);
             }
             Command::Stop => {
                 let from = controller.with(|c| {
@@ -271,7 +277,15 @@ impl<K: Keeper> Board<'_, K> {
 
     /// A new plan with `next`: its job made under the lock, solved outside it, adopted under
     /// it; the controller then holds `next`.
-    fn replan(&mut self, next: Settings, controller: &mut impl Shared, out: &mut ReplyLine) {
+    /// `next` checked as a new plan and adopted; `keep_off`: stopped again at once, under the
+    /// same lock (the output stays off at 0 V until `start`).
+    fn replan(
+        &mut self,
+        next: Settings,
+        controller: &mut impl Shared,
+        out: &mut ReplyLine,
+        keep_off: bool,
+    ) {
         let Some((image, _)) = self.image else { return };
         let job = controller.with(|c| c.as_ref().map(|c| c.replan(next)));
         let result = match job {
@@ -281,7 +295,13 @@ impl<K: Keeper> Board<'_, K> {
         };
         let adopted = result.and_then(|replanned| {
             controller.with(|c| match c {
-                Some(c) => c.adopt(replanned).map(|boot| (boot, c.plan().start_volts)),
+                Some(c) => c.adopt(replanned).map(|boot| {
+                    let from_volts = c.plan().start_volts;
+                    if keep_off {
+                        c.stop();
+                    }
+                    (boot, from_volts)
+                }),
                 None => Err(Refusal::Busy {
                     phase: Phase::Faulted,
                 }),
@@ -299,6 +319,9 @@ impl<K: Keeper> Board<'_, K> {
                     Decimal(next.ac_volts),
                     Decimal(next.ac_hz)
                 );
+                if keep_off {
+                    let _ = write!(out, " (the output stays off: `start` to drive)");
+                }
                 self.limit = boot.limit.map(|l| l.mode).or(self.limit);
             }
             Err(refusal) => err(out, code(&refusal), refusal),

@@ -37,7 +37,9 @@ pub fn drive<SPI: SpiDevice, EN: OutputPin>(
         }
         return None;
     };
-    let at_rest = c.phase() == Phase::Holding && c.plan().bias_volts == 0.0;
+    // At rest at 0 V (stopped, re-armed by `clear`, or a fault's descent over), before the
+    // tick: the stage stays off on a tick that sends 0 V from there.
+    let at_rest = c.at_rest();
     let mut output = match inputs {
         Ok(inputs) => c.tick(inputs),
         Err(e) if c.phase() != Phase::Faulted => c.fault(Fault::Input(e)),

@@ -142,7 +142,7 @@ fn main() -> ! {
     for sensing in [Sensing::Current, Sensing::Stretch] {
         let fe = front_end(sensing);
         let block = block_of(&fe, [1e-6, 7450.0, 2.19], 10, 0);
-        let reader = Reader::new(fe, 10);
+        let mut reader = Reader::new(fe, 10);
         let n = count(1000, || {
             let _ = black_box(reader.inputs(black_box(&block)));
         });
@@ -354,7 +354,7 @@ fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
     }
     let fe = front_end(sensing);
     let scans = fe.check(s.tick_hz).unwrap_or_else(|_| exit(1));
-    let reader = Reader::new(fe, scans);
+    let mut reader = Reader::new(fe, scans);
     let mut params = device();
     if track_seconds.is_some() {
         // c = M·ω/Q at 44 Hz, Q = 30.

@@ -141,6 +141,42 @@ mod app {
             let _ = writeln!(tx, "{NOTICE}warning: {warning}");
         }
         let tick_hz = logic.tick_hz(controller);
+        // The image's front end at the tick rate booted with (the image checked it at its
+        // own): the acquisition started before the tick (the tick's reader gives the first
+        // buffers a few ticks). A front end the board cannot run refuses, for good.
+        let front_end = logic.image().map_or(FrontEnd::NONE, |i| i.front_end);
+        let scans_per_tick = match front_end.check(tick_hz) {
+            Ok(scans) => scans,
+            Err(e) => {
+                logic.refuse(controller, &e, &mut notice);
+                0
+            }
+        };
+        #[cfg(not(feature = "qemu"))]
+        let acquisition = {
+            let analog = board.analog;
+            let parts = Parts {
+                adc1: analog.adc1,
+                dma2: analog.dma2,
+                tim2: analog.tim2,
+                pins: analog.pins,
+                buffers: cx.local.buffers,
+            };
+            let started = Acquisition::start(parts, &mut board.rcc, &front_end, scans_per_tick);
+            if started.is_none() && scans_per_tick > 0 {
+                logic.refuse(
+                    controller,
+                    &"the ADC's acquisition did not start",
+                    &mut notice,
+                );
+            }
+            started
+        };
+        #[cfg(feature = "qemu")]
+        let acquisition = {
+            let _ = (&mut board.rcc, cx.local.buffers);
+            None
+        };
         if logic.image().is_some()
             && board::start_tick(&mut core.SYST, board.core_hz, tick_hz).is_none()
         {
@@ -159,26 +195,6 @@ mod app {
             defmt::error!("{=str}", notice.as_str());
         }
         let _ = writeln!(tx, "{NOTICE}{notice}");
-        // The image's front end, checked at its tick rate when it was read.
-        let front_end = logic.image().map_or(FrontEnd::NONE, |i| i.front_end);
-        let scans_per_tick = front_end.check(tick_hz).unwrap_or(0);
-        #[cfg(not(feature = "qemu"))]
-        let acquisition = {
-            let analog = board.analog;
-            let parts = Parts {
-                adc1: analog.adc1,
-                dma2: analog.dma2,
-                tim2: analog.tim2,
-                pins: analog.pins,
-                buffers: cx.local.buffers,
-            };
-            Acquisition::start(parts, &mut board.rcc, &front_end, scans_per_tick)
-        };
-        #[cfg(feature = "qemu")]
-        let acquisition = {
-            let _ = (&mut board.rcc, cx.local.buffers, scans_per_tick);
-            None
-        };
         let (to_command, from_rx) = make_channel!(Line, QUEUE);
         if command::spawn().is_err() {
             de_resonator_firmware::exit(104);
@@ -251,9 +267,9 @@ mod app {
         let mut block = cx.shared.block.lock(Block::take);
         sensor.fill(&mut block);
         let inputs = cx.local.reader.inputs(&block);
-        if let Ok(readings) = inputs {
-            cx.shared.readings.lock(|r| *r = readings);
-        }
+        // A block refused reads as none (status then shows no stale reading beside the fault).
+        let readings = inputs.unwrap_or(Inputs::NONE);
+        cx.shared.readings.lock(|r| *r = readings);
         let ticked = cx.shared.controller.lock(|c| {
             let ticked = logic::tick::drive(c, stage, inputs);
             if let Some(t) = ticked {
