@@ -21,6 +21,7 @@ use common::reseal;
 use std::collections::BTreeMap;
 
 use common::{made_table, random_device, Rng};
+use de_resonator::acquire::{Channel, InputError};
 use de_resonator::table::{self, HEADER_BYTES, POINT_BYTES};
 use de_resonator::{
     Amplifier, Controller, DacCode, Device, DeviceParams, Drive, Event, Fault, FaultStage, Inputs,
@@ -181,10 +182,15 @@ fn settings(
 #[derive(Clone, Copy)]
 enum Sensor {
     None,
-    Plant { noise: f64 },
+    Plant {
+        noise: f64,
+    },
     NanAt(u32),
     StuckAt(u32),
     Wild,
+    /// The acquisition gives no reading from this tick on (an input at a rail, the DMA
+    /// stopped): the board's tick takes it as `Controller::tick_acquired` does.
+    InputLostAt(u32),
 }
 
 /// What the operator did between two ticks, as far as the checks care.
@@ -502,11 +508,12 @@ fn fuzz_the_controller() {
             plant.shear_modulus *= rng.range(0.75, 1.25);
         }
         let ticks = 200 + rng.below(3000) as u32;
-        let sensor = match rng.below(6) {
+        let sensor = match rng.below(7) {
             0 => Sensor::None,
             1 => Sensor::NanAt(rng.below(ticks as usize) as u32),
             2 => Sensor::StuckAt(rng.below(ticks as usize) as u32),
             3 => Sensor::Wild,
+            4 => Sensor::InputLostAt(rng.below(ticks as usize) as u32),
             _ => Sensor::Plant {
                 noise: rng.log_range(1e-7, 1e-3),
             },
@@ -550,6 +557,7 @@ fn fuzz_the_controller() {
                     }
                 }
                 Sensor::Wild => Some(wild(&mut rng) as f32),
+                Sensor::InputLostAt(_) => truth,
             };
             let amplifier_volts = match monitor_amplifier {
                 0 => None,
@@ -574,11 +582,18 @@ fn fuzz_the_controller() {
             // The cap this tick's output is decided under: a result the tick takes may lower
             // it for the ticks after.
             let cap_before = c.max_volts();
-            let mut out = c.tick(Inputs {
+            let inputs = Inputs {
                 stretch,
                 amplifier_volts,
                 current_amps,
-            });
+            };
+            let mut out = match sensor {
+                Sensor::InputLostAt(at) if k >= at => c.tick_acquired(Err(InputError::AtRail {
+                    channel: Channel::Stretch,
+                    mean_code: 0.0,
+                })),
+                _ => c.tick(inputs),
+            };
             if bus_fails == Some(k) {
                 out = c.fault(Fault::Bus);
             }

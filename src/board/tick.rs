@@ -7,7 +7,7 @@ use embedded_hal::spi::SpiDevice;
 
 use crate::acquire::InputError;
 use crate::board::stage::OutputStage;
-use crate::controller::{Controller, Fault, Inputs, Output, Phase};
+use crate::controller::{Controller, Inputs, Output, Phase};
 
 /// What a tick did, when a controller runs.
 #[derive(Clone, Copy, Debug)]
@@ -23,9 +23,8 @@ pub struct Ticked {
 /// One tick: the controller's output to the stage. The amplifier is on while a plan that
 /// passed its checks drives; off (the DAC powered down, the enable line low) with no
 /// controller, at rest at 0 V after `stop`, and at the end of a fault's descent (the stage's
-/// own reaction, in `OutputStage::send`). `inputs` are the acquisition's (`acquire`): an
-/// input that gave no reading trips the controller (`Fault::Input`); once it is faulted, the
-/// descent goes on whatever the inputs. `None`: no controller, the output off.
+/// own reaction, in `OutputStage::send`). `inputs` are the acquisition's (`acquire`), taken
+/// by `Controller::tick_acquired`. `None`: no controller, the output off.
 pub fn drive<SPI: SpiDevice, EN: OutputPin>(
     slot: &mut Option<Controller>,
     stage: &mut OutputStage<SPI, EN>,
@@ -40,11 +39,7 @@ pub fn drive<SPI: SpiDevice, EN: OutputPin>(
     // At rest at 0 V (stopped, re-armed by `clear`, or a fault's descent over), before the
     // tick: the stage stays off on a tick that sends 0 V from there.
     let at_rest = c.at_rest();
-    let mut output = match inputs {
-        Ok(inputs) => c.tick(inputs),
-        Err(e) if c.phase() != Phase::Faulted => c.fault(Fault::Input(e)),
-        Err(_) => c.tick(Inputs::NONE),
-    };
+    let mut output = c.tick_acquired(inputs);
     let rest = at_rest && output.volts == 0.0;
     if !rest && c.phase() != Phase::Faulted && stage.is_safe() {
         let _ = stage.enable();

@@ -49,6 +49,7 @@ pub use settings::{Setting, Settings, F32_GUARD, MAX_TRIMS, TRIM_SECANT_STEP};
 pub use trim::{TrimDone, TrimJob, TrimResult};
 pub use watch::{Inputs, AMPLIFIER_TICKS, LEAKAGE_WINDOW_SECONDS};
 
+use crate::acquire::InputError;
 use crate::device::Device;
 use crate::drive::{Amplifier, DacCode};
 use gate::gate;
@@ -542,6 +543,17 @@ impl Controller {
             self.trim.tuned = tuned;
         }
         let _ = tuned;
+    }
+
+    /// One tick on the acquisition's result (`acquire`): an input that gave no reading trips
+    /// the controller (`Fault::Input`); once it is faulted, the descent goes on whatever the
+    /// inputs (an error at every tick must not stall it).
+    pub fn tick_acquired(&mut self, inputs: Result<Inputs, InputError>) -> Output {
+        match inputs {
+            Ok(inputs) => self.tick(inputs),
+            Err(e) if !matches!(self.state, State::Faulted(_)) => self.fault(Fault::Input(e)),
+            Err(_) => self.tick(Inputs::NONE),
+        }
     }
 
     /// A fault (the tick's own, or one the IO side reports): the output goes down from the
