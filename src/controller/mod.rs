@@ -750,24 +750,42 @@ impl Controller {
         self.trim.ring_gain = ring_gain;
         self.trim.ring_seen = ring_seen;
         self.trim.previous = Some((bias_volts * bias_volts, measured_hz));
-        let mut plan = Plan {
-            start_tick: k.saturating_add(1),
-            start_volts: bias_volts,
-            bias_volts: next_bias_volts,
-            pulse_ticks: (0, 0),
-            ..self.plan
-        };
+        // The new plan built in place (the tick's budget: a plan is large), the fields it
+        // changes restored if a check refuses it.
+        let plan = &mut self.plan;
+        let before = (
+            plan.start_tick,
+            plan.start_volts,
+            plan.bias_volts,
+            plan.pulse_ticks,
+            plan.probe_volts,
+        );
+        plan.start_tick = k.saturating_add(1);
+        plan.start_volts = bias_volts;
+        plan.bias_volts = next_bias_volts;
+        plan.pulse_ticks = (0, 0);
         let bound = max_volts.min(self.max_volts);
         plan.start_under(bound, self.last_volts);
-        plan.check_range(next_bias_volts, bound)?;
-        plan.probe_off_above(bound);
-        self.amplifier
-            .code(next_bias_volts + plan.swing_volts())
-            .map_err(Fault::Amplifier)?;
+        let checked = plan.check_range(next_bias_volts, bound).and_then(|()| {
+            plan.probe_off_above(bound);
+            self.amplifier
+                .code(next_bias_volts + plan.swing_volts())
+                .map(|_| ())
+                .map_err(Fault::Amplifier)
+        });
+        if let Err(fault) = checked {
+            (
+                plan.start_tick,
+                plan.start_volts,
+                plan.bias_volts,
+                plan.pulse_ticks,
+                plan.probe_volts,
+            ) = before;
+            return Err(fault);
+        }
         self.take_estimate_cap(max_volts);
         self.take_estimate();
         self.trim.tuned = true;
-        self.plan = plan;
         self.state = State::Ramping { then_measure: true };
         Ok(())
     }
