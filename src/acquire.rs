@@ -68,14 +68,6 @@ impl Channel {
             Channel::Stretch => "(stretch)",
         }
     }
-
-    const fn index(self) -> usize {
-        match self {
-            Channel::Current => 0,
-            Channel::Amplifier => 1,
-            Channel::Stretch => 2,
-        }
-    }
 }
 
 /// One channel's wiring and scaling: `reading = (code − zero_code) · per_count`, plausible
@@ -105,6 +97,19 @@ impl ChannelSpec {
     /// those that make codes from a plant's signals (host-sim, tests).
     pub fn code_of(&self, reading: f32) -> f32 {
         self.zero_code + reading / self.per_count
+    }
+
+    /// The ADC's code for a reading: rounded, held within the ADC's range as the converter
+    /// holds its input (for those that make codes from a plant's signals).
+    pub fn adc_code(&self, reading: f32) -> u16 {
+        let code = libm::roundf(self.code_of(reading));
+        if code >= f32::from(FULL_SCALE_CODE) {
+            FULL_SCALE_CODE
+        } else if code > 0.0 {
+            code as u16
+        } else {
+            0
+        }
     }
 
     fn check(&self, channel: Channel) -> Result<(), FrontEndError> {
@@ -157,11 +162,6 @@ impl FrontEnd {
         scan_hz: 0.0,
         channels: [None; 3],
     };
-
-    /// A channel's spec, if fitted.
-    pub fn channel(&self, channel: Channel) -> Option<&ChannelSpec> {
-        self.channels.get(channel.index()).and_then(Option::as_ref)
-    }
 
     /// The fitted channels in the scan's order, with their specs.
     pub fn fitted(&self) -> impl Iterator<Item = (Channel, &ChannelSpec)> {
@@ -319,11 +319,6 @@ impl Reader {
             fast,
             waiting: FIRST_BUFFER_TICKS,
         }
-    }
-
-    /// The front end it reads through.
-    pub fn front_end(&self) -> &FrontEnd {
-        &self.front_end
     }
 
     /// The block's readings, as [`FrontEnd::inputs`] gives them (to rounding), checked; no

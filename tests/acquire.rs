@@ -608,3 +608,21 @@ fn the_scan_rate_leaves_every_tick_a_buffer_at_a_bounded_interrupt_rate() {
         assert_eq!(fe.check(TICK_HZ as f32).is_ok(), ok, "{scan_hz}");
     }
 }
+
+/// The code a reading gives (for stand-ins and studies): rounded, held within the ADC's
+/// range as the converter holds its input.
+#[test]
+fn a_readings_code_is_rounded_and_held_in_range() {
+    let spec = ChannelSpec {
+        input: 10,
+        zero_code: 100.0,
+        per_count: 2.0,
+        low: -100.0,
+        high: 7_000.0,
+    };
+    assert_eq!(spec.adc_code(0.0), 100);
+    assert_eq!(spec.adc_code(1.2), 101);
+    assert_eq!(spec.adc_code(-1_000.0), 0);
+    assert_eq!(spec.adc_code(1e6), FULL_SCALE_CODE);
+    assert_eq!(spec.adc_code(f32::NAN), 0);
+}

@@ -5,7 +5,7 @@
 //! no samples); `ModelSensor` (`model-sensor`, for testing the trim under QEMU) gives the
 //! codes of the flashed device's own model, stepped at each tick with the voltage commanded.
 
-use de_resonator::acquire::{Block, Channel, FrontEnd, FULL_SCALE_CODE};
+use de_resonator::acquire::{Block, Channel, FrontEnd};
 use de_resonator::{Device, DeviceParams, Drive, Integrator, Method, State};
 
 /// The tick's stand-in measurements: codes added to the block before the tick reads it; told
@@ -106,15 +106,10 @@ impl Sensor for ModelSensor {
                     Channel::Amplifier => self.volts,
                     Channel::Stretch => stretch,
                 };
-                let code = libm::roundf(spec.code_of(reading));
                 let code = if failed && channel == Channel::Stretch {
                     0
-                } else if code >= f32::from(FULL_SCALE_CODE) {
-                    FULL_SCALE_CODE
-                } else if code > 0.0 {
-                    code as u16
                 } else {
-                    0
+                    spec.adc_code(reading)
                 };
                 block.add(channel, code);
             }

@@ -309,8 +309,7 @@ fn block_of(fe: &FrontEnd, readings: [f32; 3], scans: u32, k: u32) -> Block {
                 Channel::Stretch => readings[2],
             };
             let dither = if (k + s).is_multiple_of(2) { 0.5 } else { -0.5 };
-            let code = libm::roundf(spec.code_of(reading) + dither).clamp(0.0, 4095.0);
-            block.add(channel, code as u16);
+            block.add(channel, spec.adc_code(reading + dither * spec.per_count));
         }
     }
     block
