@@ -40,7 +40,7 @@ pub use model::{device, material, safety, statics};
 pub use board::stage::{OutputStage, StageError};
 pub use controller::{
     Boot, Controller, Event, Fault, FaultStage, Inputs, Output, Phase, Plan, Refusal, ReplanJob,
-    Replanned, Setting, Settings,
+    Replanned, Setting, Settings, BUS_FAULT_SAID, FAULT_SAID,
 };
 #[cfg(feature = "trim")]
 pub use controller::{TrimDone, TrimJob, TrimResult};

@@ -7,6 +7,7 @@
 //! | DAC8551 SYNC (chip select) | PA4 | GPIO, in `ExclusiveDevice` |
 //! | amplifier enable (high: on) | PB0 | GPIO |
 //! | command port TX, RX | PA2, PA3 | USART2, 115200 8N1 |
+//! | the link build's bell from host-sim (QEMU only) | PB11 | USART3 RX |
 //! | analog inputs (the image's front end) | PA0, PA1, PB1, PC0..PC5 (IN0, IN1, IN9, IN10..IN15) | ADC1, triggered by TIM2, DMA2 stream 0 |
 //!
 //! Silicon runs from an 8 MHz crystal (HSE) and the PLL at 168 MHz; the `qemu` build leaves
@@ -27,6 +28,29 @@ pub type DacSpi =
     ExclusiveDevice<Spi<SPI1>, Pin<'A', 4, Output<PushPull>>, embedded_hal_bus::spi::NoDelay>;
 /// The amplifier-enable line.
 pub type EnablePin = Pin<'B', 0, Output<PushPull>>;
+/// The output stage's DAC bus and enable line: as wired, or (the link build) tapped, so the
+/// link reports what was last written.
+#[cfg(not(feature = "link"))]
+pub type StageSpi = DacSpi;
+#[cfg(not(feature = "link"))]
+pub type StagePin = EnablePin;
+#[cfg(feature = "link")]
+pub type StageSpi = de_resonator::board::link::Tap<DacSpi>;
+#[cfg(feature = "link")]
+pub type StagePin = de_resonator::board::link::Tap<EnablePin>;
+
+/// The DAC bus and the enable line as the output stage takes them.
+pub fn stage_wires(dac: DacSpi, enable: EnablePin) -> (StageSpi, StagePin) {
+    #[cfg(feature = "link")]
+    {
+        use de_resonator::board::link::Tap;
+        (Tap::new(dac), Tap::new(enable))
+    }
+    #[cfg(not(feature = "link"))]
+    {
+        (dac, enable)
+    }
+}
 
 /// Polls of the output's state before a `reset` goes ahead anyway (a few ticks' worth: the
 /// tick turns the output off at its next run).
@@ -60,6 +84,9 @@ pub struct Board {
     pub enable: EnablePin,
     pub tx: Tx<USART2>,
     pub rx: Rx<USART2>,
+    /// The link build's bell from host-sim (`link`).
+    #[cfg(feature = "link")]
+    pub link: Rx<pac::USART3>,
     /// The core clock SysTick counts, Hz.
     pub core_hz: u32,
     /// The flash controller (the settings' storage on silicon).
@@ -194,11 +221,27 @@ impl Board {
         };
         let (tx, mut rx) = serial.split();
         rx.listen();
+        #[cfg(feature = "link")]
+        let link = {
+            let serial: Serial<pac::USART3> = match dp.USART3.serial(
+                (gpiob.pb10, gpiob.pb11),
+                serial::Config::default().baudrate(BAUD.bps()),
+                &mut rcc,
+            ) {
+                Ok(serial) => serial,
+                Err(_) => crate::runtime::exit(103),
+            };
+            let (_, mut rx) = serial.split();
+            rx.listen();
+            rx
+        };
         Self {
             dac,
             enable,
             tx,
             rx,
+            #[cfg(feature = "link")]
+            link,
             core_hz,
             flash: dp.FLASH,
             iwdg: dp.IWDG,

@@ -5,7 +5,8 @@
 //! voltage, answers a request or decides when the amplifier is on (the core's `board`). One
 //! module a part: `board` (clocks, pins, peripherals), `analog` (silicon's ADC, its timer and
 //! DMA, filling the tick's block of codes), `config` (the image), `sensor` (QEMU's stand-ins
-//! for the analog inputs), `storage` (where `save` keeps the settings), `watchdog` (the IWDG, or its QEMU stand-in), `runtime` (exit codes,
+//! for the analog inputs), `storage` (where `save` keeps the settings), `watchdog` (the IWDG, or its QEMU stand-in), `link`
+//! (the link build's port to host-sim), `runtime` (exit codes,
 //! panic and fault handlers, the stack meter); `reference` and `stand_in` serve the
 //! on-target checks and counts only.
 #![no_std]
@@ -35,6 +36,16 @@ pub mod analog {
 }
 pub mod board;
 pub mod config;
+#[cfg(feature = "link")]
+pub mod link;
+/// The link build's ends, none in other builds (the app's resources name their types).
+#[cfg(not(feature = "link"))]
+pub mod link {
+    /// Never made without `link`.
+    pub enum LinkIn {}
+    /// Never made without `link`.
+    pub enum LinkOut {}
+}
 pub mod reference;
 pub mod runtime;
 pub mod sensor;

@@ -1,8 +1,10 @@
 //! `host-sim lut`: the tuning table the firmware flashes (layout in the core's `table`
 //! module), from the f64 model, with its interpolation error against the direct solve.
 
+use de_resonator::acquire::FrontEnd;
+use de_resonator::image::{self, AmplifierSpec, Image};
 use de_resonator::table::{self, Table};
-use de_resonator::{DeviceParams, Tuner};
+use de_resonator::{DeviceParams, Settings, Tuner};
 
 /// Points a table starts with when its size is not asked for; doubled (up to
 /// `table::MAX_POINTS`) until the interpolation error is at most `TARGET_ERROR`.
@@ -134,4 +136,27 @@ pub struct Errors {
     pub worst_hz: f64,
     /// Largest bias difference from the direct solve, as a fraction of the top bias.
     pub volts: f64,
+}
+
+/// The image of a device, an amplifier, a front end and settings, its table made for the
+/// settings' margin: the bytes `host-sim image` writes and `host-sim serve` boots from.
+pub fn image(
+    params: DeviceParams<f64>,
+    amplifier: &AmplifierSpec,
+    front_end: &FrontEnd,
+    settings: &Settings,
+) -> Result<Vec<u8>, String> {
+    let made = make(params, f64::from(settings.margin), None)?;
+    let mut bytes = vec![0; image::image_bytes(made.bytes.len())];
+    let params32: DeviceParams<f32> = params.cast();
+    Image::write(
+        &mut bytes,
+        &params32,
+        amplifier,
+        front_end,
+        settings,
+        &made.bytes,
+    )
+    .map_err(|e| e.to_string())?;
+    Ok(bytes)
 }

@@ -129,6 +129,7 @@ fn main() -> ExitCode {
     let command = cli.command.unwrap_or(Command::Run(cmd::run::RunArgs {
         scene: None,
         out: "out/run".into(),
+        firmware: None,
     }));
     let result = match command {
         Command::Run(args) => cmd::run::run(&args, json).map(|r| emit(&r, json)),

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use de_resonator::DeviceParams;
 use serde::Deserialize;
 
-use crate::engine::hil::{CurrentMonitor, Loop, Sensor};
+use crate::engine::hil::{Analog, CurrentMonitor, Loop, Sensor};
 use crate::engine::plant::{AmplifierModel, Branch, Leakage, Plant, MAX_BRANCHES};
 use crate::engine::simulate::{Solver, Tolerance};
 
@@ -33,6 +33,9 @@ struct SceneFile {
     amplifier: AmplifierFile,
     sensor: Option<SensorFile>,
     current_monitor: Option<CurrentMonitorFile>,
+    /// The board's analog front end (the settings file's `[front_end]`, and the ADC's
+    /// `noise_codes`): the sensors read through the ADC, as the firmware reads them.
+    front_end: Option<toml::Table>,
     /// The controller's settings: `Setting::ALL`'s keys (the core's one list), `target_hz`
     /// required, the rest `Settings::for_target`'s when absent.
     controller: toml::Table,
@@ -284,6 +287,10 @@ pub fn parse(text: &str) -> Result<Scene, String> {
             return Err("[sensor] noise and resolution must be ≥ 0, every_ticks ≥ 1".into());
         }
     }
+    let analog = match &file.front_end {
+        None => None,
+        Some(table) => Some(analog(table, &settings, &sensor, &current_monitor)?),
+    };
     let tolerance = Tolerance {
         rtol: file.plant.rtol,
         atol: file.plant.atol,
@@ -309,6 +316,7 @@ pub fn parse(text: &str) -> Result<Scene, String> {
             settings,
             sensor,
             current_monitor,
+            analog,
             bus_fails_after_seconds: file.faults.dac_bus_fails_after_seconds,
             duration_seconds: file.duration_seconds,
             seed: file.seed,
@@ -318,6 +326,41 @@ pub fn parse(text: &str) -> Result<Scene, String> {
     // Bounded work, refused before it starts.
     scene.run.ticks()?;
     Ok(scene)
+}
+
+/// The scene's `[front_end]`: the board's (the settings file's keys) and `noise_codes`, the
+/// ADC's RMS noise a conversion (default 1 code). The sensors are then read through it:
+/// `[sensor]` and `[current_monitor]` are for scenes without one.
+fn analog(
+    table: &toml::Table,
+    settings: &de_resonator::Settings,
+    sensor: &Option<Sensor>,
+    monitor: &Option<CurrentMonitor>,
+) -> Result<Analog, String> {
+    if sensor.is_some() || monitor.is_some() {
+        return Err(
+            "[front_end] reads the sensors through the ADC: leave out [sensor] and \
+                    [current_monitor]"
+                .into(),
+        );
+    }
+    let mut table = table.clone();
+    let noise_codes = match table.remove("noise_codes") {
+        None => 1.0,
+        Some(v) => v
+            .as_float()
+            .or_else(|| v.as_integer().map(|i| i as f64))
+            .filter(|x| x.is_finite() && *x >= 0.0)
+            .ok_or_else(|| format!("[front_end] noise_codes {v}: a number of codes ≥ 0"))?,
+    };
+    let front_end = crate::settings_file::front_end(&table, "[front_end]")?;
+    front_end
+        .check(settings.tick_hz)
+        .map_err(|e| format!("[front_end]: {e}"))?;
+    Ok(Analog {
+        front_end,
+        noise_codes,
+    })
 }
 
 /// A scene's name names its folder under `--out`: one plain path component (letters, digits,

@@ -11,6 +11,7 @@
 //! takes only briefly ([`port::Shared`]), so the long work of a request (a new plan's checks,
 //! a boot) runs outside the lock while the tick preempts it.
 
+pub mod link;
 pub mod port;
 pub mod protocol;
 pub mod stage;
@@ -21,7 +22,7 @@ use core::fmt::{self, Write as _};
 
 use heapless::String;
 
-use crate::controller::{Controller, Settings};
+use crate::controller::{Boot, Controller, Settings};
 use crate::drive::Amplifier;
 use crate::image::{Image, ImageError};
 use crate::numerics::decimal::Decimal;
@@ -84,6 +85,8 @@ pub struct Board<'a, K> {
     refusal: Option<Reason>,
     /// The limit the last boot or plan found on the chip (its mode).
     limit: Option<FailureMode>,
+    /// What the boot's checks found, while the controller it started drives.
+    booted: Option<Boot>,
     keeper: Option<K>,
 }
 
@@ -111,6 +114,7 @@ impl<'a, K: Keeper> Board<'a, K> {
             idle_settings: Settings::for_target(0.0),
             refusal: None,
             limit: None,
+            booted: None,
             keeper,
         };
         let mut started = Started::default();
@@ -190,6 +194,7 @@ impl<'a, K: Keeper> Board<'a, K> {
         let boot = Controller::start_in(slot, image.params, image.table, amplifier, settings)?;
         self.limit = boot.limit.map(|l| l.mode);
         self.refusal = None;
+        self.booted = Some(boot);
         Ok(boot.bias_volts)
     }
 
@@ -202,6 +207,7 @@ impl<'a, K: Keeper> Board<'a, K> {
         notice: &mut ReplyLine,
     ) {
         *slot = None;
+        self.booted = None;
         let mut reason = Reason::new();
         let _ = write!(reason, "{why}");
         notice.clear();
@@ -230,6 +236,12 @@ impl<'a, K: Keeper> Board<'a, K> {
     /// Why nothing is driven, if it is not.
     pub fn refusal(&self) -> Option<&str> {
         self.refusal.as_deref()
+    }
+
+    /// What the boot's checks found, while the controller the last boot started may drive
+    /// (`None`: refused).
+    pub fn booted(&self) -> Option<&Boot> {
+        self.booted.as_ref()
     }
 
     /// The image booted from (`None`: none that reads).

@@ -264,6 +264,56 @@ pub enum Event {
     Fault(Fault),
 }
 
+/// The words before a fault's own in `Event::Fault`'s: the descent, or (the DAC's bus) the
+/// stage off at once.
+pub const FAULT_SAID: &str = "fault, down to 0 V at the slew rate";
+pub const BUS_FAULT_SAID: &str = "fault, amplifier disabled at once";
+
+/// What the controller said, in words: host-sim's reports and the firmware's link (one
+/// wording for both).
+impl fmt::Display for Event {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Event::AtBias { volts } => write!(f, "at bias, {volts} V"),
+            Event::DriveOn => write!(f, "AC drive on"),
+            Event::DriveOff => write!(f, "AC drive paused, to trim again"),
+            Event::Trimmed {
+                bias_volts,
+                measured_hz,
+                shear_modulus,
+                next_bias_volts,
+                resolution,
+            } => {
+                write!(f, "trim: {measured_hz:.4} Hz measured at {bias_volts:.1} V")?;
+                if let Some(r) = resolution {
+                    write!(f, " (resolution {r:.0})")?;
+                }
+                write!(
+                    f,
+                    ", μ estimated {:.2} kPa, next bias {next_bias_volts:.1} V",
+                    shear_modulus / 1e3
+                )
+            }
+            Event::AboveCeiling {
+                needed_volts,
+                cap_volts,
+            } => write!(
+                f,
+                "trim needs {needed_volts:.1} V, above the cap in force {cap_volts:.1} V of the \
+                 device flashed: holding the bias"
+            ),
+            Event::Fault(fault) => {
+                let what = if fault == Fault::Bus {
+                    BUS_FAULT_SAID
+                } else {
+                    FAULT_SAID
+                };
+                write!(f, "{what}: {fault}")
+            }
+        }
+    }
+}
+
 /// One tick's output: the DAC code, the voltage it gives, and what happened.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

@@ -26,16 +26,21 @@ mod app {
     use core::mem::MaybeUninit;
 
     use de_resonator::acquire::{Block, FrontEnd, Reader, BUFFER_CODES};
+    #[cfg(feature = "link")]
+    use de_resonator::board::link::{Booted, Kind, Observed};
     use de_resonator::board::port::Extras;
     use de_resonator::board::protocol::NOTICE;
     use de_resonator::board::watchdog::CheckIn;
     use de_resonator::board::{self as logic, Line, Lines, ReplyLine, Then};
     use de_resonator::store::FlashKeeper;
-    use de_resonator::{Controller, Dac8551, Decimal, Event, Inputs, OutputStage};
+    #[cfg(not(feature = "link"))]
+    use de_resonator::Decimal;
+    use de_resonator::{Controller, Dac8551, Event, Inputs, OutputStage};
     use de_resonator_firmware::analog::Acquisition;
     #[cfg(not(feature = "qemu"))]
     use de_resonator_firmware::analog::Parts;
-    use de_resonator_firmware::board::{self, Board, DacSpi, EnablePin};
+    use de_resonator_firmware::board::{self, Board, StagePin, StageSpi};
+    use de_resonator_firmware::link::{LinkIn, LinkOut};
     use de_resonator_firmware::runtime::{self, ResetCause};
     #[cfg(feature = "model-sensor")]
     use de_resonator_firmware::sensor::ModelSensor as Sensors;
@@ -77,7 +82,7 @@ mod app {
 
     #[local]
     struct Local {
-        stage: OutputStage<DacSpi, EnablePin>,
+        stage: OutputStage<StageSpi, StagePin>,
         sensor: Sensors,
         /// The image's analog front end (none fitted without an image), ready for the tick.
         reader: Reader,
@@ -100,6 +105,11 @@ mod app {
         dog: Dog,
         /// The low-priority tasks' check-ins, counted in ticks (when the dog is fed).
         check_in: CheckIn,
+        /// The link build: host-sim's samples in, the tick's output out (USART3).
+        #[cfg(feature = "link")]
+        link_in: LinkIn,
+        #[cfg(feature = "link")]
+        link_out: LinkOut,
     }
 
     // The slot uninitialized (in .bss, not a 3 KB `None` copied from flash to `.data`).
@@ -110,13 +120,16 @@ mod app {
     fn init(cx: init::Context) -> (Shared, Local) {
         #[cfg(feature = "qemu")]
         board::qemu_clock::start(&cx.device.TIM2);
-        #[cfg(feature = "qemu")]
+        // The link paces the tick at the simulation's speed, not virtual time's: no stand-in
+        // watchdog clock to bite between ticks the host has not sent yet.
+        #[cfg(all(feature = "qemu", not(feature = "link")))]
         Dog::start_clock(&cx.device.TIM3);
         stack::paint();
         let mut core = cx.core;
         let mut board = Board::new(cx.device);
         let mut tx = board.tx;
-        let mut stage = OutputStage::new(Dac8551::new(board.dac), board.enable);
+        let (dac, enable) = board::stage_wires(board.dac, board.enable);
+        let mut stage = OutputStage::new(Dac8551::new(dac), enable);
         // 0 V, DAC powered down, amplifier disabled, until the checks pass.
         let _ = stage.safe();
         #[cfg(feature = "defmt")]
@@ -177,6 +190,10 @@ mod app {
             let _ = (&mut board.rcc, cx.local.buffers);
             None
         };
+        // The link build's tick is pended by each samples frame, not SysTick's count.
+        #[cfg(feature = "link")]
+        let _ = &mut core;
+        #[cfg(not(feature = "link"))]
         if logic.image().is_some()
             && board::start_tick(&mut core.SYST, board.core_hz, tick_hz).is_none()
         {
@@ -195,6 +212,15 @@ mod app {
             defmt::error!("{=str}", notice.as_str());
         }
         let _ = writeln!(tx, "{NOTICE}{notice}");
+        #[cfg(feature = "link")]
+        let (link_in, link_out) = {
+            let link_in = LinkIn::open(board.link, front_end);
+            let mut out = LinkOut::open();
+            let booted = Booted::of(logic.booted());
+            let refusal = logic.refusal().unwrap_or("");
+            out.send(Kind::Boot, 0, |p| booted.write(refusal, p));
+            (link_in, out)
+        };
         let (to_command, from_rx) = make_channel!(Line, QUEUE);
         if command::spawn().is_err() {
             de_resonator_firmware::exit(104);
@@ -234,6 +260,10 @@ mod app {
                 hang_after_ticks: board::asked("tick-hangs").then_some(2 * tick_hz as u32),
                 dog: Dog::new(board.iwdg),
                 check_in: CheckIn::new(tick_hz),
+                #[cfg(feature = "link")]
+                link_in,
+                #[cfg(feature = "link")]
+                link_out,
             },
         )
     }
@@ -305,7 +335,17 @@ mod app {
         if feed.feed {
             dog.feed();
         }
+        // The link build: the output back to host-sim once the job (if any) is done, as
+        // host-sim's loop runs it between ticks.
+        #[cfg(feature = "link")]
+        {
+            let wires = (stage.dac().bus().dac, stage.enable_line().high);
+            let event = ticked.and_then(|t| t.output.event);
+            let job = ticked.is_some_and(|t| t.job_wanted);
+            let _ = link_reply::spawn(wires, event, job);
+        }
         if let Some(t) = ticked {
+            #[cfg(not(feature = "link"))]
             if t.job_wanted {
                 // Already queued or running: it takes the job when it runs.
                 let _ = job::spawn();
@@ -320,6 +360,48 @@ mod app {
         cx.shared
             .tick_cycles_max
             .lock(|most| *most = (*most).max(cycles));
+    }
+
+    /// The link build: host-sim's samples into the tick's block; each tick's samples pend the
+    /// tick.
+    #[cfg(feature = "link")]
+    #[task(binds = USART3, priority = 2, shared = [block], local = [link_in])]
+    fn link_samples(mut cx: link_samples::Context) {
+        let block = &mut cx.shared.block;
+        if cx.local.link_in.read(&mut |add| block.lock(|b| add(b))) {
+            cortex_m::peripheral::SCB::set_pendst();
+        }
+    }
+
+    /// The link build: the tick's job run (as host-sim's loop runs it, before the next
+    /// tick), then the tick's output to host-sim.
+    #[cfg(feature = "link")]
+    #[task(priority = 1, shared = [controller], local = [link_out, ticks: u32 = 0])]
+    async fn link_reply(
+        mut cx: link_reply::Context,
+        wires: ((u16, bool), bool),
+        event: Option<Event>,
+        job: bool,
+    ) {
+        if job {
+            logic::tick::run_job(|f| {
+                cx.shared.controller.lock(|c| {
+                    if let Some(c) = c.as_mut() {
+                        f(c);
+                    }
+                })
+            });
+        }
+        let ((dac_code, dac_on), enable) = wires;
+        let observed = cx
+            .shared
+            .controller
+            .lock(|c| Observed::of(dac_code, dac_on, enable, c.as_ref(), event.as_ref()));
+        let tick = *cx.local.ticks;
+        *cx.local.ticks += 1;
+        cx.local
+            .link_out
+            .send(Kind::Output, tick, |p| observed.write(event.as_ref(), p));
     }
 
     /// A full buffer of ADC codes (silicon): its scans into the tick's block.

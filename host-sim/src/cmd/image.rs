@@ -8,7 +8,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 use de_resonator::acquire::{Channel, FrontEnd};
-use de_resonator::image::{self, AmplifierSpec, Image, DAC_BITS};
+use de_resonator::image::{AmplifierSpec, Image, DAC_BITS};
 use de_resonator::table::{self, Table};
 use de_resonator::{Controller, DeviceParams, Field, Setting, Settings};
 use serde::Serialize;
@@ -288,8 +288,8 @@ pub fn image(args: &ImageArgs) -> Result<ImageReport, String> {
         rail_volts: args.rail_volts.unwrap_or(full_scale),
         dac_bits: DAC_BITS,
     };
-    let bytes =
-        made(params, &amplifier, &front_end, &settings).map_err(|e| format!("{name}: {e}"))?;
+    let bytes = lut::image(params, &amplifier, &front_end, &settings)
+        .map_err(|e| format!("{name}: {e}"))?;
     // Checked before writing: an image the firmware would refuse is not written.
     let mut report = describe(&bytes, out.display().to_string())?;
     if let Verdict::Refuses { reason } = &report.verdict {
@@ -300,29 +300,6 @@ pub fn image(args: &ImageArgs) -> Result<ImageReport, String> {
     std::fs::write(out, &bytes).map_err(|e| format!("cannot write {}: {e}", out.display()))?;
     report.written = true;
     Ok(report)
-}
-
-/// The image of a device, an amplifier, a front end and settings, its table made for the
-/// settings' margin: the bytes `host-sim image` writes and `host-sim serve` boots from.
-pub fn made(
-    params: DeviceParams<f64>,
-    amplifier: &AmplifierSpec,
-    front_end: &FrontEnd,
-    settings: &Settings,
-) -> Result<Vec<u8>, String> {
-    let made = lut::make(params, f64::from(settings.margin), None)?;
-    let mut bytes = vec![0; image::image_bytes(made.bytes.len())];
-    let params32: DeviceParams<f32> = params.cast();
-    Image::write(
-        &mut bytes,
-        &params32,
-        amplifier,
-        front_end,
-        settings,
-        &made.bytes,
-    )
-    .map_err(|e| e.to_string())?;
-    Ok(bytes)
 }
 
 fn check(path: &PathBuf) -> Result<ImageReport, String> {

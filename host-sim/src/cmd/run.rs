@@ -8,6 +8,7 @@ use clap::Args;
 use serde::Serialize;
 
 use super::{finite, prepare_dir, sig, write_file, Crossing, DeviceInfo, Report};
+use crate::engine::firmware::Qemu;
 use crate::engine::hil::{Run, Sample};
 use crate::plot::{svg, Marker, Panel, Series, RED};
 use crate::scene::{self, Scene};
@@ -19,6 +20,12 @@ pub struct RunArgs {
     /// Folder for the scene's files (a subfolder per scene).
     #[arg(long, value_name = "DIR", default_value = "out/run")]
     pub out: PathBuf,
+    /// Run the firmware binary in the loop instead of the core on the host: the ELF of its
+    /// link build (`cd firmware && cargo build --release --no-default-features --features
+    /// qemu,log-semihosting,link`) under QEMU, flashed with the scene's image. The scene
+    /// needs a `[front_end]` if it reads sensors.
+    #[arg(long, value_name = "ELF")]
+    pub firmware: Option<PathBuf>,
 }
 
 /// The plant's own limit on its loading branch from 0 V, and the final bias's margin to it
@@ -98,7 +105,13 @@ impl TrackedReport {
 /// One tick of the history CSV.
 #[derive(Serialize)]
 struct HistoryRow {
+    tick: u64,
     time_seconds: f64,
+    /// The board's last DAC frame's code (0 V when `dac_on` is 0) and the enable line (1:
+    /// high).
+    dac_code: u16,
+    dac_on: u8,
+    enable: u8,
     stretch: f64,
     membrane_volts: f64,
     current_amps: Option<f64>,
@@ -288,7 +301,15 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<RunReport, String> {
             scene.name, scene.run.duration_seconds
         );
     }
-    let run = scene.run.run()?;
+    let run = match &args.firmware {
+        None => scene.run.run()?,
+        Some(elf) => {
+            let wires = scene.run.wires();
+            let image = scene.run.image()?;
+            let mut board = Qemu::start(elf, &image, &std::env::temp_dir(), &wires)?;
+            scene.run.run_on(&mut board, &wires)?
+        }
+    };
     let files = files(&dir, &scene, &run)?;
     let target = f64::from(scene.run.settings.target_hz);
     let hz = run.natural_frequency_hz;
@@ -301,9 +322,9 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<RunReport, String> {
         ticks: run.ticks,
         target_hz: target,
         bias_volts: run.bias_volts,
-        nominal_bias_volts: run.boot.map(|b| b.bias_volts),
-        refused: run.refused.map(|f| f.to_string()),
-        fault: run.fault.map(|f| f.to_string()),
+        nominal_bias_volts: run.boot.filter(|b| b.driving).map(|b| b.bias_volts),
+        refused: run.refused.clone(),
+        fault: run.fault_words.clone(),
         natural_frequency_hz: finite(hz),
         relative_error: finite((hz - target) / target),
         limit: run.limit.map(|(mode, volts)| LimitReport {
@@ -345,7 +366,11 @@ fn files(dir: &Path, scene: &Scene, run: &Run) -> Result<Vec<String>, String> {
             .history
             .iter()
             .map(|h| HistoryRow {
+                tick: h.tick,
                 time_seconds: h.seconds,
+                dac_code: h.dac_code,
+                dac_on: h.dac_on.into(),
+                enable: h.enable.into(),
                 stretch: h.stretch,
                 membrane_volts: h.membrane_volts,
                 current_amps: finite(h.current_amps),
@@ -398,12 +423,12 @@ fn plot(scene: &Scene, run: &Run) -> [Panel; 2] {
     };
     let mut levels = Vec::new();
     let mut stretch_levels = Vec::new();
-    if let Some(boot) = run.boot {
+    if let Some(boot) = run.boot.filter(|b| b.driving) {
         levels.push((f64::from(boot.max_volts), "controller's cap".into()));
-        if let Some(limit) = boot.limit {
+        if let Some((mode, stretch)) = boot.limit {
             stretch_levels.push((
-                f64::from(limit.at.stretch),
-                format!("device's limit stretch ({})", limit.mode.name()),
+                f64::from(stretch),
+                format!("device's limit stretch ({})", mode.name()),
             ));
         }
     }

@@ -297,7 +297,7 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
         rail_volts: lp.plant.amplifier.rail_volts.min(full_scale) as f32,
         dac_bits: DAC_BITS,
     };
-    let bytes = super::image::made(lp.nominal, &spec, &FrontEnd::NONE, &lp.settings)?;
+    let bytes = crate::lut::image(lp.nominal, &spec, &FrontEnd::NONE, &lp.settings)?;
     let mut flash = Flash(vec![0xFF; 2 * RAM_PAGE_BYTES]);
     let (listener, at) = Listener::bind(args)?;
     eprintln!(

@@ -7,10 +7,13 @@ use std::cell::Cell;
 use std::convert::Infallible;
 use std::time::Instant;
 
-use de_resonator::drive::PowerMode;
+use de_resonator::acquire::{Block, Channel, FrontEnd, InputError, Reader, FULL_SCALE_CODE};
+use de_resonator::board::link::{self, Booted, Observed, Said as SaidKind};
+use de_resonator::board::NoKeeper;
+use de_resonator::image::{AmplifierSpec, Image, DAC_BITS};
 use de_resonator::{
-    Amplifier, Boot, Controller, Dac8551, DeviceParams, Event, FailureMode, Fault, Inputs,
-    OutputStage, Phase, Settings,
+    Amplifier, Controller, Dac8551, DeviceParams, Event, FailureMode, Fault, Inputs, OutputStage,
+    Phase, Settings, BUS_FAULT_SAID, FAULT_SAID,
 };
 use embedded_hal::digital::{self, OutputPin};
 use embedded_hal::spi::{ErrorKind, ErrorType, Operation, SpiDevice};
@@ -29,6 +32,8 @@ use crate::text::sig;
 pub struct SimulatedDac {
     pub reference_volts: f64,
     pub output_volts: Cell<f64>,
+    /// The last frame's code, and whether it powered the DAC on.
+    pub last: Cell<(u16, bool)>,
     pub frames: Cell<u64>,
     pub fail_after: Cell<Option<u64>>,
 }
@@ -50,18 +55,23 @@ impl SpiDevice for &SimulatedDac {
             let Operation::Write(bytes) = op else {
                 return Err(ErrorKind::Other);
             };
-            let [mode, high, low] =
-                <[u8; 3]>::try_from(&bytes[..]).map_err(|_| ErrorKind::Other)?;
+            let (code, on) = link::dac_frame(bytes).ok_or(ErrorKind::Other)?;
             self.frames.set(self.frames.get() + 1);
-            let code = u16::from_be_bytes([high, low]);
-            self.output_volts
-                .set(if mode & 0b11 == PowerMode::Normal as u8 {
-                    self.reference_volts * f64::from(code) / 65536.0
-                } else {
-                    0.0
-                });
+            self.show(code, on);
         }
         Ok(())
+    }
+}
+
+impl SimulatedDac {
+    /// The output after a frame of `code`, powered `on` or down.
+    pub fn show(&self, code: u16, on: bool) {
+        self.last.set((code, on));
+        self.output_volts.set(if on {
+            self.reference_volts * f64::from(code) / 65536.0
+        } else {
+            0.0
+        });
     }
 }
 
@@ -178,6 +188,27 @@ pub struct Bench {
     /// The mean output current over the last tick, A (none before the first).
     pub last_current: Option<f64>,
     current_wanted: bool,
+    /// With a front end: its scans a tick, this tick's codes as the DMA writes them, and
+    /// the core's board's acquisition reading them.
+    scans: u32,
+    pub codes: Vec<u16>,
+    reader: Reader,
+}
+
+/// The board's analog front end in a scene (`[front_end]`): the image's, and the ADC's noise.
+#[derive(Clone, Copy, Debug)]
+pub struct Analog {
+    pub front_end: FrontEnd,
+    /// The RMS noise of a conversion, in codes (Gaussian, from the scene's seed).
+    pub noise_codes: f64,
+}
+
+/// A tick's measurements: read directly (a scene with no front end), or the ADC's codes
+/// (`Bench::codes`) that the board's acquisition reads.
+#[derive(Clone, Copy, Debug)]
+pub enum Samples {
+    Direct(Inputs),
+    Codes,
 }
 
 /// A whole loop: the controller's side (what it is told), the plant's, and the run.
@@ -193,6 +224,9 @@ pub struct Loop {
     pub sensor: Option<Sensor>,
     /// The amplifier's current monitor, if the controller reads one.
     pub current_monitor: Option<CurrentMonitor>,
+    /// The board's analog front end: the sensors read through its ADC (then `sensor` and
+    /// `current_monitor` are none).
+    pub analog: Option<Analog>,
     /// The DAC bus fails from this time on, s.
     pub bus_fails_after_seconds: Option<f64>,
     pub duration_seconds: f64,
@@ -211,12 +245,15 @@ pub struct Said {
 /// What a loop run gives.
 #[derive(Clone, Debug)]
 pub struct Run {
-    pub boot: Option<Boot>,
-    /// Why the controller refused to start.
-    pub refused: Option<Fault>,
+    /// What the boot found (`driving` false: refused).
+    pub boot: Option<Booted>,
+    /// Why the board refused to drive.
+    pub refused: Option<String>,
     pub events: Vec<Said>,
-    /// The fault that stopped the drive, if any.
+    /// The fault that stopped the drive, if any (the core's board only), and its words
+    /// (either board).
     pub fault: Option<Fault>,
+    pub fault_words: Option<String>,
     /// The first check of §6 the true plant failed, and when (s): must stay `None`.
     pub plant_crossing: Option<(FailureMode, f64)>,
     /// The bias the controller holds at the end (0 after a fault or a refusal), V.
@@ -274,56 +311,41 @@ pub struct Tracked {
 }
 
 impl Run {
-    /// Record what the controller said at `seconds`, and the fault if it is one.
-    fn said(&mut self, seconds: f64, event: Option<Event>) {
-        let Some(event) = event else { return };
-        if let Event::Fault(fault) = event {
-            self.fault = Some(fault);
-        }
-        let what = said(event);
+    /// Record what the board said at `seconds` (its kind and words), and the fault if it is
+    /// one.
+    fn said(&mut self, seconds: f64, kind: SaidKind, words: &str) {
+        let what = match kind {
+            SaidKind::Nothing => return,
+            SaidKind::Event => words.to_string(),
+            SaidKind::Fault | SaidKind::BusFault => {
+                self.fault_words = Some(words.to_string());
+                let what = if kind == SaidKind::BusFault {
+                    BUS_FAULT_SAID
+                } else {
+                    FAULT_SAID
+                };
+                format!("{what}: {words}")
+            }
+        };
         self.events.push(Said { seconds, what });
     }
 }
 
-/// What the controller said, in words.
+/// What the controller said, in words (the core's wording, the firmware's link's too).
 pub fn said(event: Event) -> String {
-    match event {
-        Event::AtBias { volts } => format!("at bias, {volts} V"),
-        Event::DriveOn => "AC drive on".to_string(),
-        Event::DriveOff => "AC drive paused, to trim again".to_string(),
-        Event::Trimmed {
-            bias_volts,
-            measured_hz,
-            shear_modulus,
-            next_bias_volts,
-            resolution,
-        } => format!(
-            "trim: {measured_hz:.4} Hz measured at {bias_volts:.1} V{}, μ estimated \
-             {:.2} kPa, next bias {next_bias_volts:.1} V",
-            resolution.map_or(String::new(), |r| format!(" (resolution {r:.0})")),
-            shear_modulus / 1e3
-        ),
-        Event::AboveCeiling {
-            needed_volts,
-            cap_volts,
-        } => format!(
-            "trim needs {needed_volts:.1} V, above the cap in force {cap_volts:.1} V of the \
-             device flashed: holding the bias"
-        ),
-        Event::Fault(fault) => {
-            if fault == Fault::Bus {
-                format!("fault, amplifier disabled at once: {fault}")
-            } else {
-                format!("fault, down to 0 V at the slew rate: {fault}")
-            }
-        }
-    }
+    event.to_string()
 }
 
 /// The plant at the end of a tick, as the history keeps it.
 #[derive(Clone, Copy, Debug)]
 pub struct Sample {
+    pub tick: u64,
     pub seconds: f64,
+    /// The board's last DAC frame (its code, and whether it powered the DAC on) and the
+    /// amplifier's enable line after the tick.
+    pub dac_code: u16,
+    pub dac_on: bool,
+    pub enable: bool,
     pub stretch: f64,
     pub membrane_volts: f64,
     /// The amplifier's mean output current over the tick, A (model.md §8).
@@ -369,24 +391,44 @@ impl Loop {
         .map_err(|e| format!("amplifier: {e}"))
     }
 
-    /// Run the loop for its duration.
+    /// Run the loop for its duration, the core's board on the host.
     pub fn run(&self) -> Result<Run, String> {
+        let wires = self.wires();
+        let mut board = CoreBoard::boot(self, &wires)?;
+        self.run_on(&mut board, &wires)
+    }
+
+    /// The image `host-sim image` writes for the scene: its device, its amplifier (the
+    /// controller told of no rail below the DAC's top code: a saturating amplifier is the
+    /// plant's, for the monitor to find), its front end and settings.
+    pub fn image(&self) -> Result<Vec<u8>, String> {
+        let amplifier = self.amplifier()?;
+        let spec = AmplifierSpec {
+            dac_reference_volts: self.dac_reference_volts as f32,
+            gain: self.plant.amplifier.gain as f32,
+            rail_volts: amplifier.max_volts(),
+            dac_bits: DAC_BITS,
+        };
+        let front_end = self.analog.map_or(FrontEnd::NONE, |a| a.front_end);
+        crate::lut::image(self.nominal, &spec, &front_end, &self.settings)
+    }
+
+    /// Run the loop for its duration on `board` (the core's, or the firmware's under QEMU),
+    /// whose output drives `wires`.
+    pub fn run_on(&self, board: &mut dyn LoopBoard, wires: &Wires) -> Result<Run, String> {
         let ticks = self.ticks()?;
-        let made = crate::lut::make(self.nominal, f64::from(self.settings.margin), None)?;
         let started = Instant::now();
         let tick_seconds = 1.0 / f64::from(self.settings.tick_hz);
         // On a terminal only, and not tick by tick.
         let progress = crate::work::bar("run", ticks as usize);
         let every = (ticks / 200).max(1);
-        // The driver borrows the bus for each write, as firmware sharing a bus would.
-        let wires = self.wires();
-        let mut stage = OutputStage::new(Dac8551::new(&wires.bus), &wires.enable);
-        let _ = stage.safe();
+        let (booted, refusal) = board.booted();
         let mut run = Run {
-            boot: None,
-            refused: None,
+            boot: Some(booted),
+            refused: refusal,
             events: Vec::new(),
             fault: None,
+            fault_words: None,
             plant_crossing: None,
             bias_volts: 0.0,
             final_command_volts: 0.0,
@@ -400,27 +442,15 @@ impl Loop {
             ticks: 0,
             run_seconds: 0.0,
         };
-        let mut controller = match Controller::start(
-            self.nominal.cast(),
-            &made.bytes,
-            self.amplifier()?,
-            self.settings,
-        ) {
-            Ok((c, boot)) => {
-                run.boot = Some(boot);
-                Some(c)
-            }
-            Err(fault) => {
-                run.refused = Some(fault);
-                None
-            }
-        };
-        // The amplifier's current, worked out only when a monitor or the history reads it.
-        let mut bench = self.bench(self.current_monitor.is_some() || self.history);
+        // The amplifier's current, worked out when a monitor, a front end or the history
+        // reads it.
+        let mut bench =
+            self.bench(self.current_monitor.is_some() || self.analog.is_some() || self.history);
         let tracked = self.settings.track_seconds.is_some();
         // The plant's stretch summed since the last window of the probe's lock-in.
         let (mut stretch_sum, mut stretch_ticks) = (0.0, 0u32);
-        let mut last_sensed = None;
+        let mut last_sensed = (f32::NAN, f32::NAN);
+        let mut bias = f32::NAN;
         let trace_every =
             ((TRACE_SECONDS * f64::from(self.settings.tick_hz)).round() as u64).max(1);
         for k in 0..ticks {
@@ -428,51 +458,70 @@ impl Loop {
                 progress.set_position(k);
             }
             let t = k as f64 * tick_seconds;
-            let stepped = self.step(k, &mut bench, &mut controller, &mut stage, &wires)?;
-            if let Some(ticked) = stepped.ticked {
-                let out = ticked.output;
-                stretch_sum += stepped.start_stretch;
+            self.fail_bus(k, wires);
+            let samples = if booted.driving {
+                self.measure(&mut bench, k, self.amplifier_input(wires))
+            } else {
+                Samples::Direct(Inputs::NONE)
+            };
+            let inputs = self.acquired(&mut bench, samples);
+            let (seen, words) = board.tick(k, inputs, samples, &bench.codes)?;
+            if let Some(fault) = board.fault() {
+                run.fault = Some(fault);
+            }
+            let start_stretch = bench.y[0];
+            let volts = self.advance(&mut bench, k, self.amplifier_input(wires))?;
+            if seen.phase.is_some() {
+                stretch_sum += start_stretch;
                 stretch_ticks += 1;
-                let c = controller.as_ref().ok_or("the controller left its slot")?;
-                let sensed = c.sensed();
-                if sensed.is_some() && sensed != last_sensed {
-                    if let Some(s) = sensed {
-                        run.sensed.push(Sensed {
-                            seconds: t,
-                            stretch: f64::from(s.stretch),
-                            sigma: f64::from(s.sigma),
-                            plant_stretch: stretch_sum / f64::from(stretch_ticks.max(1)),
-                        });
-                    }
+                let sensed = (seen.sensed_stretch, seen.sensed_sigma);
+                if !sensed.0.is_nan() && sensed.0.to_bits() != last_sensed.0.to_bits() {
+                    run.sensed.push(Sensed {
+                        seconds: t,
+                        stretch: f64::from(sensed.0),
+                        sigma: f64::from(sensed.1),
+                        plant_stretch: stretch_sum / f64::from(stretch_ticks.max(1)),
+                    });
                     (stretch_sum, stretch_ticks) = (0.0, 0);
                 }
                 last_sensed = sensed;
                 // The lock-in starts again after the trim's ring.
-                if c.phase() == Phase::Measuring {
+                if seen.phase == Some(Phase::Measuring) {
                     (stretch_sum, stretch_ticks) = (0.0, 0);
                 }
-                run.final_command_volts = f64::from(out.volts);
-                run.max_command_volts = run.max_command_volts.max(f64::from(out.volts));
-                run.said(t, out.event);
+                let command = self
+                    .amplifier()?
+                    .volts(de_resonator::DacCode(seen.dac_code));
+                let command = if seen.dac_on && seen.enable {
+                    f64::from(command)
+                } else {
+                    0.0
+                };
+                run.final_command_volts = command;
+                run.max_command_volts = run.max_command_volts.max(command);
+                run.said(t, seen.said, &words);
+                bias = seen.bias_volts;
             }
-            let (y, volts) = (bench.y, stepped.volts);
+            let y = bench.y;
             if run.plant_crossing.is_none() {
                 if let Some(mode) = self.crossing(&y, t + tick_seconds, volts) {
                     run.plant_crossing = Some((mode, t + tick_seconds));
                 }
             }
-            let last_current = bench.last_current;
             if self.history {
                 run.history.push(Sample {
+                    tick: k,
                     seconds: t + tick_seconds,
+                    dac_code: seen.dac_code,
+                    dac_on: seen.dac_on,
+                    enable: seen.enable,
                     stretch: y[0],
                     membrane_volts: volts,
-                    current_amps: last_current.unwrap_or(f64::NAN),
+                    current_amps: bench.last_current.unwrap_or(f64::NAN),
                 });
             }
             if tracked && (k + 1) % trace_every == 0 {
-                run.tracking
-                    .push(self.tracked(controller.as_ref(), &y, t + tick_seconds));
+                run.tracking.push(self.tracked(&seen, &y, t + tick_seconds));
             }
             run.final_membrane_volts = volts;
             run.ticks = k + 1;
@@ -480,10 +529,11 @@ impl Loop {
         progress.finish_and_clear();
         let y = bench.y;
         run.run_seconds = started.elapsed().as_secs_f64();
-        let bias = controller
-            .as_ref()
-            .filter(|_| run.fault.is_none())
-            .map_or(0.0, |c| f64::from(c.plan().bias_volts));
+        let bias = if run.fault_words.is_none() && bias.is_finite() {
+            f64::from(bias)
+        } else {
+            0.0
+        };
         run.bias_volts = bias;
         if let Some(rest) = self.plant.equilibrium(&y, bias) {
             run.natural_frequency_hz = self.plant.natural_frequency_hz(&rest, bias);
@@ -495,6 +545,16 @@ impl Loop {
             .equilibrium(&y, 0.0)
             .and_then(|unbiased| self.plant.limit_volts(&unbiased, 0.0));
         Ok(run)
+    }
+
+    /// The scene's DAC bus fails from its time on (the core's board's simulated bus).
+    fn fail_bus(&self, k: u64, wires: &Wires) {
+        let t = k as f64 * (1.0 / f64::from(self.settings.tick_hz));
+        let bus = &wires.bus;
+        if self.bus_fails_after_seconds.is_some_and(|at| t >= at) && bus.fail_after.get().is_none()
+        {
+            bus.fail_after.set(Some(bus.frames.get()));
+        }
     }
 
     /// The board's outputs as the plant sees them, idle: the DAC on its bus, the enable line.
@@ -521,17 +581,15 @@ impl Loop {
         stage: &mut OutputStage<&SimulatedDac, &EnableLine>,
         wires: &Wires,
     ) -> Result<Stepped, String> {
-        let t = k as f64 * (1.0 / f64::from(self.settings.tick_hz));
-        let bus = &wires.bus;
-        if self.bus_fails_after_seconds.is_some_and(|at| t >= at) && bus.fail_after.get().is_none()
-        {
-            bus.fail_after.set(Some(bus.frames.get()));
-        }
+        self.fail_bus(k, wires);
         let inputs = match slot {
-            Some(_) => self.sense(bench, k, self.amplifier_input(wires)),
-            None => Inputs::NONE,
+            Some(_) => {
+                let samples = self.measure(bench, k, self.amplifier_input(wires));
+                self.acquired(bench, samples)
+            }
+            None => Ok(Inputs::NONE),
         };
-        let ticked = board::tick::drive(slot, stage, Ok(inputs));
+        let ticked = board::tick::drive(slot, stage, inputs);
         if ticked.is_some_and(|t| t.job_wanted) {
             board::tick::run_job(|f| {
                 if let Some(c) = slot.as_mut() {
@@ -546,6 +604,47 @@ impl Loop {
             start_stretch,
             volts,
         })
+    }
+
+    /// Tick `k`'s measurements of the plant, the amplifier's input at `input_volts`: read
+    /// directly, or (a front end) the ADC's codes into `bench.codes`.
+    pub fn measure(&self, bench: &mut Bench, k: u64, input_volts: f64) -> Samples {
+        let Some(analog) = self.analog else {
+            return Samples::Direct(self.sense(bench, k, input_volts));
+        };
+        let membrane_volts = self.plant.volts(&bench.y, input_volts);
+        let current = bench.last_current.unwrap_or(0.0);
+        let stretch = bench.y[0];
+        bench.codes.clear();
+        for _ in 0..bench.scans {
+            for (channel, spec) in analog.front_end.fitted() {
+                let reading = match channel {
+                    Channel::Current => current,
+                    Channel::Amplifier => membrane_volts,
+                    Channel::Stretch => stretch,
+                };
+                let code = f64::from(spec.code_of(reading as f32))
+                    + analog.noise_codes * bench.noise.gaussian();
+                bench
+                    .codes
+                    .push(code.round().clamp(0.0, f64::from(FULL_SCALE_CODE)) as u16);
+            }
+        }
+        Samples::Codes
+    }
+
+    /// What the core's board's acquisition reads of a tick's samples.
+    pub fn acquired(&self, bench: &mut Bench, samples: Samples) -> Result<Inputs, InputError> {
+        match samples {
+            Samples::Direct(inputs) => Ok(inputs),
+            Samples::Codes => {
+                let mut block = Block::EMPTY;
+                if let Some(analog) = &self.analog {
+                    block.add_scans(&analog.front_end, &bench.codes);
+                }
+                bench.reader.inputs(&block)
+            }
+        }
     }
 
     /// The amplifier's input: the DAC's output while the enable line is high, V.
@@ -572,6 +671,8 @@ impl Loop {
     /// worked out at each tick (for a monitor or a history).
     pub fn bench(&self, current_wanted: bool) -> Bench {
         let y = self.plant.at_rest();
+        let front_end = self.analog.map_or(FrontEnd::NONE, |a| a.front_end);
+        let scans = front_end.check(self.settings.tick_hz).unwrap_or(0);
         Bench {
             port: (y[0], self.plant.volts(&y, 0.0)),
             y,
@@ -580,6 +681,9 @@ impl Loop {
             reading: f64::NAN,
             last_current: None,
             current_wanted,
+            scans,
+            codes: Vec::new(),
+            reader: Reader::new(front_end, scans),
         }
     }
 
@@ -633,25 +737,25 @@ impl Loop {
         Ok(volts)
     }
 
-    /// The plant against the tracker at `seconds`.
-    fn tracked(&self, controller: Option<&Controller>, y: &Vector, seconds: f64) -> Tracked {
-        let bias = controller.map_or(0.0, |c| f64::from(c.plan().bias_volts));
+    /// The plant against the tracker at `seconds`, the board as `seen` after its tick.
+    fn tracked(&self, seen: &Observed, y: &Vector, seconds: f64) -> Tracked {
+        let bias = if seen.bias_volts.is_finite() {
+            f64::from(seen.bias_volts)
+        } else {
+            0.0
+        };
         let plant_hz = self.plant.equilibrium(y, bias).map_or(f64::NAN, |rest| {
             self.plant.natural_frequency_hz(&rest, bias)
         });
-        let lock = controller.and_then(|c| c.tracked());
-        let drive_hz = controller
-            .filter(|c| c.plan().ac_tick.is_some())
-            .map_or(f64::NAN, |c| {
-                f64::from(self.settings.tick_hz) * f64::from(c.plan().ac_phase_step)
-                    / 4_294_967_296.0
-            });
+        let drive_hz = seen.ac_phase_step.map_or(f64::NAN, |step| {
+            f64::from(self.settings.tick_hz) * f64::from(step) / 4_294_967_296.0
+        });
         Tracked {
             seconds,
             plant_hz,
             drive_hz,
-            measured_hz: lock.map_or(f64::NAN, |l| f64::from(l.natural_hz)),
-            quality_factor: lock.map_or(f64::NAN, |l| f64::from(l.quality_factor)),
+            measured_hz: f64::from(seen.tracked_hz),
+            quality_factor: f64::from(seen.quality_factor),
             bias_volts: bias,
         }
     }
@@ -688,5 +792,107 @@ impl Loop {
             amplifier_volts: sensor.amplifier_monitor.then_some(membrane_volts as f32),
             current_amps: None,
         }
+    }
+}
+
+/// The board a loop runs against the plant: the core's, on the host ([`CoreBoard`]), or the
+/// firmware's link build under QEMU (`engine::firmware`). Both give the same record of a tick
+/// (`board::link`'s `Observed`), from which the run is kept.
+pub trait LoopBoard {
+    /// What the boot found, and the refusal's words.
+    fn booted(&mut self) -> (Booted, Option<String>);
+    /// Tick `k`: its samples (read directly; or the ADC's `codes`, which the core's board
+    /// reads as `inputs`) in, then the background job; the board after it, and the words of
+    /// what it said. The plant then sees the board's wires.
+    fn tick(
+        &mut self,
+        k: u64,
+        inputs: Result<Inputs, InputError>,
+        samples: Samples,
+        codes: &[u16],
+    ) -> Result<(Observed, String), String>;
+    /// The fault the last tick raised, where the board gives it as a value (the core's).
+    fn fault(&self) -> Option<Fault> {
+        None
+    }
+}
+
+/// The core's board on the host: booted from the scene's image, its output stage on the
+/// simulated wires.
+pub struct CoreBoard<'w> {
+    slot: Option<Controller>,
+    stage: OutputStage<&'w SimulatedDac, &'w EnableLine>,
+    booted: Booted,
+    refusal: Option<String>,
+    fault: Option<Fault>,
+    wires: &'w Wires,
+}
+
+impl<'w> CoreBoard<'w> {
+    /// Boot the core's board from the scene's image, as the firmware does.
+    pub fn boot(lp: &Loop, wires: &'w Wires) -> Result<Self, String> {
+        let bytes = lp.image()?;
+        let mut stage = OutputStage::new(Dac8551::new(&wires.bus), &wires.enable);
+        let _ = stage.safe();
+        let mut slot = None;
+        let (logic, _) =
+            board::Board::boot(&mut slot, Image::parse(&bytes), None::<NoKeeper>, None);
+        let booted = Booted::of(logic.booted().filter(|_| slot.is_some()));
+        let refusal = logic.refusal().map(str::to_string);
+        Ok(CoreBoard {
+            slot,
+            stage,
+            booted,
+            refusal,
+            fault: None,
+            wires,
+        })
+    }
+}
+
+impl LoopBoard for CoreBoard<'_> {
+    fn booted(&mut self) -> (Booted, Option<String>) {
+        (self.booted, self.refusal.clone())
+    }
+
+    fn tick(
+        &mut self,
+        _: u64,
+        inputs: Result<Inputs, InputError>,
+        _: Samples,
+        _: &[u16],
+    ) -> Result<(Observed, String), String> {
+        let ticked = board::tick::drive(&mut self.slot, &mut self.stage, inputs);
+        if ticked.is_some_and(|t| t.job_wanted) {
+            let slot = &mut self.slot;
+            board::tick::run_job(|f| {
+                if let Some(c) = slot.as_mut() {
+                    f(c);
+                }
+            });
+        }
+        let event = ticked.and_then(|t| t.output.event);
+        self.fault = match event {
+            Some(Event::Fault(fault)) => Some(fault),
+            _ => None,
+        };
+        let (code, on) = self.wires.bus.last.get();
+        let seen = Observed::of(
+            code,
+            on,
+            self.wires.enable.high.get(),
+            self.slot.as_ref(),
+            event.as_ref(),
+        );
+        let words = match event {
+            Some(Event::Fault(fault)) => fault.to_string(),
+            Some(event) => event.to_string(),
+            None => String::new(),
+        };
+        Ok((seen, words))
+    }
+
+    fn fault(&self) -> Option<Fault> {
+        self.fault
     }
 }

@@ -1,8 +1,10 @@
 //! The engines: the full plant (model.md §§4–8 and its extras: networks, amplifier, leakage,
 //! the true §6 checks; [`plant`]), the closed loop running the core's board and controller
-//! against it through a simulated DAC and enable line ([`hil`]), and the open-loop reference
+//! against it through a simulated DAC and enable line ([`hil`]), or the firmware's binary under
+//! QEMU in its place ([`firmware`]), and the open-loop reference
 //! solvers the core's integrators are measured against ([`simulate`]: DOP853, BDF).
 
+pub mod firmware;
 pub mod hil;
 pub mod plant;
 pub mod simulate;
