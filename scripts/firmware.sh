@@ -2,7 +2,8 @@
 # The firmware under QEMU (netduinoplus2, STM32F405): lint every build, measure flash and RAM
 # per feature set, count the tick's budget with the trim on, run the on-target checks against
 # their expected log (RTIC's way), and run the product end to end: the command port, the DAC
-# frames from QEMU's trace, a second device's image, bad images, the tick rate.
+# frames from QEMU's trace, a second device's image, bad images, the tick rate; then every
+# shipped scene with the firmware in the loop (its link build), tick for tick against the core.
 # Usage: scripts/firmware.sh [--bless]   (--bless rewrites the expected log)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -18,7 +19,7 @@ cd firmware
 step "firmware: fmt, clippy on every build ($(rustc --version))"
 cargo fmt -- --check
 # QEMU builds, and the silicon builds (HSE + PLL, RTT logs) that CI cannot run.
-for f in qemu,log-semihosting qemu qemu,log-semihosting,model-sensor rtt; do
+for f in qemu,log-semihosting qemu qemu,log-semihosting,model-sensor qemu,log-semihosting,link rtt; do
     cargo clippy --locked --release -q --bins --no-default-features --features "$f" -- -D warnings
 done
 
@@ -81,3 +82,10 @@ cp "$elf" ../target/firmware-trim.elf
 cargo build --locked --release -q --bin firmware
 python3 ../scripts/firmware_e2e.py "$PWD/$elf" "$host_sim" "$PWD/../target/e2e" \
     "$PWD/../target/firmware-trim.elf"
+
+step "the firmware in the loop: every shipped scene through the link build under QEMU, tick for tick against the core"
+cargo build --locked --release -q --bin firmware --no-default-features --features qemu,log-semihosting,link
+cp "$elf" ../target/firmware-link.elf
+cd ..
+rm -rf target/firmware-loop
+python3 scripts/firmware_loop.py "$host_sim" target/firmware-link.elf target/firmware-loop

@@ -21,7 +21,7 @@ fn frames(bytes: &[u8]) -> Vec<Result<(Header, Vec<u8>), LinkError>> {
 
 fn samples_frame(tick: u32, codes: &[u16]) -> Vec<u8> {
     let mut out = vec![0; MAX_FRAME];
-    let n = link::write_frame(&mut out, Kind::Samples, tick, |p| {
+    let n = link::write_frame(&mut out, (Kind::Samples, 0), tick, |p| {
         link::write_codes(codes, p)
     })
     .unwrap();
@@ -89,7 +89,7 @@ fn a_length_over_the_limit_or_an_unknown_kind_is_refused_at_the_header() {
 #[test]
 fn codes_that_do_not_fit_the_buffer_are_an_error_not_a_cut() {
     let mut out = [0u8; 20];
-    let r = link::write_frame(&mut out, Kind::Samples, 0, |p| {
+    let r = link::write_frame(&mut out, (Kind::Samples, 0), 0, |p| {
         link::write_codes(&[1; 4], p)
     });
     assert!(matches!(r, Err(LinkError::Size { needed: 8, .. })), "{r:?}");
@@ -111,6 +111,7 @@ fn a_ticks_output_reads_back_with_the_events_words() {
         said: Said::Event,
         phase: Some(Phase::Solving),
         bias_volts: 3012.25,
+        target_hz: 44.5,
         ac_phase_step: Some(0x1234_5678),
         tracked_hz: f32::NAN,
         quality_factor: 180.5,
@@ -118,7 +119,7 @@ fn a_ticks_output_reads_back_with_the_events_words() {
         sensed_sigma: 1e-4,
     };
     let mut out = vec![0; MAX_FRAME];
-    let n = link::write_frame(&mut out, Kind::Output, 99, |p| {
+    let n = link::write_frame(&mut out, (Kind::Output, 0), 99, |p| {
         observed.write(Some(&event), p)
     })
     .unwrap();

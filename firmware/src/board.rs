@@ -35,7 +35,7 @@ pub type StageSpi = DacSpi;
 #[cfg(not(feature = "link"))]
 pub type StagePin = EnablePin;
 #[cfg(feature = "link")]
-pub type StageSpi = de_resonator::board::link::Tap<DacSpi>;
+pub type StageSpi = de_resonator::board::link::Tap<crate::link::Breakable<DacSpi>>;
 #[cfg(feature = "link")]
 pub type StagePin = de_resonator::board::link::Tap<EnablePin>;
 
@@ -44,7 +44,7 @@ pub fn stage_wires(dac: DacSpi, enable: EnablePin) -> (StageSpi, StagePin) {
     #[cfg(feature = "link")]
     {
         use de_resonator::board::link::Tap;
-        (Tap::new(dac), Tap::new(enable))
+        (Tap::new(crate::link::Breakable(dac)), Tap::new(enable))
     }
     #[cfg(not(feature = "link"))]
     {

@@ -36,16 +36,7 @@ pub mod analog {
 }
 pub mod board;
 pub mod config;
-#[cfg(feature = "link")]
 pub mod link;
-/// The link build's ends, none in other builds (the app's resources name their types).
-#[cfg(not(feature = "link"))]
-pub mod link {
-    /// Never made without `link`.
-    pub enum LinkIn {}
-    /// Never made without `link`.
-    pub enum LinkOut {}
-}
 pub mod reference;
 pub mod runtime;
 pub mod sensor;

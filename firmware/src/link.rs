@@ -7,121 +7,180 @@
 //! tick's block, where silicon's DMA puts its buffers, and pend the tick: the link paces the
 //! tick, so the plant's clock is the simulation's.
 
-use de_resonator::acquire::{Block, FrontEnd};
-use de_resonator::board::link::{self, Kind, Receiver, HEADER, MAX_FRAME, MAX_PAYLOAD};
-use embedded_hal_nb::serial::Read as _;
-use semihosting::fs::File;
-use semihosting::io::{Read as _, Write as _};
-use stm32f4xx_hal::pac::USART3;
-use stm32f4xx_hal::serial::Rx;
+use de_resonator::Event;
 
-/// The samples side: each ring of the bell, a frame read whole, its codes into the block.
-pub struct LinkIn {
-    bell: Rx<USART3>,
-    samples: Option<File>,
-    receiver: Receiver,
-    bytes: [u8; MAX_FRAME],
-    codes: [u16; MAX_PAYLOAD / 2],
-    front_end: FrontEnd,
+#[cfg(feature = "link")]
+pub use transport::{Breakable, LinkIn, LinkOut};
+
+/// What a tick hands the link's reply task: the DAC frame last written (its code, and
+/// whether it powered the DAC), the enable line, the controller's event, and whether a job
+/// waits.
+#[derive(Clone, Copy, Debug)]
+pub struct TickDone {
+    pub dac: (u16, bool),
+    pub enable: bool,
+    pub event: Option<Event>,
+    pub job: bool,
 }
 
-impl LinkIn {
-    /// The bell, and the samples file opened (it waits for host-sim to open its end).
-    pub fn open(bell: Rx<USART3>, front_end: FrontEnd) -> Self {
-        LinkIn {
-            bell,
-            samples: File::open(c"samples").ok(),
-            receiver: Receiver::new(),
-            bytes: [0; MAX_FRAME],
-            codes: [0; MAX_PAYLOAD / 2],
-            front_end,
+/// Ticks queued to the reply task (one at a time, host-sim waits for each; two so that the
+/// tick never finds the queue full while the task finishes the last).
+pub const REPLIES: usize = 2;
+
+/// The link build's ends, none in other builds (the app's resources name their types).
+#[cfg(not(feature = "link"))]
+pub enum LinkIn {}
+#[cfg(not(feature = "link"))]
+pub enum LinkOut {}
+
+#[cfg(feature = "link")]
+mod transport {
+    use core::sync::atomic::{AtomicBool, Ordering};
+
+    use de_resonator::acquire::{Block, FrontEnd};
+    use de_resonator::board::link::{
+        self, Kind, Receiver, BUS_FAILS, HEADER, MAX_FRAME, MAX_PAYLOAD,
+    };
+    use embedded_hal::spi::{Error as _, ErrorKind, ErrorType, Operation, SpiDevice};
+    use embedded_hal_nb::serial::Read as _;
+    use semihosting::fs::File;
+    use semihosting::io::{Read as _, Write as _};
+    use stm32f4xx_hal::pac::USART3;
+    use stm32f4xx_hal::serial::Rx;
+
+    /// The samples side: each ring of the bell, a frame read whole, its codes into the block.
+    pub struct LinkIn {
+        bell: Rx<USART3>,
+        samples: Option<File>,
+        receiver: Receiver,
+        bytes: [u8; MAX_FRAME],
+        codes: [u16; MAX_PAYLOAD / 2],
+        front_end: FrontEnd,
+    }
+
+    impl LinkIn {
+        /// The bell, and the samples file opened (it waits for host-sim to open its end).
+        pub fn open(bell: Rx<USART3>, front_end: FrontEnd) -> Self {
+            LinkIn {
+                bell,
+                samples: File::open(c"samples").ok(),
+                receiver: Receiver::new(),
+                bytes: [0; MAX_FRAME],
+                codes: [0; MAX_PAYLOAD / 2],
+                front_end,
+            }
+        }
+
+        /// The rings waiting: each one's samples frame added to the block by `add`. Whether a
+        /// tick's samples arrived (a frame that is not one is dropped: host-sim, with no output
+        /// back, says so).
+        pub fn read(&mut self, add: &mut impl FnMut(&mut dyn FnMut(&mut Block))) -> bool {
+            let mut arrived = false;
+            while self.bell.read().is_ok() {
+                let Some(file) = self.samples.as_mut() else {
+                    continue;
+                };
+                let Some(n) = read_frame(file, &mut self.bytes) else {
+                    continue;
+                };
+                let mut header = None;
+                for &b in self.bytes.get(..n).unwrap_or(&[]) {
+                    header = self.receiver.push(b);
+                }
+                let Some(Ok(header)) =
+                    header.filter(|h| matches!(h, Ok(h) if h.kind == Kind::Samples))
+                else {
+                    continue;
+                };
+                if header.flags & BUS_FAILS != 0 {
+                    BUS_FAILED.store(true, Ordering::Relaxed);
+                }
+                let mut count = 0;
+                for (slot, code) in self
+                    .codes
+                    .iter_mut()
+                    .zip(link::codes(self.receiver.payload()))
+                {
+                    *slot = code;
+                    count += 1;
+                }
+                let codes = self.codes.get(..count).unwrap_or(&[]);
+                let front_end = &self.front_end;
+                add(&mut |block| block.add_scans(front_end, codes));
+                arrived = true;
+            }
+            arrived
         }
     }
 
-    /// The rings waiting: each one's samples frame added to the block by `add`. Whether a
-    /// tick's samples arrived (a frame that is not one is dropped: host-sim, with no output
-    /// back, says so).
-    pub fn read(&mut self, add: &mut impl FnMut(&mut dyn FnMut(&mut Block))) -> bool {
-        let mut arrived = false;
-        while self.bell.read().is_ok() {
-            let Some(file) = self.samples.as_mut() else {
-                continue;
+    /// One frame from `file` into `bytes`: its header, then its payload and CRC; its length.
+    fn read_frame(file: &mut File, bytes: &mut [u8; MAX_FRAME]) -> Option<usize> {
+        read_exact(file, bytes.get_mut(..HEADER)?)?;
+        let payload = usize::from(u16::from_le_bytes([bytes[8], bytes[9]])).min(MAX_PAYLOAD);
+        let end = HEADER + payload + 4;
+        read_exact(file, bytes.get_mut(HEADER..end)?)?;
+        Some(end)
+    }
+
+    fn read_exact(file: &mut File, mut buf: &mut [u8]) -> Option<()> {
+        while !buf.is_empty() {
+            match file.read(buf) {
+                Ok(0) | Err(_) => return None,
+                Ok(n) => buf = buf.get_mut(n..)?,
+            }
+        }
+        Some(())
+    }
+
+    /// The output side: a frame at a time, written whole.
+    pub struct LinkOut {
+        output: Option<File>,
+        frame: [u8; MAX_FRAME],
+    }
+
+    impl LinkOut {
+        /// The output file opened (after the samples file: host-sim opens them in that order).
+        pub fn open() -> Self {
+            LinkOut {
+                output: File::create(c"output").ok(),
+                frame: [0; MAX_FRAME],
+            }
+        }
+
+        /// A frame of `kind` for `tick`, its payload written by `payload`.
+        pub fn send(
+            &mut self,
+            kind: Kind,
+            tick: u32,
+            payload: impl FnOnce(&mut [u8]) -> Result<usize, link::LinkError>,
+        ) {
+            let (Some(out), Ok(n)) = (
+                self.output.as_mut(),
+                link::write_frame(&mut self.frame, (kind, 0), tick, payload),
+            ) else {
+                return;
             };
-            let Some(n) = read_frame(file, &mut self.bytes) else {
-                continue;
-            };
-            let mut header = None;
-            for &b in self.bytes.get(..n).unwrap_or(&[]) {
-                header = self.receiver.push(b);
-            }
-            if !matches!(header, Some(Ok(h)) if h.kind == Kind::Samples) {
-                continue;
-            }
-            let mut count = 0;
-            for (slot, code) in self
-                .codes
-                .iter_mut()
-                .zip(link::codes(self.receiver.payload()))
-            {
-                *slot = code;
-                count += 1;
-            }
-            let codes = self.codes.get(..count).unwrap_or(&[]);
-            let front_end = &self.front_end;
-            add(&mut |block| block.add_scans(front_end, codes));
-            arrived = true;
-        }
-        arrived
-    }
-}
-
-/// One frame from `file` into `bytes`: its header, then its payload and CRC; its length.
-fn read_frame(file: &mut File, bytes: &mut [u8; MAX_FRAME]) -> Option<usize> {
-    read_exact(file, bytes.get_mut(..HEADER)?)?;
-    let payload = usize::from(u16::from_le_bytes([bytes[8], bytes[9]])).min(MAX_PAYLOAD);
-    let end = HEADER + payload + 4;
-    read_exact(file, bytes.get_mut(HEADER..end)?)?;
-    Some(end)
-}
-
-fn read_exact(file: &mut File, mut buf: &mut [u8]) -> Option<()> {
-    while !buf.is_empty() {
-        match file.read(buf) {
-            Ok(0) | Err(_) => return None,
-            Ok(n) => buf = buf.get_mut(n..)?,
-        }
-    }
-    Some(())
-}
-
-/// The output side: a frame at a time, written whole.
-pub struct LinkOut {
-    output: Option<File>,
-    frame: [u8; MAX_FRAME],
-}
-
-impl LinkOut {
-    /// The output file opened (after the samples file: host-sim opens them in that order).
-    pub fn open() -> Self {
-        LinkOut {
-            output: File::create(c"output").ok(),
-            frame: [0; MAX_FRAME],
+            let _ = out.write_all(self.frame.get(..n).unwrap_or(&[]));
         }
     }
 
-    /// A frame of `kind` for `tick`, its payload written by `payload`.
-    pub fn send(
-        &mut self,
-        kind: Kind,
-        tick: u32,
-        payload: impl FnOnce(&mut [u8]) -> Result<usize, link::LinkError>,
-    ) {
-        let (Some(out), Ok(n)) = (
-            self.output.as_mut(),
-            link::write_frame(&mut self.frame, kind, tick, payload),
-        ) else {
-            return;
-        };
-        let _ = out.write_all(self.frame.get(..n).unwrap_or(&[]));
+    /// Set by host-sim's `BUS_FAILS`: the DAC's bus fails from then on.
+    static BUS_FAILED: AtomicBool = AtomicBool::new(false);
+
+    /// The DAC's bus as the link build drives it: the board's, until host-sim breaks it (a scene's
+    /// failing bus; QEMU's SPI never fails).
+    pub struct Breakable<S>(pub S);
+
+    impl<S: SpiDevice> ErrorType for Breakable<S> {
+        type Error = ErrorKind;
+    }
+
+    impl<S: SpiDevice> SpiDevice for Breakable<S> {
+        fn transaction(&mut self, operations: &mut [Operation<'_, u8>]) -> Result<(), ErrorKind> {
+            if BUS_FAILED.load(Ordering::Relaxed) {
+                return Err(ErrorKind::Other);
+            }
+            self.0.transaction(operations).map_err(|e| e.kind())
+        }
     }
 }

@@ -130,6 +130,7 @@ fn main() -> ExitCode {
         scene: None,
         out: "out/run".into(),
         firmware: None,
+        history: false,
     }));
     let result = match command {
         Command::Run(args) => cmd::run::run(&args, json).map(|r| emit(&r, json)),

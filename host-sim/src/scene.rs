@@ -7,9 +7,10 @@ use std::path::{Path, PathBuf};
 use de_resonator::DeviceParams;
 use serde::Deserialize;
 
-use crate::engine::hil::{Analog, CurrentMonitor, Loop, Sensor};
+use crate::engine::hil::{Analog, CurrentMonitor, Loop, Scripted, Sensor};
 use crate::engine::plant::{AmplifierModel, Branch, Leakage, Plant, MAX_BRANCHES};
 use crate::engine::simulate::{Solver, Tolerance};
+use de_resonator::board::protocol::MAX_LINE;
 
 /// The reference scene, built in: the main job.
 pub const REFERENCE: &str = include_str!("../../scenes/reference.toml");
@@ -41,6 +42,9 @@ struct SceneFile {
     controller: toml::Table,
     #[serde(default)]
     faults: FaultsFile,
+    /// Command-port lines sent at times (`[[commands]]`).
+    #[serde(default)]
+    commands: Vec<CommandFile>,
     #[serde(default)]
     output: OutputFile,
 }
@@ -178,10 +182,21 @@ fn ten_khz() -> f64 {
     1e4
 }
 
+/// A command-port line the scene sends, before the tick at `at_seconds`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CommandFile {
+    at_seconds: f64,
+    line: String,
+}
+
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct FaultsFile {
     dac_bus_fails_after_seconds: Option<f64>,
+    /// From this time on the stretch input's code repeats its last (a stuck sensor read
+    /// through `[front_end]`), s.
+    stretch_stuck_after_seconds: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -291,6 +306,26 @@ pub fn parse(text: &str) -> Result<Scene, String> {
         None => None,
         Some(table) => Some(analog(table, &settings, &sensor, &current_monitor)?),
     };
+    let analog = match (analog, file.faults.stretch_stuck_after_seconds) {
+        (_, Some(s)) if !(s >= 0.0) => {
+            return Err(format!(
+                "[faults] stretch_stuck_after_seconds {s} must be ≥ 0"
+            ))
+        }
+        (None, Some(_)) => {
+            return Err(
+                "[faults] stretch_stuck_after_seconds needs a [front_end] (or \
+                        [sensor] stuck_after_seconds without one)"
+                    .into(),
+            )
+        }
+        (Some(a), stuck) => Some(Analog {
+            stretch_stuck_after_seconds: stuck,
+            ..a
+        }),
+        (None, None) => None,
+    };
+    let commands = commands(&file, f64::from(settings.tick_hz))?;
     let tolerance = Tolerance {
         rtol: file.plant.rtol,
         atol: file.plant.atol,
@@ -320,12 +355,44 @@ pub fn parse(text: &str) -> Result<Scene, String> {
             bus_fails_after_seconds: file.faults.dac_bus_fails_after_seconds,
             duration_seconds: file.duration_seconds,
             seed: file.seed,
+            commands,
             history: file.output.history || file.output.plot,
         },
     };
     // Bounded work, refused before it starts.
     scene.run.ticks()?;
     Ok(scene)
+}
+
+/// The scene's `[[commands]]`, each at the tick its time falls on: a line the command port
+/// reads (no `reset`: the run would start again), in the scene's time.
+fn commands(file: &SceneFile, tick_hz: f64) -> Result<Vec<Scripted>, String> {
+    let mut out = Vec::new();
+    for c in &file.commands {
+        let at = c.at_seconds;
+        if !(at >= 0.0 && at < file.duration_seconds) {
+            return Err(format!(
+                "[[commands]] at_seconds {at}: a time within the scene's {} s",
+                file.duration_seconds
+            ));
+        }
+        let line = c.line.trim();
+        if line.is_empty() || line.contains(['\n', '\r']) || line.len() > MAX_LINE {
+            return Err(format!(
+                "[[commands]] line {:?}: one line of at most {MAX_LINE} bytes",
+                c.line
+            ));
+        }
+        if line.split_whitespace().next() == Some("reset") {
+            return Err("[[commands]] line \"reset\": a scene cannot script a reset".into());
+        }
+        out.push(Scripted {
+            tick: (at * tick_hz).round() as u64,
+            line: line.to_string(),
+        });
+    }
+    out.sort_by_key(|c| c.tick);
+    Ok(out)
 }
 
 /// The scene's `[front_end]`: the board's (the settings file's keys) and `noise_codes`, the
@@ -360,6 +427,7 @@ fn analog(
     Ok(Analog {
         front_end,
         noise_codes,
+        stretch_stuck_after_seconds: None,
     })
 }
 

@@ -9,7 +9,7 @@
 //! |---|---|---|
 //! | 0 | 2 | magic `DL` |
 //! | 2 | 1 | kind: 1 samples (host → board), 2 a tick's output, 3 the boot (board → host) |
-//! | 3 | 1 | 0 |
+//! | 3 | 1 | flags: a samples frame's bit 0, the DAC's bus fails from this tick on (`BUS_FAILS`, a test of the link build); 0 otherwise |
 //! | 4 | 4 | the tick's number (from 0; 0 for the boot), u32 |
 //! | 8 | 2 | P, the payload's bytes, u16 (at most `MAX_PAYLOAD`) |
 //! | 10 | P | the payload |
@@ -61,10 +61,15 @@ impl Kind {
     }
 }
 
+/// A samples frame's flag: the DAC's bus fails from this tick on (the link build's stand-in
+/// for a broken bus: QEMU's SPI never fails).
+pub const BUS_FAILS: u8 = 1;
+
 /// A frame's header, once its CRC checked.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Header {
     pub kind: Kind,
+    pub flags: u8,
     pub tick: u32,
     pub payload_bytes: usize,
 }
@@ -103,11 +108,11 @@ impl fmt::Display for LinkError {
 
 impl core::error::Error for LinkError {}
 
-/// Write a frame of `kind` for `tick` into `out`, its payload written by `payload` into the
-/// slice it is given (returning its length): the frame's length.
+/// Write a frame of `kind` with `flags` for `tick` into `out`, its payload written by
+/// `payload` into the slice it is given (returning its length): the frame's length.
 pub fn write_frame(
     out: &mut [u8],
-    kind: Kind,
+    (kind, flags): (Kind, u8),
     tick: u32,
     payload: impl FnOnce(&mut [u8]) -> Result<usize, LinkError>,
 ) -> Result<usize, LinkError> {
@@ -120,7 +125,7 @@ pub fn write_frame(
     let n = payload(body)?.min(room);
     let end = HEADER + n;
     if let Some(head) = out.get_mut(..HEADER) {
-        head.copy_from_slice(&header_bytes(kind, tick, n));
+        head.copy_from_slice(&header_bytes(kind, flags, tick, n));
     }
     let crc = crc32(out.get(..end).unwrap_or(&[]));
     let tail = out.get_mut(end..end + 4).ok_or(LinkError::Size {
@@ -131,11 +136,11 @@ pub fn write_frame(
     Ok(end + 4)
 }
 
-fn header_bytes(kind: Kind, tick: u32, payload_bytes: usize) -> [u8; HEADER] {
+fn header_bytes(kind: Kind, flags: u8, tick: u32, payload_bytes: usize) -> [u8; HEADER] {
     let [m0, m1] = MAGIC;
     let [t0, t1, t2, t3] = tick.to_le_bytes();
     let [p0, p1] = (payload_bytes as u16).to_le_bytes();
-    [m0, m1, kind as u8, 0, t0, t1, t2, t3, p0, p1]
+    [m0, m1, kind as u8, flags, t0, t1, t2, t3, p0, p1]
 }
 
 /// Frames out of a byte stream, a byte at a time (the firmware's receive interrupt, the
@@ -205,6 +210,7 @@ impl Receiver {
         }
         Some(Ok(Header {
             kind: Kind::of(self.bytes.get(2).copied().unwrap_or(0)).unwrap_or(Kind::Samples),
+            flags: self.bytes.get(3).copied().unwrap_or(0),
             tick: u32_at(&self.bytes, 4),
             payload_bytes: end - HEADER,
         }))
@@ -293,8 +299,9 @@ pub struct Observed {
     pub said: Said,
     /// The controller's phase (`None`: no controller).
     pub phase: Option<Phase>,
-    /// The plan's bias, V (NaN: no controller).
+    /// The plan's bias, V, and the target in force, Hz (NaN: no controller).
     pub bias_volts: f32,
+    pub target_hz: f32,
     /// The AC drive's phase step a tick (`None`: no AC).
     pub ac_phase_step: Option<u32>,
     /// Tracking's last cycle: natural frequency, Hz, and Q (NaN: none).
@@ -308,8 +315,8 @@ pub struct Observed {
 /// The fixed part of an output payload; the words of what was said follow. Its layout: DAC
 /// code u16; flags u8 (bit 0 the DAC on, bit 1 the enable line); `Said` u8; phase u8 (its
 /// place in `Phase`'s order, 0xFF none); AC on u8; 2 zero bytes; the AC's phase step u32;
-/// bias V, tracked Hz, Q, sensed stretch and its σ, f32 each.
-pub const OBSERVED_BYTES: usize = 32;
+/// bias V, tracked Hz, Q, sensed stretch and its σ, target Hz, f32 each.
+pub const OBSERVED_BYTES: usize = 36;
 
 const PHASES: [Phase; 7] = [
     Phase::Ramping,
@@ -347,6 +354,7 @@ impl Observed {
             said,
             phase: controller.map(|c| c.phase()),
             bias_volts: plan.map_or(f32::NAN, |p| p.bias_volts),
+            target_hz: controller.map_or(f32::NAN, |c| c.settings().target_hz),
             ac_phase_step: plan
                 .filter(|p| p.ac_tick.is_some())
                 .map(|p| p.ac_phase_step),
@@ -385,6 +393,7 @@ impl Observed {
             self.quality_factor,
             self.sensed_stretch,
             self.sensed_sigma,
+            self.target_hz,
         ] {
             put.bytes(&x.to_le_bytes());
         }
@@ -424,6 +433,7 @@ impl Observed {
             quality_factor: f32_at(payload, 20),
             sensed_stretch: f32_at(payload, 24),
             sensed_sigma: f32_at(payload, 28),
+            target_hz: f32_at(payload, 32),
         };
         Ok((observed, payload.get(OBSERVED_BYTES..).unwrap_or(&[])))
     }

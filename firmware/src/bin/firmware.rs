@@ -40,7 +40,7 @@ mod app {
     #[cfg(not(feature = "qemu"))]
     use de_resonator_firmware::analog::Parts;
     use de_resonator_firmware::board::{self, Board, StagePin, StageSpi};
-    use de_resonator_firmware::link::{LinkIn, LinkOut};
+    use de_resonator_firmware::link::{LinkIn, LinkOut, TickDone, REPLIES};
     use de_resonator_firmware::runtime::{self, ResetCause};
     #[cfg(feature = "model-sensor")]
     use de_resonator_firmware::sensor::ModelSensor as Sensors;
@@ -110,6 +110,11 @@ mod app {
         link_in: LinkIn,
         #[cfg(feature = "link")]
         link_out: LinkOut,
+        /// The link build: each tick's outcome to the reply task.
+        #[cfg(feature = "link")]
+        to_reply: Sender<'static, TickDone, REPLIES>,
+        #[cfg(feature = "link")]
+        from_tick: Receiver<'static, TickDone, REPLIES>,
     }
 
     // The slot uninitialized (in .bss, not a 3 KB `None` copied from flash to `.data`).
@@ -225,6 +230,12 @@ mod app {
         if command::spawn().is_err() {
             de_resonator_firmware::exit(104);
         }
+        #[cfg(feature = "link")]
+        let (to_reply, from_tick) = make_channel!(TickDone, REPLIES);
+        #[cfg(feature = "link")]
+        if link_reply::spawn().is_err() {
+            de_resonator_firmware::exit(104);
+        }
         (
             Shared {
                 controller,
@@ -264,6 +275,10 @@ mod app {
                 link_in,
                 #[cfg(feature = "link")]
                 link_out,
+                #[cfg(feature = "link")]
+                to_reply,
+                #[cfg(feature = "link")]
+                from_tick,
             },
         )
     }
@@ -286,7 +301,7 @@ mod app {
     }
 
     /// One controller tick: its code to the DAC, the enable line held, the events logged.
-    #[task(binds = SysTick, priority = 3, shared = [controller, tick_cycles_max, last_tick_us, output_off, checked_in, block, readings], local = [stage, sensor, reader, dog, check_in, hang_after_ticks, driven_ticks: u32 = 0])]
+    #[task(binds = SysTick, priority = 3, shared = [controller, tick_cycles_max, last_tick_us, output_off, checked_in, block, readings], local = [stage, sensor, reader, dog, check_in, hang_after_ticks, driven_ticks: u32 = 0, #[cfg(feature = "link")] to_reply])]
     fn tick(mut cx: tick::Context) {
         #[cfg(feature = "qemu")]
         cx.shared
@@ -338,12 +353,12 @@ mod app {
         // The link build: the output back to host-sim once the job (if any) is done, as
         // host-sim's loop runs it between ticks.
         #[cfg(feature = "link")]
-        {
-            let wires = (stage.dac().bus().dac, stage.enable_line().high);
-            let event = ticked.and_then(|t| t.output.event);
-            let job = ticked.is_some_and(|t| t.job_wanted);
-            let _ = link_reply::spawn(wires, event, job);
-        }
+        let _ = cx.local.to_reply.try_send(TickDone {
+            dac: stage.dac().bus().dac,
+            enable: stage.enable_line().high,
+            event: ticked.and_then(|t| t.output.event),
+            job: ticked.is_some_and(|t| t.job_wanted),
+        });
         if let Some(t) = ticked {
             #[cfg(not(feature = "link"))]
             if t.job_wanted {
@@ -373,35 +388,33 @@ mod app {
         }
     }
 
-    /// The link build: the tick's job run (as host-sim's loop runs it, before the next
+    /// The link build: each tick's job run (as host-sim's loop runs it, before the next
     /// tick), then the tick's output to host-sim.
     #[cfg(feature = "link")]
-    #[task(priority = 1, shared = [controller], local = [link_out, ticks: u32 = 0])]
-    async fn link_reply(
-        mut cx: link_reply::Context,
-        wires: ((u16, bool), bool),
-        event: Option<Event>,
-        job: bool,
-    ) {
-        if job {
-            logic::tick::run_job(|f| {
-                cx.shared.controller.lock(|c| {
-                    if let Some(c) = c.as_mut() {
-                        f(c);
-                    }
-                })
-            });
+    #[task(priority = 1, shared = [controller], local = [link_out, from_tick])]
+    async fn link_reply(mut cx: link_reply::Context) {
+        let mut tick = 0u32;
+        while let Ok(done) = cx.local.from_tick.recv().await {
+            if done.job {
+                logic::tick::run_job(|f| {
+                    cx.shared.controller.lock(|c| {
+                        if let Some(c) = c.as_mut() {
+                            f(c);
+                        }
+                    })
+                });
+            }
+            let ((dac_code, dac_on), enable) = (done.dac, done.enable);
+            let event = done.event;
+            let observed = cx
+                .shared
+                .controller
+                .lock(|c| Observed::of(dac_code, dac_on, enable, c.as_ref(), event.as_ref()));
+            cx.local
+                .link_out
+                .send(Kind::Output, tick, |p| observed.write(event.as_ref(), p));
+            tick = tick.wrapping_add(1);
         }
-        let ((dac_code, dac_on), enable) = wires;
-        let observed = cx
-            .shared
-            .controller
-            .lock(|c| Observed::of(dac_code, dac_on, enable, c.as_ref(), event.as_ref()));
-        let tick = *cx.local.ticks;
-        *cx.local.ticks += 1;
-        cx.local
-            .link_out
-            .send(Kind::Output, tick, |p| observed.write(event.as_ref(), p));
     }
 
     /// A full buffer of ADC codes (silicon): its scans into the tick's block.

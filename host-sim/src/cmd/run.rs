@@ -26,6 +26,10 @@ pub struct RunArgs {
     /// needs a `[front_end]` if it reads sensors.
     #[arg(long, value_name = "ELF")]
     pub firmware: Option<PathBuf>,
+    /// Write the time history (history.csv: per tick the DAC code, the enable line and the
+    /// plant) even if the scene does not ask for it.
+    #[arg(long)]
+    pub history: bool,
 }
 
 /// The plant's own limit on its loading branch from 0 V, and the final bias's margin to it
@@ -35,6 +39,14 @@ pub struct LimitReport {
     pub mode: &'static str,
     pub volts: f64,
     pub margin: f64,
+}
+
+/// A line the scene sent the command port, the board's reply, and when.
+#[derive(Serialize, Debug)]
+pub struct CommandReport {
+    pub time_seconds: f64,
+    pub line: String,
+    pub reply: String,
 }
 
 /// Something the controller said, and when.
@@ -145,6 +157,8 @@ pub struct RunReport {
     /// With tracking on: its last measurement.
     pub tracked: Option<TrackedReport>,
     pub events: Vec<EventReport>,
+    /// The scene's command-port lines (`[[commands]]`) and the replies.
+    pub commands: Vec<CommandReport>,
     pub run_seconds: f64,
     pub files: Vec<String>,
     /// Branches faster than 10 periods of the target (the frozen-network frequency does not
@@ -252,8 +266,16 @@ impl fmt::Display for RunReport {
                 s.stretch, s.sigma, s.windows, s.worst_error, s.worst_sigmas
             )?;
         }
-        for e in &self.events {
-            writeln!(f, "  {:>8.3} s     {}", e.time_seconds, e.what)?;
+        // Events and the scene's commands in time order (a command before its tick's event).
+        let mut lines: Vec<(f64, String)> = self
+            .commands
+            .iter()
+            .map(|c| (c.time_seconds, format!("> {}  < {}", c.line, c.reply)))
+            .collect();
+        lines.extend(self.events.iter().map(|e| (e.time_seconds, e.what.clone())));
+        lines.sort_by(|a, b| a.0.total_cmp(&b.0));
+        for (t, what) in lines {
+            writeln!(f, "  {t:>8.3} s     {what}")?;
         }
         write!(f, "run time        {:.3} s", self.run_seconds)?;
         for file in &self.files {
@@ -285,12 +307,16 @@ impl Report for RunReport {
 
 /// The scene named (or the built-in reference scene), run.
 pub fn run(args: &RunArgs, quiet: bool) -> Result<RunReport, String> {
-    let scene = match &args.scene {
+    let mut scene = match &args.scene {
         Some(path) => scene::load(path)?,
         None => {
             scene::parse(scene::REFERENCE).map_err(|e| format!("built-in reference scene: {e}"))?
         }
     };
+    if args.history {
+        scene.history = true;
+        scene.run.history = true;
+    }
     let dir = scene::out_dir(&args.out, &scene);
     if scene.plot || scene.history {
         prepare_dir(&dir)?;
@@ -311,7 +337,8 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<RunReport, String> {
         }
     };
     let files = files(&dir, &scene, &run)?;
-    let target = f64::from(scene.run.settings.target_hz);
+    // The target in force at the end (a scene's command may have changed it).
+    let target = run.target_hz;
     let hz = run.natural_frequency_hz;
     Ok(RunReport {
         scene: scene.name.clone(),
@@ -343,6 +370,15 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<RunReport, String> {
             .map(|e| EventReport {
                 time_seconds: e.seconds,
                 what: e.what.clone(),
+            })
+            .collect(),
+        commands: run
+            .commands
+            .iter()
+            .map(|c| CommandReport {
+                time_seconds: c.seconds,
+                line: c.line.clone(),
+                reply: c.reply.clone(),
             })
             .collect(),
         run_seconds: run.run_seconds,

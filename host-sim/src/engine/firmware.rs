@@ -6,7 +6,7 @@
 //! (USART2) is connected. QEMU is stopped when the board is dropped.
 
 use std::fs::File;
-use std::io::{Read, Write};
+use std::io::{BufRead, BufReader, Read, Write};
 use std::os::unix::fs::OpenOptionsExt;
 use std::os::unix::net::UnixStream;
 use std::path::{Path, PathBuf};
@@ -16,6 +16,7 @@ use std::time::{Duration, Instant};
 
 use de_resonator::acquire::InputError;
 use de_resonator::board::link::{self, Booted, Kind, Observed, Receiver, HEADER, MAX_FRAME};
+use de_resonator::board::protocol::NOTICE;
 use de_resonator::Inputs;
 
 use crate::engine::hil::{LoopBoard, Samples, Wires};
@@ -32,8 +33,8 @@ pub struct Qemu<'w> {
     samples: File,
     /// The firmware's frames, read from the output pipe by a thread of their own.
     output: mpsc::Receiver<Result<Vec<u8>, String>>,
-    /// The command port (kept open: the firmware's start-up lines).
-    _command: UnixStream,
+    /// The command port (USART2).
+    command: BufReader<UnixStream>,
     receiver: Receiver,
     frame: Vec<u8>,
     booted: (Booted, Option<String>),
@@ -120,7 +121,7 @@ impl<'w> Qemu<'w> {
             bell,
             samples,
             output,
-            _command: command,
+            command: BufReader::new(command),
             receiver: Receiver::new(),
             frame: vec![0; MAX_FRAME],
             booted: (Booted::of(None), None),
@@ -302,6 +303,32 @@ impl Drop for Qemu<'_> {
 }
 
 impl LoopBoard for Qemu<'_> {
+    fn command(&mut self, line: &str) -> Result<String, String> {
+        let sent = self
+            .command
+            .get_mut()
+            .write_all(format!("{line}\n").as_bytes());
+        if let Err(e) = sent {
+            return Err(self.gone(&format!("the command port: {e}")));
+        }
+        // The reply: the first line that is not a notice (the start-up lines come first).
+        let deadline = Instant::now() + REPLY_TIMEOUT;
+        let mut reply = String::new();
+        loop {
+            match self.command.read_line(&mut reply) {
+                Ok(0) => return Err(self.gone("the command port closed")),
+                Ok(_) if reply.starts_with(NOTICE) => reply.clear(),
+                Ok(_) => return Ok(reply.trim_end().to_string()),
+                Err(e)
+                    if matches!(
+                        e.kind(),
+                        std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                    ) && Instant::now() < deadline => {}
+                Err(e) => return Err(self.gone(&format!("`{line}` got no reply: {e}"))),
+            }
+        }
+    }
+
     fn booted(&mut self) -> (Booted, Option<String>) {
         self.booted.clone()
     }
@@ -324,7 +351,13 @@ impl LoopBoard for Qemu<'_> {
             }
         };
         let tick = k as u32;
-        let n = link::write_frame(&mut self.frame, Kind::Samples, tick, |p| {
+        // The scene's broken bus (the core's board's simulated DAC fails from then on).
+        let flags = if self.wires.bus.fail_after.get().is_some() {
+            link::BUS_FAILS
+        } else {
+            0
+        };
+        let n = link::write_frame(&mut self.frame, (Kind::Samples, flags), tick, |p| {
             link::write_codes(codes, p)
         })
         .map_err(|e| format!("tick {k}: {e}"))?;
@@ -335,7 +368,7 @@ impl LoopBoard for Qemu<'_> {
         if let Err(e) = sent {
             return Err(self.gone(&e.to_string()));
         }
-        let (kind, at, payload) = self.frame()?;
+        let (kind, at, payload) = self.frame().map_err(|e| format!("tick {k}: {e}"))?;
         if kind != Kind::Output || u64::from(at) != k {
             return Err(format!(
                 "tick {k}: the firmware sent {kind:?} for tick {at}, not this tick's output"

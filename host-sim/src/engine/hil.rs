@@ -9,7 +9,8 @@ use std::time::Instant;
 
 use de_resonator::acquire::{Block, Channel, FrontEnd, InputError, Reader, FULL_SCALE_CODE};
 use de_resonator::board::link::{self, Booted, Observed, Said as SaidKind};
-use de_resonator::board::NoKeeper;
+use de_resonator::board::port::Extras;
+use de_resonator::board::{Line, Lines, NoKeeper, ReplyLine, Then};
 use de_resonator::image::{AmplifierSpec, Image, DAC_BITS};
 use de_resonator::{
     Amplifier, Controller, Dac8551, DeviceParams, Event, FailureMode, Fault, Inputs, OutputStage,
@@ -193,6 +194,8 @@ pub struct Bench {
     scans: u32,
     pub codes: Vec<u16>,
     reader: Reader,
+    /// The stretch input's last code (a stuck sensor repeats it).
+    stuck_code: Option<u16>,
 }
 
 /// The board's analog front end in a scene (`[front_end]`): the image's, and the ADC's noise.
@@ -201,6 +204,8 @@ pub struct Analog {
     pub front_end: FrontEnd,
     /// The RMS noise of a conversion, in codes (Gaussian, from the scene's seed).
     pub noise_codes: f64,
+    /// From this time on the stretch input's code repeats its last (a stuck sensor), s.
+    pub stretch_stuck_after_seconds: Option<f64>,
 }
 
 /// A tick's measurements: read directly (a scene with no front end), or the ADC's codes
@@ -231,8 +236,25 @@ pub struct Loop {
     pub bus_fails_after_seconds: Option<f64>,
     pub duration_seconds: f64,
     pub seed: u64,
+    /// Command-port lines the scene sends, each before its tick (in order).
+    pub commands: Vec<Scripted>,
     /// Keep the time history (`Sample`) at every tick.
     pub history: bool,
+}
+
+/// A command-port line a scene sends before tick `tick` (`[[commands]]`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scripted {
+    pub tick: u64,
+    pub line: String,
+}
+
+/// A scripted line and the board's reply, and when.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Replied {
+    pub seconds: f64,
+    pub line: String,
+    pub reply: String,
 }
 
 /// Something the controller said, and when.
@@ -250,6 +272,8 @@ pub struct Run {
     /// Why the board refused to drive.
     pub refused: Option<String>,
     pub events: Vec<Said>,
+    /// The scene's command-port lines and the replies.
+    pub commands: Vec<Replied>,
     /// The fault that stopped the drive, if any (the core's board only), and its words
     /// (either board).
     pub fault: Option<Fault>,
@@ -258,6 +282,8 @@ pub struct Run {
     pub plant_crossing: Option<(FailureMode, f64)>,
     /// The bias the controller holds at the end (0 after a fault or a refusal), V.
     pub bias_volts: f64,
+    /// The target in force at the end (the scene's, unless a command changed it), Hz.
+    pub target_hz: f64,
     /// The last commanded and applied voltages, V.
     pub final_command_volts: f64,
     /// The highest voltage commanded at any tick, V.
@@ -394,7 +420,8 @@ impl Loop {
     /// Run the loop for its duration, the core's board on the host.
     pub fn run(&self) -> Result<Run, String> {
         let wires = self.wires();
-        let mut board = CoreBoard::boot(self, &wires)?;
+        let image = self.image()?;
+        let mut board = CoreBoard::boot(&image, &wires);
         self.run_on(&mut board, &wires)
     }
 
@@ -427,10 +454,12 @@ impl Loop {
             boot: Some(booted),
             refused: refusal,
             events: Vec::new(),
+            commands: Vec::new(),
             fault: None,
             fault_words: None,
             plant_crossing: None,
             bias_volts: 0.0,
+            target_hz: f64::from(self.settings.target_hz),
             final_command_volts: 0.0,
             max_command_volts: 0.0,
             final_membrane_volts: 0.0,
@@ -458,6 +487,14 @@ impl Loop {
                 progress.set_position(k);
             }
             let t = k as f64 * tick_seconds;
+            for c in self.commands.iter().filter(|c| c.tick == k) {
+                let reply = board.command(&c.line)?;
+                run.commands.push(Replied {
+                    seconds: t,
+                    line: c.line.clone(),
+                    reply,
+                });
+            }
             self.fail_bus(k, wires);
             let samples = if booted.driving {
                 self.measure(&mut bench, k, self.amplifier_input(wires))
@@ -501,6 +538,7 @@ impl Loop {
                 run.max_command_volts = run.max_command_volts.max(command);
                 run.said(t, seen.said, &words);
                 bias = seen.bias_volts;
+                run.target_hz = f64::from(seen.target_hz);
             }
             let y = bench.y;
             if run.plant_crossing.is_none() {
@@ -615,6 +653,8 @@ impl Loop {
         let membrane_volts = self.plant.volts(&bench.y, input_volts);
         let current = bench.last_current.unwrap_or(0.0);
         let stretch = bench.y[0];
+        let t = k as f64 / f64::from(self.settings.tick_hz);
+        let stuck = analog.stretch_stuck_after_seconds.is_some_and(|at| t >= at);
         bench.codes.clear();
         for _ in 0..bench.scans {
             for (channel, spec) in analog.front_end.fitted() {
@@ -625,9 +665,14 @@ impl Loop {
                 };
                 let code = f64::from(spec.code_of(reading as f32))
                     + analog.noise_codes * bench.noise.gaussian();
-                bench
-                    .codes
-                    .push(code.round().clamp(0.0, f64::from(FULL_SCALE_CODE)) as u16);
+                let mut code = code.round().clamp(0.0, f64::from(FULL_SCALE_CODE)) as u16;
+                if channel == Channel::Stretch {
+                    match bench.stuck_code {
+                        Some(last) if stuck => code = last,
+                        _ => bench.stuck_code = Some(code),
+                    }
+                }
+                bench.codes.push(code);
             }
         }
         Samples::Codes
@@ -684,6 +729,7 @@ impl Loop {
             scans,
             codes: Vec::new(),
             reader: Reader::new(front_end, scans),
+            stuck_code: None,
         }
     }
 
@@ -815,12 +861,17 @@ pub trait LoopBoard {
     fn fault(&self) -> Option<Fault> {
         None
     }
+    /// A line on the command port, between ticks: the board's reply.
+    fn command(&mut self, line: &str) -> Result<String, String>;
 }
 
 /// The core's board on the host: booted from the scene's image, its output stage on the
 /// simulated wires.
 pub struct CoreBoard<'w> {
     slot: Option<Controller>,
+    logic: board::Board<'w, NoKeeper>,
+    /// The last tick's readings, for `status`.
+    readings: Inputs,
     stage: OutputStage<&'w SimulatedDac, &'w EnableLine>,
     booted: Booted,
     refusal: Option<String>,
@@ -829,24 +880,24 @@ pub struct CoreBoard<'w> {
 }
 
 impl<'w> CoreBoard<'w> {
-    /// Boot the core's board from the scene's image, as the firmware does.
-    pub fn boot(lp: &Loop, wires: &'w Wires) -> Result<Self, String> {
-        let bytes = lp.image()?;
+    /// Boot the core's board from `image` (`Loop::image`), as the firmware does from flash.
+    pub fn boot(image: &'w [u8], wires: &'w Wires) -> Self {
         let mut stage = OutputStage::new(Dac8551::new(&wires.bus), &wires.enable);
         let _ = stage.safe();
         let mut slot = None;
-        let (logic, _) =
-            board::Board::boot(&mut slot, Image::parse(&bytes), None::<NoKeeper>, None);
+        let (logic, _) = board::Board::boot(&mut slot, Image::parse(image), None::<NoKeeper>, None);
         let booted = Booted::of(logic.booted().filter(|_| slot.is_some()));
         let refusal = logic.refusal().map(str::to_string);
-        Ok(CoreBoard {
+        CoreBoard {
             slot,
+            logic,
+            readings: Inputs::NONE,
             stage,
             booted,
             refusal,
             fault: None,
             wires,
-        })
+        }
     }
 }
 
@@ -862,6 +913,7 @@ impl LoopBoard for CoreBoard<'_> {
         _: Samples,
         _: &[u16],
     ) -> Result<(Observed, String), String> {
+        self.readings = inputs.unwrap_or(Inputs::NONE);
         let ticked = board::tick::drive(&mut self.slot, &mut self.stage, inputs);
         if ticked.is_some_and(|t| t.job_wanted) {
             let slot = &mut self.slot;
@@ -895,4 +947,32 @@ impl LoopBoard for CoreBoard<'_> {
     fn fault(&self) -> Option<Fault> {
         self.fault
     }
+
+    fn command(&mut self, line: &str) -> Result<String, String> {
+        let parsed = command_line(line)?;
+        let extras = Extras {
+            readings: self.readings,
+            ..Extras::default()
+        };
+        let mut reply = ReplyLine::new();
+        let then = self
+            .logic
+            .serve(&parsed, &mut &mut self.slot, &extras, &mut reply);
+        if then == Then::Reset {
+            return Err(format!(
+                "`{line}`: a scene cannot script a reset (the run would start again)"
+            ));
+        }
+        Ok(reply.to_string())
+    }
+}
+
+/// A scripted line as the command port's reader makes it.
+fn command_line(line: &str) -> Result<Line, String> {
+    let mut lines = Lines::default();
+    line.bytes()
+        .chain(std::iter::once(b'\n'))
+        .filter_map(|b| lines.push(b))
+        .last()
+        .ok_or_else(|| format!("`{line}`: not a command line"))
 }
