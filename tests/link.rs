@@ -1,23 +1,11 @@
 //! The link's frames (`board::link`): what one side writes the other reads back, a corrupted
-//! or cut frame is refused with its reason, and no byte stream panics the reader.
+//! or cut frame is refused with its reason, and no bytes panic the parser.
 
 use de_resonator::board::link::{
-    self, Booted, Header, Kind, LinkError, Observed, Receiver, Said, MAX_FRAME, MAX_PAYLOAD,
+    self, Booted, Kind, LinkError, Observed, Said, HEADER, MAX_FRAME, MAX_PAYLOAD,
 };
 use de_resonator::{Event, FailureMode, Fault, Phase};
 use proptest::prelude::*;
-
-/// Every frame the receiver finds in `bytes`, with its payload.
-fn frames(bytes: &[u8]) -> Vec<Result<(Header, Vec<u8>), LinkError>> {
-    let mut rx = Receiver::new();
-    let mut found = Vec::new();
-    for &b in bytes {
-        if let Some(frame) = rx.push(b) {
-            found.push(frame.map(|h| (h, rx.payload().to_vec())));
-        }
-    }
-    found
-}
 
 fn samples_frame(tick: u32, codes: &[u16]) -> Vec<u8> {
     let mut out = vec![0; MAX_FRAME];
@@ -53,37 +41,42 @@ fn a_frame_is_its_header_payload_and_the_ieee_crc_of_both() {
 }
 
 #[test]
-fn frames_are_found_after_noise_and_a_corrupted_one_is_refused() {
+fn a_frame_reads_back_and_a_corrupted_one_is_refused_with_its_reason() {
     let codes: Vec<u16> = (0..30).map(|i| 4095 - 100 * i).collect();
     let good = samples_frame(3, &codes);
-    let mut bad = samples_frame(4, &codes);
+    assert_eq!(link::frame_bytes(&good[..HEADER]), Ok(good.len()));
+    let (h, payload) = link::parse(&good).unwrap();
+    assert_eq!(
+        (h.kind, h.flags, h.tick, h.payload_bytes),
+        (Kind::Samples, 0, 3, 60)
+    );
+    assert_eq!(link::codes(payload).collect::<Vec<_>>(), codes);
+
+    let mut bad = good.clone();
     bad[20] ^= 0x10;
-    let mut stream = vec![0x00, b'D', 0x44, b'x'];
-    stream.extend(&good);
-    stream.extend(&bad);
-    stream.extend(&good);
-    let found = frames(&stream);
-    assert_eq!(found.len(), 3, "{found:?}");
-    let (h, payload) = found[0].clone().unwrap();
-    assert_eq!((h.kind, h.tick, h.payload_bytes), (Kind::Samples, 3, 60));
-    assert_eq!(link::codes(&payload).collect::<Vec<_>>(), codes);
-    assert!(matches!(found[1], Err(LinkError::BadCrc { .. })));
-    assert_eq!(found[2].as_ref().unwrap().0.tick, 3);
+    assert!(matches!(link::parse(&bad), Err(LinkError::BadCrc { .. })));
+    let mut magic = good.clone();
+    magic[0] = b'X';
+    assert_eq!(link::parse(&magic), Err(LinkError::NoMagic));
+    let cut = &good[..good.len() - 1];
+    assert!(matches!(link::parse(cut), Err(LinkError::Size { .. })));
+    assert!(matches!(
+        link::parse(&good[..4]),
+        Err(LinkError::Size { .. })
+    ));
 }
 
 #[test]
 fn a_length_over_the_limit_or_an_unknown_kind_is_refused_at_the_header() {
     let mut over = samples_frame(0, &[]);
     over[8..10].copy_from_slice(&((MAX_PAYLOAD + 1) as u16).to_le_bytes());
-    assert!(
-        matches!(frames(&over)[..], [Err(LinkError::TooLong(n))] if usize::from(n) == MAX_PAYLOAD + 1)
+    assert_eq!(
+        link::frame_bytes(&over),
+        Err(LinkError::TooLong((MAX_PAYLOAD + 1) as u16))
     );
     let mut kind = samples_frame(0, &[]);
     kind[2] = 9;
-    assert!(matches!(
-        frames(&kind)[..],
-        [Err(LinkError::UnknownKind(9))]
-    ));
+    assert_eq!(link::frame_bytes(&kind), Err(LinkError::UnknownKind(9)));
 }
 
 #[test]
@@ -123,10 +116,9 @@ fn a_ticks_output_reads_back_with_the_events_words() {
         observed.write(Some(&event), p)
     })
     .unwrap();
-    let found = frames(&out[..n]);
-    let (h, payload) = found[0].clone().unwrap();
+    let (h, payload) = link::parse(&out[..n]).unwrap();
     assert_eq!((h.kind, h.tick), (Kind::Output, 99));
-    let (back, words) = Observed::read(&payload).unwrap();
+    let (back, words) = Observed::read(payload).unwrap();
     assert!(back.tracked_hz.is_nan());
     assert_eq!(
         Observed {
@@ -195,13 +187,47 @@ fn words_longer_than_the_room_are_cut_at_a_character() {
     assert!(Observed::read(&out[..10]).is_err());
 }
 
+#[test]
+fn a_record_byte_no_field_can_hold_is_refused() {
+    let observed = Observed::of(0, false, false, None, None);
+    let mut out = [0u8; link::OBSERVED_BYTES];
+    observed.write(None, &mut out).unwrap();
+    let mut said = out;
+    said[3] = 7;
+    assert_eq!(
+        Observed::read(&said).map(|_| ()),
+        Err(LinkError::BadField {
+            offset: 3,
+            value: 7
+        })
+    );
+    let mut phase = out;
+    phase[4] = 7;
+    assert_eq!(
+        Observed::read(&phase).map(|_| ()),
+        Err(LinkError::BadField {
+            offset: 4,
+            value: 7
+        })
+    );
+}
+
 proptest! {
-    /// No byte stream panics the receiver; a frame sent whole before the noise is found.
+    /// No bytes panic the parser; any one bit flipped in a frame is refused (CRC-32 finds
+    /// every single-bit error; a flip in the header's length is a size the bytes do not have).
     #[test]
-    fn any_bytes_are_read_without_a_panic(bytes in proptest::collection::vec(any::<u8>(), 0..3000)) {
-        let mut stream = samples_frame(5, &[1, 2, 3]);
-        stream.extend(&bytes);
-        let found = frames(&stream);
-        prop_assert!(matches!(&found[0], Ok((h, p)) if h.tick == 5 && p == &[1, 0, 2, 0, 3, 0]));
+    fn any_bytes_parse_without_a_panic_and_no_flipped_bit_passes(
+        bytes in proptest::collection::vec(any::<u8>(), 0..1100),
+        codes in proptest::collection::vec(any::<u16>(), 0..40),
+        bit in 0usize..1000,
+    ) {
+        let _ = link::parse(&bytes);
+        let _ = link::frame_bytes(&bytes);
+        let frame = samples_frame(5, &codes);
+        prop_assert!(link::parse(&frame).is_ok());
+        let mut flipped = frame.clone();
+        let bit = bit % (8 * flipped.len());
+        flipped[bit / 8] ^= 1 << (bit % 8);
+        prop_assert!(link::parse(&flipped).is_err());
     }
 }

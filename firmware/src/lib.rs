@@ -5,10 +5,10 @@
 //! voltage, answers a request or decides when the amplifier is on (the core's `board`). One
 //! module a part: `board` (clocks, pins, peripherals), `analog` (silicon's ADC, its timer and
 //! DMA, filling the tick's block of codes), `config` (the image), `sensor` (QEMU's stand-ins
-//! for the analog inputs), `storage` (where `save` keeps the settings), `watchdog` (the IWDG, or its QEMU stand-in), `link`
-//! (the link build's port to host-sim), `runtime` (exit codes,
-//! panic and fault handlers, the stack meter); `reference` and `stand_in` serve the
-//! on-target checks and counts only.
+//! for the analog inputs), `storage` (where `save` keeps the settings), `watchdog` (the
+//! IWDG, or its QEMU stand-in), `link` (the link build's ends of host-sim's link), `runtime`
+//! (exit codes, panic and fault handlers, the stack meter); `reference` and `stand_in` serve
+//! the on-target checks and counts only.
 #![no_std]
 
 use cortex_m as _;
@@ -37,6 +37,8 @@ pub mod analog {
 pub mod board;
 pub mod config;
 pub mod link;
+#[cfg(all(feature = "link", feature = "model-sensor"))]
+compile_error!("`link` takes the plant's samples from host-sim: build it without `model-sensor`");
 pub mod reference;
 pub mod runtime;
 pub mod sensor;

@@ -1,9 +1,9 @@
 //! The link build (under QEMU only): host-sim's plant in, the tick's output out, in the
 //! core's frames (`de_resonator::board::link`). The frames go through two files QEMU's
 //! semihosting opens on the host, in its working folder (`samples`, `output`: host-sim's
-//! pipes), a whole frame a call; a byte on USART3 rings each tick's samples in. QEMU's USART
-//! takes a byte a main-loop turn (about 50 µs, BENCHMARKS.md): the frames would take
-//! milliseconds a tick over it, the bell takes one byte. A samples frame's codes go into the
+//! pipes), a frame in two reads (its header, then the rest); a byte on USART3 rings each
+//! tick's samples in. QEMU's USART takes a byte a main-loop turn (50 to 130 µs,
+//! BENCHMARKS.md): the frames would take milliseconds a tick over it, the bell takes one. A samples frame's codes go into the
 //! tick's block, where silicon's DMA puts its buffers, and pend the tick: the link paces the
 //! tick, so the plant's clock is the simulation's.
 
@@ -23,6 +23,12 @@ pub struct TickDone {
     pub job: bool,
 }
 
+/// QEMU's exit status when the link build cannot open its pipes (not started by host-sim),
+/// when host-sim has gone, and when a frame is not one.
+pub const LINK_OPEN: i32 = 110;
+pub const LINK_GONE: i32 = 111;
+pub const LINK_FRAME: i32 = 112;
+
 /// Ticks queued to the reply task (one at a time, host-sim waits for each; two so that the
 /// tick never finds the queue full while the task finishes the last).
 pub const REPLIES: usize = 2;
@@ -37,10 +43,9 @@ pub enum LinkOut {}
 mod transport {
     use core::sync::atomic::{AtomicBool, Ordering};
 
+    use super::{LINK_FRAME, LINK_GONE, LINK_OPEN};
     use de_resonator::acquire::{Block, FrontEnd};
-    use de_resonator::board::link::{
-        self, Kind, Receiver, BUS_FAILS, HEADER, MAX_FRAME, MAX_PAYLOAD,
-    };
+    use de_resonator::board::link::{self, Kind, BUS_FAILS, HEADER, MAX_FRAME, MAX_PAYLOAD};
     use embedded_hal::spi::{Error as _, ErrorKind, ErrorType, Operation, SpiDevice};
     use embedded_hal_nb::serial::Read as _;
     use semihosting::fs::File;
@@ -51,20 +56,22 @@ mod transport {
     /// The samples side: each ring of the bell, a frame read whole, its codes into the block.
     pub struct LinkIn {
         bell: Rx<USART3>,
-        samples: Option<File>,
-        receiver: Receiver,
+        samples: File,
         bytes: [u8; MAX_FRAME],
         codes: [u16; MAX_PAYLOAD / 2],
         front_end: FrontEnd,
     }
 
     impl LinkIn {
-        /// The bell, and the samples file opened (it waits for host-sim to open its end).
+        /// The bell, and the samples file opened (it waits for host-sim to open its end; no
+        /// file: the run ends, `LINK_OPEN`).
         pub fn open(bell: Rx<USART3>, front_end: FrontEnd) -> Self {
+            let Ok(samples) = File::open(c"samples") else {
+                crate::runtime::exit(LINK_OPEN)
+            };
             LinkIn {
                 bell,
-                samples: File::open(c"samples").ok(),
-                receiver: Receiver::new(),
+                samples,
                 bytes: [0; MAX_FRAME],
                 codes: [0; MAX_PAYLOAD / 2],
                 front_end,
@@ -72,35 +79,20 @@ mod transport {
         }
 
         /// The rings waiting: each one's samples frame added to the block by `add`. Whether a
-        /// tick's samples arrived (a frame that is not one is dropped: host-sim, with no output
-        /// back, says so).
+        /// tick's samples arrived. host-sim gone (the pipe's end) or a frame that is not a
+        /// samples frame ends the run (`LINK_GONE`, `LINK_FRAME`): QEMU's exit status says it.
         pub fn read(&mut self, add: &mut impl FnMut(&mut dyn FnMut(&mut Block))) -> bool {
             let mut arrived = false;
             while self.bell.read().is_ok() {
-                let Some(file) = self.samples.as_mut() else {
-                    continue;
-                };
-                let Some(n) = read_frame(file, &mut self.bytes) else {
-                    continue;
-                };
-                let mut header = None;
-                for &b in self.bytes.get(..n).unwrap_or(&[]) {
-                    header = self.receiver.push(b);
-                }
-                let Some(Ok(header)) =
-                    header.filter(|h| matches!(h, Ok(h) if h.kind == Kind::Samples))
-                else {
-                    continue;
+                let (header, payload) = match read_frame(&mut self.samples, &mut self.bytes) {
+                    Ok(frame) => frame,
+                    Err(code) => crate::runtime::exit(code),
                 };
                 if header.flags & BUS_FAILS != 0 {
                     BUS_FAILED.store(true, Ordering::Relaxed);
                 }
                 let mut count = 0;
-                for (slot, code) in self
-                    .codes
-                    .iter_mut()
-                    .zip(link::codes(self.receiver.payload()))
-                {
+                for (slot, code) in self.codes.iter_mut().zip(link::codes(payload)) {
                     *slot = code;
                     count += 1;
                 }
@@ -113,13 +105,19 @@ mod transport {
         }
     }
 
-    /// One frame from `file` into `bytes`: its header, then its payload and CRC; its length.
-    fn read_frame(file: &mut File, bytes: &mut [u8; MAX_FRAME]) -> Option<usize> {
-        read_exact(file, bytes.get_mut(..HEADER)?)?;
-        let payload = usize::from(u16::from_le_bytes([bytes[8], bytes[9]])).min(MAX_PAYLOAD);
-        let end = HEADER + payload + 4;
-        read_exact(file, bytes.get_mut(HEADER..end)?)?;
-        Some(end)
+    /// One samples frame from `file` into `bytes`: its header and payload, or the exit code
+    /// that says why not.
+    fn read_frame<'a>(
+        file: &mut File,
+        bytes: &'a mut [u8; MAX_FRAME],
+    ) -> Result<(link::Header, &'a [u8]), i32> {
+        read_exact(file, bytes.get_mut(..HEADER).ok_or(LINK_FRAME)?).ok_or(LINK_GONE)?;
+        let end = link::frame_bytes(bytes.as_slice()).map_err(|_| LINK_FRAME)?;
+        read_exact(file, bytes.get_mut(HEADER..end).ok_or(LINK_FRAME)?).ok_or(LINK_GONE)?;
+        match link::parse(bytes.get(..end).ok_or(LINK_FRAME)?) {
+            Ok((header, payload)) if header.kind == Kind::Samples => Ok((header, payload)),
+            _ => Err(LINK_FRAME),
+        }
     }
 
     fn read_exact(file: &mut File, mut buf: &mut [u8]) -> Option<()> {
@@ -134,33 +132,40 @@ mod transport {
 
     /// The output side: a frame at a time, written whole.
     pub struct LinkOut {
-        output: Option<File>,
+        output: File,
         frame: [u8; MAX_FRAME],
     }
 
     impl LinkOut {
         /// The output file opened (after the samples file: host-sim opens them in that order).
         pub fn open() -> Self {
+            let Ok(output) = File::create(c"output") else {
+                crate::runtime::exit(LINK_OPEN)
+            };
             LinkOut {
-                output: File::create(c"output").ok(),
+                output,
                 frame: [0; MAX_FRAME],
             }
         }
 
-        /// A frame of `kind` for `tick`, its payload written by `payload`.
+        /// A frame of `kind` for `tick`, its payload written by `payload`. A frame that cannot
+        /// be made or sent ends the run (`LINK_FRAME`, `LINK_GONE`).
         pub fn send(
             &mut self,
             kind: Kind,
             tick: u32,
             payload: impl FnOnce(&mut [u8]) -> Result<usize, link::LinkError>,
         ) {
-            let (Some(out), Ok(n)) = (
-                self.output.as_mut(),
-                link::write_frame(&mut self.frame, (kind, 0), tick, payload),
-            ) else {
-                return;
+            let Ok(n) = link::write_frame(&mut self.frame, (kind, 0), tick, payload) else {
+                crate::runtime::exit(LINK_FRAME)
             };
-            let _ = out.write_all(self.frame.get(..n).unwrap_or(&[]));
+            if self
+                .output
+                .write_all(self.frame.get(..n).unwrap_or(&[]))
+                .is_err()
+            {
+                crate::runtime::exit(LINK_GONE)
+            }
         }
     }
 

@@ -365,7 +365,8 @@ pub fn parse(text: &str) -> Result<Scene, String> {
 }
 
 /// The scene's `[[commands]]`, each at the tick its time falls on: a line the command port
-/// reads (no `reset`: the run would start again), in the scene's time.
+/// reads (no `reset` or `save`: a run does not start again or keep settings), in the scene's
+/// time.
 fn commands(file: &SceneFile, tick_hz: f64) -> Result<Vec<Scripted>, String> {
     let mut out = Vec::new();
     for c in &file.commands {
@@ -383,11 +384,20 @@ fn commands(file: &SceneFile, tick_hz: f64) -> Result<Vec<Scripted>, String> {
                 c.line
             ));
         }
-        if line.split_whitespace().next() == Some("reset") {
-            return Err("[[commands]] line \"reset\": a scene cannot script a reset".into());
+        // A run keeps no settings and does not start again.
+        if let Some(word @ ("reset" | "save")) = line.split_whitespace().next() {
+            return Err(format!(
+                "[[commands]] line \"{line}\": a scene cannot script a {word}"
+            ));
+        }
+        let tick = (at * tick_hz).round();
+        if tick >= (file.duration_seconds * tick_hz).round() {
+            return Err(format!(
+                "[[commands]] at_seconds {at}: after the scene's last tick"
+            ));
         }
         out.push(Scripted {
-            tick: (at * tick_hz).round() as u64,
+            tick: tick as u64,
             line: line.to_string(),
         });
     }

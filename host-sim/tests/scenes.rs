@@ -650,10 +650,11 @@ fn the_gent_device_of_issue_27_tunes_or_says_why() {
 }
 
 /// An operator mid-run (`operator-commands.toml`, issue 28): `target 45` at 3 s retunes the
-/// drive, `stop` at 5 s brings it to 0 V with the output off, `start` at 6.5 s drives again
-/// with the settings in force. Each line is answered `ok`; the plant is at rest between the
-/// stop's ramp and the start; at the end the plant's own natural frequency (its separate
-/// statics) is 45 Hz within 1e-3, the plant safe throughout.
+/// drive, `stop` at 5 s brings it to 0 V with the output off, `clear` at 6 s re-arms with the
+/// output still off, `start` at 6.5 s drives again with the settings in force. Each line is
+/// answered `ok`; the plant is at rest between the stop's ramp and the start; at the end the
+/// plant's own natural frequency (its separate statics) is 45 Hz within 1e-3, the plant safe
+/// throughout.
 #[test]
 fn an_operator_retargets_stops_and_starts_mid_run() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/operator-commands.toml");
@@ -661,7 +662,7 @@ fn an_operator_retargets_stops_and_starts_mid_run() {
     s.run.history = true;
     let r = s.run.run().unwrap();
     let lines: Vec<&str> = r.commands.iter().map(|c| c.line.as_str()).collect();
-    assert_eq!(lines, ["target 45", "stop", "start"]);
+    assert_eq!(lines, ["target 45", "stop", "clear", "start"]);
     for c in &r.commands {
         assert!(c.reply.starts_with("ok"), "{c:?}");
     }

@@ -69,7 +69,9 @@ pub const BUS_FAILS: u8 = 1;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Header {
     pub kind: Kind,
+    /// `BUS_FAILS` on a samples frame; 0 otherwise.
     pub flags: u8,
+    /// The tick the frame is for (0 for the boot).
     pub tick: u32,
     pub payload_bytes: usize,
 }
@@ -78,6 +80,10 @@ pub struct Header {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum LinkError {
+    /// The first two bytes are not `MAGIC`: the stream is out of step.
+    NoMagic,
+    /// A byte of a record holds no value its field can take.
+    BadField { offset: usize, value: u8 },
     /// The kind byte is none of `Kind`'s.
     UnknownKind(u8),
     /// The payload's length is over `MAX_PAYLOAD`.
@@ -91,6 +97,13 @@ pub enum LinkError {
 impl fmt::Display for LinkError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
+            LinkError::NoMagic => write!(f, "link frame without its magic `DL`: out of step"),
+            LinkError::BadField { offset, value } => {
+                write!(
+                    f,
+                    "link record byte {offset} holds {value}, no value of its field"
+                )
+            }
             LinkError::UnknownKind(k) => write!(f, "link frame of unknown kind {k}"),
             LinkError::TooLong(n) => {
                 write!(f, "link frame of {n} payload bytes, over {MAX_PAYLOAD}")
@@ -122,7 +135,13 @@ pub fn write_frame(
     let body = out
         .get_mut(HEADER..HEADER + room)
         .ok_or(LinkError::Size { bytes, needed })?;
-    let n = payload(body)?.min(room);
+    let n = payload(body)?;
+    if n > room {
+        return Err(LinkError::Size {
+            bytes: room,
+            needed: n,
+        });
+    }
     let end = HEADER + n;
     if let Some(head) = out.get_mut(..HEADER) {
         head.copy_from_slice(&header_bytes(kind, flags, tick, n));
@@ -143,100 +162,50 @@ fn header_bytes(kind: Kind, flags: u8, tick: u32, payload_bytes: usize) -> [u8; 
     [m0, m1, kind as u8, flags, t0, t1, t2, t3, p0, p1]
 }
 
-/// Frames out of a byte stream, a byte at a time (the firmware's receive interrupt, the
-/// host's reader): bytes before a magic are skipped, a frame with a bad CRC is an error and
-/// is dropped whole.
-pub struct Receiver {
-    bytes: [u8; MAX_FRAME],
-    len: usize,
+/// A frame's whole length from its first `HEADER` bytes (the rest to read): its magic,
+/// kind and payload length checked.
+pub fn frame_bytes(header: &[u8]) -> Result<usize, LinkError> {
+    let head = header.get(..HEADER).ok_or(LinkError::Size {
+        bytes: header.len(),
+        needed: HEADER,
+    })?;
+    if head.get(..2) != Some(&MAGIC[..]) {
+        return Err(LinkError::NoMagic);
+    }
+    let kind = head.get(2).copied().unwrap_or(0);
+    if Kind::of(kind).is_none() {
+        return Err(LinkError::UnknownKind(kind));
+    }
+    let n = u16_at(head, 8);
+    if usize::from(n) > MAX_PAYLOAD {
+        return Err(LinkError::TooLong(n));
+    }
+    Ok(HEADER + usize::from(n) + 4)
 }
 
-impl Default for Receiver {
-    fn default() -> Self {
-        Self::new()
+/// A whole frame (`frame_bytes` long): its header and payload, once its CRC checked.
+pub fn parse(frame: &[u8]) -> Result<(Header, &[u8]), LinkError> {
+    let length = frame_bytes(frame)?;
+    if frame.len() != length {
+        return Err(LinkError::Size {
+            bytes: frame.len(),
+            needed: length,
+        });
     }
-}
-
-impl Receiver {
-    pub const fn new() -> Self {
-        Receiver {
-            bytes: [0; MAX_FRAME],
-            len: 0,
-        }
+    let end = length - 4;
+    let body = frame.get(..end).unwrap_or(&[]);
+    let (stored, computed) = (u32_at(frame, end), crc32(body));
+    if stored != computed {
+        return Err(LinkError::BadCrc { stored, computed });
     }
-
-    /// One byte in: a whole frame's header once its last byte is in (its payload is then
-    /// `payload()` until the next byte), or an error for a frame that is not one.
-    pub fn push(&mut self, byte: u8) -> Option<Result<Header, LinkError>> {
-        if self.len >= self.expected() {
-            self.len = 0;
-        }
-        let [m0, m1] = MAGIC;
-        let fits = match self.len {
-            0 => byte == m0,
-            1 => byte == m1,
-            _ => true,
-        };
-        if !fits {
-            // A lost `D` may be this byte.
-            self.len = 0;
-            if byte == m0 {
-                self.put(byte);
-            }
-            return None;
-        }
-        self.put(byte);
-        if self.len == HEADER {
-            let kind = self.bytes.get(2).copied().unwrap_or(0);
-            if Kind::of(kind).is_none() {
-                self.len = 0;
-                return Some(Err(LinkError::UnknownKind(kind)));
-            }
-            let n = u16_at(&self.bytes, 8);
-            if usize::from(n) > MAX_PAYLOAD {
-                self.len = 0;
-                return Some(Err(LinkError::TooLong(n)));
-            }
-        }
-        if self.len < HEADER || self.len < self.expected() {
-            return None;
-        }
-        let end = self.len - 4;
-        let body = self.bytes.get(..end).unwrap_or(&[]);
-        let (stored, computed) = (u32_at(&self.bytes, end), crc32(body));
-        if stored != computed {
-            self.len = MAX_FRAME;
-            return Some(Err(LinkError::BadCrc { stored, computed }));
-        }
-        Some(Ok(Header {
-            kind: Kind::of(self.bytes.get(2).copied().unwrap_or(0)).unwrap_or(Kind::Samples),
-            flags: self.bytes.get(3).copied().unwrap_or(0),
-            tick: u32_at(&self.bytes, 4),
-            payload_bytes: end - HEADER,
-        }))
-    }
-
-    /// The last whole frame's payload.
-    pub fn payload(&self) -> &[u8] {
-        let end = self.len.saturating_sub(4).min(MAX_FRAME);
-        self.bytes.get(HEADER..end).unwrap_or(&[])
-    }
-
-    /// The frame's length once its header is in (its header's length before).
-    fn expected(&self) -> usize {
-        if self.len < HEADER {
-            HEADER
-        } else {
-            HEADER + usize::from(u16_at(&self.bytes, 8)).min(MAX_PAYLOAD) + 4
-        }
-    }
-
-    fn put(&mut self, byte: u8) {
-        if let Some(slot) = self.bytes.get_mut(self.len) {
-            *slot = byte;
-            self.len += 1;
-        }
-    }
+    let byte = |i: usize| frame.get(i).copied().unwrap_or(0);
+    let header = Header {
+        kind: Kind::of(byte(2)).ok_or(LinkError::UnknownKind(byte(2)))?,
+        flags: byte(3),
+        tick: u32_at(frame, 4),
+        payload_bytes: end - HEADER,
+    };
+    Ok((header, frame.get(HEADER..end).unwrap_or(&[])))
 }
 
 /// A samples payload: `codes` as u16s.
@@ -265,6 +234,7 @@ pub fn codes(payload: &[u8]) -> impl Iterator<Item = u16> + '_ {
 /// What the controller said on a tick, as a kind: its words follow in the payload.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Said {
+    /// Nothing this tick.
     Nothing = 0,
     /// An event that is not a fault (`Event`'s words).
     Event = 1,
@@ -275,12 +245,13 @@ pub enum Said {
 }
 
 impl Said {
-    fn of(byte: u8) -> Said {
+    fn of(byte: u8) -> Option<Said> {
         match byte {
-            1 => Said::Event,
-            2 => Said::Fault,
-            3 => Said::BusFault,
-            _ => Said::Nothing,
+            0 => Some(Said::Nothing),
+            1 => Some(Said::Event),
+            2 => Some(Said::Fault),
+            3 => Some(Said::BusFault),
+            _ => None,
         }
     }
 }
@@ -299,17 +270,33 @@ pub struct Observed {
     pub said: Said,
     /// The controller's phase (`None`: no controller).
     pub phase: Option<Phase>,
-    /// The plan's bias, V, and the target in force, Hz (NaN: no controller).
+    /// The plan's bias, V (NaN: no controller).
     pub bias_volts: f32,
+    /// The target in force, Hz (NaN: no controller).
     pub target_hz: f32,
     /// The AC drive's phase step a tick (`None`: no AC).
     pub ac_phase_step: Option<u32>,
-    /// Tracking's last cycle: natural frequency, Hz, and Q (NaN: none).
+    /// Tracking's last cycle's natural frequency, Hz (NaN: none).
     pub tracked_hz: f32,
+    /// Tracking's last cycle's quality factor (NaN: none).
     pub quality_factor: f32,
-    /// The stretch from the capacitance and its standard error (NaN: none).
+    /// The stretch from the capacitance (NaN: none).
     pub sensed_stretch: f32,
+    /// Its standard error (NaN: none).
     pub sensed_sigma: f32,
+}
+
+/// The words sent for an event: a fault's own (its kind says which descent), any other
+/// event's (`Event`'s wording).
+pub struct Words<'a>(pub &'a Event);
+
+impl fmt::Display for Words<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.0 {
+            Event::Fault(fault) => write!(f, "{fault}"),
+            event => write!(f, "{event}"),
+        }
+    }
 }
 
 /// The fixed part of an output payload; the words of what was said follow. Its layout: DAC
@@ -367,8 +354,9 @@ impl Observed {
 
     /// The payload: this record, then the words of `event` (cut at the buffer's end).
     pub fn write(&self, event: Option<&Event>, out: &mut [u8]) -> Result<usize, LinkError> {
+        let bytes = out.len();
         let fixed = out.get_mut(..OBSERVED_BYTES).ok_or(LinkError::Size {
-            bytes: 0,
+            bytes,
             needed: OBSERVED_BYTES,
         })?;
         let flags = u8::from(self.dac_on) | u8::from(self.enable) << 1;
@@ -399,14 +387,8 @@ impl Observed {
         }
         let words = out.get_mut(OBSERVED_BYTES..).unwrap_or(&mut []);
         let mut cursor = Put(words, 0);
-        match event {
-            Some(Event::Fault(fault)) => {
-                let _ = write!(cursor, "{fault}");
-            }
-            Some(event) => {
-                let _ = write!(cursor, "{event}");
-            }
-            None => {}
+        if let Some(event) = event {
+            let _ = write!(cursor, "{}", Words(event));
         }
         Ok(OBSERVED_BYTES + cursor.1)
     }
@@ -420,13 +402,22 @@ impl Observed {
             });
         }
         let byte = |i: usize| payload.get(i).copied().unwrap_or(0);
+        let bad = |offset: usize| LinkError::BadField {
+            offset,
+            value: byte(offset),
+        };
         let flags = byte(2);
+        let said = Said::of(byte(3)).ok_or(bad(3))?;
+        let phase = match byte(4) {
+            0xFF => None,
+            i => Some(*PHASES.get(usize::from(i)).ok_or(bad(4))?),
+        };
         let observed = Observed {
             dac_code: u16_at(payload, 0),
             dac_on: flags & 1 != 0,
             enable: flags & 2 != 0,
-            said: Said::of(byte(3)),
-            phase: PHASES.get(usize::from(byte(4))).copied(),
+            said,
+            phase,
             ac_phase_step: (byte(5) != 0).then(|| u32_at(payload, 8)),
             bias_volts: f32_at(payload, 12),
             tracked_hz: f32_at(payload, 16),
@@ -466,8 +457,9 @@ fn sensed(_: Option<&Controller>) -> (f32, f32) {
 pub struct Booted {
     /// Whether a controller drives (otherwise the words are the refusal).
     pub driving: bool,
-    /// The boot's bias and cap, V (NaN when refused).
+    /// The boot's bias, V (NaN when refused).
     pub bias_volts: f32,
+    /// The boot's cap, V (NaN when refused).
     pub max_volts: f32,
     /// The device's limit on its loading branch: its mode and stretch.
     pub limit: Option<(FailureMode, f32)>,
@@ -491,8 +483,9 @@ impl Booted {
 
     /// The payload: this record, then `refusal`'s words.
     pub fn write(&self, refusal: &str, out: &mut [u8]) -> Result<usize, LinkError> {
+        let bytes = out.len();
         let fixed = out.get_mut(..BOOTED_BYTES).ok_or(LinkError::Size {
-            bytes: 0,
+            bytes,
             needed: BOOTED_BYTES,
         })?;
         let mode = self
@@ -522,9 +515,18 @@ impl Booted {
             });
         }
         let byte = |i: usize| payload.get(i).copied().unwrap_or(0);
-        let limit = FailureMode::ALL
-            .get(usize::from(byte(1)))
-            .map(|&m| (m, f32_at(payload, 12)));
+        let limit = match byte(1) {
+            0xFF => None,
+            i => Some((
+                *FailureMode::ALL
+                    .get(usize::from(i))
+                    .ok_or(LinkError::BadField {
+                        offset: 1,
+                        value: i,
+                    })?,
+                f32_at(payload, 12),
+            )),
+        };
         Ok((
             Booted {
                 driving: byte(0) != 0,

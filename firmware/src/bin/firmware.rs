@@ -13,6 +13,11 @@
 //!   board; the long work (a new plan's checks, a boot, a trim's solve, tracking's slope)
 //!   runs here, preempted by the tick.
 //!
+//! The link build (`link`, QEMU, for `host-sim run --firmware`): no SysTick; `link_samples`
+//! (USART3, host-sim's bell) adds each tick's samples frame to the block and pends the tick;
+//! `link_reply` (software, lowest, in place of `job`) runs the tick's job, then sends the
+//! tick's output back (`de_resonator_firmware::link`).
+//!
 //! What the board decides (the boot and its fallbacks, the replies, when the amplifier is on)
 //! is the core's `board`, tested on the host; this file wires it to the peripherals.
 #![no_std]
@@ -105,7 +110,8 @@ mod app {
         dog: Dog,
         /// The low-priority tasks' check-ins, counted in ticks (when the dog is fed).
         check_in: CheckIn,
-        /// The link build: host-sim's samples in, the tick's output out (USART3).
+        /// The link build: host-sim's samples in (a pipe, rung on USART3), the tick's output
+        /// out (a pipe).
         #[cfg(feature = "link")]
         link_in: LinkIn,
         #[cfg(feature = "link")]

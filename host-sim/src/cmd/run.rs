@@ -330,6 +330,14 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<RunReport, String> {
     let run = match &args.firmware {
         None => scene.run.run()?,
         Some(elf) => {
+            // The firmware reads the plant through its ADC only.
+            if scene.run.sensor.is_some() || scene.run.current_monitor.is_some() {
+                return Err(format!(
+                    "{}: the scene reads its sensors directly ([sensor], [current_monitor]): \
+                     give it a [front_end] to run it through the firmware's ADC",
+                    scene.name
+                ));
+            }
             let wires = scene.run.wires();
             let image = scene.run.image()?;
             let mut board = Qemu::start(elf, &image, &std::env::temp_dir(), &wires)?;

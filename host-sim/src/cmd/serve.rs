@@ -13,17 +13,14 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use clap::Args;
-use de_resonator::acquire::FrontEnd;
 use de_resonator::board::port::Extras;
 use de_resonator::board::protocol::NOTICE;
 use de_resonator::board::{self, Board, Keeper, Line, Lines, ReplyLine, ResetCause, Then};
-use de_resonator::image::{AmplifierSpec, DAC_BITS};
 use de_resonator::store::{self, FlashKeeper, RamFlash, StoreError, RAM_PAGE_BYTES};
 use de_resonator::{Controller, Dac8551, Image, Inputs, OutputStage, Settings};
 use serde::Serialize;
 
 use super::{sig, Report};
-use crate::engine::hil;
 use crate::scene;
 
 #[derive(Args, Debug)]
@@ -289,15 +286,8 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
             ))
         }
     };
-    // The image `host-sim image` would write for the scene's device, amplifier and settings.
-    let full_scale = lp.dac_reference_volts * lp.plant.amplifier.gain;
-    let spec = AmplifierSpec {
-        dac_reference_volts: lp.dac_reference_volts as f32,
-        gain: lp.plant.amplifier.gain as f32,
-        rail_volts: lp.plant.amplifier.rail_volts.min(full_scale) as f32,
-        dac_bits: DAC_BITS,
-    };
-    let bytes = crate::lut::image(lp.nominal, &spec, &FrontEnd::NONE, &lp.settings)?;
+    // The image the scene's board boots from (`run`'s and the firmware's in the loop).
+    let bytes = lp.image()?;
     let mut flash = Flash(vec![0xFF; 2 * RAM_PAGE_BYTES]);
     let (listener, at) = Listener::bind(args)?;
     eprintln!(
@@ -329,7 +319,7 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
     for line in &banner {
         eprintln!("{line}");
     }
-    let mut bench = lp.bench(lp.current_monitor.is_some());
+    let mut bench = lp.bench(false);
     let mut clients: Vec<Client> = Vec::new();
     let mut report = ServeReport {
         scene: scene.name.clone(),
@@ -403,7 +393,7 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
         let t = k as f64 * tick_seconds;
         let stepped = lp.step(k, &mut bench, &mut slot, &mut stage, &wires)?;
         if let Some(event) = stepped.ticked.and_then(|t| t.output.event) {
-            let line = format!("{} s: {}", sig(t), hil::said(event));
+            let line = format!("{} s: {event}", sig(t));
             eprintln!("{line}");
             report.events.push(line);
         }

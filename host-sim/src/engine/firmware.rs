@@ -15,14 +15,18 @@ use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
 use de_resonator::acquire::InputError;
-use de_resonator::board::link::{self, Booted, Kind, Observed, Receiver, HEADER, MAX_FRAME};
+use de_resonator::board::link::{self, Booted, Kind, Observed, HEADER, MAX_FRAME};
 use de_resonator::board::protocol::NOTICE;
 use de_resonator::Inputs;
 
 use crate::engine::hil::{LoopBoard, Samples, Wires};
 
-/// How long a tick's output may take before the run stops: QEMU stuck or gone.
+/// How long QEMU may take to open a port or a pipe, and the firmware to answer a tick or a
+/// command line, before the run stops: QEMU stuck or gone.
 const REPLY_TIMEOUT: Duration = Duration::from_secs(10);
+
+/// Boards started by this process (each its own folder).
+static STARTED: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
 
 /// The firmware under QEMU, connected.
 pub struct Qemu<'w> {
@@ -33,9 +37,9 @@ pub struct Qemu<'w> {
     samples: File,
     /// The firmware's frames, read from the output pipe by a thread of their own.
     output: mpsc::Receiver<Result<Vec<u8>, String>>,
+    output_path: PathBuf,
     /// The command port (USART2).
     command: BufReader<UnixStream>,
-    receiver: Receiver,
     frame: Vec<u8>,
     booted: (Booted, Option<String>),
     wires: &'w Wires,
@@ -52,8 +56,12 @@ impl<'w> Qemu<'w> {
                 elf.display()
             ));
         }
-        let dir = work.join(format!("qemu-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        let n = STARTED.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let dir = work.join(format!("host-sim-qemu-{}-{n}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        // Removed again if the start fails half way (with QEMU).
+        let mut child = Killed(None, dir.clone());
         let image_path = dir.join("image.bin");
         std::fs::write(&image_path, image).map_err(|e| format!("{}: {e}", image_path.display()))?;
         let (command_path, link_path) = (dir.join("cmd.sock"), dir.join("link.sock"));
@@ -67,7 +75,7 @@ impl<'w> Qemu<'w> {
         let log = std::fs::File::create(dir.join("qemu.log"))
             .map_err(|e| format!("{}: {e}", dir.display()))?;
         let qemu = std::env::var("QEMU_BIN").unwrap_or_else(|_| "qemu-system-arm".into());
-        let child = Command::new(&qemu)
+        let spawned = Command::new(&qemu)
             .args(["-M", "netduinoplus2", "-nographic", "-monitor", "none"])
             .arg("-chardev")
             .arg(format!(
@@ -108,21 +116,22 @@ impl<'w> Qemu<'w> {
             .stderr(log)
             .spawn()
             .map_err(|e| format!("cannot start {qemu}: {e} (install qemu-system-arm)"))?;
-        let mut child = Killed(Some(child));
+        child.0 = Some(spawned);
         // QEMU waits on the command socket first, then the link's.
         let command = connect_later(&command_path, &mut child)?;
         let bell = connect_later(&link_path, &mut child)?;
         // The firmware opens `samples` to read, then `output` to write.
         let samples = open_writer(&samples_path, &mut child)?;
         let output = read_frames(output_path.clone());
+        child.1 = PathBuf::new();
         let mut qemu = Qemu {
             child: child.0.take().ok_or("QEMU lost")?,
+            output_path,
             dir,
             bell,
             samples,
             output,
             command: BufReader::new(command),
-            receiver: Receiver::new(),
             frame: vec![0; MAX_FRAME],
             booted: (Booted::of(None), None),
             wires,
@@ -146,15 +155,9 @@ impl<'w> Qemu<'w> {
             Ok(Err(why)) => return Err(self.gone(&why)),
             Err(_) => return Err(self.gone("no output in 10 s")),
         };
-        let mut found = None;
-        for &b in &bytes {
-            found = self.receiver.push(b);
-        }
-        match found {
-            Some(Ok(header)) => Ok((header.kind, header.tick, self.receiver.payload().to_vec())),
-            Some(Err(e)) => Err(format!("from the firmware: {e}")),
-            None => Err("from the firmware: a frame cut short".into()),
-        }
+        let (header, payload) =
+            link::parse(&bytes).map_err(|e| format!("from the firmware: {e}"))?;
+        Ok((header.kind, header.tick, payload.to_vec()))
     }
 
     /// Why the run stopped, with QEMU's own words if it exited.
@@ -236,17 +239,21 @@ fn read_frames(path: PathBuf) -> mpsc::Receiver<Result<Vec<u8>, String>> {
             }
         };
         loop {
-            let mut bytes = vec![0u8; MAX_FRAME];
-            let read = pipe.read_exact(&mut bytes[..HEADER]).and_then(|()| {
-                let payload = usize::from(u16::from_le_bytes([bytes[8], bytes[9]]));
-                let end = (HEADER + payload + 4).min(MAX_FRAME);
-                bytes.truncate(end);
-                pipe.read_exact(&mut bytes[HEADER..])
-            });
+            let mut bytes = vec![0u8; HEADER];
+            let read = pipe
+                .read_exact(&mut bytes)
+                .map_err(|e| format!("the output pipe: {e}"))
+                .and_then(|()| {
+                    let end =
+                        link::frame_bytes(&bytes).map_err(|e| format!("from the firmware: {e}"))?;
+                    bytes.resize(end, 0);
+                    pipe.read_exact(&mut bytes[HEADER..])
+                        .map_err(|e| format!("the output pipe: {e}"))
+                });
             let sent = match read {
                 Ok(()) => tx.send(Ok(bytes)),
                 Err(e) => {
-                    let _ = tx.send(Err(format!("the output pipe: {e}")));
+                    let _ = tx.send(Err(e));
                     return;
                 }
             };
@@ -258,14 +265,18 @@ fn read_frames(path: PathBuf) -> mpsc::Receiver<Result<Vec<u8>, String>> {
     rx
 }
 
-/// QEMU, killed if the start fails half way.
-struct Killed(Option<Child>);
+/// QEMU and its folder, killed and removed if the start fails half way (an empty path once
+/// the board holds the folder).
+struct Killed(Option<Child>, PathBuf);
 
 impl Drop for Killed {
     fn drop(&mut self) {
         if let Some(c) = self.0.as_mut() {
             let _ = c.kill();
             let _ = c.wait();
+        }
+        if !self.1.as_os_str().is_empty() {
+            let _ = std::fs::remove_dir_all(&self.1);
         }
     }
 }
@@ -298,6 +309,11 @@ impl Drop for Qemu<'_> {
     fn drop(&mut self) {
         let _ = self.child.kill();
         let _ = self.child.wait();
+        // A reader still waiting for the firmware to open its end is let go.
+        let _ = std::fs::OpenOptions::new()
+            .write(true)
+            .custom_flags(libc::O_NONBLOCK)
+            .open(&self.output_path);
         let _ = std::fs::remove_dir_all(&self.dir);
     }
 }

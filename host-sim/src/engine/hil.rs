@@ -7,8 +7,8 @@ use std::cell::Cell;
 use std::convert::Infallible;
 use std::time::Instant;
 
-use de_resonator::acquire::{Block, Channel, FrontEnd, InputError, Reader, FULL_SCALE_CODE};
-use de_resonator::board::link::{self, Booted, Observed, Said as SaidKind};
+use de_resonator::acquire::{Block, Channel, FrontEnd, InputError, Reader};
+use de_resonator::board::link::{self, Booted, Observed, Said as SaidKind, Words};
 use de_resonator::board::port::Extras;
 use de_resonator::board::{Line, Lines, NoKeeper, ReplyLine, Then};
 use de_resonator::image::{AmplifierSpec, Image, DAC_BITS};
@@ -357,11 +357,6 @@ impl Run {
     }
 }
 
-/// What the controller said, in words (the core's wording, the firmware's link's too).
-pub fn said(event: Event) -> String {
-    event.to_string()
-}
-
 /// The plant at the end of a tick, as the history keeps it.
 #[derive(Clone, Copy, Debug)]
 pub struct Sample {
@@ -450,6 +445,7 @@ impl Loop {
         let progress = crate::work::bar("run", ticks as usize);
         let every = (ticks / 200).max(1);
         let (booted, refusal) = board.booted();
+        let amplifier = self.amplifier()?;
         let mut run = Run {
             boot: Some(booted),
             refused: refusal,
@@ -473,8 +469,7 @@ impl Loop {
         };
         // The amplifier's current, worked out when a monitor, a front end or the history
         // reads it.
-        let mut bench =
-            self.bench(self.current_monitor.is_some() || self.analog.is_some() || self.history);
+        let mut bench = self.bench(self.history);
         let tracked = self.settings.track_seconds.is_some();
         // The plant's stretch summed since the last window of the probe's lock-in.
         let (mut stretch_sum, mut stretch_ticks) = (0.0, 0u32);
@@ -496,11 +491,9 @@ impl Loop {
                 });
             }
             self.fail_bus(k, wires);
-            let samples = if booted.driving {
-                self.measure(&mut bench, k, self.amplifier_input(wires))
-            } else {
-                Samples::Direct(Inputs::NONE)
-            };
+            // The plant is measured every tick, a controller or not (the ADC runs either way):
+            // both boards see the same samples whatever the commands do.
+            let samples = self.measure(&mut bench, k, self.amplifier_input(wires));
             let inputs = self.acquired(&mut bench, samples);
             let (seen, words) = board.tick(k, inputs, samples, &bench.codes)?;
             if let Some(fault) = board.fault() {
@@ -512,7 +505,9 @@ impl Loop {
                 stretch_sum += start_stretch;
                 stretch_ticks += 1;
                 let sensed = (seen.sensed_stretch, seen.sensed_sigma);
-                if !sensed.0.is_nan() && sensed.0.to_bits() != last_sensed.0.to_bits() {
+                let new = (sensed.0.to_bits(), sensed.1.to_bits())
+                    != (last_sensed.0.to_bits(), last_sensed.1.to_bits());
+                if !sensed.0.is_nan() && new {
                     run.sensed.push(Sensed {
                         seconds: t,
                         stretch: f64::from(sensed.0),
@@ -526,9 +521,7 @@ impl Loop {
                 if seen.phase == Some(Phase::Measuring) {
                     (stretch_sum, stretch_ticks) = (0.0, 0);
                 }
-                let command = self
-                    .amplifier()?
-                    .volts(de_resonator::DacCode(seen.dac_code));
+                let command = amplifier.volts(de_resonator::DacCode(seen.dac_code));
                 let command = if seen.dac_on && seen.enable {
                     f64::from(command)
                 } else {
@@ -663,9 +656,9 @@ impl Loop {
                     Channel::Amplifier => membrane_volts,
                     Channel::Stretch => stretch,
                 };
-                let code = f64::from(spec.code_of(reading as f32))
-                    + analog.noise_codes * bench.noise.gaussian();
-                let mut code = code.round().clamp(0.0, f64::from(FULL_SCALE_CODE)) as u16;
+                // The ADC's noise in the channel's unit, then the one rounding to a code.
+                let noise = analog.noise_codes * bench.noise.gaussian() * f64::from(spec.per_count);
+                let mut code = spec.adc_code((reading + noise) as f32);
                 if channel == Channel::Stretch {
                     match bench.stuck_code {
                         Some(last) if stuck => code = last,
@@ -712,9 +705,10 @@ impl Loop {
         broken.or_else(|| self.plant.first_failure(y, volts))
     }
 
-    /// The plant at rest, ready for the first tick; `current_wanted`: the amplifier's current
-    /// worked out at each tick (for a monitor or a history).
-    pub fn bench(&self, current_wanted: bool) -> Bench {
+    /// The plant at rest, ready for the first tick; the amplifier's current worked out at
+    /// each tick where a monitor or a front end reads it, or `history` keeps it.
+    pub fn bench(&self, history: bool) -> Bench {
+        let current_wanted = self.current_monitor.is_some() || self.analog.is_some() || history;
         let y = self.plant.at_rest();
         let front_end = self.analog.map_or(FrontEnd::NONE, |a| a.front_end);
         let scans = front_end.check(self.settings.tick_hz).unwrap_or(0);
@@ -886,7 +880,7 @@ impl<'w> CoreBoard<'w> {
         let _ = stage.safe();
         let mut slot = None;
         let (logic, _) = board::Board::boot(&mut slot, Image::parse(image), None::<NoKeeper>, None);
-        let booted = Booted::of(logic.booted().filter(|_| slot.is_some()));
+        let booted = Booted::of(logic.booted());
         let refusal = logic.refusal().map(str::to_string);
         CoreBoard {
             slot,
@@ -936,11 +930,7 @@ impl LoopBoard for CoreBoard<'_> {
             self.slot.as_ref(),
             event.as_ref(),
         );
-        let words = match event {
-            Some(Event::Fault(fault)) => fault.to_string(),
-            Some(event) => event.to_string(),
-            None => String::new(),
-        };
+        let words = event.map_or(String::new(), |e| Words(&e).to_string());
         Ok((seen, words))
     }
 
