@@ -29,8 +29,9 @@ RUNNER = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "firmwar
 SPI1_DR = 0x4001300C
 GPIOB_BSRR = 0x40020418
 FULL_SCALE_VOLTS = 2.5 * 4000.0  # the image's amplifier (host-sim image's defaults)
-# The trim's board: a current monitor (±190 µA about mid-scale: the
-# trim's 200 V step in a tick is 106 µA), the HV monitor (0-10 kV from
+# The trim's board: a current monitor (±480 µA about mid-scale, 0.25 µA a code: the trim's
+# 200 V step in a tick is 106 µA; a replan's ramp at the slew rate under 100 V of AC draws
+# about 200 µA, which tripped a ±190 µA range in CI), the HV monitor (0-10 kV from
 # code 100), a displacement sensor (λ1 1.0-3.0 over codes 200-3900, the
 # reference device's whole range up to its cap and the ring on it), ten scans a tick. Under
 # QEMU the model sensor fills the ADC's block with their codes (no ADC sampling, no DMA).
@@ -40,9 +41,9 @@ scan_hz = 10000
 [front_end.current]
 input = 10
 zero_code = 2047.5
-per_count = 1e-7
-low = -1.9e-4
-high = 1.9e-4
+per_count = 2.5e-7
+low = -4.8e-4
+high = 4.8e-4
 [front_end.amplifier]
 input = 11
 zero_code = 100
