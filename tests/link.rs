@@ -192,24 +192,15 @@ fn a_record_byte_no_field_can_hold_is_refused() {
     let observed = Observed::of(0, false, false, None, None);
     let mut out = [0u8; link::OBSERVED_BYTES];
     observed.write(None, &mut out).unwrap();
-    let mut said = out;
-    said[3] = 7;
-    assert_eq!(
-        Observed::read(&said).map(|_| ()),
-        Err(LinkError::BadField {
-            offset: 3,
-            value: 7
-        })
-    );
-    let mut phase = out;
-    phase[4] = 7;
-    assert_eq!(
-        Observed::read(&phase).map(|_| ()),
-        Err(LinkError::BadField {
-            offset: 4,
-            value: 7
-        })
-    );
+    // The `Said` byte (3) and the phase byte (4), each given a value no variant has.
+    for offset in [3, 4] {
+        let mut bad = out;
+        bad[offset] = 7;
+        assert_eq!(
+            Observed::read(&bad).map(|_| ()),
+            Err(LinkError::BadField { offset, value: 7 })
+        );
+    }
 }
 
 proptest! {
