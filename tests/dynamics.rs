@@ -6,7 +6,7 @@ mod common;
 use common::*;
 use de_resonator::numerics::integration::max_stable_step_seconds;
 use de_resonator::{
-    Device, Drive, FailureMode, Integrator, Method, Monitor, State, StepError, Tuner,
+    Device, DeviceParams, Drive, FailureMode, Integrator, Method, Monitor, State, StepError, Tuner,
     REFERENCE_DEVICE,
 };
 
@@ -189,6 +189,78 @@ fn guard_refuses_just_above_and_accepts_just_below() {
         false,
     );
     assert!(it.is_ok());
+}
+
+/// |R(z)| of RK4's stability polynomial R(z) = 1 + z + z²/2 + z³/6 + z⁴/24 at complex z.
+fn rk4_gain(re: f64, im: f64) -> f64 {
+    let (mut pr, mut pi) = (1.0, 0.0); // z^k / k!
+    let (mut sr, mut si) = (1.0, 0.0);
+    for k in 1..=4 {
+        let (nr, ni) = (pr * re - pi * im, pr * im + pi * re);
+        pr = nr / k as f64;
+        pi = ni / k as f64;
+        sr += pr;
+        si += pi;
+    }
+    (sr * sr + si * si).sqrt()
+}
+
+/// A reference device with viscous damping `rate` = c/M, 1/s.
+fn damped(rate: f64) -> Device<f64> {
+    Device::new(DeviceParams {
+        damping: rate * effective_mass(&REFERENCE_DEVICE),
+        ..REFERENCE_DEVICE
+    })
+    .unwrap()
+}
+
+/// The guard's bound carries the damping term (issue 29, 9): with c/M far above ω the fast
+/// root μ = −(c/M + √((c/M)² − 4ω²))/2 is real and bounds RK4's step at |h·μ| ≤ 2.6 (its
+/// region reaches 2.785 on the real axis). The undamped bound 2.8/ω would put h·μ far out
+/// of the region, where the error grows every step.
+#[test]
+fn guard_bounds_heavy_damping() {
+    let least_volts = 6500.0;
+    let omega_sq: Vec<f64> = (0..=400)
+        .map(|i| RANGE.0 + (RANGE.1 - RANGE.0) * i as f64 / 400.0)
+        .map(|l| omega_squared_fd(&REFERENCE_DEVICE, l, least_volts))
+        .collect();
+    let stiffest = omega_sq.iter().copied().fold(0.0, f64::max).sqrt();
+    let softest = omega_sq.iter().copied().fold(f64::INFINITY, f64::min);
+    let rate = 100.0 * stiffest;
+    let d = damped(rate);
+    let drive = Drive::from_volts(&d, 7000.0, 500.0, 40.0);
+    // The fast root is largest where the membrane is least stiff.
+    let mu = (rate + (rate * rate - 4.0 * softest).sqrt()) / 2.0;
+    let max = max_stable_step_seconds(&d, &drive, Method::Rk4, RANGE).unwrap();
+    assert!(rel(max, 2.6 / mu) < 1e-4, "{max} vs {}", 2.6 / mu);
+    assert!(rk4_gain(-max * mu, 0.0) <= 1.0);
+    assert!(rk4_gain(-2.8 / stiffest * mu, 0.0) > 1.0);
+    let start = at_rest(2.1);
+    let new = |h| Integrator::new(d, drive, Method::Rk4, h, RANGE, start, false);
+    assert!(matches!(new(1.01 * max), Err(StepError::Unstable { .. })));
+    let mut it = new(0.99 * max).unwrap();
+    for _ in 0..2000 {
+        it.step().unwrap();
+    }
+    // Verlet takes damping implicitly: its bound stays 2/ω.
+    let verlet = max_stable_step_seconds(&d, &drive, Method::Verlet, RANGE).unwrap();
+    assert!(rel(verlet, 2.0 / stiffest) < 1e-3, "{verlet}");
+}
+
+/// At damping ratio ζ = 0.53 the roots sit at 122° in the plane, where RK4's region reaches
+/// only 2.62: the guard's 2.6 keeps h·μ inside, the undamped 2.8 does not.
+#[test]
+fn guard_bounds_moderate_damping() {
+    let omega = omega_squared_fd(&REFERENCE_DEVICE, 2.1, 7000.0).sqrt();
+    let zeta: f64 = 0.53;
+    let (re, im) = (-zeta, (1.0 - zeta * zeta).sqrt());
+    assert!(rk4_gain(2.8 * re, 2.8 * im) > 1.0);
+    assert!(rk4_gain(2.6 * re, 2.6 * im) <= 1.0);
+    let d = damped(2.0 * zeta * omega);
+    let drive = Drive::constant(&d, 7000.0);
+    let max = max_stable_step_seconds(&d, &drive, Method::Rk4, (2.1, 2.1)).unwrap();
+    assert!(rel(max, 2.6 / omega) < 1e-4, "{max} vs {}", 2.6 / omega);
 }
 
 /// Asked to subdivide, a too-large step runs as stable substeps and agrees with small steps.

@@ -344,6 +344,83 @@ fn simulate_refuses_unstable_steps_and_unknown_methods() {
         args.extend(extra);
         refused(&args);
     }
+    // Issue 29, 9: heavy damping (c/M ≈ 1e11 /s) is refused by the guard as unstable, not
+    // found out at the first step as a stretch out of range.
+    let err = refused(&[
+        "simulate",
+        "--bias-volts",
+        "5912.84",
+        "--ac-volts",
+        "1970.95",
+        "--ac-hz",
+        "30",
+        "--damping",
+        "14110626",
+        "--duration-seconds",
+        "1",
+        "--method",
+        "rk4-f64",
+    ]);
+    assert!(err.contains("unstable"), "{err}");
+}
+
+/// Issue 29, 8: a stiff scene (c/M ≈ 1e9 /s) that DOP853 took 37 s over is found stiff by
+/// Hairer's test and handed to BDF: the same result as asking for BDF, and said so; a
+/// smooth scene stays with DOP853. The report echoes its inputs and, asked, its trajectory.
+#[test]
+fn the_reference_hands_a_stiff_scene_to_bdf() {
+    let base = [
+        "simulate",
+        "--bias-volts",
+        "5912.84",
+        "--damping",
+        "10000",
+        "--duration-seconds",
+        "1",
+        "--json",
+    ];
+    let started = std::time::Instant::now();
+    let auto = json(&base);
+    assert!(started.elapsed().as_secs_f64() < 10.0);
+    assert_eq!(auto["solver"], "bdf");
+    assert!(auto["solver_note"].as_str().unwrap().contains("stiff"));
+    let mut asked = base.to_vec();
+    asked.extend(["--method", "reference-bdf"]);
+    let bdf = json(&asked);
+    assert_eq!(bdf["solver_note"], Value::Null);
+    assert_eq!(auto["final"], bdf["final"]);
+    assert_eq!(auto["inputs"]["damping"], 10000.0);
+    assert_eq!(auto["inputs"]["bias_volts"], 5912.84);
+
+    let smooth = json(&[
+        "simulate",
+        "--bias-volts",
+        "5000",
+        "--ac-volts",
+        "500",
+        "--ac-hz",
+        "40",
+        "--duration-seconds",
+        "0.05",
+        "--step-seconds",
+        "0.001",
+        "--json",
+        "--trajectory",
+    ]);
+    assert_eq!(smooth["solver"], "dop853");
+    let rows = smooth["trajectory"].as_array().unwrap();
+    assert_eq!(rows.len(), 51);
+    // The volts column is the drive the inputs say: 5000 + 500·sin(2π·40·t).
+    for row in rows {
+        let t = row["time_seconds"].as_f64().unwrap();
+        let v = 5000.0 + 500.0 * (std::f64::consts::TAU * 40.0 * t).sin();
+        assert!((row["volts"].as_f64().unwrap() - v).abs() < 1e-9);
+    }
+    assert_eq!(
+        rows.last().unwrap()["stretch"],
+        smooth["final"]["stretch"],
+        "the last sample is the final state"
+    );
 }
 
 /// The stiff and extreme cases: no run fails silently; the guard refuses the steps past

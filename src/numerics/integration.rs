@@ -117,10 +117,20 @@ impl Method {
         }
     }
 
-    /// The largest stable h·ω for an oscillator of angular frequency ω (RK4 reaches 2√2 on
-    /// the imaginary axis; 2.8 keeps a little room). `None`: stable for any step.
+    /// The largest stable h·ω for an undamped oscillator of angular frequency ω (RK4 reaches
+    /// 2√2 on the imaginary axis; 2.8 keeps a little room). `None`: stable for any step.
     pub fn stability_limit(self) -> Option<f64> {
+        self.stability_radius(false)
+    }
+
+    /// The largest stable |h·μ| for the eigenvalues μ of a damped oscillator, which lie in
+    /// the left half-plane off the imaginary axis. RK4's region there is not a disk: it
+    /// reaches 2√2 at 90°, 2.785 at 180°, and only 2.62 near 122°, so a damped device is
+    /// held to 2.6. Verlet takes its damping implicitly (stable for any c ≥ 0), so only
+    /// the undamped ω counts for it.
+    pub fn stability_radius(self, damped: bool) -> Option<f64> {
         match self {
+            Method::Rk4 if damped => Some(2.6),
             Method::Rk4 => Some(2.8),
             Method::Verlet => Some(2.0),
             Method::ImplicitMidpoint => None,
@@ -254,29 +264,51 @@ pub struct Integrator<T> {
 }
 
 /// The largest stable step in seconds for `method` on `device` under `drive`, while the
-/// stretch stays in `range`: from the largest local stiffness ω_loc² = −∂λ''/∂λ there (at
-/// the least Φ̄² the drive reaches, where it is stiffest). `None`: any step is stable.
+/// stretch stays in `range`. Linearised about each stretch, λ'' = −k·δλ − c̄·λ' has the
+/// eigenvalues μ = (−c̄ ± √(c̄² − 4k))/2 (model.md §4, dimensionless), k = −∂λ''/∂λ the
+/// local stiffness at the least Φ̄² the drive reaches (where it is stiffest); the step
+/// keeps h·|μ| inside the method's region at every sampled stretch. With heavy damping
+/// the fast root nears c̄, so the bound carries the damping term h·c/M. `None`: any step
+/// is stable.
 pub fn max_stable_step_seconds<T: Real>(
     device: &Device<T>,
     drive: &Drive<T>,
     method: Method,
     range: (T, T),
 ) -> Option<T> {
-    let limit = T::of(method.stability_limit()?);
+    let c = device.damping_dimless();
+    // Verlet's damping is implicit: only the undamped ω bounds its step.
+    let c = if method == Method::Verlet {
+        T::zero()
+    } else {
+        c
+    };
+    let limit = T::of(method.stability_radius(c > T::zero())?);
     let p2 = drive.least_bias_dimless_squared();
-    let mut stiffest = T::zero();
+    let mut fastest = T::zero();
     for i in 0..=GUARD_POINTS {
         let l = range.0 + (range.1 - range.0) * T::of(i as f64) / T::of(GUARD_POINTS as f64);
         let k = device.stiffness_dimless(l, p2);
         // NaN stiffness (outside the model) counts as infinitely stiff.
-        stiffest = if k.is_finite() {
-            stiffest.max(k)
+        fastest = if k.is_finite() {
+            fastest.max(fastest_rate(k, c))
         } else {
             T::of(f64::INFINITY)
         };
     }
-    let omega_max = stiffest.sqrt() * device.rad_per_s_per_unit();
-    Some(limit / omega_max)
+    Some(limit / (fastest * device.rad_per_s_per_unit()))
+}
+
+/// The largest |μ| of μ² + c̄·μ + k = 0: √k when underdamped, (c̄ + √(c̄² − 4k))/2 when
+/// not (k ≤ 0, past the device's stability, gives one growing root: the physics', not the
+/// method's; the decaying one still bounds the step).
+fn fastest_rate<T: Real>(k: T, c: T) -> T {
+    let disc = c * c - T::of(4.0) * k;
+    if disc < T::zero() {
+        k.sqrt()
+    } else {
+        (c + disc.sqrt()) * T::of(0.5)
+    }
 }
 
 impl<T: Real> Integrator<T> {

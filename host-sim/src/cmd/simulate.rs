@@ -82,6 +82,9 @@ pub struct SimulateArgs {
     /// Write the trajectory as CSV (time_seconds, stretch, velocity_per_second, volts).
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
+    /// Put the trajectory in the report (`--json`: `trajectory` with the columns of `--csv`).
+    #[arg(long)]
+    pub trajectory: bool,
     /// Plot the trajectory as SVG.
     ///
     /// The stretch against time, with the loading branch's limit stretch and the first
@@ -92,9 +95,9 @@ pub struct SimulateArgs {
     pub device: DeviceArgs,
 }
 
-/// One sample of `--csv`.
-#[derive(Serialize)]
-struct Sample {
+/// One sample of `--csv` and `--trajectory`.
+#[derive(Serialize, Debug)]
+pub struct Sample {
     time_seconds: f64,
     stretch: f64,
     velocity_per_second: f64,
@@ -109,11 +112,30 @@ pub struct Final {
     pub velocity: f64,
 }
 
+/// What `simulate` was asked, echoed in its report.
+#[derive(Serialize, Debug)]
+pub struct Inputs {
+    pub bias_volts: f64,
+    pub ac_volts: f64,
+    pub ac_hz: f64,
+    /// c in force (the device's, or `--damping`), N·s.
+    pub damping: f64,
+    pub duration_seconds: f64,
+    pub start: Start,
+    /// The step asked for (`null`: the default, 1/64 of the period at zero bias).
+    pub step_seconds: Option<f64>,
+}
+
 /// What `simulate` reports.
 #[derive(Serialize, Debug)]
 pub struct SimulateReport {
     pub device: DeviceInfo,
+    pub inputs: Inputs,
     pub method: &'static str,
+    /// The adaptive solver that ran (`null` for a core method): `bdf` when the reference
+    /// found the scene stiff for DOP853, with `solver_note` saying so.
+    pub solver: Option<&'static str>,
+    pub solver_note: Option<String>,
     /// The reference's tolerance (`null` for the core's fixed-step methods).
     pub tolerance: Option<Tolerance>,
     pub step_seconds: f64,
@@ -127,6 +149,9 @@ pub struct SimulateReport {
     pub run_seconds: f64,
     /// What `--csv` and `--plot` wrote.
     pub files: Vec<String>,
+    /// The samples, with `--trajectory`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub trajectory: Option<Vec<Sample>>,
     #[serde(skip)]
     first_limit_description: Option<&'static str>,
 }
@@ -140,12 +165,15 @@ impl fmt::Display for SimulateReport {
         write!(
             f,
             "device          {}\n\
-             method          {}{}, step {} s, {} steps in {} ms\n\
+             method          {}{}{}, step {} s, {} steps in {} ms\n\
              final           stretch {}, velocity {} 1/s\n\
              stretch range   {} .. {}\n\
              first limit     {limit}{}",
             self.device,
             self.method,
+            self.solver_note
+                .as_ref()
+                .map_or(String::new(), |n| format!(" ({n})")),
             self.tolerance.map_or(String::new(), |t| format!(
                 " (rtol {}, atol {})",
                 sig(t.rtol),
@@ -231,9 +259,8 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
     let volts_at =
         |t: f64| args.bias_volts + args.ac_volts * (std::f64::consts::TAU * ac_hz * t).sin();
     let mut files = Vec::new();
-    if let Some(path) = &args.csv {
-        let rows: Vec<Sample> = out
-            .samples
+    let rows = (args.csv.is_some() || args.trajectory).then(|| {
+        out.samples
             .iter()
             .zip(&out.velocities)
             .enumerate()
@@ -246,8 +273,10 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
                     volts: volts_at(time_seconds),
                 }
             })
-            .collect();
-        files.push(write_path(path, &super::csv(&rows)?)?);
+            .collect::<Vec<Sample>>()
+    });
+    if let (Some(path), Some(rows)) = (&args.csv, &rows) {
+        files.push(write_path(path, &super::csv(rows)?)?);
     }
     if let Some(path) = &args.plot {
         let panel = plot(&device, &checked, &scene, &out, args.method.name());
@@ -255,10 +284,20 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
     }
     Ok(SimulateReport {
         device,
+        inputs: Inputs {
+            bias_volts: args.bias_volts,
+            ac_volts: args.ac_volts,
+            ac_hz,
+            damping: params.damping,
+            duration_seconds: args.duration_seconds,
+            start: args.start,
+            step_seconds: args.step_seconds,
+        },
         method: args.method.name(),
-        tolerance: args
-            .method
-            .solver()
+        solver: out.solver.map(Solver::name),
+        solver_note: out.switched.clone(),
+        tolerance: out
+            .solver
             .map(|solver| tolerance.unwrap_or(solver.default_tolerance())),
         step_seconds: out.step_seconds,
         steps: out.samples.len().saturating_sub(1),
@@ -271,6 +310,7 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
         first_limit: Crossing::of(out.first_limit),
         run_seconds: out.run_seconds,
         files,
+        trajectory: args.trajectory.then_some(rows).flatten(),
         first_limit_description: out.first_limit.map(|(mode, _)| mode.description()),
     })
 }

@@ -348,6 +348,8 @@ mod tests {
             stopped: None,
             run_seconds: 0.0,
             step_seconds: dt,
+            solver: None,
+            switched: None,
         };
         let found = upward_crossings(&out, dt, 0.0);
         assert_eq!(found.len(), 3);
