@@ -11,7 +11,8 @@
 //! | 6 | 2 | S, the number of settings, u16 = 21 (an image with another S is refused) |
 //! | 8 | 4 | L, the image's length in bytes with its CRC, u32 |
 //! | 12 | 52 | the 13 device parameters in `DeviceParams` order (`jlim` 0 = neo-Hookean) |
-//! | 64 | 16 | the amplifier: DAC reference V, gain V/V, rail V, DAC bits u16 (16), 0 u16 |
+//! | 64 | 14 | the amplifier: DAC reference V, gain V/V, rail V, DAC bits u16 (16) |
+//! | 78 | 2 | at power-up, u16: 0 = wait for `start` with the output off, 1 = drive ([`PowerUp`]) |
 //! | 80 | 4 | the front end's scans a second (`acquire::FrontEnd`) |
 //! | 84 | 3 · 20 | per channel in `Channel::ALL` order: ADC input u8 (0xFF = not fitted), 3 zero bytes, zero code, per count, plausible low, plausible high |
 //! | 144 | 4·S | the default settings in `Setting::ALL` order (0 = off for those that can be) |
@@ -77,6 +78,33 @@ impl AmplifierSpec {
     }
 }
 
+/// What the board does at power-up once the boot checks pass (offset 78).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum PowerUp {
+    /// The output off at 0 V until `start` (or `target`, `ac`): a board's default, as an HV
+    /// supply comes up with its output off.
+    #[default]
+    Wait = 0,
+    /// Ramp to the bias at once (a bench run, a scene).
+    Drive = 1,
+}
+
+impl PowerUp {
+    pub fn name(self) -> &'static str {
+        match self {
+            PowerUp::Wait => "wait",
+            PowerUp::Drive => "drive",
+        }
+    }
+
+    fn from_number(value: u16) -> Option<Self> {
+        [PowerUp::Wait, PowerUp::Drive]
+            .into_iter()
+            .find(|p| *p as u16 == value)
+    }
+}
+
 /// Why an image cannot be used.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -104,6 +132,8 @@ pub enum ImageError {
     Table(TableError),
     /// The analog front end cannot be used.
     FrontEnd(FrontEndError),
+    /// The power-up field holds no [`PowerUp`].
+    PowerUp { value: u16 },
     /// The output buffer is too small (writing).
     BufferTooSmall { needed: usize },
 }
@@ -139,6 +169,10 @@ impl fmt::Display for ImageError {
             ImageError::Amplifier(e) => write!(f, "image amplifier: {e}"),
             ImageError::Table(e) => write!(f, "image {e}"),
             ImageError::FrontEnd(e) => write!(f, "image {e}"),
+            ImageError::PowerUp { value } => write!(
+                f,
+                "image power-up field {value}: 0 (wait for `start`) or 1 (drive) expected"
+            ),
             ImageError::BufferTooSmall { needed } => {
                 write!(f, "image needs a buffer of {needed} bytes")
             }
@@ -156,6 +190,8 @@ pub struct Image<'a> {
     /// The board's analog inputs (checked at the settings' tick rate).
     pub front_end: FrontEnd,
     pub settings: Settings,
+    /// Whether the board drives once its boot checks pass, or waits for `start`.
+    pub power_up: PowerUp,
     /// The table's bytes, for `Controller::start` (which parses and checks them).
     pub table: &'a [u8],
 }
@@ -207,6 +243,9 @@ impl<'a> Image<'a> {
             dac_bits: u16_at(bytes, 76),
         };
         amplifier.amplifier()?;
+        let power_up = u16_at(bytes, 78);
+        let power_up =
+            PowerUp::from_number(power_up).ok_or(ImageError::PowerUp { value: power_up })?;
         let mut settings = Settings::for_target(0.0);
         for (k, setting) in Setting::ALL.into_iter().enumerate() {
             settings.set(setting, f32_at(bytes, SETTINGS_AT + 4 * k));
@@ -238,6 +277,7 @@ impl<'a> Image<'a> {
             amplifier,
             front_end,
             settings,
+            power_up,
             table,
         })
     }
@@ -249,6 +289,7 @@ impl<'a> Image<'a> {
         amplifier: &AmplifierSpec,
         front_end: &FrontEnd,
         settings: &Settings,
+        power_up: PowerUp,
         table: &[u8],
     ) -> Result<usize, ImageError> {
         Table::parse(table).map_err(ImageError::Table)?;
@@ -273,7 +314,7 @@ impl<'a> Image<'a> {
             ])
             .flat_map(f32::to_le_bytes)
             .chain(amplifier.dac_bits.to_le_bytes())
-            .chain([0, 0])
+            .chain((power_up as u16).to_le_bytes())
             .chain(front_end.scan_hz.to_le_bytes())
             .chain(front_end.channels.iter().flat_map(|spec| {
                 let (input, numbers) = match spec {

@@ -47,7 +47,7 @@ pub use controller::{TrimDone, TrimJob, TrimResult};
 pub use device::{Device, DeviceParams, Field, ParamError, Problem, REFERENCE_DEVICE};
 pub use drive::{Amplifier, CodeError, Dac8551, DacCode, DacError, PowerMode};
 pub use estimate::ring::TrimError;
-pub use image::{AmplifierSpec, Image, ImageError};
+pub use image::{AmplifierSpec, Image, ImageError, PowerUp};
 pub use numerics::decimal::Decimal;
 pub use numerics::integration::{Drive, Integrator, Method, State, StepError};
 pub use numerics::real::Real;

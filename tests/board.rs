@@ -8,7 +8,7 @@ mod common;
 use de_resonator::acquire::FrontEnd;
 use de_resonator::board::port::Extras;
 use de_resonator::board::{tick, Board, Keeper, Line, NoKeeper, ReplyLine, ResetCause, Then};
-use de_resonator::image::{self, AmplifierSpec, Image, DAC_BITS};
+use de_resonator::image::{self, AmplifierSpec, Image, PowerUp, DAC_BITS};
 use de_resonator::{Controller, Dac8551, Inputs, OutputStage, Settings, REFERENCE_DEVICE};
 
 /// 0..10 kV: a 2.5 V reference, gain 4000 (as `common::amplifier`).
@@ -21,6 +21,23 @@ fn spec() -> AmplifierSpec {
     }
 }
 
+/// The reference device's image with `settings`, an amplifier and a power-up choice.
+fn image_of(settings: &Settings, amplifier: &AmplifierSpec, power_up: PowerUp) -> Vec<u8> {
+    let table = common::reference_table();
+    let mut out = vec![0; image::image_bytes(table.len())];
+    Image::write(
+        &mut out,
+        &REFERENCE_DEVICE.cast(),
+        amplifier,
+        &FrontEnd::NONE,
+        settings,
+        power_up,
+        &table,
+    )
+    .unwrap();
+    out
+}
+
 /// The reference device's image with `settings`.
 fn image_with(settings: &Settings) -> Vec<u8> {
     let table = common::reference_table();
@@ -31,6 +48,7 @@ fn image_with(settings: &Settings) -> Vec<u8> {
         &spec(),
         &FrontEnd::NONE,
         settings,
+        PowerUp::Drive,
         &table,
     )
     .unwrap();
@@ -133,7 +151,7 @@ fn the_image_boots_and_says_ready() {
     let bytes = image_with(&Settings::for_target(44.0));
     let mut b = Bench::boot(&bytes, None::<NoKeeper>, None);
     assert!(b.notice.starts_with("ready "), "{}", b.notice);
-    assert!(b.notice.ends_with("settings=image"), "{}", b.notice);
+    assert!(b.notice.contains(" settings=image "), "{}", b.notice);
     assert!((field(&b.notice, "bias_volts") - 7449.88).abs() < 0.05);
     assert_eq!(b.warning, None);
     assert_eq!(b.ask("get target_hz"), "ok target_hz=44");
@@ -144,8 +162,9 @@ fn the_image_boots_and_says_ready() {
     assert_eq!(code(&b.ask("save")), Some(6));
 }
 
-/// A corrupt image drives nothing: the start-up line says why, every request but `help`
-/// answers it with code 5, and the slot stays empty.
+/// A corrupt image drives nothing: the start-up line says why, `status` answers it (phase
+/// refused, 0 V), every other request but `help` answers it with code 5, and the slot stays
+/// empty.
 #[test]
 fn a_corrupt_image_is_refused_with_its_reason() {
     let mut bytes = image_with(&Settings::for_target(44.0));
@@ -155,14 +174,13 @@ fn a_corrupt_image_is_refused_with_its_reason() {
     assert!(b.notice.starts_with("refused "), "{}", b.notice);
     assert!(b.slot.is_none());
     assert!(b.ask("help").starts_with("ok commands:"));
-    for request in [
-        "status",
-        "target 44",
-        "clear",
-        "get target_hz",
-        "save",
-        "trim",
-    ] {
+    let status = b.ask("status");
+    assert!(status.starts_with("ok phase=refused volts=0 "), "{status}");
+    assert!(
+        status.ends_with(&format!("fault={}", &b.notice["refused ".len()..])),
+        "{status}"
+    );
+    for request in ["target 44", "clear", "get target_hz", "save", "trim"] {
         let reply = b.ask(request);
         assert_eq!(code(&reply), Some(5), "{request}: {reply}");
         assert!(reply.contains(&b.notice["refused ".len()..]), "{reply}");
@@ -180,7 +198,7 @@ fn saved_settings_boot_or_fall_back_to_the_image() {
         ..Memory::default()
     };
     let b = Bench::boot(&bytes, Some(&mut memory), None);
-    assert!(b.notice.ends_with("settings=saved"), "{}", b.notice);
+    assert!(b.notice.contains(" settings=saved "), "{}", b.notice);
     assert_eq!(field(&b.notice, "target_hz"), 45.0);
     let hz = common::natural_hz_at(&REFERENCE_DEVICE, field(&b.notice, "bias_volts"));
     assert!((hz / 45.0 - 1.0).abs() < 1e-4, "{hz}");
@@ -190,7 +208,7 @@ fn saved_settings_boot_or_fall_back_to_the_image() {
         ..Memory::default()
     };
     let b = Bench::boot(&bytes, Some(&mut memory), None);
-    assert!(b.notice.ends_with("settings=image"), "{}", b.notice);
+    assert!(b.notice.contains(" settings=image "), "{}", b.notice);
     assert_eq!(field(&b.notice, "target_hz"), 44.0);
     let warning = b.warning.unwrap();
     assert!(warning.starts_with("saved settings refused"), "{warning}");
@@ -199,7 +217,7 @@ fn saved_settings_boot_or_fall_back_to_the_image() {
         ..Memory::default()
     };
     let b = Bench::boot(&bytes, Some(&mut memory), None);
-    assert!(b.notice.ends_with("settings=image"), "{}", b.notice);
+    assert!(b.notice.contains(" settings=image "), "{}", b.notice);
     assert!(b.warning.unwrap().contains("does not read"));
 }
 
@@ -216,7 +234,11 @@ fn a_watchdog_reset_waits_for_clear() {
         b.notice
     );
     assert!(b.slot.is_none());
-    assert_eq!(code(&b.ask("status")), Some(5));
+    let status = b.ask("status");
+    assert!(
+        status.starts_with("ok phase=refused volts=0 ") && status.contains("watchdog"),
+        "{status}"
+    );
     assert_eq!(b.run(5, Inputs::NONE), 0.0);
     // A setting asked for now applies at `clear`.
     assert_eq!(
@@ -304,7 +326,7 @@ fn every_request_gets_its_reply() {
     // Stop: down to 0 V; `clear` only there.
     b.run(30_000, Inputs::NONE);
     assert!(b.ask("stop").starts_with("ok stop: ramp from "));
-    assert_eq!(code(&b.ask("clear")), Some(3));
+    assert_eq!(code(&b.ask("clear")), Some(7));
     assert_eq!(b.run(60_000, Inputs::NONE), 0.0);
     assert!(b.ask("status").contains("phase=holding"));
     assert_eq!(code(&b.ask("trim")), Some(2));
@@ -321,7 +343,7 @@ fn every_request_gets_its_reply() {
     );
     // The restart boots the saved settings.
     let b = Bench::boot(&bytes, Some(&mut memory), Some(ResetCause::Asked));
-    assert!(b.notice.ends_with("settings=saved"), "{}", b.notice);
+    assert!(b.notice.contains(" settings=saved "), "{}", b.notice);
 }
 
 /// A fault latches: the output comes down (never up) to 0 V, requests answer `faulted`,
@@ -340,7 +362,7 @@ fn a_fault_latches_until_clear_at_zero() {
         Some(de_resonator::Event::Fault(_))
     ));
     assert_eq!(code(&b.ask("target 45")), Some(4));
-    assert_eq!(code(&b.ask("clear")), Some(3));
+    assert_eq!(code(&b.ask("clear")), Some(7));
     let mut last = first.output.volts;
     for _ in 0..60_000 {
         let t = tick::drive(&mut b.slot, &mut stage, Ok(Inputs::NONE)).unwrap();
@@ -502,7 +524,7 @@ fn reset_and_clear_wait_for_rest_at_zero() {
     let mut b = Bench::boot(&bytes, None::<NoKeeper>, None);
     b.run(30_000, Inputs::NONE);
     let (reply, then) = b.ask_then(&line("reset"));
-    assert_eq!(code(&reply), Some(3), "{reply}");
+    assert_eq!(code(&reply), Some(7), "{reply}");
     assert_eq!(then, Then::Reply);
     assert!(b.slot.is_some(), "the controller stays");
     // The bus dies at the bias.
@@ -519,8 +541,8 @@ fn reset_and_clear_wait_for_rest_at_zero() {
     for _ in 0..settle_ticks * 9 / 10 {
         tick::drive(&mut b.slot, &mut stage, Ok(Inputs::NONE));
     }
-    assert_eq!(code(&b.ask("clear")), Some(3));
-    assert_eq!(code(&b.ask_then(&line("reset")).0), Some(3));
+    assert_eq!(code(&b.ask("clear")), Some(7));
+    assert_eq!(code(&b.ask_then(&line("reset")).0), Some(7));
     for _ in 0..settle_ticks / 5 {
         tick::drive(&mut b.slot, &mut stage, Ok(Inputs::NONE));
     }
@@ -550,15 +572,133 @@ fn refusals_hold_or_lift_as_they_say() {
         "refused tick_hz = 1e9 is beyond the timer's reach"
     );
     assert!(b.slot.is_none());
-    for request in ["clear", "status", "set target_hz 45"] {
+    for request in ["clear", "set target_hz 45"] {
         let reply = b.ask(request);
         assert_eq!(code(&reply), Some(5), "{request}: {reply}");
         assert!(reply.contains("beyond the timer's reach"), "{reply}");
     }
+    let status = b.ask("status");
+    assert!(
+        status.starts_with("ok phase=refused") && status.contains("beyond the timer's reach"),
+        "{status}"
+    );
     let mut memory = Memory::default();
     let mut b = Bench::boot(&bytes, Some(&mut memory), Some(ResetCause::Watchdog));
     assert!(b.ask("set target_hz 45").ends_with("(applies at `clear`)"));
     assert!(b.ask("save").starts_with("ok save"));
     drop(b);
     assert_eq!(memory.saved.unwrap().target_hz, 45.0);
+}
+
+/// Issue 29, 1: an image that waits (the default of `host-sim image`) boots its checks and
+/// says so, but drives nothing, the stage off, until `start`; then ramps to the bias.
+#[test]
+fn an_image_that_waits_drives_only_at_start() {
+    let bytes = image_of(&Settings::for_target(44.0), &spec(), PowerUp::Wait);
+    let mut b = Bench::boot(&bytes, None::<NoKeeper>, None);
+    assert!(b.notice.starts_with("ready "), "{}", b.notice);
+    assert!(
+        b.notice
+            .ends_with("power_up=wait (the output off at 0 V: `start` to drive)"),
+        "{}",
+        b.notice
+    );
+    let bias = field(&b.notice, "bias_volts");
+    let (bus, pin) = (common::Bus::default(), common::Pin::default());
+    let mut stage = OutputStage::new(Dac8551::new(&bus), &pin);
+    for _ in 0..2000 {
+        let t = tick::drive(&mut b.slot, &mut stage, Ok(Inputs::NONE)).unwrap();
+        assert_eq!(t.output.volts, 0.0);
+        assert!(stage.is_safe(), "the stage stays off");
+    }
+    assert!(b.ask("status").contains(" volts=0 "));
+    assert!(b.ask("start").starts_with("ok target_hz=44 "));
+    // 10 kV/s from 0 V: at the bias within a second.
+    let mut volts = 0.0;
+    for _ in 0..1500 {
+        volts = tick::drive(&mut b.slot, &mut stage, Ok(Inputs::NONE))
+            .unwrap()
+            .output
+            .volts;
+    }
+    assert!(!stage.is_safe());
+    assert!((volts - bias).abs() < 0.5, "{volts} vs {bias}");
+    // One that drives at power-up says so and ramps at once.
+    let bytes = image_of(&Settings::for_target(44.0), &spec(), PowerUp::Drive);
+    let mut b = Bench::boot(&bytes, None::<NoKeeper>, None);
+    assert!(b.notice.ends_with("power_up=drive"), "{}", b.notice);
+    assert!(b.run(100, Inputs::NONE) > 0.0);
+}
+
+/// Issue 29, 6: with the amplifier's rail (7600 V) below the cap in force, `status` and the start-up line give the lower as the most the
+/// board commands, and say which bounds it.
+#[test]
+fn status_gives_the_lower_of_the_cap_and_the_rail() {
+    let rail = AmplifierSpec {
+        rail_volts: 7600.0,
+        ..spec()
+    };
+    let bytes = image_of(&Settings::for_target(44.0), &rail, PowerUp::Drive);
+    let mut b = Bench::boot(&bytes, None::<NoKeeper>, None);
+    assert_eq!(field(&b.notice, "max_volts"), 7600.0, "{}", b.notice);
+    let status = b.ask("status");
+    assert_eq!(field(&status, "max_volts"), 7600.0, "{status}");
+    assert!(status.contains(" max_by=amplifier "), "{status}");
+    // With the rail at 10 kV the cap (above 7600 V, or the rail would not have been the
+    // lower) is the bound.
+    let bytes = image_with(&Settings::for_target(44.0));
+    let mut b = Bench::boot(&bytes, None::<NoKeeper>, None);
+    let status = b.ask("status");
+    let cap = field(&status, "max_volts");
+    assert!(cap > 7600.0 && cap < 10_000.0, "{status}");
+    assert!(status.contains(" max_by=cap "), "{status}");
+}
+
+/// Issue 29, 5: replies that say why. `get` lists every setting; `help <setting>` its unit
+/// and rule; a typo gets the nearest key; an AC the cap cannot hold says the span it would
+/// drive and the cap; `clear` while driving is a wrong state (7), not busy (3).
+#[test]
+fn replies_say_why() {
+    let bytes = image_with(&Settings::for_target(44.0));
+    let mut b = Bench::boot(&bytes, None::<NoKeeper>, None);
+    let all = b.ask("get");
+    for setting in de_resonator::Setting::ALL {
+        let one = b.ask(&format!("get {}", setting.key()));
+        let pair = one.strip_prefix("ok ").unwrap();
+        assert!(
+            all.split(' ').any(|word| word == pair),
+            "{pair} not in {all}"
+        );
+    }
+    assert_eq!(
+        b.ask("help ac_volts"),
+        format!("ok ac_volts (V): {}", de_resonator::Setting::AcVolts.rule())
+    );
+    let typo = b.ask("set ac_volt 100");
+    assert!(
+        typo.starts_with("err 1 unknown setting; did you mean `ac_volts`?"),
+        "{typo}"
+    );
+    b.run(30_000, Inputs::NONE);
+    let status = b.ask("status");
+    let (bias, cap) = (field(&status, "bias_volts"), field(&status, "max_volts"));
+    let refused = b.ask("ac 5000 28");
+    assert_eq!(code(&refused), Some(2), "{refused}");
+    let words: Vec<&str> = refused.split(' ').collect();
+    let at = words.iter().position(|w| *w == "spans").unwrap();
+    let number = |k: usize| words[k].parse::<f32>().unwrap();
+    assert!(
+        (number(at + 1) - (bias - 5000.0)).abs() < 0.01
+            && (number(at + 3) - (bias + 5000.0)).abs() < 0.01,
+        "{refused} (bias {bias})"
+    );
+    assert!(refused.contains(" V: above the cap "), "{refused}");
+    // The cap it names: the plan's (at or under the one `status` gives, within 0.5%).
+    let named: f32 = refused
+        .rsplit(' ')
+        .nth(1)
+        .and_then(|v| v.parse().ok())
+        .unwrap();
+    assert!(named <= cap && named > 0.995 * cap, "{named} vs {cap}");
+    assert_eq!(code(&b.ask("clear")), Some(7));
 }

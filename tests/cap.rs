@@ -427,7 +427,7 @@ fn a_hold_turns_the_probe_off_and_refuses_a_trim() {
 
 /// A retune whose bias and AC fit under its cap but whose probe would not (a result that
 /// lies, as the fuzz test's tampered ones: 3 kV with a cap of 3,010 V, room for the 5 V of
-/// AC, not for the 20 V probe) is refused when it comes (`Fault::Setting` naming the probe),
+/// AC, not for the 20 V probe) is refused when it comes (`Fault::Swing` naming the probe),
 /// not taken and then stopped by the final gate when the probe rides again at the bias
 /// (found by the fuzz test, seed 11, 10⁸ ticks).
 #[cfg(all(feature = "trim", feature = "probe"))]
@@ -479,9 +479,13 @@ fn a_retune_whose_probe_would_pass_the_cap_is_refused_when_it_comes() {
     assert!(lied);
     assert_eq!(
         faults,
-        [Fault::Setting {
+        // The 3,000 V bias ± (5 V of AC + 20 V of probe) against the lying cap.
+        [Fault::Swing {
             setting: Setting::ProbeVolts,
-            value: 20.0
+            value: 20.0,
+            low_volts: 2975.0,
+            high_volts: 3025.0,
+            max_volts: 3010.0
         }]
     );
 }

@@ -514,13 +514,18 @@ fn bad_targets_and_settings_are_refused_before_anything_is_driven() {
         ..base
     })
     .unwrap_err();
-    assert_eq!(
-        fault,
-        Fault::Setting {
-            setting: Setting::AcVolts,
-            value: 2000.0
-        }
-    );
+    // It says the span the AC would drive about the bias, and the cap that refused it.
+    let Fault::Swing {
+        setting: Setting::AcVolts,
+        value: 2000.0,
+        low_volts,
+        high_volts,
+        max_volts,
+    } = fault
+    else {
+        panic!("{fault:?}")
+    };
+    assert!(high_volts > max_volts && (high_volts - low_volts - 4000.0).abs() < 0.01);
     // An amplifier that cannot reach the bias.
     let params = REFERENCE_DEVICE.cast::<f32>();
     let small = Amplifier::new(2.5, 1000.0).unwrap();
@@ -622,7 +627,7 @@ fn the_cross_check_drives_the_solves_bias() {
 
 /// Issue 12.3. An AC amplitude above the bias would command below 0 V (a target at f0 has
 /// no bias at all; the amplifier is unipolar): refused before anything is driven, as a
-/// setting fault naming the AC amplitude. The same AC on a bias that holds it is accepted.
+/// swing fault naming the AC amplitude. The same AC on a bias that holds it is accepted.
 #[test]
 fn a_plan_below_zero_volts_is_a_setting_fault() {
     let f0 = Tuner::new(Device::new(REFERENCE_DEVICE).unwrap())
@@ -636,13 +641,18 @@ fn a_plan_below_zero_volts_is_a_setting_fault() {
             ..Settings::for_target(target)
         })
         .unwrap_err();
-        assert_eq!(
-            fault,
-            Fault::Setting {
-                setting: Setting::AcVolts,
-                value: 100.0
-            },
-            "{target} Hz"
+        // Below 0 V: the span's low end is the bias (≈ 0) less the 100 V of AC.
+        assert!(
+            matches!(
+                fault,
+                Fault::Swing {
+                    setting: Setting::AcVolts,
+                    value: 100.0,
+                    low_volts,
+                    ..
+                } if low_volts < 0.0 && low_volts > -100.01
+            ),
+            "{target} Hz: {fault:?}"
         );
     }
     let accepted = start(Settings {

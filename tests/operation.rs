@@ -9,7 +9,7 @@ use common::reseal;
 
 use de_resonator::acquire::{FrontEnd, FrontEndError};
 use de_resonator::board::protocol::{self, Command, Reply};
-use de_resonator::image::{self, AmplifierSpec, Image, ImageError, DAC_BITS};
+use de_resonator::image::{self, AmplifierSpec, Image, ImageError, PowerUp, DAC_BITS};
 use de_resonator::table::TableError;
 use de_resonator::{
     Amplifier, Controller, Device, Fault, Inputs, Phase, Refusal, Settings, TuneError, Tuner,
@@ -162,7 +162,7 @@ fn an_ac_too_large_for_the_cap_is_refused_and_a_good_one_drives() {
     assert!(
         matches!(
             refused,
-            Err(Refusal::Checks(Fault::Setting {
+            Err(Refusal::Checks(Fault::Swing {
                 setting: de_resonator::Setting::AcVolts,
                 ..
             }))
@@ -412,6 +412,7 @@ fn made_image(settings: &Settings) -> Vec<u8> {
         &spec(),
         &FrontEnd::NONE,
         settings,
+        PowerUp::Drive,
         &t,
     )
     .unwrap();
@@ -625,6 +626,7 @@ fn an_image_refuses_a_channel_it_could_not_read_back() {
             &spec(),
             &front_end,
             &Settings::for_target(44.0),
+            PowerUp::Drive,
             &t,
         ),
         Err(ImageError::FrontEnd(FrontEndError::Input {

@@ -2,7 +2,7 @@
 //! module), from the f64 model, with its interpolation error against the direct solve.
 
 use de_resonator::acquire::FrontEnd;
-use de_resonator::image::{self, AmplifierSpec, Image};
+use de_resonator::image::{self, AmplifierSpec, Image, PowerUp};
 use de_resonator::table::{self, Table};
 use de_resonator::{DeviceParams, Settings, Tuner};
 
@@ -145,6 +145,7 @@ pub fn image(
     amplifier: &AmplifierSpec,
     front_end: &FrontEnd,
     settings: &Settings,
+    power_up: PowerUp,
 ) -> Result<Vec<u8>, String> {
     let made = make(params, f64::from(settings.margin), None)?;
     let mut bytes = vec![0; image::image_bytes(made.bytes.len())];
@@ -155,6 +156,7 @@ pub fn image(
         amplifier,
         front_end,
         settings,
+        power_up,
         &made.bytes,
     )
     .map_err(|e| e.to_string())?;

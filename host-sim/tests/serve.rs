@@ -34,7 +34,8 @@ fn the_virtual_board_answers_every_request_as_the_firmware() {
     assert!(ok, "{report}");
     let ready = report["notices"][0].as_str().unwrap();
     assert!(ready.starts_with("# ready target_hz=44 "), "{ready}");
-    assert!(ready.ends_with(" settings=image"), "{ready}");
+    // A scene's board drives at power-up (the scene runs from t = 0).
+    assert!(ready.ends_with(" settings=image power_up=drive"), "{ready}");
     assert!(
         close(number(ready, "bias_volts"), tuned_bias(44.0), 1e-4),
         "{ready}"
@@ -47,7 +48,7 @@ fn the_virtual_board_answers_every_request_as_the_firmware() {
         .collect();
     assert!(replies[0].starts_with("ok phase="), "{}", replies[0]);
     assert_eq!(replies[1], "ok target_hz=44");
-    assert!(replies[2].starts_with("ok commands: help | status"));
+    assert!(replies[2].starts_with("ok commands: help [setting] | status"));
 
     board.wait_for("driving", |s| s.contains("phase=driving"));
     // In range: the bias of the f64 solve for 45 Hz, ramped from 44 Hz's.
@@ -88,7 +89,7 @@ fn the_virtual_board_answers_every_request_as_the_firmware() {
     );
     // A reset under the bias is refused: at 0 V only.
     assert!(
-        replies[2].starts_with("err 3 reset at 0 V only"),
+        replies[2].starts_with("err 7 reset at 0 V only"),
         "{}",
         replies[2]
     );
@@ -109,7 +110,7 @@ fn the_virtual_board_answers_every_request_as_the_firmware() {
         .collect();
     assert_eq!(notices[1], "# reset: asked", "{notices:?}");
     assert!(
-        notices[2].starts_with("# ready target_hz=45 ") && notices[2].ends_with("settings=saved")
+        notices[2].starts_with("# ready target_hz=45 ") && notices[2].contains(" settings=saved ")
     );
     assert_eq!(exchanges[1]["reply"], "ok margin=0.1");
     assert_eq!(exchanges[2]["reply"], "ok target_hz=45");
@@ -202,4 +203,102 @@ fn lines_in_one_write_are_answered_in_order_across_a_reset() {
     assert_eq!(next(), "# reset: asked");
     assert!(next().starts_with("# ready target_hz=44 "));
     assert_eq!(next(), "ok target_hz=44");
+}
+
+/// Issue 29, 2: at a prompt, what the board says on its own (its start-up line) shows as it
+/// arrives, before any request; each reply follows its request.
+#[test]
+fn the_console_shows_what_the_board_says_as_it_arrives() {
+    use std::io::{BufRead, BufReader, Write};
+    use std::process::Stdio;
+    let board = Served::start(None, "5", "console-live");
+    let mut child = common::host_sim()
+        .arg("console")
+        .args(&board.connection)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stdin = child.stdin.take().unwrap();
+    let mut out = BufReader::new(child.stdout.take().unwrap());
+    let mut line = String::new();
+    out.read_line(&mut line).unwrap();
+    assert!(line.starts_with("# ready target_hz=44 "), "{line}");
+    stdin.write_all(b"get target_hz\n").unwrap();
+    line.clear();
+    out.read_line(&mut line).unwrap();
+    assert_eq!(line, "ok target_hz=44\n");
+    drop(stdin);
+    let done = child.wait_with_output().unwrap();
+    assert!(done.status.success());
+    let said = String::from_utf8_lossy(&done.stderr);
+    assert!(said.starts_with("connected to unix:"), "{said}");
+}
+
+/// Issue 29, 3 and 13: a script waits for a state instead of meeting `busy`; replies come
+/// parsed into fields; a wait that cannot hold fails the script (status 1, why said).
+#[test]
+fn a_script_waits_for_a_state_and_fails_when_it_never_comes() {
+    let board = Served::start(None, "5", "console-wait");
+    let (report, ok) = board.console(&[
+        "wait phase=holding|driving 30",
+        "target 45",
+        "wait phase=driving 30",
+        "ac 100 40",
+        "wait phase=driving 30",
+        "status",
+    ]);
+    assert!(ok, "{report}");
+    let exchanges = report["exchanges"].as_array().unwrap();
+    assert_eq!(exchanges.len(), 3, "waits are the console's, not requests");
+    let ac = &exchanges[1]["fields"];
+    assert_eq!(ac["ac_volts"], 100.0, "{ac}");
+    let status = &exchanges[2]["fields"];
+    assert_eq!(status["phase"], "driving", "{status}");
+    assert_eq!(status["target_hz"], 45.0, "{status}");
+    assert_eq!(status["fault"], "none", "{status}");
+    let err = board.console(&["target 300"]).0;
+    assert_eq!(err["exchanges"][0]["fields"]["code"], 2.0, "{err}");
+    // A state that never comes.
+    let (report, ok) = board.console(&["wait phase=nowhere 0.3", "status"]);
+    assert!(!ok);
+    assert!(
+        report["stopped"]
+            .as_str()
+            .unwrap()
+            .starts_with("wait phase=nowhere: not within 0.3 s"),
+        "{report}"
+    );
+    assert_eq!(report["exchanges"].as_array().unwrap().len(), 0);
+    // A malformed wait is refused before anything is sent.
+    let out = board.script("bad-wait", "status\nwait phase\n");
+    assert_eq!(out.status.code(), Some(2));
+    assert!(out.stdout.is_empty());
+}
+
+/// Issue 29, 2: a board that goes away mid-script is said as such (not "Broken pipe"), and
+/// the script fails.
+#[test]
+fn the_console_says_when_the_board_went_away() {
+    let mut board = Served::start(None, "5", "console-gone");
+    let script = common::scratch("serve").join("gone.txt");
+    std::fs::write(&script, "status\nsleep 1.5\nstatus\nstatus\n").unwrap();
+    let child = common::host_sim()
+        .args(["--json", "console"])
+        .args(&board.connection)
+        .args(["--script", script.to_str().unwrap()])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(700));
+    board.kill();
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(report["closed_by_board"], true, "{report}");
+    assert_eq!(report["exchanges"].as_array().unwrap().len(), 1);
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(said.contains("the board closed the connection"), "{said}");
 }

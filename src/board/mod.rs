@@ -24,7 +24,7 @@ use heapless::String;
 
 use crate::controller::{Boot, Controller, Settings};
 use crate::drive::Amplifier;
-use crate::image::{Image, ImageError};
+use crate::image::{Image, ImageError, PowerUp};
 use crate::numerics::decimal::Decimal;
 use crate::safety::FailureMode;
 
@@ -167,16 +167,28 @@ impl<'a, K: Keeper> Board<'a, K> {
                 &mut started.notice,
             ),
             Ok(bias_volts) => {
-                let (target_hz, max_volts) = slot
-                    .as_ref()
-                    .map_or((0.0, 0.0), |c| (c.settings().target_hz, c.max_volts()));
+                let waits = image.0.power_up == PowerUp::Wait;
+                if waits {
+                    // Checked, not switched on: at 0 V with the stage off until `start`
+                    // (as `clear` leaves it).
+                    if let Some(c) = slot.as_mut() {
+                        c.stop();
+                    }
+                }
+                let (target_hz, max_volts) = slot.as_ref().map_or((0.0, 0.0), |c| {
+                    (c.settings().target_hz, board.max_volts(c))
+                });
                 let _ = write!(
                     started.notice,
-                    "ready target_hz={} bias_volts={} max_volts={} settings={source}",
+                    "ready target_hz={} bias_volts={} max_volts={} settings={source} power_up={}",
                     Decimal(target_hz),
                     Decimal(bias_volts),
-                    Decimal(max_volts)
+                    Decimal(max_volts),
+                    image.0.power_up.name()
                 );
+                if waits {
+                    let _ = write!(started.notice, " (the output off at 0 V: `start` to drive)");
+                }
             }
         }
         (board, started)
@@ -242,6 +254,13 @@ impl<'a, K: Keeper> Board<'a, K> {
     /// (`None`: refused).
     pub fn booted(&self) -> Option<&Boot> {
         self.booted.as_ref()
+    }
+
+    /// The highest voltage the board can command under `c`: the cap in force, or the
+    /// amplifier's top (its rail, or the DAC's top code) where that is lower, V.
+    pub fn max_volts(&self, c: &Controller) -> f32 {
+        let top = self.image.map_or(f32::INFINITY, |(_, a)| a.max_volts());
+        c.max_volts().min(top)
     }
 
     /// The image booted from (`None`: none that reads).

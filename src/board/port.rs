@@ -7,8 +7,10 @@ use core::fmt::Write as _;
 use heapless::{String, Vec};
 
 use super::{Board, Keeper};
-use crate::board::protocol::{self, Command, ErrorCode, ParseError, Status, MAX_LINE};
-use crate::controller::{Controller, Inputs, Phase, Refusal, Setting, Settings};
+use crate::board::protocol::{
+    self, Command, ErrorCode, MaxBy, ParseError, Refused, Status, MAX_LINE,
+};
+use crate::controller::{Controller, Phase, Refusal, Setting, Settings};
 use crate::numerics::decimal::Decimal;
 
 /// One request as received: its bytes, or why it has none.
@@ -68,19 +70,9 @@ pub enum Then {
 }
 
 /// A reply line (one `ok …` or `err …`, without its `\n`); cut short if it would not fit.
-pub type ReplyLine = String<384>;
+pub type ReplyLine = String<640>;
 
-/// What the reply's status fields take from the hardware, read by the command task.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Extras {
-    /// The longest tick so far, core cycles.
-    pub tick_cycles_max: u32,
-    pub stack_bytes: u32,
-    /// An independent clock at the last tick, µs (QEMU builds).
-    pub clock_us: Option<u32>,
-    /// The last tick's readings of the analog inputs, in units (`acquire`).
-    pub readings: Inputs,
-}
+pub use protocol::Extras;
 
 /// The controller as the command task reaches it: under a lock shared with the tick.
 pub trait Shared {
@@ -142,8 +134,35 @@ impl<K: Keeper> Board<'_, K> {
                 return Then::Reply;
             }
         };
-        if let Command::Help = command {
-            let _ = write!(out, "ok {}", protocol::HELP);
+        match command {
+            Command::Help(None) => {
+                let _ = write!(out, "ok {}", protocol::HELP);
+                return Then::Reply;
+            }
+            Command::Help(Some(setting)) => {
+                let _ = write!(
+                    out,
+                    "ok {} ({}): {}",
+                    setting.key(),
+                    setting.unit(),
+                    setting.rule()
+                );
+                return Then::Reply;
+            }
+            _ => {}
+        }
+        // Status always answers: while nothing runs, with why.
+        let runs = controller.with(|c| c.is_some());
+        if let (Command::Status, false) = (command, runs) {
+            let why = self.refusal().unwrap_or("no image");
+            let _ = write!(
+                out,
+                "ok {}",
+                Refused {
+                    hardware: *extras,
+                    why
+                }
+            );
             return Then::Reply;
         }
         if self.image.is_none() {
@@ -154,13 +173,19 @@ impl<K: Keeper> Board<'_, K> {
         let running = controller.with(|c| c.as_ref().map(|c| *c.settings()));
         let settings = running.unwrap_or(self.idle_settings);
         match command {
-            Command::Get(setting) => {
+            Command::Get(Some(setting)) => {
                 let _ = write!(
                     out,
                     "ok {}={}",
                     setting.key(),
                     Decimal(settings.get(setting))
                 );
+            }
+            Command::Get(None) => {
+                let _ = write!(out, "ok");
+                for setting in Setting::ALL {
+                    let _ = write!(out, " {}={}", setting.key(), Decimal(settings.get(setting)));
+                }
             }
             Command::Set(setting, value) => {
                 if setting == Setting::TickHz && value != settings.tick_hz {
@@ -210,9 +235,10 @@ impl<K: Keeper> Board<'_, K> {
             Command::Status => {
                 // Read under the lock, written out after it: formatting the numbers takes
                 // thousands of instructions the tick must not wait for.
+                let top = self.image.map_or(f32::INFINITY, |(_, a)| a.max_volts());
                 let limit = self.limit;
                 if let Some(status) =
-                    controller.with(|c| c.as_ref().map(|c| status(c, limit, extras)))
+                    controller.with(|c| c.as_ref().map(|c| status(c, limit, top, extras)))
                 {
                     let _ = write!(out, "ok {status}");
                 }
@@ -262,7 +288,7 @@ impl<K: Keeper> Board<'_, K> {
                 if !replace_at_rest(controller, None) {
                     err(
                         out,
-                        ErrorCode::Busy,
+                        ErrorCode::State,
                         "reset at 0 V only: `stop` first, or wait for a fault's descent",
                     );
                     return Then::Reply;
@@ -270,7 +296,7 @@ impl<K: Keeper> Board<'_, K> {
                 let _ = write!(out, "ok reset: output off, restarting");
                 return Then::Reset;
             }
-            Command::Help => {}
+            Command::Help(_) => {}
         }
         Then::Reply
     }
@@ -338,7 +364,7 @@ impl<K: Keeper> Board<'_, K> {
         if !at_zero(controller) {
             err(
                 out,
-                ErrorCode::Busy,
+                ErrorCode::State,
                 "clear re-arms at 0 V only: `stop` first, or wait for a fault's descent",
             );
             return;
@@ -394,20 +420,28 @@ fn replace_at_rest(controller: &mut impl Shared, next: Option<Controller>) -> bo
     })
 }
 
-/// The status line of a controller.
-fn status(c: &Controller, limit: Option<crate::safety::FailureMode>, extras: &Extras) -> Status {
+/// The status line of a controller, under an amplifier whose top is `top_volts`.
+fn status(
+    c: &Controller,
+    limit: Option<crate::safety::FailureMode>,
+    top_volts: f32,
+    extras: &Extras,
+) -> Status {
+    let (max_volts, max_by) = if top_volts < c.max_volts() {
+        (top_volts, MaxBy::Amplifier)
+    } else {
+        (c.max_volts(), MaxBy::Cap)
+    };
     Status {
         phase: c.phase(),
         target_hz: c.settings().target_hz,
         bias_volts: c.plan().bias_volts,
         volts: c.last_volts(),
-        max_volts: c.max_volts(),
+        max_volts,
+        max_by,
         limit,
         ticks: c.ticks(),
-        tick_cycles_max: extras.tick_cycles_max,
-        stack_bytes: extras.stack_bytes,
-        clock_us: extras.clock_us,
-        readings: extras.readings,
+        hardware: *extras,
         fault: c.latched_fault(),
     }
 }

@@ -23,13 +23,16 @@ pub const NOTICE: &str = "# ";
 pub const MAX_LINE: usize = 96;
 
 /// What `help` answers, one line.
-pub const HELP: &str = "commands: help | status | start | target <Hz> | ac <volts> <Hz> | stop | \
-                        trim | clear | get <setting> | set <setting> <value> | save | reset";
+pub const HELP: &str =
+    "commands: help [setting] | status | start | target <Hz> | ac <volts> <Hz> | \
+                        stop | trim | clear | get [setting] | set <setting> <value> | save | \
+                        reset (`get` lists every setting; `help <setting>` its unit and range)";
 
 /// A request.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Command {
-    Help,
+    /// The commands, or one setting's meaning, unit and range.
+    Help(Option<Setting>),
     /// Phase, target, bias, cap, limit mode, last fault, ticks.
     Status,
     /// Switch the high voltage on: the plan of the settings in force, checked as `target`
@@ -52,7 +55,8 @@ pub enum Command {
     /// Re-arm after a latched fault, or at 0 V: the boot checks again, the output left off at
     /// 0 V (`start` switches it on: no command named `clear` does).
     Clear,
-    Get(Setting),
+    /// One setting's value, or every setting's (`None`).
+    Get(Option<Setting>),
     Set(Setting, f32),
     /// Store the settings in force in flash: the firmware boots with them from then on.
     Save,
@@ -76,16 +80,19 @@ pub enum ErrorCode {
     Config = 5,
     /// This build does not carry what the request needs.
     Unsupported = 6,
+    /// Not in this state: the request needs the output at rest at 0 V (`stop` first).
+    State = 7,
 }
 
 impl ErrorCode {
-    pub const ALL: [ErrorCode; 6] = [
+    pub const ALL: [ErrorCode; 7] = [
         ErrorCode::Syntax,
         ErrorCode::Refused,
         ErrorCode::Busy,
         ErrorCode::Faulted,
         ErrorCode::Config,
         ErrorCode::Unsupported,
+        ErrorCode::State,
     ];
 
     /// The code with this number.
@@ -110,7 +117,10 @@ pub enum ParseError {
     /// Bytes that are not printable ASCII.
     NotText,
     UnknownCommand,
-    UnknownSetting,
+    /// No setting has this key; the nearest one, if one is near.
+    UnknownSetting {
+        nearest: Option<Setting>,
+    },
     /// Argument `index` (from 1) is missing.
     Missing {
         index: u8,
@@ -130,8 +140,12 @@ impl fmt::Display for ParseError {
             ParseError::TooLong => write!(f, "line longer than {MAX_LINE} bytes, dropped"),
             ParseError::NotText => write!(f, "line holds bytes that are not printable ASCII"),
             ParseError::UnknownCommand => write!(f, "unknown command; try `help`"),
-            ParseError::UnknownSetting => {
-                write!(f, "unknown setting; the settings are those of `Settings`")
+            ParseError::UnknownSetting { nearest } => {
+                write!(f, "unknown setting")?;
+                if let Some(s) = nearest {
+                    write!(f, "; did you mean `{}`?", s.key())?;
+                }
+                write!(f, " (`get` lists every setting)")
             }
             ParseError::Missing { index } => write!(f, "argument {index} is missing"),
             ParseError::Extra => write!(f, "too many arguments"),
@@ -159,7 +173,7 @@ pub fn parse(line: &[u8]) -> Result<Command, ParseError> {
     let name = words.next().ok_or(ParseError::Empty)?;
     let mut args = Args { words, index: 0 };
     let command = match name {
-        "help" => Command::Help,
+        "help" => Command::Help(args.optional_setting()?),
         "status" => Command::Status,
         "start" => Command::Start,
         "target" => Command::Target { hz: args.number()? },
@@ -170,7 +184,7 @@ pub fn parse(line: &[u8]) -> Result<Command, ParseError> {
         "stop" => Command::Stop,
         "trim" => Command::Trim,
         "clear" => Command::Clear,
-        "get" => Command::Get(args.setting()?),
+        "get" => Command::Get(args.optional_setting()?),
         "set" => Command::Set(args.setting()?, args.number()?),
         "save" => Command::Save,
         "reset" => Command::Reset,
@@ -201,8 +215,67 @@ impl<'a, I: Iterator<Item = &'a str>> Args<'a, I> {
     }
 
     fn setting(&mut self) -> Result<Setting, ParseError> {
-        Setting::from_key(self.word()?).ok_or(ParseError::UnknownSetting)
+        let word = self.word()?;
+        Setting::from_key(word).ok_or(ParseError::UnknownSetting {
+            nearest: nearest_setting(word),
+        })
     }
+
+    /// A setting if a word is left, `None` if none is.
+    fn optional_setting(&mut self) -> Result<Option<Setting>, ParseError> {
+        match self.words.next() {
+            None => Ok(None),
+            Some(word) => {
+                self.index += 1;
+                Setting::from_key(word)
+                    .map(Some)
+                    .ok_or(ParseError::UnknownSetting {
+                        nearest: nearest_setting(word),
+                    })
+            }
+        }
+    }
+}
+
+/// The setting whose key is nearest `word` (edit distance, case ignored) if it is within a
+/// third of the key's length: a typo's suggestion.
+fn nearest_setting(word: &str) -> Option<Setting> {
+    Setting::ALL
+        .into_iter()
+        .map(|s| (edit_distance(word.as_bytes(), s.key().as_bytes()), s))
+        .filter(|&(d, s)| d <= s.key().len() / 3)
+        .min_by_key(|&(d, _)| d)
+        .map(|(_, s)| s)
+}
+
+/// Levenshtein distance over ASCII (case ignored), for words up to 32 bytes (longer: far).
+fn edit_distance(a: &[u8], b: &[u8]) -> usize {
+    const MAX: usize = 32;
+    if a.len() > MAX || b.len() > MAX {
+        return usize::MAX;
+    }
+    let mut row = [0usize; MAX + 1];
+    for (j, slot) in row.iter_mut().enumerate() {
+        *slot = j;
+    }
+    for (i, &x) in a.iter().enumerate() {
+        let mut diagonal = i;
+        let mut left = i + 1;
+        for (j, &y) in b.iter().enumerate() {
+            let up = row.get(j + 1).copied().unwrap_or(usize::MAX);
+            let cost = usize::from(!x.eq_ignore_ascii_case(&y));
+            let next = (diagonal + cost).min(up + 1).min(left + 1);
+            diagonal = up;
+            if let Some(slot) = row.get_mut(j + 1) {
+                *slot = next;
+            }
+            left = next;
+        }
+        if let Some(slot) = row.get_mut(0) {
+            *slot = i + 1;
+        }
+    }
+    row.get(b.len()).copied().unwrap_or(usize::MAX)
 }
 
 /// A decimal number (`-12.5`, `.5`, `3e-4`, `1E3`) as the nearest f32, or `None` for anything
@@ -305,24 +378,30 @@ impl<'a> Reply<'a> {
     /// The value of `key=` in an `ok` reply of key=value pairs (`fault=` takes the rest of
     /// the line: it is always last).
     pub fn field(&self, key: &str) -> Option<&'a str> {
-        let Reply::Ok(text) = *self else {
-            return None;
+        self.pairs().find(|(k, _)| *k == key).map(|(_, v)| v)
+    }
+
+    /// The `key=value` pairs of an `ok` reply, in order (`fault=` takes the rest of the
+    /// line); none for an `err`.
+    pub fn pairs(&self) -> impl Iterator<Item = (&'a str, &'a str)> {
+        let mut rest = match *self {
+            Reply::Ok(text) => text,
+            Reply::Err { .. } => "",
         };
-        let mut rest = text;
-        while !rest.is_empty() {
+        core::iter::from_fn(move || loop {
+            if rest.is_empty() {
+                return None;
+            }
             let (pair, after) = if rest.starts_with("fault=") {
                 (rest, "")
             } else {
                 rest.split_once(' ').unwrap_or((rest, ""))
             };
-            if let Some((k, v)) = pair.split_once('=') {
-                if k == key {
-                    return Some(v);
-                }
-            }
             rest = after;
-        }
-        None
+            if let Some(kv) = pair.split_once('=') {
+                return Some(kv);
+            }
+        })
     }
 }
 
@@ -335,39 +414,57 @@ pub struct Status {
     pub bias_volts: f32,
     /// The voltage commanded at the last tick, V.
     pub volts: f32,
-    /// The cap in force, V.
+    /// The highest voltage the board may command: the cap in force, or the amplifier's top
+    /// (rail or top code) where lower, V.
     pub max_volts: f32,
+    /// Which of the two sets `max_volts`.
+    pub max_by: MaxBy,
     /// The first failure above it (the limit's mode), when the chip solved it.
     pub limit: Option<FailureMode>,
     pub ticks: u32,
-    /// The longest tick so far, core clock cycles (SysTick counts).
-    pub tick_cycles_max: u32,
-    /// The deepest stack so far, bytes.
-    pub stack_bytes: u32,
-    /// Virtual time from an independent clock, µs (QEMU builds only).
-    pub clock_us: Option<u32>,
-    /// The last tick's readings of the fitted analog inputs, in units.
-    pub readings: Inputs,
+    pub hardware: Extras,
     /// The fault that brings the output down to 0 V and holds it there, if any.
     pub fault: Option<Fault>,
 }
 
-impl fmt::Display for Status {
+/// What bounds the voltage a board may command.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MaxBy {
+    /// The cap in force (the model's limit less the margin, an operator's or an estimate's).
+    Cap,
+    /// The amplifier: its rail, or the DAC's top code.
+    Amplifier,
+}
+
+impl MaxBy {
+    pub fn name(self) -> &'static str {
+        match self {
+            MaxBy::Cap => "cap",
+            MaxBy::Amplifier => "amplifier",
+        }
+    }
+}
+
+/// What the status line takes from the hardware, read by the command task.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Extras {
+    /// The longest tick so far, core cycles (`None` where they are not cycles: under QEMU a
+    /// tick after a `wfi` counts QEMU's wake-up; `count` gives its instructions).
+    pub tick_cycles_max: Option<u32>,
+    /// The deepest stack so far, bytes.
+    pub stack_bytes: u32,
+    /// Virtual time from an independent clock, µs (QEMU builds only).
+    pub clock_us: Option<u32>,
+    /// The last tick's readings of the fitted analog inputs, in units (`acquire`).
+    pub readings: Inputs,
+}
+
+impl fmt::Display for Extras {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(
-            f,
-            "phase={} target_hz={} bias_volts={} volts={} max_volts={} limit={} ticks={} \
-             tick_cycles_max={} stack_bytes={}",
-            self.phase.name(),
-            Decimal(self.target_hz),
-            Decimal(self.bias_volts),
-            Decimal(self.volts),
-            Decimal(self.max_volts),
-            self.limit.map_or("unknown", FailureMode::name),
-            self.ticks,
-            self.tick_cycles_max,
-            self.stack_bytes,
-        )?;
+        if let Some(cycles) = self.tick_cycles_max {
+            write!(f, " tick_cycles_max={cycles}")?;
+        }
+        write!(f, " stack_bytes={}", self.stack_bytes)?;
         if let Some(us) = self.clock_us {
             write!(f, " clock_us={us}")?;
         }
@@ -381,10 +478,48 @@ impl fmt::Display for Status {
                 write!(f, " {key}={}", Decimal(value))?;
             }
         }
+        Ok(())
+    }
+}
+
+impl fmt::Display for Status {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "phase={} target_hz={} bias_volts={} volts={} max_volts={} max_by={} limit={} \
+             ticks={}{}",
+            self.phase.name(),
+            Decimal(self.target_hz),
+            Decimal(self.bias_volts),
+            Decimal(self.volts),
+            Decimal(self.max_volts),
+            self.max_by.name(),
+            self.limit.map_or("unknown", FailureMode::name),
+            self.ticks,
+            self.hardware,
+        )?;
         match self.fault {
             Some(fault) => write!(f, " fault={fault}"),
             None => write!(f, " fault=none"),
         }
+    }
+}
+
+/// What `status` answers while no controller runs (no image, or the boot checks refused):
+/// the output off at 0 V, and why, last (as a fault is).
+#[derive(Clone, Copy, Debug)]
+pub struct Refused<'a> {
+    pub hardware: Extras,
+    pub why: &'a str,
+}
+
+impl fmt::Display for Refused<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "phase=refused volts=0{} fault={}",
+            self.hardware, self.why
+        )
     }
 }
 
@@ -447,13 +582,48 @@ mod tests {
             parse(b"set margin 0.1"),
             Ok(Command::Set(Setting::Margin, 0.1))
         );
-        assert_eq!(parse(b"get tick_hz"), Ok(Command::Get(Setting::TickHz)));
+        assert_eq!(
+            parse(b"get tick_hz"),
+            Ok(Command::Get(Some(Setting::TickHz)))
+        );
+        assert_eq!(parse(b"get"), Ok(Command::Get(None)));
+        assert_eq!(parse(b"help"), Ok(Command::Help(None)));
+        assert_eq!(
+            parse(b"help ac_volts"),
+            Ok(Command::Help(Some(Setting::AcVolts)))
+        );
         assert_eq!(parse(b""), Err(ParseError::Empty));
         assert_eq!(parse(b"target"), Err(ParseError::Missing { index: 1 }));
         assert_eq!(parse(b"ac 100"), Err(ParseError::Missing { index: 2 }));
         assert_eq!(parse(b"stop now"), Err(ParseError::Extra));
         assert_eq!(parse(b"target 4x"), Err(ParseError::BadNumber { index: 1 }));
-        assert_eq!(parse(b"get volume"), Err(ParseError::UnknownSetting));
+        assert_eq!(
+            parse(b"get volume"),
+            Err(ParseError::UnknownSetting { nearest: None })
+        );
+        // A typo's suggestion: one letter off, a letter missing, two swapped, case.
+        for (typo, meant) in [
+            ("ac_volt", Setting::AcVolts),
+            ("acvolts", Setting::AcVolts),
+            ("tagret_hz", Setting::TargetHz),
+            ("MARGIN", Setting::Margin),
+            ("slew_volts_per_secnd", Setting::SlewVoltsPerSecond),
+        ] {
+            let mut line = heapless::Vec::<u8, 64>::new();
+            let _ = line.extend_from_slice(b"set ");
+            let _ = line.extend_from_slice(typo.as_bytes());
+            let _ = line.extend_from_slice(b" 1");
+            assert_eq!(
+                parse(&line),
+                Err(ParseError::UnknownSetting {
+                    nearest: Some(meant)
+                }),
+                "{typo}"
+            );
+        }
+        assert_eq!(edit_distance(b"kitten", b"sitting"), 3);
+        assert_eq!(edit_distance(b"", b"abc"), 3);
+        assert_eq!(edit_distance(b"flaw", b"lawn"), 2);
         assert_eq!(parse(b"start"), Ok(Command::Start));
         assert_eq!(parse(b"launch"), Err(ParseError::UnknownCommand));
         assert_eq!(parse(b"target \xff44"), Err(ParseError::NotText));
@@ -479,14 +649,17 @@ mod tests {
             bias_volts: 7449.5,
             volts: 7500.25,
             max_volts: 9361.9,
+            max_by: MaxBy::Cap,
             limit: Some(FailureMode::Emi),
             ticks: 12,
-            tick_cycles_max: 300,
-            stack_bytes: 1024,
-            clock_us: None,
-            readings: Inputs {
-                current_amps: Some(-2.5e-6),
-                ..Inputs::NONE
+            hardware: Extras {
+                tick_cycles_max: None,
+                stack_bytes: 1024,
+                clock_us: None,
+                readings: Inputs {
+                    current_amps: Some(-2.5e-6),
+                    ..Inputs::NONE
+                },
             },
             fault: Some(Fault::Bus),
         };
@@ -501,6 +674,8 @@ mod tests {
             .and_then(|v| v.parse::<f32>().ok());
         assert_eq!(amps, Some(-2.5e-6));
         assert_eq!(reply.field("stretch"), None);
+        assert_eq!(reply.field("tick_cycles_max"), None);
+        assert_eq!(reply.field("max_by"), Some("cap"));
         assert_eq!(reply.field("fault"), Some("DAC bus error"));
         assert_eq!(
             Reply::parse("err 2 target out of range"),

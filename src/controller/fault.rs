@@ -23,6 +23,15 @@ pub enum Fault {
     Device(ParamError),
     /// A setting is NaN, out of range, or makes the plan too long.
     Setting { setting: Setting, value: f32 },
+    /// The AC (`ac_volts`) or the AC and the probe (`probe_volts`) about the bias reach
+    /// outside [0 V, the cap in force]: the span they would drive, V.
+    Swing {
+        setting: Setting,
+        value: f32,
+        low_volts: f32,
+        high_volts: f32,
+        max_volts: f32,
+    },
     /// The tuning table is corrupted, out of order, for another device, or misses the target.
     Table(TableError),
     /// The direct solve cannot reach the target (out of range, bad target or margin).
@@ -89,6 +98,27 @@ impl fmt::Display for Fault {
                     Decimal(*value),
                     setting.rule()
                 )
+            }
+            Fault::Swing {
+                setting,
+                value,
+                low_volts,
+                high_volts,
+                max_volts,
+            } => {
+                write!(
+                    f,
+                    "`{}` = {} V about the bias spans {} .. {} V: ",
+                    setting.key(),
+                    Decimal(*value),
+                    Decimal(*low_volts),
+                    Decimal(*high_volts)
+                )?;
+                if *high_volts > *max_volts {
+                    write!(f, "above the cap {} V", Decimal(*max_volts))
+                } else {
+                    write!(f, "below 0 V (the amplifier is unipolar): raise the bias")
+                }
             }
             Fault::Table(e) => write!(f, "table: {e}"),
             Fault::Tune(e) => write!(f, "tuning: {e}"),
@@ -209,6 +239,7 @@ impl Fault {
         match self {
             Fault::Device(_)
             | Fault::Setting { .. }
+            | Fault::Swing { .. }
             | Fault::Table(_)
             | Fault::Tune(_)
             | Fault::Disagree { .. }

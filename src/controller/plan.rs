@@ -204,14 +204,18 @@ impl Plan {
     pub(super) fn probe_back(&mut self, probe_volts: f32, max_volts: f32) -> Result<(), Fault> {
         // No probe asked for: nothing comes back, whatever the cap (a cap below the bias is
         // the way down's business, not the probe's).
-        if !(probe_volts > 0.0) || self.bias_volts + self.ac_volts + probe_volts <= max_volts {
+        let swing = self.ac_volts + probe_volts;
+        if !(probe_volts > 0.0) || self.bias_volts + swing <= max_volts {
             self.probe_volts = probe_volts;
             Ok(())
         } else {
             self.probe_volts = 0.0;
-            Err(Fault::Setting {
+            Err(Fault::Swing {
                 setting: Setting::ProbeVolts,
                 value: probe_volts,
+                low_volts: self.bias_volts - swing,
+                high_volts: self.bias_volts + swing,
+                max_volts,
             })
         }
     }
@@ -240,22 +244,25 @@ impl Plan {
                 max_volts,
             });
         }
-        let fits = |swing: f32| {
-            ac_bias_volts - swing >= 0.0 && ac_bias_volts.max(self.bias_volts) + swing <= max_volts
+        let fits = |setting: Setting, value: f32, swing: f32| {
+            let (low_volts, high_volts) = (
+                ac_bias_volts - swing,
+                ac_bias_volts.max(self.bias_volts) + swing,
+            );
+            if low_volts >= 0.0 && high_volts <= max_volts {
+                Ok(())
+            } else {
+                Err(Fault::Swing {
+                    setting,
+                    value,
+                    low_volts,
+                    high_volts,
+                    max_volts,
+                })
+            }
         };
-        if !fits(self.ac_volts) {
-            return Err(Fault::Setting {
-                setting: Setting::AcVolts,
-                value: self.ac_volts,
-            });
-        }
-        if !fits(self.swing_volts()) {
-            return Err(Fault::Setting {
-                setting: Setting::ProbeVolts,
-                value: self.probe_volts,
-            });
-        }
-        Ok(())
+        fits(Setting::AcVolts, self.ac_volts, self.ac_volts)?;
+        fits(Setting::ProbeVolts, self.probe_volts, self.swing_volts())
     }
 
     /// Run the plan through the model (RK4, f32, one step a tick, subdivided for stability)
@@ -368,9 +375,12 @@ mod tests {
         assert_eq!(plan.probe_volts, 20.0);
         assert_eq!(
             plan.probe_back(20.0, 4049.0),
-            Err(Fault::Setting {
+            Err(Fault::Swing {
                 setting: Setting::ProbeVolts,
-                value: 20.0
+                value: 20.0,
+                low_volts: 3950.0,
+                high_volts: 4050.0,
+                max_volts: 4049.0
             })
         );
         assert_eq!(plan.probe_volts, 0.0);

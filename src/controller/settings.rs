@@ -418,6 +418,30 @@ impl Setting {
 }
 
 impl Setting {
+    /// The unit its value is in (the key's suffix says it too).
+    pub fn unit(self) -> &'static str {
+        match self {
+            Setting::TargetHz | Setting::AcHz | Setting::TickHz | Setting::ProbeHz => "Hz",
+            Setting::AcVolts
+            | Setting::ProbeVolts
+            | Setting::TrimPulseVolts
+            | Setting::AmplifierToleranceVolts => "V",
+            Setting::SlewVoltsPerSecond => "V/s",
+            Setting::SettleSeconds
+            | Setting::CheckSeconds
+            | Setting::TrimWindowSeconds
+            | Setting::TrimEverySeconds
+            | Setting::TrackSeconds => "s",
+            Setting::LeakageFloorOhms => "ohm",
+            Setting::LeakageFallPerSecond => "1/s",
+            Setting::StuckSamples => "samples",
+            Setting::Margin
+            | Setting::Agreement
+            | Setting::TrimTolerance
+            | Setting::TrimProbeFraction => "fraction",
+        }
+    }
+
     /// What the checks ask of it, said when they refuse it.
     pub fn rule(self) -> &'static str {
         match self {

@@ -1,14 +1,23 @@
 //! `console`: talk to the firmware's command port (the core's `protocol`) over a serial port,
 //! a TCP socket or a Unix socket (QEMU's USART2), typed at a prompt or from a script.
+//!
+//! A reader thread takes every line the board sends: what it says on its own (`# …`: the
+//! start-up line, a reset, a fault) is shown as it arrives, replies go to the request that
+//! waits for them. Two requests are the console's own, not sent: `sleep <s>` and
+//! `wait <key>=<value>[|<value>…] [<s>]` (asks `status` until the field holds one of the
+//! values; a script fails when the time runs out).
 
 use std::fmt;
-use std::io::{BufRead, BufReader, Read, Write};
+use std::io::{BufRead, BufReader, IsTerminal, Read, Write};
 use std::path::PathBuf;
-use std::time::Duration;
+use std::sync::mpsc::{self, Receiver, RecvTimeoutError};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
 
 use clap::Args;
 use de_resonator::board::protocol::{Reply, NOTICE};
 use serde::Serialize;
+use serde_json::{Map, Value};
 
 use super::Report;
 
@@ -30,9 +39,12 @@ pub struct ConsoleArgs {
     #[arg(long, value_name = "BAUD", default_value_t = 115_200)]
     pub baud: u32,
     /// Requests from FILE, one a line (`#` comments and blank lines skipped); status 1 if any gets
-    /// an `err`.
+    /// an `err` or a `wait` runs out of time.
     ///
-    /// Without it: a prompt on stdin.
+    /// Without it: requests from stdin, with a prompt on a terminal. Besides the board's
+    /// requests (`help`), the console's own: `sleep <S>` waits S seconds; `wait
+    /// <key>=<value>[|<value>…] [<S>]` asks `status` every 0.1 s until the field holds one of
+    /// the values (e.g. `wait phase=driving 10`; default 30 s).
     #[arg(long, value_name = "FILE")]
     pub script: Option<PathBuf>,
     /// How long to wait for a reply, s.
@@ -51,14 +63,21 @@ pub struct Exchange {
     pub request: String,
     pub reply: String,
     pub ok: bool,
+    /// An `ok` reply's `key=value` pairs (numbers as numbers; `fault` takes the rest of the
+    /// line), or an `err`'s `code` and `message`.
+    pub fields: Map<String, Value>,
 }
 
 /// What a console session did.
 #[derive(Serialize, Debug)]
 pub struct ConsoleReport {
-    /// Lines the firmware said on its own (`# …`: its start-up banner).
+    /// Lines the firmware said on its own (`# …`: its start-up line, a reset, a fault).
     pub notices: Vec<String>,
     pub exchanges: Vec<Exchange>,
+    /// Whether the board closed the connection before the requests were done.
+    pub closed_by_board: bool,
+    /// Why a script stopped before its end (a `wait` that ran out of time, a silent board).
+    pub stopped: Option<String>,
     #[serde(skip)]
     script: bool,
 }
@@ -71,23 +90,55 @@ impl fmt::Display for ConsoleReport {
             "{} requests, {} answered `err`",
             self.exchanges.len(),
             errors
-        )
+        )?;
+        if self.closed_by_board {
+            write!(f, "; the board closed the connection")?;
+        }
+        Ok(())
     }
 }
 
 impl Report for ConsoleReport {
     fn failure(&self) -> Option<String> {
+        if self.closed_by_board {
+            return Some("the board closed the connection".into());
+        }
+        if let Some(why) = &self.stopped {
+            return Some(why.clone());
+        }
         let first = self.exchanges.iter().find(|e| !e.ok)?;
         self.script
             .then(|| format!("`{}` got `{}`", first.request, first.reply))
     }
 }
 
+/// The fields of a reply line: `ok`'s pairs, `err`'s code and message.
+pub fn fields(line: &str) -> Map<String, Value> {
+    let mut map = Map::new();
+    match Reply::parse(line) {
+        Some(reply @ Reply::Ok(_)) => {
+            for (key, value) in reply.pairs() {
+                let value = match value.parse::<f64>() {
+                    Ok(n) if n.is_finite() => Value::from(n),
+                    _ => Value::from(value),
+                };
+                map.insert(key.into(), value);
+            }
+        }
+        Some(Reply::Err { code, message }) => {
+            map.insert("code".into(), Value::from(code as u8));
+            map.insert("message".into(), Value::from(message));
+        }
+        None => {}
+    }
+    map
+}
+
 trait Port: Read + Write {}
 impl<T: Read + Write> Port for T {}
 
 /// A connection: its reading half and its writing half.
-type Halves = (Box<dyn Read>, Box<dyn Port>);
+type Halves = (Box<dyn Read + Send>, Box<dyn Port>);
 
 /// The connection asked for: a reader and a writer on it.
 fn connect(args: &ConsoleArgs, timeout: Duration) -> Result<Halves, String> {
@@ -124,32 +175,155 @@ fn say(line: &str) {
     let _ = writeln!(out, "{line}").and_then(|()| out.flush());
 }
 
-/// Read lines until a reply, keeping the notices before it.
-fn reply(
-    reader: &mut impl BufRead,
-    notices: &mut Vec<String>,
+/// What the reader thread hands the requests: a reply line, or the end of the connection.
+enum Heard {
+    Reply(String),
+    NotAReply(String),
+    Closed(String),
+}
+
+/// Read every line the board sends: notices kept (and shown at once when `echo`), the rest
+/// handed on.
+fn listen(
+    reader: Box<dyn Read + Send>,
+    notices: Arc<Mutex<Vec<String>>>,
     echo: bool,
-) -> Result<String, String> {
-    loop {
-        let mut line = String::new();
-        match reader.read_line(&mut line) {
-            Ok(0) => return Err("the firmware closed the connection".into()),
-            Ok(_) => {}
-            Err(e) => return Err(format!("no reply: {e}")),
-        }
-        let line = line.trim_end().to_string();
-        if line.starts_with(NOTICE) {
-            if echo {
-                say(&line);
+) -> Receiver<Heard> {
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        let mut reader = BufReader::new(reader);
+        loop {
+            let mut line = String::new();
+            let heard = match reader.read_line(&mut line) {
+                Ok(0) => Heard::Closed("the board closed the connection".into()),
+                Ok(_) => {
+                    let line = line.trim_end().to_string();
+                    if line.starts_with(NOTICE) {
+                        if echo {
+                            say(&line);
+                        }
+                        if let Ok(mut kept) = notices.lock() {
+                            kept.push(line);
+                        }
+                        continue;
+                    }
+                    if Reply::parse(&line).is_some() {
+                        Heard::Reply(line)
+                    } else {
+                        Heard::NotAReply(line)
+                    }
+                }
+                // A read timeout is only a quiet line: keep listening.
+                Err(e)
+                    if matches!(
+                        e.kind(),
+                        std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                    ) =>
+                {
+                    continue
+                }
+                Err(e) => Heard::Closed(format!("the connection failed: {e}")),
+            };
+            let closed = matches!(heard, Heard::Closed(_));
+            if tx.send(heard).is_err() || closed {
+                return;
             }
-            notices.push(line);
-            continue;
         }
-        if Reply::parse(&line).is_some() {
-            return Ok(line);
+    });
+    rx
+}
+
+/// A request of the console's own (not sent to the board).
+#[derive(Debug, PartialEq)]
+enum Local {
+    Sleep(Duration),
+    /// Until `status`'s field `key` holds one of `values`, within the time.
+    Wait {
+        key: String,
+        values: Vec<String>,
+        within: Duration,
+    },
+}
+
+/// The time a `wait` gives the board unless told.
+const WAIT_SECONDS: f64 = 30.0;
+
+/// `sleep <s>` or `wait <key>=<v>[|<v>…] [<s>]`; `None` for a board's request.
+fn local(request: &str) -> Option<Result<Local, String>> {
+    let mut words = request.split_whitespace();
+    let seconds = |word: Option<&str>, default: Option<f64>| -> Result<Duration, String> {
+        let s = match (word, default) {
+            (Some(w), _) => w
+                .parse::<f64>()
+                .map_err(|_| format!("`{request}`: {w} is not a number of seconds"))?,
+            (None, Some(d)) => d,
+            (None, None) => return Err(format!("`{request}`: give the seconds")),
+        };
+        if !(s.is_finite() && (0.0..=86_400.0).contains(&s)) {
+            return Err(format!("`{request}`: {s} s is not in 0 .. 86400 s"));
         }
-        return Err(format!("not a reply: {line:?}"));
+        Ok(Duration::from_secs_f64(s))
+    };
+    match words.next()? {
+        "sleep" => Some(seconds(words.next(), None).map(Local::Sleep)),
+        "wait" => Some((|| {
+            let condition = words
+                .next()
+                .ok_or_else(|| format!("`{request}`: wait <key>=<value> [seconds]"))?;
+            let (key, values) = condition
+                .split_once('=')
+                .filter(|(k, v)| !k.is_empty() && !v.is_empty())
+                .ok_or_else(|| format!("`{request}`: wait <key>=<value> [seconds]"))?;
+            let within = seconds(words.next(), Some(WAIT_SECONDS))?;
+            Ok(Local::Wait {
+                key: key.into(),
+                values: values.split('|').map(String::from).collect(),
+                within,
+            })
+        })()),
+        _ => None,
     }
+}
+
+/// A connected console: the writer, the reader thread's lines, the replies' timeout.
+struct Session {
+    writer: Box<dyn Port>,
+    heard: Receiver<Heard>,
+    timeout: Duration,
+}
+
+impl Session {
+    /// Send one request and wait for its reply; `Err` when the board went away or is silent.
+    fn ask(&mut self, request: &str) -> Result<String, String> {
+        // A connection the board closed is said as such, not as the write's error.
+        if let Ok(Heard::Closed(why)) = self.heard.try_recv() {
+            return Err(why);
+        }
+        self.writer
+            .write_all(format!("{request}\n").as_bytes())
+            .and_then(|()| self.writer.flush())
+            .map_err(|e| match e.kind() {
+                std::io::ErrorKind::BrokenPipe | std::io::ErrorKind::ConnectionReset => {
+                    "the board closed the connection".to_string()
+                }
+                _ => format!("cannot send `{request}`: {e}"),
+            })?;
+        match self.heard.recv_timeout(self.timeout) {
+            Ok(Heard::Reply(line)) => Ok(line),
+            Ok(Heard::NotAReply(line)) => Err(format!("not a reply: {line:?}")),
+            Ok(Heard::Closed(why)) => Err(why),
+            Err(RecvTimeoutError::Timeout) => Err(format!(
+                "no reply to `{request}` in {} s",
+                self.timeout.as_secs_f64()
+            )),
+            Err(RecvTimeoutError::Disconnected) => Err("the board closed the connection".into()),
+        }
+    }
+}
+
+/// Whether an error means the board went away (the session ends, said as such).
+fn gone(why: &str) -> bool {
+    why.starts_with("the board closed") || why.starts_with("the connection failed")
 }
 
 pub fn console(args: &ConsoleArgs, json: bool) -> Result<ConsoleReport, String> {
@@ -159,7 +333,7 @@ pub fn console(args: &ConsoleArgs, json: bool) -> Result<ConsoleReport, String> 
             args.timeout
         ));
     }
-    let requests: Box<dyn Iterator<Item = String>> = match &args.script {
+    let script = match &args.script {
         Some(path) => {
             let text = std::fs::read_to_string(path)
                 .map_err(|e| format!("cannot read script {}: {e}", path.display()))?;
@@ -169,36 +343,137 @@ pub fn console(args: &ConsoleArgs, json: bool) -> Result<ConsoleReport, String> 
                 .filter(|l| !l.is_empty() && !l.starts_with('#'))
                 .map(String::from)
                 .collect();
-            Box::new(lines.into_iter())
+            // The console's own requests checked before anything is sent.
+            for line in &lines {
+                if let Some(Err(why)) = local(line) {
+                    return Err(why);
+                }
+            }
+            Some(lines)
         }
-        None => Box::new(std::io::stdin().lock().lines().map_while(Result::ok)),
+        None => None,
     };
-    let (reader, mut writer) = connect(args, Duration::from_secs_f64(args.timeout))?;
-    let mut reader = BufReader::new(reader);
+    let prompt = script.is_none() && !json && std::io::stdin().is_terminal();
+    let (reader, writer) = connect(args, Duration::from_millis(200))?;
     let echo = !json;
+    if echo {
+        eprintln!("connected to {}", target(args));
+    }
+    let notices = Arc::new(Mutex::new(Vec::new()));
+    let heard = listen(reader, notices.clone(), echo);
+    let mut session = Session {
+        writer,
+        heard,
+        timeout: Duration::from_secs_f64(args.timeout),
+    };
     let mut report = ConsoleReport {
         notices: Vec::new(),
         exchanges: Vec::new(),
-        script: args.script.is_some(),
+        closed_by_board: false,
+        stopped: None,
+        script: script.is_some(),
     };
-    for request in requests {
-        writer
-            .write_all(format!("{request}\n").as_bytes())
-            .and_then(|()| writer.flush())
-            .map_err(|e| format!("cannot send `{request}`: {e}"))?;
-        let line = reply(&mut reader, &mut report.notices, echo)?;
-        if echo {
-            if report.script {
-                say(&format!("> {request}"));
-            }
-            say(&line);
+    let requests: Box<dyn Iterator<Item = String>> = match script {
+        Some(lines) => Box::new(lines.into_iter()),
+        None => Box::new(std::io::stdin().lock().lines().map_while(Result::ok)),
+    };
+    let show_prompt = || {
+        if prompt {
+            let mut out = std::io::stdout().lock();
+            let _ = write!(out, "> ").and_then(|()| out.flush());
         }
-        let ok = matches!(Reply::parse(&line), Some(Reply::Ok(_)));
-        report.exchanges.push(Exchange {
-            request,
-            reply: line,
-            ok,
-        });
+    };
+    show_prompt();
+    for request in requests {
+        let request = request.trim().to_string();
+        if request.is_empty() || request.starts_with('#') {
+            show_prompt();
+            continue;
+        }
+        if echo && report.script {
+            say(&format!("> {request}"));
+        }
+        let done = match local(&request) {
+            Some(Ok(Local::Sleep(time))) => {
+                std::thread::sleep(time);
+                Ok(())
+            }
+            Some(Ok(Local::Wait {
+                key,
+                values,
+                within,
+            })) => wait(&mut session, &key, &values, within, echo),
+            Some(Err(why)) => Err(why),
+            None => session.ask(&request).map(|line| {
+                if echo {
+                    say(&line);
+                }
+                let ok = matches!(Reply::parse(&line), Some(Reply::Ok(_)));
+                report.exchanges.push(Exchange {
+                    request: request.clone(),
+                    fields: fields(&line),
+                    reply: line,
+                    ok,
+                });
+            }),
+        };
+        if let Err(why) = done {
+            if gone(&why) {
+                if echo {
+                    eprintln!("{why}");
+                }
+                report.closed_by_board = true;
+                break;
+            }
+            if report.script {
+                report.stopped = Some(why);
+                break;
+            }
+            eprintln!("error: {why}");
+        }
+        show_prompt();
     }
+    report.notices = notices.lock().map(|n| n.clone()).unwrap_or_default();
     Ok(report)
+}
+
+/// `status` every 0.1 s until its `key` holds one of `values`, within `within`.
+fn wait(
+    session: &mut Session,
+    key: &str,
+    values: &[String],
+    within: Duration,
+    echo: bool,
+) -> Result<(), String> {
+    let end = Instant::now() + within;
+    loop {
+        let line = session.ask("status")?;
+        let now = fields(&line)
+            .get(key)
+            .map(|v| v.as_str().map_or(v.to_string(), String::from));
+        if now.as_ref().is_some_and(|v| values.iter().any(|w| w == v)) {
+            if echo {
+                say(&line);
+            }
+            return Ok(());
+        }
+        if Instant::now() >= end {
+            return Err(format!(
+                "wait {key}={}: not within {} s (last `{line}`)",
+                values.join("|"),
+                within.as_secs_f64()
+            ));
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    }
+}
+
+/// Where the console connects, as said to the user.
+fn target(args: &ConsoleArgs) -> String {
+    match (&args.tcp, &args.unix, &args.port) {
+        (Some(address), _, _) => format!("tcp:{address}"),
+        (_, Some(path), _) => format!("unix:{}", path.display()),
+        (_, _, Some(port)) => format!("{port} at {} baud", args.baud),
+        _ => "nothing".into(),
+    }
 }

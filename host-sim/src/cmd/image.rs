@@ -8,7 +8,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 use de_resonator::acquire::{Channel, FrontEnd};
-use de_resonator::image::{AmplifierSpec, Image, DAC_BITS};
+use de_resonator::image::{AmplifierSpec, Image, PowerUp, DAC_BITS};
 use de_resonator::table::{self, Table};
 use de_resonator::{Controller, DeviceParams, Field, Setting, Settings};
 use serde::Serialize;
@@ -61,13 +61,36 @@ pub struct ImageArgs {
     /// Default: the DAC's full scale times the gain.
     #[arg(long, value_name = "V", allow_negative_numbers = true)]
     pub rail_volts: Option<f32>,
+    /// What the board does once its boot checks pass: `wait` with the output off at 0 V
+    /// for `start` (an HV supply's way), or `drive` at once (a bench run).
+    #[arg(long, value_name = "WHEN", value_enum, default_value_t = PowerUpArg::Wait)]
+    pub power_up: PowerUpArg,
 }
 
-/// One device parameter or setting, for the report.
+/// `--power-up`: the image's [`PowerUp`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum PowerUpArg {
+    /// The output off at 0 V until `start` (the default).
+    Wait,
+    /// Ramp to the bias at power-up.
+    Drive,
+}
+
+impl From<PowerUpArg> for PowerUp {
+    fn from(arg: PowerUpArg) -> Self {
+        match arg {
+            PowerUpArg::Wait => PowerUp::Wait,
+            PowerUpArg::Drive => PowerUp::Drive,
+        }
+    }
+}
+
+/// One device parameter or setting, for the report (`null`: none, as `jlim` of a
+/// neo-Hookean device, which the image holds as 0).
 #[derive(Serialize, Debug)]
 pub struct Entry {
     pub key: &'static str,
-    pub value: f32,
+    pub value: Option<f32>,
 }
 
 /// What the table inside holds.
@@ -106,6 +129,8 @@ pub struct ImageReport {
     /// The device parameters the image holds, in `Field::ALL` order.
     pub device_parameters: Vec<Entry>,
     pub amplifier: Option<AmplifierSummary>,
+    /// What the board does at power-up once the checks pass: `wait` or `drive` (`null`: a table).
+    pub power_up: Option<&'static str>,
     /// The board's analog inputs (empty: none fitted, open loop).
     pub front_end: Option<FrontEndSummary>,
     pub settings: Vec<Entry>,
@@ -173,7 +198,10 @@ impl fmt::Display for ImageReport {
         let list = |entries: &[Entry]| {
             entries
                 .iter()
-                .map(|e| format!("{} = {}", e.key, e.value))
+                .map(|e| match e.value {
+                    Some(value) => format!("{} = {value}", e.key),
+                    None => format!("{} = none", e.key),
+                })
                 .collect::<Vec<_>>()
                 .join(", ")
         };
@@ -186,6 +214,14 @@ impl fmt::Display for ImageReport {
                 "amplifier       {}-bit DAC, reference {} V, gain {}, rail {} V",
                 a.dac_bits, a.dac_reference_volts, a.gain, a.rail_volts
             )?;
+        }
+        match self.power_up {
+            Some("wait") => writeln!(
+                f,
+                "power-up        wait: the output off at 0 V until `start`"
+            )?,
+            Some(_) => writeln!(f, "power-up        drive: ramp to the bias at once")?,
+            None => {}
         }
         if let Some(fe) = &self.front_end {
             if fe.channels.is_empty() {
@@ -288,8 +324,14 @@ pub fn image(args: &ImageArgs) -> Result<ImageReport, String> {
         rail_volts: args.rail_volts.unwrap_or(full_scale),
         dac_bits: DAC_BITS,
     };
-    let bytes = lut::image(params, &amplifier, &front_end, &settings)
-        .map_err(|e| format!("{name}: {e}"))?;
+    let bytes = lut::image(
+        params,
+        &amplifier,
+        &front_end,
+        &settings,
+        args.power_up.into(),
+    )
+    .map_err(|e| format!("{name}: {e}"))?;
     // Checked before writing: an image the firmware would refuse is not written.
     let mut report = describe(&bytes, out.display().to_string())?;
     if let Verdict::Refuses { reason } = &report.verdict {
@@ -312,7 +354,10 @@ fn entries(params: &DeviceParams<f32>) -> Vec<Entry> {
         .iter()
         .map(|&field| Entry {
             key: field.key(),
-            value: params.get(field),
+            value: match field {
+                Field::Jlim => params.jlim,
+                _ => Some(params.get(field)),
+            },
         })
         .collect()
 }
@@ -340,6 +385,7 @@ fn describe(bytes: &[u8], file: String) -> Result<ImageReport, String> {
             bytes: bytes.len(),
             device_parameters: entries(&parsed.params()),
             amplifier: None,
+            power_up: None,
             front_end: None,
             settings: Vec::new(),
             table: Some(summary(&parsed, bytes.len())),
@@ -359,6 +405,7 @@ fn describe(bytes: &[u8], file: String) -> Result<ImageReport, String> {
                 bytes: bytes.len(),
                 device_parameters: Vec::new(),
                 amplifier: None,
+                power_up: None,
                 front_end: None,
                 settings: Vec::new(),
                 table: None,
@@ -375,11 +422,13 @@ fn describe(bytes: &[u8], file: String) -> Result<ImageReport, String> {
         .map_err(|e| e.to_string())
         .and_then(|amplifier| {
             Controller::start(parsed.params, parsed.table, amplifier, parsed.settings)
+                .map(|(_, boot)| (boot, amplifier.max_volts()))
                 .map_err(|e| e.to_string())
         }) {
-        Ok((_, boot)) => Verdict::Drives {
+        // The most it commands: the cap, or the amplifier's top where lower (as `status`).
+        Ok((boot, top_volts)) => Verdict::Drives {
             bias_volts: boot.bias_volts,
-            max_volts: boot.max_volts,
+            max_volts: boot.max_volts.min(top_volts),
             limit: boot.limit.map(|l| l.mode.name()),
         },
         Err(reason) => refuse(reason),
@@ -395,12 +444,13 @@ fn describe(bytes: &[u8], file: String) -> Result<ImageReport, String> {
             rail_volts: a.rail_volts,
             dac_bits: a.dac_bits,
         }),
+        power_up: Some(parsed.power_up.name()),
         front_end: Some(FrontEndSummary::of(&parsed.front_end)),
         settings: Setting::ALL
             .iter()
             .map(|&s| Entry {
                 key: s.key(),
-                value: parsed.settings.get(s),
+                value: Some(parsed.settings.get(s)),
             })
             .collect(),
         table: Some(summary(&table, parsed.table.len())),

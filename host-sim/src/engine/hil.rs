@@ -11,7 +11,7 @@ use de_resonator::acquire::{Block, Channel, FrontEnd, InputError, Reader};
 use de_resonator::board::link::{self, Booted, Observed, Said as SaidKind, Words};
 use de_resonator::board::port::Extras;
 use de_resonator::board::{Line, Lines, NoKeeper, ReplyLine, Then};
-use de_resonator::image::{AmplifierSpec, Image, DAC_BITS};
+use de_resonator::image::{AmplifierSpec, Image, PowerUp, DAC_BITS};
 use de_resonator::{
     Amplifier, Controller, Dac8551, DeviceParams, Event, FailureMode, Fault, Inputs, OutputStage,
     Phase, Settings, BUS_FAULT_SAID, FAULT_SAID,
@@ -432,7 +432,13 @@ impl Loop {
             dac_bits: DAC_BITS,
         };
         let front_end = self.analog.map_or(FrontEnd::NONE, |a| a.front_end);
-        crate::lut::image(self.nominal, &spec, &front_end, &self.settings)
+        crate::lut::image(
+            self.nominal,
+            &spec,
+            &front_end,
+            &self.settings,
+            PowerUp::Drive,
+        )
     }
 
     /// Run the loop for its duration on `board` (the core's, or the firmware's under QEMU),

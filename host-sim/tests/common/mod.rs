@@ -73,6 +73,12 @@ impl Served {
         Self { child, connection }
     }
 
+    /// Stop the board now (a board that goes away under a console).
+    pub fn kill(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+
     /// `console --script` (text) with the script `text`, saved as `name`.
     pub fn script(&self, name: &str, text: &str) -> std::process::Output {
         let script = scratch("serve").join(format!("{name}.txt"));
