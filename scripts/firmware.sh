@@ -16,6 +16,8 @@ host_sim="$PWD/target/release/host-sim"
 cmp tables/reference.bin target/reference.bin
 
 cd firmware
+# The runs here end on their own; a hang ends at 5 minutes (qemu-run.sh has no limit unless told).
+export QEMU_TIMEOUT="${QEMU_TIMEOUT:-300}"
 step "firmware: fmt, clippy on every build ($(rustc --version))"
 cargo fmt -- --check
 # QEMU builds, and the silicon builds (HSE + PLL, RTT logs) that CI cannot run.
@@ -82,6 +84,16 @@ cp "$elf" ../target/firmware-trim.elf
 cargo build --locked --release -q --bin firmware
 python3 ../scripts/firmware_e2e.py "$PWD/$elf" "$host_sim" "$PWD/../target/e2e" \
     "$PWD/../target/firmware-trim.elf"
+
+step "the one command from the root: scripts/qemu.sh (an image, QEMU, a console script; QEMU gone after)"
+cd ..
+printf 'start\nwait phase=holding 60\nstatus\nstop\n' >target/qemu-script.txt
+scripts/qemu.sh -- --script target/qemu-script.txt | tee target/qemu-script.log
+grep -q '^# ready .*power_up=wait' target/qemu-script.log
+grep -q '^ok phase=holding target_hz=44 ' target/qemu-script.log
+sleep 0.5
+if pgrep -f "unix:$PWD/target/qemu/fw.sock" | grep -q .; then echo "scripts/qemu.sh left QEMU running" >&2; exit 1; fi
+cd firmware
 
 step "the firmware in the loop: every shipped scene through the link build under QEMU, tick for tick against the core"
 cargo build --locked --release -q --bin firmware --no-default-features --features qemu,log-semihosting,link

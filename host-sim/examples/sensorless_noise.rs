@@ -1,7 +1,7 @@
 //! How good the sensorless path is against the current monitor's noise, and where it stops:
 //! the `sensorless-soft` scene (plant μ 20% below nominal, no displacement sensor, the probe
-//! on) at noise levels from 0.1 to 1000 µA rms a sample (10 kHz, averaged over 1 kHz
-//! ticks), several seeds each; the plant's final frequency error, or the fault; and the
+//! on) at noise levels from 0.1 to 1000 µA rms a conversion of the ADC (averaged over each
+//! tick's scans), several seeds each; the plant's final frequency error, or the fault; and the
 //! stretch from C: its rms error against the plant's mean stretch over each window, and the
 //! standard error it reports. Prints a table and writes docs/plots/sensorless-noise.svg.
 //!
@@ -15,11 +15,19 @@ use host_sim::scene;
 fn main() -> Result<(), String> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let base = scene::load(&root.join("scenes/sensorless-soft.toml"))?;
-    let per_tick = base
+    // The current input's amps a code: the noise levels are set in codes of the ADC.
+    let analog = base
         .run
-        .current_monitor
-        .ok_or("the scene has a current monitor")?;
-    let stated = 1e-6;
+        .analog
+        .as_ref()
+        .ok_or("the scene has an analog front end")?;
+    let per_count = analog
+        .front_end
+        .fitted()
+        .find(|(c, _)| *c == de_resonator::acquire::Channel::Current)
+        .map(|(_, spec)| f64::from(spec.per_count).abs())
+        .ok_or("the scene's front end has a current input")?;
+    let stated = analog.noise_codes * per_count;
     let levels: Vec<f64> = (0..=16)
         .map(|k| 1e-7 * 10f64.powf(k as f64 / 4.0))
         .collect();
@@ -32,8 +40,8 @@ fn main() -> Result<(), String> {
         let mut s = base.clone();
         s.run.history = false;
         s.run.seed = seed;
-        if let Some(m) = s.run.current_monitor.as_mut() {
-            m.noise_amps = per_tick.noise_amps * noise / stated;
+        if let Some(a) = s.run.analog.as_mut() {
+            a.noise_codes = noise / per_count;
         }
         let r = s.run.run().expect("the scene runs");
         let target = f64::from(s.run.settings.target_hz);
@@ -87,7 +95,7 @@ fn main() -> Result<(), String> {
     let panels = [
         Panel {
             title: "λ from C (probe ±20 V, 500 Hz): error against the plant".into(),
-            x_label: "current monitor noise, A rms a sample at 10 kHz".into(),
+            x_label: "current monitor noise, A rms a conversion".into(),
             y_label: "relative to λ, over every 0.1 s window".into(),
             log_x: true,
             log_y: true,
@@ -104,6 +112,7 @@ fn main() -> Result<(), String> {
                         colour: Some(RED),
                         ..Style::default()
                     },
+                    ..Series::default()
                 },
             ],
             guides: vec![(stated, "scene's noise".into())],
@@ -111,7 +120,7 @@ fn main() -> Result<(), String> {
         },
         Panel {
             title: "sensorless trim: frequency error".into(),
-            x_label: "current monitor noise, A rms a sample at 10 kHz".into(),
+            x_label: "current monitor noise, A rms a conversion".into(),
             y_label: "worst |f − target| / target of the tuned runs".into(),
             log_x: true,
             log_y: true,
@@ -126,7 +135,7 @@ fn main() -> Result<(), String> {
         },
         Panel {
             title: "where it stops: faults (safe, 0 V)".into(),
-            x_label: "current monitor noise, A rms a sample at 10 kHz".into(),
+            x_label: "current monitor noise, A rms a conversion".into(),
             y_label: "fraction of runs faulted".into(),
             log_x: true,
             series: vec![Series {
@@ -136,6 +145,7 @@ fn main() -> Result<(), String> {
                     colour: Some(RED),
                     ..Style::default()
                 },
+                ..Series::default()
             }],
             guides: vec![(stated, "scene's noise".into())],
             ..Panel::default()

@@ -7,10 +7,45 @@ use std::path::Path;
 use de_resonator::{DeviceParams, Field, REFERENCE_DEVICE};
 use toml::Spanned;
 
+/// What a device file left out and what in it no real membrane has: said on stderr, never an
+/// error (the model's own checks refuse what it cannot use).
+#[derive(Debug, Default, PartialEq)]
+pub struct Notes {
+    /// Keys not given: the reference device's values were taken (`jlim` aside).
+    pub defaulted: Vec<Field>,
+    /// `jlim` not given: the material is neo-Hookean.
+    pub neo_hookean: bool,
+    /// Values outside the range any real membrane has, each said with its unit and range.
+    pub implausible: Vec<String>,
+}
+
+/// The range any real DE membrane and its bars have, per field, in SI, and the unit: wider
+/// than any device built (VHB, silicones, acrylics, thin films), so a value outside it is a
+/// unit slip (mm for m) or a typo, not a design.
+fn plausible(field: Field) -> Option<(f64, f64, &'static str)> {
+    Some(match field {
+        Field::ShearModulus => (1e3, 1e7, "Pa"),
+        Field::Jlim => (2.0, 1e4, ""),
+        Field::RelativePermittivity => (1.0, 100.0, ""),
+        Field::Density => (300.0, 5000.0, "kg/m³"),
+        Field::BreakdownField => (1e6, 2e9, "V/m"),
+        Field::Thickness => (1e-6, 5e-3, "m"),
+        Field::LengthActive | Field::LengthPassive | Field::Width => (1e-4, 1.0, "m"),
+        Field::BarMass => (0.0, 1.0, "kg"),
+        Field::Prestretch1 | Field::Prestretch2 => (1.0, 10.0, ""),
+        Field::Damping => return None,
+    })
+}
+
 /// Parse a device file's text: its keys are `Field::ALL`'s (the core's one list), each a
 /// number; an absent key takes the reference device's value, except `jlim` (absent:
 /// neo-Hookean). Errors are one line: `line N: what is wrong`.
 pub fn parse(text: &str) -> Result<DeviceParams<f64>, String> {
+    parse_noting(text).map(|(params, _)| params)
+}
+
+/// [`parse`], and what the file left out or holds that no real membrane has.
+pub fn parse_noting(text: &str) -> Result<(DeviceParams<f64>, Notes), String> {
     let line_of = |at: usize| text.get(..at).unwrap_or(text).matches('\n').count() + 1;
     let file: BTreeMap<Spanned<String>, Spanned<toml::Value>> =
         toml::from_str(text).map_err(|e| {
@@ -24,6 +59,7 @@ pub fn parse(text: &str) -> Result<DeviceParams<f64>, String> {
         jlim: None,
         ..REFERENCE_DEVICE
     };
+    let mut given = Vec::new();
     for (key, value) in &file {
         let line = line_of(key.span().start);
         let field = Field::from_key(key.get_ref()).ok_or_else(|| {
@@ -53,15 +89,77 @@ pub fn parse(text: &str) -> Result<DeviceParams<f64>, String> {
             // Written out, jlim is the Gent limit, whatever its value (0 is refused later).
             params.jlim = Some(number);
         }
+        given.push(field);
     }
-    Ok(params)
+    let mut notes = Notes {
+        neo_hookean: !given.contains(&Field::Jlim),
+        ..Notes::default()
+    };
+    for field in Field::ALL {
+        if !given.contains(&field) {
+            if field != Field::Jlim {
+                notes.defaulted.push(field);
+            }
+            continue;
+        }
+        let value = params.get(field);
+        if let Some((low, high, unit)) = plausible(field) {
+            if value.is_finite() && !(low..=high).contains(&value) {
+                let unit = if unit.is_empty() {
+                    String::new()
+                } else {
+                    format!(" {unit}")
+                };
+                // Short, exact numbers: 1e-6 rather than 0.000001.
+                let said = |x: f64| {
+                    if x != 0.0 && !(1e-3..1e4).contains(&x.abs()) {
+                        format!("{x:e}")
+                    } else {
+                        format!("{x}")
+                    }
+                };
+                notes.implausible.push(format!(
+                    "`{}` = {}{unit} is outside what any real membrane has ({}{unit} .. \
+                     {}{unit}; the file is read in SI units)",
+                    field.key(),
+                    said(value),
+                    said(low),
+                    said(high)
+                ));
+            }
+        }
+    }
+    Ok((params, notes))
 }
 
-/// Read and parse a device file; errors name the file.
+/// Read and parse a device file; errors name the file. What it left out (the reference
+/// device's values taken, neo-Hookean without `jlim`) is noted on stderr, and a value no
+/// real membrane has is warned of (for a device the model accepts: a refused one is said
+/// by its refusal).
 pub fn load(path: &Path) -> Result<DeviceParams<f64>, String> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| format!("cannot read device file {}: {e}", path.display()))?;
-    parse(&text).map_err(|e| format!("device file {}: {e}", path.display()))
+    let (params, notes) =
+        parse_noting(&text).map_err(|e| format!("device file {}: {e}", path.display()))?;
+    let name = path.display();
+    // A device the model refuses is said by its refusal alone (one line).
+    if de_resonator::Device::new(params).is_err() {
+        return Ok(params);
+    }
+    if !notes.defaulted.is_empty() {
+        let keys: Vec<&str> = notes.defaulted.iter().map(|f| f.key()).collect();
+        eprintln!(
+            "note: device file {name}: not given, the reference device's values taken: {}",
+            keys.join(", ")
+        );
+    }
+    if notes.neo_hookean {
+        eprintln!("note: device file {name}: no `jlim`: the material is neo-Hookean");
+    }
+    for warning in &notes.implausible {
+        eprintln!("warning: device file {name}: {warning}");
+    }
+    Ok(params)
 }
 
 #[cfg(test)]
@@ -112,6 +210,34 @@ mod tests {
     fn wrong_type_is_an_error() {
         let e = parse("thickness = \"thin\"\n").unwrap_err();
         assert!(e.starts_with("line 1:"), "{e}");
+    }
+
+    /// Issue 29, 7: what the file leaves out is noted, and values no membrane has (metres
+    /// for millimetres, a breakdown field of 1 V/m) are warned of, with the unit.
+    #[test]
+    fn left_out_keys_and_absurd_values_are_noted() {
+        let (_, notes) = parse_noting("thickness = 50\nbreakdown_field = 1\n").unwrap();
+        assert!(notes.neo_hookean);
+        assert_eq!(notes.defaulted.len(), Field::ALL.len() - 3);
+        assert!(!notes.defaulted.contains(&Field::Thickness));
+        assert_eq!(notes.implausible.len(), 2, "{:?}", notes.implausible);
+        assert!(notes.implausible[0].starts_with("`breakdown_field` = 1 V/m"));
+        assert!(notes.implausible[1].starts_with("`thickness` = 50 m is outside"));
+        // The shipped devices are all plausible, and the reference file leaves nothing out.
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../devices");
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let path = entry.unwrap().path();
+            let text = std::fs::read_to_string(&path).unwrap();
+            let (_, notes) = parse_noting(&text).unwrap();
+            assert!(
+                notes.implausible.is_empty(),
+                "{}: {notes:?}",
+                path.display()
+            );
+        }
+        let reference = Path::new(env!("CARGO_MANIFEST_DIR")).join("../devices/reference.toml");
+        let (_, notes) = parse_noting(&std::fs::read_to_string(reference).unwrap()).unwrap();
+        assert_eq!(notes, Notes::default());
     }
 
     #[test]

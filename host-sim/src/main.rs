@@ -147,10 +147,14 @@ fn main() -> ExitCode {
         Command::Serve(args) => cmd::serve::serve(&args).map(|r| emit(&r, json)),
     };
     match result {
-        Ok((out, failure)) => {
+        Ok((out, failure, to_stderr)) => {
             // A reader that stops early (`host-sim safe | head -1`) is not an error: no panic.
-            let mut stdout = std::io::stdout().lock();
-            let _ = writeln!(stdout, "{out}").and_then(|()| stdout.flush());
+            if to_stderr {
+                eprintln!("{out}");
+            } else {
+                let mut stdout = std::io::stdout().lock();
+                let _ = writeln!(stdout, "{out}").and_then(|()| stdout.flush());
+            }
             match failure {
                 None => ExitCode::SUCCESS,
                 Some(message) => {
@@ -177,13 +181,15 @@ fn say_error(message: &str) {
 }
 
 /// A report as text or JSON, and the failure it carries (exit status 1).
-fn emit<R: Report>(report: &R, json: bool) -> (String, Option<String>) {
+/// The report as text or JSON, whether it failed, and whether it goes to stderr (stdout
+/// carries the data: `--csv -`).
+fn emit<R: Report>(report: &R, json: bool) -> (String, Option<String>, bool) {
     let text = if json {
         serde_json::to_string(report).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
     } else {
         report.to_string()
     };
-    (text, report.failure())
+    (text, report.failure(), report.data_on_stdout())
 }
 
 /// clap's verdict on the command line: help and version as clap prints them (status 0);

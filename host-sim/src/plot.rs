@@ -9,6 +9,9 @@ pub struct Series {
     pub name: String,
     pub points: Vec<(f64, f64)>,
     pub style: Style,
+    /// A label written beside the line, in its colour, where it overprints no other text
+    /// (its end first, then along it): which curve of a family this is.
+    pub label: String,
 }
 
 /// How a series is drawn: the palette's next colour, a solid line, unless said otherwise.
@@ -16,8 +19,11 @@ pub struct Series {
 pub struct Style {
     pub colour: Option<&'static str>,
     pub dashed: bool,
-    /// Markers only, no line (points that are not a curve, e.g. stopped runs).
+    /// Markers only, no line (points that are not a curve).
     pub dots_only: bool,
+    /// Points with no value (stopped runs): open triangles along the x axis at their x, their
+    /// y ignored, so they never read as data.
+    pub on_axis: bool,
 }
 
 /// A point to point at: a crossing, a target.
@@ -32,7 +38,7 @@ pub struct Marker {
 /// Red, for limits and crossings.
 pub const RED: &str = "#d62728";
 /// Grey, for what is not data (stopped runs).
-pub const GREY: &str = "#aaaaaa";
+pub const GREY: &str = "#888888";
 
 /// One chart.
 #[derive(Clone, Debug, Default)]
@@ -43,13 +49,18 @@ pub struct Panel {
     pub log_x: bool,
     pub log_y: bool,
     pub series: Vec<Series>,
-    /// Vertical dashed lines at these x, each with a label.
+    /// Vertical dashed lines at these x, each with a label: written along the top where the
+    /// labels fit, otherwise a colour per distinct label and the labels in the legend.
     pub guides: Vec<(f64, String)>,
-    /// Horizontal lines at these y (limits, caps), each with a label, in red.
+    /// Horizontal lines at these y (limits, caps), each with a label, in red: written beside
+    /// its own line where that cannot be read as another's, otherwise in the legend with a
+    /// dash pattern each.
     pub levels: Vec<(f64, String)>,
     pub markers: Vec<Marker>,
     /// Lines of text under the legend (what the plot cannot show: refused runs, counts).
     pub notes: Vec<String>,
+    /// The panel's width without its legend, px (`None`: 520).
+    pub width: Option<f64>,
 }
 
 const WIDTH: f64 = 520.0;
@@ -58,12 +69,31 @@ const LEFT: f64 = 70.0;
 const RIGHT: f64 = 20.0;
 const TOP: f64 = 36.0;
 const BOTTOM: f64 = 50.0;
-/// The legend's column, right of the plot, so it never covers a trace.
-const LEGEND: f64 = 190.0;
+/// A zoom panel's width: beside a whole run and its legend within `MAX_WIDTH`.
+const ZOOM_WIDTH: f64 = 420.0;
+/// Panels go side by side up to this width, then on a new row.
+pub const MAX_WIDTH: f64 = 1200.0;
+/// Labels' font size, px.
+const FONT: f64 = 11.0;
+/// A character's width as a fraction of the font size: a little above DejaVu Sans' average
+/// (~0.6), so that boxes estimated from it hold the text drawn.
+const CHAR: f64 = 0.62;
 /// Above this many points a series is drawn as its min/max envelope per pixel column.
 const MAX_POINTS_PER_PIXEL: f64 = 2.0;
 pub const COLOURS: [&str; 8] = [
     "#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf",
+];
+/// Guides' colours when their labels go in the legend (none is the series' blue or the
+/// limits' red).
+const GUIDE_COLOURS: [&str; 7] = [
+    "#7f7f7f", "#ff7f0e", "#2ca02c", "#9467bd", "#8c564b", "#e377c2", "#17becf",
+];
+/// Levels' dash patterns and reds when their labels go in the legend.
+const LEVEL_STYLES: [(&str, &str); 4] = [
+    (RED, "6 3"),
+    ("#8b0000", "2 2"),
+    (RED, "10 3 2 3"),
+    ("#8b0000", "12 4"),
 ];
 
 /// An axis: data range mapped onto pixels, linear or log10.
@@ -145,11 +175,168 @@ fn escape(text: &str) -> String {
         .replace('>', "&gt;")
 }
 
+/// Where a text's x is: its start, middle or end (SVG's text-anchor).
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Anchor {
+    Start,
+    Middle,
+    End,
+}
+
+impl Anchor {
+    fn name(self) -> &'static str {
+        match self {
+            Anchor::Start => "start",
+            Anchor::Middle => "middle",
+            Anchor::End => "end",
+        }
+    }
+}
+
+/// A box on the page, px: left, top, right, bottom.
+#[derive(Clone, Copy, Debug)]
+struct Rect(f64, f64, f64, f64);
+
+impl Rect {
+    fn overlaps(&self, o: &Rect) -> bool {
+        self.0 < o.2 && o.0 < self.2 && self.1 < o.3 && o.1 < self.3
+    }
+
+    fn inside(&self, o: &Rect) -> bool {
+        self.0 >= o.0 && self.2 <= o.2 && self.1 >= o.1 && self.3 <= o.3
+    }
+
+    /// The box of `text` at `size` px with its baseline at y (a pixel of room around it).
+    fn of_text(x: f64, y: f64, text: &str, size: f64, anchor: Anchor) -> Rect {
+        let w = CHAR * size * text.chars().count() as f64;
+        let left = match anchor {
+            Anchor::Start => x,
+            Anchor::Middle => x - w / 2.0,
+            Anchor::End => x - w,
+        };
+        Rect(
+            left - 1.0,
+            y - size - 1.0,
+            left + w + 1.0,
+            y + 0.3 * size + 1.0,
+        )
+    }
+}
+
+/// Labels put where they overprint no other: each takes the first of its candidate places
+/// that lies inside the area and clear of everything taken.
+#[derive(Clone)]
+struct Placer {
+    area: Rect,
+    taken: Vec<Rect>,
+}
+
+impl Placer {
+    fn fits(&self, r: &Rect) -> bool {
+        r.inside(&self.area) && !self.taken.iter().any(|t| t.overlaps(r))
+    }
+
+    fn place(
+        &mut self,
+        text: &str,
+        candidates: impl IntoIterator<Item = (f64, f64, Anchor)>,
+        also: impl Fn(&Rect) -> bool,
+    ) -> Option<(f64, f64, Anchor)> {
+        let found = candidates.into_iter().find(|&(x, y, a)| {
+            let r = Rect::of_text(x, y, text, FONT, a);
+            self.fits(&r) && also(&r)
+        })?;
+        self.taken
+            .push(Rect::of_text(found.0, found.1, text, FONT, found.2));
+        Some(found)
+    }
+}
+
+/// A label, on a white halo so that lines under it do not strike it through.
+fn text(out: &mut String, (x, y, anchor): (f64, f64, Anchor), colour: &str, label: &str) {
+    let _ = writeln!(
+        out,
+        r#"<text x="{x:.1}" y="{y:.1}" font-size="{FONT}" fill="{colour}" text-anchor="{}" stroke="white" stroke-width="3" stroke-linejoin="round" paint-order="stroke">{}</text>"#,
+        anchor.name(),
+        escape(label)
+    );
+}
+
+/// What a legend row shows left of its text.
+enum Key {
+    Line(&'static str, Option<&'static str>),
+    Dot(&'static str),
+    Triangle(&'static str),
+}
+
+fn triangle(out: &mut String, x: f64, y: f64, colour: &str) {
+    let _ = writeln!(
+        out,
+        r#"<path d="M{:.1} {:.1} L{:.1} {:.1} L{:.1} {:.1} Z" fill="white" stroke="{colour}" stroke-width="1.5"/>"#,
+        x,
+        y - 7.0,
+        x - 4.5,
+        y,
+        x + 4.5,
+        y
+    );
+}
+
 impl Panel {
-    fn draw(&self, out: &mut String, x0: f64) {
-        let all = || self.series.iter().flat_map(|s| s.points.iter());
+    /// The same panel over x in [from, to] only (its series clipped, unnamed so that it has
+    /// no legend of its own, their colours kept), under another title: the detail a long run
+    /// draws as a solid band. Levels are left out, so that the y axis fits the detail.
+    pub fn zoom(&self, from: f64, to: f64, title: String) -> Panel {
+        let inside = |x: f64| x >= from && x <= to;
+        Panel {
+            title,
+            series: self
+                .series
+                .iter()
+                .enumerate()
+                .map(|(k, s)| Series {
+                    name: String::new(),
+                    points: s.points.iter().copied().filter(|p| inside(p.0)).collect(),
+                    style: Style {
+                        colour: Some(s.style.colour.unwrap_or(COLOURS[k % COLOURS.len()])),
+                        ..s.style
+                    },
+                    label: String::new(),
+                })
+                .collect(),
+            guides: self
+                .guides
+                .iter()
+                .filter(|g| inside(g.0))
+                .cloned()
+                .collect(),
+            levels: Vec::new(),
+            markers: self
+                .markers
+                .iter()
+                .filter(|m| inside(m.x))
+                .cloned()
+                .collect(),
+            notes: Vec::new(),
+            width: Some(ZOOM_WIDTH),
+            ..self.clone()
+        }
+    }
+
+    /// Draw the panel with its top left corner at (x0, y0); its width.
+    fn draw(&self, out: &mut String, x0: f64, y0: f64) -> f64 {
+        let all = || {
+            self.series
+                .iter()
+                .filter(|s| !s.style.on_axis)
+                .flat_map(|s| s.points.iter())
+        };
         let xs = Axis::new(
-            all().map(|p| p.0).chain(self.guides.iter().map(|g| g.0)),
+            self.series
+                .iter()
+                .flat_map(|s| s.points.iter())
+                .map(|p| p.0)
+                .chain(self.guides.iter().map(|g| g.0)),
             self.log_x,
         );
         let ys = Axis::new(
@@ -159,27 +346,35 @@ impl Panel {
                 .chain(self.markers.iter().map(|m| m.y)),
             self.log_y,
         );
-        let (w, h) = (WIDTH - LEFT - RIGHT, HEIGHT - TOP - BOTTOM);
-        let px = |x: f64| xs.fraction(x).map(|f| x0 + LEFT + f * w);
-        let py = |y: f64| ys.fraction(y).map(|f| TOP + (1.0 - f) * h);
+        let width = self.width.unwrap_or(WIDTH);
+        let (w, h) = (width - LEFT - RIGHT, HEIGHT - TOP - BOTTOM);
+        let (left, top) = (x0 + LEFT, y0 + TOP);
+        let (right, bottom) = (left + w, top + h);
+        let px = |x: f64| xs.fraction(x).map(|f| left + f * w);
+        let py = |y: f64| ys.fraction(y).map(|f| top + (1.0 - f) * h);
+        // The title over the plot, or from the panel's left when wider than the plot.
+        let title_w = 0.65 * 14.0 * self.title.chars().count() as f64;
+        let (tx, ta) = if title_w > w {
+            (x0 + 8.0, "start")
+        } else {
+            (left + w / 2.0, "middle")
+        };
         let _ = writeln!(
             out,
-            r#"<text x="{}" y="20" text-anchor="middle" font-weight="bold">{}</text>"#,
-            x0 + LEFT + w / 2.0,
+            r#"<text x="{tx}" y="{}" text-anchor="{ta}" font-size="14" font-weight="bold">{}</text>"#,
+            y0 + 20.0,
             escape(&self.title)
         );
         let _ = writeln!(
             out,
-            r##"<rect x="{}" y="{TOP}" width="{w}" height="{h}" fill="none" stroke="#444"/>"##,
-            x0 + LEFT
+            r##"<rect x="{left}" y="{top}" width="{w}" height="{h}" fill="none" stroke="#444"/>"##,
         );
         for (v, label) in xs.ticks() {
             if let Some(x) = px(v) {
                 let _ = writeln!(
                     out,
-                    r##"<line x1="{x}" y1="{TOP}" x2="{x}" y2="{}" stroke="#ddd"/><text x="{x}" y="{}" text-anchor="middle" font-size="11">{label}</text>"##,
-                    TOP + h,
-                    TOP + h + 15.0
+                    r##"<line x1="{x}" y1="{top}" x2="{x}" y2="{bottom}" stroke="#ddd"/><text x="{x}" y="{}" text-anchor="middle" font-size="{FONT}">{label}</text>"##,
+                    bottom + 15.0
                 );
             }
         }
@@ -187,10 +382,8 @@ impl Panel {
             if let Some(y) = py(v) {
                 let _ = writeln!(
                     out,
-                    r##"<line x1="{}" y1="{y}" x2="{}" y2="{y}" stroke="#ddd"/><text x="{}" y="{}" text-anchor="end" font-size="11">{label}</text>"##,
-                    x0 + LEFT,
-                    x0 + LEFT + w,
-                    x0 + LEFT - 4.0,
+                    r##"<line x1="{left}" y1="{y}" x2="{right}" y2="{y}" stroke="#ddd"/><text x="{}" y="{}" text-anchor="end" font-size="{FONT}">{label}</text>"##,
+                    left - 4.0,
                     y + 4.0
                 );
             }
@@ -198,57 +391,208 @@ impl Panel {
         let _ = writeln!(
             out,
             r#"<text x="{}" y="{}" text-anchor="middle" font-size="12">{}</text>"#,
-            x0 + LEFT + w / 2.0,
-            HEIGHT - 12.0,
+            left + w / 2.0,
+            y0 + HEIGHT - 12.0,
             escape(&self.x_label)
         );
-        let (yx, yy) = (x0 + 16.0, TOP + h / 2.0);
+        let (yx, yy) = (x0 + 16.0, top + h / 2.0);
         let _ = writeln!(
             out,
             r#"<text x="{yx}" y="{yy}" text-anchor="middle" font-size="12" transform="rotate(-90 {yx} {yy})">{}</text>"#,
             escape(&self.y_label)
         );
-        // Guide labels in rows from the top, each in the first row where it overlaps no
-        // earlier label (about 6 px a character at 11 px).
-        let mut row_ends: Vec<f64> = Vec::new();
-        for (v, label) in &self.guides {
-            if let Some(x) = px(*v) {
-                let row = row_ends
-                    .iter()
-                    .position(|&end| x > end)
-                    .unwrap_or(row_ends.len());
-                let end = x + 6.0 + 6.0 * label.chars().count() as f64;
-                match row_ends.get_mut(row) {
-                    Some(e) => *e = end,
-                    None => row_ends.push(end),
+
+        // Labels inside the plot, none over another: the markers' crosses first.
+        let mut placer = Placer {
+            area: Rect(left + 1.0, top + 1.0, right - 1.0, bottom - 1.0),
+            taken: Vec::new(),
+        };
+        let crosses: Vec<(f64, f64, &Marker)> = self
+            .markers
+            .iter()
+            .filter_map(|m| Some((px(m.x)?, py(m.y)?, m)))
+            .collect();
+        for (x, y, _) in &crosses {
+            placer.taken.push(Rect(x - 6.0, y - 6.0, x + 6.0, y + 6.0));
+        }
+        let mut legend: Vec<(Option<Key>, String)> = Vec::new();
+        let mut labels = String::new();
+
+        let level_ys: Vec<f64> = self.levels.iter().filter_map(|l| py(l.0)).collect();
+        // Marker labels: near the cross, the nearest place that is clear.
+        for (x, y, m) in &crosses {
+            let mut candidates = Vec::new();
+            for dy in [-7.0, 15.0, -20.0, 28.0, -33.0, 41.0] {
+                for (dx, a) in [(8.0, Anchor::Start), (-8.0, Anchor::End)] {
+                    candidates.push((x + dx, y + dy, a));
                 }
-                let _ = writeln!(
-                    out,
-                    r##"<line x1="{x}" y1="{TOP}" x2="{x}" y2="{}" stroke="#888" stroke-dasharray="4 3"/><text x="{}" y="{}" font-size="11" fill="#555">{}</text>"##,
-                    TOP + h,
-                    x + 3.0,
-                    TOP + 12.0 + 13.0 * row as f64,
-                    escape(label)
-                );
+            }
+            for (dx, a) in [(10.0, Anchor::Start), (-10.0, Anchor::End)] {
+                candidates.push((x + dx, y + 4.0, a));
+            }
+            // Not across a level's line, where it would read as that line's label.
+            let clear = |r: &Rect| !level_ys.iter().any(|l| *l >= r.1 && *l <= r.3);
+            if let Some(at) = placer.place(&m.label, candidates, clear) {
+                text(&mut labels, at, m.colour, &m.label);
+            } else if !m.label.is_empty() {
+                legend.push((None, format!("× {}", m.label)));
             }
         }
-        for (v, label) in &self.levels {
-            if let Some(y) = py(*v) {
-                let _ = writeln!(
-                    out,
-                    r##"<line x1="{}" y1="{y}" x2="{}" y2="{y}" stroke="{RED}" stroke-dasharray="6 3"/><text x="{}" y="{}" font-size="11" fill="{RED}" text-anchor="end">{}</text>"##,
-                    x0 + LEFT,
-                    x0 + LEFT + w,
-                    x0 + LEFT + w - 4.0,
-                    // Below the line, clear of the guides' labels along the top.
-                    y + 13.0,
-                    escape(label)
-                );
+
+        // Levels: a label beside its own line, on a side where no other level's line is
+        // near (so it cannot be read as that one's); if one has no such place, all go in
+        // the legend.
+        let lines: Vec<(f64, &String)> = self
+            .levels
+            .iter()
+            .filter_map(|(v, l)| Some((py(*v)?, l)))
+            .collect();
+        let mut trial = placer.clone();
+        let mut inline = Vec::new();
+        for (k, &(y, label)) in lines.iter().enumerate() {
+            let others: Vec<f64> = lines
+                .iter()
+                .enumerate()
+                .filter(|(j, _)| *j != k)
+                .map(|(_, l)| l.0)
+                .collect();
+            let candidates = [right - 4.0, left + 4.0, left + w / 2.0]
+                .into_iter()
+                .zip([Anchor::End, Anchor::Start, Anchor::Middle])
+                .flat_map(|(x, a)| [(x, y + 13.0, a), (x, y - 4.0, a)]);
+            let clear = |r: &Rect| {
+                let (a, b) = (r.1.min(y) - 4.0, r.3.max(y) + 4.0);
+                !others.iter().any(|o| *o >= a && *o <= b)
+            };
+            match trial.place(label, candidates, clear) {
+                Some(at) => inline.push((at, label)),
+                None => break,
             }
         }
-        let mut legend_rows = 0;
+        let levels_inline = inline.len() == lines.len();
+        if levels_inline {
+            placer = trial;
+            for (at, label) in inline {
+                text(&mut labels, at, RED, label);
+            }
+        }
+        let mut back = String::new();
+        for (k, &(y, label)) in lines.iter().enumerate() {
+            let (colour, dash) = if levels_inline {
+                LEVEL_STYLES[0]
+            } else {
+                LEVEL_STYLES[k % LEVEL_STYLES.len()]
+            };
+            let _ = writeln!(
+                back,
+                r#"<line x1="{left}" y1="{y}" x2="{right}" y2="{y}" stroke="{colour}" stroke-width="1.2" stroke-dasharray="{dash}"/>"#,
+            );
+            if !levels_inline {
+                legend.push((Some(Key::Line(colour, Some(dash))), label.clone()));
+            }
+        }
+
+        // Series' own labels: at the end, else along the line from its end.
+        for (k, series) in self.series.iter().enumerate() {
+            if series.label.is_empty() {
+                continue;
+            }
+            let colour = series.style.colour.unwrap_or(COLOURS[k % COLOURS.len()]);
+            let along: Vec<(f64, f64)> = series
+                .points
+                .iter()
+                .rev()
+                .filter_map(|&(x, y)| Some((px(x)?, py(y)?)))
+                .collect();
+            let step = (along.len() / 24).max(1);
+            let candidates = along.iter().step_by(step).flat_map(|&(x, y)| {
+                [
+                    (x + 5.0, y + 4.0, Anchor::Start),
+                    (x - 5.0, y - 5.0, Anchor::End),
+                    (x + 5.0, y - 5.0, Anchor::Start),
+                    (x - 5.0, y + 13.0, Anchor::End),
+                    (x + 5.0, y + 13.0, Anchor::Start),
+                ]
+            });
+            match placer.place(&series.label, candidates, |_| true) {
+                Some(at) => text(&mut labels, at, colour, &series.label),
+                None => legend.push((None, format!("{} (no room on the plot)", series.label))),
+            }
+        }
+
+        // Guides: labels along the top in up to three rows, clear of other guides' lines;
+        // if one does not fit, a colour per distinct label and the labels in the legend.
+        let guides: Vec<(f64, &String)> = self
+            .guides
+            .iter()
+            .filter_map(|(v, l)| Some((px(*v)?, l)))
+            .collect();
+        let mut trial = placer.clone();
+        let mut inline = Vec::new();
+        for &(x, label) in &guides {
+            let candidates = (0..3).flat_map(|row| {
+                let y = top + 13.0 + 13.0 * row as f64;
+                [(x + 3.0, y, Anchor::Start), (x - 3.0, y, Anchor::End)]
+            });
+            let clear = |r: &Rect| {
+                !guides
+                    .iter()
+                    .any(|&(g, _)| g != x && g >= r.0 - 1.0 && g <= r.2 + 1.0)
+            };
+            match trial.place(label, candidates, clear) {
+                Some(at) => inline.push((at, label)),
+                None => break,
+            }
+        }
+        let guides_inline = inline.len() == guides.len();
+        if guides_inline {
+            for (at, label) in inline {
+                text(&mut labels, at, "#555", label);
+            }
+        }
+        let mut kinds: Vec<&String> = Vec::new();
+        for &(x, label) in &guides {
+            let colour = if guides_inline {
+                "#888"
+            } else {
+                if !kinds.contains(&label) {
+                    kinds.push(label);
+                }
+                GUIDE_COLOURS[kinds.iter().position(|k| *k == label).unwrap_or(0) % 7]
+            };
+            let _ = writeln!(
+                back,
+                r#"<line x1="{x}" y1="{top}" x2="{x}" y2="{bottom}" stroke="{colour}" stroke-dasharray="4 3"/>"#,
+            );
+        }
+        for (k, kind) in kinds.iter().enumerate() {
+            let n = guides.iter().filter(|g| g.1 == *kind).count();
+            let times = if n > 1 {
+                format!(" (×{n})")
+            } else {
+                String::new()
+            };
+            legend.push((
+                Some(Key::Line(GUIDE_COLOURS[k % 7], Some("4 3"))),
+                format!("{kind}{times}"),
+            ));
+        }
+        out.push_str(&back);
+
+        // The data.
+        let mut named: Vec<(Option<Key>, String)> = Vec::new();
         for (k, series) in self.series.iter().enumerate() {
             let colour = series.style.colour.unwrap_or(COLOURS[k % COLOURS.len()]);
+            let dash = series.style.dashed.then_some("5 3");
+            if series.style.on_axis {
+                for x in series.points.iter().filter_map(|p| px(p.0)) {
+                    triangle(out, x, bottom - 1.0, colour);
+                }
+                if !series.name.is_empty() {
+                    named.push((Some(Key::Triangle(colour)), series.name.clone()));
+                }
+                continue;
+            }
             let dots: Vec<(f64, f64)> = envelope(
                 series
                     .points
@@ -259,11 +603,9 @@ impl Panel {
             if !series.style.dots_only {
                 let path: Vec<String> =
                     dots.iter().map(|(x, y)| format!("{x:.1},{y:.1}")).collect();
-                let dash = if series.style.dashed {
-                    r#" stroke-dasharray="5 3""#
-                } else {
-                    ""
-                };
+                let dash = dash
+                    .map(|d| format!(r#" stroke-dasharray="{d}""#))
+                    .unwrap_or_default();
                 let _ = writeln!(
                     out,
                     r#"<polyline points="{}" fill="none" stroke="{colour}" stroke-width="1.5"{dash}/>"#,
@@ -278,69 +620,86 @@ impl Panel {
                     );
                 }
             }
-            if series.name.is_empty() {
-                continue;
-            }
-            let ly = TOP + 14.0 + 15.0 * legend_rows as f64;
-            legend_rows += 1;
-            let lx = x0 + LEFT + w + 12.0;
-            let dash = if series.style.dashed {
-                r#" stroke-dasharray="5 3""#
-            } else {
-                ""
-            };
-            let _ = writeln!(
-                out,
-                r#"<line x1="{lx}" y1="{}" x2="{}" y2="{}" stroke="{colour}" stroke-width="2"{dash}/><text x="{}" y="{ly}" font-size="11">{}</text>"#,
-                ly - 4.0,
-                lx + 18.0,
-                ly - 4.0,
-                lx + 22.0,
-                escape(&series.name)
-            );
-        }
-        for (k, note) in self.notes.iter().enumerate() {
-            let _ = writeln!(
-                out,
-                r##"<text x="{}" y="{}" font-size="11" fill="#555">{}</text>"##,
-                x0 + LEFT + w + 12.0,
-                TOP + 14.0 + 15.0 * (legend_rows + 1 + k) as f64,
-                escape(note)
-            );
-        }
-        for m in &self.markers {
-            if let (Some(x), Some(y)) = (px(m.x), py(m.y)) {
-                let c = m.colour;
-                // Labels right of the marker, or left of it in the plot's right third.
-                let (lx, anchor) = if x > x0 + LEFT + 0.66 * w {
-                    (x - 7.0, "end")
+            if !series.name.is_empty() {
+                let key = if series.style.dots_only {
+                    Key::Dot(colour)
                 } else {
-                    (x + 7.0, "start")
+                    Key::Line(colour, dash)
                 };
-                let _ = writeln!(
-                    out,
-                    r#"<path d="M{} {} L{} {} M{} {} L{} {}" stroke="{c}" stroke-width="2.5"/><text x="{lx}" y="{}" font-size="11" fill="{c}" text-anchor="{anchor}">{}</text>"#,
-                    x - 5.0,
-                    y - 5.0,
-                    x + 5.0,
-                    y + 5.0,
-                    x - 5.0,
-                    y + 5.0,
-                    x + 5.0,
-                    y - 5.0,
-                    y - 7.0,
-                    escape(&m.label)
-                );
+                named.push((Some(key), series.name.clone()));
             }
         }
-    }
+        for (x, y, m) in &crosses {
+            let c = m.colour;
+            let _ = writeln!(
+                out,
+                r#"<path d="M{} {} L{} {} M{} {} L{} {}" stroke="{c}" stroke-width="2.5"/>"#,
+                x - 5.0,
+                y - 5.0,
+                x + 5.0,
+                y + 5.0,
+                x - 5.0,
+                y + 5.0,
+                x + 5.0,
+                y - 5.0,
+            );
+        }
+        out.push_str(&labels);
 
-    /// The panel's width: the plot, and the legend's column when a series is named.
-    fn width(&self) -> f64 {
-        if self.series.iter().any(|s| !s.name.is_empty()) || !self.notes.is_empty() {
-            WIDTH + LEGEND
+        // The legend's column, right of the plot, so it never covers a trace: the series,
+        // then what went there for want of room, then the notes.
+        named.append(&mut legend);
+        let lx = right + 12.0;
+        let mut widest: f64 = 0.0;
+        let mut row = 0;
+        for (key, label) in &named {
+            let ly = top + 14.0 + 15.0 * row as f64;
+            row += 1;
+            let tx = match key {
+                Some(_) => lx + 22.0,
+                None => lx,
+            };
+            match key {
+                Some(Key::Line(colour, dash)) => {
+                    let dash = dash
+                        .map(|d| format!(r#" stroke-dasharray="{d}""#))
+                        .unwrap_or_default();
+                    let _ = writeln!(
+                        out,
+                        r#"<line x1="{lx}" y1="{}" x2="{}" y2="{}" stroke="{colour}" stroke-width="2"{dash}/>"#,
+                        ly - 4.0,
+                        lx + 18.0,
+                        ly - 4.0,
+                    );
+                }
+                Some(Key::Dot(colour)) => {
+                    let _ = writeln!(
+                        out,
+                        r#"<circle cx="{}" cy="{}" r="3" fill="{colour}"/>"#,
+                        lx + 9.0,
+                        ly - 4.0
+                    );
+                }
+                Some(Key::Triangle(colour)) => triangle(out, lx + 9.0, ly, colour),
+                None => {}
+            }
+            let colour = if key.is_some() { "black" } else { "#555" };
+            text(out, (tx, ly, Anchor::Start), colour, label);
+            widest = widest.max(tx - lx + CHAR * FONT * label.chars().count() as f64);
+        }
+        if !named.is_empty() && !self.notes.is_empty() {
+            row += 1;
+        }
+        for note in &self.notes {
+            let ly = top + 14.0 + 15.0 * row as f64;
+            row += 1;
+            text(out, (lx, ly, Anchor::Start), "#555", note);
+            widest = widest.max(CHAR * FONT * note.chars().count() as f64);
+        }
+        if row == 0 {
+            width
         } else {
-            WIDTH
+            width + 12.0 + widest + 16.0
         }
     }
 }
@@ -387,18 +746,43 @@ fn envelope(points: impl Iterator<Item = (f64, f64)>, columns: usize) -> Vec<(f6
     out
 }
 
-/// Panels side by side, as one SVG document.
+/// Panels side by side, on as many rows as keep the page within `MAX_WIDTH`, as one SVG
+/// document.
 pub fn svg(panels: &[Panel]) -> String {
-    let total: f64 = panels.iter().map(Panel::width).sum::<f64>().max(WIDTH);
+    let widths: Vec<f64> = panels
+        .iter()
+        .map(|p| p.draw(&mut String::new(), 0.0, 0.0))
+        .collect();
+    let mut rows: Vec<Vec<usize>> = Vec::new();
+    let mut row_width = 0.0;
+    for (k, &w) in widths.iter().enumerate() {
+        match rows.last_mut() {
+            Some(row) if row_width + w <= MAX_WIDTH => {
+                row.push(k);
+                row_width += w;
+            }
+            _ => {
+                rows.push(vec![k]);
+                row_width = w;
+            }
+        }
+    }
+    let total = rows
+        .iter()
+        .map(|r| r.iter().map(|&k| widths[k]).sum::<f64>())
+        .fold(WIDTH, f64::max)
+        .ceil();
+    let height = HEIGHT * rows.len().max(1) as f64;
     let mut out = format!(
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{total}" height="{HEIGHT}" font-family="sans-serif" viewBox="0 0 {total} {HEIGHT}">
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{total}" height="{height}" font-family="sans-serif" viewBox="0 0 {total} {height}">
 <rect width="100%" height="100%" fill="white"/>
 "#
     );
-    let mut x0 = 0.0;
-    for panel in panels {
-        panel.draw(&mut out, x0);
-        x0 += panel.width();
+    for (r, row) in rows.iter().enumerate() {
+        let mut x0 = 0.0;
+        for &k in row {
+            x0 += panels[k].draw(&mut out, x0, HEIGHT * r as f64);
+        }
     }
     out.push_str("</svg>\n");
     out
@@ -470,5 +854,60 @@ mod tests {
             assert_eq!(max(all), max(kept));
         }
         assert!(thin.windows(2).all(|w| w[0].0 <= w[1].0));
+    }
+
+    /// Three panels with legends (e.g. a study over three scenes) wrap onto rows: the page
+    /// stays within `MAX_WIDTH` and its text at its size.
+    #[test]
+    fn panels_wrap_within_the_page_width() {
+        let panel = Panel {
+            series: vec![Series {
+                name: "a long series name for the legend".into(),
+                points: vec![(1.0, 1.0), (2.0, 4.0)],
+                ..Series::default()
+            }],
+            ..Panel::default()
+        };
+        let doc = svg(&[panel.clone(), panel.clone(), panel]);
+        let head = doc.lines().next().unwrap();
+        let width: f64 = head
+            .split("width=\"")
+            .nth(1)
+            .unwrap()
+            .split('"')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!(width <= MAX_WIDTH, "{width}");
+        assert!(
+            head.contains(&format!("height=\"{}\"", 3.0 * HEIGHT)),
+            "{head}"
+        );
+    }
+
+    /// Two levels close together (a cap just under a limit) are told apart: each its own
+    /// dash pattern and its label once, in the legend.
+    #[test]
+    fn close_levels_are_told_apart() {
+        let panel = Panel {
+            series: vec![Series {
+                name: "output".into(),
+                points: vec![(0.0, 0.0), (10.0, 7400.0)],
+                ..Series::default()
+            }],
+            levels: vec![(9362.0, "cap".into()), (9855.0, "limit".into())],
+            ..Panel::default()
+        };
+        let doc = svg(&[panel]);
+        let dashes: Vec<&str> = doc
+            .lines()
+            .filter(|l| l.contains("stroke-width=\"1.2\""))
+            .filter_map(|l| l.split("stroke-dasharray=\"").nth(1)?.split('"').next())
+            .collect();
+        assert_eq!(dashes.len(), 2);
+        assert_ne!(dashes[0], dashes[1]);
+        assert_eq!(doc.matches(">cap<").count(), 1);
+        assert_eq!(doc.matches(">limit<").count(), 1);
     }
 }

@@ -423,6 +423,160 @@ fn the_reference_hands_a_stiff_scene_to_bdf() {
     );
 }
 
+/// Issue 29, 7: a device file's left-out keys are noted and values no membrane has are
+/// warned of on stderr (the report unchanged on stdout); a tunable range closed at 0 V is
+/// said as such, with the mode that closes it.
+#[test]
+fn device_files_are_read_aloud() {
+    let dir = std::env::temp_dir().join(format!("host-sim-notes-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let metres = dir.join("metres.toml");
+    std::fs::write(&metres, "thickness = 50\njlim = 120\n").unwrap();
+    let out = host_sim(&["safe", "--device", metres.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("warning: device file") && err.contains("`thickness` = 50 m is outside"),
+        "{err}"
+    );
+    assert!(err.contains("values taken: shear_modulus,"), "{err}");
+    assert!(!err.contains("neo-Hookean"), "{err}");
+    let closed = dir.join("closed.toml");
+    std::fs::write(&closed, "breakdown_field = 1\n").unwrap();
+    let out = host_sim(&["safe", "--device", closed.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("tunable range   none: only ")
+            && text.contains("the breakdown limit closes it"),
+        "{text}"
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("no `jlim`: the material is neo-Hookean"),
+        "{err}"
+    );
+    assert!(
+        err.contains("`breakdown_field` = 1 V/m is outside"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// Issue 29, 10: the command line's rules, one each. `--csv -` is stdout (the report then on
+/// stderr); every output's folder is made before the work, for every command; the curve's
+/// columns never run together; a sweep that measures nothing does not exit 0.
+#[test]
+fn one_rule_for_outputs_and_columns() {
+    let dir = std::env::temp_dir().join(format!("host-sim-rules-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    // stdout: the CSV alone, its header first, as many rows as steps + 1.
+    let out = host_sim(&[
+        "simulate",
+        "--bias-volts",
+        "5000",
+        "--duration-seconds",
+        "0.01",
+        "--step-seconds",
+        "0.001",
+        "--csv",
+        "-",
+    ]);
+    assert!(out.status.success());
+    let csv = String::from_utf8(out.stdout).unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(lines[0], "time_seconds,stretch,velocity_per_second,volts");
+    assert_eq!(lines.len(), 12, "{csv}");
+    assert!(String::from_utf8_lossy(&out.stderr).contains("method          reference"));
+    assert!(!std::path::Path::new("-").exists());
+    // Folders made for every output, before the work.
+    let lut = dir.join("a/b/table.bin");
+    let image = dir.join("c/d/reference.img");
+    let plot = dir.join("e/f/x.svg");
+    for args in [
+        vec!["lut", "--out", lut.to_str().unwrap()],
+        vec!["image", "--out", image.to_str().unwrap()],
+        vec![
+            "simulate",
+            "--bias-volts",
+            "5000",
+            "--duration-seconds",
+            "0.01",
+            "--plot",
+            plot.to_str().unwrap(),
+        ],
+    ] {
+        let out = host_sim(&args);
+        assert!(
+            out.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    assert!(lut.is_file() && image.is_file() && plot.is_file());
+    // A neo-Hookean device read back from an image: `jlim = none`, not 0 (which a device
+    // file refuses).
+    let neo = dir.join("neo.toml");
+    std::fs::write(&neo, "shear_modulus = 45000\n").unwrap();
+    let neo_image = dir.join("neo.img");
+    let out = host_sim(&[
+        "image",
+        "--device",
+        neo.to_str().unwrap(),
+        "--target-hz",
+        "42",
+        "--out",
+        neo_image.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text =
+        String::from_utf8(host_sim(&["image", "--check", neo_image.to_str().unwrap()]).stdout)
+            .unwrap();
+    assert!(
+        text.contains("jlim = none") && !text.contains("jlim = 0"),
+        "{text}"
+    );
+    // Columns: the longest limit (`loss_of_tension_2a at … V`) still has two spaces after it,
+    // and every row's next column starts where the header's does.
+    let out = host_sim(&[
+        "curve",
+        "--device",
+        neo.to_str().unwrap(),
+        "--prestretch-1",
+        "3",
+        "--prestretch-2",
+        "0.8:1.0:2",
+        "--out",
+        dir.join("curve").to_str().unwrap(),
+    ]);
+    let text = String::from_utf8(out.stdout).unwrap();
+    let header = text.lines().find(|l| l.starts_with("λ1p")).unwrap();
+    // In characters: the header's λ is two bytes.
+    let column = header[..header.find("max bias V").unwrap()].chars().count();
+    let rows: Vec<&str> = text.lines().filter(|l| l.contains(" at ")).collect();
+    assert!(
+        rows.iter().any(|r| r.contains("loss_of_tension_2a")),
+        "{text}"
+    );
+    for row in rows {
+        let chars: Vec<char> = row.chars().collect();
+        assert_eq!(chars[column - 2..column], [' ', ' '], "{row}");
+        assert!(chars[column].is_ascii_digit(), "{row}");
+    }
+    // A sweep damped past any measurement is refused (the guard), not a silent exit 0.
+    let out = host_sim(&[
+        "sweep",
+        "--quality-factor",
+        "1e-9",
+        "--out",
+        dir.join("s").to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
 /// The stiff and extreme cases: no run fails silently; the guard refuses the steps past
 /// every explicit method's stability limit (2 steps a period), and each case has a step at
 /// which RK4 in f32 runs stable or stops after the monitor saw a crossing.

@@ -245,6 +245,9 @@ enum Local {
     },
 }
 
+/// How long the first request waits for a start-up line (a board already running says none).
+const STARTUP_WAIT: Duration = Duration::from_secs(2);
+
 /// The time a `wait` gives the board unless told.
 const WAIT_SECONDS: f64 = 30.0;
 
@@ -361,6 +364,12 @@ pub fn console(args: &ConsoleArgs, json: bool) -> Result<ConsoleReport, String> 
     }
     let notices = Arc::new(Mutex::new(Vec::new()));
     let heard = listen(reader, notices.clone(), echo);
+    // A board that starts as the console connects (QEMU's socket, `serve`) says its start-up
+    // line first, and may not listen before it: the first request waits for it, a while.
+    let end = Instant::now() + STARTUP_WAIT;
+    while Instant::now() < end && notices.lock().map_or(true, |n| n.is_empty()) {
+        std::thread::sleep(Duration::from_millis(20));
+    }
     let mut session = Session {
         writer,
         heard,

@@ -102,12 +102,28 @@ pub struct CurveReport {
 
 impl fmt::Display for CurveReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        // The limit column as wide as its longest entry and two spaces.
+        let limit_of = |c: &Curve| {
+            c.limit
+                .as_ref()
+                .map(|l| format!("{} at {} V", l.mode, sig(l.volts)))
+        };
+        let width = self
+            .curves
+            .iter()
+            .filter_map(limit_of)
+            .map(|t| t.chars().count() + 2)
+            .max()
+            .unwrap_or(0)
+            .max(31);
         writeln!(
             f,
             "device          {}\nmargin          {}\n\
-             λ1p      λ2p      limit                          max bias V   tunable range Hz{}",
+             λ1p      λ2p      {:<width$}{:<13}tunable range Hz{}",
             self.device,
             short(self.margin),
+            "limit",
+            "max bias V",
             if self.curves.iter().any(|c| c.target.is_some()) {
                 "        target bias V"
             } else {
@@ -122,11 +138,11 @@ impl fmt::Display for CurveReport {
                 short(c.prestretch_2)
             )?;
             match (&c.limit, c.max_bias_volts, c.tunable_range_hz) {
-                (Some(l), Some(max), Some([low, high])) => {
+                (Some(_), Some(max), Some([low, high])) => {
                     write!(
                         f,
-                        "{:<31}{:<13}{} .. {}",
-                        format!("{} at {} V", l.mode, sig(l.volts)),
+                        "{:<width$}{:<13}{} .. {}",
+                        limit_of(c).unwrap_or_default(),
                         sig(max),
                         sig(low),
                         sig(high)
@@ -316,8 +332,8 @@ fn one_curve(
 }
 
 /// f against bias. One device: the curve, its limit (red ×), the margin's highest bias, the
-/// tunable range as two levels, the target. A family: a colour per λ2p, a curve per λ1p, and
-/// through each colour's limits the safe region's edge, dashed red.
+/// tunable range as two levels, the target. A family: a colour per λ2p, a curve per λ1p
+/// labelled with its λ1p, and through each colour's limits the safe region's edge, dashed red.
 fn plot(device: &DeviceInfo, curves: &[Curve], family: bool) -> Panel {
     let mut panel = Panel {
         title: format!("Tuning curve: {}", device.source),
@@ -367,6 +383,12 @@ fn plot(device: &DeviceInfo, curves: &[Curve], family: bool) -> Panel {
                     colour: Some(colour),
                     ..Style::default()
                 },
+                // In a family, each curve says which λ1p it is (its colour says the λ2p).
+                label: if family {
+                    format!("λ1p {}", short(c.prestretch_1))
+                } else {
+                    String::new()
+                },
             });
         }
         if family {
@@ -384,8 +406,9 @@ fn plot(device: &DeviceInfo, curves: &[Curve], family: bool) -> Panel {
                 style: Style {
                     colour: Some(RED),
                     dashed: true,
-                    dots_only: false,
+                    ..Style::default()
                 },
+                label: String::new(),
             });
         }
     }

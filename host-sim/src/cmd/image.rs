@@ -13,7 +13,7 @@ use de_resonator::table::{self, Table};
 use de_resonator::{Controller, DeviceParams, Field, Setting, Settings};
 use serde::Serialize;
 
-use super::{sig, DeviceArgs, Report};
+use super::{prepare_file, sig, write_path, DeviceArgs, Report};
 use crate::lut;
 
 /// The reference job's target (model.md §9, scenes/reference.toml), Hz.
@@ -281,6 +281,10 @@ impl fmt::Display for ImageReport {
 }
 
 impl Report for ImageReport {
+    fn data_on_stdout(&self) -> bool {
+        self.written && self.file == "-"
+    }
+
     fn failure(&self) -> Option<String> {
         match &self.verdict {
             Verdict::Refuses { reason } => Some(format!("the firmware would refuse: {reason}")),
@@ -297,6 +301,7 @@ pub fn image(args: &ImageArgs) -> Result<ImageReport, String> {
         .out
         .as_ref()
         .ok_or("give --out FILE (or --check FILE)")?;
+    prepare_file(out)?;
     let (params, name) = args.device.params()?;
     let target_hz = args.target_hz.or_else(|| {
         (args.device.device.is_none() && args.settings.is_none()).then_some(REFERENCE_TARGET_HZ)
@@ -339,7 +344,7 @@ pub fn image(args: &ImageArgs) -> Result<ImageReport, String> {
             "{name}: the firmware would refuse this image: {reason}"
         ));
     }
-    std::fs::write(out, &bytes).map_err(|e| format!("cannot write {}: {e}", out.display()))?;
+    write_path(out, &bytes)?;
     report.written = true;
     Ok(report)
 }

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use clap::Args;
 use serde::Serialize;
 
-use super::{short, sig, DeviceArgs, DeviceInfo, MarginArgs, Report};
+use super::{prepare_file, short, sig, write_path, DeviceArgs, DeviceInfo, MarginArgs, Report};
 use crate::lut;
 
 /// How `lut` writes the table.
@@ -100,7 +100,11 @@ impl fmt::Display for LutReport {
     }
 }
 
-impl Report for LutReport {}
+impl Report for LutReport {
+    fn data_on_stdout(&self) -> bool {
+        self.files.iter().any(|f| f == "-")
+    }
+}
 
 pub fn lut(args: &LutArgs) -> Result<LutReport, String> {
     let (params, name) = args.device.params()?;
@@ -125,6 +129,7 @@ pub fn lut(args: &LutArgs) -> Result<LutReport, String> {
         (None, true, _) => LutFormat::Csv,
         (None, false, _) => LutFormat::Bin,
     };
+    prepare_file(&args.out)?;
     let made = lut::make(params, margin, args.points).map_err(|e| format!("{name}: {e}"))?;
     let points: Vec<Point> = made
         .points
@@ -138,8 +143,7 @@ pub fn lut(args: &LutArgs) -> Result<LutReport, String> {
         LutFormat::Bin => made.bytes.clone(),
         LutFormat::Csv => super::csv(&points)?,
     };
-    std::fs::write(&args.out, written)
-        .map_err(|e| format!("cannot write {}: {e}", args.out.display()))?;
+    write_path(&args.out, &written)?;
     let first = made.points.first().copied().unwrap_or((f32::NAN, f32::NAN));
     let last = made.points.last().copied().unwrap_or((f32::NAN, f32::NAN));
     Ok(LutReport {

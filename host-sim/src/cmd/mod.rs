@@ -14,6 +14,7 @@ pub mod stress;
 pub mod sweep;
 
 use std::fmt::Display;
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use clap::Args;
@@ -27,6 +28,25 @@ pub trait Report: Serialize + Display {
     /// A run that finished but failed (exit status 1), with why.
     fn failure(&self) -> Option<String> {
         None
+    }
+
+    /// Whether stdout carries the data itself (`--csv -`): the report then goes to stderr.
+    fn data_on_stdout(&self) -> bool {
+        false
+    }
+}
+
+/// `-` as a file: stdout, as Unix tools take it.
+pub fn is_stdout(path: &Path) -> bool {
+    path.as_os_str() == "-"
+}
+
+/// Where a file goes, made ready before the work: its folder created and checked writable
+/// (the one rule for every output: `--out`, `--csv`, `--plot`); nothing for stdout (`-`).
+pub fn prepare_file(path: &Path) -> Result<(), String> {
+    match path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        Some(dir) if !is_stdout(path) => prepare_dir(dir),
+        _ => Ok(()),
     }
 }
 
@@ -135,8 +155,14 @@ pub fn write_file(dir: &Path, file: &str, bytes: &[u8]) -> Result<String, String
     write_path(&dir.join(file), bytes)
 }
 
-/// Write `bytes` to `path`; the path written, or why not.
+/// Write `bytes` to `path` (`-`: stdout); the path written, or why not.
 pub fn write_path(path: &Path, bytes: &[u8]) -> Result<String, String> {
+    if is_stdout(path) {
+        let mut out = std::io::stdout().lock();
+        // A reader that stops early is not an error.
+        let _ = out.write_all(bytes).and_then(|()| out.flush());
+        return Ok("-".into());
+    }
     std::fs::write(path, bytes).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     Ok(path.display().to_string())
 }

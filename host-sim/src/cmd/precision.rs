@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use clap::Args;
 use serde::Serialize;
 
-use super::{write_csv_and_plot, DeviceArgs, DeviceInfo, Report};
+use super::{prepare_dir, write_csv_and_plot, DeviceArgs, DeviceInfo, Report};
 use crate::engine::simulate::Choice;
 use crate::plot::{Marker, Panel, Series, Style, COLOURS};
 use crate::study::precision::{reference, rows, studies, Row, ToleranceRow};
@@ -123,6 +123,8 @@ impl Report for PrecisionReport {}
 
 pub fn precision(args: &PrecisionArgs) -> Result<PrecisionReport, String> {
     let (params, name) = args.device.params()?;
+    // The folder made ready before the work (minutes of it), as every command does.
+    prepare_dir(&args.out)?;
     let studies = studies(params).map_err(|e| format!("{name}: {e}"))?;
     let references = crate::work::map("reference", &studies, reference)
         .into_iter()
@@ -209,8 +211,9 @@ fn panel(scene: &str, rows: &[Row]) -> Panel {
                 style: Style {
                     colour: Some(colour),
                     dashed: f32_,
-                    dots_only: false,
+                    ..Style::default()
                 },
+                label: String::new(),
             }),
         }
         if matches!(r.steps_per_period, 8 | 64 | 512) {

@@ -432,10 +432,11 @@ fn files(dir: &Path, scene: &Scene, run: &Run) -> Result<Vec<String>, String> {
     Ok(written)
 }
 
-/// The run's two panels: the stretch (the plant's crossing marked) and the voltage on the
+/// The run's panels: the stretch (the plant's crossing marked) and the voltage on the
 /// membrane with the controller's cap and the plant's own limit; the controller's events as
-/// guides (the first clause of each, labels in rows that do not overprint).
-fn plot(scene: &Scene, run: &Run) -> [Panel; 2] {
+/// guides (the first clause of each). Each beside its last `ZOOM_PERIODS` periods of the
+/// drive, which the whole run draws as a solid band.
+fn plot(scene: &Scene, run: &Run) -> Vec<Panel> {
     let series = |name: &str, pick: fn(&Sample) -> f64| Series {
         name: name.into(),
         points: run.history.iter().map(|h| (h.seconds, pick(h))).collect(),
@@ -479,7 +480,7 @@ fn plot(scene: &Scene, run: &Run) -> [Panel; 2] {
     if let Some((mode, volts)) = run.limit {
         levels.push((volts, format!("plant's limit ({})", mode.name())));
     }
-    [
+    let whole = [
         Panel {
             title: format!("{}: stretch of A", scene.name),
             x_label: "time, s".into(),
@@ -500,5 +501,33 @@ fn plot(scene: &Scene, run: &Run) -> [Panel; 2] {
             markers: markers(|h| h.membrane_volts),
             ..Panel::default()
         },
-    ]
+    ];
+    // The drive's period: the scene's AC, else the target.
+    let hz = [f64::from(scene.run.settings.ac_hz), run.target_hz]
+        .into_iter()
+        .find(|hz| hz.is_finite() && *hz > 0.0);
+    let end = run.history.last().map_or(0.0, |h| h.seconds);
+    let from = hz.map(|hz| end - ZOOM_PERIODS / hz);
+    let mut panels = Vec::new();
+    for panel in whole {
+        let zoom = match (hz, from) {
+            (Some(hz), Some(from)) if from > run.history[0].seconds => Some(panel.zoom(
+                from,
+                end,
+                format!(
+                    "last {ZOOM_PERIODS} periods of {} Hz: {} to {} s",
+                    crate::text::short(hz),
+                    crate::text::short(from),
+                    crate::text::short(end)
+                ),
+            )),
+            _ => None,
+        };
+        panels.push(panel);
+        panels.extend(zoom);
+    }
+    panels
 }
+
+/// How many of the drive's periods the plot's zoom panels show.
+const ZOOM_PERIODS: f64 = 5.0;

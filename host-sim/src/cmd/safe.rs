@@ -78,6 +78,30 @@ impl Region {
     }
 }
 
+impl Region {
+    /// Whether the range is empty or of zero width (within 1e-6): the limit is at or near
+    /// 0 V, and no bias tunes anything.
+    pub fn range_is_empty(&self) -> bool {
+        let [low, high] = self.tunable_range_hz;
+        !(high - low > 1e-6 * high.abs())
+    }
+
+    /// The tunable range as said: `low .. high Hz`, or why there is none.
+    fn range_said(&self) -> String {
+        let [low, high] = self.tunable_range_hz;
+        if self.range_is_empty() {
+            format!(
+                "none: only {} Hz, the {} limit closes it at {} V",
+                sig(low),
+                self.limit.mode,
+                sig(self.limit.volts)
+            )
+        } else {
+            format!("{} .. {} Hz", sig(low), sig(high))
+        }
+    }
+}
+
 impl fmt::Display for Region {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let l = &self.limit;
@@ -88,7 +112,7 @@ impl fmt::Display for Region {
              limit           {}: {}\n\
              \x20               at {} V, stretch {}, f = {} Hz\n\
              margin {:<8} bias at most {} V (stretch {})\n\
-             tunable range   {} .. {} Hz",
+             tunable range   {}",
             self.device,
             sig(self.zero_bias_frequency_hz),
             sig(self.zero_bias_stretch),
@@ -100,8 +124,7 @@ impl fmt::Display for Region {
             short(self.margin),
             sig(self.max_bias_volts),
             sig(self.max_bias_stretch),
-            sig(self.tunable_range_hz[0]),
-            sig(self.tunable_range_hz[1]),
+            self.range_said(),
         )
     }
 }

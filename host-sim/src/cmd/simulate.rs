@@ -8,7 +8,7 @@ use clap::Args;
 use de_resonator::Device;
 use serde::Serialize;
 
-use super::{prepare_dir, sig, write_path, Crossing, DeviceArgs, DeviceInfo, Report};
+use super::{prepare_file, sig, write_path, Crossing, DeviceArgs, DeviceInfo, Report};
 use crate::engine::simulate::{self, Choice, OpenLoop, Solver, Start, Tolerance};
 use crate::plot::{svg, Marker, Panel, Series, RED};
 
@@ -79,7 +79,8 @@ pub struct SimulateArgs {
     /// Default: the relative tolerance.
     #[arg(long, value_name = "A", allow_negative_numbers = true)]
     pub atol: Option<f64>,
-    /// Write the trajectory as CSV (time_seconds, stretch, velocity_per_second, volts).
+    /// Write the trajectory as CSV (time_seconds, stretch, velocity_per_second, volts); `-`:
+    /// to stdout (the report then goes to stderr).
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
     /// Put the trajectory in the report (`--json`: `trajectory` with the columns of `--csv`).
@@ -195,6 +196,10 @@ impl fmt::Display for SimulateReport {
 }
 
 impl Report for SimulateReport {
+    fn data_on_stdout(&self) -> bool {
+        self.files.iter().any(|f| f == "-")
+    }
+
     /// Done, but the trajectory crossed a limit (exit status 1).
     fn failure(&self) -> Option<String> {
         self.first_limit.map(|c| {
@@ -242,9 +247,7 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
     };
     // Where the files go, checked before the work.
     for path in [&args.csv, &args.plot].into_iter().flatten() {
-        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            prepare_dir(dir)?;
-        }
+        prepare_file(path)?;
     }
     let scene = OpenLoop {
         params,
@@ -316,7 +319,9 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
 }
 
 /// The stretch against time, the limit's stretch on the loading branch as a level, the
-/// first crossing marked.
+/// first crossing marked. With no AC the bias is constant and so is the stretch at which the
+/// check that fired fails: that stretch is a level too, and the ✕ sits where the curve
+/// crosses it (between the last sample that passed and the first that failed).
 fn plot(
     device: &DeviceInfo,
     checked: &Device<f64>,
@@ -325,33 +330,72 @@ fn plot(
     method: &str,
 ) -> Panel {
     let limit = de_resonator::Limit::of(checked);
+    let dt = out.step_seconds;
     let points: Vec<(f64, f64)> = out
         .samples
         .iter()
         .enumerate()
-        .map(|(k, &x)| (k as f64 * out.step_seconds, x))
+        .map(|(k, &x)| (k as f64 * dt, x))
         .collect();
-    let markers = out
-        .first_limit
-        .and_then(|(mode, t)| {
-            let at = points.iter().find(|p| p.0 >= t)?;
-            Some(Marker {
-                x: t,
-                y: at.1,
+    let no_ac = scene.ac_volts == 0.0 || scene.drive_hz <= 0.0;
+    let mut levels = vec![(
+        limit.at.stretch,
+        format!("static limit ({}) stretch", limit.mode.name()),
+    )];
+    let mut markers = Vec::new();
+    if let Some((mode, t)) = out.first_limit {
+        let k = (t / dt).round() as usize;
+        let crossing = match (no_ac, k.checked_sub(1).and_then(|j| points.get(j..=k))) {
+            (true, Some(&[(t0, s0), (_, s1)])) => {
+                let b2 = de_resonator::Drive::from_volts(checked, scene.bias_volts, 0.0, 0.0)
+                    .bias_dimless_squared_at(0.0);
+                let fails = |s: f64| {
+                    de_resonator::Monitor::new()
+                        .observe(checked, 0, s, b2)
+                        .is_some()
+                };
+                (!fails(s0) && fails(s1)).then(|| {
+                    let (mut pass, mut fail) = (s0, s1);
+                    for _ in 0..60 {
+                        let mid = 0.5 * (pass + fail);
+                        if fails(mid) {
+                            fail = mid;
+                        } else {
+                            pass = mid;
+                        }
+                    }
+                    let at = 0.5 * (pass + fail);
+                    levels.push((
+                        at,
+                        format!(
+                            "{} at {} V: stretch {}",
+                            mode.name(),
+                            sig(scene.bias_volts),
+                            sig(at)
+                        ),
+                    ));
+                    (t0 + dt * (at - s0) / (s1 - s0), at)
+                })
+            }
+            _ => None,
+        };
+        // With AC (or no sample before): the first sample that failed.
+        if let Some((x, y)) = crossing.or_else(|| points.get(k).copied()) {
+            markers.push(Marker {
+                x,
+                y,
                 label: format!("{} at {} s", mode.name(), sig(t)),
                 colour: RED,
-            })
-        })
-        .into_iter()
-        .collect();
+            });
+        }
+    }
+    let ac = if no_ac {
+        "no AC".to_string()
+    } else {
+        format!("{} V AC at {} Hz", sig(scene.ac_volts), sig(scene.drive_hz))
+    };
     Panel {
-        title: format!(
-            "{}: {} V + {} V AC at {} Hz",
-            device.source,
-            sig(scene.bias_volts),
-            sig(scene.ac_volts),
-            sig(scene.drive_hz)
-        ),
+        title: format!("{}: {} V, {ac}", device.source, sig(scene.bias_volts)),
         x_label: "time, s".into(),
         y_label: "stretch λ".into(),
         series: vec![Series {
@@ -359,10 +403,7 @@ fn plot(
             points,
             ..Series::default()
         }],
-        levels: vec![(
-            limit.at.stretch,
-            format!("static limit ({}) stretch", limit.mode.name()),
-        )],
+        levels,
         markers,
         ..Panel::default()
     }

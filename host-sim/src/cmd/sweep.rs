@@ -188,13 +188,20 @@ impl fmt::Display for SweepReport {
 }
 
 impl Report for SweepReport {
-    /// Done, but the drive crossed a limit at some frequency.
+    /// Done, but the drive crossed a limit at some frequency, or no run gave an amplitude
+    /// (every one stopped: nothing was measured).
     fn failure(&self) -> Option<String> {
-        (self.crossed_limit > 0).then(|| {
-            format!(
+        if self.crossed_limit > 0 {
+            return Some(format!(
                 "{} of {} drive frequencies crossed a limit of model.md §6",
                 self.crossed_limit,
                 self.points.len()
+            ));
+        }
+        (!self.points.is_empty() && self.stopped == self.points.len()).then(|| {
+            format!(
+                "all {} runs stopped before settling: nothing was measured",
+                self.stopped
             )
         })
     }
@@ -300,7 +307,8 @@ pub fn sweep(args: &SweepArgs) -> Result<SweepReport, String> {
 }
 
 /// The response against drive frequency in Hz: measured points as a line (broken where runs
-/// stopped), those that crossed a limit in red, stopped ones grey along the top.
+/// stopped), those that crossed a limit in red, stopped ones as grey triangles along the
+/// frequency axis (nothing measured, so at no amplitude).
 fn plot(
     device: &DeviceInfo,
     s: &Sweep,
@@ -310,10 +318,6 @@ fn plot(
     stopped: usize,
 ) -> Panel {
     let measured = |p: &Point| p.amplitude.map(|a| (p.drive_hz, a));
-    let top = points
-        .iter()
-        .filter_map(|p| p.amplitude)
-        .fold(f64::MIN_POSITIVE, f64::max);
     let mut series: Vec<Series> = points
         .split(|p| p.stopped)
         .filter(|run| !run.is_empty())
@@ -329,6 +333,7 @@ fn plot(
                 colour: Some(crate::plot::COLOURS[0]),
                 ..Style::default()
             },
+            label: String::new(),
         })
         .collect();
     series.push(Series {
@@ -343,19 +348,22 @@ fn plot(
             dots_only: true,
             ..Style::default()
         },
+        label: String::new(),
     });
+    // No amplitude: marked along the frequency axis, at no value.
     series.push(Series {
         name: "stopped: nothing measured".into(),
         points: points
             .iter()
             .filter(|p| p.stopped)
-            .map(|p| (p.drive_hz, top * 2.0))
+            .map(|p| (p.drive_hz, f64::NAN))
             .collect(),
         style: Style {
             colour: Some(GREY),
-            dots_only: true,
+            on_axis: true,
             ..Style::default()
         },
+        label: String::new(),
     });
     series.retain(|s| !s.points.is_empty());
     Panel {

@@ -1,0 +1,62 @@
+#!/usr/bin/env bash
+# The firmware under QEMU with an image and a console, from the repository's root, in one
+# command: builds the firmware (QEMU build) and host-sim, makes an image unless given one,
+# starts QEMU (netduinoplus2) with the command port (USART2) on a Unix socket, and opens
+# `host-sim console` on it. No time limit; Ctrl-C or the console's end (Ctrl-D) stops QEMU.
+#
+# Usage: scripts/qemu.sh [--image FILE] [--socket PATH] [--no-console] [-- CONSOLE-ARGS...]
+#   --image FILE   the configuration image to flash (default: the reference device at 44 Hz,
+#                  made by `host-sim image`: it waits for `start`)
+#   --socket PATH  the command port's socket (default: target/qemu/fw.sock)
+#   --no-console   serve the socket only (talk to it with `host-sim console --unix PATH`),
+#                  until Ctrl-C
+#   after --       more arguments for `host-sim console` (e.g. --script FILE, --json)
+# Environment: QEMU_TIMEOUT=S stops QEMU after S seconds (none by default).
+set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+image="" socket="$root/target/qemu/fw.sock" console=1 console_args=()
+while [ $# -gt 0 ]; do
+    case "$1" in
+        --image) image="$(realpath "${2:?--image needs a file}")"; shift 2 ;;
+        --socket) socket="$(realpath -m "${2:?--socket needs a path}")"; shift 2 ;;
+        --no-console) console=0; shift ;;
+        --) shift; console_args=("$@"); break ;;
+        -h|--help) sed -n '2,14p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+        *) echo "qemu.sh: unknown argument $1 (see --help)" >&2; exit 2 ;;
+    esac
+done
+command -v qemu-system-arm >/dev/null || { echo "qemu.sh: install qemu-system-arm (apt-get install qemu-system-arm)" >&2; exit 2; }
+mkdir -p "$root/target/qemu" "$(dirname "$socket")"
+echo "building host-sim and the firmware (QEMU build)..." >&2
+cargo build --locked --release -q -p host-sim --manifest-path "$root/Cargo.toml"
+host_sim="$root/target/release/host-sim"
+(cd "$root/firmware" && cargo build --locked --release -q --bin firmware)
+elf="$root/firmware/target/thumbv7em-none-eabihf/release/firmware"
+if [ -z "$image" ]; then
+    image="$root/target/qemu/reference.img"
+    "$host_sim" image --target-hz 44 --out "$image" >/dev/null
+fi
+"$host_sim" image --check "$image" >/dev/null || { echo "qemu.sh: the firmware would refuse $image (host-sim image --check $image)" >&2; }
+rm -f "$socket"
+log="$root/target/qemu/firmware.log"
+# QEMU waits for the console to connect (wait=on): nothing is missed, the start-up line first.
+# In a process group of its own (setsid): the runner, QEMU and the log decoder stop together.
+(cd "$root/firmware" && QEMU_IMAGE="$image" QEMU_SERIAL1="unix:$socket,server=on,wait=on" \
+    exec setsid ./qemu-run.sh "$elf") >"$log" 2>&1 &
+runner=$!
+stop() {
+    kill -TERM -- "-$runner" 2>/dev/null || true
+    wait "$runner" 2>/dev/null || true
+    rm -f "$socket"
+}
+trap stop EXIT
+trap 'exit 130' INT TERM
+for _ in $(seq 100); do [ -S "$socket" ] && break; sleep 0.1; done
+[ -S "$socket" ] || { cat "$log" >&2; echo "qemu.sh: QEMU did not open $socket" >&2; exit 1; }
+echo "firmware under QEMU: image $image, command port $socket, log $log" >&2
+if [ "$console" = 1 ]; then
+    "$host_sim" console --unix "$socket" "${console_args[@]}"
+else
+    echo "serving: host-sim console --unix $socket (Ctrl-C stops QEMU)" >&2
+    wait "$runner"
+fi
