@@ -2,9 +2,9 @@
 //! or cut frame is refused with its reason, and no bytes panic the parser.
 
 use de_resonator::board::link::{
-    self, Booted, Kind, LinkError, Observed, Said, HEADER, MAX_FRAME, MAX_PAYLOAD,
+    self, Booted, Kind, LinkError, Observed, HEADER, MAX_FRAME, MAX_PAYLOAD,
 };
-use de_resonator::{Event, FailureMode, Fault, Phase};
+use de_resonator::{Event, EventKind, FailureMode, Fault, Phase};
 use proptest::prelude::*;
 
 fn samples_frame(tick: u32, codes: &[u16]) -> Vec<u8> {
@@ -101,7 +101,8 @@ fn a_ticks_output_reads_back_with_the_events_words() {
         dac_code: 51234,
         dac_on: true,
         enable: true,
-        said: Said::Event,
+        said: Some(event.kind()),
+        said_values: event.values(),
         phase: Some(Phase::Solving),
         bias_volts: 3012.25,
         target_hz: 44.5,
@@ -120,6 +121,22 @@ fn a_ticks_output_reads_back_with_the_events_words() {
     assert_eq!((h.kind, h.tick), (Kind::Output, 99));
     let (back, words) = Observed::read(payload).unwrap();
     assert!(back.tracked_hz.is_nan());
+    // The event's numbers, as it was made, named in order.
+    assert_eq!(back.said, Some(EventKind::Trimmed));
+    assert_eq!(
+        back.said_values,
+        [3012.25, 43.98765, 41234.5, 3020.0, 120.0]
+    );
+    assert_eq!(
+        EventKind::Trimmed.value_names(),
+        [
+            "bias_volts",
+            "measured_hz",
+            "shear_modulus_pa",
+            "next_bias_volts",
+            "resolution"
+        ]
+    );
     assert_eq!(
         Observed {
             tracked_hz: 0.0,
@@ -144,7 +161,10 @@ fn a_fault_sends_the_faults_words_and_a_refused_boot_its_reason() {
         value: 3.0,
     };
     let observed = Observed::of(0, false, false, None, Some(&Event::Fault(fault)));
-    assert_eq!((observed.said, observed.phase), (Said::Fault, None));
+    assert_eq!(
+        (observed.said, observed.phase),
+        (Some(EventKind::Fault), None)
+    );
     let mut out = [0u8; 200];
     let n = observed
         .write(Some(&Event::Fault(fault)), &mut out)
@@ -153,7 +173,7 @@ fn a_fault_sends_the_faults_words_and_a_refused_boot_its_reason() {
     assert_eq!(std::str::from_utf8(words).unwrap(), fault.to_string());
     assert_eq!(
         Observed::of(0, false, false, None, Some(&Event::Fault(Fault::Bus))).said,
-        Said::BusFault
+        Some(EventKind::BusFault)
     );
 
     let booted = Booted {
@@ -192,13 +212,13 @@ fn a_record_byte_no_field_can_hold_is_refused() {
     let observed = Observed::of(0, false, false, None, None);
     let mut out = [0u8; link::OBSERVED_BYTES];
     observed.write(None, &mut out).unwrap();
-    // The `Said` byte (3) and the phase byte (4), each given a value no variant has.
+    // What was said (byte 3) and the phase (byte 4), each given a value no variant has.
     for offset in [3, 4] {
         let mut bad = out;
-        bad[offset] = 7;
+        bad[offset] = 8;
         assert_eq!(
             Observed::read(&bad).map(|_| ()),
-            Err(LinkError::BadField { offset, value: 7 })
+            Err(LinkError::BadField { offset, value: 8 })
         );
     }
 }

@@ -577,6 +577,31 @@ fn one_rule_for_outputs_and_columns() {
     std::fs::remove_dir_all(dir).unwrap();
 }
 
+/// Issue 29, 13: `run`'s events carry fields, not only words: the reference scene's
+/// `at_bias` holds the f64 solve's bias for 44 Hz (`tune`, an independent path) within a DAC
+/// step, and the AC comes on after it.
+#[test]
+fn run_events_have_kinds_and_values() {
+    let dir = out_dir("run-events");
+    let v = ran(&["--json", "run", "--out", &dir]);
+    let events = v["events"].as_array().unwrap();
+    let kinds: Vec<&str> = events.iter().map(|e| e["kind"].as_str().unwrap()).collect();
+    let at = kinds.iter().position(|k| *k == "at_bias").unwrap();
+    let on = kinds.iter().position(|k| *k == "drive_on").unwrap();
+    assert!(at < on, "{kinds:?}");
+    let volts = events[at]["values"]["volts"].as_f64().unwrap();
+    let tuned = json(&["tune", "--target-hz", "44", "--json"])["bias_volts"]
+        .as_f64()
+        .unwrap();
+    // One step of the 16-bit DAC at 2.5 V × 4000.
+    assert!(
+        (volts - tuned).abs() <= 1e4 / 65536.0 + 1e-3,
+        "{volts} vs {tuned}"
+    );
+    assert_eq!(events[on]["values"], serde_json::json!({}));
+    assert!(events[at]["what"].as_str().unwrap().starts_with("at bias"));
+}
+
 /// The stiff and extreme cases: no run fails silently; the guard refuses the steps past
 /// every explicit method's stability limit (2 steps a period), and each case has a step at
 /// which RK4 in f32 runs stable or stops after the monitor saw a crossing.

@@ -24,7 +24,7 @@ use core::fmt::{self, Write as _};
 use embedded_hal::digital::OutputPin;
 use embedded_hal::spi::{Operation, SpiDevice};
 
-use crate::controller::{Boot, Controller, Event, Fault, Phase};
+use crate::controller::{Boot, Controller, Event, EventKind, Phase, EVENT_VALUES};
 use crate::drive::PowerMode;
 use crate::model::failure::FailureMode;
 use crate::table::{crc32, f32_at, u16_at, u32_at};
@@ -231,31 +231,6 @@ pub fn codes(payload: &[u8]) -> impl Iterator<Item = u16> + '_ {
     })
 }
 
-/// What the controller said on a tick, as a kind: its words follow in the payload.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Said {
-    /// Nothing this tick.
-    Nothing = 0,
-    /// An event that is not a fault (`Event`'s words).
-    Event = 1,
-    /// A fault (the fault's words), the output down at the slew rate.
-    Fault = 2,
-    /// The DAC bus's fault (the fault's words), the amplifier disabled at once.
-    BusFault = 3,
-}
-
-impl Said {
-    fn of(byte: u8) -> Option<Said> {
-        match byte {
-            0 => Some(Said::Nothing),
-            1 => Some(Said::Event),
-            2 => Some(Said::Fault),
-            3 => Some(Said::BusFault),
-            _ => None,
-        }
-    }
-}
-
 /// A tick's output as the board saw it: the DAC frame written, the enable line, what the
 /// controller said, and what host-sim's report reads of the controller.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -266,8 +241,10 @@ pub struct Observed {
     pub dac_on: bool,
     /// The amplifier's enable line.
     pub enable: bool,
-    /// What the controller said.
-    pub said: Said,
+    /// What the controller said, as a kind (its words follow in the payload).
+    pub said: Option<EventKind>,
+    /// Its numbers (`Event::values`: `EventKind::value_names` says which; NaN past them).
+    pub said_values: [f32; EVENT_VALUES],
     /// The controller's phase (`None`: no controller).
     pub phase: Option<Phase>,
     /// The plan's bias, V (NaN: no controller).
@@ -300,10 +277,11 @@ impl fmt::Display for Words<'_> {
 }
 
 /// The fixed part of an output payload; the words of what was said follow. Its layout: DAC
-/// code u16; flags u8 (bit 0 the DAC on, bit 1 the enable line); `Said` u8; phase u8 (its
-/// place in `Phase`'s order, 0xFF none); AC on u8; 2 zero bytes; the AC's phase step u32;
-/// bias V, tracked Hz, Q, sensed stretch and its σ, target Hz, f32 each.
-pub const OBSERVED_BYTES: usize = 36;
+/// code u16; flags u8 (bit 0 the DAC on, bit 1 the enable line); what was said u8
+/// (`EventKind` as u8, 0 nothing); phase u8 (its place in `Phase`'s order, 0xFF none); AC on
+/// u8; 2 zero bytes; the AC's phase step u32; bias V, tracked Hz, Q, sensed stretch and its
+/// σ, target Hz, f32 each; the event's `EVENT_VALUES` numbers, f32 each.
+pub const OBSERVED_BYTES: usize = 36 + 4 * EVENT_VALUES;
 
 const PHASES: [Phase; 7] = [
     Phase::Ramping,
@@ -325,12 +303,6 @@ impl Observed {
         controller: Option<&Controller>,
         event: Option<&Event>,
     ) -> Self {
-        let said = match event {
-            None => Said::Nothing,
-            Some(Event::Fault(Fault::Bus)) => Said::BusFault,
-            Some(Event::Fault(_)) => Said::Fault,
-            Some(_) => Said::Event,
-        };
         let plan = controller.map(|c| c.plan());
         let (tracked_hz, quality_factor) = tracked(controller);
         let (sensed_stretch, sensed_sigma) = sensed(controller);
@@ -338,7 +310,8 @@ impl Observed {
             dac_code,
             dac_on,
             enable,
-            said,
+            said: event.map(Event::kind),
+            said_values: event.map_or([f32::NAN; EVENT_VALUES], Event::values),
             phase: controller.map(|c| c.phase()),
             bias_volts: plan.map_or(f32::NAN, |p| p.bias_volts),
             target_hz: controller.map_or(f32::NAN, |c| c.settings().target_hz),
@@ -368,7 +341,7 @@ impl Observed {
         put.bytes(&self.dac_code.to_le_bytes());
         put.bytes(&[
             flags,
-            self.said as u8,
+            self.said.map_or(0, |k| k as u8),
             phase,
             u8::from(self.ac_phase_step.is_some()),
             0,
@@ -382,7 +355,10 @@ impl Observed {
             self.sensed_stretch,
             self.sensed_sigma,
             self.target_hz,
-        ] {
+        ]
+        .into_iter()
+        .chain(self.said_values)
+        {
             put.bytes(&x.to_le_bytes());
         }
         let words = out.get_mut(OBSERVED_BYTES..).unwrap_or(&mut []);
@@ -407,7 +383,14 @@ impl Observed {
             value: byte(offset),
         };
         let flags = byte(2);
-        let said = Said::of(byte(3)).ok_or(bad(3))?;
+        let said = match byte(3) {
+            0 => None,
+            n => Some(EventKind::of(n).ok_or(bad(3))?),
+        };
+        let mut said_values = [f32::NAN; EVENT_VALUES];
+        for (k, value) in said_values.iter_mut().enumerate() {
+            *value = f32_at(payload, 36 + 4 * k);
+        }
         let phase = match byte(4) {
             0xFF => None,
             i => Some(*PHASES.get(usize::from(i)).ok_or(bad(4))?),
@@ -417,6 +400,7 @@ impl Observed {
             dac_on: flags & 1 != 0,
             enable: flags & 2 != 0,
             said,
+            said_values,
             phase,
             ac_phase_step: (byte(5) != 0).then(|| u32_at(payload, 8)),
             bias_volts: f32_at(payload, 12),

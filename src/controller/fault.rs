@@ -295,6 +295,117 @@ pub enum Event {
     Fault(Fault),
 }
 
+/// What kind of thing an `Event` is, for a reader that wants fields rather than words.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum EventKind {
+    AtBias = 1,
+    DriveOn = 2,
+    DriveOff = 3,
+    Trimmed = 4,
+    AboveCeiling = 5,
+    /// A fault, down to 0 V at the slew rate.
+    Fault = 6,
+    /// The DAC bus's fault, the amplifier disabled at once.
+    BusFault = 7,
+}
+
+/// The most numbers an event carries (`Event::values`).
+pub const EVENT_VALUES: usize = 5;
+
+impl EventKind {
+    pub const ALL: [EventKind; 7] = [
+        EventKind::AtBias,
+        EventKind::DriveOn,
+        EventKind::DriveOff,
+        EventKind::Trimmed,
+        EventKind::AboveCeiling,
+        EventKind::Fault,
+        EventKind::BusFault,
+    ];
+
+    /// The kind's name in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            EventKind::AtBias => "at_bias",
+            EventKind::DriveOn => "drive_on",
+            EventKind::DriveOff => "drive_off",
+            EventKind::Trimmed => "trimmed",
+            EventKind::AboveCeiling => "above_ceiling",
+            EventKind::Fault => "fault",
+            EventKind::BusFault => "bus_fault",
+        }
+    }
+
+    /// The names of `Event::values`, in order, with their units in them.
+    pub fn value_names(self) -> &'static [&'static str] {
+        match self {
+            EventKind::AtBias => &["volts"],
+            EventKind::Trimmed => &[
+                "bias_volts",
+                "measured_hz",
+                "shear_modulus_pa",
+                "next_bias_volts",
+                "resolution",
+            ],
+            EventKind::AboveCeiling => &["needed_volts", "cap_volts"],
+            EventKind::DriveOn | EventKind::DriveOff | EventKind::Fault | EventKind::BusFault => {
+                &[]
+            }
+        }
+    }
+
+    /// The kind with this number (`kind as u8`).
+    pub fn of(number: u8) -> Option<EventKind> {
+        EventKind::ALL.into_iter().find(|k| *k as u8 == number)
+    }
+}
+
+impl Event {
+    pub fn kind(&self) -> EventKind {
+        match self {
+            Event::AtBias { .. } => EventKind::AtBias,
+            Event::DriveOn => EventKind::DriveOn,
+            Event::DriveOff => EventKind::DriveOff,
+            Event::Trimmed { .. } => EventKind::Trimmed,
+            Event::AboveCeiling { .. } => EventKind::AboveCeiling,
+            Event::Fault(Fault::Bus) => EventKind::BusFault,
+            Event::Fault(_) => EventKind::Fault,
+        }
+    }
+
+    /// Its numbers in the order of `kind().value_names()`, NaN past them (and for a
+    /// resolution not measured); a fault's are in its words.
+    pub fn values(&self) -> [f32; EVENT_VALUES] {
+        let mut v = [f32::NAN; EVENT_VALUES];
+        let given: &[f32] = match *self {
+            Event::AtBias { volts } => &[volts],
+            Event::Trimmed {
+                bias_volts,
+                measured_hz,
+                shear_modulus,
+                next_bias_volts,
+                resolution,
+            } => &[
+                bias_volts,
+                measured_hz,
+                shear_modulus,
+                next_bias_volts,
+                resolution.unwrap_or(f32::NAN),
+            ],
+            Event::AboveCeiling {
+                needed_volts,
+                cap_volts,
+            } => &[needed_volts, cap_volts],
+            _ => &[],
+        };
+        for (slot, value) in v.iter_mut().zip(given) {
+            *slot = *value;
+        }
+        v
+    }
+}
+
 /// The words before a fault's own in `Event::Fault`'s: the descent, or (the DAC's bus) the
 /// stage off at once.
 pub const FAULT_SAID: &str = "fault, down to 0 V at the slew rate";

@@ -42,7 +42,9 @@ mod watch;
 
 pub use boot::Boot;
 pub use command::{Refusal, ReplanJob, Replanned};
-pub use fault::{Event, Fault, FaultStage, Output, BUS_FAULT_SAID, FAULT_SAID};
+pub use fault::{
+    Event, EventKind, Fault, FaultStage, Output, BUS_FAULT_SAID, EVENT_VALUES, FAULT_SAID,
+};
 pub use plan::{Plan, MAX_PLAN_TICKS};
 pub use settings::{Setting, Settings, F32_GUARD, MAX_TRIMS, TRIM_SECANT_STEP};
 #[cfg(feature = "trim")]

@@ -49,10 +49,14 @@ pub struct CommandReport {
     pub reply: String,
 }
 
-/// Something the controller said, and when.
+/// Something the controller said, and when: its kind, its numbers by name (units in the
+/// names), and its words.
 #[derive(Serialize, Debug)]
 pub struct EventReport {
     pub time_seconds: f64,
+    /// `at_bias`, `drive_on`, `drive_off`, `trimmed`, `above_ceiling`, `fault`, `bus_fault`.
+    pub kind: &'static str,
+    pub values: serde_json::Map<String, serde_json::Value>,
     pub what: String,
 }
 
@@ -377,6 +381,12 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<RunReport, String> {
             .iter()
             .map(|e| EventReport {
                 time_seconds: e.seconds,
+                kind: e.kind.name(),
+                values: e
+                    .values
+                    .iter()
+                    .map(|(name, v)| (name.to_string(), serde_json::Value::from(*v)))
+                    .collect(),
                 what: e.what.clone(),
             })
             .collect(),

@@ -8,13 +8,13 @@ use std::convert::Infallible;
 use std::time::Instant;
 
 use de_resonator::acquire::{Block, Channel, FrontEnd, InputError, Reader};
-use de_resonator::board::link::{self, Booted, Observed, Said as SaidKind, Words};
+use de_resonator::board::link::{self, Booted, Observed, Words};
 use de_resonator::board::port::Extras;
 use de_resonator::board::{Line, Lines, NoKeeper, ReplyLine, Then};
 use de_resonator::image::{AmplifierSpec, Image, PowerUp, DAC_BITS};
 use de_resonator::{
-    Amplifier, Controller, Dac8551, DeviceParams, Event, FailureMode, Fault, Inputs, OutputStage,
-    Phase, Settings, BUS_FAULT_SAID, FAULT_SAID,
+    Amplifier, Controller, Dac8551, DeviceParams, Event, EventKind, FailureMode, Fault, Inputs,
+    OutputStage, Phase, Settings, BUS_FAULT_SAID, FAULT_SAID,
 };
 use embedded_hal::digital::{self, OutputPin};
 use embedded_hal::spi::{ErrorKind, ErrorType, Operation, SpiDevice};
@@ -257,10 +257,13 @@ pub struct Replied {
     pub reply: String,
 }
 
-/// Something the controller said, and when.
+/// Something the controller said, and when: its kind, its numbers (named by
+/// `EventKind::value_names`) and its words.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Said {
     pub seconds: f64,
+    pub kind: EventKind,
+    pub values: Vec<(&'static str, f64)>,
     pub what: String,
 }
 
@@ -337,23 +340,35 @@ pub struct Tracked {
 }
 
 impl Run {
-    /// Record what the board said at `seconds` (its kind and words), and the fault if it is
-    /// one.
-    fn said(&mut self, seconds: f64, kind: SaidKind, words: &str) {
+    /// Record what the board said at `seconds` (its kind, numbers and words), and the fault
+    /// if it is one.
+    fn said(&mut self, seconds: f64, seen: &Observed, words: &str) {
+        let Some(kind) = seen.said else { return };
         let what = match kind {
-            SaidKind::Nothing => return,
-            SaidKind::Event => words.to_string(),
-            SaidKind::Fault | SaidKind::BusFault => {
+            EventKind::Fault | EventKind::BusFault => {
                 self.fault_words = Some(words.to_string());
-                let what = if kind == SaidKind::BusFault {
+                let what = if kind == EventKind::BusFault {
                     BUS_FAULT_SAID
                 } else {
                     FAULT_SAID
                 };
                 format!("{what}: {words}")
             }
+            _ => words.to_string(),
         };
-        self.events.push(Said { seconds, what });
+        let values = kind
+            .value_names()
+            .iter()
+            .zip(seen.said_values)
+            .filter(|(_, v)| v.is_finite())
+            .map(|(name, v)| (*name, f64::from(v)))
+            .collect();
+        self.events.push(Said {
+            seconds,
+            kind,
+            values,
+            what,
+        });
     }
 }
 
@@ -535,7 +550,7 @@ impl Loop {
                 };
                 run.final_command_volts = command;
                 run.max_command_volts = run.max_command_volts.max(command);
-                run.said(t, seen.said, &words);
+                run.said(t, &seen, &words);
                 bias = seen.bias_volts;
                 run.target_hz = f64::from(seen.target_hz);
             }
