@@ -26,7 +26,9 @@ fi
 # shellcheck disable=SC2206
 if [ -n "${QEMU_EXTRA:-}" ]; then extra+=($QEMU_EXTRA); fi
 limit=()
-if [ -n "${QEMU_TIMEOUT:-}" ]; then limit=(timeout "$QEMU_TIMEOUT"); fi
+# --foreground: timeout stays in the caller's process group, so a group kill (scripts/qemu.sh)
+# reaches QEMU.
+if [ -n "${QEMU_TIMEOUT:-}" ]; then limit=(timeout --foreground "$QEMU_TIMEOUT"); fi
 qemu() {
     "${limit[@]}" qemu-system-arm -M netduinoplus2 -nographic -monitor none \
         -serial null -serial "${QEMU_SERIAL1:-null}" \

@@ -5,6 +5,7 @@ mod common;
 
 use std::path::Path;
 
+use host_sim::plot::RED;
 use serde_json::Value;
 
 /// Run host-sim (exit status 0, or 1 for a limit crossed); its JSON report.
@@ -250,20 +251,36 @@ fn stopped_sweep_points_are_not_drawn_as_data() {
     assert!(stopped > 0, "the default sweep has stopped runs");
     let svg = read(&Path::new(&dir).join("sweep.svg"));
     no_overlaps("sweep.svg", &svg);
-    assert!(svg.contains(">stopped: nothing measured<"));
+    // The legend names the stopped runs by whether they crossed a limit first (the JSON's
+    // points say which there are).
+    let points = v["points"].as_array().unwrap();
+    let crossed_then_stopped = points
+        .iter()
+        .filter(|p| p["stopped"] == true && !p["first_limit_mode"].is_null())
+        .count() as u64;
+    assert_eq!(
+        svg.contains(">stopped after crossing a limit<"),
+        crossed_then_stopped > 0
+    );
+    assert_eq!(
+        svg.contains(">stopped: nothing measured<"),
+        stopped > crossed_then_stopped
+    );
     let frame = svg
         .lines()
         .find(|l| l.starts_with("<rect x=") && l.contains("fill=\"none\""))
         .unwrap();
     let bottom = num(frame, "y") + num(frame, "height");
-    // Nothing grey is a dot (a value); the grey symbols stand on the axis.
+    // Nothing grey is a dot (a value); the stopped runs' symbols (grey, or red after a
+    // crossing) stand on the axis.
     let grey: Vec<&str> = svg
         .lines()
         .filter(|l| l.contains("#888888") && !l.starts_with("<line"))
         .collect();
     assert!(grey.iter().all(|l| !l.starts_with("<circle")), "{grey:?}");
-    let on_axis: Vec<&&str> = grey
-        .iter()
+    let on_axis: Vec<&str> = svg
+        .lines()
+        .filter(|l| l.contains("#888888") || l.contains(RED))
         .filter(|l| l.starts_with("<path") && num(l, "stroke-width") > 0.0)
         .collect();
     assert!(

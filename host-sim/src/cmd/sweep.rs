@@ -307,8 +307,8 @@ pub fn sweep(args: &SweepArgs) -> Result<SweepReport, String> {
 }
 
 /// The response against drive frequency in Hz: measured points as a line (broken where runs
-/// stopped), those that crossed a limit in red, stopped ones as grey triangles along the
-/// frequency axis (nothing measured, so at no amplitude).
+/// stopped), those that crossed a limit in red, stopped ones as triangles along the
+/// frequency axis (nothing measured, so at no amplitude), red if they crossed a limit first.
 fn plot(
     device: &DeviceInfo,
     s: &Sweep,
@@ -350,21 +350,27 @@ fn plot(
         },
         label: String::new(),
     });
-    // No amplitude: marked along the frequency axis, at no value.
-    series.push(Series {
-        name: "stopped: nothing measured".into(),
-        points: points
-            .iter()
-            .filter(|p| p.stopped)
-            .map(|p| (p.drive_hz, f64::NAN))
-            .collect(),
-        style: Style {
-            colour: Some(GREY),
-            on_axis: true,
-            ..Style::default()
-        },
-        label: String::new(),
-    });
+    // No amplitude: marked along the frequency axis, at no value; red where the run crossed
+    // a limit before it stopped (a crossing is a crossing, measured or not).
+    for (name, colour, crossed) in [
+        ("stopped after crossing a limit", RED, true),
+        ("stopped: nothing measured", GREY, false),
+    ] {
+        series.push(Series {
+            name: name.into(),
+            points: points
+                .iter()
+                .filter(|p| p.stopped && p.first_limit_mode.is_some() == crossed)
+                .map(|p| (p.drive_hz, f64::NAN))
+                .collect(),
+            style: Style {
+                colour: Some(colour),
+                on_axis: true,
+                ..Style::default()
+            },
+            label: String::new(),
+        });
+    }
     series.retain(|s| !s.points.is_empty());
     Panel {
         title: format!(
