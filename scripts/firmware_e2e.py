@@ -442,7 +442,7 @@ def main():
         with open(settings, "w") as f:
             f.write(f"target_hz = 44.0\ntick_hz = {tick_hz}.0\n")
         img = os.path.join(WORK, f"rate-{tick_hz}.img")
-        host_sim("image", "--settings", settings, "--out", img)
+        host_sim("image", "--settings", settings, "--power-up", "drive", "--out", img)
         fw = Firmware(f"rate-{tick_hz}", img, args="busy-idle")
         a = fw.status()
         while int(a["ticks"]) == 0:  # `clock_us` is the last tick's: wait for one
