@@ -46,8 +46,6 @@ log="$root/target/qemu/firmware.log"
 runner=$!
 stop() {
     kill -TERM -- "-$runner" 2>/dev/null || true
-    # Anything of this session's QEMU left outside the group (its socket names it).
-    pkill -f "unix:$socket,server" 2>/dev/null || true
     wait "$runner" 2>/dev/null || true
     rm -f "$socket"
 }

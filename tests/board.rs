@@ -628,6 +628,23 @@ fn an_image_that_waits_drives_only_at_start() {
     let mut b = Bench::boot(&bytes, None::<NoKeeper>, None);
     assert!(b.notice.ends_with("power_up=drive"), "{}", b.notice);
     assert!(b.run(100, Inputs::NONE) > 0.0);
+    // After a `reset` (asked at rest at 0 V) it comes up off: no command named `reset`
+    // switches the high voltage on.
+    let mut b = Bench::boot(&bytes, None::<NoKeeper>, Some(ResetCause::Asked));
+    assert!(
+        b.notice
+            .ends_with("power_up=drive (the output off at 0 V: `start` to drive)"),
+        "{}",
+        b.notice
+    );
+    let (bus, pin) = (common::Bus::default(), common::Pin::default());
+    let mut stage = OutputStage::new(Dac8551::new(&bus), &pin);
+    for _ in 0..2000 {
+        let t = tick::drive(&mut b.slot, &mut stage, Ok(Inputs::NONE)).unwrap();
+        assert_eq!(t.output.volts, 0.0);
+        assert!(stage.is_safe());
+    }
+    assert!(b.ask("start").starts_with("ok target_hz=44 "));
 }
 
 /// Issue 29, 6: with the amplifier's rail (7600 V) below the cap in force, `status` and the start-up line give the lower as the most the

@@ -230,11 +230,15 @@ fn guard_bounds_heavy_damping() {
     let rate = 100.0 * stiffest;
     let d = damped(rate);
     let drive = Drive::from_volts(&d, 7000.0, 500.0, 40.0);
-    // The fast root is largest where the membrane is least stiff.
+    // The fast root grows as the stiffness falls (a higher bias than the drive's least, a
+    // later drive): it is below c/M for every k ≥ 0, the bound the guard holds at every bias.
     let mu = (rate + (rate * rate - 4.0 * softest).sqrt()) / 2.0;
+    assert!(mu < rate);
     let max = max_stable_step_seconds(&d, &drive, Method::Rk4, RANGE).unwrap();
-    assert!(rel(max, 2.6 / mu) < 1e-4, "{max} vs {}", 2.6 / mu);
+    assert!(rel(max, 2.6 / rate) < 1e-9, "{max} vs {}", 2.6 / rate);
     assert!(rk4_gain(-max * mu, 0.0) <= 1.0);
+    // At a bias where the membrane is softer still (k → 0), still inside the region.
+    assert!(rk4_gain(-max * rate, 0.0) <= 1.0);
     assert!(rk4_gain(-2.8 / stiffest * mu, 0.0) > 1.0);
     let start = at_rest(2.1);
     let new = |h| Integrator::new(d, drive, Method::Rk4, h, RANGE, start, false);
@@ -260,7 +264,10 @@ fn guard_bounds_moderate_damping() {
     let d = damped(2.0 * zeta * omega);
     let drive = Drive::constant(&d, 7000.0);
     let max = max_stable_step_seconds(&d, &drive, Method::Rk4, (2.1, 2.1)).unwrap();
-    assert!(rel(max, 2.6 / omega) < 1e-4, "{max} vs {}", 2.6 / omega);
+    // |μ| = ω here; at a softer state the roots go real and the fast one nears c/M = 2ζω
+    // (1.06 ω), the bound the guard holds.
+    let bound = omega.max(2.0 * zeta * omega);
+    assert!(rel(max, 2.6 / bound) < 1e-4, "{max} vs {}", 2.6 / bound);
 }
 
 /// Asked to subdivide, a too-large step runs as stable substeps and agrees with small steps.

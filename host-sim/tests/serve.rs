@@ -260,6 +260,9 @@ fn a_script_waits_for_a_state_and_fails_when_it_never_comes() {
     assert_eq!(status["fault"], "none", "{status}");
     let err = board.console(&["target 300"]).0;
     assert_eq!(err["exchanges"][0]["fields"]["code"], 2.0, "{err}");
+    // A number waited for as the board writes it, or as a number equal to it.
+    let (report, ok) = board.console(&["stop", "wait volts=0 30", "wait volts=0.0 1"]);
+    assert!(ok, "{report}");
     // A state that never comes.
     let (report, ok) = board.console(&["wait phase=nowhere 0.3", "status"]);
     assert!(!ok);

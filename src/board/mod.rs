@@ -167,7 +167,9 @@ impl<'a, K: Keeper> Board<'a, K> {
                 &mut started.notice,
             ),
             Ok(bias_volts) => {
-                let waits = image.0.power_up == PowerUp::Wait;
+                // An image drives at power-up only: after a `reset` the output stays off
+                // (it was asked to be off at 0 V; no command named `reset` switches it on).
+                let waits = image.0.power_up == PowerUp::Wait || cause.is_some();
                 if waits {
                     // Checked, not switched on: at 0 V with the stage off until `start`
                     // (as `clear` leaves it).

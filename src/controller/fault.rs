@@ -116,8 +116,10 @@ impl fmt::Display for Fault {
                 )?;
                 if *high_volts > *max_volts {
                     write!(f, "above the cap {} V", Decimal(*max_volts))
-                } else {
+                } else if *low_volts < 0.0 {
                     write!(f, "below 0 V (the amplifier is unipolar): raise the bias")
+                } else {
+                    write!(f, "not within [0 V, the cap {} V]", Decimal(*max_volts))
                 }
             }
             Fault::Table(e) => write!(f, "table: {e}"),

@@ -266,10 +266,11 @@ pub struct Integrator<T> {
 /// The largest stable step in seconds for `method` on `device` under `drive`, while the
 /// stretch stays in `range`. Linearised about each stretch, λ'' = −k·δλ − c̄·λ' has the
 /// eigenvalues μ = (−c̄ ± √(c̄² − 4k))/2 (model.md §4, dimensionless), k = −∂λ''/∂λ the
-/// local stiffness at the least Φ̄² the drive reaches (where it is stiffest); the step
-/// keeps h·|μ| inside the method's region at every sampled stretch. With heavy damping
-/// the fast root nears c̄, so the bound carries the damping term h·c/M. `None`: any step
-/// is stable.
+/// local stiffness. k is largest at the least Φ̄² the drive reaches, and √k bounds |μ| when
+/// underdamped; overdamped, the fast root grows as k falls (a higher bias, later drives of
+/// a plan), up to c̄ at k = 0: the bound takes c̄ itself, so the damping term h·c/M holds at
+/// every bias. Past the device's stability (k < 0) the decaying root at the sampled k is
+/// taken. The step keeps h·|μ| inside the method's region. `None`: any step is stable.
 pub fn max_stable_step_seconds<T: Real>(
     device: &Device<T>,
     drive: &Drive<T>,
@@ -285,7 +286,7 @@ pub fn max_stable_step_seconds<T: Real>(
     };
     let limit = T::of(method.stability_radius(c > T::zero())?);
     let p2 = drive.least_bias_dimless_squared();
-    let mut fastest = T::zero();
+    let mut fastest = c;
     for i in 0..=GUARD_POINTS {
         let l = range.0 + (range.1 - range.0) * T::of(i as f64) / T::of(GUARD_POINTS as f64);
         let k = device.stiffness_dimless(l, p2);
@@ -300,7 +301,7 @@ pub fn max_stable_step_seconds<T: Real>(
 }
 
 /// The largest |μ| of μ² + c̄·μ + k = 0: √k when underdamped, (c̄ + √(c̄² − 4k))/2 when
-/// not (k ≤ 0, past the device's stability, gives one growing root: the physics', not the
+/// not (k < 0, past the device's stability, gives one growing root: the physics', not the
 /// method's; the decaying one still bounds the step).
 fn fastest_rate<T: Real>(k: T, c: T) -> T {
     let disc = c * c - T::of(4.0) * k;

@@ -192,12 +192,15 @@ fn listen(
     let (tx, rx) = mpsc::channel();
     std::thread::spawn(move || {
         let mut reader = BufReader::new(reader);
+        // Kept across read timeouts: a line that arrives in pieces is read whole.
+        let mut line = String::new();
         loop {
-            let mut line = String::new();
             let heard = match reader.read_line(&mut line) {
                 Ok(0) => Heard::Closed("the board closed the connection".into()),
+                Ok(_) if !line.ends_with('\n') => continue,
                 Ok(_) => {
-                    let line = line.trim_end().to_string();
+                    let whole = std::mem::take(&mut line);
+                    let line = whole.trim_end().to_string();
                     if line.starts_with(NOTICE) {
                         if echo {
                             say(&line);
@@ -298,9 +301,12 @@ struct Session {
 impl Session {
     /// Send one request and wait for its reply; `Err` when the board went away or is silent.
     fn ask(&mut self, request: &str) -> Result<String, String> {
-        // A connection the board closed is said as such, not as the write's error.
-        if let Ok(Heard::Closed(why)) = self.heard.try_recv() {
-            return Err(why);
+        // A connection the board closed is said as such, not as the write's error; a reply
+        // that came after its request's time ran out is dropped, not taken for this one's.
+        while let Ok(heard) = self.heard.try_recv() {
+            if let Heard::Closed(why) = heard {
+                return Err(why);
+            }
         }
         self.writer
             .write_all(format!("{request}\n").as_bytes())
@@ -457,10 +463,15 @@ fn wait(
     let end = Instant::now() + within;
     loop {
         let line = session.ask("status")?;
-        let now = fields(&line)
-            .get(key)
-            .map(|v| v.as_str().map_or(v.to_string(), String::from));
-        if now.as_ref().is_some_and(|v| values.iter().any(|w| w == v)) {
+        // The field as the board wrote it (`volts=0`), or as a number equal to the one
+        // asked for (`wait volts=0.0`).
+        let now = Reply::parse(&line).and_then(|r| r.field(key));
+        let holds = |want: &String| match (now, want.parse::<f64>()) {
+            (Some(text), Ok(number)) => text == want || text.parse::<f64>() == Ok(number),
+            (Some(text), Err(_)) => text == want,
+            (None, _) => false,
+        };
+        if values.iter().any(holds) {
             if echo {
                 say(&line);
             }
