@@ -11,7 +11,8 @@
 #   --no-console   serve the socket only (talk to it with `host-sim console --unix PATH`),
 #                  until Ctrl-C
 #   after --       more arguments for `host-sim console` (e.g. --script FILE, --json)
-# Environment: QEMU_TIMEOUT=S stops QEMU after S seconds (none by default).
+# Environment: QEMU_TIMEOUT=S stops QEMU after S seconds (none by default); HOST_SIM=path
+# uses that host-sim binary rather than building the release one.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 image="" socket="$root/target/qemu/fw.sock" console=1 console_args=()
@@ -21,15 +22,19 @@ while [ $# -gt 0 ]; do
         --socket) socket="$(realpath -m "${2:?--socket needs a path}")"; shift 2 ;;
         --no-console) console=0; shift ;;
         --) shift; console_args=("$@"); break ;;
-        -h|--help) sed -n '2,14p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+        -h|--help) sed -n '2,15p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
         *) echo "qemu.sh: unknown argument $1 (see --help)" >&2; exit 2 ;;
     esac
 done
 command -v qemu-system-arm >/dev/null || { echo "qemu.sh: install qemu-system-arm (apt-get install qemu-system-arm)" >&2; exit 2; }
 mkdir -p "$root/target/qemu" "$(dirname "$socket")"
 echo "building host-sim and the firmware (QEMU build)..." >&2
-cargo build --locked --release -q -p host-sim --manifest-path "$root/Cargo.toml"
-host_sim="$root/target/release/host-sim"
+if [ -n "${HOST_SIM:-}" ]; then
+    host_sim="$HOST_SIM"
+else
+    cargo build --locked --release -q -p host-sim --manifest-path "$root/Cargo.toml"
+    host_sim="$root/target/release/host-sim"
+fi
 (cd "$root/firmware" && cargo build --locked --release -q --bin firmware)
 elf="$root/firmware/target/thumbv7em-none-eabihf/release/firmware"
 if [ -z "$image" ]; then

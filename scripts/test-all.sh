@@ -2,12 +2,55 @@
 # Every check CI runs, from a fresh machine: installs what it needs, then formats, lints
 # (host and Cortex-M4F target), builds the core for the target, runs all tests and the two
 # fuzzers, and runs the firmware under QEMU (installing qemu-system-arm, defmt-print and
-# cargo-fuzz when missing).
+# cargo-fuzz when missing). Ends with the time each step took.
+# Usage: scripts/test-all.sh [--quick]
+#   --quick  a developer's inner loop: format, clippy on the host, the workspace's tests
+#            (no target builds, fuzzers or firmware; a few minutes once built)
 set -euo pipefail
 cd "$(dirname "$0")/.."
+quick=0
+case "${1:-}" in
+    --quick) quick=1 ;;
+    "") ;;
+    -h|--help) sed -n '2,8p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    *) echo "test-all.sh: unknown argument \`$1\` (see --help)" >&2; exit 2 ;;
+esac
 
 TARGET=thumbv7em-none-eabihf
-step() { printf '\n== %s\n' "$*"; }
+# Each step's name and seconds, printed as a table at the end (also when a step fails).
+names=() seconds=() current="" started=0 begun=$(date +%s)
+finish() {
+    if [ -n "$current" ]; then
+        names+=("$current")
+        seconds+=($(($(date +%s) - started)))
+    fi
+    current=""
+}
+step() {
+    finish
+    current="$*" started=$(date +%s)
+    printf '\n== %s\n' "$*"
+}
+table() {
+    local status=$?
+    finish
+    printf '\n== time per step (s)\n'
+    for i in "${!names[@]}"; do
+        printf '%6d  %s\n' "${seconds[$i]}" "${names[$i]:0:90}"
+    done
+    printf '%6d  total%s\n' "$(($(date +%s) - begun))" "$([ "$status" = 0 ] || echo ", failed")"
+}
+trap table EXIT
+
+if [ "$quick" = 1 ]; then
+    step "format"
+    cargo fmt --all -- --check
+    step "clippy, host"
+    cargo clippy --locked --workspace --all-targets -- -D warnings
+    step "tests (the workspace's, without the long fuzz test)"
+    cargo test --locked --workspace -- --skip fuzz_the_controller
+    exit 0
+fi
 
 step "toolchain (rust-toolchain.toml) and the $TARGET target"
 rustup show active-toolchain
@@ -56,4 +99,7 @@ cargo fmt --manifest-path fuzz/Cargo.toml -- --check
 scripts/fuzz.sh
 
 step "firmware under QEMU: the reference run and the on-target checks against expected logs"
-scripts/firmware.sh
+# host-sim as `cargo test` built it for its CLI tests (the test profile, optimised): no
+# second build of the workspace in the release profile.
+[ -x target/debug/host-sim ] || { echo "no target/debug/host-sim: the test step builds it" >&2; exit 1; }
+HOST_SIM="$PWD/target/debug/host-sim" scripts/firmware.sh

@@ -397,11 +397,10 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
             eprintln!("{line}");
             report.events.push(line);
         }
-        let end = t + tick_seconds;
         if report.plant_crossing.is_none() {
-            if let Some(mode) = lp.crossing(&bench.y, end, stepped.volts) {
-                eprintln!("{} s: the plant crossed {}", sig(end), mode.name());
-                report.plant_crossing = super::Crossing::of(Some((mode, end)));
+            if let Some((mode, at)) = bench.crossing {
+                eprintln!("{} s: the plant crossed {}", sig(at), mode.name());
+                report.plant_crossing = super::Crossing::of(Some((mode, at)));
             }
         }
         k += 1;

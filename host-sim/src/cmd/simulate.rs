@@ -310,7 +310,7 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
         },
         min_stretch: out.min_stretch,
         max_stretch: out.max_stretch,
-        first_limit: Crossing::of(out.first_limit),
+        first_limit: Crossing::with_state(out.first_limit, out.first_limit_state),
         run_seconds: out.run_seconds,
         files,
         trajectory: args.trajectory.then_some(rows).flatten(),
@@ -319,9 +319,8 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
 }
 
 /// The stretch against time, the limit's stretch on the loading branch as a level, the
-/// first crossing marked. With no AC the bias is constant and so is the stretch at which the
-/// check that fired fails: that stretch is a level too, and the ✕ sits where the curve
-/// crosses it (between the last sample that passed and the first that failed).
+/// first crossing marked where the run located it. With no AC the bias is constant and so is
+/// the stretch at which the check that fired fails: that stretch is a level too.
 fn plot(
     device: &DeviceInfo,
     checked: &Device<f64>,
@@ -343,51 +342,26 @@ fn plot(
         format!("static limit ({}) stretch", limit.mode.name()),
     )];
     let mut markers = Vec::new();
-    if let Some((mode, t)) = out.first_limit {
-        let k = (t / dt).round() as usize;
-        let crossing = match (no_ac, k.checked_sub(1).and_then(|j| points.get(j..=k))) {
-            (true, Some(&[(t0, s0), (_, s1)])) => {
-                let b2 = de_resonator::Drive::from_volts(checked, scene.bias_volts, 0.0, 0.0)
-                    .bias_dimless_squared_at(0.0);
-                let fails = |s: f64| {
-                    de_resonator::Monitor::new()
-                        .observe(checked, 0, s, b2)
-                        .is_some()
-                };
-                (!fails(s0) && fails(s1)).then(|| {
-                    let (mut pass, mut fail) = (s0, s1);
-                    for _ in 0..60 {
-                        let mid = 0.5 * (pass + fail);
-                        if fails(mid) {
-                            fail = mid;
-                        } else {
-                            pass = mid;
-                        }
-                    }
-                    let at = 0.5 * (pass + fail);
-                    levels.push((
-                        at,
-                        format!(
-                            "{} at {} V: stretch {}",
-                            mode.name(),
-                            sig(scene.bias_volts),
-                            sig(at)
-                        ),
-                    ));
-                    (t0 + dt * (at - s0) / (s1 - s0), at)
-                })
-            }
-            _ => None,
-        };
-        // With AC (or no sample before): the first sample that failed.
-        if let Some((x, y)) = crossing.or_else(|| points.get(k).copied()) {
-            markers.push(Marker {
-                x,
-                y,
-                label: format!("{} at {} s", mode.name(), sig(t)),
-                colour: RED,
-            });
+    // The crossing where the run located it (between samples). With no AC the bias is
+    // constant and so is the stretch at which the check that fired fails: a level too.
+    if let (Some((mode, t)), Some((stretch, _))) = (out.first_limit, out.first_limit_state) {
+        if no_ac {
+            levels.push((
+                stretch,
+                format!(
+                    "{} at {} V: stretch {}",
+                    mode.name(),
+                    sig(scene.bias_volts),
+                    sig(stretch)
+                ),
+            ));
         }
+        markers.push(Marker {
+            x: t,
+            y: stretch,
+            label: format!("{} at {} s", mode.name(), sig(t)),
+            colour: RED,
+        });
     }
     let ac = if no_ac {
         "no AC".to_string()

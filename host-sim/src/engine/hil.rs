@@ -21,8 +21,9 @@ use embedded_hal::spi::{ErrorKind, ErrorType, Operation, SpiDevice};
 
 use de_resonator::board;
 
+use crate::engine::events;
 use crate::engine::plant::{self, Plant, Vector};
-use crate::engine::simulate::{Solver, Tolerance};
+use crate::engine::simulate::{Solver, Tolerance, EVENT_RESOLUTION_SECONDS};
 use crate::text::sig;
 
 /// The DAC8551 as its datasheet has it: 24-bit frames (PD1 PD0, then the code MSB first),
@@ -196,6 +197,8 @@ pub struct Bench {
     reader: Reader,
     /// The stretch input's last code (a stuck sensor repeats it).
     stuck_code: Option<u16>,
+    /// The first check of §6 the plant failed, and when (s): located within its tick.
+    pub crossing: Option<(FailureMode, f64)>,
 }
 
 /// The board's analog front end in a scene (`[front_end]`): the image's, and the ADC's noise.
@@ -555,11 +558,7 @@ impl Loop {
                 run.target_hz = f64::from(seen.target_hz);
             }
             let y = bench.y;
-            if run.plant_crossing.is_none() {
-                if let Some(mode) = self.crossing(&y, t + tick_seconds, volts) {
-                    run.plant_crossing = Some((mode, t + tick_seconds));
-                }
-            }
+            run.plant_crossing = run.plant_crossing.or(bench.crossing);
             if self.history {
                 run.history.push(Sample {
                     tick: k,
@@ -715,6 +714,45 @@ impl Loop {
         }
     }
 
+    /// The first check of §6 the plant fails in a tick from `t0` solved to `solved`: probed
+    /// where the stretch turns and at the tick's end (a brief excursion peaks at a turn; the
+    /// DAC holds and the amplifier's output is monotone over a tick), then located by solving
+    /// the tick again from its start to each bisection's midpoint, to the reference's
+    /// `EVENT_RESOLUTION_SECONDS`.
+    fn first_crossing(
+        &self,
+        t0: f64,
+        solved: &plant::Solved,
+        input_volts: f64,
+        solve: impl Fn(f64) -> Result<plant::Solved, String>,
+    ) -> Result<Option<(FailureMode, f64)>, String> {
+        let fails = |t: f64, y: &Vector| self.crossing(y, t, self.plant.volts(y, input_volts));
+        let end = (t0 + 1.0 / f64::from(self.settings.tick_hz), solved.y);
+        let mut passes = t0;
+        for (t, y) in solved.turns.iter().flatten().copied().chain([end]) {
+            let Some(mode) = fails(t, &y) else {
+                passes = t;
+                continue;
+            };
+            let mut failed = None;
+            let located =
+                events::first_failing(
+                    passes,
+                    (t, mode),
+                    EVENT_RESOLUTION_SECONDS,
+                    |t| match solve(t) {
+                        Ok(at) => fails(t, &at.y),
+                        Err(e) => {
+                            failed.get_or_insert(e);
+                            None
+                        }
+                    },
+                );
+            return failed.map_or(Ok(Some((located.1, located.0))), Err);
+        }
+        Ok(None)
+    }
+
     /// The first check of §6 the true plant fails at `seconds` in state `y` at `volts` (the
     /// leakage's breakdown first), if any.
     pub fn crossing(&self, y: &Vector, seconds: f64, volts: f64) -> Option<FailureMode> {
@@ -745,6 +783,7 @@ impl Loop {
             codes: Vec::new(),
             reader: Reader::new(front_end, scans),
             stuck_code: None,
+            crossing: None,
         }
     }
 
@@ -772,18 +811,26 @@ impl Loop {
     pub fn advance(&self, bench: &mut Bench, k: u64, input_volts: f64) -> Result<f64, String> {
         let tick_seconds = 1.0 / f64::from(self.settings.tick_hz);
         let t = k as f64 * tick_seconds;
-        (bench.y, bench.next_step) = plant::Tick {
-            plant: &self.plant,
-            solver: self.solver,
-            tolerance: self.tolerance,
-            y: bench.y,
-            t0: t,
-            t1: t + tick_seconds,
-            input_volts,
-            first_step: bench.next_step,
+        let (start, first_step) = (bench.y, bench.next_step);
+        // The tick from its start to `t1`.
+        let solve = |t1: f64| {
+            plant::Tick {
+                plant: &self.plant,
+                solver: self.solver,
+                tolerance: self.tolerance,
+                y: start,
+                t0: t,
+                t1,
+                input_volts,
+                first_step,
+            }
+            .solve()
+        };
+        let solved = solve(t + tick_seconds)?;
+        (bench.y, bench.next_step) = (solved.y, Some(solved.first_step));
+        if bench.crossing.is_none() {
+            bench.crossing = self.first_crossing(t, &solved, input_volts, solve)?;
         }
-        .solve()
-        .map(|(y, h)| (y, Some(h)))?;
         let volts = self.plant.volts(&bench.y, input_volts);
         if bench.current_wanted {
             // The output current over this tick, from the membrane's charge (§8).

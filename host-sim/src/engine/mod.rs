@@ -2,8 +2,10 @@
 //! the true §6 checks; [`plant`]), the closed loop running the core's board and controller
 //! against it through a simulated DAC and enable line ([`hil`]), or the firmware's binary under
 //! QEMU in its place ([`firmware`]), and the open-loop reference
-//! solvers the core's integrators are measured against ([`simulate`]: DOP853, BDF).
+//! solvers the core's integrators are measured against ([`simulate`]: DOP853, BDF), and the
+//! events located between their samples ([`events`]: turns of the stretch, first failures).
 
+pub mod events;
 pub mod firmware;
 pub mod hil;
 pub mod plant;

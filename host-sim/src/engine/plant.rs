@@ -7,6 +7,7 @@
 use de_resonator::{DeviceParams, FailureMode};
 use differential_equations::prelude::*;
 
+use crate::engine::events::{self, Hermite, Jet};
 use crate::engine::simulate::{Solver, Tolerance};
 
 /// Most viscoelastic branches a plant may have.
@@ -461,6 +462,16 @@ impl<const N: usize> ODE<f64, [f64; N]> for Motion<'_, N> {
     }
 }
 
+/// A tick solved: the state at its end, the first step the solve took after the drive's
+/// jump, and where the stretch turned within it (time, state: the extremes a check between
+/// tick ends must see).
+#[derive(Clone, Copy, Debug)]
+pub struct Solved {
+    pub y: Vector,
+    pub first_step: f64,
+    pub turns: [Option<(f64, Vector)>; 2],
+}
+
 /// One tick of the plant: `y` over `[t0, t1]` with the amplifier's input held at
 /// `input_volts`.
 pub struct Tick<'a> {
@@ -477,8 +488,8 @@ pub struct Tick<'a> {
 }
 
 impl Tick<'_> {
-    /// The state at `t1`, and the first step the solve took after the drive's jump.
-    pub fn solve(self) -> Result<(Vector, f64), String> {
+    /// The state at `t1`, the first step the solve took after the drive's jump, its turns.
+    pub fn solve(self) -> Result<Solved, String> {
         let t0 = self.t0;
         match self.plant.branches.len() {
             0 => self.advance::<3>(),
@@ -496,7 +507,7 @@ impl Tick<'_> {
 }
 
 impl Tick<'_> {
-    fn advance<const N: usize>(self) -> Result<(Vector, f64), String> {
+    fn advance<const N: usize>(self) -> Result<Solved, String> {
         let mut short = [0.0; N];
         short.copy_from_slice(&self.y[..N]);
         let amplifier = self.plant.amplifier_has_state().then(|| {
@@ -512,6 +523,43 @@ impl Tick<'_> {
         let knee = amplifier
             .and_then(|path| path.knee_time())
             .filter(|&at| at > self.t0 && at < self.t1);
+        // The whole state at `t` from the solved part (the amplifier's in closed form).
+        let whole = |t: f64, short: &[f64; N]| {
+            let mut y = self.y;
+            y[..N].copy_from_slice(short);
+            if let Some(path) = amplifier {
+                y[2] = path.volts_at(t);
+            }
+            y
+        };
+        // A step whose ends' velocities differ in sign holds a turn: located on a quintic
+        // through its ends (value, slope, and the curvature from the equations), the slow
+        // states between them linear.
+        let mut turns = [None; 2];
+        let mut on_step = |(a, ya): (f64, [f64; N]), (b, yb): (f64, [f64; N])| {
+            if !events::turns(ya[1], yb[1]) {
+                return;
+            }
+            let jet = |t: f64, y: &[f64; N]| {
+                let mut rate = [0.0; N];
+                motion.diff(t, y, &mut rate);
+                Jet {
+                    t,
+                    stretch: y[0],
+                    velocity: y[1],
+                    acceleration: rate[1],
+                }
+            };
+            let path = Hermite::new(jet(a, &ya), jet(b, &yb));
+            let at = events::turn(a, b, |t| path.at(t).1);
+            let (stretch, velocity) = path.at(at);
+            let w = (at - a) / (b - a);
+            let mut y: [f64; N] = std::array::from_fn(|i| ya[i] + w * (yb[i] - ya[i]));
+            (y[0], y[1]) = (stretch, velocity);
+            if let Some(slot) = turns.iter_mut().find(|t| t.is_none()) {
+                *slot = Some((at, whole(at, &y)));
+            }
+        };
         // The ramp at the slew rate (if any) in one step; then the rest from the last tick's
         // first step there.
         let (mut from, mut end, mut h) = (self.t0, short, f64::NAN);
@@ -521,16 +569,20 @@ impl Tick<'_> {
             } else {
                 Some(to - from)
             };
-            (end, h) = self
-                .solver
-                .advance(&motion, from, to, end, self.tolerance, first)?;
+            (end, h) = self.solver.advance_watched(
+                &motion,
+                (from, to),
+                end,
+                self.tolerance,
+                first,
+                &mut on_step,
+            )?;
             from = to;
         }
-        let mut y = self.y;
-        y[..N].copy_from_slice(&end);
-        if let Some(path) = amplifier {
-            y[2] = path.volts_at(self.t1);
-        }
-        Ok((y, h))
+        Ok(Solved {
+            y: whole(self.t1, &end),
+            first_step: h,
+            turns,
+        })
     }
 }

@@ -4,11 +4,11 @@
 
 use std::time::Instant;
 
+use crate::engine::events::{Hermite, Jet, Watch};
 use crate::text::sig;
 
 use de_resonator::{
-    Device, DeviceParams, Drive, FailureMode, Integrator, Limit, Method, Monitor, Real, State,
-    StepError,
+    Device, DeviceParams, Drive, FailureMode, Integrator, Limit, Method, Real, State, StepError,
 };
 use differential_equations::error::Error as SolveError;
 use differential_equations::interpolate::Interpolation;
@@ -21,6 +21,9 @@ pub const REFERENCE_TOLERANCE: f64 = 1e-12;
 
 /// Tolerance of the stiff reference (BDF, orders 1 to 5): tighter costs many tiny steps.
 pub const STIFF_REFERENCE_TOLERANCE: f64 = 1e-10;
+
+/// Events (the first crossing of a check) are located to this, s.
+pub const EVENT_RESOLUTION_SECONDS: f64 = 1e-11;
 
 /// The most samples a run keeps (two f64 each, and as many monitor checks): 16 M, 256 MB.
 pub const MAX_SAMPLES: f64 = 16.0 * 1024.0 * 1024.0;
@@ -174,10 +177,15 @@ pub struct Outcome {
     pub final_stretch: f64,
     /// dλ/dt, 1/s.
     pub final_velocity_per_second: f64,
+    /// The stretch's true extremes: turns located between samples on the method's path (the
+    /// reference's dense output; a quintic through the core's step ends).
     pub min_stretch: f64,
     pub max_stretch: f64,
-    /// The first failing check along the trajectory, and when (s).
+    /// The first failing check along the trajectory, and when (s), located between samples
+    /// to `EVENT_RESOLUTION_SECONDS`.
     pub first_limit: Option<(FailureMode, f64)>,
+    /// The state where it first failed: stretch, and dλ/dt in 1/s.
+    pub first_limit_state: Option<(f64, f64)>,
     /// Stretch at t = k·step, k = 0, 1, ...
     pub samples: Vec<f64>,
     /// dλ/dt at the same times, 1/s.
@@ -304,6 +312,7 @@ fn outcome(samples: Vec<f64>, velocities: Vec<f64>) -> Outcome {
         min_stretch: min,
         max_stretch: max,
         first_limit: None,
+        first_limit_state: None,
         samples,
         velocities,
         stopped: None,
@@ -323,9 +332,9 @@ fn core<T: Real>(
 ) -> Result<Outcome, RunError> {
     let params = scene.params.cast::<T>();
     let device = Device::new(params).map_err(|e| e.to_string())?;
-    let range = Device::new(scene.params)
-        .map_err(|e| e.to_string())?
-        .model_range();
+    // The checks and the path between steps in f64, on the method's own states.
+    let exact = Device::new(scene.params).map_err(|e| e.to_string())?;
+    let range = exact.model_range();
     let drive = Drive::from_volts(
         &device,
         T::of(scene.bias_volts),
@@ -349,32 +358,46 @@ fn core<T: Real>(
         _ => RunError::Failed(e.to_string()),
     })?;
     let mut stopped = None;
-    let mut monitor = Monitor::new();
-    let scale = device.rad_per_s_per_unit().to_f64();
+    let scale = exact.rad_per_s_per_unit();
+    let drive = Drive::from_volts(&exact, scene.bias_volts, scene.ac_volts, scene.drive_hz);
+    let mut watch = Watch::new(EVENT_RESOLUTION_SECONDS);
+    // Time in seconds; (stretch, dλ/dt in 1/s).
+    let fails =
+        |t: f64, y: &(f64, f64)| exact.first_failure(y.0, drive.bias_dimless_squared_at(t * scale));
+    let jet = |t: f64, s: State<T>| {
+        let state = State {
+            stretch: s.stretch.to_f64(),
+            velocity: s.velocity.to_f64(),
+        };
+        Jet::of_model(&exact, &drive, t, state)
+    };
     let mut samples = Vec::with_capacity(steps as usize + 1);
     let mut velocities = Vec::with_capacity(steps as usize + 1);
     samples.push(start);
     velocities.push(0.0);
-    monitor.observe(&device, 0, T::of(start), it.bias_dimless_squared());
-    for _ in 0..steps {
+    let mut last = jet(0.0, it.state());
+    for k in 1..=steps {
         if let Err(e) = it.step() {
             // Past the guarded range the model is no longer trusted: stop, say why.
-            if monitor.first_crossing().is_none() {
+            if watch.first.is_none() {
                 return Err(RunError::Failed(e.to_string()));
             }
             stopped = Some(e.to_string());
             break;
         }
-        let s = it.state();
-        samples.push(s.stretch.to_f64());
-        velocities.push(s.velocity.to_f64() * scale);
-        monitor.observe(&device, it.tick(), s.stretch, it.bias_dimless_squared());
+        let next = jet(k as f64 * step_seconds, it.state());
+        samples.push(next.stretch);
+        velocities.push(next.velocity);
+        let path = Hermite::new(last, next);
+        watch.step(last.end(), next.end(), |t| path.at(t), |y| *y, fails);
+        last = next;
     }
     let mut out = outcome(samples, velocities);
     out.stopped = stopped;
-    out.first_limit = monitor
-        .first_crossing()
-        .map(|c| (c.mode, c.tick as f64 * step_seconds));
+    out.min_stretch = out.min_stretch.min(watch.extremes.min);
+    out.max_stretch = out.max_stretch.max(watch.extremes.max);
+    out.first_limit = watch.first.map(|(t, mode, _)| (mode, t));
+    out.first_limit_state = watch.first.map(|(_, _, y)| y);
     Ok(out)
 }
 
@@ -449,7 +472,12 @@ struct Samples<'a, const N: usize> {
     times: &'a [f64],
     ys: Vec<[f64; N]>,
     failed: Option<String>,
+    on_step: Option<OnStep<'a, N>>,
 }
+
+/// What sees each step of a dense solve: its ends (time, state) and its path between them.
+pub type OnStep<'a, const N: usize> =
+    &'a mut dyn FnMut((f64, [f64; N]), (f64, [f64; N]), &mut dyn FnMut(f64) -> [f64; N]);
 
 impl<const N: usize> Solout<f64, [f64; N]> for Samples<'_, N> {
     fn solout<I>(
@@ -464,6 +492,20 @@ impl<const N: usize> Solout<f64, [f64; N]> for Samples<'_, N> {
     where
         I: Interpolation<f64, [f64; N]> + ?Sized,
     {
+        if let Some(hook) = self.on_step.as_mut().filter(|_| t_curr > t_prev) {
+            let mut failed = None;
+            let mut at = |t: f64| {
+                interpolator.interpolate(t).unwrap_or_else(|e| {
+                    failed = Some(format!("the reference's dense output failed: {e:?}"));
+                    [f64::NAN; N]
+                })
+            };
+            hook((t_prev, *y_prev), (t_curr, *y_curr), &mut at);
+            if failed.is_some() {
+                self.failed = failed;
+                return ControlFlag::Terminate;
+            }
+        }
         while let Some(&tau) = self.times.get(self.ys.len()) {
             if tau > t_curr {
                 break;
@@ -504,18 +546,20 @@ pub fn solve(
         ));
     }
     let motion = Motion { device, drive };
-    solver.sample(&motion, y0, &sample_times(dtau, tau_end), tolerance)
+    solver.sample(&motion, y0, &sample_times(dtau, tau_end), tolerance, None)
 }
 
 impl Solver {
     /// One solve of `ode` from `times[0]` with `y` there, sampled at `times` (increasing; the
-    /// first sample is `y`).
-    pub fn sample<const N: usize, F: ODE<f64, [f64; N]>>(
+    /// first sample is `y`). `on_step` sees each of DOP853's steps with its dense output (BDF
+    /// has none to give: its caller walks the samples).
+    pub fn sample<'a, const N: usize, F: ODE<f64, [f64; N]>>(
         self,
         ode: &F,
         y: [f64; N],
-        times: &[f64],
+        times: &'a [f64],
         tolerance: Tolerance,
+        on_step: Option<OnStep<'a, N>>,
     ) -> Result<Vec<[f64; N]>, String> {
         tolerance.check()?;
         let (&t0, &t1) = match (times.first(), times.last()) {
@@ -528,6 +572,7 @@ impl Solver {
                     times,
                     ys: Vec::with_capacity(times.len()),
                     failed: None,
+                    on_step,
                 };
                 let (end, _) = dop853(ode, t0, t1, y, tolerance, 0.0, true, &mut samples)?;
                 if let Some(why) = samples.failed {
@@ -564,43 +609,62 @@ impl Solver {
         tolerance: Tolerance,
         first_step: Option<f64>,
     ) -> Result<([f64; N], f64), String> {
+        self.advance_watched(ode, (t0, t1), y, tolerance, first_step, &mut |_, _| {})
+    }
+
+    /// `advance`, with `on_step` seeing the ends (time, state) of each of DOP853's steps
+    /// (no dense output: a step's ends only), or of the whole interval with BDF.
+    pub fn advance_watched<const N: usize, F: ODE<f64, [f64; N]>>(
+        self,
+        ode: &F,
+        (t0, t1): (f64, f64),
+        y: [f64; N],
+        tolerance: Tolerance,
+        first_step: Option<f64>,
+        on_step: &mut StepEnds<'_, N>,
+    ) -> Result<([f64; N], f64), String> {
         tolerance.check()?;
         let h0 = first_step
             .filter(|h| h.is_finite() && *h > 0.0)
             .map_or(0.0, |h| h.min(t1 - t0));
         match self {
             Solver::Dop853 => {
-                let mut first = FirstStep(None);
+                let mut first = FirstStep(None, on_step);
                 let (end, next) = dop853(ode, t0, t1, y, tolerance, h0, false, &mut first)?;
                 Ok((end, first.0.map_or(next, |h| 1.25 * h)))
             }
             Solver::Bdf => {
                 let (ys, h) = bdf(ode, y, &[t0, t1], tolerance, h0)?;
                 let end = ys.last().copied().ok_or("no state returned")?;
+                on_step((t0, y), (t1, end));
                 Ok((end, h))
             }
         }
     }
 }
 
-/// The first step a solve took.
-struct FirstStep(Option<f64>);
+/// The first step a solve took; and what sees each step's ends.
+struct FirstStep<'a, 'b, const N: usize>(Option<f64>, &'a mut StepEnds<'b, N>);
 
-impl<const N: usize> Solout<f64, [f64; N]> for FirstStep {
+/// What sees a step's ends, (time, state) at its start and at its end.
+pub type StepEnds<'a, const N: usize> = dyn FnMut((f64, [f64; N]), (f64, [f64; N])) + 'a;
+
+impl<const N: usize> Solout<f64, [f64; N]> for FirstStep<'_, '_, N> {
     fn solout<I>(
         &mut self,
         t_curr: f64,
         t_prev: f64,
-        _: &[f64; N],
-        _: &[f64; N],
+        y_curr: &[f64; N],
+        y_prev: &[f64; N],
         _: &mut I,
         _: &mut Solution<f64, [f64; N]>,
     ) -> ControlFlag<f64, [f64; N]>
     where
         I: Interpolation<f64, [f64; N]> + ?Sized,
     {
-        if self.0.is_none() && t_curr > t_prev {
-            self.0 = Some(t_curr - t_prev);
+        if t_curr > t_prev {
+            self.0.get_or_insert(t_curr - t_prev);
+            (self.1)((t_prev, *y_prev), (t_curr, *y_curr));
         }
         ControlFlag::Continue
     }
@@ -726,18 +790,53 @@ fn reference(
     let scale = device.rad_per_s_per_unit();
     let tolerance = scene.tolerance.unwrap_or(solver.default_tolerance());
     let times = sample_times(step_seconds * scale, scene.duration_seconds * scale);
-    let ys = solver.sample(&Motion { device, drive }, [start, 0.0], &times, tolerance)?;
-    let mut monitor = Monitor::new();
-    for (k, (y, tau)) in ys.iter().zip(&times).enumerate() {
-        monitor.observe(device, k as u64, y[0], drive.bias_dimless_squared_at(*tau));
-    }
+    let motion = Motion { device, drive };
+    // The events on the solver's path, in dimensionless time.
+    let mut watch = Watch::new(EVENT_RESOLUTION_SECONDS * scale);
+    let fails =
+        |tau: f64, y: &[f64; 2]| device.first_failure(y[0], drive.bias_dimless_squared_at(tau));
+    let key = |y: &[f64; 2]| (y[0], y[1]);
+    let ys = match solver {
+        // DOP853's 7th-order dense output between its own steps.
+        Solver::Dop853 => {
+            let mut on_step = |a, b, at: &mut dyn FnMut(f64) -> [f64; 2]| {
+                watch.step(a, b, at, key, fails);
+            };
+            solver.sample(&motion, [start, 0.0], &times, tolerance, Some(&mut on_step))?
+        }
+        // BDF gives samples only: a quintic through them (value, slope and the model's
+        // curvature at each), O((ωh)⁶) between them.
+        Solver::Bdf => {
+            let ys = solver.sample(&motion, [start, 0.0], &times, tolerance, None)?;
+            let jet = |tau: f64, y: &[f64; 2]| {
+                let mut rate = [0.0; 2];
+                motion.diff(tau, y, &mut rate);
+                Jet {
+                    t: tau,
+                    stretch: y[0],
+                    velocity: y[1],
+                    acceleration: rate[1],
+                }
+            };
+            for (pair, tau) in ys.windows(2).zip(times.windows(2)) {
+                let path = Hermite::new(jet(tau[0], &pair[0]), jet(tau[1], &pair[1]));
+                let at = |t: f64| {
+                    let (stretch, velocity) = path.at(t);
+                    [stretch, velocity]
+                };
+                watch.step((tau[0], pair[0]), (tau[1], pair[1]), at, key, fails);
+            }
+            ys
+        }
+    };
     let mut out = outcome(
         ys.iter().map(|y| y[0]).collect(),
         ys.iter().map(|y| y[1] * scale).collect(),
     );
-    out.first_limit = monitor
-        .first_crossing()
-        .map(|c| (c.mode, c.tick as f64 * step_seconds));
+    out.min_stretch = out.min_stretch.min(watch.extremes.min);
+    out.max_stretch = out.max_stretch.max(watch.extremes.max);
+    out.first_limit = watch.first.map(|(tau, mode, _)| (mode, tau / scale));
+    out.first_limit_state = watch.first.map(|(_, _, y)| (y[0], y[1] * scale));
     out.solver = Some(solver);
     Ok(out)
 }
@@ -886,7 +985,7 @@ mod tests {
         let end = 0.3 * device.rad_per_s_per_unit();
         let tolerance = Tolerance::both(1e-12);
         let sampled = Solver::Dop853
-            .sample(&motion, y0, &[0.0, end], tolerance)
+            .sample(&motion, y0, &[0.0, end], tolerance, None)
             .unwrap();
         let (advanced, _) = Solver::Dop853
             .advance(&motion, 0.0, end, y0, tolerance, None)

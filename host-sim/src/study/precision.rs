@@ -337,6 +337,7 @@ mod tests {
             min_stretch: -1.0,
             max_stretch: 1.0,
             first_limit: None,
+            first_limit_state: None,
             samples: t
                 .iter()
                 .map(|t| (std::f64::consts::TAU * t).sin())

@@ -1,11 +1,14 @@
 //! `host-sim sweep`: the frequency response under parametric drive (model.md §7). Each drive
 //! frequency is a run from rest at the bias's equilibrium with the core's RK4 in f64, long
 //! enough for the response to settle; its amplitude is half the peak-to-peak stretch over the
-//! last quarter. Peaks are local maxima that stand out from the valleys on both sides.
+//! last quarter, from the true extremes between RK4's steps (a quintic through their ends). Peaks are local maxima that stand out from the valleys on both sides.
 
 use de_resonator::{
-    Device, DeviceParams, Drive, FailureMode, Integrator, Limit, Method, Monitor, State, StepError,
+    Device, DeviceParams, Drive, FailureMode, Integrator, Limit, Method, State, StepError,
 };
+
+use crate::engine::events::{Extremes, Hermite, Jet, Watch};
+use crate::engine::simulate::EVENT_RESOLUTION_SECONDS;
 
 /// What to sweep.
 #[derive(Clone, Copy, Debug)]
@@ -133,18 +136,27 @@ pub fn respond(
     };
     let mut it = Integrator::new(*device, drive, Method::Rk4, step, range, state, true)
         .map_err(|e| e.to_string())?;
-    let mut monitor = Monitor::new();
+    // The extremes and the first crossing on a quintic through RK4's step ends (time in s).
+    let mut watch = Watch::new(EVENT_RESOLUTION_SECONDS);
+    let scale = device.rad_per_s_per_unit();
+    let fails = |t: f64, y: &(f64, f64)| {
+        device.first_failure(y.0, drive.bias_dimless_squared_at(t * scale))
+    };
     let settled = steps - steps / 4;
-    let (mut low, mut high) = (f64::INFINITY, f64::NEG_INFINITY);
+    let mut last = Jet::of_model(device, &drive, 0.0, state);
     let mut stopped = None;
     for k in 1..=steps {
         match it.step() {
             Ok(s) => {
-                monitor.observe(device, k, s.stretch, it.bias_dimless_squared());
-                if k >= settled {
-                    low = low.min(s.stretch);
-                    high = high.max(s.stretch);
+                let next = Jet::of_model(device, &drive, k as f64 * step, s);
+                let path = Hermite::new(last, next);
+                watch.step(last.end(), next.end(), |t| path.at(t), |y| *y, fails);
+                // The amplitude is measured over the last quarter only.
+                if k == settled {
+                    watch.extremes = Extremes::default();
+                    watch.extremes.include(next.stretch);
                 }
+                last = next;
             }
             Err(e @ StepError::LeftGuardedRange { .. }) => {
                 stopped = Some(e.to_string());
@@ -156,10 +168,8 @@ pub fn respond(
     Ok(Point {
         drive_hz,
         // A stopped run measured nothing: no filler value that would read as data.
-        amplitude: stopped.is_none().then_some(0.5 * (high - low)),
-        first_limit: monitor
-            .first_crossing()
-            .map(|c| (c.mode, c.tick as f64 * step)),
+        amplitude: stopped.is_none().then_some(watch.extremes.amplitude()),
+        first_limit: watch.first.map(|(t, mode, _)| (mode, t)),
         stopped,
     })
 }

@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# A newcomer's first hour, timed: clone this repository's committed HEAD into a new folder,
+# with an empty cargo home (so the registry is fetched and every crate built, as on CI's new
+# machine), and time the README's two commands in it, one after the other.
+# Usage: scripts/fresh-clone.sh [--main-only] [--keep]
+#   --main-only  time only the main command (`cargo run --release -p host-sim`)
+#   --keep       leave the clone and its cargo home (default: removed at the end)
+# Prints a line per command, `main_seconds=… tests_seconds=…`, for BENCHMARKS.md.
+# The rustup toolchain itself is not re-installed (rust-toolchain.toml names it; rustup has it).
+set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+main_only=0 keep=0
+for a in "$@"; do
+    case "$a" in
+        --main-only) main_only=1 ;;
+        --keep) keep=1 ;;
+        -h|--help) sed -n '2,9p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+        *) echo "fresh-clone.sh: unknown argument \`$a\` (see --help)" >&2; exit 2 ;;
+    esac
+done
+work="$(mktemp -d /tmp/fresh-clone.XXXXXX)"
+[ "$keep" = 1 ] || trap 'rm -rf "$work"' EXIT
+git clone -q "$root" "$work/repo"
+export CARGO_HOME="$work/cargo-home"
+mkdir -p "$CARGO_HOME"
+# The cargo-installed tools the test command would otherwise build (defmt-print, cargo-fuzz)
+# stay reachable on PATH from the usual cargo home, as on a machine that already ran it once.
+cd "$work/repo"
+echo "fresh clone of $(git rev-parse --short HEAD) in $work/repo, CARGO_HOME=$CARGO_HOME" >&2
+t0=$(date +%s)
+cargo run --release -p host-sim >"$work/main.log" 2>&1 || { tail -20 "$work/main.log" >&2; exit 1; }
+t1=$(date +%s)
+main=$((t1 - t0))
+echo "main command: cargo run --release -p host-sim: ${main} s" >&2
+tests=skipped
+if [ "$main_only" = 0 ]; then
+    ./scripts/test-all.sh >"$work/tests.log" 2>&1 || { tail -30 "$work/tests.log" >&2; exit 1; }
+    tests=$(($(date +%s) - t1))
+    echo "test command: ./scripts/test-all.sh: ${tests} s (its steps: the table at the end of $work/tests.log)" >&2
+    sed -n '/^== time per step/,$p' "$work/tests.log" >&2
+fi
+echo "main_seconds=$main tests_seconds=$tests"
