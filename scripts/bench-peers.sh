@@ -28,7 +28,7 @@ if [ ! -x "$VENV/bin/python" ] || ! "$VENV/bin/python" -c "import numbalsoda, nu
     python3 -m venv "$VENV"
     "$VENV/bin/pip" install --quiet numbalsoda numba
 fi
-cargo build --locked --release -p host-sim --quiet
+cargo build --locked --profile peak -p host-sim --features bdf --quiet
 gcc -O2 -o target/cvode_scene scripts/peers/cvode_scene.c \
     -lsundials_cvode -lsundials_nvecserial -lm
 "$VENV/bin/python" - "$RUNS" <<'PY'
@@ -46,7 +46,7 @@ def whole(cmd):
     return json.loads(out), min(times), sum(times) / len(times)
 
 def host_sim(*args):
-    return ["target/release/host-sim", "--json", "simulate", *args]
+    return ["target/peak/host-sim", "--json", "simulate", *args]
 
 failed = []
 def agree(what, ours, theirs, within):

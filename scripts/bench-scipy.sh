@@ -12,13 +12,13 @@ if [ ! -x "$VENV/bin/python" ] || ! "$VENV/bin/python" -c "import scipy" 2>/dev/
     python3 -m venv "$VENV"
     "$VENV/bin/pip" install --quiet scipy
 fi
-cargo build --locked --release -p host-sim --quiet
+cargo build --locked --profile peak -p host-sim --features bdf --quiet
 "$VENV/bin/python" - "$RUNS" <<'PY'
 import json, subprocess, sys, time
 runs = int(sys.argv[1])
 # The scene: reference device, 6000 V bias, 600 V AC at 40.2 Hz (0.9 f0), 1 s, tolerance 1e-12.
 bias, ac, hz, seconds, tol = "6000", "600", "40.2", "1", "1e-12"
-rust = ["target/release/host-sim", "simulate", "--bias-volts", bias, "--ac-volts", ac,
+rust = ["target/peak/host-sim", "simulate", "--bias-volts", bias, "--ac-volts", ac,
         "--ac-hz", hz, "--duration-seconds", seconds, "--step-seconds", seconds, "--json"]
 scipy = [sys.executable, "scripts/scipy_scene.py", bias, ac, hz, seconds, tol]
 

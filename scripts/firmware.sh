@@ -13,7 +13,7 @@ step() { printf '\n== %s\n' "$*"; }
 step "the on-target checks' table is the one host-sim makes"
 # HOST_SIM: a host-sim already built (test-all.sh passes the tests' own); else a release build.
 if [ -z "${HOST_SIM:-}" ]; then
-    cargo build --locked --release -q -p host-sim
+    cargo build --locked --release -q -p host-sim --features bdf
     HOST_SIM="$PWD/target/release/host-sim"
 fi
 export HOST_SIM

@@ -2,7 +2,7 @@
 # Regenerate the plots the README shows (docs/plots/), from the built-in reference device.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cargo build --locked --release -q -p host-sim
+cargo build --locked --release -q -p host-sim --features bdf
 hs=target/release/host-sim
 out=docs/plots
 tmp=$(mktemp -d)

@@ -46,9 +46,9 @@ if [ "$quick" = 1 ]; then
     step "format"
     cargo fmt --all -- --check
     step "clippy, host"
-    cargo clippy --locked --workspace --all-targets -- -D warnings
-    step "tests (the workspace's, without the long fuzz test)"
-    cargo test --locked --workspace -- --skip fuzz_the_controller
+    cargo clippy --locked --workspace --all-targets --features host-sim/bdf -- -D warnings
+    step "tests (the workspace's, with BDF, without the long fuzz test)"
+    cargo test --locked --workspace --features host-sim/bdf -- --skip fuzz_the_controller
     exit 0
 fi
 
@@ -75,8 +75,9 @@ cargo fmt --all -- --check
 step "docs: every model.md citation names a section of docs/model.md; nothing points outside"
 scripts/check-citations.sh
 
-step "clippy, host"
+step "clippy, host (host-sim as built by default, and with its bdf feature)"
 cargo clippy --locked --workspace --all-targets -- -D warnings
+cargo clippy --locked --workspace --all-targets --features host-sim/bdf -- -D warnings
 
 step "clippy, target (core with defmt)"
 cargo clippy --locked -p de-resonator --target "$TARGET" --features defmt -- -D warnings
@@ -85,8 +86,8 @@ step "build the no_std core for $TARGET"
 cargo build --locked -p de-resonator --target "$TARGET" --release
 cargo build --locked -p de-resonator --target "$TARGET" --release --features defmt
 
-step "tests (core integration tests, host-sim unit and CLI tests; the fuzz test has its own step)"
-cargo test --locked --workspace -- --skip fuzz_the_controller
+step "tests (core integration tests, host-sim unit and CLI tests with BDF; the fuzz test has its own step)"
+cargo test --locked --workspace --features host-sim/bdf -- --skip fuzz_the_controller
 
 step "the core's tests without its optional trim feature (as the firmware builds it)"
 cargo test --locked -q -p de-resonator --no-default-features -- --skip fuzz_the_controller

@@ -120,6 +120,8 @@ fn one_second(c: &mut Criterion) {
             )
         })
     });
+    // BDF is in builds with the `bdf` feature (`cargo bench -p host-sim --features bdf`).
+    #[cfg(feature = "bdf")]
     group.bench_function("reference_bdf_1e-10", |b| {
         let tolerance = Tolerance::both(1e-10);
         b.iter(|| {

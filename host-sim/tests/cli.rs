@@ -368,6 +368,7 @@ fn simulate_refuses_unstable_steps_and_unknown_methods() {
 /// Hairer's test and handed to BDF: the same result as asking for BDF, and said so; a
 /// smooth scene stays with DOP853. The report echoes its inputs and, asked, its trajectory.
 #[test]
+#[cfg_attr(not(feature = "bdf"), ignore = "BDF: --features bdf")]
 fn the_reference_hands_a_stiff_scene_to_bdf() {
     let base = [
         "simulate",
@@ -606,6 +607,7 @@ fn run_events_have_kinds_and_values() {
 /// every explicit method's stability limit (2 steps a period), and each case has a step at
 /// which RK4 in f32 runs stable or stops after the monitor saw a crossing.
 #[test]
+#[cfg_attr(not(feature = "bdf"), ignore = "BDF: --features bdf")]
 fn stress_never_fails_silently() {
     let v = json(&["stress", "--json"]);
     assert_eq!(v["summary"]["failed_silently"], 0, "{}", v["summary"]);
@@ -874,6 +876,7 @@ fn one_exit_status_rule() {
 /// pre-stretch of 2.5) does not abort the others: it is listed with why, the rest run, and
 /// the command fails with status 1.
 #[test]
+#[cfg_attr(not(feature = "bdf"), ignore = "BDF: --features bdf")]
 fn stress_goes_on_past_a_case_it_cannot_build() {
     let file = DeviceFile::new("stretched.toml", "jlim = 120\nprestretch_1 = 2.5\n");
     let (v, why) = crossed(&["stress", "--device", file.path(), "--json"]);

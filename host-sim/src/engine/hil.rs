@@ -1034,3 +1034,59 @@ fn command_line(line: &str) -> Result<Line, String> {
         .last()
         .ok_or_else(|| format!("`{line}`: not a command line"))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engine::simulate::{simulate, Choice, OpenLoop, Start};
+    use de_resonator::REFERENCE_DEVICE;
+
+    /// The plant's monitor finds a crossing that comes and goes within one tick, at its
+    /// time: a 9360 V step from the pre-stretch (an ideal amplifier, no networks or damping:
+    /// the plant is the core's model restated) enters §6.2's region for about a millisecond
+    /// inside one 5 ms tick, where no tick's end sees it. Its time agrees with the
+    /// reference's event on DOP853's dense output (`simulate`, the core's model) to 1e-9 s.
+    #[test]
+    fn the_plant_monitor_finds_a_crossing_within_a_tick() {
+        let text = "name = \"t\"\ndescription = \"t\"\nduration_seconds = 0.03\n\
+                    [controller]\ntarget_hz = 44.0\n";
+        let mut run = crate::scene::parse(text).unwrap().run;
+        run.plant.params = REFERENCE_DEVICE;
+        run.plant.amplifier = plant::AmplifierModel {
+            gain: 1.0,
+            bandwidth_hz: f64::INFINITY,
+            slew_volts_per_second: f64::INFINITY,
+            rail_volts: f64::INFINITY,
+        };
+        run.plant.branches.clear();
+        run.plant.leakage = plant::Leakage::NONE;
+        run.settings.tick_hz = 200.0;
+        let volts = 9360.0;
+        let mut bench = run.bench(false);
+        for k in 0..6 {
+            run.advance(&mut bench, k, volts).unwrap();
+            // No tick's end fails: only the search within the tick sees the excursion.
+            let end = (k + 1) as f64 / 200.0;
+            assert_eq!(run.crossing(&bench.y, end, volts), None, "tick {k}");
+        }
+        let (mode, at) = bench.crossing.expect("the plant crossed");
+        let reference = simulate(
+            &OpenLoop {
+                params: REFERENCE_DEVICE,
+                bias_volts: volts,
+                ac_volts: 0.0,
+                drive_hz: 0.0,
+                duration_seconds: 0.03,
+                start: Start::Prestretch,
+                tolerance: None,
+            },
+            Choice::Reference,
+            1e-3,
+        )
+        .unwrap();
+        let (their_mode, their_at) = reference.first_limit.unwrap();
+        assert_eq!(mode, their_mode);
+        assert!((at - their_at).abs() < 1e-9, "{at} s vs {their_at} s");
+        assert!((0.010..0.015).contains(&at), "{at}");
+    }
+}

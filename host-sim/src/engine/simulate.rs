@@ -281,7 +281,8 @@ pub fn simulate(scene: &OpenLoop, choice: Choice, step_seconds: f64) -> Result<O
         // DOP853's stiffness test (Hairer's) hands a stiff scene to BDF, as LSODA would.
         Choice::Reference => match reference(scene, &device, start, step_seconds, Solver::Dop853) {
             Err(why) if why.starts_with(STIFF_FOR_DOP853) => {
-                let mut out = reference(scene, &device, start, step_seconds, Solver::Bdf)?;
+                let mut out = reference(scene, &device, start, step_seconds, Solver::Bdf)
+                    .map_err(|e| format!("{why}; {e}"))?;
                 out.switched = Some("DOP853 found the scene stiff; solved by BDF".into());
                 out
             }
@@ -402,9 +403,9 @@ fn core<T: Real>(
 }
 
 /// The equation of motion for the reference integrator, dimensionless time.
-struct Motion<'a> {
-    device: &'a Device<f64>,
-    drive: Drive<f64>,
+pub struct Motion<'a> {
+    pub device: &'a Device<f64>,
+    pub drive: Drive<f64>,
 }
 
 impl ODE<f64, [f64; 2]> for Motion<'_> {
@@ -718,6 +719,7 @@ fn dop853<const N: usize, F: ODE<f64, [f64; N]>, O: Solout<f64, [f64; N]>>(
 /// right-hand side more): Newton converges with it; the error control does not use it.
 /// differential-equations' own BDF (0.7.0) was not used: it takes no Newton step, and its
 /// one solve of the reference scene ended 8e-3 off at rtol 1e-10 (BENCHMARKS.md).
+#[cfg(feature = "bdf")]
 fn bdf<const N: usize, F: ODE<f64, [f64; N]>>(
     ode: &F,
     y: [f64; N],
@@ -778,6 +780,22 @@ fn bdf<const N: usize, F: ODE<f64, [f64; N]>>(
         .collect();
     Ok((ys, solver.state().h))
 }
+
+/// Without the `bdf` feature: why not, and how to have it.
+#[cfg(not(feature = "bdf"))]
+fn bdf<const N: usize, F: ODE<f64, [f64; N]>>(
+    _: &F,
+    _: [f64; N],
+    _: &[f64],
+    _: Tolerance,
+    _: f64,
+) -> Result<(Vec<[f64; N]>, f64), String> {
+    Err(BDF_NOT_BUILT.into())
+}
+
+/// What a BDF solve says in a build without the `bdf` feature.
+pub const BDF_NOT_BUILT: &str = "BDF (the stiff reference) is not in this build: build host-sim \
+     with `--features bdf` (cargo run --release -p host-sim --features bdf -- ...)";
 
 fn reference(
     scene: &OpenLoop,
@@ -846,6 +864,11 @@ mod tests {
     use super::*;
     use de_resonator::REFERENCE_DEVICE;
 
+    /// Whether this build has the solver (BDF only with the `bdf` feature).
+    fn built<T>((solver, ..): &(Solver, T, T)) -> bool {
+        *solver != Solver::Bdf || cfg!(feature = "bdf")
+    }
+
     /// Closed form first: at zero bias, small amplitude, the reference follows
     /// λ* + a·cos(ωt) with ω from model.md §5, to the level of the neglected nonlinearity.
     #[test]
@@ -909,6 +932,7 @@ mod tests {
     /// The stiff reference (BDF at 1e-10) against DOP853 at 1e-12 on a driven scene and on a
     /// light bar (ω 30 times the reference's): a second method agreeing to its tolerance.
     #[test]
+    #[cfg_attr(not(feature = "bdf"), ignore = "BDF: --features bdf")]
     fn bdf_agrees_with_dop853() {
         let light = DeviceParams {
             bar_mass: 0.0,
@@ -948,7 +972,8 @@ mod tests {
         let y0 = [device.stretch_for_bias(7000.0, 3.0).unwrap(), 0.0];
         // Samples at an awkward spacing, off the solver's steps.
         let (end, every) = (0.5 * scale, 0.5 / 731.0 * scale);
-        for (solver, tol, within) in [(Solver::Dop853, 1e-12, 1e-10), (Solver::Bdf, 1e-10, 1e-7)] {
+        let solvers = [(Solver::Dop853, 1e-12, 1e-10), (Solver::Bdf, 1e-10, 1e-7)];
+        for (solver, tol, within) in solvers.into_iter().filter(built) {
             let tolerance = Tolerance::both(tol);
             let dense = solve(solver, &device, drive, y0, end, every, tolerance).unwrap();
             assert_eq!(dense.len(), 732);
@@ -1019,6 +1044,9 @@ mod tests {
             .advance(&motion, 0.0, 0.5 * scale, y0, Tolerance::both(1e-13), None)
             .unwrap();
         for choice in [Choice::Reference, Choice::ReferenceBdf] {
+            if choice == Choice::ReferenceBdf && !cfg!(feature = "bdf") {
+                continue;
+            }
             let out = simulate(&scene, choice, step).unwrap();
             assert_eq!(out.samples.len(), 102, "{choice:?}");
             assert!((out.step_seconds * 101.0 - 0.5).abs() < 1e-15);
