@@ -16,6 +16,7 @@ if [ -z "${HOST_SIM:-}" ]; then
     cargo build --locked --release -q -p host-sim --features bdf
     HOST_SIM="$PWD/target/release/host-sim"
 fi
+HOST_SIM="$(realpath "$HOST_SIM")"
 export HOST_SIM
 host_sim="$HOST_SIM"
 "$host_sim" lut --out target/reference.bin >/dev/null

@@ -30,7 +30,7 @@ command -v qemu-system-arm >/dev/null || { echo "qemu.sh: install qemu-system-ar
 mkdir -p "$root/target/qemu" "$(dirname "$socket")"
 echo "building host-sim and the firmware (QEMU build)..." >&2
 if [ -n "${HOST_SIM:-}" ]; then
-    host_sim="$HOST_SIM"
+    host_sim="$(realpath "$HOST_SIM")"
 else
     cargo build --locked --release -q -p host-sim --manifest-path "$root/Cargo.toml"
     host_sim="$root/target/release/host-sim"

@@ -112,6 +112,13 @@ impl Jet {
     }
 }
 
+/// The stretch where a path turns between two step ends whose velocities differ in sign: on
+/// the quintic through their jets.
+pub fn turn_stretch(a: Jet, b: Jet) -> f64 {
+    let path = Hermite::new(a, b);
+    path.at(turn(a.t, b.t, |t| path.at(t).1)).0
+}
+
 /// The quintic through two `Jet`s (value, slope and curvature at both ends): the path of a
 /// fixed-step method or of a solver step without dense output, error O(h⁶) (for an
 /// oscillation of ω, (ωh)⁶/46080 of its amplitude).

@@ -728,8 +728,15 @@ impl Loop {
     ) -> Result<Option<(FailureMode, f64)>, String> {
         let fails = |t: f64, y: &Vector| self.crossing(y, t, self.plant.volts(y, input_volts));
         let end = (t0 + 1.0 / f64::from(self.settings.tick_hz), solved.y);
+        // The turns in time order, then the end.
+        let mut turns = solved.turns;
+        if let [Some((a, _)), Some((b, _))] = turns {
+            if b < a {
+                turns.swap(0, 1);
+            }
+        }
         let mut passes = t0;
-        for (t, y) in solved.turns.iter().flatten().copied().chain([end]) {
+        for (t, y) in turns.iter().flatten().copied().chain([end]) {
             let Some(mode) = fails(t, &y) else {
                 passes = t;
                 continue;

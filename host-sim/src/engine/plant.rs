@@ -463,8 +463,8 @@ impl<const N: usize> ODE<f64, [f64; N]> for Motion<'_, N> {
 }
 
 /// A tick solved: the state at its end, the first step the solve took after the drive's
-/// jump, and where the stretch turned within it (time, state: the extremes a check between
-/// tick ends must see).
+/// jump, and where the stretch turned highest and lowest within it (time, state: the
+/// extremes a check between tick ends must see; with BDF, a turn between the tick's ends).
 #[derive(Clone, Copy, Debug)]
 pub struct Solved {
     pub y: Vector,
@@ -535,7 +535,7 @@ impl Tick<'_> {
         // A step whose ends' velocities differ in sign holds a turn: located on a quintic
         // through its ends (value, slope, and the curvature from the equations), the slow
         // states between them linear.
-        let mut turns = [None; 2];
+        let mut turns: [Option<(f64, Vector)>; 2] = [None; 2];
         let mut on_step = |(a, ya): (f64, [f64; N]), (b, yb): (f64, [f64; N])| {
             if !events::turns(ya[1], yb[1]) {
                 return;
@@ -556,8 +556,15 @@ impl Tick<'_> {
             let w = (at - a) / (b - a);
             let mut y: [f64; N] = std::array::from_fn(|i| ya[i] + w * (yb[i] - ya[i]));
             (y[0], y[1]) = (stretch, velocity);
-            if let Some(slot) = turns.iter_mut().find(|t| t.is_none()) {
-                *slot = Some((at, whole(at, &y)));
+            // The highest turn and the lowest (however many a long tick holds): where an
+            // excursion peaks.
+            let turn = Some((at, whole(at, &y)));
+            let [high, low] = &mut turns;
+            if high.is_none_or(|(_, h)| stretch > h[0]) {
+                *high = turn;
+            }
+            if low.is_none_or(|(_, l)| stretch < l[0]) {
+                *low = turn;
             }
         };
         // The ramp at the slew rate (if any) in one step; then the rest from the last tick's

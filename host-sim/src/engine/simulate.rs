@@ -4,11 +4,12 @@
 
 use std::time::Instant;
 
-use crate::engine::events::{Hermite, Jet, Watch};
+use crate::engine::events::{self, Extremes, Hermite, Jet, Watch};
 use crate::text::sig;
 
 use de_resonator::{
-    Device, DeviceParams, Drive, FailureMode, Integrator, Limit, Method, Real, State, StepError,
+    Device, DeviceParams, Drive, FailureMode, Integrator, Limit, Method, Monitor, Real, State,
+    StepError,
 };
 use differential_equations::error::Error as SolveError;
 use differential_equations::interpolate::Interpolation;
@@ -359,46 +360,50 @@ fn core<T: Real>(
         _ => RunError::Failed(e.to_string()),
     })?;
     let mut stopped = None;
+    // The crossing as the target's monitor sees it (its own checks, in T, at step ends); the
+    // range is the path's true extremes, turns located on a quintic through the step ends.
+    let mut monitor = Monitor::new();
+    let mut extremes = Extremes::default();
     let scale = exact.rad_per_s_per_unit();
     let drive = Drive::from_volts(&exact, scene.bias_volts, scene.ac_volts, scene.drive_hz);
-    let mut watch = Watch::new(EVENT_RESOLUTION_SECONDS);
-    // Time in seconds; (stretch, dλ/dt in 1/s).
-    let fails =
-        |t: f64, y: &(f64, f64)| exact.first_failure(y.0, drive.bias_dimless_squared_at(t * scale));
-    let jet = |t: f64, s: State<T>| {
+    let jet = |k: u64, s: State<T>| {
         let state = State {
             stretch: s.stretch.to_f64(),
             velocity: s.velocity.to_f64(),
         };
-        Jet::of_model(&exact, &drive, t, state)
+        Jet::of_model(&exact, &drive, k as f64 * step_seconds, state)
     };
     let mut samples = Vec::with_capacity(steps as usize + 1);
     let mut velocities = Vec::with_capacity(steps as usize + 1);
     samples.push(start);
     velocities.push(0.0);
-    let mut last = jet(0.0, it.state());
+    monitor.observe(&device, 0, T::of(start), it.bias_dimless_squared());
+    let mut last = it.state();
     for k in 1..=steps {
         if let Err(e) = it.step() {
             // Past the guarded range the model is no longer trusted: stop, say why.
-            if watch.first.is_none() {
+            if monitor.first_crossing().is_none() {
                 return Err(RunError::Failed(e.to_string()));
             }
             stopped = Some(e.to_string());
             break;
         }
-        let next = jet(k as f64 * step_seconds, it.state());
-        samples.push(next.stretch);
-        velocities.push(next.velocity);
-        let path = Hermite::new(last, next);
-        watch.step(last.end(), next.end(), |t| path.at(t), |y| *y, fails);
-        last = next;
+        let s = it.state();
+        samples.push(s.stretch.to_f64());
+        velocities.push(s.velocity.to_f64() * scale);
+        monitor.observe(&device, k, s.stretch, it.bias_dimless_squared());
+        if events::turns(last.velocity.to_f64(), s.velocity.to_f64()) {
+            extremes.include(events::turn_stretch(jet(k - 1, last), jet(k, s)));
+        }
+        last = s;
     }
     let mut out = outcome(samples, velocities);
     out.stopped = stopped;
-    out.min_stretch = out.min_stretch.min(watch.extremes.min);
-    out.max_stretch = out.max_stretch.max(watch.extremes.max);
-    out.first_limit = watch.first.map(|(t, mode, _)| (mode, t));
-    out.first_limit_state = watch.first.map(|(_, _, y)| y);
+    out.min_stretch = out.min_stretch.min(extremes.min);
+    out.max_stretch = out.max_stretch.max(extremes.max);
+    out.first_limit = monitor
+        .first_crossing()
+        .map(|c| (c.mode, c.tick as f64 * step_seconds));
     Ok(out)
 }
 

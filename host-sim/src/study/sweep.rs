@@ -4,11 +4,10 @@
 //! last quarter, from the true extremes between RK4's steps (a quintic through their ends). Peaks are local maxima that stand out from the valleys on both sides.
 
 use de_resonator::{
-    Device, DeviceParams, Drive, FailureMode, Integrator, Limit, Method, State, StepError,
+    Device, DeviceParams, Drive, FailureMode, Integrator, Limit, Method, Monitor, State, StepError,
 };
 
-use crate::engine::events::{Extremes, Hermite, Jet, Watch};
-use crate::engine::simulate::EVENT_RESOLUTION_SECONDS;
+use crate::engine::events::{self, Extremes, Jet};
 
 /// What to sweep.
 #[derive(Clone, Copy, Debug)]
@@ -136,27 +135,26 @@ pub fn respond(
     };
     let mut it = Integrator::new(*device, drive, Method::Rk4, step, range, state, true)
         .map_err(|e| e.to_string())?;
-    // The extremes and the first crossing on a quintic through RK4's step ends (time in s).
-    let mut watch = Watch::new(EVENT_RESOLUTION_SECONDS);
-    let scale = device.rad_per_s_per_unit();
-    let fails = |t: f64, y: &(f64, f64)| {
-        device.first_failure(y.0, drive.bias_dimless_squared_at(t * scale))
-    };
+    // The crossing as the monitor sees it at step ends; the amplitude from the path's true
+    // extremes, turns located on a quintic through the step ends (time in s).
+    let mut monitor = Monitor::new();
+    let mut extremes = Extremes::default();
+    let jet = |k: u64, s: State<f64>| Jet::of_model(device, &drive, k as f64 * step, s);
     let settled = steps - steps / 4;
-    let mut last = Jet::of_model(device, &drive, 0.0, state);
+    let mut last = state;
     let mut stopped = None;
     for k in 1..=steps {
         match it.step() {
             Ok(s) => {
-                let next = Jet::of_model(device, &drive, k as f64 * step, s);
-                let path = Hermite::new(last, next);
-                watch.step(last.end(), next.end(), |t| path.at(t), |y| *y, fails);
+                monitor.observe(device, k, s.stretch, it.bias_dimless_squared());
                 // The amplitude is measured over the last quarter only.
-                if k == settled {
-                    watch.extremes = Extremes::default();
-                    watch.extremes.include(next.stretch);
+                if k >= settled {
+                    extremes.include(s.stretch);
+                    if k > settled && events::turns(last.velocity, s.velocity) {
+                        extremes.include(events::turn_stretch(jet(k - 1, last), jet(k, s)));
+                    }
                 }
-                last = next;
+                last = s;
             }
             Err(e @ StepError::LeftGuardedRange { .. }) => {
                 stopped = Some(e.to_string());
@@ -168,8 +166,10 @@ pub fn respond(
     Ok(Point {
         drive_hz,
         // A stopped run measured nothing: no filler value that would read as data.
-        amplitude: stopped.is_none().then_some(watch.extremes.amplitude()),
-        first_limit: watch.first.map(|(t, mode, _)| (mode, t)),
+        amplitude: stopped.is_none().then_some(extremes.amplitude()),
+        first_limit: monitor
+            .first_crossing()
+            .map(|c| (c.mode, c.tick as f64 * step)),
         stopped,
     })
 }
@@ -240,6 +240,7 @@ mod tests {
     /// to 1e-6, where the samples alone are up to (π/256)²/2 = 7.5e-5 low.
     #[test]
     fn amplitudes_are_the_extremes_between_steps() {
+        use crate::engine::events::Watch;
         use crate::engine::simulate::{Motion, Solver, Tolerance};
         use de_resonator::REFERENCE_DEVICE;
         let device = Device::new(REFERENCE_DEVICE).unwrap();
