@@ -116,18 +116,11 @@ fn solve_here(p: &DeviceParams<f64>, volts: f64, seconds: f64) -> Events {
     events
 }
 
-/// A voltage step from rest whose overshoot enters the EMI region of §6.2 for about half a
-/// millisecond, between two output samples 5 ms apart: the samples alone see no crossing.
-#[test]
-fn a_crossing_between_samples_is_located_to_a_nanosecond() {
+/// `simulate --json --method METHOD` on the step below, what the solve here finds on it, and
+/// the output spacing.
+fn crossing_run(method: &str) -> (Value, Events, f64) {
     let (volts, seconds, every) = (9360.0, 0.03, 0.005);
     let here = solve_here(&REFERENCE_DEVICE, volts, seconds);
-    let (t, mode, stretch, velocity) = here.first.expect("the scene crosses");
-    let back = here.back_seconds.expect("and comes back");
-    // The excursion lies between two samples: no sample sees it.
-    assert_eq!((t / every).floor(), (back / every).floor(), "{t} .. {back}");
-    assert!(back - t < every, "{t} .. {back}");
-
     let out = Command::new(env!("CARGO_BIN_EXE_host-sim"))
         .args([
             "simulate",
@@ -137,6 +130,7 @@ fn a_crossing_between_samples_is_located_to_a_nanosecond() {
             "0",
             "--json",
         ])
+        .args(["--method", method])
         .args(["--bias-volts", &volts.to_string()])
         .args(["--duration-seconds", &seconds.to_string()])
         .args(["--step-seconds", &every.to_string()])
@@ -144,10 +138,25 @@ fn a_crossing_between_samples_is_located_to_a_nanosecond() {
         .unwrap();
     // A run that crossed a limit exits with 1, its report complete.
     assert_eq!(out.status.code(), Some(1), "{out:?}");
-    let report: Value = serde_json::from_slice(&out.stdout).unwrap();
+    (serde_json::from_slice(&out.stdout).unwrap(), here, every)
+}
+
+fn f(v: &Value) -> f64 {
+    v.as_f64().unwrap()
+}
+
+/// A voltage step from rest whose overshoot enters the EMI region of §6.2 for about a
+/// millisecond, between two output samples 5 ms apart: the samples alone see no crossing.
+#[test]
+fn a_crossing_between_samples_is_located_to_a_nanosecond() {
+    let (report, here, every) = crossing_run("reference");
+    let (t, mode, stretch, velocity) = here.first.expect("the scene crosses");
+    let back = here.back_seconds.expect("and comes back");
+    // The excursion lies between two samples: no sample sees it.
+    assert_eq!((t / every).floor(), (back / every).floor(), "{t} .. {back}");
+    assert!(back - t < every, "{t} .. {back}");
     let first = &report["first_limit"];
     assert_eq!(first["mode"], mode, "{report}");
-    let f = |v: &Value| v.as_f64().unwrap();
     let (their_t, their_stretch) = (f(&first["time_seconds"]), f(&first["stretch"]));
     assert!(
         (their_t - t).abs() < 1e-9,
@@ -167,5 +176,25 @@ fn a_crossing_between_samples_is_located_to_a_nanosecond() {
         let theirs = f(&report[key]);
         assert!((theirs - here).abs() < 1e-9, "{key}: {theirs} vs {here}");
     }
-    assert_eq!(f(&report["steps"]), seconds / every);
+    assert_eq!(f(&report["steps"]), 6.0);
+}
+
+/// The stiff reference finds the same crossing between its samples, through a quintic on its
+/// own samples eight times as dense: to its tolerance's level (1e-10 a step).
+#[test]
+#[cfg_attr(not(feature = "bdf"), ignore = "BDF: --features bdf")]
+fn bdf_locates_the_crossing_between_samples_too() {
+    let (report, here, _) = crossing_run("reference-bdf");
+    let (t, mode, stretch, _) = here.first.unwrap();
+    let first = &report["first_limit"];
+    assert_eq!(first["mode"], mode, "{report}");
+    assert!(
+        (f(&first["time_seconds"]) - t).abs() < 1e-8,
+        "{first} vs {t}"
+    );
+    assert!((f(&first["stretch"]) - stretch).abs() < 1e-8, "{first}");
+    assert!(
+        (f(&report["max_stretch"]) - here.max).abs() < 1e-8,
+        "{report}"
+    );
 }
