@@ -371,7 +371,7 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<RunReport, String> {
             volts,
             margin: 1.0 - run.bias_volts / volts,
         }),
-        plant_crossing: Crossing::of(run.plant_crossing),
+        plant_crossing: Crossing::with_state(run.plant_crossing, run.plant_crossing_state),
         plant_crossing_description: run.plant_crossing.map(|(mode, _)| mode.description()),
         final_membrane_volts: run.final_membrane_volts,
         sensed: SensedReport::of(&run),
@@ -465,10 +465,14 @@ fn plot(scene: &Scene, run: &Run) -> Vec<Panel> {
     let markers = |pick: fn(&Sample) -> f64| -> Vec<Marker> {
         run.plant_crossing
             .and_then(|(mode, t)| {
-                let at = run.history.iter().find(|h| h.seconds >= t)?;
+                // The tick's end after it, with the stretch where the crossing was located.
+                let mut at = *run.history.iter().find(|h| h.seconds >= t)?;
+                if let Some((stretch, _)) = run.plant_crossing_state {
+                    at.stretch = stretch;
+                }
                 Some(Marker {
                     x: t,
-                    y: pick(at),
+                    y: pick(&at),
                     label: format!("{} at {} s", mode.name(), sig(t)),
                     colour: RED,
                 })

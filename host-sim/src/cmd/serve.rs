@@ -400,7 +400,8 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
         if report.plant_crossing.is_none() {
             if let Some((mode, at)) = bench.crossing {
                 eprintln!("{} s: the plant crossed {}", sig(at), mode.name());
-                report.plant_crossing = super::Crossing::of(Some((mode, at)));
+                report.plant_crossing =
+                    super::Crossing::with_state(Some((mode, at)), bench.crossing_state);
             }
         }
         k += 1;

@@ -199,6 +199,8 @@ pub struct Bench {
     stuck_code: Option<u16>,
     /// The first check of §6 the plant failed, and when (s): located within its tick.
     pub crossing: Option<(FailureMode, f64)>,
+    /// The plant's stretch and dλ/dt (1/s) there.
+    pub crossing_state: Option<(f64, f64)>,
 }
 
 /// The board's analog front end in a scene (`[front_end]`): the image's, and the ADC's noise.
@@ -286,6 +288,8 @@ pub struct Run {
     pub fault_words: Option<String>,
     /// The first check of §6 the true plant failed, and when (s): must stay `None`.
     pub plant_crossing: Option<(FailureMode, f64)>,
+    /// The plant's stretch and dλ/dt (1/s) there.
+    pub plant_crossing_state: Option<(f64, f64)>,
     /// The bias the controller holds at the end (0 after a fault or a refusal), V.
     pub bias_volts: f64,
     /// The target in force at the end (the scene's, unless a command changed it), Hz.
@@ -478,6 +482,7 @@ impl Loop {
             fault: None,
             fault_words: None,
             plant_crossing: None,
+            plant_crossing_state: None,
             bias_volts: 0.0,
             target_hz: f64::from(self.settings.target_hz),
             final_command_volts: 0.0,
@@ -558,7 +563,10 @@ impl Loop {
                 run.target_hz = f64::from(seen.target_hz);
             }
             let y = bench.y;
-            run.plant_crossing = run.plant_crossing.or(bench.crossing);
+            if run.plant_crossing.is_none() {
+                (run.plant_crossing, run.plant_crossing_state) =
+                    (bench.crossing, bench.crossing_state);
+            }
             if self.history {
                 run.history.push(Sample {
                     tick: k,
@@ -724,7 +732,7 @@ impl Loop {
         t0: f64,
         solved: &plant::Solved,
         input_volts: f64,
-        solve: impl Fn(f64) -> Result<plant::Solved, String>,
+        solve: &impl Fn(f64) -> Result<plant::Solved, String>,
     ) -> Result<Option<(FailureMode, f64)>, String> {
         let fails = |t: f64, y: &Vector| self.crossing(y, t, self.plant.volts(y, input_volts));
         let end = (t0 + 1.0 / f64::from(self.settings.tick_hz), solved.y);
@@ -791,6 +799,7 @@ impl Loop {
             reader: Reader::new(front_end, scans),
             stuck_code: None,
             crossing: None,
+            crossing_state: None,
         }
     }
 
@@ -836,7 +845,11 @@ impl Loop {
         let solved = solve(t + tick_seconds)?;
         (bench.y, bench.next_step) = (solved.y, Some(solved.first_step));
         if bench.crossing.is_none() {
-            bench.crossing = self.first_crossing(t, &solved, input_volts, solve)?;
+            if let Some((mode, at)) = self.first_crossing(t, &solved, input_volts, &solve)? {
+                let there = solve(at)?.y;
+                bench.crossing = Some((mode, at));
+                bench.crossing_state = Some((there[0], there[1]));
+            }
         }
         let volts = self.plant.volts(&bench.y, input_volts);
         if bench.current_wanted {
@@ -1094,6 +1107,12 @@ mod tests {
         let (their_mode, their_at) = reference.first_limit.unwrap();
         assert_eq!(mode, their_mode);
         assert!((at - their_at).abs() < 1e-9, "{at} s vs {their_at} s");
+        let (stretch, _) = bench.crossing_state.unwrap();
+        let (their_stretch, _) = reference.first_limit_state.unwrap();
+        assert!(
+            (stretch - their_stretch).abs() < 1e-9,
+            "{stretch} vs {their_stretch}"
+        );
         assert!((0.010..0.015).contains(&at), "{at}");
     }
 }
