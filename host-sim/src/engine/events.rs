@@ -105,11 +105,6 @@ impl Jet {
             acceleration: device.acceleration(state, p2) * scale * scale,
         }
     }
-
-    /// Its time and (stretch, velocity), as `Watch::step` takes a step's ends.
-    pub fn end(&self) -> (f64, (f64, f64)) {
-        (self.t, (self.stretch, self.velocity))
-    }
 }
 
 /// The stretch where a path turns between two step ends whose velocities differ in sign: on
