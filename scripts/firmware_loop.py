@@ -46,7 +46,7 @@ def main():
         if core_status != fw_status:
             problems.append(f"exit status {core_status} (core) vs {fw_status} (firmware)")
         header = core_rows[0]
-        for column in ("tick", "time_seconds", "dac_code", "dac_on", "enable"):
+        for column in ("tick", "time_seconds", "dac_code", "dac_on", "enable", "phase"):
             if column not in header:
                 problems.append(f"history.csv has no {column}")
         for i, (a, b) in enumerate(zip(core_rows[1:], fw_rows[1:])):

@@ -194,6 +194,8 @@ pub struct Image<'a> {
     pub power_up: PowerUp,
     /// The table's bytes, for `Controller::start` (which parses and checks them).
     pub table: &'a [u8],
+    /// The image's own CRC-32 (its last four bytes): which image a board runs, in a word.
+    pub crc: u32,
 }
 
 impl<'a> Image<'a> {
@@ -279,6 +281,7 @@ impl<'a> Image<'a> {
             settings,
             power_up,
             table,
+            crc: stored,
         })
     }
 

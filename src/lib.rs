@@ -40,7 +40,7 @@ pub use model::{device, material, safety, statics};
 pub use board::stage::{OutputStage, StageError};
 pub use controller::{
     Boot, Controller, Event, EventKind, Fault, FaultStage, Inputs, Output, Phase, Plan, Refusal,
-    ReplanJob, Replanned, Setting, Settings, BUS_FAULT_SAID, EVENT_VALUES, FAULT_SAID,
+    ReplanJob, Replanned, Setting, Settings, BUS_FAULT_SAID, EVENT_VALUES, FAULT_KEYS, FAULT_SAID,
 };
 #[cfg(feature = "trim")]
 pub use controller::{TrimDone, TrimJob, TrimResult};

@@ -440,6 +440,33 @@ pub fn write(
     Ok(needed)
 }
 
+/// Bytes into a slice from the front, the rest dropped (a `fmt::Write` that cuts, never
+/// fails: words longer than the room are cut at a character's boundary).
+pub(crate) struct Put<'a>(pub(crate) &'a mut [u8], pub(crate) usize);
+
+impl Put<'_> {
+    pub(crate) fn bytes(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            if let Some(slot) = self.0.get_mut(self.1) {
+                *slot = b;
+                self.1 += 1;
+            }
+        }
+    }
+}
+
+impl fmt::Write for Put<'_> {
+    fn write_str(&mut self, s: &str) -> fmt::Result {
+        let room = self.0.len().saturating_sub(self.1);
+        let mut n = s.len().min(room);
+        while !s.is_char_boundary(n) {
+            n -= 1;
+        }
+        self.bytes(s.as_bytes().get(..n).unwrap_or(&[]));
+        Ok(())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -587,7 +587,9 @@ fn image_errors_and_refusals_say_why() {
 /// Every request the help line names parses, and its reply forms read back.
 #[test]
 fn the_protocol_covers_what_help_says() {
-    for name in ["help", "status", "stop", "trim", "clear", "save", "reset"] {
+    for name in [
+        "help", "status", "info", "stop", "trim", "clear", "save", "reset",
+    ] {
         assert!(protocol::parse(name.as_bytes()).is_ok(), "{name}");
     }
     assert_eq!(
@@ -595,6 +597,13 @@ fn the_protocol_covers_what_help_says() {
         Ok(Command::Target { hz: 44.0 })
     );
     assert!(protocol::HELP.contains("target <Hz>"));
+    assert_eq!(
+        protocol::parse(b"stream 100"),
+        Ok(Command::Stream(Some(100.0)))
+    );
+    assert_eq!(protocol::parse(b"stream off"), Ok(Command::Stream(None)));
+    assert!(protocol::parse(b"stream").is_err() && protocol::parse(b"stream fast").is_err());
+    assert!(protocol::HELP.contains("stream <Hz>"));
     assert_eq!(
         Reply::parse("ok target_hz=44 bias_volts=7449.878").and_then(|r| r.field("bias_volts")),
         Some("7449.878")

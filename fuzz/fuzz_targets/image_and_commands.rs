@@ -1,9 +1,12 @@
-//! Any bytes as a configuration image (first byte `I`) or as command-port lines (otherwise):
-//! reading never panics; an image that reads boots or is refused with a typed fault, never a
-//! panic; a line parses or gets a typed error, and a number it parses is finite.
+//! Any bytes as a configuration image (first byte `I`), as the telemetry stream a receiver
+//! reads (first byte `S`) or as command-port lines (otherwise): reading never panics; an image
+//! that reads boots or is refused with a typed fault, never a panic; a record the receiver
+//! takes is written back to the same bytes; a line parses or gets a typed error, and a number
+//! it parses is finite.
 #![no_main]
 
 use de_resonator::board::protocol::{self, Command};
+use de_resonator::board::stream::{Receiver, Record};
 use de_resonator::image::Image;
 use de_resonator::Controller;
 use libfuzzer_sys::fuzz_target;
@@ -25,11 +28,22 @@ fuzz_target!(|data: &[u8]| {
         }
         return;
     }
+    if let Some(rest) = data.strip_prefix(b"S") {
+        let mut receiver = Receiver::default();
+        for &b in rest {
+            if let Some(Ok(record)) = receiver.push(b) {
+                let again = Record::from_bytes(&record.to_bytes());
+                assert_eq!(again.map(|r| r.to_bytes()), Ok(record.to_bytes()));
+            }
+        }
+        return;
+    }
     for line in data.split(|&b| b == b'\n') {
         match protocol::parse(line) {
             Ok(Command::Target { hz }) => assert!(hz.is_finite()),
             Ok(Command::Ac { volts, hz }) => assert!(volts.is_finite() && hz.is_finite()),
             Ok(Command::Set(_, value)) => assert!(value.is_finite()),
+            Ok(Command::Stream(Some(hz))) => assert!(hz.is_finite()),
             _ => {}
         }
         if let Ok(text) = core::str::from_utf8(line) {

@@ -24,10 +24,11 @@ use core::fmt::{self, Write as _};
 use embedded_hal::digital::OutputPin;
 use embedded_hal::spi::{Operation, SpiDevice};
 
+use crate::controller::{phase_byte, phase_of_byte};
 use crate::controller::{Boot, Controller, Event, EventKind, Phase, EVENT_VALUES};
 use crate::drive::PowerMode;
 use crate::model::failure::FailureMode;
-use crate::table::{crc32, f32_at, u16_at, u32_at};
+use crate::table::{crc32, f32_at, u16_at, u32_at, Put};
 
 /// A frame's first two bytes.
 pub const MAGIC: [u8; 2] = *b"DL";
@@ -283,16 +284,6 @@ impl fmt::Display for Words<'_> {
 /// σ, target Hz, f32 each; the event's `EVENT_VALUES` numbers, f32 each.
 pub const OBSERVED_BYTES: usize = 36 + 4 * EVENT_VALUES;
 
-const PHASES: [Phase; 7] = [
-    Phase::Ramping,
-    Phase::Holding,
-    Phase::Measuring,
-    Phase::Solving,
-    Phase::Driving,
-    Phase::Held,
-    Phase::Faulted,
-];
-
 impl Observed {
     /// The board after a tick: the DAC frame last written (`dac_code`, `dac_on`), the enable
     /// line, the controller (none: nothing driven) and its event.
@@ -304,8 +295,11 @@ impl Observed {
         event: Option<&Event>,
     ) -> Self {
         let plan = controller.map(|c| c.plan());
-        let (tracked_hz, quality_factor) = tracked(controller);
-        let (sensed_stretch, sensed_sigma) = sensed(controller);
+        let none = (f32::NAN, f32::NAN);
+        let (tracked_hz, quality_factor) =
+            controller.and_then(Controller::tracking).unwrap_or(none);
+        let (sensed_stretch, sensed_sigma) =
+            controller.and_then(Controller::sensing).unwrap_or(none);
         Observed {
             dac_code,
             dac_on,
@@ -333,10 +327,7 @@ impl Observed {
             needed: OBSERVED_BYTES,
         })?;
         let flags = u8::from(self.dac_on) | u8::from(self.enable) << 1;
-        let phase = self
-            .phase
-            .and_then(|p| PHASES.iter().position(|&q| q == p))
-            .map_or(0xFF, |i| i as u8);
+        let phase = phase_byte(self.phase);
         let mut put = Put(fixed, 0);
         put.bytes(&self.dac_code.to_le_bytes());
         put.bytes(&[
@@ -391,10 +382,7 @@ impl Observed {
         for (k, value) in said_values.iter_mut().enumerate() {
             *value = f32_at(payload, 36 + 4 * k);
         }
-        let phase = match byte(4) {
-            0xFF => None,
-            i => Some(*PHASES.get(usize::from(i)).ok_or(bad(4))?),
-        };
+        let phase = phase_of_byte(byte(4)).ok_or(bad(4))?;
         let observed = Observed {
             dac_code: u16_at(payload, 0),
             dac_on: flags & 1 != 0,
@@ -412,28 +400,6 @@ impl Observed {
         };
         Ok((observed, payload.get(OBSERVED_BYTES..).unwrap_or(&[])))
     }
-}
-
-#[cfg(feature = "track")]
-fn tracked(c: Option<&Controller>) -> (f32, f32) {
-    c.and_then(|c| c.tracked())
-        .map_or((f32::NAN, f32::NAN), |l| (l.natural_hz, l.quality_factor))
-}
-
-#[cfg(not(feature = "track"))]
-fn tracked(_: Option<&Controller>) -> (f32, f32) {
-    (f32::NAN, f32::NAN)
-}
-
-#[cfg(feature = "probe")]
-fn sensed(c: Option<&Controller>) -> (f32, f32) {
-    c.and_then(|c| c.sensed())
-        .map_or((f32::NAN, f32::NAN), |s| (s.stretch, s.sigma))
-}
-
-#[cfg(not(feature = "probe"))]
-fn sensed(_: Option<&Controller>) -> (f32, f32) {
-    (f32::NAN, f32::NAN)
 }
 
 /// The boot's outcome, as host-sim's report reads it.
@@ -520,33 +486,6 @@ impl Booted {
             },
             payload.get(BOOTED_BYTES..).unwrap_or(&[]),
         ))
-    }
-}
-
-/// Bytes into a slice from the front, the rest dropped (a `fmt::Write` that cuts, never
-/// fails: words longer than the room are cut at a character's boundary).
-struct Put<'a>(&'a mut [u8], usize);
-
-impl Put<'_> {
-    fn bytes(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            if let Some(slot) = self.0.get_mut(self.1) {
-                *slot = b;
-                self.1 += 1;
-            }
-        }
-    }
-}
-
-impl fmt::Write for Put<'_> {
-    fn write_str(&mut self, s: &str) -> fmt::Result {
-        let room = self.0.len().saturating_sub(self.1);
-        let mut n = s.len().min(room);
-        while !s.is_char_boundary(n) {
-            n -= 1;
-        }
-        self.bytes(s.as_bytes().get(..n).unwrap_or(&[]));
-        Ok(())
     }
 }
 

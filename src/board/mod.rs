@@ -15,6 +15,7 @@ pub mod link;
 pub mod port;
 pub mod protocol;
 pub mod stage;
+pub mod stream;
 pub mod tick;
 pub mod watchdog;
 

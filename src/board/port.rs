@@ -10,6 +10,7 @@ use super::{Board, Keeper};
 use crate::board::protocol::{
     self, Command, ErrorCode, MaxBy, ParseError, Refused, Status, MAX_LINE,
 };
+use crate::board::stream;
 use crate::controller::{Controller, Phase, Refusal, Setting, Settings};
 use crate::numerics::decimal::Decimal;
 
@@ -67,6 +68,9 @@ pub enum Then {
     Reply,
     /// Restart: the slot is already empty (the next tick makes the stage safe).
     Reset,
+    /// Send the telemetry stream's records every this many ticks (`None`: stop): the tick's
+    /// `stream::Telemetry::set`.
+    Stream(Option<u32>),
 }
 
 /// A reply line (one `ok …` or `err …`, without its `\n`); cut short if it would not fit.
@@ -105,6 +109,43 @@ fn code(refusal: &Refusal) -> ErrorCode {
 }
 
 impl<K: Keeper> Board<'_, K> {
+    /// `stream <hz>` / `stream off`: the rate checked against the tick's, the reply with the
+    /// rate it gives and the bytes a second it sends; the tick's side is the caller's.
+    fn stream(
+        &self,
+        hz: Option<f32>,
+        controller: &mut impl Shared,
+        extras: &Extras,
+        out: &mut ReplyLine,
+    ) -> Then {
+        if !extras.stream_port {
+            err(out, ErrorCode::Unsupported, "this board has no stream port");
+            return Then::Reply;
+        }
+        let Some(hz) = hz else {
+            let _ = write!(out, "ok stream off");
+            return Then::Stream(None);
+        };
+        let tick_hz = controller.with(|c| self.tick_hz(c));
+        match stream::rate(hz, tick_hz) {
+            Ok(every) => {
+                let hz = tick_hz / every as f32;
+                let _ = write!(
+                    out,
+                    "ok stream hz={} every_ticks={every} frame_bytes={} bytes_per_second={}",
+                    Decimal(hz),
+                    stream::FRAME_BYTES,
+                    Decimal(hz * stream::FRAME_BYTES as f32)
+                );
+                Then::Stream(Some(every))
+            }
+            Err(e) => {
+                err(out, ErrorCode::Refused, e);
+                Then::Reply
+            }
+        }
+    }
+
     /// Answer one request into `out`. Long work (a new plan's checks, a new boot) runs here,
     /// outside the controller's lock; the tick preempts it.
     pub fn serve(
@@ -146,6 +187,26 @@ impl<K: Keeper> Board<'_, K> {
                     setting.key(),
                     setting.unit(),
                     setting.rule()
+                );
+                return Then::Reply;
+            }
+            Command::Stream(hz) => return self.stream(hz, controller, extras, out),
+            Command::Info => {
+                let _ = write!(
+                    out,
+                    "ok firmware=de-resonator-{} image_crc=",
+                    env!("CARGO_PKG_VERSION")
+                );
+                let _ = match self.image() {
+                    Some(image) => write!(out, "{:#010x}", image.crc),
+                    None => write!(out, "none"),
+                };
+                let _ = write!(
+                    out,
+                    " tick_hz={} stream_layout={} stream_port={}",
+                    Decimal(controller.with(|c| self.tick_hz(c))),
+                    stream::VERSION,
+                    if extras.stream_port { "yes" } else { "no" }
                 );
                 return Then::Reply;
             }
@@ -296,7 +357,8 @@ impl<K: Keeper> Board<'_, K> {
                 let _ = write!(out, "ok reset: output off, restarting");
                 return Then::Reset;
             }
-            Command::Help(_) => {}
+            // Answered above.
+            Command::Help(_) | Command::Stream(_) | Command::Info => {}
         }
         Then::Reply
     }

@@ -24,9 +24,10 @@ pub const MAX_LINE: usize = 96;
 
 /// What `help` answers, one line.
 pub const HELP: &str =
-    "commands: help [setting] | status | start | target <Hz> | ac <volts> <Hz> | \
+    "commands: help [setting] | status | info | start | target <Hz> | ac <volts> <Hz> | \
                         stop | trim | clear | get [setting] | set <setting> <value> | save | \
-                        reset (`get` lists every setting; `help <setting>` its unit and range)";
+                        reset | stream <Hz> | stream off (`get` lists every setting; \
+                        `help <setting>` its unit and range)";
 
 /// A request.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -35,6 +36,9 @@ pub enum Command {
     Help(Option<Setting>),
     /// Phase, target, bias, cap, limit mode, last fault, ticks.
     Status,
+    /// What runs: the firmware's version, the image's CRC, the stream's record layout and
+    /// whether the board has its port (a recording's header names them).
+    Info,
     /// Switch the high voltage on: the plan of the settings in force, checked as `target`
     /// is, ramped to from the present voltage (after `clear` or `stop`, from 0 V).
     Start,
@@ -62,6 +66,9 @@ pub enum Command {
     Save,
     /// Restart the firmware, at rest at 0 V only (`stop` first); the boot checks run again.
     Reset,
+    /// Send the telemetry stream's records (`board::stream`) on the stream port at this
+    /// rate, Hz (`None`: `stream off`, stop sending).
+    Stream(Option<f32>),
 }
 
 /// Why a request was not done: the number after `err`.
@@ -175,6 +182,7 @@ pub fn parse(line: &[u8]) -> Result<Command, ParseError> {
     let command = match name {
         "help" => Command::Help(args.optional_setting()?),
         "status" => Command::Status,
+        "info" => Command::Info,
         "start" => Command::Start,
         "target" => Command::Target { hz: args.number()? },
         "ac" => Command::Ac {
@@ -188,6 +196,15 @@ pub fn parse(line: &[u8]) -> Result<Command, ParseError> {
         "set" => Command::Set(args.setting()?, args.number()?),
         "save" => Command::Save,
         "reset" => Command::Reset,
+        "stream" => match args.words.next() {
+            Some("off") => Command::Stream(None),
+            Some(word) => {
+                args.index += 1;
+                let hz = parse_number(word).ok_or(ParseError::BadNumber { index: 1 })?;
+                Command::Stream(Some(hz))
+            }
+            None => return Err(ParseError::Missing { index: 1 }),
+        },
         _ => return Err(ParseError::UnknownCommand),
     };
     if args.words.next().is_some() {
@@ -457,6 +474,8 @@ pub struct Extras {
     pub clock_us: Option<u32>,
     /// The last tick's readings of the fitted analog inputs, in units (`acquire`).
     pub readings: Inputs,
+    /// Whether the board has a port for the telemetry stream (`stream <hz>`).
+    pub stream_port: bool,
 }
 
 impl fmt::Display for Extras {
@@ -660,6 +679,7 @@ mod tests {
                     current_amps: Some(-2.5e-6),
                     ..Inputs::NONE
                 },
+                stream_port: false,
             },
             fault: Some(Fault::Bus),
         };

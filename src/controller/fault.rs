@@ -233,7 +233,68 @@ pub enum FaultStage {
     Running,
 }
 
+/// Each fault's key, in `Fault`'s order: `Fault::number` − 1 indexes it (the telemetry
+/// record and the fault log carry the number, a reader shows the key).
+pub const FAULT_KEYS: [&str; 22] = [
+    "device",
+    "setting",
+    "swing",
+    "table",
+    "tune",
+    "disagree",
+    "above_safe",
+    "plan_crosses",
+    "plan_failed",
+    "amplifier",
+    "gate",
+    "sensor",
+    "sensor_implausible",
+    "sensor_stuck",
+    "leakage",
+    "leakage_falling",
+    "track_lost",
+    "amplifier_disagrees",
+    "limit",
+    "bus",
+    "input",
+    "trim",
+];
+
 impl Fault {
+    /// The fault's kind as a number from 1, in the order of `FAULT_KEYS` (0: no fault, in a
+    /// record).
+    pub fn number(&self) -> u8 {
+        match self {
+            Fault::Device(_) => 1,
+            Fault::Setting { .. } => 2,
+            Fault::Swing { .. } => 3,
+            Fault::Table(_) => 4,
+            Fault::Tune(_) => 5,
+            Fault::Disagree { .. } => 6,
+            Fault::AboveSafe { .. } => 7,
+            Fault::PlanCrosses { .. } => 8,
+            Fault::PlanFailed(_) => 9,
+            Fault::Amplifier(_) => 10,
+            Fault::Gate { .. } => 11,
+            Fault::Sensor { .. } => 12,
+            Fault::SensorImplausible { .. } => 13,
+            Fault::SensorStuck { .. } => 14,
+            Fault::Leakage { .. } => 15,
+            Fault::LeakageFalling { .. } => 16,
+            Fault::TrackLost { .. } => 17,
+            Fault::AmplifierDisagrees { .. } => 18,
+            Fault::Limit { .. } => 19,
+            Fault::Bus => 20,
+            Fault::Input(_) => 21,
+            Fault::Trim(_) => 22,
+        }
+    }
+
+    /// The key of fault number `number` (`Fault::number`), if one has it.
+    pub fn key_of(number: u8) -> Option<&'static str> {
+        FAULT_KEYS.get(usize::from(number).checked_sub(1)?).copied()
+    }
+
     /// Whether this is a boot refusal or a trip while running. A trim's retune runs the boot's
     /// checks again while running: its `Setting`, `Tune`, `Device` and `AboveSafe` faults are
     /// boot-kind refusals that stop a running drive.

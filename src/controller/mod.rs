@@ -43,7 +43,8 @@ mod watch;
 pub use boot::Boot;
 pub use command::{Refusal, ReplanJob, Replanned};
 pub use fault::{
-    Event, EventKind, Fault, FaultStage, Output, BUS_FAULT_SAID, EVENT_VALUES, FAULT_SAID,
+    Event, EventKind, Fault, FaultStage, Output, BUS_FAULT_SAID, EVENT_VALUES, FAULT_KEYS,
+    FAULT_SAID,
 };
 pub use plan::{Plan, MAX_PLAN_TICKS};
 pub use settings::{Setting, Settings, F32_GUARD, MAX_TRIMS, TRIM_SECANT_STEP};
@@ -87,6 +88,33 @@ impl Phase {
             Phase::Held => "held",
             Phase::Faulted => "faulted",
         }
+    }
+}
+
+/// Every phase, in order: a phase's byte in the link's and the stream's records is its place.
+const PHASES: [Phase; 7] = [
+    Phase::Ramping,
+    Phase::Holding,
+    Phase::Measuring,
+    Phase::Solving,
+    Phase::Driving,
+    Phase::Held,
+    Phase::Faulted,
+];
+
+/// A phase as one byte: its place in `Phase`'s order, 0xFF for none (no controller). The
+/// link's and the telemetry stream's records both carry it so.
+pub(crate) fn phase_byte(phase: Option<Phase>) -> u8 {
+    phase
+        .and_then(|p| PHASES.iter().position(|&q| q == p))
+        .map_or(0xFF, |i| i as u8)
+}
+
+/// The phase of `phase_byte`'s byte (`None`: no phase has it).
+pub(crate) fn phase_of_byte(byte: u8) -> Option<Option<Phase>> {
+    match byte {
+        0xFF => Some(None),
+        i => PHASES.get(usize::from(i)).copied().map(Some),
     }
 }
 
@@ -234,6 +262,27 @@ impl Controller {
     /// The cap of the operator's plan in force (at most the ceiling), V.
     pub fn operator_volts(&self) -> f32 {
         self.operator_volts
+    }
+
+    /// Tracking's last natural frequency (Hz) and quality factor, if it has them.
+    pub fn tracking(&self) -> Option<(f32, f32)> {
+        #[cfg(feature = "track")]
+        return self.tracked().map(|l| (l.natural_hz, l.quality_factor));
+        #[cfg(not(feature = "track"))]
+        None
+    }
+
+    /// The probe's last λ from C and its standard error, if it has them.
+    pub fn sensing(&self) -> Option<(f32, f32)> {
+        #[cfg(feature = "probe")]
+        return self.sensed().map(|s| (s.stretch, s.sigma));
+        #[cfg(not(feature = "probe"))]
+        None
+    }
+
+    /// The leakage resistance the last window of the leakage watch measured, Ω, if one did.
+    pub fn leakage_ohms(&self) -> Option<f32> {
+        self.leakage.siemens().map(|siemens| 1.0 / siemens)
     }
 
     /// The lowest cap the measured estimates gave (∞ before any), V.

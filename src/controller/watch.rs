@@ -72,7 +72,6 @@ const FALL_SIGNIFICANCE: f32 = 3.0;
 
 impl Leakage {
     /// The last window's leakage conductance, S, if one is measured.
-    #[cfg(feature = "probe")]
     pub(super) fn siemens(&self) -> Option<f32> {
         self.previous.map(|(siemens, _)| siemens)
     }

@@ -528,6 +528,8 @@ mod app {
                 #[cfg(not(feature = "qemu"))]
                 clock_us: None,
                 readings: cx.shared.readings.lock(|r| *r),
+                // The telemetry stream's UART is not wired yet: `stream` answers unsupported.
+                stream_port: false,
             };
             let mut controller = Locked(&mut cx.shared.controller);
             let then = cx

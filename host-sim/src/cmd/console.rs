@@ -9,7 +9,7 @@
 
 use std::fmt;
 use std::io::{BufRead, BufReader, IsTerminal, Read, Write};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -19,10 +19,12 @@ use de_resonator::board::protocol::{Reply, NOTICE};
 use serde::Serialize;
 use serde_json::{Map, Value};
 
+use super::record::{self, Recorder, Source};
 use super::Report;
 
 #[derive(Args, Debug)]
 #[command(group(clap::ArgGroup::new("connection").required(true).args(["port", "tcp", "unix"])))]
+#[command(group(clap::ArgGroup::new("stream_source").multiple(false)))]
 pub struct ConsoleArgs {
     /// A serial port (a board's USART2 through a USB adapter), e.g.
     ///
@@ -47,6 +49,35 @@ pub struct ConsoleArgs {
     /// the values (e.g. `wait phase=driving 10`; default 30 s).
     #[arg(long, value_name = "FILE")]
     pub script: Option<PathBuf>,
+    /// Record the board's telemetry stream to FILE (CSV, `#` header lines naming the
+    /// firmware, the image's CRC, the settings and the records lost): sends `stream <HZ>`
+    /// first and `stream off` at the end. Give where the stream comes from with
+    /// --stream-port, --stream-tcp or --stream-unix.
+    ///
+    /// The recording lasts --duration-seconds, or the script's run (stdin is not read).
+    #[arg(long, value_name = "FILE.csv", requires = "stream_source")]
+    pub record: Option<PathBuf>,
+    /// The stream's serial port (the board's stream UART), e.g. /dev/ttyUSB1.
+    #[arg(long, value_name = "DEVICE", group = "stream_source")]
+    pub stream_port: Option<String>,
+    /// The stream on a TCP socket (`serve --stream-tcp`, QEMU's chardev), HOST:PORT.
+    #[arg(long, value_name = "HOST:PORT", group = "stream_source")]
+    pub stream_tcp: Option<String>,
+    /// The stream on a Unix socket.
+    #[arg(long, value_name = "PATH", group = "stream_source")]
+    pub stream_unix: Option<PathBuf>,
+    /// The stream's serial port's baud rate.
+    #[arg(long, value_name = "BAUD", default_value_t = 2_000_000)]
+    pub stream_baud: u32,
+    /// Records a second asked of the board (`stream <HZ>`).
+    #[arg(long, value_name = "HZ", default_value_t = 100.0)]
+    pub stream_hz: f64,
+    /// How long to record, s (wall time from `stream`). Default: 10 s, or the script's run.
+    #[arg(long, value_name = "S")]
+    pub duration_seconds: Option<f64>,
+    /// Draw the recording to FILE.svg: the voltage commanded under the cap, the stretch.
+    #[arg(long, value_name = "FILE.svg", requires = "record")]
+    pub plot: Option<PathBuf>,
     /// How long to wait for a reply, s.
     #[arg(
         long,
@@ -78,6 +109,8 @@ pub struct ConsoleReport {
     pub closed_by_board: bool,
     /// Why a script stopped before its end (a `wait` that ran out of time, a silent board).
     pub stopped: Option<String>,
+    /// The telemetry recorded (`--record`).
+    pub recording: Option<record::Recorded>,
     #[serde(skip)]
     script: bool,
 }
@@ -93,6 +126,16 @@ impl fmt::Display for ConsoleReport {
         )?;
         if self.closed_by_board {
             write!(f, "; the board closed the connection")?;
+        }
+        if let Some(r) = &self.recording {
+            write!(
+                f,
+                "; recorded {} records to {} ({} lost, {} bad frames)",
+                r.records, r.file, r.lost, r.bad_frames
+            )?;
+            if let Some(plot) = &r.plot {
+                write!(f, ", drawn to {plot}")?;
+            }
         }
         Ok(())
     }
@@ -386,10 +429,16 @@ pub fn console(args: &ConsoleArgs, json: bool) -> Result<ConsoleReport, String> 
         exchanges: Vec::new(),
         closed_by_board: false,
         stopped: None,
+        recording: None,
         script: script.is_some(),
+    };
+    let recording = match &args.record {
+        Some(path) => Some(Recording::start(args, path, &mut session, echo)?),
+        None => None,
     };
     let requests: Box<dyn Iterator<Item = String>> = match script {
         Some(lines) => Box::new(lines.into_iter()),
+        None if recording.is_some() => Box::new(std::iter::empty()),
         None => Box::new(std::io::stdin().lock().lines().map_while(Result::ok)),
     };
     let show_prompt = || {
@@ -449,8 +498,123 @@ pub fn console(args: &ConsoleArgs, json: bool) -> Result<ConsoleReport, String> 
         show_prompt();
     }
     report.notices = notices.lock().map(|n| n.clone()).unwrap_or_default();
+    if let Some(recording) = recording {
+        report.recording = Some(recording.finish(args, &mut session, &report.notices)?);
+    }
     Ok(report)
 }
+
+/// A `--record` under way: the stream's reader, what the header names, when it started.
+struct Recording {
+    recorder: Recorder,
+    path: PathBuf,
+    header: Vec<String>,
+    tick_hz: f64,
+    started: Instant,
+}
+
+impl Recording {
+    /// Ask what runs (`info`, `get`, `status`) for the header, connect to the stream, and
+    /// start it (`stream <hz>`).
+    fn start(
+        args: &ConsoleArgs,
+        path: &Path,
+        session: &mut Session,
+        echo: bool,
+    ) -> Result<Self, String> {
+        let hz = args.stream_hz;
+        if !(hz > 0.0 && hz.is_finite()) {
+            return Err(format!(
+                "--stream-hz {hz}: a positive number of records a second"
+            ));
+        }
+        if let Some(s) = args
+            .duration_seconds
+            .filter(|s| !(*s > 0.0 && s.is_finite()))
+        {
+            return Err(format!(
+                "--duration-seconds {s}: a positive number of seconds"
+            ));
+        }
+        let source = match (&args.stream_port, &args.stream_tcp, &args.stream_unix) {
+            (Some(device), _, _) => Source::Port {
+                device: device.clone(),
+                baud: args.stream_baud,
+            },
+            (_, Some(address), _) => Source::Tcp(address.clone()),
+            (_, _, Some(path)) => Source::Unix(path.clone()),
+            _ => return Err("--record needs --stream-port, --stream-tcp or --stream-unix".into()),
+        };
+        let mut header = Vec::new();
+        let mut tick_hz = f64::NAN;
+        for request in ["info", "get", "status"] {
+            let line = session.ask(request)?;
+            if let Some(Value::Number(n)) = fields(&line).get("tick_hz") {
+                tick_hz = n.as_f64().unwrap_or(f64::NAN);
+            }
+            header.push(format!("{request}: {line}"));
+        }
+        if !(tick_hz > 0.0) {
+            return Err("the board's `info` and `get` say no tick rate".into());
+        }
+        let recorder = Recorder::start(&source)?;
+        let request = format!("stream {hz}");
+        let line = session.ask(&request)?;
+        if !matches!(Reply::parse(&line), Some(Reply::Ok(_))) {
+            let _ = recorder.finish(Duration::ZERO);
+            return Err(format!("`{request}` got `{line}`"));
+        }
+        if echo {
+            eprintln!("recording the stream to {}: {line}", path.display());
+        }
+        header.push(format!("{request}: {line}"));
+        Ok(Recording {
+            recorder,
+            path: path.to_path_buf(),
+            header,
+            tick_hz,
+            started: Instant::now(),
+        })
+    }
+
+    /// Wait out the duration, stop the stream, and write the CSV (and the plot).
+    fn finish(
+        self,
+        args: &ConsoleArgs,
+        session: &mut Session,
+        notices: &[String],
+    ) -> Result<record::Recorded, String> {
+        let duration = match (args.duration_seconds, args.script.is_some()) {
+            (Some(s), _) => Duration::from_secs_f64(s),
+            (None, true) => Duration::ZERO,
+            (None, false) => Duration::from_secs_f64(DEFAULT_RECORD_SECONDS),
+        };
+        if let Some(left) = duration.checked_sub(self.started.elapsed()) {
+            std::thread::sleep(left);
+        }
+        let stopped = session.ask("stream off");
+        // The frames in flight when the board stopped.
+        let (records, receiver) = self.recorder.finish(Duration::from_millis(200))?;
+        stopped?;
+        let mut header = self.header;
+        header.extend(notices.iter().map(|n| format!("board said: {n}")));
+        let mut recording = record::write(&self.path, &header, &records, &receiver, self.tick_hz)?;
+        if let Some(plot) = &args.plot {
+            let title = self
+                .path
+                .file_stem()
+                .map_or("recording".into(), |s| s.to_string_lossy().into_owned());
+            let svg = crate::plot::svg(&record::plot(&records, &receiver, self.tick_hz, &title));
+            std::fs::write(plot, svg)
+                .map_err(|e| format!("cannot write {}: {e}", plot.display()))?;
+            recording.plot = Some(plot.display().to_string());
+        }
+        Ok(recording)
+    }
+}
+
+/// How long `--record` records without a script or --duration-seconds, s.
+const DEFAULT_RECORD_SECONDS: f64 = 10.0;
 
 /// `status` every 0.1 s until its `key` holds one of `values`, within `within`.
 fn wait(

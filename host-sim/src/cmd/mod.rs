@@ -6,6 +6,7 @@ pub mod curve;
 pub mod image;
 pub mod lut;
 pub mod precision;
+pub mod record;
 pub mod run;
 pub mod safe;
 pub mod serve;

@@ -26,8 +26,8 @@ pub struct RunArgs {
     /// needs a `[front_end]` if it reads sensors.
     #[arg(long, value_name = "ELF")]
     pub firmware: Option<PathBuf>,
-    /// Write the time history (history.csv: per tick the DAC code, the enable line and the
-    /// plant) even if the scene does not ask for it.
+    /// Write the time history (history.csv: per tick the DAC code, the enable line, the
+    /// controller's phase and the plant) even if the scene does not ask for it.
     #[arg(long)]
     pub history: bool,
 }
@@ -128,6 +128,8 @@ struct HistoryRow {
     dac_code: u16,
     dac_on: u8,
     enable: u8,
+    /// The controller's phase (`none`: no controller runs).
+    phase: &'static str,
     stretch: f64,
     membrane_volts: f64,
     current_amps: Option<f64>,
@@ -425,6 +427,7 @@ fn files(dir: &Path, scene: &Scene, run: &Run) -> Result<Vec<String>, String> {
                 dac_code: h.dac_code,
                 dac_on: h.dac_on.into(),
                 enable: h.enable.into(),
+                phase: h.phase.map_or("none", |p| p.name()),
                 stretch: h.stretch,
                 membrane_volts: h.membrane_volts,
                 current_amps: finite(h.current_amps),

@@ -15,6 +15,7 @@ use std::time::{Duration, Instant};
 use clap::Args;
 use de_resonator::board::port::Extras;
 use de_resonator::board::protocol::NOTICE;
+use de_resonator::board::stream::{self, Record, Telemetry};
 use de_resonator::board::{self, Board, Keeper, Line, Lines, ReplyLine, ResetCause, Then};
 use de_resonator::store::{self, FlashKeeper, RamFlash, StoreError, RAM_PAGE_BYTES};
 use de_resonator::{Controller, Dac8551, Image, Inputs, OutputStage, Settings};
@@ -36,6 +37,15 @@ pub struct ServeArgs {
     /// Serve on a Unix socket at PATH (a stale socket there is replaced).
     #[arg(long, value_name = "PATH")]
     pub unix: Option<PathBuf>,
+    /// Send the telemetry stream (`stream <hz>` starts it) to clients of a TCP socket,
+    /// HOST:PORT: COBS-framed records, as a board's stream UART sends them.
+    ///
+    /// Without it or --stream-unix, `stream` answers that the board has no stream port.
+    #[arg(long, value_name = "HOST:PORT", conflicts_with = "stream_unix")]
+    pub stream_tcp: Option<String>,
+    /// Send the telemetry stream to clients of a Unix socket at PATH.
+    #[arg(long, value_name = "PATH")]
+    pub stream_unix: Option<PathBuf>,
     /// Simulated seconds per wall-clock second, or `max`: as fast as it computes.
     #[arg(long, value_name = "X|max", default_value = "1", value_parser = speed)]
     pub speed: Speed,
@@ -169,6 +179,14 @@ impl Client {
         self.out.push(b'\n');
     }
 
+    /// Queue a stream frame; dropped (a gap the receiver counts) while the client is more
+    /// than `QUEUED_BYTES` behind.
+    fn send(&mut self, frame: &[u8]) {
+        if self.out.len() <= QUEUED_BYTES {
+            self.out.extend_from_slice(frame);
+        }
+    }
+
     /// Write what is queued, as far as the socket takes it now.
     fn flush(&mut self) {
         while !self.out.is_empty() && !self.gone {
@@ -209,15 +227,16 @@ enum Listener {
 }
 
 impl Listener {
-    fn bind(args: &ServeArgs) -> Result<(Self, String), String> {
-        if let Some(address) = &args.tcp {
+    /// A listener on the TCP address or the Unix path given (one of them).
+    fn bind(tcp: Option<&str>, unix: Option<&PathBuf>) -> Result<(Self, String), String> {
+        if let Some(address) = tcp {
             let l = TcpListener::bind(address)
                 .map_err(|e| format!("cannot listen on {address}: {e}"))?;
             l.set_nonblocking(true).map_err(|e| e.to_string())?;
             let at = l.local_addr().map_err(|e| e.to_string())?;
             return Ok((Listener::Tcp(l), format!("tcp {at}")));
         }
-        let path = args.unix.clone().ok_or("give --tcp or --unix")?;
+        let path = unix.cloned().ok_or("give --tcp or --unix")?;
         if let Ok(meta) = std::fs::symlink_metadata(&path) {
             if !meta.file_type().is_socket() {
                 return Err(format!("{} exists and is not a socket", path.display()));
@@ -289,7 +308,18 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
     // The image the scene's board boots from (`run`'s and the firmware's in the loop).
     let bytes = lp.image()?;
     let mut flash = Flash(vec![0xFF; 2 * RAM_PAGE_BYTES]);
-    let (listener, at) = Listener::bind(args)?;
+    let (listener, at) = Listener::bind(args.tcp.as_deref(), args.unix.as_ref())?;
+    let streams = match (&args.stream_tcp, &args.stream_unix) {
+        (None, None) => None,
+        (tcp, unix) => {
+            let (l, at) = Listener::bind(tcp.as_deref(), unix.as_ref())?;
+            eprintln!("the telemetry stream on {at} (`stream <hz>` starts it)");
+            Some(l)
+        }
+    };
+    let mut stream_clients: Vec<Client> = Vec::new();
+    let mut telemetry = Telemetry::default();
+    let mut frame = [0u8; stream::FRAME_BYTES];
     eprintln!(
         "serving scene {} on {at} at {}; the command port's protocol (`help`)",
         scene.name,
@@ -354,9 +384,15 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
                 clients.push(client);
                 report.clients += 1;
             }
+            if let Some(streams) = &streams {
+                while let Some(stream) = streams.accept() {
+                    stream_clients.push(Client::new(stream));
+                }
+            }
             // The clock the firmware's status reports (a u32 of µs, wrapping).
             let extras = Extras {
                 clock_us: Some((k as f64 * tick_seconds * 1e6) as u64 as u32),
+                stream_port: streams.is_some(),
                 ..Extras::default()
             };
             let mut queue = Vec::new();
@@ -371,7 +407,12 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
                 let mut reply = ReplyLine::new();
                 let then = logic.serve(&line, &mut &mut slot, &extras, &mut reply);
                 clients[i].say(&reply);
+                if let Then::Stream(every) = then {
+                    telemetry.set(every);
+                }
                 if then == Then::Reset {
+                    // A restart stops the stream and starts its count again, as on a board.
+                    telemetry = Telemetry::default();
                     // The slot is empty: the output off at once (as the firmware's next tick
                     // does), then the boot, the settings' flash kept.
                     let _ = board::tick::drive(&mut slot, &mut stage, Ok(Inputs::NONE));
@@ -385,6 +426,8 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
             }
             clients.iter_mut().for_each(Client::flush);
             clients.retain(|c| !c.gone);
+            stream_clients.iter_mut().for_each(Client::flush);
+            stream_clients.retain(|c| !c.gone);
             if let Some(due) = due.filter(|&d| d > Instant::now()) {
                 std::thread::sleep((due - Instant::now().min(due)).min(POLL));
                 continue;
@@ -392,6 +435,19 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
         }
         let t = k as f64 * tick_seconds;
         let stepped = lp.step(k, &mut bench, &mut slot, &mut stage, &wires)?;
+        if let Some(sequence) = telemetry.due() {
+            let record = Record::of(
+                (sequence, k as u32),
+                stepped.ticked.as_ref().map(|t| &t.output),
+                !stage.is_safe(),
+                slot.as_ref(),
+                &stepped.inputs,
+            );
+            let n = record.frame(&mut frame);
+            for client in &mut stream_clients {
+                client.send(&frame[..n]);
+            }
+        }
         if let Some(event) = stepped.ticked.and_then(|t| t.output.event) {
             let line = format!("{} s: {event}", sig(t));
             eprintln!("{line}");

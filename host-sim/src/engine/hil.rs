@@ -174,6 +174,8 @@ pub struct Stepped {
     pub start_stretch: f64,
     /// The membrane's voltage at the tick's end, V.
     pub volts: f64,
+    /// What the board's acquisition read at the tick, in units (none when it failed).
+    pub inputs: Inputs,
 }
 
 /// The plant's side of a loop between ticks: its state, the solver's next step, the
@@ -389,6 +391,8 @@ pub struct Sample {
     pub dac_code: u16,
     pub dac_on: bool,
     pub enable: bool,
+    /// The controller's phase after the tick (`None`: no controller runs).
+    pub phase: Option<Phase>,
     pub stretch: f64,
     pub membrane_volts: f64,
     /// The amplifier's mean output current over the tick, A (model.md §8).
@@ -574,6 +578,7 @@ impl Loop {
                     dac_code: seen.dac_code,
                     dac_on: seen.dac_on,
                     enable: seen.enable,
+                    phase: seen.phase,
                     stretch: y[0],
                     membrane_volts: volts,
                     current_amps: bench.last_current.unwrap_or(f64::NAN),
@@ -648,6 +653,7 @@ impl Loop {
             }
             None => Ok(Inputs::NONE),
         };
+        let read = inputs.as_ref().map_or(Inputs::NONE, |i| *i);
         let ticked = board::tick::drive(slot, stage, inputs);
         if ticked.is_some_and(|t| t.job_wanted) {
             board::tick::run_job(|f| {
@@ -662,6 +668,7 @@ impl Loop {
             ticked,
             start_stretch,
             volts,
+            inputs: read,
         })
     }
 

@@ -24,12 +24,23 @@ pub struct Served {
     child: Child,
     /// `--unix PATH` or `--tcp HOST:PORT`, as `console` takes it.
     pub connection: [String; 2],
+    /// The telemetry stream's Unix socket, when it serves one.
+    pub stream: Option<String>,
 }
 
 impl Served {
     /// Serve `scene` (`None`: the reference scene) at `speed` on a Unix socket named `name`,
     /// or on TCP (`name` = `tcp`, a port the system picks).
     pub fn start(scene: Option<&str>, speed: &str, name: &str) -> Self {
+        Self::serve(scene, speed, name, false)
+    }
+
+    /// As `start` (on a Unix socket), with the telemetry stream on a second one.
+    pub fn streaming(scene: Option<&str>, speed: &str, name: &str) -> Self {
+        Self::serve(scene, speed, name, true)
+    }
+
+    fn serve(scene: Option<&str>, speed: &str, name: &str, streaming: bool) -> Self {
         let mut command = host_sim();
         command.arg("serve");
         if let Some(scene) = scene {
@@ -43,6 +54,13 @@ impl Served {
         } else {
             command.args(["--unix", &socket]);
         }
+        let stream = streaming.then(|| {
+            let path = scratch("serve").join(format!("{name}-stream.sock"));
+            path.to_str().unwrap().to_string()
+        });
+        if let Some(path) = &stream {
+            command.args(["--stream-unix", path]);
+        }
         // A bound: a test that dies leaves no board running for long.
         command.args(["--speed", speed, "--seconds", "3000"]);
         let mut child = command
@@ -50,10 +68,15 @@ impl Served {
             .stderr(Stdio::piped())
             .spawn()
             .expect("host-sim serve starts");
-        // Its first line says where it serves.
+        // Its first line says where it serves (after the stream's, if it has one).
         let mut stderr = BufReader::new(child.stderr.take().unwrap());
         let mut first = String::new();
         stderr.read_line(&mut first).unwrap();
+        if stream.is_some() {
+            assert!(first.contains("telemetry stream"), "{first:?}");
+            first.clear();
+            stderr.read_line(&mut first).unwrap();
+        }
         let at = first
             .split(" on ")
             .nth(1)
@@ -70,7 +93,11 @@ impl Served {
         } else {
             ["--unix".to_string(), socket]
         };
-        Self { child, connection }
+        Self {
+            child,
+            connection,
+            stream,
+        }
     }
 
     /// Stop the board now (a board that goes away under a console).

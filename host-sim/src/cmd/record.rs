@@ -1,0 +1,284 @@
+//! `console --record`: the board's telemetry stream (`de_resonator::board::stream`) read from
+//! its own port, decoded, and written to CSV with a header that names what ran; records
+//! lost on the way counted from the sequence's gaps and said, never filled in.
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::Duration;
+
+use de_resonator::board::stream::{Receiver, Record, VERSION};
+use de_resonator::Fault;
+use serde::Serialize;
+
+use crate::plot::{self, Panel, Series};
+
+/// Where the stream comes from: a serial port (the board's stream UART), a TCP or a Unix
+/// socket (QEMU's chardev, `serve --stream-tcp/--stream-unix`).
+#[derive(Clone, Debug)]
+pub enum Source {
+    Port { device: String, baud: u32 },
+    Tcp(String),
+    Unix(PathBuf),
+}
+
+impl Source {
+    fn open(&self) -> Result<Box<dyn Read + Send>, String> {
+        let quiet = Some(READ_TIMEOUT);
+        match self {
+            Source::Tcp(address) => {
+                let s = std::net::TcpStream::connect(address)
+                    .map_err(|e| format!("cannot connect to the stream at {address}: {e}"))?;
+                s.set_read_timeout(quiet).map_err(|e| e.to_string())?;
+                Ok(Box::new(s))
+            }
+            Source::Unix(path) => {
+                let s = std::os::unix::net::UnixStream::connect(path).map_err(|e| {
+                    format!("cannot connect to the stream at {}: {e}", path.display())
+                })?;
+                s.set_read_timeout(quiet).map_err(|e| e.to_string())?;
+                Ok(Box::new(s))
+            }
+            Source::Port { device, baud } => serialport::new(device, *baud)
+                .timeout(READ_TIMEOUT)
+                .open()
+                .map(|p| Box::new(p) as Box<dyn Read + Send>)
+                .map_err(|e| format!("cannot open the stream's serial port {device}: {e}")),
+        }
+    }
+}
+
+/// How long a read waits before the reader looks whether it should stop.
+const READ_TIMEOUT: Duration = Duration::from_millis(50);
+
+/// A recording under way: a thread reading the stream into records.
+pub struct Recorder {
+    stop: Arc<AtomicBool>,
+    reader: JoinHandle<Result<(Vec<Record>, Receiver), String>>,
+}
+
+impl Recorder {
+    /// Connect to the stream and read it until `finish`.
+    pub fn start(source: &Source) -> Result<Self, String> {
+        let mut port = source.open()?;
+        let stop = Arc::new(AtomicBool::new(false));
+        let stopping = stop.clone();
+        let reader = std::thread::spawn(move || {
+            let mut receiver = Receiver::default();
+            let mut records = Vec::new();
+            let mut buf = [0u8; 4096];
+            while !stopping.load(Ordering::Relaxed) {
+                let n = match port.read(&mut buf) {
+                    Ok(0) => break,
+                    Ok(n) => n,
+                    Err(e)
+                        if matches!(
+                            e.kind(),
+                            std::io::ErrorKind::WouldBlock
+                                | std::io::ErrorKind::TimedOut
+                                | std::io::ErrorKind::Interrupted
+                        ) =>
+                    {
+                        continue
+                    }
+                    Err(e) => return Err(format!("the stream's connection failed: {e}")),
+                };
+                for &b in &buf[..n] {
+                    if let Some(Ok(record)) = receiver.push(b) {
+                        records.push(record);
+                    }
+                }
+            }
+            Ok((records, receiver))
+        });
+        Ok(Recorder { stop, reader })
+    }
+
+    /// Stop reading (after what is in flight: `linger`); the records and the receiver's counts.
+    pub fn finish(self, linger: Duration) -> Result<(Vec<Record>, Receiver), String> {
+        std::thread::sleep(linger);
+        self.stop.store(true, Ordering::Relaxed);
+        self.reader
+            .join()
+            .map_err(|_| "the stream's reader stopped unexpectedly".to_string())?
+    }
+}
+
+/// What a recording holds, as reported.
+#[derive(Serialize, Debug, Clone)]
+pub struct Recorded {
+    pub file: String,
+    pub plot: Option<String>,
+    pub records: u64,
+    /// Records missing from the sequence between the first and the last read.
+    pub lost: u64,
+    /// Frames that failed their checks (bytes lost or changed on the way).
+    pub bad_frames: u64,
+    pub first_tick: Option<u32>,
+    pub last_tick: Option<u32>,
+}
+
+/// One record as a CSV row: units in the names, empty where nothing was measured.
+#[derive(Serialize)]
+struct Row {
+    sequence: u32,
+    tick: u32,
+    time_seconds: f64,
+    volts: f32,
+    dac_code: u16,
+    enable: u8,
+    phase: &'static str,
+    fault: &'static str,
+    max_volts: Option<f32>,
+    stretch: Option<f32>,
+    current_amps: Option<f32>,
+    amplifier_volts: Option<f32>,
+    sensed_stretch: Option<f32>,
+    sensed_sigma: Option<f32>,
+    tracked_hz: Option<f32>,
+    quality_factor: Option<f32>,
+    leakage_ohms: Option<f32>,
+    bias_volts: Option<f32>,
+}
+
+fn finite(x: f32) -> Option<f32> {
+    x.is_finite().then_some(x)
+}
+
+impl Row {
+    fn of(r: &Record, tick_hz: f64) -> Self {
+        Row {
+            sequence: r.sequence,
+            tick: r.tick,
+            time_seconds: f64::from(r.tick) / tick_hz,
+            volts: r.volts,
+            dac_code: r.dac_code,
+            enable: u8::from(r.enabled),
+            phase: r.phase.map_or("none", |p| p.name()),
+            fault: r.fault.and_then(Fault::key_of).unwrap_or(""),
+            max_volts: finite(r.max_volts),
+            stretch: r.inputs.stretch,
+            current_amps: r.inputs.current_amps,
+            amplifier_volts: r.inputs.amplifier_volts,
+            sensed_stretch: r.sensed.map(|s| s.0),
+            sensed_sigma: r.sensed.map(|s| s.1),
+            tracked_hz: r.tracked.map(|t| t.0),
+            quality_factor: r.tracked.map(|t| t.1),
+            leakage_ohms: r.leakage_ohms,
+            bias_volts: finite(r.bias_volts),
+        }
+    }
+}
+
+/// Write the records to `path`: `#` header lines (`header`, then the counts), then the CSV.
+pub fn write(
+    path: &Path,
+    header: &[String],
+    records: &[Record],
+    receiver: &Receiver,
+    tick_hz: f64,
+) -> Result<Recorded, String> {
+    let mut text = format!("# de-resonator telemetry, record layout {VERSION}\n");
+    for line in header {
+        text.push_str(&format!("# {line}\n"));
+    }
+    text.push_str(&format!(
+        "# records={} lost={} bad_frames={} (lost records are missing rows, not filled in)\n",
+        receiver.records, receiver.lost, receiver.bad_frames
+    ));
+    let rows: Vec<Row> = records.iter().map(|r| Row::of(r, tick_hz)).collect();
+    let mut bytes = text.into_bytes();
+    bytes.extend(super::csv(&rows)?);
+    if rows.is_empty() {
+        // The column names even with no record.
+        let mut w = csv::Writer::from_writer(Vec::new());
+        w.write_record(COLUMNS).map_err(|e| e.to_string())?;
+        bytes.extend(w.into_inner().map_err(|e| e.to_string())?);
+    }
+    std::fs::write(path, bytes).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    Ok(Recorded {
+        file: path.display().to_string(),
+        plot: None,
+        records: receiver.records,
+        lost: receiver.lost,
+        bad_frames: receiver.bad_frames,
+        first_tick: records.first().map(|r| r.tick),
+        last_tick: records.last().map(|r| r.tick),
+    })
+}
+
+/// The CSV's columns, as `Row` writes them.
+const COLUMNS: [&str; 18] = [
+    "sequence",
+    "tick",
+    "time_seconds",
+    "volts",
+    "dac_code",
+    "enable",
+    "phase",
+    "fault",
+    "max_volts",
+    "stretch",
+    "current_amps",
+    "amplifier_volts",
+    "sensed_stretch",
+    "sensed_sigma",
+    "tracked_hz",
+    "quality_factor",
+    "leakage_ohms",
+    "bias_volts",
+];
+
+/// The recording drawn: the voltage commanded under the cap in force, and the stretch (the
+/// sensor's and the probe's λ from C), against time; the records lost said in a note.
+pub fn plot(records: &[Record], receiver: &Receiver, tick_hz: f64, title: &str) -> Vec<Panel> {
+    let t = |r: &Record| f64::from(r.tick) / tick_hz;
+    let series = |name: &str, pick: &dyn Fn(&Record) -> Option<f32>| Series {
+        name: name.into(),
+        points: records
+            .iter()
+            .filter_map(|r| pick(r).map(|y| (t(r), f64::from(y))))
+            .collect(),
+        ..Series::default()
+    };
+    let cap = series("cap in force", &|r| finite(r.max_volts));
+    let cap = Series {
+        style: plot::Style {
+            colour: Some(plot::RED),
+            dashed: true,
+            ..plot::Style::default()
+        },
+        ..cap
+    };
+    let mut volts = Panel {
+        title: format!("{title}: voltage commanded"),
+        x_label: "time, s".into(),
+        y_label: "V".into(),
+        series: vec![series("commanded", &|r| Some(r.volts)), cap],
+        notes: vec![format!(
+            "{} records, {} lost, {} bad frames",
+            receiver.records, receiver.lost, receiver.bad_frames
+        )],
+        ..Panel::default()
+    };
+    let mut stretch = Panel {
+        title: "stretch".into(),
+        x_label: "time, s".into(),
+        y_label: "stretch λ".into(),
+        series: vec![
+            series("sensor", &|r| r.inputs.stretch),
+            series("from C", &|r| r.sensed.map(|s| s.0)),
+        ],
+        ..Panel::default()
+    };
+    for panel in [&mut volts, &mut stretch] {
+        panel.series.retain(|s| !s.points.is_empty());
+    }
+    let mut panels = vec![volts];
+    if !stretch.series.is_empty() {
+        panels.push(stretch);
+    }
+    panels
+}
