@@ -7,6 +7,8 @@
 #                       folder, as QEMU_CALLER_DIR says when set)
 #   QEMU_SERIAL1=SPEC   USART2, the command port: a -serial spec (default: null), e.g.
 #                       unix:/tmp/fw.sock,server=on,wait=on  or  tcp:127.0.0.1:4444,server=on
+#   QEMU_SERIAL0=SPEC   USART1, the telemetry stream (default: null), e.g.
+#                       unix:/tmp/fw-stream.sock,server=on,wait=off
 #   QEMU_ICOUNT=1       -icount shift=0,sleep=off (one nanosecond of virtual time an
 #                       instruction, deterministic; QEMU-STM32F405.md §2)
 #   QEMU_EXTRA="..."    more QEMU arguments (e.g. -d trace:memory_region_ops_write -D FILE)
@@ -31,7 +33,7 @@ limit=()
 if [ -n "${QEMU_TIMEOUT:-}" ]; then limit=(timeout --foreground "$QEMU_TIMEOUT"); fi
 qemu() {
     "${limit[@]}" qemu-system-arm -M netduinoplus2 -nographic -monitor none \
-        -serial null -serial "${QEMU_SERIAL1:-null}" \
+        -serial "${QEMU_SERIAL0:-null}" -serial "${QEMU_SERIAL1:-null}" \
         -semihosting-config "enable=on,target=native${QEMU_ARGS:+,arg=firmware,arg=$QEMU_ARGS}" \
         "${extra[@]}" -kernel "$elf"
 }

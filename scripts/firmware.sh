@@ -52,7 +52,7 @@ done
 step "the tick's budget: whole trim cycles (stretch; current only with λ from C under the probe) and a tracked drive counted under -icount"
 QEMU_ICOUNT=1 cargo run --locked --release -q --bin count >../target/count-trim.log 2>&1 ||
     { cat ../target/count-trim.log; echo "count (trim, track) failed" >&2; exit 1; }
-grep -E "trim|track" ../target/count-trim.log
+grep -E "trim|track|telemetry" ../target/count-trim.log
 # The board's whole tick (the ADC block through the image's front end, the controller, the
 # DAC frame) within the 1,500 instruction budget, every capability on: the trim on the
 # stretch, the trim on the current only, the trim then the tracked drive, and the tracked

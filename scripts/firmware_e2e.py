@@ -11,6 +11,7 @@ TRIM_ELF: the firmware built with `model-sensor` (the flashed device's model as 
 displacement sensor), for the trim on the chip.
 """
 
+import csv
 import json
 import os
 import random
@@ -550,9 +551,125 @@ def main():
         check(all(c == 0 for c in later) and enable.count("high") == highs,
               f"nothing driven after the clear: codes {set(later) or 'none'}, enable never high")
 
+    telemetry()
+
     if failures:
         sys.exit(f"{len(failures)} checks failed")
     print("firmware end to end: all checks pass")
+
+
+# A scene with no analog inputs, as the QEMU build reads none: its image flashed, its own
+# history (`host-sim run`, the core's board on the host) the record the stream is held to.
+STREAM_SCENE = """
+name = "stream"
+description = "reference device at 44 Hz, 100 V AC at 40 Hz, no analog inputs"
+duration_seconds = 40.0
+
+[amplifier]
+dac_reference_volts = 2.5
+gain = 4000.0
+
+[controller]
+target_hz = 44.0
+ac_volts = 100.0
+ac_hz = 40.0
+"""
+
+
+def lossy_proxy(upstream, path, every):
+    """A socket at `path` that passes the stream from `upstream` on, one byte in `every`
+    dropped."""
+    import threading
+    server = socket.socket(socket.AF_UNIX)
+    if os.path.exists(path):
+        os.remove(path)
+    server.bind(path)
+    server.listen(1)
+
+    def run():
+        down, _ = server.accept()
+        up = socket.socket(socket.AF_UNIX)
+        up.connect(upstream)
+        count = 0
+        while True:
+            data = up.recv(4096)
+            if not data:
+                return
+            kept = bytearray()
+            for b in data:
+                count += 1
+                if count % every != every // 2:
+                    kept.append(b)
+            try:
+                down.sendall(bytes(kept))
+            except OSError:
+                return
+    threading.Thread(target=run, daemon=True).start()
+
+
+def telemetry():
+    """`stream 100` for 2 s through the firmware's USART1 (a Unix socket), recorded by
+    `host-sim console --record`: every row the scene's own history at its tick (DAC code,
+    enable line, phase; the voltage within a DAC step of the code's), none lost; then through a
+    proxy that drops bytes: the gaps counted, the rows after them still the board's."""
+    print("== the telemetry stream: the firmware's records against the scene's own history")
+    scene = os.path.join(WORK, "stream.toml")
+    with open(scene, "w") as f:
+        f.write(STREAM_SCENE)
+    image = os.path.join(WORK, "stream.img")
+    host_sim("image", "--scene", scene, "--out", image)
+    run_dir = os.path.join(WORK, "stream-run")
+    host_sim("run", scene, "--history", "--out", run_dir)
+    with open(os.path.join(run_dir, "stream", "history.csv"), newline="") as f:
+        history = {row["tick"]: row for row in csv.DictReader(f)}
+    for lossy in (False, True):
+        cmd, stream = (os.path.join(WORK, name) for name in ("stream.sock", "stream-out.sock"))
+        for path in (cmd, stream):
+            if os.path.exists(path):
+                os.remove(path)
+        env = dict(os.environ, QEMU_IMAGE=image, QEMU_TIMEOUT="60",
+                   QEMU_SERIAL1=f"unix:{cmd},server=on,wait=on",
+                   QEMU_SERIAL0=f"unix:{stream},server=on,wait=off")
+        log = open(os.path.join(WORK, "stream.log"), "w")
+        qemu = subprocess.Popen([RUNNER, ELF], env=env, stdout=log, stderr=subprocess.STDOUT,
+                                start_new_session=True)
+        for _ in range(200):
+            if os.path.exists(cmd) and os.path.exists(stream):
+                break
+            time.sleep(0.05)
+        source = stream
+        if lossy:
+            source = os.path.join(WORK, "stream-lossy.sock")
+            lossy_proxy(stream, source, 1000)
+        out = os.path.join(WORK, f"stream{'-lossy' if lossy else ''}.csv")
+        done = subprocess.run([HOST_SIM, "--json", "console", "--unix", cmd, "--record", out,
+                               "--stream-unix", source, "--duration-seconds", "2"],
+                              capture_output=True, text=True)
+        os.killpg(qemu.pid, signal.SIGTERM)
+        qemu.wait()
+        if done.returncode != 0:
+            check(False, f"console --record: {done.stderr.strip()}")
+            continue
+        recording = json.loads(done.stdout)["recording"]
+        with open(out, newline="") as f:
+            rows = list(csv.DictReader(line for line in f if not line.startswith("#")))
+        step = FULL_SCALE_VOLTS / 65535
+        wrong = [r["tick"] for r in rows
+                 if r["tick"] not in history
+                 or any(r[c] != history[r["tick"]][c] for c in ("dac_code", "enable", "phase"))
+                 or abs(float(r["volts"]) - int(r["dac_code"]) * step) > step]
+        check(not wrong, f"{len(rows)} records, each the scene's own history at its tick "
+                         f"(code, enable, phase, volts): {len(wrong)} differ {wrong[:5]}")
+        seq = [int(r["sequence"]) for r in rows]
+        if not lossy:
+            check(len(rows) >= 150 and recording["lost"] == 0 and recording["bad_frames"] == 0
+                  and seq == list(range(seq[0], seq[0] + len(seq))),
+                  f"2 s at 100 Hz: {len(rows)} records in sequence, none lost: {recording}")
+        else:
+            check(recording["lost"] >= 5 and recording["bad_frames"] >= 5
+                  and len(rows) + recording["lost"] == seq[-1] - seq[0] + 1,
+                  f"one byte in 1,000 dropped: the gaps counted, read and lost add up to the "
+                  f"sequence's span: {recording}")
 
 
 main()

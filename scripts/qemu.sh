@@ -7,7 +7,10 @@
 # Usage: scripts/qemu.sh [--image FILE] [--socket PATH] [--no-console] [-- CONSOLE-ARGS...]
 #   --image FILE   the configuration image to flash (default: the reference device at 44 Hz,
 #                  made by `host-sim image`: it waits for `start`)
-#   --socket PATH  the command port's socket (default: target/qemu/fw.sock)
+#   --socket PATH  the command port's socket (default: target/qemu/fw.sock); the telemetry
+#                  stream (USART1) is served beside it, at PATH with `-stream` before its
+#                  extension (target/qemu/fw-stream.sock): `-- --record run.csv
+#                  --stream-unix target/qemu/fw-stream.sock` records it
 #   --no-console   serve the socket only (talk to it with `host-sim console --unix PATH`),
 #                  until Ctrl-C
 #   after --       more arguments for `host-sim console` (e.g. --script FILE, --json)
@@ -22,7 +25,7 @@ while [ $# -gt 0 ]; do
         --socket) socket="$(realpath -m "${2:?--socket needs a path}")"; shift 2 ;;
         --no-console) console=0; shift ;;
         --) shift; console_args=("$@"); break ;;
-        -h|--help) sed -n '2,15p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+        -h|--help) sed -n '2,18p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
         *) echo "qemu.sh: unknown argument $1 (see --help)" >&2; exit 2 ;;
     esac
 done
@@ -42,23 +45,25 @@ if [ -z "$image" ]; then
     "$host_sim" image --target-hz 44 --out "$image" >/dev/null
 fi
 "$host_sim" image --check "$image" >/dev/null || { echo "qemu.sh: the firmware would refuse $image (host-sim image --check $image)" >&2; }
-rm -f "$socket"
+stream="${socket%.sock}-stream.sock"
+rm -f "$socket" "$stream"
 log="$root/target/qemu/firmware.log"
 # QEMU waits for the console to connect (wait=on): nothing is missed, the start-up line first.
 # In a process group of its own (setsid): the runner, QEMU and the log decoder stop together.
 (cd "$root/firmware" && QEMU_IMAGE="$image" QEMU_SERIAL1="unix:$socket,server=on,wait=on" \
+    QEMU_SERIAL0="unix:$stream,server=on,wait=off" \
     exec setsid ./qemu-run.sh "$elf") >"$log" 2>&1 &
 runner=$!
 stop() {
     kill -TERM -- "-$runner" 2>/dev/null || true
     wait "$runner" 2>/dev/null || true
-    rm -f "$socket"
+    rm -f "$socket" "$stream"
 }
 trap stop EXIT
 trap 'exit 130' INT TERM
 for _ in $(seq 100); do [ -S "$socket" ] && break; sleep 0.1; done
 [ -S "$socket" ] || { cat "$log" >&2; echo "qemu.sh: QEMU did not open $socket" >&2; exit 1; }
-echo "firmware under QEMU: image $image, command port $socket, log $log" >&2
+echo "firmware under QEMU: image $image, command port $socket, telemetry stream $stream, log $log" >&2
 if [ "$console" = 1 ]; then
     "$host_sim" console --unix "$socket" "${console_args[@]}"
 else

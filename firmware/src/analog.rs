@@ -14,7 +14,7 @@ use stm32f4xx_hal::adc::config::{
 };
 use stm32f4xx_hal::adc::Adc;
 use stm32f4xx_hal::dma::config::DmaConfig;
-use stm32f4xx_hal::dma::{DMAError, PeripheralToMemory, Stream0, StreamsTuple, Transfer};
+use stm32f4xx_hal::dma::{DMAError, PeripheralToMemory, Stream0, Transfer};
 use stm32f4xx_hal::gpio::{Analog, PA0, PA1, PB1, PC0, PC1, PC2, PC3, PC4, PC5};
 use stm32f4xx_hal::pac::{ADC1, DMA2, TIM2};
 use stm32f4xx_hal::prelude::*;
@@ -73,7 +73,8 @@ pub struct Acquisition {
 /// The peripherals and memory an acquisition takes.
 pub struct Parts {
     pub adc1: ADC1,
-    pub dma2: DMA2,
+    /// DMA2's stream 0 (the board splits DMA2's streams: stream 7 is the telemetry's).
+    pub dma: Stream0<DMA2>,
     pub tim2: TIM2,
     pub pins: AnalogPins,
     pub buffers: &'static mut [[u16; BUFFER_CODES]; 3],
@@ -107,12 +108,11 @@ impl Acquisition {
         }
         let [a, b, c] = parts.buffers;
         let (a, b, c) = (&mut a[..codes], &mut b[..codes], &mut c[..codes]);
-        let streams = StreamsTuple::new(parts.dma2, rcc);
         let dma = DmaConfig::default()
             .transfer_complete_interrupt(true)
             .memory_increment(true)
             .double_buffer(true);
-        let mut transfer = Transfer::init_peripheral_to_memory(streams.0, adc, a, Some(b), dma);
+        let mut transfer = Transfer::init_peripheral_to_memory(parts.dma, adc, a, Some(b), dma);
         transfer.start(|adc| adc.enable());
         let mut timer = Timer::new(parts.tim2, rcc);
         timer.set_master_mode(stm32f4xx_hal::pac::tim2::cr2::MMS::Update);

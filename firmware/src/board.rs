@@ -7,6 +7,7 @@
 //! | DAC8551 SYNC (chip select) | PA4 | GPIO, in `ExclusiveDevice` |
 //! | amplifier enable (high: on) | PB0 | GPIO |
 //! | command port TX, RX | PA2, PA3 | USART2, 115200 8N1 |
+//! | telemetry stream TX | PA9 | USART1, 2 Mbaud 8N1, DMA2 stream 7 |
 //! | the link build's bell from host-sim (QEMU only) | PB11 | USART3 RX |
 //! | analog inputs (the image's front end) | PA0, PA1, PB1, PC0..PC5 (IN0, IN1, IN9, IN10..IN15) | ADC1, triggered by TIM2, DMA2 stream 0 |
 //!
@@ -84,6 +85,12 @@ pub struct Board {
     pub enable: EnablePin,
     pub tx: Tx<USART2>,
     pub rx: Rx<USART2>,
+    /// The telemetry stream's port (`None`: no divider gives its baud rate from the clock in
+    /// use, the 16 MHz fallback: `stream` then answers that the board has none).
+    pub stream_tx: Option<Tx<pac::USART1>>,
+    /// Its DMA stream (silicon).
+    #[cfg(not(feature = "qemu"))]
+    pub stream_dma: stm32f4xx_hal::dma::Stream7<pac::DMA2>,
     /// The link build's bell from host-sim (`link`).
     #[cfg(feature = "link")]
     pub link: Rx<pac::USART3>,
@@ -107,7 +114,7 @@ pub struct Board {
 #[cfg(not(feature = "qemu"))]
 pub struct AnalogParts {
     pub adc1: pac::ADC1,
-    pub dma2: pac::DMA2,
+    pub dma: stm32f4xx_hal::dma::Stream0<pac::DMA2>,
     pub tim2: pac::TIM2,
     pub pins: crate::analog::AnalogPins,
 }
@@ -176,11 +183,13 @@ impl Board {
         let gpioa = dp.GPIOA.split(&mut rcc);
         let gpiob = dp.GPIOB.split(&mut rcc);
         #[cfg(not(feature = "qemu"))]
+        let streams = stm32f4xx_hal::dma::StreamsTuple::new(dp.DMA2, &mut rcc);
+        #[cfg(not(feature = "qemu"))]
         let analog = {
             let gpioc = dp.GPIOC.split(&mut rcc);
             AnalogParts {
                 adc1: dp.ADC1,
-                dma2: dp.DMA2,
+                dma: streams.0,
                 tim2: dp.TIM2,
                 pins: crate::analog::AnalogPins {
                     pa0: gpioa.pa0.into_analog(),
@@ -221,6 +230,10 @@ impl Board {
         };
         let (tx, mut rx) = serial.split();
         rx.listen();
+        let config = serial::Config::default().baudrate(crate::stream::BAUD.bps());
+        #[cfg(not(feature = "qemu"))]
+        let config = config.dma(serial::config::DmaConfig::Tx);
+        let stream_tx = dp.USART1.tx(gpioa.pa9, config, &mut rcc).ok();
         #[cfg(feature = "link")]
         let link = {
             let serial: Serial<pac::USART3> = match dp.USART3.serial(
@@ -240,6 +253,9 @@ impl Board {
             enable,
             tx,
             rx,
+            stream_tx,
+            #[cfg(not(feature = "qemu"))]
+            stream_dma: streams.7,
             #[cfg(feature = "link")]
             link,
             core_hz,

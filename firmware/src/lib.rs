@@ -5,7 +5,8 @@
 //! voltage, answers a request or decides when the amplifier is on (the core's `board`). One
 //! module a part: `board` (clocks, pins, peripherals), `analog` (silicon's ADC, its timer and
 //! DMA, filling the tick's block of codes), `config` (the image), `sensor` (QEMU's stand-ins
-//! for the analog inputs), `storage` (where `save` keeps the settings), `watchdog` (the
+//! for the analog inputs), `storage` (where `save` keeps the settings), `stream` (the telemetry stream's port),
+//! `watchdog` (the
 //! IWDG, or its QEMU stand-in), `link` (the link build's ends of host-sim's link), `runtime`
 //! (exit codes, panic and fault handlers, the stack meter); `reference` and `stand_in` serve
 //! the on-target checks and counts only.
@@ -44,6 +45,7 @@ pub mod runtime;
 pub mod sensor;
 pub mod stand_in;
 pub mod storage;
+pub mod stream;
 pub mod watchdog;
 
 pub use runtime::{exit, stack};

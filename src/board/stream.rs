@@ -39,7 +39,7 @@
 use core::fmt;
 
 use crate::acquire::Inputs;
-use crate::controller::{phase_byte, phase_of_byte, Controller, Fault, Output, Phase};
+use crate::controller::{phase_byte, phase_of_byte, Controller, Fault, Phase};
 use crate::table::{crc32, f32_at, u16_at, u32_at, Put};
 
 /// The record layout's version (byte 0).
@@ -121,11 +121,11 @@ fn number(x: f32) -> Option<f32> {
 }
 
 impl Record {
-    /// The board after tick `tick`: the output sent, the enable line, the controller (none:
-    /// nothing driven) and the inputs it read. A copy of numbers: cheap in the tick.
+    /// The board after tick `tick`: the enable line, the controller (none: nothing driven,
+    /// 0 V) and the inputs the tick read. A copy of the controller's numbers, read outside
+    /// the tick (the firmware's idle loop, under the controller's lock).
     pub fn of(
         (sequence, tick): (u32, u32),
-        output: Option<&Output>,
         enabled: bool,
         controller: Option<&Controller>,
         inputs: &Inputs,
@@ -133,8 +133,8 @@ impl Record {
         Record {
             sequence,
             tick,
-            volts: output.map_or(0.0, |o| o.volts),
-            dac_code: output.map_or(0, |o| o.code.0),
+            volts: controller.map_or(0.0, Controller::last_volts),
+            dac_code: controller.map_or(0, |c| c.last_code().0),
             enabled,
             phase: controller.map(Controller::phase),
             fault: controller
@@ -279,21 +279,22 @@ pub fn rate(hz: f32, tick_hz: f32) -> Result<u32, RateError> {
 }
 
 /// The stream's state: off, or a record every `every_ticks` ticks. The sequence counts the
-/// records since boot, on and off.
+/// records due since boot, on and off: one due but not sent (the caller was late by more
+/// than a period, or its port was busy) is a gap the receiver counts.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Telemetry {
     /// Ticks between records (`None`: off).
     every_ticks: Option<u32>,
-    /// Ticks until the next record.
-    countdown: u32,
+    /// The tick the next record is due at (`None`: the first call's).
+    next_tick: Option<u32>,
     sequence: u32,
 }
 
 impl Telemetry {
-    /// A record every `every_ticks` ticks from the next tick on (`None`: off).
+    /// A record every `every_ticks` ticks from the next call on (`None`: off).
     pub fn set(&mut self, every_ticks: Option<u32>) {
         self.every_ticks = every_ticks.filter(|&n| n > 0);
-        self.countdown = 0;
+        self.next_tick = None;
     }
 
     /// Ticks between records, if on.
@@ -301,14 +302,25 @@ impl Telemetry {
         self.every_ticks
     }
 
-    /// Once a tick: the sequence number of a record due at this tick, if one is.
-    pub fn due(&mut self) -> Option<u32> {
+    /// At board tick `tick` (asked every tick, or whenever the caller runs): the sequence
+    /// number of the record due, if one is. A caller late by whole periods gets one record,
+    /// the ones it missed counted in the sequence.
+    pub fn due(&mut self, tick: u32) -> Option<u32> {
         let every = self.every_ticks?;
-        if self.countdown > 0 {
-            self.countdown -= 1;
-            return None;
-        }
-        self.countdown = every - 1;
+        let late = match self.next_tick {
+            None => 0,
+            Some(next) => {
+                let late = tick.wrapping_sub(next);
+                // Before it (a wrapped difference above half the range).
+                if late >= 1 << 31 {
+                    return None;
+                }
+                late
+            }
+        };
+        let missed = late / every;
+        self.next_tick = Some(tick.wrapping_add(every - late % every));
+        self.sequence = self.sequence.wrapping_add(missed);
         let sequence = self.sequence;
         self.sequence = self.sequence.wrapping_add(1);
         Some(sequence)
@@ -451,14 +463,20 @@ mod tests {
             assert!(rate(bad, 1000.0).is_err(), "{bad}");
         }
         let mut t = Telemetry::default();
-        assert_eq!(t.due(), None);
+        assert_eq!(t.due(5), None);
         t.set(Some(3));
-        let due: [Option<u32>; 7] = core::array::from_fn(|_| t.due());
+        let due: [Option<u32>; 7] = core::array::from_fn(|k| t.due(10 + k as u32));
         assert_eq!(due, [Some(0), None, None, Some(1), None, None, Some(2)]);
+        // Late by a period and one tick (due at 19, asked at 23): one record, the one missed
+        // counted, back on the grid (next at 25).
+        assert_eq!(t.due(23), Some(4));
+        assert_eq!(t.due(24), None);
+        assert_eq!(t.due(25), Some(5));
         t.set(None);
-        assert_eq!(t.due(), None);
+        assert_eq!(t.due(26), None);
         t.set(Some(1));
-        assert_eq!(t.due(), Some(3), "the sequence goes on across off and on");
+        assert_eq!(t.due(40), Some(6), "the sequence goes on across off and on");
+        assert_eq!(t.due(41), Some(7));
     }
 
     /// Frames with bytes dropped on purpose: every intact frame is read, the damaged ones

@@ -9,7 +9,7 @@ use core::fmt;
 use super::fault::Fault;
 use super::plan::Plan;
 use super::{Boot, Controller, Phase, State};
-use crate::drive::Amplifier;
+use crate::drive::{Amplifier, DacCode};
 use crate::{DeviceParams, Settings};
 
 /// Why a request to a running controller was not done. The controller runs on as before.
@@ -135,6 +135,11 @@ impl Controller {
     /// The voltage commanded at the last tick, V.
     pub fn last_volts(&self) -> f32 {
         self.last_volts
+    }
+
+    /// The DAC code sent at the last tick (`last_volts` is its voltage).
+    pub fn last_code(&self) -> DacCode {
+        self.last_code
     }
 
     /// Whether the bias holds still (no ramp, no trim under way): when a new plan may start.

@@ -175,6 +175,8 @@ pub struct Controller {
     leakage: Leakage,
     /// The voltage commanded at the last tick, V.
     last_volts: f32,
+    /// The DAC code of `last_volts`, as sent.
+    last_code: DacCode,
     /// The first tick at which an output dropped at once (a dead bus) has had the time to
     /// follow to 0 V at the slew rate (`at_rest`).
     settled_from_tick: u32,
@@ -209,6 +211,7 @@ impl Controller {
             watch: Watch::new(),
             leakage: Leakage::default(),
             last_volts: 0.0,
+            last_code: DacCode(0),
             settled_from_tick: 0,
             #[cfg(feature = "trim")]
             trim: trim::TrimState::new(*device.params(), true),
@@ -419,8 +422,8 @@ impl Controller {
         // or a plan under a lowered cap comes down from it (from the one before, the first
         // step down was larger than the slew's by the AC's last step). A fault's descent
         // starts from what was sent before.
-        let sent_before = self.last_volts;
-        self.last_volts = commanded_volts;
+        let sent_before = (self.last_volts, self.last_code);
+        (self.last_volts, self.last_code) = (commanded_volts, code);
         match self.advance(k, Ring::of(&inputs)) {
             Ok(event) => Output {
                 code,
@@ -428,7 +431,7 @@ impl Controller {
                 event,
             },
             Err(fault) => {
-                self.last_volts = sent_before;
+                (self.last_volts, self.last_code) = sent_before;
                 self.fault(fault)
             }
         }
@@ -665,7 +668,7 @@ impl Controller {
     fn descend(&mut self, event: Option<Event>) -> Output {
         let volts = self.plan.ramp_volts(self.tick.saturating_add(1));
         let code = gate(&self.amplifier, volts, self.last_volts).unwrap_or(DacCode(0));
-        self.last_volts = self.amplifier.volts(code);
+        (self.last_volts, self.last_code) = (self.amplifier.volts(code), code);
         Output {
             code,
             volts: self.last_volts,

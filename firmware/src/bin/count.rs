@@ -11,6 +11,7 @@ use core::hint::black_box;
 use cortex_m::peripheral::syst::SystClkSource;
 use cortex_m::peripheral::SYST;
 use de_resonator::acquire::{Block, Channel, ChannelSpec, FrontEnd, Reader};
+use de_resonator::board::stream::{Record, Telemetry, FRAME_BYTES};
 use de_resonator::board::tick;
 use de_resonator::{
     Controller, Dac8551, Device, Drive, Inputs, Integrator, Method, OutputStage, State, Table,
@@ -373,6 +374,10 @@ fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
     };
     let (mut worst, mut worst_phase, mut solves, mut solve_most) = (0, Phase::Ramping, 0, 0);
     let (mut worst_front_end, mut worst_frame, mut worst_board) = (0, 0, 0);
+    let (mut worst_record, mut worst_framing) = (0, 0);
+    let mut telemetry = Telemetry::default();
+    telemetry.set(Some(1));
+    let mut frame = [0u8; FRAME_BYTES];
     let (mut tracked, mut worst_tracked, mut worst_tracked_board) = (0u32, 0, 0);
     let (mut charge, mut amps, mut volts) = (0.0f32, 0.0f32, 0.0f32);
     for k in 0..40_000 {
@@ -391,6 +396,21 @@ fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
         let n = count(1, || out = Some(c.tick(black_box(inputs))));
         let Some(mut sent) = out else { exit(1) };
         let n_frame = count(1, || stage.send(&mut c, black_box(&mut sent)));
+        // The telemetry stream at the tick rate, as the idle loop takes it after the tick:
+        // the record under the locks (a latency for a tick that comes meanwhile, not the
+        // tick's work), then its frame outside them.
+        if let Some(sequence) = telemetry.due(k) {
+            let mut record = None;
+            let n_record = count(1, || {
+                record = Some(Record::of((sequence, k), true, Some(&c), &inputs));
+            });
+            let Some(record) = record else { exit(1) };
+            let n_framing = count(1, || {
+                black_box(record.frame(&mut frame));
+            });
+            worst_record = worst_record.max(n_record);
+            worst_framing = worst_framing.max(n_framing);
+        }
         worst_front_end = worst_front_end.max(n_front_end);
         worst_frame = worst_frame.max(n_frame);
         worst_board = worst_board.max(n_front_end + n + n_frame);
@@ -452,6 +472,12 @@ fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
         worst_board,
         worst_front_end,
         worst_frame
+    );
+    defmt::info!(
+        "the telemetry stream at every tick with {=str}, in the idle loop: the record under the locks at most {=u32} instructions, its frame (CRC-32, COBS) at most {=u32}",
+        what,
+        worst_record,
+        worst_framing
     );
     defmt::info!(
         "{=str} solve outside the tick ({=u32} solves): at most {=u32} instructions",

@@ -11,7 +11,9 @@
 //!   silicon): each full buffer of ADC codes added to the tick's block;
 //! - `command` and `job` (software, lowest): each request answered on USART2 by the core's
 //!   board; the long work (a new plan's checks, a boot, a trim's solve, tracking's slope)
-//!   runs here, preempted by the tick.
+//!   runs here, preempted by the tick;
+//! - `idle`: the telemetry stream (`stream <hz>`): a record taken when one is due, under the
+//!   locks of what the tick left (nothing added to the tick), framed and sent on USART1.
 //!
 //! The link build (`link`, QEMU, for `host-sim run --firmware`): no SysTick; `link_samples`
 //! (USART3, host-sim's bell) adds each tick's samples frame to the block and pends the tick;
@@ -35,6 +37,7 @@ mod app {
     use de_resonator::board::link::{Booted, Kind, Observed};
     use de_resonator::board::port::Extras;
     use de_resonator::board::protocol::NOTICE;
+    use de_resonator::board::stream::{Record, Telemetry, FRAME_BYTES};
     use de_resonator::board::watchdog::CheckIn;
     use de_resonator::board::{self as logic, Line, Lines, ReplyLine, Then};
     use de_resonator::store::FlashKeeper;
@@ -53,6 +56,7 @@ mod app {
     use de_resonator_firmware::sensor::NoSensor as Sensors;
     use de_resonator_firmware::sensor::Sensor;
     use de_resonator_firmware::storage::SettingsFlash;
+    use de_resonator_firmware::stream::StreamPort;
     use de_resonator_firmware::watchdog::{self, Dog, Watchdog as _};
     use de_resonator_firmware::{config, stack, storage};
     use embedded_hal_nb::serial::Read as _;
@@ -81,7 +85,18 @@ mod app {
         /// The ADC's codes since the last tick: filled by `adc` (silicon) or the tick's
         /// stand-in (QEMU), taken by the tick.
         block: Block,
-        /// The last tick's readings, in units, for `status`.
+        /// The last tick: its number since boot and its readings, in units (`status` and
+        /// the telemetry stream's records).
+        latest: Latest,
+        /// The telemetry stream's rate and count (`stream <hz>`), its records taken by `idle`.
+        telemetry: Telemetry,
+    }
+
+    /// What the tick leaves for the tasks below it.
+    #[derive(Clone, Copy)]
+    pub struct Latest {
+        /// The tick's number since boot (from 0).
+        tick: u32,
         readings: Inputs,
     }
 
@@ -100,6 +115,10 @@ mod app {
         to_command: Sender<'static, Line, QUEUE>,
         from_rx: Receiver<'static, Line, QUEUE>,
         tx: Tx<USART2>,
+        /// The telemetry stream's port (`None`: the clock in use gives no divider for it).
+        stream_port: Option<StreamPort>,
+        /// Whether the board has the stream's port (`stream` answers unsupported without).
+        has_stream_port: bool,
         /// The core's board: the image, the settings, the refusal, the command port's answers.
         logic: logic::Board<'static, FlashKeeper<SettingsFlash>>,
         /// Idle without `wfi` (QEMU runs that measure the tick rate).
@@ -127,6 +146,7 @@ mod app {
     #[init(local = [
         slot: MaybeUninit<Option<Controller>> = MaybeUninit::uninit(),
         buffers: [[u16; BUFFER_CODES]; 3] = [[0; BUFFER_CODES]; 3],
+        frames: [[u8; FRAME_BYTES]; 2] = [[0; FRAME_BYTES]; 2],
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
         #[cfg(feature = "qemu")]
@@ -181,7 +201,7 @@ mod app {
             let analog = board.analog;
             let parts = Parts {
                 adc1: analog.adc1,
-                dma2: analog.dma2,
+                dma: analog.dma,
                 tim2: analog.tim2,
                 pins: analog.pins,
                 buffers: cx.local.buffers,
@@ -200,6 +220,15 @@ mod app {
         let acquisition = {
             let _ = (&mut board.rcc, cx.local.buffers);
             None
+        };
+        #[cfg(not(feature = "qemu"))]
+        let stream_port = board
+            .stream_tx
+            .map(|tx| StreamPort::new(board.stream_dma, tx, cx.local.frames));
+        #[cfg(feature = "qemu")]
+        let stream_port = {
+            let _ = cx.local.frames;
+            board.stream_tx.map(StreamPort::new)
         };
         // The link build's tick is pended by each samples frame, not SysTick's count.
         #[cfg(feature = "link")]
@@ -250,7 +279,11 @@ mod app {
                 output_off: true,
                 checked_in: true,
                 block: Block::EMPTY,
-                readings: Inputs::NONE,
+                latest: Latest {
+                    tick: 0,
+                    readings: Inputs::NONE,
+                },
+                telemetry: Telemetry::default(),
             },
             Local {
                 stage,
@@ -272,6 +305,8 @@ mod app {
                 to_command,
                 from_rx,
                 tx,
+                has_stream_port: stream_port.is_some(),
+                stream_port,
                 logic,
                 busy_idle: board::asked("busy-idle"),
                 hang_after_ticks: board::asked("tick-hangs").then_some(2 * tick_hz as u32),
@@ -294,10 +329,27 @@ mod app {
     /// QEMU's `-icount sleep=off` a `wfi` loses every other SysTick period (measured against
     /// TIM2: BENCHMARKS.md); a QEMU run started with the semihosting argument `busy-idle`
     /// idles busy instead, so that its virtual time is its instruction count, exactly.
-    #[idle(local = [busy_idle])]
-    fn idle(cx: idle::Context) -> ! {
+    #[idle(shared = [controller, latest, output_off, telemetry], local = [busy_idle, stream_port, frame: [u8; FRAME_BYTES] = [0; FRAME_BYTES]])]
+    fn idle(mut cx: idle::Context) -> ! {
         let busy = *cx.local.busy_idle;
         loop {
+            // The telemetry stream: a record when one is due, taken here under the locks
+            // (the tick's state after its last run, whole), framed and sent outside them.
+            let tick = cx.shared.latest.lock(|l| l.tick);
+            if let Some(sequence) = cx.shared.telemetry.lock(|t| t.due(tick)) {
+                let record = (
+                    &mut cx.shared.latest,
+                    &mut cx.shared.controller,
+                    &mut cx.shared.output_off,
+                )
+                    .lock(|latest, c, off| {
+                        Record::of((sequence, latest.tick), !*off, c.as_ref(), &latest.readings)
+                    });
+                let n = record.frame(cx.local.frame);
+                if let Some(port) = cx.local.stream_port.as_mut() {
+                    let _ = port.send(&cx.local.frame[..n]);
+                }
+            }
             if busy {
                 cortex_m::asm::nop();
             } else {
@@ -307,7 +359,7 @@ mod app {
     }
 
     /// One controller tick: its code to the DAC, the enable line held, the events logged.
-    #[task(binds = SysTick, priority = 3, shared = [controller, tick_cycles_max, last_tick_us, output_off, checked_in, block, readings], local = [stage, sensor, reader, dog, check_in, hang_after_ticks, driven_ticks: u32 = 0, #[cfg(feature = "link")] to_reply])]
+    #[task(binds = SysTick, priority = 3, shared = [controller, tick_cycles_max, last_tick_us, output_off, checked_in, block, latest], local = [stage, sensor, reader, dog, check_in, hang_after_ticks, driven_ticks: u32 = 0, next_tick: u32 = 0, #[cfg(feature = "link")] to_reply])]
     fn tick(mut cx: tick::Context) {
         #[cfg(feature = "qemu")]
         cx.shared
@@ -320,7 +372,9 @@ mod app {
         let inputs = cx.local.reader.inputs(&block);
         // A block refused reads as none (status then shows no stale reading beside the fault).
         let readings = inputs.unwrap_or(Inputs::NONE);
-        cx.shared.readings.lock(|r| *r = readings);
+        let tick = *cx.local.next_tick;
+        *cx.local.next_tick = tick.wrapping_add(1);
+        cx.shared.latest.lock(|l| *l = Latest { tick, readings });
         let ticked = cx.shared.controller.lock(|c| {
             let ticked = logic::tick::drive(c, stage, inputs);
             if let Some(t) = ticked {
@@ -505,7 +559,7 @@ mod app {
     }
 
     /// Each request answered, one reply line each.
-    #[task(priority = 1, shared = [controller, tick_cycles_max, last_tick_us, output_off, readings], local = [from_rx, tx, logic])]
+    #[task(priority = 1, shared = [controller, tick_cycles_max, last_tick_us, output_off, latest, telemetry], local = [from_rx, tx, logic, has_stream_port])]
     async fn command(mut cx: command::Context) {
         let mut reply = ReplyLine::new();
         while let Ok(line) = cx.local.from_rx.recv().await {
@@ -527,9 +581,8 @@ mod app {
                 clock_us: Some(cx.shared.last_tick_us.lock(|at| *at)),
                 #[cfg(not(feature = "qemu"))]
                 clock_us: None,
-                readings: cx.shared.readings.lock(|r| *r),
-                // The telemetry stream's UART is not wired yet: `stream` answers unsupported.
-                stream_port: false,
+                readings: cx.shared.latest.lock(|l| l.readings),
+                stream_port: *cx.local.has_stream_port,
             };
             let mut controller = Locked(&mut cx.shared.controller);
             let then = cx
@@ -537,6 +590,9 @@ mod app {
                 .logic
                 .serve(&line, &mut controller, &extras, &mut reply);
             let _ = writeln!(cx.local.tx, "{reply}");
+            if let Then::Stream(every) = then {
+                cx.shared.telemetry.lock(|t| t.set(every));
+            }
             if then == Then::Reset {
                 // The board took the controller out of its slot: the tick turns the output
                 // off; then the restart.

@@ -28,6 +28,11 @@ pub struct ImageArgs {
     /// firmware's boot checks accept it (status 1 if not).
     #[arg(long, value_name = "FILE", conflicts_with_all = ["out", "settings", "target_hz"])]
     pub check: Option<PathBuf>,
+    /// The image a scene's board boots from (`run`, `serve`: its device, amplifier, front
+    /// end and settings; it drives at power-up), to flash the same board under QEMU or on a
+    /// chip.
+    #[arg(long, value_name = "SCENE.toml", conflicts_with_all = ["check", "settings", "target_hz", "device", "rail_volts"])]
+    pub scene: Option<PathBuf>,
     #[command(flatten)]
     pub device: DeviceArgs,
     /// Default settings (TOML, the keys of a scene's [controller] table).
@@ -302,6 +307,20 @@ pub fn image(args: &ImageArgs) -> Result<ImageReport, String> {
         .as_ref()
         .ok_or("give --out FILE (or --check FILE)")?;
     prepare_file(out)?;
+    if let Some(path) = &args.scene {
+        let scene = crate::scene::load(path)?;
+        let bytes = scene.run.image()?;
+        let mut report = describe(&bytes, out.display().to_string())?;
+        if let Verdict::Refuses { reason } = &report.verdict {
+            return Err(format!(
+                "scene {}: the firmware would refuse its image: {reason}",
+                scene.name
+            ));
+        }
+        write_path(out, &bytes)?;
+        report.written = true;
+        return Ok(report);
+    }
     let (params, name) = args.device.params()?;
     let target_hz = args.target_hz.or_else(|| {
         (args.device.device.is_none() && args.settings.is_none()).then_some(REFERENCE_TARGET_HZ)

@@ -435,10 +435,9 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
         }
         let t = k as f64 * tick_seconds;
         let stepped = lp.step(k, &mut bench, &mut slot, &mut stage, &wires)?;
-        if let Some(sequence) = telemetry.due() {
+        if let Some(sequence) = telemetry.due(k as u32) {
             let record = Record::of(
                 (sequence, k as u32),
-                stepped.ticked.as_ref().map(|t| &t.output),
                 !stage.is_safe(),
                 slot.as_ref(),
                 &stepped.inputs,
