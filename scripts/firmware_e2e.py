@@ -352,6 +352,9 @@ def main():
     reply = fw.ask("status")
     check(reply.startswith("ok phase=refused volts=0 ") and "watchdog" in reply,
           f"status after it answers why: {reply}")
+    reply = fw.ask("faults")
+    check(re.fullmatch(r"ok faults=1 \| \d+ watchdog t=0", reply) is not None,
+          f"the fault log holds the watchdog's reset: {reply}")
     reply = fw.ask("clear")
     check(reply.startswith("ok clear") and "off at 0 V until `start`" in reply,
           f"clear boots again, the output left off: {reply}")
@@ -375,6 +378,9 @@ def main():
     reply = fw.ask("status")
     check(reply.startswith("ok phase=refused volts=0 ") and "watchdog" in reply,
           f"status after it answers why: {reply}")
+    reply = fw.ask("faults")
+    check(re.fullmatch(r"ok faults=1 \| \d+ watchdog t=0", reply) is not None,
+          f"the fault log holds the watchdog's reset: {reply}")
     fw.stop()
 
     print("== a second device: the same firmware, its own image")
@@ -544,6 +550,24 @@ def main():
         s = fw.status()
         check(s["phase"] == "faulted" and "rail" in s["fault"],
               f"the sensor still fails: faulted again at once: {s['phase']}, {s['fault']}")
+        # The faults in the log (the first, and the one after `clear`), still there after a
+        # reset, with their data.
+        listed = fw.ask("faults")
+        check(re.fullmatch(r"ok faults=2 \| 2 input t=\d+ \| 1 input t=\d+", listed) is not None,
+              f"the fault log holds both, newest first: {listed}")
+        reply = fw.ask("reset")
+        lines = [fw.line(), fw.line()]
+        check(reply.startswith("ok reset") and lines[0] == "# reset: asked",
+              f"reset at 0 V: {reply} {lines}")
+        after = fw.ask("faults")
+        entry = fw.ask("faults 1")
+        tick = int(re.search(r"tick=(\d+)", entry).group(1))
+        check(after.endswith(listed.split(" ", 2)[2]) and "cause=input" in entry
+              and "words=sensor fault: stretch input" in entry
+              and 1900 <= tick <= 2100 and f"seconds={tick / 1000:g}" in entry
+              and float(re.search(r"volts=([0-9.]+)", entry).group(1)) > 1000,
+              f"after the reset, the same log; the first entry whole (2 s in, at the drive's "
+              f"voltage, its words): {entry}")
         fw.stop()
         ram_within_budget(s, TRIM_ELF, "a fault's descent and a clear (a whole boot) while ticking")
         frames, enable = fw.frames()

@@ -26,6 +26,7 @@ pub mod board;
 pub mod controller;
 pub mod drive;
 pub mod estimate;
+pub mod fault_log;
 pub mod image;
 pub mod model;
 pub mod numerics;

@@ -23,7 +23,7 @@ use embedded_storage_async::nor_flash::{
 };
 
 use crate::controller::{Setting, Settings};
-use crate::table::{crc32, f32_at, u16_at, u32_at};
+use crate::table::{crc32, f32_at, newer, u16_at, u32_at};
 
 /// The blob's layout version this code reads and writes.
 pub const BLOB_VERSION: u16 = 1;
@@ -48,6 +48,9 @@ pub enum StoreError {
     /// The newest record holds a blob of another layout version (or length): refused, never
     /// read as this one.
     Version { version: u16, count: u16 },
+    /// The fault log's half is full and its next entry needs the other erased, which the
+    /// caller does not allow now (an erase stalls the chip: it waits for 0 V).
+    LogFull,
 }
 
 /// How a flash operation failed (embedded-storage's kinds).
@@ -79,6 +82,11 @@ impl fmt::Display for StoreError {
                     "the settings flash range is not two slots of whole pages"
                 )
             }
+            StoreError::LogFull => write!(
+                f,
+                "the fault log's half is full: the entry waits for the output at 0 V, where \
+                 the other half is erased"
+            ),
             StoreError::Version { version, count } => write!(
                 f,
                 "saved settings of layout version {version} ({count} settings): this firmware \
@@ -88,7 +96,7 @@ impl fmt::Display for StoreError {
     }
 }
 
-fn flash_error<E: NorFlashError>(e: E) -> StoreError {
+pub(crate) fn flash_error<E: NorFlashError>(e: E) -> StoreError {
     StoreError::Flash(e.kind().into())
 }
 
@@ -121,8 +129,9 @@ pub fn decode(blob: &[u8]) -> Result<Settings, StoreError> {
     Ok(settings)
 }
 
-/// The two slots' first offsets, checked against the flash's pages.
-fn slots<F: NorFlash>(range: &Range<u32>) -> Result<[u32; 2], StoreError> {
+/// `range` as two halves of whole flash pages: their starts and their length in bytes (the
+/// settings' two slots; the fault log's two halves).
+pub(crate) fn halves<F: NorFlash>(range: &Range<u32>) -> Result<([u32; 2], usize), StoreError> {
     let len = range
         .end
         .checked_sub(range.start)
@@ -132,10 +141,19 @@ fn slots<F: NorFlash>(range: &Range<u32>) -> Result<[u32; 2], StoreError> {
     let whole = len.is_multiple_of(2)
         && half.is_multiple_of(page)
         && (range.start as usize).is_multiple_of(page);
-    if !(whole && half >= RECORD_BYTES.next_multiple_of(F::WRITE_SIZE.max(1))) {
+    if !whole {
         return Err(StoreError::Range);
     }
-    Ok([range.start, range.start + half as u32])
+    Ok(([range.start, range.start + half as u32], half))
+}
+
+/// The two slots' first offsets, checked against the flash's pages.
+fn slots<F: NorFlash>(range: &Range<u32>) -> Result<[u32; 2], StoreError> {
+    let (starts, half) = halves::<F>(range)?;
+    if half < RECORD_BYTES.next_multiple_of(F::WRITE_SIZE.max(1)) {
+        return Err(StoreError::Range);
+    }
+    Ok(starts)
 }
 
 /// The valid record in a slot: its sequence number and blob.
@@ -154,11 +172,6 @@ async fn read_slot<F: NorFlash>(
         blob.copy_from_slice(src);
     }
     Ok(Some((u32_at(&record, 4), blob)))
-}
-
-/// Whether sequence `a` is newer than `b` (wrapping: a save every second for 68 years).
-fn newer(a: u32, b: u32) -> bool {
-    (a.wrapping_sub(b) as i32) > 0
 }
 
 /// The newest valid record and the slot it is in.
@@ -248,12 +261,14 @@ pub async fn erase<F: NorFlash>(mut flash: F, range: Range<u32>) -> Result<(), S
         .map_err(flash_error)
 }
 
-/// A flash and the range of it the settings use, as the board keeps them
+/// A flash and the ranges of it the settings and the fault log use, as the board keeps them
 /// ([`crate::board::Keeper`]): each call run to its end at once, for a flash that never waits
 /// (RAM, or the STM32F4's flash controller, which blocks in each call).
 pub struct FlashKeeper<F> {
     pub flash: F,
     pub range: Range<u32>,
+    /// The fault log's (`crate::fault_log`; `None`: none kept).
+    pub log: Option<Range<u32>>,
 }
 
 impl<F: NorFlash> crate::board::Keeper for FlashKeeper<F> {
@@ -267,6 +282,42 @@ impl<F: NorFlash> crate::board::Keeper for FlashKeeper<F> {
     fn save(&mut self, settings: &Settings) -> Result<(), StoreError> {
         block_on(save(&mut self.flash, self.range.clone(), settings))
             .unwrap_or(Err(StoreError::Flash(FlashKind::Other)))
+    }
+
+    fn log(
+        &mut self,
+        entry: &crate::fault_log::Entry,
+        may_erase: bool,
+    ) -> Option<Result<u32, StoreError>> {
+        let range = self.log.clone()?;
+        Some(
+            block_on(crate::fault_log::append(
+                &mut self.flash,
+                range,
+                entry,
+                may_erase,
+            ))
+            .unwrap_or(Err(StoreError::Flash(FlashKind::Other))),
+        )
+    }
+
+    fn each_fault(
+        &mut self,
+        each: &mut dyn FnMut(crate::fault_log::Entry),
+    ) -> Option<Result<(), StoreError>> {
+        let range = self.log.clone()?;
+        Some(
+            block_on(crate::fault_log::each(&mut self.flash, range, each))
+                .unwrap_or(Err(StoreError::Flash(FlashKind::Other))),
+        )
+    }
+
+    fn clear_faults(&mut self) -> Option<Result<(), StoreError>> {
+        let range = self.log.clone()?;
+        Some(
+            block_on(crate::fault_log::clear(&mut self.flash, range))
+                .unwrap_or(Err(StoreError::Flash(FlashKind::Other))),
+        )
     }
 }
 

@@ -440,6 +440,12 @@ pub fn write(
     Ok(needed)
 }
 
+/// Whether sequence number `a` is newer than `b`, wrapping (a saved record's, a log
+/// entry's: one a second for 68 years before it matters).
+pub(crate) fn newer(a: u32, b: u32) -> bool {
+    (a.wrapping_sub(b) as i32) > 0
+}
+
 /// Bytes into a slice from the front, the rest dropped (a `fmt::Write` that cuts, never
 /// fails: words longer than the room are cut at a character's boundary).
 pub(crate) struct Put<'a>(pub(crate) &'a mut [u8], pub(crate) usize);

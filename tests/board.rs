@@ -719,3 +719,64 @@ fn replies_say_why() {
     assert!(named <= cap && named > 0.995 * cap, "{named} vs {cap}");
     assert_eq!(code(&b.ask("clear")), Some(7));
 }
+
+/// The fault log through the board: a watchdog reset logged at the boot after it; faults
+/// logged as the command task writes them; `faults` lists the newest 32 newest first, past
+/// the first half's turn; `faults <n>` gives one whole; a board with no log says so.
+#[cfg(feature = "storage")]
+#[test]
+fn the_fault_log_lists_the_newest_first_across_resets() {
+    use de_resonator::fault_log::KEPT;
+    use de_resonator::store::{FlashKeeper, RamFlash, RAM_PAGE_BYTES};
+    use de_resonator::Fault;
+
+    let image = image_with(&Settings::for_target(44.0));
+    let mut bytes = vec![0xFFu8; 6 * RAM_PAGE_BYTES];
+    fn keeper(bytes: &mut [u8]) -> FlashKeeper<RamFlash<'_>> {
+        let len = bytes.len() as u32;
+        FlashKeeper {
+            flash: RamFlash::new(bytes),
+            range: 0..(2 * RAM_PAGE_BYTES) as u32,
+            log: Some((2 * RAM_PAGE_BYTES) as u32..len),
+        }
+    }
+    {
+        let mut bench = Bench::boot(&image, Some(keeper(&mut bytes)), Some(ResetCause::Watchdog));
+        assert_eq!(bench.ask("faults"), "ok faults=1 | 1 watchdog t=0");
+        for n in 0..40u32 {
+            let fault = Fault::Sensor { value: n as f32 };
+            let logged =
+                bench
+                    .board
+                    .log_fault(&fault, (100 * n, n as f32 / 10.0), 5.0, &Inputs::NONE, true);
+            assert_eq!(logged, Some(Ok(n + 2)));
+        }
+    }
+    // A reset: a new board on the same flash.
+    let mut bench = Bench::boot(&image, Some(keeper(&mut bytes)), Some(ResetCause::Asked));
+    let list = bench.ask("faults");
+    let expected: String = (2..=41u32)
+        .rev()
+        .take(KEPT)
+        .map(|s| format!(" | {s} sensor t={}", 100 * (s - 2)))
+        .collect();
+    assert_eq!(list, format!("ok faults={KEPT}{expected}"));
+    let one = bench.ask("faults 41");
+    assert_eq!(
+        one,
+        "ok sequence=41 cause=sensor tick=3900 seconds=3.9 volts=5 \
+         words=sensor sample 39 is not a number"
+    );
+    // Past the list's 32, the full older half still holds the first entries.
+    assert!(
+        bench
+            .ask("faults 1")
+            .starts_with("ok sequence=1 cause=watchdog tick=0 "),
+        "the watchdog's entry, in the older half"
+    );
+    assert_eq!(code(&bench.ask("faults 42")), Some(2), "no such entry");
+    assert_eq!(bench.ask("faults clear"), "ok faults cleared");
+    assert_eq!(bench.ask("faults"), "ok faults=0");
+    let mut none = Bench::<NoKeeper>::boot(&image, None, None);
+    assert_eq!(code(&none.ask("faults")), Some(6));
+}

@@ -604,6 +604,29 @@ fn the_protocol_covers_what_help_says() {
     assert_eq!(protocol::parse(b"stream off"), Ok(Command::Stream(None)));
     assert!(protocol::parse(b"stream").is_err() && protocol::parse(b"stream fast").is_err());
     assert!(protocol::HELP.contains("stream <Hz>"));
+    assert!(protocol::HELP.contains("faults [<n> | clear]"));
+    assert!(!protocol::HELP.contains('\n'), "one reply line");
+    use de_resonator::board::protocol::FaultsAsk;
+    for (line, ask) in [
+        (&b"faults"[..], FaultsAsk::List),
+        (b"faults clear", FaultsAsk::Clear),
+        (b"faults 7", FaultsAsk::One(7)),
+    ] {
+        assert_eq!(protocol::parse(line), Ok(Command::Faults(ask)));
+    }
+    for bad in [
+        &b"faults 0"[..],
+        b"faults 1.5",
+        b"faults -2",
+        b"faults 1e9",
+        b"faults x",
+    ] {
+        assert!(
+            protocol::parse(bad).is_err(),
+            "{}",
+            String::from_utf8_lossy(bad)
+        );
+    }
     assert_eq!(
         Reply::parse("ok target_hz=44 bias_volts=7449.878").and_then(|r| r.field("bias_volts")),
         Some("7449.878")

@@ -15,6 +15,7 @@ pub fn reset(cause: ResetCause) -> ! {
     let code = match cause {
         ResetCause::Asked => 1,
         ResetCause::Watchdog => 2,
+        ResetCause::BrownOut => 3,
     };
     // SAFETY: a plain store into RAM no one else uses, just before the reset.
     unsafe {
@@ -38,11 +39,12 @@ pub fn take_reset_cause() -> Option<ResetCause> {
         record
     };
     if check != CAUSE_CHECK ^ code {
-        return None;
+        return brown_out();
     }
     match code {
         1 => Some(ResetCause::Asked),
         2 => Some(ResetCause::Watchdog),
+        3 => Some(ResetCause::BrownOut),
         _ => None,
     }
 }
@@ -148,14 +150,32 @@ pub mod stack {
     }
 }
 
-/// 2 KB of RAM that a reset keeps (`.uninit`: cortex-m-rt does not zero it; QEMU's
-/// `sys_reset` keeps it): the settings' flash under QEMU. Given out once.
+/// A brown-out the chip's reset flags say (RCC_CSR's BORRSTF), the flags then cleared;
+/// never under QEMU (its RCC reads 0).
+fn brown_out() -> Option<ResetCause> {
+    #[cfg(not(feature = "qemu"))]
+    {
+        // SAFETY: RCC_CSR read, then its RMVF bit set to clear the reset flags: no one else
+        // touches them.
+        let rcc = unsafe { &*stm32f4xx_hal::pac::RCC::ptr() };
+        let brown = rcc.csr().read().borrstf().bit_is_set();
+        rcc.csr().modify(|_, w| w.rmvf().set_bit());
+        brown.then_some(ResetCause::BrownOut)
+    }
+    #[cfg(feature = "qemu")]
+    None
+}
+
+/// The RAM pages that a reset keeps (`.uninit`: cortex-m-rt does not zero it; QEMU's
+/// `sys_reset` keeps it): the settings' flash (`SETTINGS_PAGES`) and the fault log's
+/// (`LOG_PAGES`) under QEMU. Given out once.
 #[cfg(feature = "qemu")]
-pub fn settings_ram() -> Option<&'static mut [u8]> {
+pub fn storage_ram() -> Option<&'static mut [u8]> {
     use core::mem::MaybeUninit;
     use core::sync::atomic::{AtomicBool, Ordering};
 
-    const BYTES: usize = 2 * de_resonator::store::RAM_PAGE_BYTES;
+    const BYTES: usize = (crate::storage::SETTINGS_PAGES + crate::storage::LOG_PAGES)
+        * de_resonator::store::RAM_PAGE_BYTES;
     #[link_section = ".uninit.SETTINGS"]
     static mut RAM: MaybeUninit<[u8; BYTES]> = MaybeUninit::uninit();
     static TAKEN: AtomicBool = AtomicBool::new(false);

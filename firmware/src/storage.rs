@@ -1,10 +1,15 @@
-//! Where `save` keeps the settings: flash sectors 9 and 10 on the chip (memory.x's SETTINGS;
-//! the STM32F4 flash controller through the HAL), 2 KB of `.uninit` RAM under QEMU (whose
-//! flash controller is not emulated; `.uninit` survives `SCB::sys_reset`, as flash survives
-//! a power cycle). The layout and the power-cut safety are the core's `store`
-//! (sequential-storage).
+//! Where `save` keeps the settings and the board its fault log: flash sectors 9 and 10 and
+//! sectors 7 and 8 on the chip (memory.x's SETTINGS and FAULTLOG; the STM32F4 flash controller
+//! through the HAL), `.uninit` RAM pages under QEMU (whose flash controller is not emulated;
+//! `.uninit` survives `SCB::sys_reset`, as flash survives a power cycle). The layouts and the
+//! power-cut safety are the core's `store` and `fault_log`.
 
 use de_resonator::store::FlashKeeper;
+
+/// The settings' RAM pages under QEMU (two slots of a page).
+pub const SETTINGS_PAGES: usize = 2;
+/// The fault log's RAM pages under QEMU: two halves of two, 32 entries each.
+pub const LOG_PAGES: usize = 4;
 
 /// The settings' flash as this build has it.
 #[cfg(feature = "qemu")]
@@ -12,32 +17,40 @@ pub type SettingsFlash = de_resonator::store::RamFlash<'static>;
 #[cfg(not(feature = "qemu"))]
 pub type SettingsFlash = ChipFlash;
 
-/// The flash (from the chip's flash controller, unused under QEMU) and the range of it the
-/// settings use, as the board keeps them.
+/// The flash (from the chip's flash controller, unused under QEMU) and the ranges of it the
+/// settings and the fault log use, as the board keeps them.
 pub fn open(controller: stm32f4xx_hal::pac::FLASH) -> Option<FlashKeeper<SettingsFlash>> {
     #[cfg(feature = "qemu")]
     {
         let _ = controller;
-        let ram = crate::runtime::settings_ram()?;
+        let ram = crate::runtime::storage_ram()?;
+        let settings = (SETTINGS_PAGES * de_resonator::store::RAM_PAGE_BYTES) as u32;
         let len = ram.len() as u32;
         Some(FlashKeeper {
             flash: de_resonator::store::RamFlash::new(ram),
-            range: 0..len,
+            range: 0..settings,
+            log: Some(settings..len),
         })
     }
     #[cfg(not(feature = "qemu"))]
     {
         extern "C" {
-            /// memory.x: the settings sectors as offsets from the start of flash.
+            /// memory.x: the settings' and the fault log's sectors as offsets from the start
+            /// of flash.
             static _settings_offset: u8;
             static _settings_end: u8;
+            static _faultlog_offset: u8;
+            static _faultlog_end: u8;
         }
         let from = core::ptr::addr_of!(_settings_offset) as u32;
         let to = core::ptr::addr_of!(_settings_end) as u32;
+        let log_from = core::ptr::addr_of!(_faultlog_offset) as u32;
+        let log_to = core::ptr::addr_of!(_faultlog_end) as u32;
         let flash = stm32f4xx_hal::flash::LockedFlash::new(controller);
         Some(FlashKeeper {
             flash: ChipFlash(flash),
             range: from..to,
+            log: Some(log_from..log_to),
         })
     }
 }

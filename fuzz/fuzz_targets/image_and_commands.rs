@@ -44,6 +44,7 @@ fuzz_target!(|data: &[u8]| {
             Ok(Command::Ac { volts, hz }) => assert!(volts.is_finite() && hz.is_finite()),
             Ok(Command::Set(_, value)) => assert!(value.is_finite()),
             Ok(Command::Stream(Some(hz))) => assert!(hz.is_finite()),
+            Ok(Command::Faults(protocol::FaultsAsk::One(n))) => assert!(n >= 1),
             _ => {}
         }
         if let Ok(text) = core::str::from_utf8(line) {

@@ -156,6 +156,54 @@ fn a_fault_latches_on_the_virtual_board_until_clear() {
     assert!(again.ends_with("for 100 samples"), "{again}");
 }
 
+/// The fault log: the stuck sensor's fault logged as it latches, with its data; after its
+/// descent and a `reset` the log still holds it (`faults`, `faults <n>`), and `faults clear`
+/// empties it.
+#[test]
+fn a_fault_is_in_the_log_after_a_reset_with_its_data() {
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../scenes/fault-sensor-stuck.toml"
+    );
+    let board = Served::start(Some(scene), "20", "fault-log");
+    assert_eq!(board.replies(&["faults"])[0], "ok faults=0");
+    let faulted = board.wait_for("faulted", |s| !s.ends_with("fault=none"));
+    board.wait_for("at 0 V", |s| number(s, "volts") == 0.0);
+    // The sensor sticks at 3 s and the watch counts 100 equal samples at 1 kHz.
+    let at = number(&faulted, "ticks");
+    let replies = board.replies(&["reset", "faults", "faults 1", "faults 2"]);
+    assert!(replies[0].starts_with("ok reset"), "{}", replies[0]);
+    let list = &replies[1];
+    assert!(
+        list.starts_with("ok faults=1 | 1 sensor_stuck t="),
+        "{list}"
+    );
+    let one = &replies[2];
+    let tick = number(one, "tick");
+    assert!(
+        (3099.0..=at).contains(&tick),
+        "logged at tick {tick}: 100 samples after 3 s, by the time status saw it ({at}): {one}"
+    );
+    assert!(close(number(one, "seconds"), tick / 1000.0, 1e-6), "{one}");
+    assert!(
+        number(one, "volts") > 7000.0,
+        "at the drive's voltage: {one}"
+    );
+    let said = faulted.split(" fault=").nth(1).unwrap();
+    assert!(
+        one.ends_with(&format!("words={}", &said[..32])),
+        "the fault's sentence as status said it before the reset, cut at 32 bytes: {one}"
+    );
+    let stuck_at = said.split_whitespace().nth(4).unwrap();
+    assert!(
+        one.contains(&format!(" stretch={stuck_at} ")),
+        "the stretch sample that stuck: {one}"
+    );
+    assert!(replies[3].starts_with("err 2 no fault 2"), "{}", replies[3]);
+    let cleared = board.replies(&["faults clear", "faults"]);
+    assert_eq!(cleared, ["ok faults cleared", "ok faults=0"]);
+}
+
 /// `console` against the board on TCP: a script's replies in order, status 1 and the first
 /// `err` named on stderr when one fails.
 #[test]

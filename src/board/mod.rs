@@ -11,6 +11,7 @@
 //! takes only briefly ([`port::Shared`]), so the long work of a request (a new plan's checks,
 //! a boot) runs outside the lock while the tick preempts it.
 
+pub mod faults;
 pub mod link;
 pub mod port;
 pub mod protocol;
@@ -25,6 +26,7 @@ use heapless::String;
 
 use crate::controller::{Boot, Controller, Settings};
 use crate::drive::Amplifier;
+use crate::fault_log::Entry;
 use crate::image::{Image, ImageError, PowerUp};
 use crate::numerics::decimal::Decimal;
 use crate::safety::FailureMode;
@@ -39,6 +41,8 @@ pub enum ResetCause {
     Asked,
     /// The watchdog was not fed in time.
     Watchdog,
+    /// The supply fell below the brown-out level (the chip's reset flags; never under QEMU).
+    BrownOut,
 }
 
 impl ResetCause {
@@ -46,6 +50,7 @@ impl ResetCause {
         match self {
             ResetCause::Asked => "asked",
             ResetCause::Watchdog => "watchdog",
+            ResetCause::BrownOut => "brown_out",
         }
     }
 }
@@ -57,6 +62,19 @@ pub trait Keeper {
     /// The settings saved last, if any.
     fn load(&mut self) -> Result<Option<Settings>, Self::Error>;
     fn save(&mut self, settings: &Settings) -> Result<(), Self::Error>;
+    /// Append `entry` to the fault log beside the settings (its sequence number), erasing a
+    /// half if it must only when `may_erase`; `None`: no fault log here.
+    fn log(&mut self, _entry: &Entry, _may_erase: bool) -> Option<Result<u32, Self::Error>> {
+        None
+    }
+    /// Every entry of the fault log, in flash order; `None`: no fault log here.
+    fn each_fault(&mut self, _each: &mut dyn FnMut(Entry)) -> Option<Result<(), Self::Error>> {
+        None
+    }
+    /// Empty the fault log; `None`: no fault log here.
+    fn clear_faults(&mut self) -> Option<Result<(), Self::Error>> {
+        None
+    }
 }
 
 /// No settings storage: `save` answers that it is unsupported.
@@ -118,6 +136,10 @@ impl<'a, K: Keeper> Board<'a, K> {
             booted: None,
             keeper,
         };
+        // A reset the board did not ask for is an entry of the fault log.
+        if let Some(cause @ (ResetCause::Watchdog | ResetCause::BrownOut)) = cause {
+            let _ = board.log_reset(cause);
+        }
         let mut started = Started::default();
         let image = match image.and_then(|i| Ok((i, i.amplifier.amplifier()?))) {
             Ok(pair) => pair,

@@ -74,7 +74,7 @@ pub enum Then {
 }
 
 /// A reply line (one `ok …` or `err …`, without its `\n`); cut short if it would not fit.
-pub type ReplyLine = String<640>;
+pub type ReplyLine = String<1024>;
 
 pub use protocol::Extras;
 
@@ -91,7 +91,7 @@ impl Shared for &mut Option<Controller> {
 }
 
 /// `err <code> <message>` into `out`.
-fn err(out: &mut ReplyLine, code: ErrorCode, message: impl core::fmt::Display) {
+pub(super) fn err(out: &mut ReplyLine, code: ErrorCode, message: impl core::fmt::Display) {
     out.clear();
     let _ = write!(out, "err {code} {message}");
 }
@@ -191,6 +191,10 @@ impl<K: Keeper> Board<'_, K> {
                 return Then::Reply;
             }
             Command::Stream(hz) => return self.stream(hz, controller, extras, out),
+            Command::Faults(ask) => {
+                self.faults(ask, out);
+                return Then::Reply;
+            }
             Command::Info => {
                 let _ = write!(
                     out,
@@ -358,7 +362,7 @@ impl<K: Keeper> Board<'_, K> {
                 return Then::Reset;
             }
             // Answered above.
-            Command::Help(_) | Command::Stream(_) | Command::Info => {}
+            Command::Help(_) | Command::Stream(_) | Command::Info | Command::Faults(_) => {}
         }
         Then::Reply
     }

@@ -26,8 +26,8 @@ pub const MAX_LINE: usize = 96;
 pub const HELP: &str =
     "commands: help [setting] | status | info | start | target <Hz> | ac <volts> <Hz> | \
                         stop | trim | clear | get [setting] | set <setting> <value> | save | \
-                        reset | stream <Hz> | stream off (`get` lists every setting; \
-                        `help <setting>` its unit and range)";
+                        reset | stream <Hz> | stream off | faults [<n> | clear] (`get` lists \
+                        every setting; `help <setting>` its unit and range)";
 
 /// A request.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -69,6 +69,19 @@ pub enum Command {
     /// Send the telemetry stream's records (`board::stream`) on the stream port at this
     /// rate, Hz (`None`: `stream off`, stop sending).
     Stream(Option<f32>),
+    /// The fault log: the newest entries, one whole, or emptied.
+    Faults(FaultsAsk),
+}
+
+/// What `faults` asks of the fault log.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FaultsAsk {
+    /// `faults`: the newest entries, newest first.
+    List,
+    /// `faults <n>`: entry number n whole.
+    One(u32),
+    /// `faults clear`: empty the log.
+    Clear,
 }
 
 /// Why a request was not done: the number after `err`.
@@ -204,6 +217,17 @@ pub fn parse(line: &[u8]) -> Result<Command, ParseError> {
                 Command::Stream(Some(hz))
             }
             None => return Err(ParseError::Missing { index: 1 }),
+        },
+        "faults" => match args.words.next() {
+            None => Command::Faults(FaultsAsk::List),
+            Some("clear") => Command::Faults(FaultsAsk::Clear),
+            Some(word) => {
+                args.index += 1;
+                let n = parse_number(word)
+                    .filter(|n| *n >= 1.0 && *n < 16_777_216.0 && libm::truncf(*n) == *n)
+                    .ok_or(ParseError::BadNumber { index: 1 })?;
+                Command::Faults(FaultsAsk::One(n as u32))
+            }
         },
         _ => return Err(ParseError::UnknownCommand),
     };

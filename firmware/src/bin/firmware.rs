@@ -40,10 +40,10 @@ mod app {
     use de_resonator::board::stream::{Record, Telemetry, FRAME_BYTES};
     use de_resonator::board::watchdog::CheckIn;
     use de_resonator::board::{self as logic, Line, Lines, ReplyLine, Then};
-    use de_resonator::store::FlashKeeper;
+    use de_resonator::store::{FlashKeeper, StoreError};
     #[cfg(not(feature = "link"))]
     use de_resonator::Decimal;
-    use de_resonator::{Controller, Dac8551, Event, Inputs, OutputStage};
+    use de_resonator::{Controller, Dac8551, Event, Fault, Inputs, OutputStage};
     use de_resonator_firmware::analog::Acquisition;
     #[cfg(not(feature = "qemu"))]
     use de_resonator_firmware::analog::Parts;
@@ -92,6 +92,23 @@ mod app {
         telemetry: Telemetry,
     }
 
+    /// What the command task is given: a request line (from `rx`), or a fault the tick saw
+    /// latch, for the fault log (flash work, outside the tick).
+    pub enum Work {
+        Line(Line),
+        Fault(Logged),
+        /// The output came to rest at 0 V (the stage safe): a held entry may erase now.
+        AtRest,
+    }
+
+    /// A fault as the tick saw it latch: when, at what voltage, on what readings.
+    pub struct Logged {
+        fault: Fault,
+        tick: u32,
+        volts: f32,
+        readings: Inputs,
+    }
+
     /// What the tick leaves for the tasks below it.
     #[derive(Clone, Copy)]
     pub struct Latest {
@@ -112,8 +129,10 @@ mod app {
         lines: Lines,
         /// A line that found the queue full, kept until the command task makes room.
         held: Option<Line>,
-        to_command: Sender<'static, Line, QUEUE>,
-        from_rx: Receiver<'static, Line, QUEUE>,
+        to_command: Sender<'static, Work, QUEUE>,
+        /// The tick's end of the command task's queue: a fault to log.
+        to_log: Sender<'static, Work, QUEUE>,
+        from_rx: Receiver<'static, Work, QUEUE>,
         tx: Tx<USART2>,
         /// The telemetry stream's port (`None`: the clock in use gives no divider for it).
         stream_port: Option<StreamPort>,
@@ -261,7 +280,8 @@ mod app {
             out.send(Kind::Boot, 0, |p| booted.write(refusal, p));
             (link_in, out)
         };
-        let (to_command, from_rx) = make_channel!(Line, QUEUE);
+        let (to_command, from_rx) = make_channel!(Work, QUEUE);
+        let to_log = to_command.clone();
         if command::spawn().is_err() {
             de_resonator_firmware::exit(104);
         }
@@ -303,6 +323,7 @@ mod app {
                 lines: Lines::default(),
                 held: None,
                 to_command,
+                to_log,
                 from_rx,
                 tx,
                 has_stream_port: stream_port.is_some(),
@@ -359,7 +380,7 @@ mod app {
     }
 
     /// One controller tick: its code to the DAC, the enable line held, the events logged.
-    #[task(binds = SysTick, priority = 3, shared = [controller, tick_cycles_max, last_tick_us, output_off, checked_in, block, latest], local = [stage, sensor, reader, dog, check_in, hang_after_ticks, driven_ticks: u32 = 0, next_tick: u32 = 0, #[cfg(feature = "link")] to_reply])]
+    #[task(binds = SysTick, priority = 3, shared = [controller, tick_cycles_max, last_tick_us, output_off, checked_in, block, latest], local = [stage, sensor, reader, dog, check_in, hang_after_ticks, to_log, driven_ticks: u32 = 0, next_tick: u32 = 0, was_off: bool = true, #[cfg(feature = "link")] to_reply])]
     fn tick(mut cx: tick::Context) {
         #[cfg(feature = "qemu")]
         cx.shared
@@ -427,10 +448,23 @@ mod app {
             }
             if let Some(event) = t.output.event {
                 log(event, t.ticks);
+                // Into the fault log, written by the command task (a full queue loses it).
+                if let Event::Fault(fault) = event {
+                    let _ = cx.local.to_log.try_send(Work::Fault(Logged {
+                        fault,
+                        tick,
+                        volts: t.output.volts,
+                        readings,
+                    }));
+                }
             }
         }
         let off = stage.is_safe();
         cx.shared.output_off.lock(|o| *o = off);
+        if off && !*cx.local.was_off {
+            let _ = cx.local.to_log.try_send(Work::AtRest);
+        }
+        *cx.local.was_off = off;
         let cycles = board::cycles_into_tick();
         cx.shared
             .tick_cycles_max
@@ -520,7 +554,8 @@ mod app {
         let held = cx.local.held;
         let stash = cx.local.stash;
         if let Some(line) = held.take() {
-            if let Err(TrySendError::Full(line)) = to_command.try_send(line) {
+            if let Err(TrySendError::Full(Work::Line(line))) = to_command.try_send(Work::Line(line))
+            {
                 *held = Some(line);
                 match rx.read() {
                     Ok(byte) if stash.is_none() => *stash = Some(byte),
@@ -536,7 +571,9 @@ mod app {
             match next.take().unwrap_or_else(|| rx.read()) {
                 Ok(byte) => {
                     if let Some(line) = lines.push(byte) {
-                        if let Err(TrySendError::Full(line)) = to_command.try_send(line) {
+                        if let Err(TrySendError::Full(Work::Line(line))) =
+                            to_command.try_send(Work::Line(line))
+                        {
                             *held = Some(line);
                             rx.unlisten();
                             return;
@@ -559,12 +596,37 @@ mod app {
     }
 
     /// Each request answered, one reply line each.
-    #[task(priority = 1, shared = [controller, tick_cycles_max, last_tick_us, output_off, latest, telemetry], local = [from_rx, tx, logic, has_stream_port])]
+    #[task(priority = 1, shared = [controller, tick_cycles_max, last_tick_us, output_off, latest, telemetry], local = [from_rx, tx, logic, has_stream_port, held_entry: Option<Logged> = None])]
     async fn command(mut cx: command::Context) {
         let mut reply = ReplyLine::new();
-        while let Ok(line) = cx.local.from_rx.recv().await {
+        while let Ok(work) = cx.local.from_rx.recv().await {
             // Room in the queue again: a paused receiver resumes.
             rtic::pend(stm32f4xx_hal::pac::Interrupt::USART2);
+            // A fault into the log; one that needs a half erased (a stall of 1–2 s on the
+            // chip) waits for the output at rest at 0 V.
+            let logged = match work {
+                Work::Line(line) => Ok(line),
+                Work::Fault(logged) => Err(Some(logged)),
+                Work::AtRest => Err(cx.local.held_entry.take()),
+            };
+            let line = match logged {
+                Ok(line) => line,
+                Err(None) => continue,
+                Err(Some(logged)) => {
+                    let logic = &mut *cx.local.logic;
+                    let tick_hz = cx.shared.controller.lock(|c| logic.tick_hz(c));
+                    let at = (logged.tick, logged.tick as f32 / tick_hz);
+                    let at_rest = cx.shared.output_off.lock(|o| *o);
+                    let (fault, volts, readings) = (logged.fault, logged.volts, logged.readings);
+                    match logic.log_fault(&fault, at, volts, &readings, at_rest) {
+                        Some(Err(StoreError::LogFull)) => *cx.local.held_entry = Some(logged),
+                        #[cfg(feature = "defmt")]
+                        Some(Err(e)) => defmt::error!("the fault log: {}", e),
+                        _ => {}
+                    }
+                    continue;
+                }
+            };
             #[cfg(feature = "defmt")]
             if let Line::Text(bytes) = &line {
                 defmt::info!("command: {=[u8]:a}", bytes);

@@ -17,8 +17,9 @@ use de_resonator::board::port::Extras;
 use de_resonator::board::protocol::NOTICE;
 use de_resonator::board::stream::{self, Record, Telemetry};
 use de_resonator::board::{self, Board, Keeper, Line, Lines, ReplyLine, ResetCause, Then};
+use de_resonator::fault_log::Entry;
 use de_resonator::store::{self, FlashKeeper, RamFlash, StoreError, RAM_PAGE_BYTES};
-use de_resonator::{Controller, Dac8551, Image, Inputs, OutputStage, Settings};
+use de_resonator::{Controller, Dac8551, Event, Image, Inputs, OutputStage, Settings};
 use serde::Serialize;
 
 use super::{sig, Report};
@@ -118,8 +119,13 @@ impl Report for ServeReport {
     }
 }
 
-/// The settings' flash: two RAM pages, as the chip's two sectors (kept across `reset`).
+/// The settings' and the fault log's flash, as the firmware's QEMU build has them: two RAM
+/// pages for the settings, four for the log (kept across `reset`).
 struct Flash(Vec<u8>);
+
+/// The settings' pages; the log's follow.
+const SETTINGS_PAGES: usize = 2;
+const LOG_PAGES: usize = 4;
 
 impl Keeper for &mut Flash {
     type Error = StoreError;
@@ -129,14 +135,29 @@ impl Keeper for &mut Flash {
     fn save(&mut self, settings: &Settings) -> Result<(), StoreError> {
         self.keeper().save(settings)
     }
+    fn log(&mut self, entry: &Entry, may_erase: bool) -> Option<Result<u32, StoreError>> {
+        self.keeper().log(entry, may_erase)
+    }
+    fn each_fault(&mut self, each: &mut dyn FnMut(Entry)) -> Option<Result<(), StoreError>> {
+        self.keeper().each_fault(each)
+    }
+    fn clear_faults(&mut self) -> Option<Result<(), StoreError>> {
+        self.keeper().clear_faults()
+    }
 }
 
 impl Flash {
+    fn new() -> Self {
+        Flash(vec![0xFF; (SETTINGS_PAGES + LOG_PAGES) * RAM_PAGE_BYTES])
+    }
+
     fn keeper(&mut self) -> FlashKeeper<RamFlash<'_>> {
+        let settings = (SETTINGS_PAGES * RAM_PAGE_BYTES) as u32;
         let len = self.0.len() as u32;
         FlashKeeper {
             flash: store::RamFlash::new(&mut self.0),
-            range: 0..len,
+            range: 0..settings,
+            log: Some(settings..len),
         }
     }
 }
@@ -307,7 +328,7 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
     };
     // The image the scene's board boots from (`run`'s and the firmware's in the loop).
     let bytes = lp.image()?;
-    let mut flash = Flash(vec![0xFF; 2 * RAM_PAGE_BYTES]);
+    let mut flash = Flash::new();
     let (listener, at) = Listener::bind(args.tcp.as_deref(), args.unix.as_ref())?;
     let streams = match (&args.stream_tcp, &args.stream_unix) {
         (None, None) => None,
@@ -447,10 +468,22 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
                 client.send(&frame[..n]);
             }
         }
-        if let Some(event) = stepped.ticked.and_then(|t| t.output.event) {
-            let line = format!("{} s: {event}", sig(t));
-            eprintln!("{line}");
-            report.events.push(line);
+        if let Some(ticked) = stepped.ticked {
+            if let Some(event) = ticked.output.event {
+                let line = format!("{} s: {event}", sig(t));
+                eprintln!("{line}");
+                report.events.push(line);
+            }
+            // A fault into the log, as the firmware's command task writes it after the tick
+            // (RAM: an erase stalls nothing).
+            if let Some(Event::Fault(fault)) = ticked.output.event {
+                let at = (k as u32, t as f32);
+                if let Some(Err(e)) =
+                    logic.log_fault(&fault, at, ticked.output.volts, &stepped.inputs, true)
+                {
+                    eprintln!("{} s: the fault log: {e}", sig(t));
+                }
+            }
         }
         if report.plant_crossing.is_none() {
             if let Some((mode, at)) = bench.crossing {

@@ -1,0 +1,402 @@
+//! The fault log: the last faults the board met, kept in flash beside
+//! the saved settings so that the reason of a trip outlives a reset or a power cut. Each
+//! entry is the cause with its words (the fault's own sentence, cut at `WORDS_BYTES`), the
+//! board's tick and time since boot, and the voltage, current and stretch when it came; a
+//! watchdog reset and a brown-out are entries too.
+//!
+//! Two halves of whole flash pages, each room for at least `KEPT` entries. An entry is written
+//! at the first erased slot of the half that holds the newest one, its CRC in a write of its
+//! own after the rest: a power cut in an append leaves that entry unreadable (skipped) and
+//! every other as it was. When that half is full, the other half is erased and the log goes on
+//! there: the full half still holds the `KEPT` newest. `read` gives the valid entries, newest
+//! first; `clear` erases both halves. Generic over embedded-storage's async `NorFlash`, as the
+//! settings' `store` is.
+//!
+//! The entries (always) and their flash (the `storage` feature). An entry ([`ENTRY_BYTES`],
+//! little-endian):
+//!
+//! | offset | size | what |
+//! |---|---|---|
+//! | 0 | 2 | magic `DF` |
+//! | 2 | 1 | cause: `Fault::number` (1–22), 0xF0 a watchdog reset, 0xF1 a brown-out |
+//! | 3 | 1 | the words' length, bytes |
+//! | 4 | 4 | sequence number, u32 (from 1; the newest is the largest, wrapping) |
+//! | 8 | 4 | the board's tick since boot, u32 |
+//! | 12 | 4 | time since boot, s, f32 |
+//! | 16 | 4 | the voltage commanded, V, f32 |
+//! | 20 | 4 | the amplifier's current, A, f32 (NaN: not measured) |
+//! | 24 | 4 | the stretch sample, f32 (NaN: not measured) |
+//! | 28 | 32 | the words, UTF-8 (the rest zero) |
+//! | 60 | 4 | CRC-32 (IEEE 802.3) of bytes 0–59 |
+
+use core::fmt::{self, Write as _};
+#[cfg(feature = "storage")]
+use core::ops::Range;
+
+#[cfg(feature = "storage")]
+use embedded_storage_async::nor_flash::NorFlash;
+use heapless::String;
+#[cfg(feature = "storage")]
+use heapless::Vec;
+
+use crate::controller::Fault;
+#[cfg(feature = "storage")]
+use crate::store::{flash_error, StoreError};
+#[cfg(feature = "storage")]
+use crate::table::{crc32, f32_at, newer, u32_at, Put};
+
+/// The newest entries the log keeps, at least.
+pub const KEPT: usize = 32;
+/// An entry's bytes.
+pub const ENTRY_BYTES: usize = 64;
+/// The words an entry keeps, bytes at most.
+pub const WORDS_BYTES: usize = 32;
+#[cfg(feature = "storage")]
+const MAGIC: [u8; 2] = *b"DF";
+#[cfg(feature = "storage")]
+const WORDS_AT: usize = 28;
+#[cfg(feature = "storage")]
+const CRC_AT: usize = ENTRY_BYTES - 4;
+const WATCHDOG: u8 = 0xF0;
+const BROWN_OUT: u8 = 0xF1;
+
+/// What an entry is for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Cause {
+    /// A fault the controller latched (`Fault::number`).
+    Fault(u8),
+    /// The watchdog reset the chip (logged at the boot after it).
+    Watchdog,
+    /// The supply fell below the brown-out level (logged at the boot after it).
+    BrownOut,
+}
+
+impl Cause {
+    /// The cause as the entry's byte.
+    pub fn byte(self) -> u8 {
+        match self {
+            Cause::Fault(n) => n,
+            Cause::Watchdog => WATCHDOG,
+            Cause::BrownOut => BROWN_OUT,
+        }
+    }
+
+    /// The cause of an entry's byte, if it is one.
+    pub fn of(byte: u8) -> Option<Self> {
+        match byte {
+            WATCHDOG => Some(Cause::Watchdog),
+            BROWN_OUT => Some(Cause::BrownOut),
+            n => Fault::key_of(n).map(|_| Cause::Fault(n)),
+        }
+    }
+
+    /// Its key: the fault's (`FAULT_KEYS`), `watchdog` or `brown_out`.
+    pub fn key(self) -> &'static str {
+        match self {
+            Cause::Fault(n) => Fault::key_of(n).unwrap_or("fault"),
+            Cause::Watchdog => "watchdog",
+            Cause::BrownOut => "brown_out",
+        }
+    }
+}
+
+/// One entry of the log.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Entry {
+    /// Its number (set by `append`: one more than the newest).
+    pub sequence: u32,
+    pub cause: Cause,
+    /// The board's tick since boot.
+    pub tick: u32,
+    /// Time since boot, s.
+    pub seconds: f32,
+    /// The voltage commanded when it came, V.
+    pub volts: f32,
+    pub current_amps: Option<f32>,
+    pub stretch: Option<f32>,
+    /// What happened, in words (the fault's sentence, cut).
+    pub words: String<WORDS_BYTES>,
+}
+
+impl Entry {
+    /// An entry for `fault`, its words its sentence (cut at `WORDS_BYTES`, at a character's
+    /// boundary).
+    pub fn of_fault(fault: &Fault, tick: u32, seconds: f32, volts: f32) -> Self {
+        let mut words = Cut(String::new());
+        let _ = write!(words, "{fault}");
+        Entry {
+            sequence: 0,
+            cause: Cause::Fault(fault.number()),
+            tick,
+            seconds,
+            volts,
+            current_amps: None,
+            stretch: None,
+            words: words.0,
+        }
+    }
+
+    /// An entry for a reset the boot found (`Cause::Watchdog`, `Cause::BrownOut`), at tick 0.
+    pub fn of_reset(cause: Cause, words: &str) -> Self {
+        let mut cut = Cut(String::new());
+        let _ = cut.write_str(words);
+        Entry {
+            sequence: 0,
+            cause,
+            tick: 0,
+            seconds: 0.0,
+            volts: 0.0,
+            current_amps: None,
+            stretch: None,
+            words: cut.0,
+        }
+    }
+
+    #[cfg(feature = "storage")]
+    fn to_bytes(&self) -> [u8; ENTRY_BYTES] {
+        let mut out = [0u8; ENTRY_BYTES];
+        let mut put = Put(&mut out, 0);
+        put.bytes(&MAGIC);
+        put.bytes(&[self.cause.byte(), self.words.len() as u8]);
+        put.bytes(&self.sequence.to_le_bytes());
+        put.bytes(&self.tick.to_le_bytes());
+        for x in [
+            self.seconds,
+            self.volts,
+            self.current_amps.unwrap_or(f32::NAN),
+            self.stretch.unwrap_or(f32::NAN),
+        ] {
+            put.bytes(&x.to_le_bytes());
+        }
+        put.bytes(self.words.as_bytes());
+        let crc = crc32(out.get(..CRC_AT).unwrap_or(&[]));
+        if let Some(tail) = out.get_mut(CRC_AT..) {
+            tail.copy_from_slice(&crc.to_le_bytes());
+        }
+        out
+    }
+
+    #[cfg(feature = "storage")]
+    /// An entry from its bytes, if they are a whole one (magic, CRC, fields).
+    fn from_bytes(bytes: &[u8]) -> Option<Self> {
+        let body = bytes.get(..CRC_AT)?;
+        if body.get(..2) != Some(&MAGIC[..]) || crc32(body) != u32_at(bytes, CRC_AT) {
+            return None;
+        }
+        let len = usize::from(*bytes.get(3)?);
+        let text = core::str::from_utf8(bytes.get(WORDS_AT..WORDS_AT + len)?).ok()?;
+        let number = |x: f32| (!x.is_nan()).then_some(x);
+        Some(Entry {
+            sequence: u32_at(bytes, 4),
+            cause: Cause::of(*bytes.get(2)?)?,
+            tick: u32_at(bytes, 8),
+            seconds: f32_at(bytes, 12),
+            volts: f32_at(bytes, 16),
+            current_amps: number(f32_at(bytes, 20)),
+            stretch: number(f32_at(bytes, 24)),
+            words: String::try_from(text).ok()?,
+        })
+    }
+}
+
+/// A `String` that takes what fits and cuts at a character's boundary.
+struct Cut(String<WORDS_BYTES>);
+
+impl fmt::Write for Cut {
+    fn write_str(&mut self, s: &str) -> fmt::Result {
+        for c in s.chars() {
+            if self.0.push(c).is_err() {
+                break;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The two halves' starts and the slots a half holds, each room for `KEPT` entries.
+#[cfg(feature = "storage")]
+fn halves<F: NorFlash>(range: &Range<u32>) -> Result<([u32; 2], usize), StoreError> {
+    let (starts, half) = crate::store::halves::<F>(range)?;
+    let slots = half / ENTRY_BYTES.next_multiple_of(F::WRITE_SIZE.max(1));
+    if slots < KEPT {
+        return Err(StoreError::Range);
+    }
+    Ok((starts, slots))
+}
+
+/// A slot's offset: `k` whole slots into the half at `start`.
+#[cfg(feature = "storage")]
+fn slot_at<F: NorFlash>(start: u32, k: usize) -> u32 {
+    start + (k * ENTRY_BYTES.next_multiple_of(F::WRITE_SIZE.max(1))) as u32
+}
+
+/// What a scan of the log found: the newest entry's sequence and half, and each half's first
+/// erased slot (the slots after the last one written).
+#[cfg(feature = "storage")]
+struct Scan {
+    newest: Option<(u32, usize)>,
+    free: [Option<usize>; 2],
+}
+
+#[cfg(feature = "storage")]
+async fn scan<F: NorFlash>(
+    flash: &mut F,
+    range: &Range<u32>,
+    mut each: impl FnMut(Entry),
+) -> Result<Scan, StoreError> {
+    let (starts, slots) = halves::<F>(range)?;
+    let mut found = Scan {
+        newest: None,
+        free: [None; 2],
+    };
+    for (h, &start) in starts.iter().enumerate() {
+        // Appends go in order: the slot after the last one written (whole or torn) is free.
+        let mut free = Some(0);
+        for k in 0..slots {
+            let mut bytes = [0u8; ENTRY_BYTES];
+            flash
+                .read(slot_at::<F>(start, k), &mut bytes)
+                .await
+                .map_err(flash_error)?;
+            if bytes.iter().all(|&b| b == 0xFF) {
+                continue;
+            }
+            free = (k + 1 < slots).then_some(k + 1);
+            if let Some(entry) = Entry::from_bytes(&bytes) {
+                if found.newest.is_none_or(|(s, _)| newer(entry.sequence, s)) {
+                    found.newest = Some((entry.sequence, h));
+                }
+                each(entry);
+            }
+        }
+        if let Some(slot) = found.free.get_mut(h) {
+            *slot = free;
+        }
+    }
+    Ok(found)
+}
+
+/// Append `entry` (its sequence set to one more than the newest): at the first erased slot
+/// after the newest's half's last written one, or, that half full, at the start of the other
+/// half, erased first if `may_erase` (else `StoreError::LogFull`, nothing written: an erase
+/// stalls a chip that runs from the same flash bank). The sequence number written.
+#[cfg(feature = "storage")]
+pub async fn append<F: NorFlash>(
+    mut flash: F,
+    range: Range<u32>,
+    entry: &Entry,
+    may_erase: bool,
+) -> Result<u32, StoreError> {
+    let (starts, slots) = halves::<F>(&range)?;
+    let found = scan(&mut flash, &range, |_| {}).await?;
+    let (sequence, half) = match found.newest {
+        Some((s, h)) => (s.wrapping_add(1), h),
+        None => (1, 0),
+    };
+    let free = found.free.get(half).copied().flatten();
+    let (half, k) = match free {
+        Some(k) => (half, k),
+        None if !may_erase => return Err(StoreError::LogFull),
+        None => {
+            let other = 1 - half;
+            let start = starts.get(other).copied().ok_or(StoreError::Range)?;
+            let len = (range.end - range.start) / 2;
+            flash.erase(start, start + len).await.map_err(flash_error)?;
+            (other, 0)
+        }
+    };
+    if k >= slots {
+        return Err(StoreError::Range);
+    }
+    let at = slot_at::<F>(starts.get(half).copied().ok_or(StoreError::Range)?, k);
+    let bytes = Entry {
+        sequence,
+        ..entry.clone()
+    }
+    .to_bytes();
+    // The body, then the CRC in a write of its own: a cut anywhere leaves a CRC that does not
+    // match (the erased 0xFF…, or a part of it). Writes are whole words of the flash's.
+    let word = F::WRITE_SIZE.max(1);
+    let body_len = (CRC_AT / word) * word;
+    let tail_len = (ENTRY_BYTES - body_len).next_multiple_of(word);
+    let mut padded = [0xFFu8; ENTRY_BYTES + 32];
+    for (slot, &byte) in padded.iter_mut().zip(bytes.get(..CRC_AT).unwrap_or(&[])) {
+        *slot = byte;
+    }
+    let head = padded.get(..body_len).ok_or(StoreError::Range)?;
+    flash.write(at, head).await.map_err(flash_error)?;
+    for (slot, &byte) in padded.iter_mut().zip(&bytes).skip(CRC_AT) {
+        *slot = byte;
+    }
+    let tail = padded
+        .get(body_len..body_len + tail_len)
+        .ok_or(StoreError::Range)?;
+    flash
+        .write(at + body_len as u32, tail)
+        .await
+        .map_err(flash_error)?;
+    Ok(sequence)
+}
+
+/// Every valid entry, in flash order (the board's `faults`: a list, or one entry, without
+/// holding them all).
+#[cfg(feature = "storage")]
+pub async fn each<F: NorFlash>(
+    mut flash: F,
+    range: Range<u32>,
+    each: impl FnMut(Entry),
+) -> Result<(), StoreError> {
+    scan(&mut flash, &range, each).await.map(|_| ())
+}
+
+/// The valid entries, newest first (at most `KEPT`).
+#[cfg(feature = "storage")]
+pub async fn read<F: NorFlash>(
+    mut flash: F,
+    range: Range<u32>,
+) -> Result<Vec<Entry, KEPT>, StoreError> {
+    let mut kept: Vec<Entry, KEPT> = Vec::new();
+    scan(&mut flash, &range, |entry| {
+        // Keep the KEPT newest: a full list drops its oldest for a newer one.
+        if kept.is_full() {
+            let oldest = kept
+                .iter()
+                .enumerate()
+                .min_by(|a, b| {
+                    if newer(a.1.sequence, b.1.sequence) {
+                        core::cmp::Ordering::Greater
+                    } else {
+                        core::cmp::Ordering::Less
+                    }
+                })
+                .map(|(i, e)| (i, e.sequence));
+            match oldest {
+                Some((i, s)) if newer(entry.sequence, s) => {
+                    kept.swap_remove(i);
+                }
+                _ => return,
+            }
+        }
+        let _ = kept.push(entry);
+    })
+    .await?;
+    kept.sort_unstable_by(|a, b| {
+        if newer(a.sequence, b.sequence) {
+            core::cmp::Ordering::Less
+        } else {
+            core::cmp::Ordering::Greater
+        }
+    });
+    Ok(kept)
+}
+
+/// Erase both halves: the log empty.
+#[cfg(feature = "storage")]
+pub async fn clear<F: NorFlash>(mut flash: F, range: Range<u32>) -> Result<(), StoreError> {
+    halves::<F>(&range)?;
+    flash
+        .erase(range.start, range.end)
+        .await
+        .map_err(flash_error)
+}

@@ -1,0 +1,238 @@
+//! The fault log in flash (`fault_log`), on the RAM flash that can tear a write at any byte:
+//! entries read back as written, newest first, the `KEPT` newest across the halves' turns; a
+//! power cut at any byte of any append (its erase of the other half included) loses nothing
+//! but the entry in flight; garbage holds no entry; `clear` empties the log.
+#![cfg(feature = "storage")]
+
+use de_resonator::fault_log::{self, Cause, Entry, KEPT};
+use de_resonator::store::{RamFlash, StoreError, RAM_PAGE_BYTES};
+use de_resonator::{FailureMode, Fault};
+use futures::executor::block_on;
+
+/// Two halves of two pages, as the firmware's QEMU stand-in has: 32 entries a half.
+const PAGES: usize = 4;
+const RANGE: core::ops::Range<u32> = 0..(PAGES * RAM_PAGE_BYTES) as u32;
+const PER_HALF: usize = PAGES / 2 * RAM_PAGE_BYTES / 64;
+
+fn erased() -> Vec<u8> {
+    vec![0xFF; PAGES * RAM_PAGE_BYTES]
+}
+
+/// The n-th entry of a sequence: each differs from the others in every field.
+fn nth(n: u32) -> Entry {
+    let fault = Fault::Limit {
+        mode: FailureMode::Emi,
+        tick: 1000 + n,
+    };
+    Entry {
+        current_amps: Some(1e-6 * n as f32),
+        stretch: (!n.is_multiple_of(3)).then_some(2.0 + n as f32 / 1000.0),
+        ..Entry::of_fault(&fault, 1000 + n, 1.0 + n as f32 / 1000.0, 7000.0 + n as f32)
+    }
+}
+
+fn append(bytes: &mut [u8], entry: &Entry, fail_after: Option<usize>) -> Result<u32, StoreError> {
+    let mut flash = RamFlash::new(bytes);
+    flash.fail_after = fail_after;
+    block_on(fault_log::append(&mut flash, RANGE, entry, true))
+}
+
+fn read(bytes: &mut [u8]) -> Vec<Entry> {
+    block_on(fault_log::read(RamFlash::new(bytes), RANGE))
+        .unwrap()
+        .to_vec()
+}
+
+/// `expected` as the log gives it: the n-th entry with its sequence n + 1, newest first.
+fn newest_first(ns: impl DoubleEndedIterator<Item = u32>) -> Vec<Entry> {
+    ns.rev()
+        .map(|n| Entry {
+            sequence: n + 1,
+            ..nth(n)
+        })
+        .collect()
+}
+
+#[test]
+fn entries_read_back_newest_first_with_their_data() {
+    let mut bytes = erased();
+    for n in 0..5 {
+        assert_eq!(append(&mut bytes, &nth(n), None), Ok(n + 1));
+    }
+    let log = read(&mut bytes);
+    assert_eq!(log, newest_first(0..5));
+    let newest = &log[0];
+    assert_eq!(newest.cause, Cause::Fault(19));
+    assert_eq!(newest.cause.key(), "limit");
+    let sentence = Fault::Limit {
+        mode: FailureMode::Emi,
+        tick: 1004,
+    }
+    .to_string();
+    assert!(sentence.len() > 32);
+    assert_eq!(
+        newest.words.as_str(),
+        &sentence[..32],
+        "the fault's own sentence, cut at 32 bytes"
+    );
+}
+
+#[test]
+fn the_newest_kept_across_the_halves_turns() {
+    let mut bytes = erased();
+    const { assert!(PER_HALF >= KEPT) };
+    for n in 0..(5 * PER_HALF as u32 + 7) {
+        append(&mut bytes, &nth(n), None).unwrap();
+        let log = read(&mut bytes);
+        let from = (n + 1).saturating_sub(KEPT as u32);
+        assert_eq!(log, newest_first(from..n + 1), "after {} appends", n + 1);
+    }
+}
+
+/// Bytes an append changes (written or erased), counted by a budget that never runs out.
+fn bytes_of_append(bytes: &[u8], entry: &Entry) -> usize {
+    let mut copy = bytes.to_vec();
+    let budget = usize::MAX / 2;
+    let mut flash = RamFlash::new(&mut copy);
+    flash.fail_after = Some(budget);
+    block_on(fault_log::append(&mut flash, RANGE, entry, true)).unwrap();
+    budget - flash.fail_after.unwrap()
+}
+
+#[test]
+fn a_power_cut_at_any_byte_of_any_append_loses_only_the_entry_in_flight() {
+    let mut bytes = erased();
+    let mut cuts = 0;
+    // Through two turns of the halves: appends into erased slots and appends that erase.
+    for n in 0..(2 * PER_HALF as u32 + 3) {
+        let before = read(&mut bytes);
+        let changed = bytes_of_append(&bytes, &nth(n));
+        for cut in (0..changed).step_by(if changed > 200 { 7 } else { 1 }) {
+            let mut torn = bytes.clone();
+            assert!(append(&mut torn, &nth(n), Some(cut)).is_err());
+            let after = read(&mut torn);
+            // Everything before, but what an erase of the older half takes (entries beyond
+            // the KEPT newest), and the new entry whole or not at all.
+            let kept: Vec<&Entry> = before.iter().take(KEPT).collect();
+            for old in &kept {
+                assert!(
+                    after.contains(old),
+                    "append {n} cut at byte {cut}: entry {} lost",
+                    old.sequence
+                );
+            }
+            assert!(
+                after.iter().all(|e| before.contains(e)
+                    || *e
+                        == Entry {
+                            sequence: n + 1,
+                            ..nth(n)
+                        }),
+                "append {n} cut at byte {cut}: an entry that was never written"
+            );
+            // The log goes on after the cut.
+            let next = append(&mut torn, &nth(n), None).unwrap();
+            assert_eq!(read(&mut torn)[0].sequence, next);
+            cuts += 1;
+        }
+        append(&mut bytes, &nth(n), None).unwrap();
+    }
+    // 67 appends of 64 bytes cut at each byte, two of them with a 2 KB erase cut at every
+    // 7th.
+    assert!(cuts > 4000, "{cuts} cuts");
+}
+
+#[test]
+fn garbage_holds_no_entry_and_an_append_works_on_it() {
+    let mut bytes: Vec<u8> = (0..PAGES * RAM_PAGE_BYTES)
+        .map(|i| (i * 7919 % 251) as u8)
+        .collect();
+    assert_eq!(read(&mut bytes), vec![]);
+    // Garbage in every slot: no slot is free; the append erases the other half.
+    append(&mut bytes, &nth(0), None).unwrap();
+    assert_eq!(read(&mut bytes), newest_first(0..1));
+}
+
+#[test]
+fn clear_empties_the_log() {
+    let mut bytes = erased();
+    for n in 0..3 {
+        append(&mut bytes, &nth(n), None).unwrap();
+    }
+    block_on(fault_log::clear(RamFlash::new(&mut bytes), RANGE)).unwrap();
+    assert_eq!(read(&mut bytes), vec![]);
+    assert_eq!(append(&mut bytes, &nth(9), None), Ok(1));
+}
+
+#[test]
+fn a_range_without_room_for_the_kept_entries_is_refused() {
+    let mut bytes = erased();
+    let small = 0..(2 * RAM_PAGE_BYTES) as u32;
+    let got = block_on(fault_log::append(
+        RamFlash::new(&mut bytes),
+        small,
+        &nth(0),
+        true,
+    ));
+    assert_eq!(
+        got,
+        Err(StoreError::Range),
+        "two 1 KB halves hold 10 entries each"
+    );
+}
+
+/// A half full and no erase allowed (the output not at 0 V): nothing written, said; allowed
+/// later, the entry goes in.
+#[test]
+fn an_append_that_needs_an_erase_waits_when_told() {
+    let mut bytes = erased();
+    for n in 0..PER_HALF as u32 {
+        assert_eq!(
+            block_on(fault_log::append(
+                RamFlash::new(&mut bytes),
+                RANGE,
+                &nth(n),
+                false
+            )),
+            Ok(n + 1)
+        );
+    }
+    let before = bytes.clone();
+    let got = block_on(fault_log::append(
+        RamFlash::new(&mut bytes),
+        RANGE,
+        &nth(99),
+        false,
+    ));
+    assert_eq!(got, Err(StoreError::LogFull));
+    assert!(bytes == before, "nothing written");
+    let got = block_on(fault_log::append(
+        RamFlash::new(&mut bytes),
+        RANGE,
+        &nth(99),
+        true,
+    ));
+    assert_eq!(got, Ok(PER_HALF as u32 + 1));
+}
+
+#[test]
+fn resets_are_entries_too() {
+    let mut bytes = erased();
+    append(
+        &mut bytes,
+        &Entry::of_reset(Cause::Watchdog, "watchdog reset"),
+        None,
+    )
+    .unwrap();
+    append(
+        &mut bytes,
+        &Entry::of_reset(Cause::BrownOut, "brown-out reset"),
+        None,
+    )
+    .unwrap();
+    let log = read(&mut bytes);
+    assert_eq!(
+        log.iter().map(|e| e.cause.key()).collect::<Vec<_>>(),
+        ["brown_out", "watchdog"]
+    );
+}
