@@ -4,7 +4,8 @@ host-sim, once with the core's board on the host and once with the firmware's li
 under QEMU (`host-sim run --firmware`), both with their history. The firmware is the core's
 code for the M4F (IEEE f32, software libm) on the same ADC codes, so the two must agree bit
 for bit: the same history.csv (per tick the DAC code, its power, the enable line, and the
-plant they drove), the same report but for its run time, the same exit status.
+plant they drove), the same report but for its run time, the same exit status, and the same telemetry stream
+(`--record`: every field of each record, the firmware's read from its USART1).
 
 Usage: scripts/firmware_loop.py HOST_SIM LINK_ELF OUT_DIR [SCENE...]
 """
@@ -18,7 +19,7 @@ from pathlib import Path
 
 def run(host_sim, scene, out, firmware=None):
     """host-sim's JSON report, exit status and history rows for a scene; wall seconds."""
-    cmd = [host_sim, "--json", "run", str(scene), "--history", "--out", str(out)]
+    cmd = [host_sim, "--json", "run", str(scene), "--history", "--record", "--out", str(out)]
     if firmware:
         cmd += ["--firmware", str(firmware)]
     started = time.monotonic()
@@ -30,7 +31,9 @@ def run(host_sim, scene, out, firmware=None):
     name = report["scene"]
     with open(out / name / "history.csv", newline="") as f:
         rows = list(csv.reader(f))
-    return report, done.returncode, rows, wall
+    with open(out / name / "telemetry.csv", newline="") as f:
+        records = [line for line in f if not line.startswith("#")]
+    return report, done.returncode, rows, records, wall
 
 
 def main():
@@ -40,8 +43,8 @@ def main():
     failures = []
     print(f"{'scene':<26} {'ticks':>7} {'core s':>7} {'QEMU s':>7} {'ticks/s':>8}  agreement")
     for scene in scenes:
-        core, core_status, core_rows, _ = run(host_sim, scene, out / "core")
-        fw, fw_status, fw_rows, wall = run(host_sim, scene, out / "firmware", elf)
+        core, core_status, core_rows, core_records, _ = run(host_sim, scene, out / "core")
+        fw, fw_status, fw_rows, fw_records, wall = run(host_sim, scene, out / "firmware", elf)
         problems = []
         if core_status != fw_status:
             problems.append(f"exit status {core_status} (core) vs {fw_status} (firmware)")
@@ -54,6 +57,10 @@ def main():
                 diff = [f"{h} {x} vs {y}" for h, x, y in zip(header, a, b) if x != y]
                 problems.append(f"tick {a[0]} differs: {', '.join(diff)}")
                 break
+        if len(core_records) < 2 or core_records != fw_records:
+            diff = next((f"{a.strip()} vs {b.strip()}" for a, b in zip(core_records, fw_records)
+                         if a != b), f"{len(core_records)} vs {len(fw_records)} lines")
+            problems.append(f"telemetry differs: {diff}")
         if len(core_rows) != len(fw_rows):
             problems.append(f"{len(core_rows) - 1} ticks (core) vs {len(fw_rows) - 1} (firmware)")
         for key in set(core) | set(fw):
@@ -69,7 +76,7 @@ def main():
         if problems:
             failures.append(scene.stem)
     print(f"{total_ticks} ticks compared over {len(scenes)} scenes: DAC code, its power, the "
-          f"enable line and the plant, tick for tick")
+          f"enable line and the plant, tick for tick; the telemetry stream, record for record")
     if failures:
         sys.exit(f"the firmware and the core differ on: {', '.join(failures)}")
 

@@ -131,6 +131,8 @@ fn main() -> ExitCode {
         out: "out/run".into(),
         firmware: None,
         history: false,
+        record: false,
+        stream_hz: 100.0,
     }));
     let result = match command {
         Command::Run(args) => cmd::run::run(&args, json).map(|r| emit(&r, json)),

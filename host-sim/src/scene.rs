@@ -357,6 +357,7 @@ pub fn parse(text: &str) -> Result<Scene, String> {
             seed: file.seed,
             commands,
             history: file.output.history || file.output.plot,
+            stream_hz: None,
         },
     };
     // Bounded work, refused before it starts.

@@ -192,3 +192,35 @@ fn bytes_dropped_from_the_stream_are_counted_as_gaps_and_the_receiver_resyncs() 
     assert!(rows.len() as u64 > span - 2 * bad, "{recording}");
     check_rows(&rows, &history(&scene, &dir.join("run")));
 }
+
+/// `run --record`: the scene's board streams the same records through a run (the core's
+/// board here; the firmware's under QEMU in scripts/firmware_loop.py, compared record for
+/// record): one every 10 ticks from the first, none lost, each the history's at its tick.
+#[test]
+fn a_run_records_the_stream_beside_its_history() {
+    let dir = scratch("stream-run");
+    let out = host_sim()
+        .args(["--json", "run", "--history", "--record", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (comments, rows) = read_csv(&dir.join("reference").join("telemetry.csv"));
+    assert!(
+        comments.iter().any(|c| c
+            == "# records=1000 lost=0 bad_frames=0 (lost records are missing rows, not filled in)"),
+        "{comments:?}"
+    );
+    let ticks: Vec<u64> = rows.iter().map(|r| r["tick"].parse().unwrap()).collect();
+    assert_eq!(ticks, (0..1000).map(|k| 10 * k).collect::<Vec<_>>());
+    let (_, history) = read_csv(&dir.join("reference").join("history.csv"));
+    let history = history
+        .into_iter()
+        .map(|r| (r["tick"].clone(), r))
+        .collect();
+    check_rows(&rows, &history);
+}

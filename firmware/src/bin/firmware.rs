@@ -32,6 +32,8 @@ mod app {
     use core::fmt::Write as _;
     use core::mem::MaybeUninit;
 
+    use rtic::mutex_prelude::*;
+
     use de_resonator::acquire::{Block, FrontEnd, Reader, BUFFER_CODES};
     #[cfg(feature = "link")]
     use de_resonator::board::link::{Booted, Kind, Observed};
@@ -88,8 +90,11 @@ mod app {
         /// The last tick: its number since boot and its readings, in units (`status` and
         /// the telemetry stream's records).
         latest: Latest,
-        /// The telemetry stream's rate and count (`stream <hz>`), its records taken by `idle`.
+        /// The telemetry stream's rate and count (`stream <hz>`), its records taken by `idle`
+        /// (by `link_reply` in the link build).
         telemetry: Telemetry,
+        /// The telemetry stream's port (`None`: the clock in use gives no divider for it).
+        stream_port: Option<StreamPort>,
     }
 
     /// What the command task is given: a request line (from `rx`), or a fault the tick saw
@@ -112,8 +117,8 @@ mod app {
     /// What the tick leaves for the tasks below it.
     #[derive(Clone, Copy)]
     pub struct Latest {
-        /// The tick's number since boot (from 0).
-        tick: u32,
+        /// Ticks done since boot: the last one's number is one less (none yet: 0).
+        ticks: u32,
         readings: Inputs,
     }
 
@@ -134,8 +139,6 @@ mod app {
         to_log: Sender<'static, Work, QUEUE>,
         from_rx: Receiver<'static, Work, QUEUE>,
         tx: Tx<USART2>,
-        /// The telemetry stream's port (`None`: the clock in use gives no divider for it).
-        stream_port: Option<StreamPort>,
         /// Whether the board has the stream's port (`stream` answers unsupported without).
         has_stream_port: bool,
         /// The core's board: the image, the settings, the refusal, the command port's answers.
@@ -249,6 +252,7 @@ mod app {
             let _ = cx.local.frames;
             board.stream_tx.map(StreamPort::new)
         };
+        let has_stream_port = stream_port.is_some();
         // The link build's tick is pended by each samples frame, not SysTick's count.
         #[cfg(feature = "link")]
         let _ = &mut core;
@@ -300,10 +304,11 @@ mod app {
                 checked_in: true,
                 block: Block::EMPTY,
                 latest: Latest {
-                    tick: 0,
+                    ticks: 0,
                     readings: Inputs::NONE,
                 },
                 telemetry: Telemetry::default(),
+                stream_port,
             },
             Local {
                 stage,
@@ -326,8 +331,7 @@ mod app {
                 to_log,
                 from_rx,
                 tx,
-                has_stream_port: stream_port.is_some(),
-                stream_port,
+                has_stream_port,
                 logic,
                 busy_idle: board::asked("busy-idle"),
                 hang_after_ticks: board::asked("tick-hangs").then_some(2 * tick_hz as u32),
@@ -350,33 +354,60 @@ mod app {
     /// QEMU's `-icount sleep=off` a `wfi` loses every other SysTick period (measured against
     /// TIM2: BENCHMARKS.md); a QEMU run started with the semihosting argument `busy-idle`
     /// idles busy instead, so that its virtual time is its instruction count, exactly.
-    #[idle(shared = [controller, latest, output_off, telemetry], local = [busy_idle, stream_port, frame: [u8; FRAME_BYTES] = [0; FRAME_BYTES]])]
+    #[idle(shared = [controller, latest, output_off, telemetry, stream_port], local = [busy_idle, frame: [u8; FRAME_BYTES] = [0; FRAME_BYTES]])]
     fn idle(mut cx: idle::Context) -> ! {
         let busy = *cx.local.busy_idle;
+        #[cfg(feature = "link")]
+        let _ = (&mut cx.shared, cx.local.frame);
         loop {
-            // The telemetry stream: a record when one is due, taken here under the locks
-            // (the tick's state after its last run, whole), framed and sent outside them.
-            let tick = cx.shared.latest.lock(|l| l.tick);
-            if let Some(sequence) = cx.shared.telemetry.lock(|t| t.due(tick)) {
-                let record = (
-                    &mut cx.shared.latest,
-                    &mut cx.shared.controller,
-                    &mut cx.shared.output_off,
-                )
-                    .lock(|latest, c, off| {
-                        Record::of((sequence, latest.tick), !*off, c.as_ref(), &latest.readings)
-                    });
-                let n = record.frame(cx.local.frame);
-                if let Some(port) = cx.local.stream_port.as_mut() {
-                    let _ = port.send(&cx.local.frame[..n]);
-                }
-            }
+            // The telemetry stream: a record when one is due (the link build takes its own
+            // after each tick's job: `link_reply`).
+            #[cfg(not(feature = "link"))]
+            stream(
+                (&mut cx.shared.latest, &mut cx.shared.telemetry),
+                (&mut cx.shared.controller, &mut cx.shared.output_off),
+                &mut cx.shared.stream_port,
+                cx.local.frame,
+            );
             if busy {
                 cortex_m::asm::nop();
             } else {
                 cortex_m::asm::wfi();
             }
         }
+    }
+
+    /// The telemetry stream's record of the last tick done, if one is due: taken under the
+    /// locks of what the tick left (its state after its last run, whole; none before the first
+    /// tick), then framed outside them and sent on the stream's port, if the board has one.
+    fn stream(
+        (latest, telemetry): (
+            &mut impl rtic::Mutex<T = Latest>,
+            &mut impl rtic::Mutex<T = Telemetry>,
+        ),
+        (controller, output_off): (
+            &mut impl rtic::Mutex<T = &'static mut Option<Controller>>,
+            &mut impl rtic::Mutex<T = bool>,
+        ),
+        port: &mut impl rtic::Mutex<T = Option<StreamPort>>,
+        frame: &mut [u8; FRAME_BYTES],
+    ) {
+        let Some(last) = latest.lock(|l| l.ticks.checked_sub(1)) else {
+            return;
+        };
+        let Some(sequence) = telemetry.lock(|t| t.due(last)) else {
+            return;
+        };
+        let record = (latest, controller, output_off).lock(|latest, c, off| {
+            let tick = latest.ticks.wrapping_sub(1);
+            Record::of((sequence, tick), !*off, c.as_ref(), &latest.readings)
+        });
+        let n = record.frame(frame);
+        port.lock(|port| {
+            if let Some(port) = port.as_mut() {
+                let _ = port.send(frame.get(..n).unwrap_or(&[]));
+            }
+        });
     }
 
     /// One controller tick: its code to the DAC, the enable line held, the events logged.
@@ -395,7 +426,12 @@ mod app {
         let readings = inputs.unwrap_or(Inputs::NONE);
         let tick = *cx.local.next_tick;
         *cx.local.next_tick = tick.wrapping_add(1);
-        cx.shared.latest.lock(|l| *l = Latest { tick, readings });
+        cx.shared.latest.lock(|l| {
+            *l = Latest {
+                ticks: tick.wrapping_add(1),
+                readings,
+            }
+        });
         let ticked = cx.shared.controller.lock(|c| {
             let ticked = logic::tick::drive(c, stage, inputs);
             if let Some(t) = ticked {
@@ -485,7 +521,7 @@ mod app {
     /// The link build: each tick's job run (as host-sim's loop runs it, before the next
     /// tick), then the tick's output to host-sim.
     #[cfg(feature = "link")]
-    #[task(priority = 1, shared = [controller], local = [link_out, from_tick])]
+    #[task(priority = 1, shared = [controller, latest, output_off, telemetry, stream_port], local = [link_out, from_tick, frame: [u8; FRAME_BYTES] = [0; FRAME_BYTES]])]
     async fn link_reply(mut cx: link_reply::Context) {
         let mut tick = 0u32;
         while let Ok(done) = cx.local.from_tick.recv().await {
@@ -498,6 +534,14 @@ mod app {
                     })
                 });
             }
+            // The stream's record after the tick and its job, as host-sim's loop takes the
+            // core's: the same tick whatever host-sim's pace.
+            stream(
+                (&mut cx.shared.latest, &mut cx.shared.telemetry),
+                (&mut cx.shared.controller, &mut cx.shared.output_off),
+                &mut cx.shared.stream_port,
+                cx.local.frame,
+            );
             let ((dac_code, dac_on), enable) = (done.dac, done.enable);
             let event = done.event;
             let observed = cx

@@ -19,8 +19,9 @@ use de_resonator::board::protocol::{Reply, NOTICE};
 use serde::Serialize;
 use serde_json::{Map, Value};
 
-use super::record::{self, Recorder, Source};
+use super::record;
 use super::Report;
+use crate::telemetry::{Recorder, Source};
 
 #[derive(Args, Debug)]
 #[command(group(clap::ArgGroup::new("connection").required(true).args(["port", "tcp", "unix"])))]

@@ -1,110 +1,14 @@
-//! `console --record`: the board's telemetry stream (`de_resonator::board::stream`) read from
-//! its own port, decoded, and written to CSV with a header that names what ran; records
-//! lost on the way counted from the sequence's gaps and said, never filled in.
+//! The board's telemetry stream (`de_resonator::board::stream`) written to CSV with a header
+//! that names what ran (`console --record`, `run --record`); records lost on the way counted
+//! from the sequence's gaps and said, never filled in; and drawn (`--plot`).
 
-use std::io::Read;
-use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
-use std::thread::JoinHandle;
-use std::time::Duration;
+use std::path::Path;
 
 use de_resonator::board::stream::{Receiver, Record, VERSION};
 use de_resonator::Fault;
 use serde::Serialize;
 
 use crate::plot::{self, Panel, Series};
-
-/// Where the stream comes from: a serial port (the board's stream UART), a TCP or a Unix
-/// socket (QEMU's chardev, `serve --stream-tcp/--stream-unix`).
-#[derive(Clone, Debug)]
-pub enum Source {
-    Port { device: String, baud: u32 },
-    Tcp(String),
-    Unix(PathBuf),
-}
-
-impl Source {
-    fn open(&self) -> Result<Box<dyn Read + Send>, String> {
-        let quiet = Some(READ_TIMEOUT);
-        match self {
-            Source::Tcp(address) => {
-                let s = std::net::TcpStream::connect(address)
-                    .map_err(|e| format!("cannot connect to the stream at {address}: {e}"))?;
-                s.set_read_timeout(quiet).map_err(|e| e.to_string())?;
-                Ok(Box::new(s))
-            }
-            Source::Unix(path) => {
-                let s = std::os::unix::net::UnixStream::connect(path).map_err(|e| {
-                    format!("cannot connect to the stream at {}: {e}", path.display())
-                })?;
-                s.set_read_timeout(quiet).map_err(|e| e.to_string())?;
-                Ok(Box::new(s))
-            }
-            Source::Port { device, baud } => serialport::new(device, *baud)
-                .timeout(READ_TIMEOUT)
-                .open()
-                .map(|p| Box::new(p) as Box<dyn Read + Send>)
-                .map_err(|e| format!("cannot open the stream's serial port {device}: {e}")),
-        }
-    }
-}
-
-/// How long a read waits before the reader looks whether it should stop.
-const READ_TIMEOUT: Duration = Duration::from_millis(50);
-
-/// A recording under way: a thread reading the stream into records.
-pub struct Recorder {
-    stop: Arc<AtomicBool>,
-    reader: JoinHandle<Result<(Vec<Record>, Receiver), String>>,
-}
-
-impl Recorder {
-    /// Connect to the stream and read it until `finish`.
-    pub fn start(source: &Source) -> Result<Self, String> {
-        let mut port = source.open()?;
-        let stop = Arc::new(AtomicBool::new(false));
-        let stopping = stop.clone();
-        let reader = std::thread::spawn(move || {
-            let mut receiver = Receiver::default();
-            let mut records = Vec::new();
-            let mut buf = [0u8; 4096];
-            while !stopping.load(Ordering::Relaxed) {
-                let n = match port.read(&mut buf) {
-                    Ok(0) => break,
-                    Ok(n) => n,
-                    Err(e)
-                        if matches!(
-                            e.kind(),
-                            std::io::ErrorKind::WouldBlock
-                                | std::io::ErrorKind::TimedOut
-                                | std::io::ErrorKind::Interrupted
-                        ) =>
-                    {
-                        continue
-                    }
-                    Err(e) => return Err(format!("the stream's connection failed: {e}")),
-                };
-                for &b in &buf[..n] {
-                    if let Some(Ok(record)) = receiver.push(b) {
-                        records.push(record);
-                    }
-                }
-            }
-            Ok((records, receiver))
-        });
-        Ok(Recorder { stop, reader })
-    }
-
-    /// Stop reading (after what is in flight: `linger`); the records and the receiver's counts.
-    pub fn finish(self, linger: Duration) -> Result<(Vec<Record>, Receiver), String> {
-        std::thread::sleep(linger);
-        self.stop.store(true, Ordering::Relaxed);
-        self.reader
-            .join()
-            .map_err(|_| "the stream's reader stopped unexpectedly".to_string())?
-    }
-}
 
 /// What a recording holds, as reported.
 #[derive(Serialize, Debug, Clone)]

@@ -12,6 +12,7 @@ use crate::engine::firmware::Qemu;
 use crate::engine::hil::{Run, Sample};
 use crate::plot::{svg, Marker, Panel, Series, RED};
 use crate::scene::{self, Scene};
+use de_resonator::{Decimal, Setting};
 
 #[derive(Args, Debug, Default)]
 pub struct RunArgs {
@@ -30,6 +31,14 @@ pub struct RunArgs {
     /// controller's phase and the plant) even if the scene does not ask for it.
     #[arg(long)]
     pub history: bool,
+    /// Record the board's telemetry stream (telemetry.csv: the records `console --record`
+    /// writes): `stream <HZ>` sent before the first tick; with --firmware, read from the
+    /// firmware's USART1 under QEMU.
+    #[arg(long)]
+    pub record: bool,
+    /// The stream's rate with --record, records a second.
+    #[arg(long, value_name = "HZ", default_value_t = 100.0, requires = "record")]
+    pub stream_hz: f32,
 }
 
 /// The plant's own limit on its loading branch from 0 V, and the final bias's margin to it
@@ -323,8 +332,11 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<RunReport, String> {
         scene.history = true;
         scene.run.history = true;
     }
+    if args.record {
+        scene.run.stream_hz = Some(args.stream_hz);
+    }
     let dir = scene::out_dir(&args.out, &scene);
-    if scene.plot || scene.history {
+    if scene.plot || scene.history || args.record {
         prepare_dir(&dir)?;
     }
     if !quiet {
@@ -350,7 +362,31 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<RunReport, String> {
             scene.run.run_on(&mut board, &wires)?
         }
     };
-    let files = files(&dir, &scene, &run)?;
+    let mut files = files(&dir, &scene, &run)?;
+    if let Some((records, receiver)) = &run.telemetry {
+        let board = match &args.firmware {
+            Some(elf) => format!("the firmware {} under QEMU (link build)", elf.display()),
+            None => "the core's board on the host".to_string(),
+        };
+        let image = scene.run.image()?;
+        let crc = image
+            .get(image.len().saturating_sub(4)..)
+            .map_or(0, |b| u32::from_le_bytes(b.try_into().unwrap_or([0; 4])));
+        let settings: String = Setting::ALL
+            .iter()
+            .map(|&k| format!(" {}={}", k.key(), Decimal(scene.run.settings.get(k))))
+            .collect();
+        let header = [
+            format!("scene: {} ({})", scene.name, scene.description),
+            format!("board: {board}"),
+            format!("image_crc: {crc:#010x}"),
+            format!("settings:{settings}"),
+        ];
+        let path = dir.join("telemetry.csv");
+        let tick_hz = f64::from(scene.run.settings.tick_hz);
+        let recorded = super::record::write(&path, &header, records, receiver, tick_hz)?;
+        files.push(recorded.file);
+    }
     // The target in force at the end (a scene's command may have changed it).
     let target = run.target_hz;
     let hz = run.natural_frequency_hz;

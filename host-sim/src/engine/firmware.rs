@@ -17,9 +17,11 @@ use std::time::{Duration, Instant};
 use de_resonator::acquire::InputError;
 use de_resonator::board::link::{self, Booted, Kind, Observed, HEADER, MAX_FRAME};
 use de_resonator::board::protocol::NOTICE;
+use de_resonator::board::stream::{Receiver, Record};
 use de_resonator::Inputs;
 
 use crate::engine::hil::{LoopBoard, Samples, Wires};
+use crate::telemetry::{Recorder, Source};
 
 /// How long QEMU may take to open a port or a pipe, and the firmware to answer a tick or a
 /// command line, before the run stops: QEMU stuck or gone.
@@ -43,6 +45,8 @@ pub struct Qemu<'w> {
     frame: Vec<u8>,
     booted: (Booted, Option<String>),
     wires: &'w Wires,
+    /// The telemetry stream's reader (USART1), until `records` takes it.
+    recorder: Option<Recorder>,
 }
 
 impl<'w> Qemu<'w> {
@@ -65,8 +69,15 @@ impl<'w> Qemu<'w> {
         let image_path = dir.join("image.bin");
         std::fs::write(&image_path, image).map_err(|e| format!("{}: {e}", image_path.display()))?;
         let (command_path, link_path) = (dir.join("cmd.sock"), dir.join("link.sock"));
+        let stream_path = dir.join("stream.sock");
         let (samples_path, output_path) = (dir.join("samples"), dir.join("output"));
-        for p in [&command_path, &link_path, &samples_path, &output_path] {
+        for p in [
+            &command_path,
+            &link_path,
+            &stream_path,
+            &samples_path,
+            &output_path,
+        ] {
             let _ = std::fs::remove_file(p);
         }
         for p in [&samples_path, &output_path] {
@@ -79,6 +90,11 @@ impl<'w> Qemu<'w> {
             .args(["-M", "netduinoplus2", "-nographic", "-monitor", "none"])
             .arg("-chardev")
             .arg(format!(
+                "socket,id=stream,path={},server=on,wait=off",
+                stream_path.display()
+            ))
+            .arg("-chardev")
+            .arg(format!(
                 "socket,id=cmd,path={},server=on,wait=on",
                 command_path.display()
             ))
@@ -89,7 +105,7 @@ impl<'w> Qemu<'w> {
             ))
             .args([
                 "-serial",
-                "null",
+                "chardev:stream",
                 "-serial",
                 "chardev:cmd",
                 "-serial",
@@ -123,6 +139,8 @@ impl<'w> Qemu<'w> {
         // The firmware opens `samples` to read, then `output` to write.
         let samples = open_writer(&samples_path, &mut child)?;
         let output = read_frames(output_path.clone());
+        // The telemetry stream (USART1): QEMU listens without waiting; read from now on.
+        let recorder = Recorder::start(&Source::Unix(stream_path))?;
         child.1 = PathBuf::new();
         let mut qemu = Qemu {
             child: child.0.take().ok_or("QEMU lost")?,
@@ -135,6 +153,7 @@ impl<'w> Qemu<'w> {
             frame: vec![0; MAX_FRAME],
             booted: (Booted::of(None), None),
             wires,
+            recorder: Some(recorder),
         };
         let (kind, _, payload) = qemu.frame()?;
         if kind != Kind::Boot {
@@ -347,6 +366,12 @@ impl LoopBoard for Qemu<'_> {
 
     fn booted(&mut self) -> (Booted, Option<String>) {
         self.booted.clone()
+    }
+
+    fn records(&mut self) -> Result<(Vec<Record>, Receiver), String> {
+        // The last tick's record leaves the firmware's idle loop after its output frame.
+        let recorder = self.recorder.take().ok_or("the stream was read already")?;
+        recorder.finish(Duration::from_millis(200))
     }
 
     fn tick(

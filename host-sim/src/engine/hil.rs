@@ -10,6 +10,7 @@ use std::time::Instant;
 use de_resonator::acquire::{Block, Channel, FrontEnd, InputError, Reader};
 use de_resonator::board::link::{self, Booted, Observed, Words};
 use de_resonator::board::port::Extras;
+use de_resonator::board::stream::{self, Receiver, Record, Telemetry};
 use de_resonator::board::{Line, Lines, NoKeeper, ReplyLine, Then};
 use de_resonator::image::{AmplifierSpec, Image, PowerUp, DAC_BITS};
 use de_resonator::{
@@ -247,6 +248,9 @@ pub struct Loop {
     pub commands: Vec<Scripted>,
     /// Keep the time history (`Sample`) at every tick.
     pub history: bool,
+    /// Record the board's telemetry stream at this rate, Hz (`stream <hz>` sent before the
+    /// first tick; `None`: no stream).
+    pub stream_hz: Option<f32>,
 }
 
 /// A command-port line a scene sends before tick `tick` (`[[commands]]`).
@@ -308,6 +312,9 @@ pub struct Run {
     /// are at the end) and its mode.
     pub limit: Option<(FailureMode, f64)>,
     pub history: Vec<Sample>,
+    /// The board's telemetry stream as received (`Loop::stream_hz`): the records, and the
+    /// receiver's counts.
+    pub telemetry: Option<(Vec<Record>, Receiver)>,
     /// With tracking on (`track_seconds`): every `TRACE_SECONDS`, the plant's natural
     /// frequency at the bias held and what the tracker measures.
     pub tracking: Vec<Tracked>,
@@ -495,6 +502,7 @@ impl Loop {
             natural_frequency_hz: f64::NAN,
             limit: None,
             history: Vec::new(),
+            telemetry: None,
             tracking: Vec::new(),
             sensed: Vec::new(),
             ticks: 0,
@@ -510,6 +518,18 @@ impl Loop {
         let mut bias = f32::NAN;
         let trace_every =
             ((TRACE_SECONDS * f64::from(self.settings.tick_hz)).round() as u64).max(1);
+        if let Some(hz) = self.stream_hz {
+            let line = format!("stream {hz}");
+            let reply = board.command(&line)?;
+            if !reply.starts_with("ok ") {
+                return Err(format!("`{line}` got `{reply}`"));
+            }
+            run.commands.push(Replied {
+                seconds: 0.0,
+                line,
+                reply,
+            });
+        }
         for k in 0..ticks {
             if k % every == 0 {
                 progress.set_position(k);
@@ -591,6 +611,9 @@ impl Loop {
             run.ticks = k + 1;
         }
         progress.finish_and_clear();
+        if self.stream_hz.is_some() {
+            run.telemetry = Some(board.records()?);
+        }
         let y = bench.y;
         run.run_seconds = started.elapsed().as_secs_f64();
         let bias = if run.fault_words.is_none() && bias.is_finite() {
@@ -952,6 +975,8 @@ pub trait LoopBoard {
     }
     /// A line on the command port, between ticks: the board's reply.
     fn command(&mut self, line: &str) -> Result<String, String>;
+    /// The telemetry stream's records received so far and the receiver's counts.
+    fn records(&mut self) -> Result<(Vec<Record>, Receiver), String>;
 }
 
 /// The core's board on the host: booted from the scene's image, its output stage on the
@@ -966,6 +991,11 @@ pub struct CoreBoard<'w> {
     refusal: Option<String>,
     fault: Option<Fault>,
     wires: &'w Wires,
+    /// The stream's state, and its frames through a receiver as a client's wire would take
+    /// them.
+    telemetry: Telemetry,
+    receiver: Receiver,
+    records: Vec<Record>,
 }
 
 impl<'w> CoreBoard<'w> {
@@ -986,6 +1016,9 @@ impl<'w> CoreBoard<'w> {
             refusal,
             fault: None,
             wires,
+            telemetry: Telemetry::default(),
+            receiver: Receiver::default(),
+            records: Vec::new(),
         }
     }
 }
@@ -997,7 +1030,7 @@ impl LoopBoard for CoreBoard<'_> {
 
     fn tick(
         &mut self,
-        _: u64,
+        k: u64,
         inputs: Result<Inputs, InputError>,
         _: Samples,
         _: &[u16],
@@ -1011,6 +1044,22 @@ impl LoopBoard for CoreBoard<'_> {
                     f(c);
                 }
             });
+        }
+        // The stream's record after the tick and its job, as the firmware's idle loop takes it.
+        if let Some(sequence) = self.telemetry.due(k as u32) {
+            let record = Record::of(
+                (sequence, k as u32),
+                !self.stage.is_safe(),
+                self.slot.as_ref(),
+                &self.readings,
+            );
+            let mut frame = [0u8; stream::FRAME_BYTES];
+            let n = record.frame(&mut frame);
+            for &byte in &frame[..n] {
+                if let Some(Ok(r)) = self.receiver.push(byte) {
+                    self.records.push(r);
+                }
+            }
         }
         let event = ticked.and_then(|t| t.output.event);
         self.fault = match event {
@@ -1037,18 +1086,26 @@ impl LoopBoard for CoreBoard<'_> {
         let parsed = command_line(line)?;
         let extras = Extras {
             readings: self.readings,
+            stream_port: true,
             ..Extras::default()
         };
         let mut reply = ReplyLine::new();
         let then = self
             .logic
             .serve(&parsed, &mut &mut self.slot, &extras, &mut reply);
+        if let Then::Stream(every) = then {
+            self.telemetry.set(every);
+        }
         if then == Then::Reset {
             return Err(format!(
                 "`{line}`: a scene cannot script a reset (the run would start again)"
             ));
         }
         Ok(reply.to_string())
+    }
+
+    fn records(&mut self) -> Result<(Vec<Record>, Receiver), String> {
+        Ok((std::mem::take(&mut self.records), self.receiver.clone()))
     }
 }
 
