@@ -279,8 +279,9 @@ async fn scan<F: NorFlash>(
 
 /// Append `entry` (its sequence set to one more than the newest): at the first erased slot
 /// after the newest's half's last written one, or, that half full, at the start of the other
-/// half, erased first if `may_erase` (else `StoreError::LogFull`, nothing written: an erase
-/// stalls a chip that runs from the same flash bank). The sequence number written.
+/// half: as it is if it is erased already (`prepare`), erased first if `may_erase` (else
+/// `StoreError::LogFull`, nothing written: an erase stalls a chip that runs from the same
+/// flash bank, for longer than its watchdog waits). The sequence number written.
 #[cfg(feature = "storage")]
 pub async fn append<F: NorFlash>(
     mut flash: F,
@@ -295,14 +296,14 @@ pub async fn append<F: NorFlash>(
         None => (1, 0),
     };
     let free = found.free.get(half).copied().flatten();
+    let other = 1 - half;
     let (half, k) = match free {
         Some(k) => (half, k),
+        // The other half erased already (`prepare`, or never written).
+        None if found.free.get(other).copied().flatten() == Some(0) => (other, 0),
         None if !may_erase => return Err(StoreError::LogFull),
         None => {
-            let other = 1 - half;
-            let start = starts.get(other).copied().ok_or(StoreError::Range)?;
-            let len = (range.end - range.start) / 2;
-            flash.erase(start, start + len).await.map_err(flash_error)?;
+            erase_half(&mut flash, &starts, other).await?;
             (other, 0)
         }
     };
@@ -337,6 +338,42 @@ pub async fn append<F: NorFlash>(
         .await
         .map_err(flash_error)?;
     Ok(sequence)
+}
+
+/// Erase half `h` (its whole pages).
+#[cfg(feature = "storage")]
+async fn erase_half<F: NorFlash>(
+    flash: &mut F,
+    starts: &[u32; 2],
+    h: usize,
+) -> Result<(), StoreError> {
+    let start = starts.get(h).copied().ok_or(StoreError::Range)?;
+    // The halves are the same length: the second's start less the first's.
+    let [first, second] = *starts;
+    flash
+        .erase(start, start + (second - first))
+        .await
+        .map_err(flash_error)
+}
+
+/// At boot, while a stall harms nothing (nothing driven, no watchdog yet): erase the other
+/// half if the newest's holds `KEPT` entries or more (the newest `KEPT` are all there) and
+/// the other is not erased, so that appends while running, which must not erase on a chip,
+/// have the rest of this half and all of the other. Whether it erased.
+#[cfg(feature = "storage")]
+pub async fn prepare<F: NorFlash>(mut flash: F, range: Range<u32>) -> Result<bool, StoreError> {
+    let (starts, slots) = halves::<F>(&range)?;
+    let found = scan(&mut flash, &range, |_| {}).await?;
+    let Some((_, half)) = found.newest else {
+        return Ok(false);
+    };
+    let used = found.free.get(half).copied().flatten().unwrap_or(slots);
+    let other = 1 - half;
+    if used < KEPT || found.free.get(other).copied().flatten() == Some(0) {
+        return Ok(false);
+    }
+    erase_half(&mut flash, &starts, other).await?;
+    Ok(true)
 }
 
 /// Every valid entry, in flash order (the board's `faults`: a list, or one entry, without

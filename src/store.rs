@@ -48,8 +48,8 @@ pub enum StoreError {
     /// The newest record holds a blob of another layout version (or length): refused, never
     /// read as this one.
     Version { version: u16, count: u16 },
-    /// The fault log's half is full and its next entry needs the other erased, which the
-    /// caller does not allow now (an erase stalls the chip: it waits for 0 V).
+    /// The fault log's half is full and its next entry needs the other erased, which is not
+    /// done while running on a chip (an erase stalls it past its watchdog): at the next boot.
     LogFull,
 }
 
@@ -84,8 +84,8 @@ impl fmt::Display for StoreError {
             }
             StoreError::LogFull => write!(
                 f,
-                "the fault log's half is full: the entry waits for the output at 0 V, where \
-                 the other half is erased"
+                "the fault log is full for this run (its other half is erased at the next \
+                 boot): entry not kept"
             ),
             StoreError::Version { version, count } => write!(
                 f,
@@ -269,6 +269,10 @@ pub struct FlashKeeper<F> {
     pub range: Range<u32>,
     /// The fault log's (`crate::fault_log`; `None`: none kept).
     pub log: Option<Range<u32>>,
+    /// Whether an erase stalls the chip (its code runs from this flash bank, for longer than
+    /// the watchdog waits): the log then erases only at boot (`Keeper::prepare_faults`), never
+    /// while running. RAM: `false`.
+    pub erase_stalls: bool,
 }
 
 impl<F: NorFlash> crate::board::Keeper for FlashKeeper<F> {
@@ -284,12 +288,9 @@ impl<F: NorFlash> crate::board::Keeper for FlashKeeper<F> {
             .unwrap_or(Err(StoreError::Flash(FlashKind::Other)))
     }
 
-    fn log(
-        &mut self,
-        entry: &crate::fault_log::Entry,
-        may_erase: bool,
-    ) -> Option<Result<u32, StoreError>> {
+    fn log(&mut self, entry: &crate::fault_log::Entry) -> Option<Result<u32, StoreError>> {
         let range = self.log.clone()?;
+        let may_erase = !self.erase_stalls;
         Some(
             block_on(crate::fault_log::append(
                 &mut self.flash,
@@ -298,6 +299,14 @@ impl<F: NorFlash> crate::board::Keeper for FlashKeeper<F> {
                 may_erase,
             ))
             .unwrap_or(Err(StoreError::Flash(FlashKind::Other))),
+        )
+    }
+
+    fn prepare_faults(&mut self) -> Option<Result<bool, StoreError>> {
+        let range = self.log.clone()?;
+        Some(
+            block_on(crate::fault_log::prepare(&mut self.flash, range))
+                .unwrap_or(Err(StoreError::Flash(FlashKind::Other))),
         )
     }
 

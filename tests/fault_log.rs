@@ -181,38 +181,39 @@ fn a_range_without_room_for_the_kept_entries_is_refused() {
     );
 }
 
-/// A half full and no erase allowed (the output not at 0 V): nothing written, said; allowed
-/// later, the entry goes in.
+/// Appends that must not erase (a chip, running): into the other half while it is erased;
+/// both full, nothing written and said; `prepare` at boot erases the older half (the newest
+/// holding `KEPT`), and appends go on without an erase.
 #[test]
-fn an_append_that_needs_an_erase_waits_when_told() {
+fn appends_that_must_not_erase_and_the_boots_prepare() {
     let mut bytes = erased();
-    for n in 0..PER_HALF as u32 {
-        assert_eq!(
-            block_on(fault_log::append(
-                RamFlash::new(&mut bytes),
-                RANGE,
-                &nth(n),
-                false
-            )),
-            Ok(n + 1)
-        );
+    let append = |bytes: &mut Vec<u8>, n: u32| {
+        block_on(fault_log::append(
+            RamFlash::new(bytes),
+            RANGE,
+            &nth(n),
+            false,
+        ))
+    };
+    for n in 0..2 * PER_HALF as u32 {
+        assert_eq!(append(&mut bytes, n), Ok(n + 1), "both halves fill");
     }
     let before = bytes.clone();
-    let got = block_on(fault_log::append(
-        RamFlash::new(&mut bytes),
-        RANGE,
-        &nth(99),
-        false,
-    ));
-    assert_eq!(got, Err(StoreError::LogFull));
+    assert_eq!(append(&mut bytes, 99), Err(StoreError::LogFull));
     assert!(bytes == before, "nothing written");
-    let got = block_on(fault_log::append(
-        RamFlash::new(&mut bytes),
-        RANGE,
-        &nth(99),
-        true,
-    ));
-    assert_eq!(got, Ok(PER_HALF as u32 + 1));
+    let prepare = |bytes: &mut Vec<u8>| block_on(fault_log::prepare(RamFlash::new(bytes), RANGE));
+    assert_eq!(prepare(&mut bytes), Ok(true));
+    assert_eq!(prepare(&mut bytes), Ok(false), "once");
+    let top = 2 * PER_HALF as u32;
+    assert_eq!(read(&mut bytes), newest_first(top - KEPT as u32..top));
+    assert_eq!(append(&mut bytes, top), Ok(top + 1));
+    // Fewer than KEPT in the newest half: the older half is kept.
+    let mut bytes = erased();
+    for n in 0..PER_HALF as u32 + 3 {
+        append(&mut bytes, n).unwrap();
+    }
+    assert_eq!(prepare(&mut bytes), Ok(false));
+    assert_eq!(read(&mut bytes).len(), KEPT);
 }
 
 #[test]

@@ -27,8 +27,9 @@ pub fn reset(cause: ResetCause) -> ! {
     cortex_m::peripheral::SCB::sys_reset()
 }
 
-/// Why the last reset happened, if the firmware recorded it (then forgotten: a power cycle
-/// or a reset pin reads `None`).
+/// Why the last reset happened: the firmware's own record (`reset`, QEMU's watchdog
+/// stand-in), else the chip's reset flags (the IWDG, a brown-out); then forgotten. A power
+/// cycle or the reset pin reads `None`.
 pub fn take_reset_cause() -> Option<ResetCause> {
     // SAFETY: reads and clears RAM only this module touches; any bit pattern is a valid
     // [u32; 2], and the check word says whether it was written.
@@ -38,8 +39,9 @@ pub fn take_reset_cause() -> Option<ResetCause> {
         core::ptr::write_volatile(at, [0, 0]);
         record
     };
+    let flags = from_flags();
     if check != CAUSE_CHECK ^ code {
-        return brown_out();
+        return flags;
     }
     match code {
         1 => Some(ResetCause::Asked),
@@ -150,17 +152,25 @@ pub mod stack {
     }
 }
 
-/// A brown-out the chip's reset flags say (RCC_CSR's BORRSTF), the flags then cleared;
-/// never under QEMU (its RCC reads 0).
-fn brown_out() -> Option<ResetCause> {
+/// The reset the chip's own flags say, when the firmware recorded none (RCC_CSR, then
+/// cleared): the IWDG's, or a brown-out (BORRSTF without PORRSTF: a power-on sets both).
+/// Never under QEMU (its RCC reads 0; its watchdog stand-in records its reset in RAM).
+fn from_flags() -> Option<ResetCause> {
     #[cfg(not(feature = "qemu"))]
     {
         // SAFETY: RCC_CSR read, then its RMVF bit set to clear the reset flags: no one else
         // touches them.
         let rcc = unsafe { &*stm32f4xx_hal::pac::RCC::ptr() };
-        let brown = rcc.csr().read().borrstf().bit_is_set();
+        let csr = rcc.csr().read();
+        let cause = if csr.iwdgrstf().bit_is_set() {
+            Some(ResetCause::Watchdog)
+        } else if csr.borrstf().bit_is_set() && csr.porrstf().bit_is_clear() {
+            Some(ResetCause::BrownOut)
+        } else {
+            None
+        };
         rcc.csr().modify(|_, w| w.rmvf().set_bit());
-        brown.then_some(ResetCause::BrownOut)
+        cause
     }
     #[cfg(feature = "qemu")]
     None

@@ -30,6 +30,8 @@ pub fn open(controller: stm32f4xx_hal::pac::FLASH) -> Option<FlashKeeper<Setting
             flash: de_resonator::store::RamFlash::new(ram),
             range: 0..settings,
             log: Some(settings..len),
+            // RAM: an erase is over at once.
+            erase_stalls: false,
         })
     }
     #[cfg(not(feature = "qemu"))]
@@ -51,6 +53,8 @@ pub fn open(controller: stm32f4xx_hal::pac::FLASH) -> Option<FlashKeeper<Setting
             flash: ChipFlash(flash),
             range: from..to,
             log: Some(log_from..log_to),
+            // A 128 KB sector's erase stalls the core 2-4 s (one bank), past the watchdog.
+            erase_stalls: true,
         })
     }
 }

@@ -134,6 +134,8 @@ fn a_recording_matches_the_scenes_own_history_record_for_record() {
     for named in [
         "image_crc=0x",
         "firmware=de-resonator",
+        "device.shear_modulus=",
+        "device.jlim=",
         "target_hz=44",
         "stream hz=100",
     ] {

@@ -5,7 +5,7 @@
 
 use core::fmt::Write as _;
 
-use super::{Board, Keeper, ResetCause};
+use super::{Board, Keeper, ResetCause, Shared};
 use crate::acquire::Inputs;
 use crate::board::port::ReplyLine;
 use crate::board::protocol::{ErrorCode, FaultsAsk};
@@ -25,34 +25,43 @@ impl<K: Keeper> Board<'_, K> {
             ResetCause::BrownOut => (Cause::BrownOut, "brown-out reset: the supply fell"),
             ResetCause::Asked => return None,
         };
-        // At boot: nothing driven, an erase may stall the chip.
-        self.keeper
-            .as_mut()?
-            .log(&Entry::of_reset(cause, words), true)
+        self.keeper.as_mut()?.log(&Entry::of_reset(cause, words))
     }
 
-    /// Log `fault`, latched at board tick `tick` (`seconds` since boot) with `volts`
-    /// commanded and `inputs` read; its sequence number, `None` without a log. Flash work: the
-    /// caller runs it outside the tick, and allows an erase (`may_erase`) only where a stall
-    /// is harmless (the output at rest at 0 V, or a flash that never stalls).
+    /// Log `fault`, latched at board tick `tick` (`seconds` since boot) with `volts` sent
+    /// before it and `inputs` read; its sequence number, `None` without a log. Flash work: the
+    /// caller runs it outside the tick.
     pub fn log_fault(
         &mut self,
         fault: &Fault,
         (tick, seconds): (u32, f32),
         volts: f32,
         inputs: &Inputs,
-        may_erase: bool,
     ) -> Option<Result<u32, K::Error>> {
         let entry = Entry {
             current_amps: inputs.current_amps,
             stretch: inputs.stretch,
             ..Entry::of_fault(fault, tick, seconds, volts)
         };
-        self.keeper.as_mut()?.log(&entry, may_erase)
+        self.keeper.as_mut()?.log(&entry)
     }
 
-    /// `faults`, `faults <n>`, `faults clear`.
-    pub(super) fn faults(&mut self, ask: FaultsAsk, out: &mut ReplyLine) {
+    /// `faults`, `faults <n>`, `faults clear` (at rest at 0 V only: it erases flash, which
+    /// stalls a chip).
+    pub(super) fn faults(
+        &mut self,
+        ask: FaultsAsk,
+        controller: &mut impl Shared,
+        out: &mut ReplyLine,
+    ) {
+        if ask == FaultsAsk::Clear && !controller.with(|c| c.as_ref().is_none_or(|c| c.at_rest())) {
+            return super::port::err(
+                out,
+                ErrorCode::State,
+                "`faults clear` erases flash, which stalls the chip: at rest at 0 V only \
+                 (`stop` first)",
+            );
+        }
         let Some(keeper) = self.keeper.as_mut() else {
             return super::port::err(out, ErrorCode::Unsupported, "no fault log on this board");
         };
@@ -104,6 +113,11 @@ impl<K: Keeper> Board<'_, K> {
                     r.map(|()| {
                         let _ = write!(out, "ok faults={}", kept.iter().flatten().count());
                         for (sequence, cause, tick) in kept.iter().flatten() {
+                            // The line's room: the rest said as such, never cut mid-entry.
+                            if out.capacity() - out.len() < ITEM_BYTES + MORE.len() {
+                                let _ = out.push_str(MORE);
+                                break;
+                            }
                             let _ = write!(out, " | {sequence} {} t={tick}", cause.key());
                         }
                     })
@@ -117,6 +131,11 @@ impl<K: Keeper> Board<'_, K> {
         }
     }
 }
+
+/// The longest item of the list: ` | ` and a u32, a space, the longest key, ` t=` and a u32.
+const ITEM_BYTES: usize = 3 + 10 + 1 + 19 + 3 + 10;
+/// What ends a list cut for the reply line's room.
+const MORE: &str = " | … (older: `faults <n>`)";
 
 /// One entry whole: its fields, its words last (they take the rest of the line).
 fn one(e: &Entry, out: &mut ReplyLine) {

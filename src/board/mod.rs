@@ -62,9 +62,14 @@ pub trait Keeper {
     /// The settings saved last, if any.
     fn load(&mut self) -> Result<Option<Settings>, Self::Error>;
     fn save(&mut self, settings: &Settings) -> Result<(), Self::Error>;
-    /// Append `entry` to the fault log beside the settings (its sequence number), erasing a
-    /// half if it must only when `may_erase`; `None`: no fault log here.
-    fn log(&mut self, _entry: &Entry, _may_erase: bool) -> Option<Result<u32, Self::Error>> {
+    /// Append `entry` to the fault log beside the settings (its sequence number); `None`: no
+    /// fault log here.
+    fn log(&mut self, _entry: &Entry) -> Option<Result<u32, Self::Error>> {
+        None
+    }
+    /// At boot, before anything is driven: make the fault log ready for a run's entries
+    /// (an erase, if one is due; whether it erased); `None`: no fault log here.
+    fn prepare_faults(&mut self) -> Option<Result<bool, Self::Error>> {
         None
     }
     /// Every entry of the fault log, in flash order; `None`: no fault log here.
@@ -136,7 +141,11 @@ impl<'a, K: Keeper> Board<'a, K> {
             booted: None,
             keeper,
         };
-        // A reset the board did not ask for is an entry of the fault log.
+        // The fault log ready for the run (a stall here harms nothing); a reset the board did
+        // not ask for is its first entry.
+        if let Some(keeper) = board.keeper.as_mut() {
+            let _ = keeper.prepare_faults();
+        }
         if let Some(cause @ (ResetCause::Watchdog | ResetCause::BrownOut)) = cause {
             let _ = board.log_reset(cause);
         }

@@ -12,6 +12,7 @@ use crate::board::protocol::{
 };
 use crate::board::stream;
 use crate::controller::{Controller, Phase, Refusal, Setting, Settings};
+use crate::device::Field;
 use crate::numerics::decimal::Decimal;
 
 /// One request as received: its bytes, or why it has none.
@@ -192,7 +193,7 @@ impl<K: Keeper> Board<'_, K> {
             }
             Command::Stream(hz) => return self.stream(hz, controller, extras, out),
             Command::Faults(ask) => {
-                self.faults(ask, out);
+                self.faults(ask, controller, out);
                 return Then::Reply;
             }
             Command::Info => {
@@ -212,6 +213,13 @@ impl<K: Keeper> Board<'_, K> {
                     stream::VERSION,
                     if extras.stream_port { "yes" } else { "no" }
                 );
+                // The device flashed, by its device-file keys (SI units; `jlim` 0: neo-Hookean).
+                if let Some(image) = self.image() {
+                    for field in Field::ALL {
+                        let value = Decimal(image.params.get(field));
+                        let _ = write!(out, " device.{}={value}", field.key());
+                    }
+                }
                 return Then::Reply;
             }
             _ => {}

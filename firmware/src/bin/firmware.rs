@@ -42,7 +42,7 @@ mod app {
     use de_resonator::board::stream::{Record, Telemetry, FRAME_BYTES};
     use de_resonator::board::watchdog::CheckIn;
     use de_resonator::board::{self as logic, Line, Lines, ReplyLine, Then};
-    use de_resonator::store::{FlashKeeper, StoreError};
+    use de_resonator::store::FlashKeeper;
     #[cfg(not(feature = "link"))]
     use de_resonator::Decimal;
     use de_resonator::{Controller, Dac8551, Event, Fault, Inputs, OutputStage};
@@ -95,18 +95,20 @@ mod app {
         telemetry: Telemetry,
         /// The telemetry stream's port (`None`: the clock in use gives no divider for it).
         stream_port: Option<StreamPort>,
+        /// The fault the tick saw latch, until the command task writes it to the fault log.
+        logged: Option<Logged>,
     }
 
-    /// What the command task is given: a request line (from `rx`), or a fault the tick saw
-    /// latch, for the fault log (flash work, outside the tick).
+    /// What the command task is given: a request line (from `rx`), or a wake-up for the
+    /// fault the tick left in `logged` (flash work, outside the tick; should the queue be
+    /// full, the task finds it at its next line).
     pub enum Work {
         Line(Line),
-        Fault(Logged),
-        /// The output came to rest at 0 V (the stage safe): a held entry may erase now.
-        AtRest,
+        Log,
     }
 
-    /// A fault as the tick saw it latch: when, at what voltage, on what readings.
+    /// A fault as the tick saw it latch: when, at the voltage sent before it, on what readings.
+    #[derive(Clone, Copy)]
     pub struct Logged {
         fault: Fault,
         tick: u32,
@@ -309,6 +311,7 @@ mod app {
                 },
                 telemetry: Telemetry::default(),
                 stream_port,
+                logged: None,
             },
             Local {
                 stage,
@@ -398,10 +401,15 @@ mod app {
         let Some(sequence) = telemetry.lock(|t| t.due(last)) else {
             return;
         };
+        // Under one lock with the tick's state; a tick that ran between the two locks makes
+        // this record's sequence number a gap, not a record of another tick.
         let record = (latest, controller, output_off).lock(|latest, c, off| {
-            let tick = latest.ticks.wrapping_sub(1);
-            Record::of((sequence, tick), !*off, c.as_ref(), &latest.readings)
+            (latest.ticks.wrapping_sub(1) == last)
+                .then(|| Record::of((sequence, last), !*off, c.as_ref(), &latest.readings))
         });
+        let Some(record) = record else {
+            return;
+        };
         let n = record.frame(frame);
         port.lock(|port| {
             if let Some(port) = port.as_mut() {
@@ -411,7 +419,7 @@ mod app {
     }
 
     /// One controller tick: its code to the DAC, the enable line held, the events logged.
-    #[task(binds = SysTick, priority = 3, shared = [controller, tick_cycles_max, last_tick_us, output_off, checked_in, block, latest], local = [stage, sensor, reader, dog, check_in, hang_after_ticks, to_log, driven_ticks: u32 = 0, next_tick: u32 = 0, was_off: bool = true, #[cfg(feature = "link")] to_reply])]
+    #[task(binds = SysTick, priority = 3, shared = [controller, tick_cycles_max, last_tick_us, output_off, checked_in, block, latest, logged], local = [stage, sensor, reader, dog, check_in, hang_after_ticks, to_log, driven_ticks: u32 = 0, next_tick: u32 = 0, sent_volts: f32 = 0.0, #[cfg(feature = "link")] to_reply])]
     fn tick(mut cx: tick::Context) {
         #[cfg(feature = "qemu")]
         cx.shared
@@ -484,23 +492,25 @@ mod app {
             }
             if let Some(event) = t.output.event {
                 log(event, t.ticks);
-                // Into the fault log, written by the command task (a full queue loses it).
+                // Into the fault log, written by the command task, with the voltage sent
+                // before the fault.
                 if let Event::Fault(fault) = event {
-                    let _ = cx.local.to_log.try_send(Work::Fault(Logged {
-                        fault,
-                        tick,
-                        volts: t.output.volts,
-                        readings,
-                    }));
+                    let volts = *cx.local.sent_volts;
+                    cx.shared.logged.lock(|l| {
+                        *l = Some(Logged {
+                            fault,
+                            tick,
+                            volts,
+                            readings,
+                        })
+                    });
+                    let _ = cx.local.to_log.try_send(Work::Log);
                 }
             }
+            *cx.local.sent_volts = t.output.volts;
         }
         let off = stage.is_safe();
         cx.shared.output_off.lock(|o| *o = off);
-        if off && !*cx.local.was_off {
-            let _ = cx.local.to_log.try_send(Work::AtRest);
-        }
-        *cx.local.was_off = off;
         let cycles = board::cycles_into_tick();
         cx.shared
             .tick_cycles_max
@@ -640,36 +650,27 @@ mod app {
     }
 
     /// Each request answered, one reply line each.
-    #[task(priority = 1, shared = [controller, tick_cycles_max, last_tick_us, output_off, latest, telemetry], local = [from_rx, tx, logic, has_stream_port, held_entry: Option<Logged> = None])]
+    #[task(priority = 1, shared = [controller, tick_cycles_max, last_tick_us, output_off, latest, telemetry, logged], local = [from_rx, tx, logic, has_stream_port])]
     async fn command(mut cx: command::Context) {
         let mut reply = ReplyLine::new();
         while let Ok(work) = cx.local.from_rx.recv().await {
             // Room in the queue again: a paused receiver resumes.
             rtic::pend(stm32f4xx_hal::pac::Interrupt::USART2);
-            // A fault into the log; one that needs a half erased (a stall of 1–2 s on the
-            // chip) waits for the output at rest at 0 V.
-            let logged = match work {
-                Work::Line(line) => Ok(line),
-                Work::Fault(logged) => Err(Some(logged)),
-                Work::AtRest => Err(cx.local.held_entry.take()),
-            };
-            let line = match logged {
-                Ok(line) => line,
-                Err(None) => continue,
-                Err(Some(logged)) => {
-                    let logic = &mut *cx.local.logic;
-                    let tick_hz = cx.shared.controller.lock(|c| logic.tick_hz(c));
-                    let at = (logged.tick, logged.tick as f32 / tick_hz);
-                    let at_rest = cx.shared.output_off.lock(|o| *o);
-                    let (fault, volts, readings) = (logged.fault, logged.volts, logged.readings);
-                    match logic.log_fault(&fault, at, volts, &readings, at_rest) {
-                        Some(Err(StoreError::LogFull)) => *cx.local.held_entry = Some(logged),
-                        #[cfg(feature = "defmt")]
-                        Some(Err(e)) => defmt::error!("the fault log: {}", e),
-                        _ => {}
-                    }
-                    continue;
+            // A fault the tick left, into the log (the flash's own policy: no erase while
+            // running on the chip, `store::FlashKeeper::erase_stalls`).
+            if let Some(logged) = cx.shared.logged.lock(Option::take) {
+                let logic = &mut *cx.local.logic;
+                let tick_hz = cx.shared.controller.lock(|c| logic.tick_hz(c));
+                let at = (logged.tick, logged.tick as f32 / tick_hz);
+                let done = logic.log_fault(&logged.fault, at, logged.volts, &logged.readings);
+                #[cfg(feature = "defmt")]
+                if let Some(Err(e)) = done {
+                    defmt::error!("the fault log: {}", e);
                 }
+                let _ = done;
+            }
+            let Work::Line(line) = work else {
+                continue;
             };
             #[cfg(feature = "defmt")]
             if let Line::Text(bytes) = &line {

@@ -135,8 +135,11 @@ impl Keeper for &mut Flash {
     fn save(&mut self, settings: &Settings) -> Result<(), StoreError> {
         self.keeper().save(settings)
     }
-    fn log(&mut self, entry: &Entry, may_erase: bool) -> Option<Result<u32, StoreError>> {
-        self.keeper().log(entry, may_erase)
+    fn log(&mut self, entry: &Entry) -> Option<Result<u32, StoreError>> {
+        self.keeper().log(entry)
+    }
+    fn prepare_faults(&mut self) -> Option<Result<bool, StoreError>> {
+        self.keeper().prepare_faults()
     }
     fn each_fault(&mut self, each: &mut dyn FnMut(Entry)) -> Option<Result<(), StoreError>> {
         self.keeper().each_fault(each)
@@ -158,6 +161,7 @@ impl Flash {
             flash: store::RamFlash::new(&mut self.0),
             range: 0..settings,
             log: Some(settings..len),
+            erase_stalls: false,
         }
     }
 }
@@ -385,6 +389,8 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
     let started = Instant::now();
     let mut next_poll = started;
     let mut k: u64 = 0;
+    // The voltage the last tick sent (a fault's entry says the one before its tick).
+    let mut sent_volts = 0.0f32;
     while ticks_limit.is_none_or(|n| k < n) {
         let now = Instant::now();
         let due = match args.speed {
@@ -474,16 +480,15 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
                 eprintln!("{line}");
                 report.events.push(line);
             }
-            // A fault into the log, as the firmware's command task writes it after the tick
-            // (RAM: an erase stalls nothing).
+            // A fault into the log, as the firmware's command task writes it after the tick,
+            // with the voltage sent before it.
             if let Some(Event::Fault(fault)) = ticked.output.event {
                 let at = (k as u32, t as f32);
-                if let Some(Err(e)) =
-                    logic.log_fault(&fault, at, ticked.output.volts, &stepped.inputs, true)
-                {
+                if let Some(Err(e)) = logic.log_fault(&fault, at, sent_volts, &stepped.inputs) {
                     eprintln!("{} s: the fault log: {e}", sig(t));
                 }
             }
+            sent_volts = ticked.output.volts;
         }
         if report.plant_crossing.is_none() {
             if let Some((mode, at)) = bench.crossing {
