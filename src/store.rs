@@ -302,6 +302,10 @@ impl<F: NorFlash> crate::board::Keeper for FlashKeeper<F> {
         )
     }
 
+    fn erase_stalls(&self) -> bool {
+        self.erase_stalls
+    }
+
     fn prepare_faults(&mut self) -> Option<Result<bool, StoreError>> {
         let range = self.log.clone()?;
         Some(

@@ -813,3 +813,34 @@ fn the_fault_log_lists_the_newest_first_across_resets() {
     let mut none = Bench::<NoKeeper>::boot(&image, None, None);
     assert_eq!(code(&none.ask("faults")), Some(6));
 }
+
+/// Where an erase stalls the chip past its watchdog (`FlashKeeper::erase_stalls`), `save`
+/// waits for the output at rest at 0 V; where it does not (RAM: QEMU, the virtual board), it
+/// saves while driving.
+#[cfg(feature = "storage")]
+#[test]
+fn a_save_on_a_chip_waits_for_rest() {
+    use de_resonator::store::{FlashKeeper, RamFlash, RAM_PAGE_BYTES};
+
+    let image = image_with(&Settings::for_target(44.0));
+    for stalls in [true, false] {
+        let mut bytes = vec![0xFFu8; 2 * RAM_PAGE_BYTES];
+        let keeper = FlashKeeper {
+            flash: RamFlash::new(&mut bytes),
+            range: 0..(2 * RAM_PAGE_BYTES) as u32,
+            log: None,
+            erase_stalls: stalls,
+        };
+        let mut bench = Bench::boot(&image, Some(keeper), None);
+        bench.run(10, Inputs::NONE);
+        let reply = bench.ask("save");
+        if stalls {
+            assert_eq!(code(&reply), Some(7), "while ramping: {reply}");
+            assert!(bench.ask("stop").starts_with("ok stop"));
+            bench.run(3000, Inputs::NONE);
+            assert!(bench.ask("save").starts_with("ok save"));
+        } else {
+            assert!(reply.starts_with("ok save"), "{reply}");
+        }
+    }
+}

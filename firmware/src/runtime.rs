@@ -162,7 +162,8 @@ fn from_flags() -> Option<ResetCause> {
         // touches them.
         let rcc = unsafe { &*stm32f4xx_hal::pac::RCC::ptr() };
         let csr = rcc.csr().read();
-        let cause = if csr.iwdgrstf().bit_is_set() {
+        // WDGRSTF: the independent watchdog's (the IWDG's IWDGRSTF in RM0090).
+        let cause = if csr.wdgrstf().bit_is_set() {
             Some(ResetCause::Watchdog)
         } else if csr.borrstf().bit_is_set() && csr.porrstf().bit_is_clear() {
             Some(ResetCause::BrownOut)

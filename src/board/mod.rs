@@ -62,6 +62,11 @@ pub trait Keeper {
     /// The settings saved last, if any.
     fn load(&mut self) -> Result<Option<Settings>, Self::Error>;
     fn save(&mut self, settings: &Settings) -> Result<(), Self::Error>;
+    /// Whether a flash erase stalls the chip (past its watchdog): `save` and `faults clear`
+    /// then wait for the output at rest at 0 V.
+    fn erase_stalls(&self) -> bool {
+        false
+    }
     /// Append `entry` to the fault log beside the settings (its sequence number); `None`: no
     /// fault log here.
     fn log(&mut self, _entry: &Entry) -> Option<Result<u32, Self::Error>> {

@@ -291,6 +291,18 @@ impl<K: Keeper> Board<'_, K> {
                 self.replan(next, controller, out, at_rest);
             }
             Command::Clear => self.clear(controller, out),
+            // A save erases a slot: where that stalls the chip past its watchdog, at rest only.
+            Command::Save
+                if self.keeper.as_ref().is_some_and(Keeper::erase_stalls)
+                    && !controller.with(|c| c.as_ref().is_none_or(Controller::at_rest)) =>
+            {
+                err(
+                    out,
+                    ErrorCode::State,
+                    "`save` erases flash, which stalls the chip: at rest at 0 V only (`stop` \
+                     first)",
+                );
+            }
             Command::Save => match self.keeper.as_mut().map(|k| k.save(&settings)) {
                 Some(Ok(())) => {
                     let _ = write!(out, "ok save: the settings in force boot from now on");
