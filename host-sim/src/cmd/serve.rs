@@ -344,6 +344,7 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
     };
     let mut stream_clients: Vec<Client> = Vec::new();
     let mut telemetry = Telemetry::default();
+    let mut boot_tick: u64 = 0;
     let mut frame = [0u8; stream::FRAME_BYTES];
     eprintln!(
         "serving scene {} on {at} at {}; the command port's protocol (`help`)",
@@ -440,6 +441,8 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
                 if then == Then::Reset {
                     // A restart stops the stream and starts its count again, as on a board.
                     telemetry = Telemetry::default();
+                    // The board's ticks count from its boot, as the firmware's do.
+                    boot_tick = k;
                     // The slot is empty: the output off at once (as the firmware's next tick
                     // does), then the boot, the settings' flash kept.
                     let _ = board::tick::drive(&mut slot, &mut stage, Ok(Inputs::NONE));
@@ -462,9 +465,11 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
         }
         let t = k as f64 * tick_seconds;
         let stepped = lp.step(k, &mut bench, &mut slot, &mut stage, &wires)?;
-        if let Some(sequence) = telemetry.due(k as u32) {
+        // The board's tick since its boot (the stream's and the fault log's).
+        let tick = (k - boot_tick) as u32;
+        if let Some(sequence) = telemetry.due(tick) {
             let record = Record::of(
-                (sequence, k as u32),
+                (sequence, tick),
                 !stage.is_safe(),
                 slot.as_ref(),
                 &stepped.inputs,
@@ -483,7 +488,7 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
             // A fault into the log, as the firmware's command task writes it after the tick,
             // with the voltage sent before it.
             if let Some(Event::Fault(fault)) = ticked.output.event {
-                let at = (k as u32, t as f32);
+                let at = (tick, (tick as f64 * tick_seconds) as f32);
                 if let Some(Err(e)) = logic.log_fault(&fault, at, sent_volts, &stepped.inputs) {
                     eprintln!("{} s: the fault log: {e}", sig(t));
                 }
