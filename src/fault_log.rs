@@ -42,8 +42,9 @@ use heapless::Vec;
 use crate::controller::Fault;
 #[cfg(feature = "storage")]
 use crate::store::{flash_error, StoreError};
+use crate::table::newer;
 #[cfg(feature = "storage")]
-use crate::table::{crc32, f32_at, newer, u32_at, Put};
+use crate::table::{crc32, f32_at, u32_at, Put};
 
 /// The newest entries the log keeps, at least.
 pub const KEPT: usize = 32;
@@ -197,6 +198,25 @@ impl Entry {
             stretch: number(f32_at(bytes, 24)),
             words: String::try_from(text).ok()?,
         })
+    }
+}
+
+/// Put `item` in its place in `kept`, newest first by `sequence` (wrapping), the oldest
+/// falling off the end: the newest `kept.len()` of a log read in any order, without a sort.
+pub fn keep_newest<T>(kept: &mut [Option<T>], sequence: impl Fn(&T) -> u32, item: T) {
+    let s = sequence(&item);
+    let Some(at) = kept
+        .iter()
+        .position(|k| k.as_ref().is_none_or(|k| newer(s, sequence(k))))
+    else {
+        return;
+    };
+    let mut carry = Some(item);
+    for slot in kept.iter_mut().skip(at) {
+        carry = core::mem::replace(slot, carry);
+        if carry.is_none() {
+            break;
+        }
     }
 }
 
@@ -393,39 +413,16 @@ pub async fn read<F: NorFlash>(
     mut flash: F,
     range: Range<u32>,
 ) -> Result<Vec<Entry, KEPT>, StoreError> {
-    let mut kept: Vec<Entry, KEPT> = Vec::new();
+    let mut kept: [Option<Entry>; KEPT] = core::array::from_fn(|_| None);
     scan(&mut flash, &range, |entry| {
-        // Keep the KEPT newest: a full list drops its oldest for a newer one.
-        if kept.is_full() {
-            let oldest = kept
-                .iter()
-                .enumerate()
-                .min_by(|a, b| {
-                    if newer(a.1.sequence, b.1.sequence) {
-                        core::cmp::Ordering::Greater
-                    } else {
-                        core::cmp::Ordering::Less
-                    }
-                })
-                .map(|(i, e)| (i, e.sequence));
-            match oldest {
-                Some((i, s)) if newer(entry.sequence, s) => {
-                    kept.swap_remove(i);
-                }
-                _ => return,
-            }
-        }
-        let _ = kept.push(entry);
+        keep_newest(&mut kept, |e| e.sequence, entry)
     })
     .await?;
-    kept.sort_unstable_by(|a, b| {
-        if newer(a.sequence, b.sequence) {
-            core::cmp::Ordering::Less
-        } else {
-            core::cmp::Ordering::Greater
-        }
-    });
-    Ok(kept)
+    let mut list = Vec::new();
+    for entry in kept.into_iter().flatten() {
+        let _ = list.push(entry);
+    }
+    Ok(list)
 }
 
 /// Erase both halves: the log empty.

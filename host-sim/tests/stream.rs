@@ -54,37 +54,33 @@ fn read_csv(path: &Path) -> (Vec<String>, Vec<HashMap<String, String>>) {
     (comments, rows)
 }
 
-/// The scene's own history, by tick.
-fn history(scene: &str, dir: &Path) -> HashMap<String, HashMap<String, String>> {
-    let out = host_sim()
-        .args(["--json", "run", scene, "--history", "--out"])
-        .arg(dir)
-        .output()
-        .unwrap();
+/// `host-sim` with `args`, which must succeed: its stdout.
+fn succeeds(args: &[&str]) -> Vec<u8> {
+    let out = host_sim().args(args).output().unwrap();
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    out.stdout
+}
+
+/// `run` of the scene `args` name (none: the reference), with `--history` into `dir`, and
+/// whatever else `args` say: the reference scene's history, by tick.
+fn history(args: &[&str], dir: &Path) -> HashMap<String, HashMap<String, String>> {
+    let out = ["--out", dir.to_str().unwrap(), "--history"];
+    succeeds(&[&["--json", "run"][..], args, &out].concat());
     let (_, rows) = read_csv(&dir.join("reference").join("history.csv"));
     rows.into_iter().map(|r| (r["tick"].clone(), r)).collect()
 }
 
 /// `console --record` for `wall_seconds` from `stream` (a Unix socket): its report.
 fn record(board: &Served, stream: &str, csv: &Path, wall_seconds: &str) -> Value {
-    let out = host_sim()
-        .args(["--json", "console"])
-        .args(&board.connection)
-        .args(["--record", csv.to_str().unwrap(), "--stream-unix", stream])
-        .args(["--duration-seconds", wall_seconds])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let report: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let connection: Vec<&str> = board.connection.iter().map(String::as_str).collect();
+    let record = ["--record", csv.to_str().unwrap(), "--stream-unix", stream];
+    let duration = ["--duration-seconds", wall_seconds];
+    let args = [&["--json", "console"][..], &connection, &record, &duration].concat();
+    let report: Value = serde_json::from_slice(&succeeds(&args)).unwrap();
     report["recording"].clone()
 }
 
@@ -141,7 +137,7 @@ fn a_recording_matches_the_scenes_own_history_record_for_record() {
     ] {
         assert!(header.contains(named), "the header lacks {named}: {header}");
     }
-    check_rows(&rows, &history(&scene, &dir.join("run")));
+    check_rows(&rows, &history(&[&scene], &dir.join("run")));
 }
 
 /// A proxy between the board's stream and the console that drops one byte in every `every`.
@@ -192,7 +188,7 @@ fn bytes_dropped_from_the_stream_are_counted_as_gaps_and_the_receiver_resyncs() 
     assert_eq!(rows.len() as u64 + lost, span, "{recording}");
     // Back in step after each drop: the rows after a gap are the board's, at their ticks.
     assert!(rows.len() as u64 > span - 2 * bad, "{recording}");
-    check_rows(&rows, &history(&scene, &dir.join("run")));
+    check_rows(&rows, &history(&[&scene], &dir.join("run")));
 }
 
 /// `run --record`: the scene's board streams the same records through a run (the core's
@@ -201,16 +197,7 @@ fn bytes_dropped_from_the_stream_are_counted_as_gaps_and_the_receiver_resyncs() 
 #[test]
 fn a_run_records_the_stream_beside_its_history() {
     let dir = scratch("stream-run");
-    let out = host_sim()
-        .args(["--json", "run", "--history", "--record", "--out"])
-        .arg(&dir)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let history = history(&["--record"], &dir);
     let (comments, rows) = read_csv(&dir.join("reference").join("telemetry.csv"));
     assert!(
         comments.iter().any(|c| c
@@ -219,10 +206,5 @@ fn a_run_records_the_stream_beside_its_history() {
     );
     let ticks: Vec<u64> = rows.iter().map(|r| r["tick"].parse().unwrap()).collect();
     assert_eq!(ticks, (0..1000).map(|k| 10 * k).collect::<Vec<_>>());
-    let (_, history) = read_csv(&dir.join("reference").join("history.csv"));
-    let history = history
-        .into_iter()
-        .map(|r| (r["tick"].clone(), r))
-        .collect();
     check_rows(&rows, &history);
 }

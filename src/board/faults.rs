@@ -10,9 +10,8 @@ use crate::acquire::Inputs;
 use crate::board::port::ReplyLine;
 use crate::board::protocol::{ErrorCode, FaultsAsk};
 use crate::controller::Fault;
-use crate::fault_log::{Cause, Entry, KEPT};
+use crate::fault_log::{keep_newest, Cause, Entry, KEPT};
 use crate::numerics::decimal::Decimal;
-use crate::table::newer;
 
 impl<K: Keeper> Board<'_, K> {
     /// Log a reset the boot found; `None` without a log.
@@ -90,24 +89,10 @@ impl<K: Keeper> Board<'_, K> {
                 })
             }
             FaultsAsk::List => {
-                // The newest KEPT, newest first: each entry put in its place, the oldest
-                // falling off the end (no sort, no move of the whole list).
+                // The newest KEPT, newest first (no sort: flash for the firmware).
                 let mut kept: [Option<(u32, Cause, u32)>; KEPT] = [None; KEPT];
                 let done = keeper.each_fault(&mut |e| {
-                    let item = (e.sequence, e.cause, e.tick);
-                    let Some(at) = kept
-                        .iter()
-                        .position(|k| k.is_none_or(|k| newer(item.0, k.0)))
-                    else {
-                        return;
-                    };
-                    let mut carry = Some(item);
-                    for slot in kept.iter_mut().skip(at) {
-                        carry = core::mem::replace(slot, carry);
-                        if carry.is_none() {
-                            break;
-                        }
-                    }
+                    keep_newest(&mut kept, |k| k.0, (e.sequence, e.cause, e.tick))
                 });
                 done.map(|r| {
                     r.map(|()| {

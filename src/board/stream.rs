@@ -297,11 +297,6 @@ impl Telemetry {
         self.next_tick = None;
     }
 
-    /// Ticks between records, if on.
-    pub fn every_ticks(&self) -> Option<u32> {
-        self.every_ticks
-    }
-
     /// At board tick `tick` (asked every tick, or whenever the caller runs): the sequence
     /// number of the record due, if one is. A caller late by whole periods gets one record,
     /// the ones it missed counted in the sequence.

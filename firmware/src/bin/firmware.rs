@@ -141,8 +141,6 @@ mod app {
         to_log: Sender<'static, Work, QUEUE>,
         from_rx: Receiver<'static, Work, QUEUE>,
         tx: Tx<USART2>,
-        /// Whether the board has the stream's port (`stream` answers unsupported without).
-        has_stream_port: bool,
         /// The core's board: the image, the settings, the refusal, the command port's answers.
         logic: logic::Board<'static, FlashKeeper<SettingsFlash>>,
         /// Idle without `wfi` (QEMU runs that measure the tick rate).
@@ -254,7 +252,6 @@ mod app {
             let _ = cx.local.frames;
             board.stream_tx.map(StreamPort::new)
         };
-        let has_stream_port = stream_port.is_some();
         // The link build's tick is pended by each samples frame, not SysTick's count.
         #[cfg(feature = "link")]
         let _ = &mut core;
@@ -334,7 +331,6 @@ mod app {
                 to_log,
                 from_rx,
                 tx,
-                has_stream_port,
                 logic,
                 busy_idle: board::asked("busy-idle"),
                 hang_after_ticks: board::asked("tick-hangs").then_some(2 * tick_hz as u32),
@@ -650,7 +646,7 @@ mod app {
     }
 
     /// Each request answered, one reply line each.
-    #[task(priority = 1, shared = [controller, tick_cycles_max, last_tick_us, output_off, latest, telemetry, logged], local = [from_rx, tx, logic, has_stream_port])]
+    #[task(priority = 1, shared = [controller, tick_cycles_max, last_tick_us, output_off, latest, telemetry, logged, stream_port], local = [from_rx, tx, logic])]
     async fn command(mut cx: command::Context) {
         let mut reply = ReplyLine::new();
         while let Ok(work) = cx.local.from_rx.recv().await {
@@ -689,7 +685,7 @@ mod app {
                 #[cfg(not(feature = "qemu"))]
                 clock_us: None,
                 readings: cx.shared.latest.lock(|l| l.readings),
-                stream_port: *cx.local.has_stream_port,
+                stream_port: cx.shared.stream_port.lock(|p| p.is_some()),
             };
             let mut controller = Locked(&mut cx.shared.controller);
             let then = cx

@@ -186,3 +186,32 @@ pub fn plot(records: &[Record], receiver: &Receiver, tick_hz: f64, title: &str) 
     }
     panels
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use de_resonator::Inputs;
+
+    /// The column names written for an empty recording are the rows' own.
+    #[test]
+    fn the_columns_are_the_rows_header() {
+        let record = Record {
+            sequence: 0,
+            tick: 0,
+            volts: 0.0,
+            dac_code: 0,
+            enabled: false,
+            phase: None,
+            fault: None,
+            max_volts: f32::NAN,
+            inputs: Inputs::NONE,
+            sensed: None,
+            tracked: None,
+            leakage_ohms: None,
+            bias_volts: f32::NAN,
+        };
+        let bytes = super::super::csv(&[Row::of(&record, 1000.0)]).unwrap();
+        let header = String::from_utf8(bytes).unwrap();
+        assert_eq!(header.lines().next(), Some(COLUMNS.join(",").as_str()));
+    }
+}
