@@ -102,11 +102,13 @@ impl ChannelSpec {
     /// The ADC's code for a reading: rounded, held within the ADC's range as the converter
     /// holds its input (for those that make codes from a plant's signals).
     pub fn adc_code(&self, reading: f32) -> u16 {
-        let code = libm::roundf(self.code_of(reading));
+        let code = self.code_of(reading);
         if code >= f32::from(FULL_SCALE_CODE) {
             FULL_SCALE_CODE
         } else if code > 0.0 {
-            code as u16
+            // The nearest code, halves up: the cast truncates (libm's software roundf cost
+            // as much as the rest of a simulated sample).
+            (code + 0.5) as u16
         } else {
             0
         }

@@ -30,14 +30,20 @@ pub struct Made {
 
 /// Make the table for `params` up to (1 − margin)·limit less the `HEADROOM` the f32
 /// firmware needs: `points` points, or (`None`) the fewest of 64, 128, … 1024 whose
-/// interpolation error is at most `TARGET_ERROR`.
-pub fn make(params: DeviceParams<f64>, margin: f64, points: Option<usize>) -> Result<Made, String> {
+/// interpolation error is at most `TARGET_ERROR`. `bias_error`: whether to measure the bias
+/// against the direct solve too (`Errors::volts`; the image needs only the frequency's).
+pub fn make(
+    params: DeviceParams<f64>,
+    margin: f64,
+    points: Option<usize>,
+    bias_error: bool,
+) -> Result<Made, String> {
     if let Some(points) = points {
-        return make_with(params, margin, points);
+        return make_with(params, margin, points, bias_error);
     }
     let mut points = DEFAULT_POINTS;
     loop {
-        let made = make_with(params, margin, points)?;
+        let made = make_with(params, margin, points, bias_error)?;
         if made.errors.frequency <= TARGET_ERROR || points >= table::MAX_POINTS {
             return Ok(made);
         }
@@ -47,7 +53,12 @@ pub fn make(params: DeviceParams<f64>, margin: f64, points: Option<usize>) -> Re
 
 /// The table of `points` points: f's turning points and, around them, points evenly spaced
 /// in Φ² (f − f(0) ∝ Φ² near zero bias), so Φ² linear in f interpolates well everywhere.
-fn make_with(params: DeviceParams<f64>, margin: f64, points: usize) -> Result<Made, String> {
+fn make_with(
+    params: DeviceParams<f64>,
+    margin: f64,
+    points: usize,
+    bias_error: bool,
+) -> Result<Made, String> {
     if !(2..=table::MAX_POINTS).contains(&points) {
         return Err(format!("{points} points: need 2 to {}", table::MAX_POINTS));
     }
@@ -69,7 +80,8 @@ fn make_with(params: DeviceParams<f64>, margin: f64, points: usize) -> Result<Ma
     table::write(&mut bytes, &params32, margin as f32, 0.0, &stored).map_err(|e| e.to_string())?;
     let errors = {
         let t = Table::parse(&bytes).map_err(|e| e.to_string())?;
-        interpolation_error(&t, &tuner, table::table_margin(margin))?
+        let top_volts = bias_error.then_some(top.volts);
+        interpolation_error(&t, &tuner, table::table_margin(margin), top_volts)?
     };
     let error = errors.frequency as f32;
     table::write(&mut bytes, &params32, margin as f32, error, &stored)
@@ -88,16 +100,22 @@ fn make_with(params: DeviceParams<f64>, margin: f64, points: usize) -> Result<Ma
 /// frequency the table's bias gives (f64 model) against the target, where it is, and the
 /// largest bias difference as a fraction of the top bias. Near zero bias, dΦ/df is unbounded
 /// (f − f(0) ∝ Φ²), so the bias difference there is set by f32's rounding of f, not by the
-/// interpolation; the frequency error is the one that matters and is well conditioned.
-fn interpolation_error(t: &Table, tuner: &Tuner<f64>, margin: f64) -> Result<Errors, String> {
+/// interpolation; the frequency error is the one that matters and is well conditioned. The
+/// bias difference (a direct solve at every check, as a fraction of the top bias
+/// `top_volts`) only where asked for.
+fn interpolation_error(
+    t: &Table,
+    tuner: &Tuner<f64>,
+    margin: f64,
+    top_volts: Option<f64>,
+) -> Result<Errors, String> {
     let device = tuner.device();
-    let top = tuner.max_bias(margin).map_err(|e| e.to_string())?;
     // The f64 range: the f32 end points may round just outside it.
     let range = tuner.tunable_range(margin).map_err(|e| e.to_string())?;
     let mut errors = Errors {
         frequency: 0.0,
         worst_hz: f64::NAN,
-        volts: 0.0,
+        volts: top_volts.map(|_| 0.0),
     };
     let (low, high) = t.range_hz();
     for k in 0..t.points() - 1 {
@@ -109,9 +127,6 @@ fn interpolation_error(t: &Table, tuner: &Tuner<f64>, margin: f64) -> Result<Err
                 continue;
             }
             let table_volts = f64::from(t.bias_volts(hz32).map_err(|e| e.to_string())?);
-            let solved = tuner
-                .tune(hz, margin)
-                .map_err(|e| format!("direct solve at {hz} Hz: {e}"))?;
             // Up to the limit, not the top: the top point's f32 volts may round above it.
             let offset = device
                 .offset_for_bias(table_volts, tuner.limit().at.offset)
@@ -121,8 +136,12 @@ fn interpolation_error(t: &Table, tuner: &Tuner<f64>, margin: f64) -> Result<Err
                 errors.frequency = error;
                 errors.worst_hz = hz;
             }
-            let volts = (table_volts - solved.volts).abs() / top.volts;
-            errors.volts = errors.volts.max(volts);
+            if let (Some(worst), Some(top)) = (&mut errors.volts, top_volts) {
+                let solved = tuner
+                    .tune(hz, margin)
+                    .map_err(|e| format!("direct solve at {hz} Hz: {e}"))?;
+                *worst = worst.max((table_volts - solved.volts).abs() / top);
+            }
         }
     }
     Ok(errors)
@@ -134,8 +153,9 @@ pub struct Errors {
     pub frequency: f64,
     /// Where it is, Hz.
     pub worst_hz: f64,
-    /// Largest bias difference from the direct solve, as a fraction of the top bias.
-    pub volts: f64,
+    /// Largest bias difference from the direct solve, as a fraction of the top bias (where
+    /// asked for).
+    pub volts: Option<f64>,
 }
 
 /// The image of a device, an amplifier, a front end and settings, its table made for the
@@ -147,7 +167,7 @@ pub fn image(
     settings: &Settings,
     power_up: PowerUp,
 ) -> Result<Vec<u8>, String> {
-    let made = make(params, f64::from(settings.margin), None)?;
+    let made = make(params, f64::from(settings.margin), None, false)?;
     let mut bytes = vec![0; image::image_bytes(made.bytes.len())];
     let params32: DeviceParams<f32> = params.cast();
     Image::write(

@@ -130,7 +130,7 @@ pub fn lut(args: &LutArgs) -> Result<LutReport, String> {
         (None, false, _) => LutFormat::Bin,
     };
     prepare_file(&args.out)?;
-    let made = lut::make(params, margin, args.points).map_err(|e| format!("{name}: {e}"))?;
+    let made = lut::make(params, margin, args.points, true).map_err(|e| format!("{name}: {e}"))?;
     let points: Vec<Point> = made
         .points
         .iter()
@@ -162,7 +162,7 @@ pub fn lut(args: &LutArgs) -> Result<LutReport, String> {
         interpolation_error: Interpolation {
             frequency: made.errors.frequency,
             worst_hz: made.errors.worst_hz,
-            volts_of_top: made.errors.volts,
+            volts_of_top: made.errors.volts.unwrap_or(f64::NAN),
         },
     })
 }

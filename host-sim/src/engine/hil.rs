@@ -136,7 +136,8 @@ impl CurrentMonitor {
     }
 }
 
-/// SplitMix64 and Box–Muller: reproducible noise from a seed.
+/// Reproducible noise from a seed: SplitMix64, normal deviates by the ziggurat
+/// (rand_distr's `StandardNormal`).
 struct Noise(u64);
 
 impl Noise {
@@ -148,13 +149,29 @@ impl Noise {
         z ^ (z >> 31)
     }
 
-    fn uniform(&mut self) -> f64 {
-        ((self.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    /// A standard normal deviate.
+    fn gaussian(&mut self) -> f64 {
+        rand_distr::Distribution::sample(&rand_distr::StandardNormal, self)
+    }
+}
+
+impl rand_core::TryRng for Noise {
+    type Error = core::convert::Infallible;
+
+    fn try_next_u32(&mut self) -> Result<u32, Self::Error> {
+        Ok((self.next_u64() >> 32) as u32)
     }
 
-    fn gaussian(&mut self) -> f64 {
-        let (u, v) = (self.uniform(), self.uniform());
-        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+    fn try_next_u64(&mut self) -> Result<u64, Self::Error> {
+        Ok(self.next_u64())
+    }
+
+    fn try_fill_bytes(&mut self, dst: &mut [u8]) -> Result<(), Self::Error> {
+        for chunk in dst.chunks_mut(8) {
+            let bytes = self.next_u64().to_le_bytes();
+            chunk.copy_from_slice(&bytes[..chunk.len()]);
+        }
+        Ok(())
     }
 }
 

@@ -5,8 +5,10 @@
 //! solvers the core's integrators are measured against ([`simulate`]: DOP853, BDF), and the
 //! events located between their samples ([`events`]: turns of the stretch, first failures).
 
+pub mod erk;
 pub mod events;
 pub mod firmware;
 pub mod hil;
+pub mod lift;
 pub mod plant;
 pub mod simulate;

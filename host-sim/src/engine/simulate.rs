@@ -4,6 +4,7 @@
 
 use std::time::Instant;
 
+use crate::engine::erk::{StepEnds, Stop, DOP853, DOPRI5};
 use crate::engine::events::{self, Extremes, Hermite, Jet, Watch};
 use crate::text::sig;
 
@@ -620,7 +621,12 @@ impl Solver {
         tolerance: Tolerance,
         first_step: Option<f64>,
     ) -> Result<([f64; N], f64), String> {
-        self.advance_watched(ode, (t0, t1), y, tolerance, first_step, &mut |_, _| {})
+        let span = Span {
+            from: t0,
+            to: t1,
+            short: false,
+        };
+        self.advance_watched(ode, span, y, tolerance, first_step, &mut |_, _| {})
     }
 
     /// `advance`, with `on_step` seeing the ends (time, state) of each of DOP853's steps
@@ -628,7 +634,11 @@ impl Solver {
     pub fn advance_watched<const N: usize, F: ODE<f64, [f64; N]>>(
         self,
         ode: &F,
-        (t0, t1): (f64, f64),
+        Span {
+            from: t0,
+            to: t1,
+            short,
+        }: Span,
         y: [f64; N],
         tolerance: Tolerance,
         first_step: Option<f64>,
@@ -639,7 +649,28 @@ impl Solver {
             .filter(|h| h.is_finite() && *h > 0.0)
             .map_or(0.0, |h| h.min(t1 - t0));
         match self {
+            Solver::Dop853 if h0 > 0.0 => {
+                // A step known: the tick's own steps (`erk`), DOPRI5 over a short span.
+                let mut first = None;
+                let mut watch = |a: (f64, [f64; N]), b: (f64, [f64; N])| {
+                    first.get_or_insert(b.0 - a.0);
+                    on_step(a, b);
+                };
+                let Tolerance { rtol, atol } = tolerance;
+                let (span, tolerance) = ((t0, t1), (rtol, atol));
+                let solved = if short {
+                    DOPRI5.solve(ode, span, y, tolerance, h0, &mut watch)
+                } else {
+                    DOP853.solve(ode, span, y, tolerance, h0, &mut watch)
+                };
+                let (end, next) = solved.map_err(|stop| match stop {
+                    Stop::StepSize => STEP_SIZE_FELL.to_string(),
+                    Stop::Stiff => STIFF.to_string(),
+                })?;
+                Ok((end, first.map_or(next, |h| 1.25 * h)))
+            }
             Solver::Dop853 => {
+                // The first solve: the library's DOP853 estimates the first step.
                 let mut first = FirstStep(None, on_step);
                 let (end, next) = dop853(ode, t0, t1, y, tolerance, h0, false, &mut first)?;
                 Ok((end, first.0.map_or(next, |h| 1.25 * h)))
@@ -654,11 +685,18 @@ impl Solver {
     }
 }
 
+/// An interval to solve over; `short`: a step long (the amplifier's ramp, tens of µs), where
+/// DOP853's twelve stages buy nothing: DOPRI5's six (first same as last) at the same
+/// tolerance.
+#[derive(Clone, Copy, Debug)]
+pub struct Span {
+    pub from: f64,
+    pub to: f64,
+    pub short: bool,
+}
+
 /// The first step a solve took; and what sees each step's ends.
 struct FirstStep<'a, 'b, const N: usize>(Option<f64>, &'a mut StepEnds<'b, N>);
-
-/// What sees a step's ends, (time, state) at its start and at its end.
-pub type StepEnds<'a, const N: usize> = dyn FnMut((f64, [f64; N]), (f64, [f64; N])) + 'a;
 
 impl<const N: usize> Solout<f64, [f64; N]> for FirstStep<'_, '_, N> {
     fn solout<I>(
@@ -684,6 +722,14 @@ impl<const N: usize> Solout<f64, [f64; N]> for FirstStep<'_, '_, N> {
 /// How DOP853's refusal of a stiff problem begins (the reference switches on it).
 pub const STIFF_FOR_DOP853: &str = "stiff for DOP853";
 
+/// DOP853's refusal of a stiff problem.
+const STIFF: &str = "stiff for DOP853 (Hairer's test): use BDF (`--method reference-bdf`, or \
+                     `solver = \"bdf\"` in a scene's [plant])";
+
+/// A solve whose step fell to nothing.
+const STEP_SIZE_FELL: &str =
+    "the step size fell to nothing (a singularity, or too tight a tolerance)";
+
 /// DOP853 (differential-equations) from `t0` to `t1`, `solout` seeing every step: the state
 /// at the end and the next step. `h0` 0 estimates the first step. `dense`: whether `solout`
 /// interpolates (its three extra stages a step are left out otherwise: PATCH.md).
@@ -707,14 +753,8 @@ fn dop853<const N: usize, F: ODE<f64, [f64; N]>, O: Solout<f64, [f64; N]>>(
         method = method.without_dense_output();
     }
     solve_ode(&mut method, ode, t0, t1, &y, solout).map_err(|e| match e {
-        SolveError::StepSize { .. } => {
-            "the step size fell to nothing (a singularity, or too tight a tolerance)".to_string()
-        }
-        SolveError::Stiffness { .. } => {
-            "stiff for DOP853 (Hairer's test): use BDF (`--method reference-bdf`, \
-                                          or `solver = \"bdf\"` in a scene's [plant])"
-                .to_string()
-        }
+        SolveError::StepSize { .. } => STEP_SIZE_FELL.to_string(),
+        SolveError::Stiffness { .. } => STIFF.to_string(),
         SolveError::BadInput { msg } => msg,
         e => format!("the reference solver stopped: {e:?}"),
     })?;
