@@ -106,8 +106,9 @@ impl ChannelSpec {
         if code >= f32::from(FULL_SCALE_CODE) {
             FULL_SCALE_CODE
         } else if code > 0.0 {
-            // The nearest code, halves up: the cast truncates (libm's software roundf cost
-            // as much as the rest of a simulated sample).
+            // The nearest code, halves up, as floor(code + 0.5) in f32 (which, unlike
+            // roundf, rounds the one value just below a half up): libm's software roundf cost
+            // as much as the rest of a simulated sample.
             (code + 0.5) as u16
         } else {
             0

@@ -150,7 +150,14 @@ impl<const S: usize> Erk<S> {
                 deno = 1.0;
             }
             let err = h * sum5 * (1.0 / (deno * N as f64)).sqrt();
-            let mut scale = (SAFETY * err.powf(-self.exponent)).clamp(MIN_SCALE, MAX_SCALE);
+            // A NaN error (a right-hand side undefined at a trial stage) shrinks the step as
+            // far as it may, as the library's, rather than ending the solve.
+            let raw = SAFETY * err.powf(-self.exponent);
+            let mut scale = if raw.is_nan() {
+                MIN_SCALE
+            } else {
+                raw.clamp(MIN_SCALE, MAX_SCALE)
+            };
             if err <= 1.0 {
                 let t_new = t + h;
                 let rate = if self.fsal {
@@ -289,5 +296,31 @@ mod tests {
             &mut |_, _| {},
         );
         assert_eq!(solved.err(), Some(Stop::Stiff));
+    }
+
+    /// A right-hand side undefined past a point (NaN, as Gent's stress past lock-up): a trial
+    /// step that reaches it is rejected and shrunk, as the library's, and the solve goes on.
+    #[test]
+    fn an_undefined_trial_stage_shrinks_the_step() {
+        struct Edge;
+        impl ODE<f64, [f64; 1]> for Edge {
+            fn diff(&self, _: f64, y: &[f64; 1], dydt: &mut [f64; 1]) {
+                // Defined for y < 1 only; the solution 1 − (1 − t/2)² stays below it to t = 2.
+                dydt[0] = (1.0 - y[0]).sqrt();
+            }
+        }
+        let mut ends = 0;
+        let solved = DOP853.solve(
+            &Edge,
+            (0.0, 1.5),
+            [0.0],
+            (1e-10, 1e-10),
+            5.0,
+            &mut |_, _| ends += 1,
+        );
+        let (y, _) = solved.expect("solves");
+        let exact = 1.0 - (1.0f64 - 0.75).powi(2);
+        assert!((y[0] - exact).abs() < 1e-8, "{} against {exact}", y[0]);
+        assert!(ends > 1);
     }
 }

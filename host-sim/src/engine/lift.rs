@@ -108,7 +108,35 @@ impl Lift {
     /// solution of η'' + γη' + κη = β·φ(σ)·ℓ(σ), ℓ the quadratic of `local.taylor`. What it
     /// leaves in λ̂'s equation (β·φ·(λ̂ − ℓ + η), κ's change over the transient times η) is
     /// second order in the transient and the step; it costs the solver steps, not accuracy.
-    pub fn new(rate: f64, target_volts: f64, gap_volts: f64, beta: f64, local: &Local) -> Lift {
+    ///
+    /// `None` where η is undefined or ill-conditioned: an input not finite, or the membrane
+    /// with a mode near a rate of the exponential (ρ² − γρ + κ within a hundredth of ρ²: η
+    /// would be huge and λ̂ its difference from λ); the tick is then solved unlifted.
+    pub fn new(
+        rate: f64,
+        target_volts: f64,
+        gap_volts: f64,
+        beta: f64,
+        local: &Local,
+    ) -> Option<Lift> {
+        let finite = [
+            rate,
+            target_volts,
+            gap_volts,
+            beta,
+            local.stiffness,
+            local.damping,
+        ]
+        .iter()
+        .chain(&local.taylor)
+        .all(|x| x.is_finite());
+        let conditioned = (1..=RATES).all(|m| {
+            let rho = m as f64 * rate;
+            (rho * rho - local.damping * rho + local.stiffness).abs() > 0.01 * rho * rho
+        });
+        if !(finite && conditioned && rate > 0.0) {
+            return None;
+        }
         let (t, g) = (target_volts, gap_volts);
         let phi = [-2.0 * t * g * beta, g * g * beta];
         let [l0, l1, l2] = local.taylor;
@@ -117,14 +145,14 @@ impl Lift {
         for (row, p) in forcing.c.iter_mut().zip(phi) {
             *row = slow.map(|l| p * l);
         }
-        Lift {
+        Some(Lift {
             rate,
             target_volts,
             gap_volts,
             eta: forcing
                 .solve(rate, local.damping, local.stiffness)
                 .derivatives(rate),
-        }
+        })
     }
 
     /// (η, η', η'') and the amplifier's output V at σ.
@@ -181,5 +209,21 @@ mod tests {
         assert!(((up.0 - down.0) / (2.0 * h) - e1).abs() < 1e-6 * e1.abs());
         assert!(((up.1 - down.1) / (2.0 * h) - e2).abs() < 1e-6 * e2.abs());
         assert!(e0.is_finite());
+    }
+
+    /// A membrane with a mode at the exponential's rate (an overdamped plant: ρ² − γρ + κ = 0
+    /// at ρ = r), or a stiffness not finite: no lift.
+    #[test]
+    fn no_lift_where_it_is_undefined() {
+        let rate = 12_566.0;
+        let local = |stiffness: f64, damping: f64| Local {
+            taylor: [2.0, 0.1, -3.0],
+            stiffness,
+            damping,
+        };
+        assert!(Lift::new(rate, 6000.0, 10.0, 1e-3, &local(7.6e4, 3.0)).is_some());
+        let damping = rate + 7.6e4 / rate;
+        assert!(Lift::new(rate, 6000.0, 10.0, 1e-3, &local(7.6e4, damping)).is_none());
+        assert!(Lift::new(rate, 6000.0, 10.0, 1e-3, &local(f64::NAN, 3.0)).is_none());
     }
 }
