@@ -102,7 +102,8 @@ impl<const S: usize> Erk<S> {
         let (mut rejected, mut steps) = (false, 0usize);
         // Hairer's stiffness test's counts, positive and negative.
         let (mut stiff, mut not_stiff) = (0, 0);
-        let mut last_stage = y;
+        // The stage's state; after the stages, the last one's (the stiffness test's).
+        let mut stage = y;
         while (t1 - t).abs() > 10.0 * f64::EPSILON {
             if t + h > t1 {
                 h = t1 - t;
@@ -112,7 +113,7 @@ impl<const S: usize> Erk<S> {
             }
             steps += 1;
             for i in 1..S {
-                let mut stage = y;
+                stage = y;
                 for (kj, aij) in k[..i].iter().zip(&self.a[i][..i]) {
                     let w = aij * h;
                     for (s, d) in stage.iter_mut().zip(kj) {
@@ -120,7 +121,6 @@ impl<const S: usize> Erk<S> {
                     }
                 }
                 ode.diff(t + self.c[i] * h, &stage, &mut k[i]);
-                last_stage = stage;
             }
             // The update and the error estimates, as the library's (Hairer's for DOP853:
             // the 5th- and 3rd-order estimates combined).
@@ -173,7 +173,7 @@ impl<const S: usize> Erk<S> {
                     let squared = |a: &[f64; N], b: &[f64; N]| -> f64 {
                         a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum()
                     };
-                    let (num, den) = (squared(&rate, &k[S - 1]), squared(&y_new, &last_stage));
+                    let (num, den) = (squared(&rate, &k[S - 1]), squared(&y_new, &stage));
                     let h_lambda = if den > 0.0 {
                         h * (num / den).sqrt()
                     } else {

@@ -174,11 +174,6 @@ impl Plant {
         (s1, s2)
     }
 
-    /// λ'' at state `y` under `volts` on A (model.md §4 with the networks), 1/s².
-    fn acceleration(&self, y: &Vector, volts: f64) -> f64 {
-        self.dynamics().acceleration(&self.branches, y, volts)
-    }
-
     /// The constants of λ'' (model.md §4): worked out once a tick, not at every right-hand
     /// side.
     fn dynamics(&self) -> Dynamics {
@@ -358,11 +353,12 @@ impl Plant {
     /// The static equilibrium under `volts` nearest state `y`, the networks frozen at their
     /// viscous stretches in `y` (Newton on λ'' = 0 from y's stretch); `None` if it fails.
     pub fn equilibrium(&self, y: &Vector, volts: f64) -> Option<Vector> {
+        let (dynamics, branches) = (self.dynamics(), &self.branches);
         let mut z = *y;
         z[1] = 0.0;
         for _ in 0..100 {
-            let a = self.acceleration(&z, volts);
-            let k = self.stiffness(&z, volts);
+            let a = dynamics.acceleration(branches, &z, volts);
+            let k = dynamics.stiffness(branches, &z, volts);
             if !(k > 0.0) {
                 return None;
             }
@@ -468,7 +464,7 @@ impl Dynamics {
         }
     }
 
-    /// λ'' at state `y` under `volts`, 1/s².
+    /// λ'' at state `y` under `volts` on A (model.md §4 with the networks), 1/s².
     #[inline]
     fn acceleration(&self, branches: &[Branch], y: &Vector, volts: f64) -> f64 {
         let (l, v) = (y[0], y[1]);
@@ -800,7 +796,10 @@ mod tests {
             full[..3].copy_from_slice(y);
             let slope = (self.target_volts - y[2]) * std::f64::consts::TAU * a.bandwidth_hz;
             rate[0] = y[1];
-            rate[1] = self.plant.acceleration(&full, y[2]);
+            rate[1] = self
+                .plant
+                .dynamics()
+                .acceleration(&self.plant.branches, &full, y[2]);
             rate[2] = slope.clamp(-a.slew_volts_per_second, a.slew_volts_per_second);
         }
     }
