@@ -39,11 +39,13 @@ pub fn make(
     bias_error: bool,
 ) -> Result<Made, String> {
     if let Some(points) = points {
-        return make_with(params, margin, points, bias_error);
+        return make_with(params, margin, points, bias_error, None);
     }
     let mut points = DEFAULT_POINTS;
     loop {
-        let made = make_with(params, margin, points, bias_error)?;
+        // A table with points to spare is given up at its first error above the target.
+        let give_up_above = (points < table::MAX_POINTS).then_some(TARGET_ERROR);
+        let made = make_with(params, margin, points, bias_error, give_up_above)?;
         if made.errors.frequency <= TARGET_ERROR || points >= table::MAX_POINTS {
             return Ok(made);
         }
@@ -53,11 +55,13 @@ pub fn make(
 
 /// The table of `points` points: f's turning points and, around them, points evenly spaced
 /// in Φ² (f − f(0) ∝ Φ² near zero bias), so Φ² linear in f interpolates well everywhere.
+/// `give_up_above`: an error above which the check stops (the table is not the one made).
 fn make_with(
     params: DeviceParams<f64>,
     margin: f64,
     points: usize,
     bias_error: bool,
+    give_up_above: Option<f64>,
 ) -> Result<Made, String> {
     if !(2..=table::MAX_POINTS).contains(&points) {
         return Err(format!("{points} points: need 2 to {}", table::MAX_POINTS));
@@ -81,7 +85,8 @@ fn make_with(
     let errors = {
         let t = Table::parse(&bytes).map_err(|e| e.to_string())?;
         let top_volts = bias_error.then_some(top.volts);
-        interpolation_error(&t, &tuner, table::table_margin(margin), top_volts)?
+        let margin = table::table_margin(margin);
+        interpolation_error(&t, &tuner, margin, top_volts, give_up_above)?
     };
     let error = errors.frequency as f32;
     table::write(&mut bytes, &params32, margin as f32, error, &stored)
@@ -102,12 +107,14 @@ fn make_with(
 /// (f − f(0) ∝ Φ²), so the bias difference there is set by f32's rounding of f, not by the
 /// interpolation; the frequency error is the one that matters and is well conditioned. The
 /// bias difference (a direct solve at every check, as a fraction of the top bias
-/// `top_volts`) only where asked for.
+/// `top_volts`) only where asked for. With `give_up_above`, the check ends at the first
+/// frequency error above it (that error returned).
 fn interpolation_error(
     t: &Table,
     tuner: &Tuner<f64>,
     margin: f64,
     top_volts: Option<f64>,
+    give_up_above: Option<f64>,
 ) -> Result<Errors, String> {
     let device = tuner.device();
     // The f64 range: the f32 end points may round just outside it.
@@ -135,6 +142,9 @@ fn interpolation_error(
             if error > errors.frequency {
                 errors.frequency = error;
                 errors.worst_hz = hz;
+                if give_up_above.is_some_and(|limit| error > limit) {
+                    return Ok(errors);
+                }
             }
             if let (Some(worst), Some(top)) = (&mut errors.volts, top_volts) {
                 let solved = tuner

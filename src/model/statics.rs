@@ -6,7 +6,7 @@
 
 use crate::device::Device;
 use crate::numerics::real::Real;
-use crate::numerics::roots::bisect;
+use crate::numerics::roots::root;
 
 /// An equilibrium on the loading branch, SI units.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -149,7 +149,7 @@ impl<T: Real> Device<T> {
         if !(max_offset > T::zero()) || volts == T::zero() {
             return Some(T::zero());
         }
-        let (below, _) = bisect(T::zero(), max_offset, |d| self.bias_volts_at(d) < volts);
+        let (below, _) = root(T::zero(), max_offset, |d| self.bias_volts_at(d) - volts);
         Some(below)
     }
 }

@@ -2,29 +2,17 @@
 //! model.md §6 first fails, located on a continuous path of the state (a solver's dense
 //! output, or a quintic Hermite through step ends), not at the nearest output sample.
 
+use de_resonator::numerics::roots;
 use de_resonator::{Device, Drive, State};
 
-/// Bisections of a turn's time: the interval shrinks to a rounding of its ends, where the
-/// stretch is flat (its error is ½·λ''·δt²).
-const TURN_BISECTIONS: usize = 64;
-
 /// Where the velocity changes sign in `[t0, t1]` (it has opposite signs, or is 0, at the
-/// ends): bisected on `velocity(t)` until the interval is a rounding of its ends.
+/// ends): the core's bracketed root of `velocity(t)`, to adjacent times (there the stretch is
+/// flat: its error is ½·λ''·δt²).
 pub fn turn(t0: f64, t1: f64, mut velocity: impl FnMut(f64) -> f64) -> f64 {
-    let (mut low, mut high) = (t0, t1);
+    // Before the turn the velocity has the sign of t0's: negative, rising through zero.
     let rising = velocity(t0) < 0.0 || velocity(t1) > 0.0;
-    for _ in 0..TURN_BISECTIONS {
-        let mid = 0.5 * (low + high);
-        if mid <= low || mid >= high {
-            break;
-        }
-        // Before the turn the velocity has the sign of t0's.
-        if (velocity(mid) < 0.0) == rising {
-            low = mid;
-        } else {
-            high = mid;
-        }
-    }
+    let sign = if rising { 1.0 } else { -1.0 };
+    let (low, high) = roots::root(t0, t1, |t| sign * velocity(t));
     0.5 * (low + high)
 }
 

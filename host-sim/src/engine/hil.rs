@@ -202,6 +202,8 @@ pub struct Stepped {
 pub struct Bench {
     pub y: Vector,
     next_step: Option<f64>,
+    /// dy/dt at `y` where the last tick's solve worked it out (`plant::Tick::rate`).
+    rate: Option<Vector>,
     noise: Noise,
     /// The stretch sensor's last reading (a stuck sensor repeats it).
     reading: f64,
@@ -723,16 +725,27 @@ impl Loop {
         let stretch = bench.y[0];
         let t = k as f64 / f64::from(self.settings.tick_hz);
         let stuck = analog.stretch_stuck_after_seconds.is_some_and(|at| t >= at);
+        // Each fitted channel's reading, spec and noise scale (its unit a code), once a tick.
+        let mut fitted = [(Channel::Current, 0.0, 0.0, None); 3];
+        let mut n = 0;
+        for ((channel, spec), slot) in analog.front_end.fitted().zip(&mut fitted) {
+            let reading = match channel {
+                Channel::Current => current,
+                Channel::Amplifier => membrane_volts,
+                Channel::Stretch => stretch,
+            };
+            let noise_scale = analog.noise_codes * f64::from(spec.per_count);
+            *slot = (channel, reading, noise_scale, Some(spec));
+            n += 1;
+        }
+        let fitted = &fitted[..n];
         bench.codes.clear();
+        bench.codes.reserve(n * bench.scans as usize);
         for _ in 0..bench.scans {
-            for (channel, spec) in analog.front_end.fitted() {
-                let reading = match channel {
-                    Channel::Current => current,
-                    Channel::Amplifier => membrane_volts,
-                    Channel::Stretch => stretch,
-                };
+            for &(channel, reading, noise_scale, spec) in fitted {
+                let Some(spec) = spec else { continue };
                 // The ADC's noise in the channel's unit, then the one rounding to a code.
-                let noise = analog.noise_codes * bench.noise.gaussian() * f64::from(spec.per_count);
+                let noise = noise_scale * bench.noise.gaussian();
                 let mut code = spec.adc_code((reading + noise) as f32);
                 if channel == Channel::Stretch {
                     match bench.stuck_code {
@@ -837,6 +850,7 @@ impl Loop {
             port: (y[0], self.plant.volts(&y, 0.0)),
             y,
             next_step: None,
+            rate: None,
             noise: Noise(self.seed),
             reading: f64::NAN,
             last_current: None,
@@ -874,7 +888,7 @@ impl Loop {
     pub fn advance(&self, bench: &mut Bench, k: u64, input_volts: f64) -> Result<f64, String> {
         let tick_seconds = 1.0 / f64::from(self.settings.tick_hz);
         let t = k as f64 * tick_seconds;
-        let (start, first_step) = (bench.y, bench.next_step);
+        let (start, first_step, rate) = (bench.y, bench.next_step, bench.rate);
         // The tick from its start to `t1`.
         let solve = |t1: f64| {
             plant::Tick {
@@ -886,11 +900,12 @@ impl Loop {
                 t1,
                 input_volts,
                 first_step,
+                rate,
             }
             .solve()
         };
         let solved = solve(t + tick_seconds)?;
-        (bench.y, bench.next_step) = (solved.y, Some(solved.first_step));
+        (bench.y, bench.next_step, bench.rate) = (solved.y, Some(solved.first_step), solved.rate);
         if bench.crossing.is_none() {
             if let Some((mode, at)) = self.first_crossing(t, &solved, input_volts, &solve)? {
                 let there = solve(at)?.y;

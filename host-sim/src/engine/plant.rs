@@ -8,6 +8,7 @@ use de_resonator::{DeviceParams, FailureMode};
 
 use differential_equations::prelude::*;
 
+use crate::engine::erk::Start;
 use crate::engine::events::{self, Hermite, Jet};
 use crate::engine::lift::{Lift, Local};
 use crate::engine::simulate::{Solver, Span, Tolerance};
@@ -196,16 +197,21 @@ impl Plant {
 
     /// The fast part of the stretch over the amplifier's exponential `path` with gap `gap`
     /// (V = T − g·e^(−rσ)), for a solve from state `y` at the exponential's start, the
-    /// plant's constants `dynamics`.
+    /// plant's constants `dynamics`; `acceleration`: λ'' there (under the output `y[2]`), if
+    /// known.
     fn lift(
         &self,
         dynamics: &Dynamics,
         y: &Vector,
         path: &AmplifierPath,
         gap: f64,
+        acceleration: Option<f64>,
     ) -> Option<Lift> {
         let (rate, target) = (path.rate_per_second, path.target_volts);
-        let local = dynamics.local(&self.branches, y, target);
+        // λ'' is linear in V² (model.md §4): under the target, β·λ·(T² − V²) more.
+        let under_target = acceleration
+            .map(|a| a + dynamics.electric_gain * y[0] * (target * target - y[2] * y[2]));
+        let local = dynamics.local(&self.branches, y, target, under_target);
         Lift::new(rate, target, gap, dynamics.electric_gain, &local)
     }
 
@@ -452,11 +458,21 @@ impl Dynamics {
             / (2.0 * h)
     }
 
-    /// The membrane about state `y` under `volts` held: λ, λ', λ'' and its stiffness
-    /// (networks frozen), for [`Lift`].
-    fn local(&self, branches: &[Branch], y: &Vector, volts: f64) -> Local {
-        let stiffness = self.stiffness(branches, y, volts);
-        let acceleration = self.acceleration(branches, y, volts);
+    /// The membrane about state `y` under `volts` held: λ, λ', λ'' (`acceleration`, if
+    /// known) and its stiffness (networks frozen), for [`Lift`]. The stiffness is one-sided
+    /// from λ'': it sets how well η fits (the solver's steps), not the solve's accuracy.
+    fn local(
+        &self,
+        branches: &[Branch],
+        y: &Vector,
+        volts: f64,
+        acceleration: Option<f64>,
+    ) -> Local {
+        let acceleration = acceleration.unwrap_or_else(|| self.acceleration(branches, y, volts));
+        let h = 1e-6 * y[0].abs().max(1.0);
+        let mut up = *y;
+        up[0] += h;
+        let stiffness = -(self.acceleration(branches, &up, volts) - acceleration) / h;
         Local {
             taylor: [y[0], y[1], acceleration],
             stiffness,
@@ -530,9 +546,10 @@ impl AmplifierPath {
 }
 
 /// The plant's equations over one controller tick, with the amplifier's input held (the
-/// DAC holds its code between ticks), on the first `N` states: 3 and four a branch, so that a
-/// plant with fewer branches than `MAX_BRANCHES` does not integrate zeros. With a `lift`
-/// (from `start`), the states are λ̂ = λ − η and λ̂' = λ' − η' ([`Lift`]).
+/// DAC holds its code between ticks), on `N` states: λ, λ' and four a branch (the plant's
+/// state less the amplifier's output, which is in closed form), so that a plant with fewer
+/// branches than `MAX_BRANCHES` does not integrate zeros. With a `lift` (from `start`), the
+/// states are λ̂ = λ − η and λ̂' = λ' − η' ([`Lift`]).
 #[derive(Clone, Copy)]
 pub struct Motion<'a, const N: usize> {
     pub plant: &'a Plant,
@@ -546,13 +563,19 @@ pub struct Motion<'a, const N: usize> {
     dynamics: Dynamics,
 }
 
+/// The solved states of the plant's state `y` ([`Motion`]): all but the amplifier's output.
+fn solved_of<const N: usize>(y: &Vector) -> [f64; N] {
+    std::array::from_fn(|i| if i < 2 { y[i] } else { y[i + 1] })
+}
+
 impl<const N: usize> Motion<'_, N> {
     /// The plant's state at `t` from the solved one: λ = λ̂ + η, λ' = λ̂' + η', the
     /// amplifier's output in closed form; and η''.
     #[inline]
     fn unlift(&self, t: f64, short: &[f64; N], base: &Vector) -> (Vector, f64) {
         let mut y = *base;
-        y[..N].copy_from_slice(short);
+        y[..2].copy_from_slice(&short[..2]);
+        y[3..N + 1].copy_from_slice(&short[2..]);
         let mut fast = 0.0;
         if let Some((start, lift)) = &self.lift {
             let ((e0, e1, e2), volts) = lift.at(t - start);
@@ -611,6 +634,35 @@ impl<const N: usize> Motion<'_, N> {
     fn whole(&self, t: f64, short: &[f64; N], base: &Vector) -> Vector {
         self.unlift(t, short, base).0
     }
+
+    /// η' and η'' at `t` (zero without a lift).
+    fn fast_rates(&self, t: f64) -> (f64, f64) {
+        self.lift.as_ref().map_or((0.0, 0.0), |(start, lift)| {
+            let ((_, e1, e2), _) = lift.at(t - start);
+            (e1, e2)
+        })
+    }
+
+    /// The solved states' derivative at `t` from the plant's (`rate`, [`Solved::rate`]).
+    fn solved_rate(&self, t: f64, rate: &Vector) -> [f64; N] {
+        let mut solved = solved_of(rate);
+        let (e1, e2) = self.fast_rates(t);
+        solved[0] -= e1;
+        solved[1] -= e2;
+        solved
+    }
+
+    /// The plant's state's derivative at `t` from the solved states' (the amplifier's
+    /// output's left 0: it is in closed form).
+    fn plant_rate(&self, t: f64, solved: &[f64; N]) -> Vector {
+        let mut rate = [0.0; STATE];
+        rate[..2].copy_from_slice(&solved[..2]);
+        rate[3..N + 1].copy_from_slice(&solved[2..]);
+        let (e1, e2) = self.fast_rates(t);
+        rate[0] += e1;
+        rate[1] += e2;
+        rate
+    }
 }
 
 impl<const N: usize> ODE<f64, [f64; N]> for Motion<'_, N> {
@@ -632,7 +684,7 @@ impl<const N: usize> ODE<f64, [f64; N]> for Motion<'_, N> {
             dydt[at + 2] = b1;
             dydt[at + 3] = b2;
         }
-        rate.copy_from_slice(&dydt[..N]);
+        *rate = solved_of(&dydt);
     }
 }
 
@@ -643,6 +695,9 @@ impl<const N: usize> ODE<f64, [f64; N]> for Motion<'_, N> {
 pub struct Solved {
     pub y: Vector,
     pub first_step: f64,
+    /// dy/dt at the end where the tick's own steps worked it out (the amplifier's output's
+    /// left 0): the next tick's [`Tick::rate`].
+    pub rate: Option<Vector>,
     pub turns: [Option<(f64, Vector)>; 2],
 }
 
@@ -659,6 +714,11 @@ pub struct Tick<'a> {
     /// The last tick's first step after the drive's jump, so that a tick neither estimates
     /// its first step again nor starts too long and has it rejected (`None` at the start).
     pub first_step: Option<f64>,
+    /// dy/dt at `t0`, if known (the last tick's [`Solved::rate`]): the solve's first stage,
+    /// saved. Used only where the plant's right-hand side is continuous across the tick's
+    /// start, as it is when the amplifier's output is a state (the DAC's jump moves its
+    /// target, not its output).
+    pub rate: Option<Vector>,
 }
 
 impl Tick<'_> {
@@ -666,10 +726,10 @@ impl Tick<'_> {
     pub fn solve(self) -> Result<Solved, String> {
         let t0 = self.t0;
         match self.plant.branches.len() {
-            0 => self.advance::<3>(),
-            1 => self.advance::<7>(),
-            2 => self.advance::<11>(),
-            _ => self.advance::<STATE>(),
+            0 => self.advance::<2>(),
+            1 => self.advance::<6>(),
+            2 => self.advance::<10>(),
+            _ => self.advance::<{ STATE - 1 }>(),
         }
         .map_err(|e| {
             format!(
@@ -708,6 +768,8 @@ impl Tick<'_> {
         // The ramp at the slew rate (if any) in one step; then the rest from the last tick's
         // first step there.
         let (mut from, mut end, mut h) = (self.t0, self.y, f64::NAN);
+        // dy/dt at `from`: continuous at the knee, and at the tick's start with an amplifier.
+        let mut rate = self.rate.filter(|_| amplifier.is_some());
         for to in knee.into_iter().chain([self.t1]) {
             let first = if to == self.t1 {
                 self.first_step
@@ -717,13 +779,13 @@ impl Tick<'_> {
             let lift = exponential
                 .filter(|(_, (start, _))| from >= *start)
                 .and_then(|(path, (start, gap))| {
-                    let lift = self.plant.lift(&plain.dynamics, &end, &path, gap)?;
+                    let known = rate.map(|rate| rate[1]);
+                    let lift = self.plant.lift(&plain.dynamics, &end, &path, gap, known)?;
                     Some((start, lift))
                 });
             let motion = Motion { lift, ..plain };
             // λ̂ = λ − η at the start.
-            let mut short = [0.0; N];
-            short.copy_from_slice(&end[..N]);
+            let mut short = solved_of::<N>(&end);
             let at = motion.whole(from, &short, &self.y);
             short[0] -= at[0] - end[0];
             short[1] -= at[1] - end[1];
@@ -752,25 +814,31 @@ impl Tick<'_> {
                 to,
                 short: to < self.t1,
             };
-            let solved;
-            (solved, h) = self.solver.advance_watched(
+            let start = Start {
+                y: short,
+                rate: rate.map(|rate| motion.solved_rate(from, &rate)),
+            };
+            let solved = self.solver.advance_watched(
                 &motion,
                 span,
-                short,
+                start,
                 self.tolerance,
                 first,
                 &mut on_step,
             )?;
+            h = solved.first_step;
+            rate = solved.rate.map(|r| motion.plant_rate(to, &r));
             end = if last.0 == to {
                 last.1
             } else {
-                motion.whole(to, &solved, &self.y)
+                motion.whole(to, &solved.y, &self.y)
             };
             from = to;
         }
         Ok(Solved {
             y: end,
             first_step: h,
+            rate,
             turns,
         })
     }
@@ -870,7 +938,7 @@ mod tests {
         plant.params.damping = plant.mass() * std::f64::consts::TAU * hz / 200.0;
         let exact = Tolerance::both(1e-13);
         let (mut lifted, mut whole) = (rest, [rest[0], rest[1], rest[2]]);
-        let (mut first_step, mut worst, mut fastest) = (None, [0.0f64; 5], 0.0f64);
+        let (mut first_step, mut rate, mut worst, mut fastest) = (None, None, [0.0f64; 5], 0.0f64);
         let mut turns = 0;
         for k in 0..400 {
             let (t0, t1) = (k as f64 * 1e-3, (k + 1) as f64 * 1e-3);
@@ -885,9 +953,10 @@ mod tests {
                 t1,
                 input_volts: input,
                 first_step,
+                rate,
             };
             let solved = tick.solve().expect("solves");
-            (lifted, first_step) = (solved.y, Some(solved.first_step));
+            (lifted, first_step, rate) = (solved.y, Some(solved.first_step), solved.rate);
             let ode = Whole {
                 plant: &plant,
                 target_volts: input,

@@ -4,7 +4,7 @@
 
 use std::time::Instant;
 
-use crate::engine::erk::{StepEnds, Stop, DOP853, DOPRI5};
+use crate::engine::erk::{self, StepEnds, Stop, DOP853, DOPRI5};
 use crate::engine::events::{self, Extremes, Hermite, Jet, Watch};
 use crate::text::sig;
 
@@ -626,11 +626,14 @@ impl Solver {
             to: t1,
             short: false,
         };
-        self.advance_watched(ode, span, y, tolerance, first_step, &mut |_, _| {})
+        let start = erk::Start { y, rate: None };
+        let end = self.advance_watched(ode, span, start, tolerance, first_step, &mut |_, _| {})?;
+        Ok((end.y, end.first_step))
     }
 
-    /// `advance`, with `on_step` seeing the ends (time, state) of each of DOP853's steps
-    /// (no dense output: a step's ends only), or of the whole interval with BDF.
+    /// `advance` from `start` (its derivative, if known, saves the first stage), with
+    /// `on_step` seeing the ends (time, state) of each of DOP853's steps (no dense output: a
+    /// step's ends only), or of the whole interval with BDF.
     pub fn advance_watched<const N: usize, F: ODE<f64, [f64; N]>>(
         self,
         ode: &F,
@@ -639,11 +642,12 @@ impl Solver {
             to: t1,
             short,
         }: Span,
-        y: [f64; N],
+        start: erk::Start<N>,
         tolerance: Tolerance,
         first_step: Option<f64>,
         on_step: &mut StepEnds<'_, N>,
-    ) -> Result<([f64; N], f64), String> {
+    ) -> Result<Advanced<N>, String> {
+        let y = start.y;
         tolerance.check()?;
         let h0 = first_step
             .filter(|h| h.is_finite() && *h > 0.0)
@@ -659,27 +663,39 @@ impl Solver {
                 let Tolerance { rtol, atol } = tolerance;
                 let (span, tolerance) = ((t0, t1), (rtol, atol));
                 let solved = if short {
-                    DOPRI5.solve(ode, span, y, tolerance, h0, &mut watch)
+                    DOPRI5.solve(ode, span, start, tolerance, h0, &mut watch)
                 } else {
-                    DOP853.solve(ode, span, y, tolerance, h0, &mut watch)
+                    DOP853.solve(ode, span, start, tolerance, h0, &mut watch)
                 };
-                let (end, next) = solved.map_err(|stop| match stop {
+                let end = solved.map_err(|stop| match stop {
                     Stop::StepSize => STEP_SIZE_FELL.to_string(),
                     Stop::Stiff => STIFF.to_string(),
                 })?;
-                Ok((end, first.map_or(next, |h| 1.25 * h)))
+                Ok(Advanced {
+                    y: end.y,
+                    first_step: first.map_or(end.next_step, |h| 1.25 * h),
+                    rate: Some(end.rate),
+                })
             }
             Solver::Dop853 => {
                 // The first solve: the library's DOP853 estimates the first step.
                 let mut first = FirstStep(None, on_step);
                 let (end, next) = dop853(ode, t0, t1, y, tolerance, h0, false, &mut first)?;
-                Ok((end, first.0.map_or(next, |h| 1.25 * h)))
+                Ok(Advanced {
+                    y: end,
+                    first_step: first.0.map_or(next, |h| 1.25 * h),
+                    rate: None,
+                })
             }
             Solver::Bdf => {
                 let (ys, h) = bdf(ode, y, &[t0, t1], tolerance, h0)?;
                 let end = ys.last().copied().ok_or("no state returned")?;
                 on_step((t0, y), (t1, end));
-                Ok((end, h))
+                Ok(Advanced {
+                    y: end,
+                    first_step: h,
+                    rate: None,
+                })
             }
         }
     }
@@ -693,6 +709,15 @@ pub struct Span {
     pub from: f64,
     pub to: f64,
     pub short: bool,
+}
+
+/// A solve's end ([`Solver::advance_watched`]): the state, the first step it took, and the
+/// derivative there where the tick's own steps worked it out (the next solve's first stage).
+#[derive(Clone, Copy, Debug)]
+pub struct Advanced<const N: usize> {
+    pub y: [f64; N],
+    pub first_step: f64,
+    pub rate: Option<[f64; N]>,
 }
 
 /// The first step a solve took; and what sees each step's ends.
