@@ -155,3 +155,43 @@ fn stretch_for_bias_inverts_bias_volts() {
         assert_eq!(d.stretch_for_bias(f64::INFINITY, limit.stretch), None);
     }
 }
+
+/// The offset for a bias (the core's `root`) against bisection on the same comparison
+/// (`bisect`, one evaluation a bit), on random valid devices in f64 and in f32 as flashed:
+/// the bias there is below the target, and the two offsets' biases agree to rounding (where Φ's rounding flips the comparison more than once about the
+/// root, the two may end on different flips; they are the same floats where it does not).
+#[test]
+fn offset_for_bias_agrees_with_bisection_on_random_devices() {
+    use de_resonator::numerics::real::Real;
+    use de_resonator::numerics::roots::bisect;
+    /// (the same floats, the biases' difference over the target).
+    fn against_bisection<T: Real>(d: &Device<T>, fraction: f64) -> (bool, f64) {
+        let max_offset = Tuner::new(*d).limit().at.offset;
+        let volts = d.bias_volts_at(max_offset) * T::of(fraction);
+        let ours = d
+            .offset_for_bias(volts, max_offset)
+            .expect("below the limit");
+        let (theirs, _) = bisect(T::zero(), max_offset, |x| d.bias_volts_at(x) < volts);
+        assert!(d.bias_volts_at(ours) < volts, "{fraction} of the limit");
+        let gap = (d.bias_volts_at(ours) - d.bias_volts_at(theirs)).abs() / volts;
+        (ours == theirs, gap.to_f64())
+    }
+    let mut rng = Rng(0x0ff5_e7b1);
+    let (mut cases, mut same64, mut same32) = (0, 0, 0);
+    let (mut worst64, mut worst32) = (0.0f64, 0.0f64);
+    while cases < 400 {
+        let p = random_device(&mut rng);
+        let (Ok(d64), Ok(d32)) = (Device::new(p), Device::new(p.cast::<f32>())) else {
+            continue;
+        };
+        cases += 1;
+        let fraction = rng.range(1e-3, 1.0);
+        let (same, gap) = against_bisection(&d64, fraction);
+        (same64, worst64) = (same64 + usize::from(same), worst64.max(gap));
+        let (same, gap) = against_bisection(&d32, fraction);
+        (same32, worst32) = (same32 + usize::from(same), worst32.max(gap));
+    }
+    println!("same floats: f64 {same64}/{cases}, f32 {same32}/{cases}; biases' worst relative difference f64 {worst64:.1e}, f32 {worst32:.1e}");
+    assert!(worst64 < 1e-12, "f64: {worst64}");
+    assert!(worst32 < 1e-6, "f32: {worst32}");
+}

@@ -25,9 +25,11 @@ pub fn bisect<T: Real>(mut lo: T, mut hi: T, mut inside: impl FnMut(T) -> bool) 
     (lo, hi)
 }
 
-/// As [`bisect`] with `inside(x)` = `f(x) < 0`, for a continuous `f` with `f(lo) < 0 ≤ f(hi)`
-/// and `lo < hi`: the same adjacent floats, in a handful of evaluations where `f` is smooth
-/// rather than one per bit. Secant steps through the last two points (Dekker's), kept inside
+/// As [`bisect`] with `inside(x)` = `f(x) < 0`, for `f(lo) < 0 ≤ f(hi)` and `lo < hi`: where
+/// `f`'s sign changes once in the bracket, the same adjacent floats, in a handful of
+/// evaluations where `f` is smooth rather than one per bit. Where it changes more than once
+/// (rounding noise about the root in f32, say), the floats about one of the changes, as
+/// bisection's are, though not necessarily the same one. Secant steps through the last two points (Dekker's), kept inside
 /// the bracket, with a midpoint wherever the bracket has not halved in four steps; once a
 /// step is within a few units in the last place, a point as far past it closes the bracket,
 /// and bisection ends it. Ends the other way round, or a NaN, leave the rest to [`bisect`].

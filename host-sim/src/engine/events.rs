@@ -9,7 +9,8 @@ use de_resonator::{Device, Drive, State};
 /// ends): the core's bracketed root of `velocity(t)`, to adjacent times (there the stretch is
 /// flat: its error is ½·λ''·δt²).
 pub fn turn(t0: f64, t1: f64, mut velocity: impl FnMut(f64) -> f64) -> f64 {
-    // Before the turn the velocity has the sign of t0's: negative, rising through zero.
+    // Before the turn the velocity has the sign of t0's: signed so that it is negative there
+    // and rises through zero (a velocity of exactly 0 counts as after the turn).
     let rising = velocity(t0) < 0.0 || velocity(t1) > 0.0;
     let sign = if rising { 1.0 } else { -1.0 };
     let (low, high) = roots::root(t0, t1, |t| sign * velocity(t));

@@ -726,8 +726,7 @@ impl Loop {
         let t = k as f64 / f64::from(self.settings.tick_hz);
         let stuck = analog.stretch_stuck_after_seconds.is_some_and(|at| t >= at);
         // Each fitted channel's reading, spec and noise scale (its unit a code), once a tick.
-        let mut fitted = [(Channel::Current, 0.0, 0.0, None); 3];
-        let mut n = 0;
+        let mut fitted = [None; Channel::ALL.len()];
         for ((channel, spec), slot) in analog.front_end.fitted().zip(&mut fitted) {
             let reading = match channel {
                 Channel::Current => current,
@@ -735,15 +734,11 @@ impl Loop {
                 Channel::Stretch => stretch,
             };
             let noise_scale = analog.noise_codes * f64::from(spec.per_count);
-            *slot = (channel, reading, noise_scale, Some(spec));
-            n += 1;
+            *slot = Some((channel, reading, noise_scale, spec));
         }
-        let fitted = &fitted[..n];
         bench.codes.clear();
-        bench.codes.reserve(n * bench.scans as usize);
         for _ in 0..bench.scans {
-            for &(channel, reading, noise_scale, spec) in fitted {
-                let Some(spec) = spec else { continue };
+            for &(channel, reading, noise_scale, spec) in fitted.iter().flatten() {
                 // The ADC's noise in the channel's unit, then the one rounding to a code.
                 let noise = noise_scale * bench.noise.gaussian();
                 let mut code = spec.adc_code((reading + noise) as f32);

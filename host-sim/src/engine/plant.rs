@@ -568,14 +568,19 @@ fn solved_of<const N: usize>(y: &Vector) -> [f64; N] {
     std::array::from_fn(|i| if i < 2 { y[i] } else { y[i + 1] })
 }
 
+/// The solved states put back into the plant's state `y` (the inverse of [`solved_of`]).
+fn place<const N: usize>(y: &mut Vector, solved: &[f64; N]) {
+    y[..2].copy_from_slice(&solved[..2]);
+    y[3..N + 1].copy_from_slice(&solved[2..]);
+}
+
 impl<const N: usize> Motion<'_, N> {
     /// The plant's state at `t` from the solved one: λ = λ̂ + η, λ' = λ̂' + η', the
     /// amplifier's output in closed form; and η''.
     #[inline]
     fn unlift(&self, t: f64, short: &[f64; N], base: &Vector) -> (Vector, f64) {
         let mut y = *base;
-        y[..2].copy_from_slice(&short[..2]);
-        y[3..N + 1].copy_from_slice(&short[2..]);
+        place(&mut y, short);
         let mut fast = 0.0;
         if let Some((start, lift)) = &self.lift {
             let ((e0, e1, e2), volts) = lift.at(t - start);
@@ -612,17 +617,11 @@ impl<const N: usize> Motion<'_, N> {
                 acceleration: rate[1],
             }
         };
-        let fast = |t: f64| {
-            self.lift.as_ref().map_or((0.0, 0.0), |(start, lift)| {
-                let ((e0, e1, _), _) = lift.at(t - start);
-                (e0, e1)
-            })
-        };
         let path = Hermite::new(jet(a, ya), jet(b, yb));
-        let at = events::turn(a, b, |t| path.at(t).1 + fast(t).1);
+        let at = events::turn(a, b, |t| path.at(t).1 + self.eta(t).1);
         let w = (at - a) / (b - a);
         let mut y: Vector = std::array::from_fn(|i| whole_a[i] + w * (whole_b[i] - whole_a[i]));
-        let ((stretch, velocity), (e0, e1)) = (path.at(at), fast(at));
+        let ((stretch, velocity), (e0, e1, _)) = (path.at(at), self.eta(at));
         (y[0], y[1]) = (stretch + e0, velocity + e1);
         if let Some(amplifier) = &self.amplifier {
             y[2] = amplifier.volts_at(at);
@@ -635,18 +634,17 @@ impl<const N: usize> Motion<'_, N> {
         self.unlift(t, short, base).0
     }
 
-    /// η' and η'' at `t` (zero without a lift).
-    fn fast_rates(&self, t: f64) -> (f64, f64) {
-        self.lift.as_ref().map_or((0.0, 0.0), |(start, lift)| {
-            let ((_, e1, e2), _) = lift.at(t - start);
-            (e1, e2)
-        })
+    /// η, η' and η'' at `t` (zero without a lift).
+    fn eta(&self, t: f64) -> (f64, f64, f64) {
+        self.lift
+            .as_ref()
+            .map_or((0.0, 0.0, 0.0), |(start, lift)| lift.at(t - start).0)
     }
 
     /// The solved states' derivative at `t` from the plant's (`rate`, [`Solved::rate`]).
     fn solved_rate(&self, t: f64, rate: &Vector) -> [f64; N] {
         let mut solved = solved_of(rate);
-        let (e1, e2) = self.fast_rates(t);
+        let (_, e1, e2) = self.eta(t);
         solved[0] -= e1;
         solved[1] -= e2;
         solved
@@ -656,9 +654,8 @@ impl<const N: usize> Motion<'_, N> {
     /// output's left 0: it is in closed form).
     fn plant_rate(&self, t: f64, solved: &[f64; N]) -> Vector {
         let mut rate = [0.0; STATE];
-        rate[..2].copy_from_slice(&solved[..2]);
-        rate[3..N + 1].copy_from_slice(&solved[2..]);
-        let (e1, e2) = self.fast_rates(t);
+        place(&mut rate, solved);
+        let (_, e1, e2) = self.eta(t);
         rate[0] += e1;
         rate[1] += e2;
         rate
@@ -915,6 +912,14 @@ mod tests {
         }
     }
 
+    /// The reference scene's amplifier (`scenes/reference.toml`): gain 4000, 2 kHz, 0.2 V/µs.
+    const LAGGING: AmplifierModel = AmplifierModel {
+        gain: 4000.0,
+        bandwidth_hz: 2000.0,
+        slew_volts_per_second: 200_000.0,
+        rail_volts: f64::INFINITY,
+    };
+
     /// The worst differences of `solver`'s lifted ticks from the state solve (the stretch, and
     /// the rate and the volts as fractions of their largest), at the ticks' ends and at the
     /// turns the ticks found (the state solve run to each turn's time).
@@ -922,12 +927,7 @@ mod tests {
         let mut plant = Plant {
             params,
             branches: Vec::new(),
-            amplifier: AmplifierModel {
-                gain: 4000.0,
-                bandwidth_hz: 2000.0,
-                slew_volts_per_second: 200_000.0,
-                rail_volts: f64::INFINITY,
-            },
+            amplifier: LAGGING,
             leakage: Leakage::NONE,
         };
         let rest = plant.at_rest();
@@ -987,5 +987,73 @@ mod tests {
         worst[2] /= limit;
         worst[4] /= fastest;
         worst
+    }
+
+    /// The end derivative a tick carries into the next (`Solved::rate`, the next solve's
+    /// first stage) with one, two and three viscoelastic branches behind a lagging amplifier:
+    /// the ticks carrying it end where ticks that evaluate their first stage afresh do, to
+    /// the solve's tolerance (a rate on the wrong states, or stale, would move each step's
+    /// result by its first stage's weight, about h/20 times its error).
+    #[test]
+    fn a_carried_rate_leaves_the_ticks_with_branches_where_they_were() {
+        let branches = [
+            Branch {
+                modulus: 45e3,
+                relaxation_seconds: 2e-2,
+            },
+            Branch {
+                modulus: 20e3,
+                relaxation_seconds: 3e-3,
+            },
+            Branch {
+                modulus: 10e3,
+                relaxation_seconds: 0.2,
+            },
+        ];
+        for count in 1..=branches.len() {
+            let mut plant = Plant {
+                params: REFERENCE_DEVICE,
+                branches: branches[..count].to_vec(),
+                amplifier: LAGGING,
+                leakage: Leakage::NONE,
+            };
+            plant.params.damping = 0.05;
+            let rest = plant.at_rest();
+            let (_, limit) = plant.limit_volts(&rest, 1.0).expect("a limit");
+            let (mut carried, mut fresh) = ((rest, None, None), (rest, None));
+            let (mut worst, mut carries) = (0.0f64, 0);
+            for k in 0..300 {
+                let (t0, t1) = (k as f64 * 1e-3, (k + 1) as f64 * 1e-3);
+                let ac = 0.02 * limit * (std::f64::consts::TAU * 40.0 * t0).sin();
+                let input_volts = if k < 60 {
+                    0.6 * limit
+                } else {
+                    0.6 * limit + ac
+                };
+                let tick = |y, first_step, rate| Tick {
+                    plant: &plant,
+                    solver: Solver::Dop853,
+                    tolerance: Tolerance::both(1e-10),
+                    y,
+                    t0,
+                    t1,
+                    input_volts,
+                    first_step,
+                    rate,
+                };
+                let solved = tick(carried.0, carried.1, carried.2)
+                    .solve()
+                    .expect("solves");
+                carries += usize::from(carried.2.is_some());
+                carried = (solved.y, Some(solved.first_step), solved.rate);
+                let solved = tick(fresh.0, fresh.1, None).solve().expect("solves");
+                fresh = (solved.y, Some(solved.first_step));
+                for (a, b) in carried.0.iter().zip(&fresh.0) {
+                    worst = worst.max((a - b).abs() / b.abs().max(1.0));
+                }
+            }
+            assert!(carries > 250, "{count} branches: carried {carries} times");
+            assert!(worst < 1e-8, "{count} branches: {worst}");
+        }
     }
 }
