@@ -3,9 +3,8 @@
 //! for a fixed-size state and a solve a step or two long. A scene solves 1,000 ticks a
 //! simulated second, each a solve of its own; the library's general driver (a state by trait,
 //! stage loops sized at run time, kilobytes of method built and a `Solution` kept a solve) cost
-//! as much as the right-hand sides. Left out, as a tick uses neither: dense output, and the
-//! stiffness test (every 100th step of a solve: a tick never reaches it). The reference's
-//! solves (`simulate`) keep the library's methods.
+//! as much as the right-hand sides. Left out, as a tick reads no state between steps: dense
+//! output. The reference's solves (`simulate`) keep the library's methods.
 
 use std::sync::LazyLock;
 

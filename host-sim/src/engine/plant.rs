@@ -156,11 +156,6 @@ impl Plant {
         self.params.relative_permittivity * VACUUM_PERMITTIVITY
     }
 
-    /// λB from λ (model.md §2).
-    pub fn passive_stretch(&self, stretch: f64) -> f64 {
-        self.dynamics().passive_stretch(stretch)
-    }
-
     /// Total nominal stresses (s1, s2) of membrane A (`active`) or B at stretches (λ1, λ2),
     /// with the networks at the viscous stretches in `y`.
     #[inline]
@@ -287,15 +282,11 @@ impl Plant {
         }
     }
 
-    /// The local stiffness −∂λ''/∂λ with the networks frozen (central difference), 1/s².
-    fn stiffness(&self, y: &Vector, volts: f64) -> f64 {
-        self.dynamics().stiffness(&self.branches, y, volts)
-    }
-
     /// The natural frequency of small oscillations about state `y` (networks frozen, as they
     /// are over a period when their relaxation is slow), Hz; NaN where unstable.
     pub fn natural_frequency_hz(&self, y: &Vector, volts: f64) -> f64 {
-        self.stiffness(y, volts).sqrt() / std::f64::consts::TAU
+        let stiffness = self.dynamics().stiffness(&self.branches, y, volts);
+        stiffness.sqrt() / std::f64::consts::TAU
     }
 
     /// The six checks of model.md §6 at state `y` under `volts`, with the networks' stresses
@@ -429,6 +420,7 @@ struct Dynamics {
 }
 
 impl Dynamics {
+    /// λB from λ (model.md §2).
     fn passive_stretch(&self, stretch: f64) -> f64 {
         self.passive_offset - self.passive_slope * stretch
     }
@@ -783,9 +775,9 @@ impl Tick<'_> {
             let motion = Motion { lift, ..plain };
             // λ̂ = λ − η at the start.
             let mut short = solved_of::<N>(&end);
-            let at = motion.whole(from, &short, &self.y);
-            short[0] -= at[0] - end[0];
-            short[1] -= at[1] - end[1];
+            let (e0, e1, _) = motion.eta(from);
+            short[0] -= e0;
+            short[1] -= e1;
             // The plant's state at the last step's end: the next step's start.
             let mut last = (from, end);
             let mut on_step = |(a, ya): (f64, [f64; N]), (b, yb): (f64, [f64; N])| {
