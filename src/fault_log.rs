@@ -18,7 +18,7 @@
 //! | offset | size | what |
 //! |---|---|---|
 //! | 0 | 2 | magic `DF` |
-//! | 2 | 1 | cause: `Fault::number` (1–22), 0xF0 a watchdog reset, 0xF1 a brown-out |
+//! | 2 | 1 | cause: `Fault::number` (1–24), 0xF0 a watchdog reset, 0xF1 a brown-out |
 //! | 3 | 1 | the words' length, bytes |
 //! | 4 | 4 | sequence number, u32 (from 1; the newest is the largest, wrapping) |
 //! | 8 | 4 | the board's tick since boot, u32 |

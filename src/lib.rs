@@ -36,7 +36,7 @@ pub mod table;
 pub mod tuning;
 
 // The model's modules at the crate's root too, as every caller names them.
-pub use model::{device, material, safety, statics};
+pub use model::{device, material, safety, statics, swing};
 
 pub use board::stage::{OutputStage, StageError};
 pub use controller::{
@@ -54,5 +54,6 @@ pub use numerics::integration::{Drive, Integrator, Method, State, StepError};
 pub use numerics::real::Real;
 pub use safety::{Crossing, FailureMode, Limit, Margins, Monitor};
 pub use statics::Equilibrium;
+pub use swing::{AcDrive, Ramp, Resonance, Swing, SwingError};
 pub use table::{Table, TableError};
 pub use tuning::{TunableRange, TuneError, Tuner, DEFAULT_MARGIN};

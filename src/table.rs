@@ -287,11 +287,14 @@ impl<'a> Table<'a> {
         DeviceParams::from_values(values)
     }
 
-    /// Check that the table was made for `params` (bit for bit, as f32).
+    /// Check that the table was made for `params` (bit for bit, as f32), but for the
+    /// damping, which no static of model.md §5–§7 reads: a device told its damping after its
+    /// table was made keeps the table.
     pub fn check_device(&self, params: &DeviceParams<f32>) -> Result<(), TableError> {
         let ours = self.params();
         match Field::ALL
             .into_iter()
+            .filter(|&field| field != Field::Damping)
             .find(|&field| ours.get(field).to_bits() != params.get(field).to_bits())
         {
             Some(field) => Err(TableError::OtherDevice { field }),

@@ -305,9 +305,15 @@ fn every_request_gets_its_reply() {
     assert_eq!(code(&refused), Some(2), "{refused}");
     assert_eq!(b.ask("get target_hz"), "ok target_hz=45");
     assert_eq!(b.slot.as_ref().unwrap().plan().bias_volts, bias);
-    // AC on: the settings in force carry it.
-    let ac = b.ask("ac 50 45");
-    assert!(ac.contains("ac_volts=50 ac_hz=45"), "{ac}");
+    // AC at the resonance of a device flashed without damping: no bound in the model, refused
+    // with the figures (model.md §7), the plan in force kept.
+    let resonant = b.ask("ac 50 45");
+    assert_eq!(code(&resonant), Some(2), "{resonant}");
+    assert!(resonant.contains("harmonic resonance"), "{resonant}");
+    assert_eq!(b.ask("get ac_volts"), "ok ac_volts=0");
+    // AC on, off the resonance: the settings in force carry it.
+    let ac = b.ask("ac 50 41");
+    assert!(ac.contains("ac_volts=50 ac_hz=41"), "{ac}");
     assert_eq!(b.ask("get ac_volts"), "ok ac_volts=50");
     b.run(30_000, Inputs::NONE);
     // A setting by name; the tick rate only in an image.
@@ -451,7 +457,20 @@ fn tracking_slope_reaches_the_background_job() {
         track_seconds: Some(0.2),
         ..Settings::for_target(45.5)
     };
-    let bytes = image_with(&settings);
+    // The device flashed says half the plant's damping: a drive at the resonance has a bound.
+    let told = common::with_quality_factor(REFERENCE_DEVICE, 100.0);
+    let table = common::made_table(told, 0.05, 64);
+    let mut bytes = vec![0; image::image_bytes(table.len())];
+    Image::write(
+        &mut bytes,
+        &told.cast(),
+        &spec(),
+        &FrontEnd::NONE,
+        &settings,
+        PowerUp::Drive,
+        &table,
+    )
+    .unwrap();
     let mut b = Bench::boot(&bytes, None::<NoKeeper>, None);
     let mut plant = common::Plant::new(common::with_quality_factor(REFERENCE_DEVICE, 50.0), 1e3);
     let (bus, pin) = (common::Bus::default(), common::Pin::default());

@@ -544,19 +544,32 @@ fn bad_targets_and_settings_are_refused_before_anything_is_driven() {
 }
 
 /// An AC drive at the natural frequency, statically safe (peak below the safe maximum) but
-/// undamped: the swing grows every period until it crosses a limit. The model run of the
-/// plan finds it, and the controller refuses; the same AC off resonance is accepted.
+/// undamped: the swing grows every period until it crosses a limit. The swing's prediction
+/// refuses it (no bound at the resonance, model.md §7); the model run of the plan alone
+/// (the table's stage, then `check_plan`) finds the crossing too; the same AC off resonance
+/// is accepted.
 #[test]
 fn a_plan_that_crosses_dynamically_is_refused_by_the_model_check() {
     let off = Settings {
-        ac_volts: 1800.0,
+        ac_volts: 1500.0,
         ac_hz: 20.0,
         ..Settings::for_target(44.0)
     };
     let accepted = start(off);
     assert!(accepted.is_ok(), "{:?}", accepted.err());
     let resonant = Settings { ac_hz: 44.0, ..off };
-    let fault = start(resonant).unwrap_err();
+    match start(resonant).unwrap_err() {
+        Fault::DriveSwing(e) => assert!(e.to_string().contains("harmonic resonance"), "{e}"),
+        other => panic!("{other}"),
+    }
+    let (mut c, boot) = Controller::from_table(
+        REFERENCE_DEVICE.cast(),
+        &reference_table(),
+        amplifier(),
+        resonant,
+    )
+    .unwrap();
+    let fault = c.check_plan(boot).unwrap_err();
     // The crossing comes while the AC drives: after the ramp (745 ticks) and the hold (250),
     // within the 0.5 s the model follows the AC.
     match fault {

@@ -65,7 +65,7 @@ fn the_virtual_board_answers_every_request_as_the_firmware() {
     board.wait_for("at the new bias", settled);
     let replies = board.replies(&[
         "target 300",
-        "ac 20 45",
+        "ac 20 41",
         "get ac_volts",
         "set tick_hz 2000",
         "frobnicate",
@@ -74,7 +74,7 @@ fn the_virtual_board_answers_every_request_as_the_firmware() {
     // Out of range: refused by the checks (code 2), the plan in force kept.
     assert!(replies[0].starts_with("err 2 "), "{}", replies[0]);
     assert!(
-        replies[1].starts_with("ok target_hz=45 ") && replies[1].ends_with("ac_volts=20 ac_hz=45")
+        replies[1].starts_with("ok target_hz=45 ") && replies[1].ends_with("ac_volts=20 ac_hz=41")
     );
     assert_eq!(replies[2], "ok ac_volts=20");
     assert!(replies[3].starts_with("err 2 tick_hz"), "{}", replies[3]);

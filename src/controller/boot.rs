@@ -9,6 +9,7 @@ use super::{Controller, State};
 use crate::device::Device;
 use crate::drive::Amplifier;
 use crate::safety::Limit;
+use crate::swing::{AcDrive, Ramp};
 use crate::table::Table;
 use crate::tuning::Tuner;
 use crate::{DeviceParams, Settings};
@@ -191,6 +192,23 @@ impl Controller {
         self.ceiling_volts = max_volts;
         self.set_caps(max_volts, self.estimate_volts);
         let plan_ticks = self.set_plan(solved.volts)?;
+        // The drive's swing about the tuned bias, with the device's damping (model.md §7):
+        // inside the margin of every check, or refused before anything is driven.
+        if settings.ac_volts > 0.0 && settings.ac_hz > 0.0 {
+            let drive = AcDrive {
+                bias_volts: solved.volts,
+                ac_volts: settings.ac_volts,
+                ac_hz: settings.ac_hz,
+                ramp: Some(Ramp {
+                    from_volts: self.plan.start_volts,
+                    slew_volts_per_second: settings.slew_volts_per_second,
+                    settle_seconds: settings.settle_seconds,
+                }),
+            };
+            self.flashed
+                .check_swing(drive, limit.at.offset, None, settings.margin)
+                .map_err(Fault::DriveSwing)?;
+        }
         // The ring the first pulse will leave in the charge, at the bias it measures at (the
         // tick weighs it against the noise before it pulses).
         #[cfg(feature = "trim")]

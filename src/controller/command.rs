@@ -192,6 +192,9 @@ impl Controller {
             .min(replanned.max_volts)
             .min(self.estimate_volts);
         let mut plan = replanned.plan.delayed(self.tick);
+        // From the bias the last tick sent (a ramp in force may not be done: a hold's, a
+        // tracked drive's), never a jump to the job's start.
+        plan.start_volts = self.plan.ramp_volts(self.tick.saturating_sub(1));
         plan.start_under(max_volts, self.last_volts);
         plan.check_range(replanned.plan.bias_volts, max_volts)
             .map_err(Refusal::Checks)?;

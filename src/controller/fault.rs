@@ -12,6 +12,7 @@ use crate::drive::{CodeError, DacCode};
 use crate::estimate::ring::TrimError;
 use crate::numerics::integration::StepError;
 use crate::safety::FailureMode;
+use crate::swing::SwingError;
 use crate::table::TableError;
 use crate::tuning::TuneError;
 
@@ -84,6 +85,19 @@ pub enum Fault {
     Input(InputError),
     /// The trim could not measure, estimate or converge.
     Trim(TrimError),
+    /// The drive's predicted swing about its bias (model.md §7), widened by the margin,
+    /// crosses a check of §6, or has no bound in the model: the drive is refused (before it
+    /// is on: at boot, `ac`, `target`, a trim's or tracking's new bias).
+    DriveSwing(SwingError<f32>),
+    /// The measured motion came within the margin of a limit of model.md §6: the stretch
+    /// sample fails a check under the tick's voltage raised by 1/(1 − margin). Taken off
+    /// before the limit itself.
+    NearLimit {
+        mode: FailureMode,
+        tick: u32,
+        stretch: f32,
+        volts: f32,
+    },
 }
 
 impl fmt::Display for Fault {
@@ -218,6 +232,20 @@ impl fmt::Display for Fault {
             Fault::Bus => write!(f, "DAC bus error"),
             Fault::Input(e) => write!(f, "sensor fault: {e}"),
             Fault::Trim(e) => write!(f, "trim: {e}"),
+            Fault::DriveSwing(e) => write!(f, "drive refused: {e}"),
+            Fault::NearLimit {
+                mode,
+                tick,
+                stretch,
+                volts,
+            } => write!(
+                f,
+                "measured motion near a limit at tick {tick}: λ {} under {} V is within the \
+                 margin of {}",
+                Decimal(*stretch),
+                Decimal(*volts),
+                mode.description()
+            ),
         }
     }
 }
@@ -235,7 +263,7 @@ pub enum FaultStage {
 
 /// Each fault's key, in `Fault`'s order: `Fault::number` − 1 indexes it (the telemetry
 /// record and the fault log carry the number, a reader shows the key).
-pub const FAULT_KEYS: [&str; 22] = [
+pub const FAULT_KEYS: [&str; 24] = [
     "device",
     "setting",
     "swing",
@@ -258,6 +286,8 @@ pub const FAULT_KEYS: [&str; 22] = [
     "bus",
     "input",
     "trim",
+    "drive_swing",
+    "near_limit",
 ];
 
 impl Fault {
@@ -287,6 +317,8 @@ impl Fault {
             Fault::Bus => 20,
             Fault::Input(_) => 21,
             Fault::Trim(_) => 22,
+            Fault::DriveSwing(_) => 23,
+            Fault::NearLimit { .. } => 24,
         }
     }
 
@@ -309,7 +341,8 @@ impl Fault {
             | Fault::AboveSafe { .. }
             | Fault::PlanCrosses { .. }
             | Fault::PlanFailed(_)
-            | Fault::Amplifier(_) => FaultStage::Boot,
+            | Fault::Amplifier(_)
+            | Fault::DriveSwing(_) => FaultStage::Boot,
             Fault::Gate { .. }
             | Fault::Sensor { .. }
             | Fault::SensorImplausible { .. }
@@ -321,7 +354,8 @@ impl Fault {
             | Fault::Limit { .. }
             | Fault::Bus
             | Fault::Input(_)
-            | Fault::Trim(_) => FaultStage::Running,
+            | Fault::Trim(_)
+            | Fault::NearLimit { .. } => FaultStage::Running,
         }
     }
 }

@@ -407,10 +407,15 @@ impl Controller {
                 .estimate
                 .as_ref()
                 .map(|device| (device, self.estimate_shares_terms));
-            if let Some(fault) =
-                self.watch
-                    .stretch(k, stretch, volts, &self.flashed, estimate, stuck)
-            {
+            if let Some(fault) = self.watch.stretch(
+                k,
+                stretch,
+                volts,
+                self.settings.margin,
+                &self.flashed,
+                estimate,
+                stuck,
+            ) {
                 return self.fault(fault);
             }
         }
@@ -814,8 +819,9 @@ impl Controller {
             plan.pulse_ticks,
             plan.probe_volts,
         );
+        // From the bias sent at this tick (held: the window's), at the slew rate.
+        plan.start_volts = plan.ramp_volts(k);
         plan.start_tick = k.saturating_add(1);
-        plan.start_volts = bias_volts;
         plan.bias_volts = next_bias_volts;
         plan.pulse_ticks = (0, 0);
         let bound = max_volts.min(self.max_volts);

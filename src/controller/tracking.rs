@@ -148,7 +148,7 @@ impl Controller {
             .solved_at
             .is_none_or(|at| k.wrapping_sub(at) as f32 >= ticks_of(SLOPE_TIME_CONSTANTS));
         if stale && self.trim.tracked_hz.is_none() {
-            self.trim.want_job(Some(hz));
+            self.trim.want_job(Some((hz, lock.quality_factor)));
             self.tracking.solved_at = Some(k);
         }
         let Some(slope) = self.tracking.volts_squared_per_hz else {
@@ -157,23 +157,30 @@ impl Controller {
         // The integral law over this cycle (1/hz s long): Φ² moves by slope·error·dt/Ti, the
         // error the cycle's own estimate's (the drive's frequency lags it by the tracker's
         // smoothing).
+        // The law integrates from where the output's bias is (the last move's ramp may not
+        // be done: from its target instead, the moves would wind up and outrun the slew).
         let integral_seconds = INTEGRAL_TIME_CONSTANTS * loop_seconds;
         let error_hz = target_hz - lock.natural_hz;
-        let squared = bias * bias + slope * error_hz / (hz * integral_seconds);
+        let here = self.plan.ramp_volts(k);
+        let squared = here * here + slope * error_hz / (hz * integral_seconds);
         let next_bias_volts = sqrt_f32(squared.max(0.0));
         let ac = self.plan.swing_volts();
         if !(next_bias_volts + ac <= self.max_volts) {
             // The plant needs more than the cap: hold the bias, the drive off, and say so.
             return Ok(Some(self.hold(k, next_bias_volts + ac)));
         }
-        // From this tick (its voltage is sent): a step within the ramp's is done by the next.
+        // The amplifier must give the new peak, as for a trim's new bias.
+        self.amplifier
+            .code(next_bias_volts + ac)
+            .map_err(Fault::Amplifier)?;
+        // From this tick's bias, at the slew rate (this tick's voltage is sent).
         let before = (
             self.plan.start_tick,
             self.plan.start_volts,
             self.plan.bias_volts,
         );
         self.plan.start_tick = k;
-        self.plan.start_volts = bias;
+        self.plan.start_volts = here;
         self.plan.bias_volts = next_bias_volts;
         if let Err(fault) = self.plan.check_range(next_bias_volts, self.max_volts) {
             (

@@ -12,6 +12,7 @@ use crate::estimate::ring::{
     estimate_shear_modulus, high_passed, model_hz, ring_charge_gain, ring_frequency_hz, ChargeRing,
     TrimError, MAX_WINDOW, TIMING_ERROR_TIMES_RESOLUTION,
 };
+use crate::swing::{AcDrive, Ramp};
 use crate::tuning::{TuneError, Tuner};
 
 /// The relative frequency error at which the trim before a tracked drive hands over to the
@@ -58,6 +59,8 @@ pub(super) struct TrimState {
     /// A tracked drive's measured natural frequency, Hz, whose retune is wanted (instead of
     /// a window's ring).
     pub(super) tracked_hz: Option<f32>,
+    /// The tracker's Q with it (NaN: none): the damping the drive's swing is checked with.
+    pub(super) tracked_quality: f32,
 }
 
 impl TrimState {
@@ -79,16 +82,18 @@ impl TrimState {
             handed_out: false,
             job: 0,
             tracked_hz: None,
+            tracked_quality: f32::NAN,
         }
     }
 
     /// A new job is wanted (a window measured, a tracked frequency to solve at): a result of
     /// any job handed out before is stale from now on.
-    pub(super) fn want_job(&mut self, tracked_hz: Option<f32>) {
+    pub(super) fn want_job(&mut self, tracked: Option<(f32, f32)>) {
         self.job = self.job.wrapping_add(1);
         self.handed_out = false;
         self.result = None;
-        self.tracked_hz = tracked_hz;
+        self.tracked_hz = tracked.map(|(hz, _)| hz);
+        self.tracked_quality = tracked.map_or(f32::NAN, |(_, q)| q);
     }
 
     /// Start afresh on a new plan (the trim's own μ, the window, the secant's history and
@@ -236,8 +241,9 @@ pub struct TrimJob {
     /// showed (`TrimState::ring_gain`, `ring_seen`).
     ring_gain: f32,
     ring_seen: f32,
-    /// Measured by the tracker (the window is not read), Hz.
+    /// Measured by the tracker (the window is not read), Hz, and its Q (NaN: none).
     measured_hz: Option<f32>,
+    quality_factor: f32,
     /// Its number, carried by its result.
     job: u32,
 }
@@ -309,6 +315,7 @@ impl TrimJob {
             ring_gain: state.ring_gain,
             ring_seen: state.ring_seen,
             measured_hz: state.tracked_hz,
+            quality_factor: state.tracked_quality,
             job: state.job,
         }
     }
@@ -468,6 +475,35 @@ impl TrimJob {
                 max_volts: estimate_volts,
             });
         }
+        // The drive's swing at the new bias on the estimate (model.md §7): a tracked drive
+        // follows the resonance, so it is checked there, with the tracker's Q.
+        let quality = (self.quality_factor > 0.0).then_some(self.quality_factor);
+        let ac_hz = match self.measured_hz {
+            Some(_) => tuner
+                .device()
+                .offset_for_bias(bias_volts, tuner.limit().at.offset)
+                .map_or(s.ac_hz, |offset| device.natural_frequency_hz_at(offset)),
+            None => s.ac_hz,
+        };
+        if s.ac_volts > 0.0 && ac_hz > 0.0 {
+            // From the bias measured at: a tracked drive moves it with the AC on.
+            let drive = AcDrive {
+                bias_volts,
+                ac_volts: s.ac_volts,
+                ac_hz,
+                ramp: Some(Ramp {
+                    from_volts: self.bias_volts,
+                    slew_volts_per_second: s.slew_volts_per_second,
+                    settle_seconds: match self.measured_hz {
+                        Some(_) => 0.0,
+                        None => s.settle_seconds,
+                    },
+                }),
+            };
+            device
+                .check_swing(drive, tuner.limit().at.offset, quality, s.margin)
+                .map_err(Fault::DriveSwing)?;
+        }
         Ok(TrimResult::Retune {
             measured_hz,
             shear_modulus,
@@ -518,6 +554,7 @@ mod tests {
             ring_gain: f32::NAN,
             ring_seen: 1.0,
             measured_hz: None,
+            quality_factor: f32::NAN,
             job: 0,
         }
     }

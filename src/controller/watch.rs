@@ -157,13 +157,17 @@ impl Watch {
     /// A stretch sample at tick `k` under `volts`: a number (`Sensor`), one a device could
     /// give (`SensorImplausible`), not the same `stuck_samples` times in a row (`SensorStuck`;
     /// `None`: no such check), and inside model.md §6 for the device flashed and for the
-    /// trim's estimate, if any, with whether it is the flashed device but for μ (`Limit`; a
+    /// trim's estimate, if any, with whether it is the flashed device but for μ, under the
+    /// voltage raised by 1/(1 − `margin`): a failure there is `NearLimit` (the motion is
+    /// taken off before the limit), or `Limit` where it fails at the voltage itself too (a
     /// state outside the model is loss of tension 1).
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn stretch(
         &mut self,
         k: u32,
         stretch: f32,
         volts: f32,
+        margin: f32,
         flashed: &Device<f32>,
         estimate: Option<(&Device<f32>, bool)>,
         stuck_samples: Option<u32>,
@@ -192,16 +196,21 @@ impl Watch {
         }
         let tick = u64::from(k);
         let terms = flashed.stretch_terms(stretch);
+        // The checks under the raised voltage; passing there, they pass at the voltage
+        // itself where the elastic Hessian is definite (`StretchTerms::elastic_definite`),
+        // and are checked at the voltage itself too where it is not.
+        let near = volts / (1.0 - margin);
+        let monotone = terms.elastic_definite();
         if let Some((device, true)) = estimate {
             // Both pass: one device's checks (`StretchTerms::both_pass`). Otherwise each in
             // turn below, which says the first that fails as it always has.
             let of = |d: &Device<f32>| {
-                let p = volts / d.volts_per_unit();
+                let p = near / d.volts_per_unit();
                 (p * p, d.breakdown_field_dimless())
             };
             let (f, e) = (of(flashed), of(device));
             let (larger, smaller) = if e.0 > f.0 { (e, f) } else { (f, e) };
-            if terms.both_pass(larger, smaller) {
+            if monotone && terms.both_pass(larger, smaller) {
                 return None;
             }
         }
@@ -215,10 +224,28 @@ impl Watch {
                 own = device.stretch_terms(stretch);
                 &own
             };
-            let p = volts / device.volts_per_unit();
             let breakdown = device.breakdown_field_dimless();
-            if let Some(mode) = self.monitor.observe_terms(terms, tick, p * p, breakdown) {
-                return Some(Fault::Limit { mode, tick: k });
+            let p = near / device.volts_per_unit();
+            let raised = match terms.first_failure(p * p, breakdown) {
+                None if !monotone => {
+                    let p = volts / device.volts_per_unit();
+                    terms.first_failure(p * p, breakdown)
+                }
+                raised => raised,
+            };
+            if let Some(mode) = raised {
+                let p = volts / device.volts_per_unit();
+                return Some(
+                    match self.monitor.observe_terms(terms, tick, p * p, breakdown) {
+                        Some(mode) => Fault::Limit { mode, tick: k },
+                        None => Fault::NearLimit {
+                            mode,
+                            tick: k,
+                            stretch,
+                            volts,
+                        },
+                    },
+                );
             }
         }
         None

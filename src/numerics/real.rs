@@ -26,6 +26,7 @@ pub trait Real:
     fn to_f64(self) -> f64;
     fn sqrt(self) -> Self;
     fn ln(self) -> Self;
+    fn exp(self) -> Self;
     fn abs(self) -> Self;
     fn sin(self) -> Self;
     fn is_finite(self) -> bool;
@@ -96,6 +97,9 @@ impl Real for f64 {
     fn ln(self) -> Self {
         libm::log(self)
     }
+    fn exp(self) -> Self {
+        libm::exp(self)
+    }
     fn abs(self) -> Self {
         libm::fabs(self)
     }
@@ -127,6 +131,9 @@ impl Real for f32 {
     }
     fn ln(self) -> Self {
         libm::logf(self)
+    }
+    fn exp(self) -> Self {
+        libm::expf(self)
     }
     fn abs(self) -> Self {
         libm::fabsf(self)

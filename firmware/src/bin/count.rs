@@ -342,7 +342,13 @@ fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
         probe_hz: 500.0,
         ..settings()
     };
-    let Ok((c, _)) = Controller::start(device(), TABLE, amp, s) else {
+    // A drive at the resonance is checked with the damping the device is told (model.md
+    // §7): Q 60 at 44 Hz, half the plant's below.
+    let mut told = device();
+    if track_seconds.is_some() {
+        told.damping = told.effective_mass() * core::f32::consts::TAU * 44.0 / 60.0;
+    }
+    let Ok((c, _)) = Controller::start(told, TABLE, amp, s) else {
         exit(1)
     };
     let mut c = c;

@@ -1,0 +1,412 @@
+//! The drive's swing (issue 44): a drive is accepted only where its swing, settled and on the
+//! way there, stays inside the margin of model.md §6, and the monitor takes it off before a
+//! limit. Checked on the full plant in f64 (the scenes' simulator: an independent solve of
+//! the equation of motion, with the plant's own damping and viscous branches), never on the
+//! core's prediction.
+
+use de_resonator::{AcDrive, Device, DeviceParams, Phase, Ramp, Settings, Tuner};
+
+use host_sim::engine::hil::Run;
+use host_sim::scene;
+
+/// The issue's VHB-like membrane (μ 60 kPa, 0.5 mm, 3 × 3, no damping given): tuned to
+/// 33 Hz, then `ac 80 33` on a plant of Q 1000. Before, `ok`, and the plant's field reached
+/// breakdown 1.17 s later; now the drive is refused (no damping known at the resonance) and
+/// the plant never crosses.
+#[test]
+fn an_ac_at_the_resonance_of_an_undamped_device_is_refused_and_the_plant_stays_safe() {
+    let text = format!(
+        "{}
+[controller]
+target_hz = 33.0
+
+[[commands]]
+at_seconds = 1.0
+line = \"ac 80 33\"
+",
+        vhb_like(1000.0, 0.0, 4.0)
+    );
+    let run = run(&text);
+    assert_eq!(run.plant_crossing, None, "{:?}", run.fault_words);
+    let reply = &run.commands[0].reply;
+    assert!(
+        reply.starts_with("err") && reply.contains("drive refused") && reply.contains("largest AC"),
+        "{reply}"
+    );
+    // The bias still held, nothing faulted: the refusal leaves the board as it was.
+    assert!(run.fault.is_none(), "{:?}", run.fault_words);
+    assert!(run.bias_volts > 3000.0, "{}", run.bias_volts);
+}
+
+/// The same membrane with its damping told (Q 300 at 33 Hz) on plants of Q 300 and 1000:
+/// `ac 80 33` is checked on the model with that damping. On the plant of Q 300 the drive
+/// either fits (the plant never crosses) or is refused with its figures; on the plant of
+/// Q 1000, damped less than told, the monitor takes the drive off before the limit.
+#[test]
+fn a_drive_on_a_plant_damped_less_than_told_is_taken_off_before_the_limit() {
+    for plant_q in [300.0, 1000.0] {
+        let text = format!(
+            "{}
+[controller]
+target_hz = 33.0
+
+[[commands]]
+at_seconds = 1.0
+line = \"ac 40 33\"
+",
+            vhb_like(plant_q, 300.0, 20.0)
+        );
+        let run = run(&text);
+        assert_eq!(
+            run.plant_crossing, None,
+            "plant Q {plant_q}: {:?}; {:?}",
+            run.fault_words, run.commands
+        );
+        let reply = &run.commands[0].reply;
+        if let Some(words) = &run.fault_words {
+            assert!(words.contains("near a limit"), "plant Q {plant_q}: {words}");
+        }
+        assert!(
+            reply == "ok" || reply.contains("largest AC"),
+            "plant Q {plant_q}: {reply}"
+        );
+    }
+}
+
+/// A property over random valid devices: plants of Q from 10 to 10⁴ (a quarter with a
+/// viscous branch), the device told the plant's damping, half of it or none; drives at, and
+/// 1% and 3% off, f0, 2·f0 and f0/2, with amplitudes across all the cap allows; each run on
+/// the full plant for five ring times Q/(π·f) after the drive starts. Zero crossings of any
+/// check of §6; each refusal and each early stop says its figures. `SWING_CASES` sets the
+/// number of cases (default 48).
+#[test]
+fn no_accepted_drive_crosses_a_limit_on_random_devices() {
+    let cases: usize = std::env::var("SWING_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(48);
+    let mut rng = Rng(0x5eed_0044);
+    let (mut refused, mut stopped, mut driven, mut tried) = (0, 0, 0, 0);
+    let mut simulated_seconds = 0.0;
+    let mut worst: f64 = 0.0;
+    let defaults = Settings::for_target(1.0);
+    while refused + stopped + driven < cases {
+        tried += 1;
+        assert!(tried < 50 * cases, "too few valid devices");
+        let Some(case) = Case::random(&mut rng) else {
+            continue;
+        };
+        simulated_seconds += case.duration_seconds;
+        let run = run_with_history(&case.scene());
+        assert_eq!(
+            run.plant_crossing, None,
+            "{case:?}: {:?} {:?}",
+            run.refused, run.fault_words
+        );
+        if let Some(words) = &run.refused {
+            // A boot refusal with its figures: the swing's (the largest AC that fits), or
+            // the plan's model run, or the AC's range under the cap.
+            assert!(
+                words.contains("largest AC") || words.contains(" V") || words.contains(" s"),
+                "{case:?}: {words}"
+            );
+            refused += 1;
+        } else if let Some(words) = &run.fault_words {
+            assert!(
+                words.contains("near a limit") || !words.contains("measured motion"),
+                "{case:?}: the monitor acted at the limit, not before it: {words}"
+            );
+            stopped += 1;
+        } else {
+            driven += 1;
+            if case.branch.is_none() {
+                // The plant's own swing with the AC on against the prediction (f64, the
+                // device told, the bias held): inside the box widened by the margin, and
+                // how far out of the unwidened box it went.
+                let swing = Device::new(case.params)
+                    .unwrap()
+                    .check_swing(
+                        AcDrive {
+                            bias_volts: run.bias_volts,
+                            ac_volts: case.ac_volts,
+                            ac_hz: case.ac_hz,
+                            ramp: Some(Ramp {
+                                from_volts: 0.0,
+                                slew_volts_per_second: defaults.slew_volts_per_second.into(),
+                                settle_seconds: defaults.settle_seconds.into(),
+                            }),
+                        },
+                        Tuner::new(Device::new(case.params).unwrap())
+                            .limit()
+                            .at
+                            .offset,
+                        None,
+                        0.05,
+                    )
+                    .unwrap_or_else(|e| panic!("{case:?}: driven, yet {e}"));
+                let driving = run
+                    .history
+                    .iter()
+                    .filter(|s| s.phase == Some(Phase::Driving))
+                    .map(|s| s.stretch);
+                let (low, high) = driving.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| {
+                    (l.min(x), h.max(x))
+                });
+                let out = ((swing.stretch - low) / (swing.stretch - swing.low_stretch))
+                    .max((high - swing.stretch) / (swing.high_stretch - swing.stretch));
+                assert!(
+                    out <= 1.0 / 0.95,
+                    "{case:?}: the plant swung λ {low} .. {high}, predicted {swing:?}"
+                );
+                if out.is_finite() {
+                    worst = worst.max(out);
+                }
+            }
+        }
+    }
+    println!(
+        "swing: {cases} cases ({tried} drawn): {driven} driven to the end, {stopped} stopped \
+         early, {refused} refused; {simulated_seconds:.0} s of plant simulated; the plant's \
+         swing at most {worst:.3} of the predicted"
+    );
+    // The property must test drives, not only refusals.
+    assert!(driven >= cases / 4, "{driven} of {cases} driven");
+}
+
+/// One random case of the property.
+#[derive(Debug)]
+struct Case {
+    params: DeviceParams<f64>,
+    target_hz: f64,
+    ac_volts: f64,
+    ac_hz: f64,
+    plant_q: f64,
+    branch: Option<(f64, f64)>,
+    tick_hz: f64,
+    duration_seconds: f64,
+}
+
+impl Case {
+    fn random(rng: &mut Rng) -> Option<Case> {
+        let mut params = DeviceParams {
+            shear_modulus: rng.log_range(20e3, 200e3),
+            jlim: (rng.unit() < 0.7).then(|| rng.range(30.0, 200.0)),
+            relative_permittivity: rng.range(3.0, 6.0),
+            density: rng.range(900.0, 1200.0),
+            breakdown_field: rng.log_range(50e6, 200e6),
+            thickness: rng.log_range(0.2e-3, 2e-3),
+            length_active: rng.range(10e-3, 40e-3),
+            length_passive: rng.range(10e-3, 60e-3),
+            width: rng.range(20e-3, 80e-3),
+            bar_mass: rng.log_range(0.5e-3, 5e-3),
+            prestretch_1: rng.range(1.2, 4.0),
+            prestretch_2: rng.range(1.0, 4.0),
+            damping: 0.0,
+        };
+        let tuner = Tuner::new(Device::new(params).ok()?);
+        let range = tuner.tunable_range(0.05).ok()?;
+        let target_hz = range.low_hz + (range.high_hz - range.low_hz) * rng.range(0.05, 0.95);
+        if target_hz.is_nan() || target_hz <= 5.0 || target_hz >= 300.0 {
+            return None;
+        }
+        let bias = tuner.tune(target_hz, 0.05).ok()?.volts;
+        let cap = tuner.max_bias(0.05).ok()?.volts;
+        let room = bias.min(cap - bias);
+        if room.is_nan() || room <= 1.0 {
+            return None;
+        }
+        let ac_volts = room * rng.log_range(0.02, 1.0);
+        let near = [1.0, 2.0, 0.5][rng.below(3)];
+        let off = [0.0, 0.01, -0.01, 0.03, -0.03][rng.below(5)];
+        let ac_hz = target_hz * near * (1.0 + off);
+        let plant_q = rng.log_range(10.0, 1e4);
+        // The device told the plant's damping, half of it, or none.
+        let told = [Some(1.0), Some(2.0), None][rng.below(3)];
+        if let Some(factor) = told {
+            let omega = std::f64::consts::TAU * target_hz;
+            params.damping = params.effective_mass() * omega / (plant_q * factor);
+        }
+        let branch = (rng.unit() < 0.25).then(|| {
+            (
+                params.shear_modulus * rng.range(0.05, 0.3),
+                rng.log_range(0.05, 5.0),
+            )
+        });
+        let tick_hz = (20.0 * ac_hz).max(1000.0).ceil();
+        let defaults = Settings::for_target(1.0);
+        let drive_starts =
+            bias / f64::from(defaults.slew_volts_per_second) + f64::from(defaults.settle_seconds);
+        let ring = plant_q / (std::f64::consts::PI * target_hz.min(ac_hz));
+        Some(Case {
+            params,
+            target_hz,
+            ac_volts,
+            ac_hz,
+            plant_q,
+            branch,
+            tick_hz,
+            duration_seconds: drive_starts + 5.0 * ring,
+        })
+    }
+
+    fn scene(&self) -> String {
+        let p = &self.params;
+        let jlim = p.jlim.map_or(String::new(), |j| format!("jlim = {j:e}\n"));
+        let branch = self.branch.map_or(String::new(), |(modulus, seconds)| {
+            format!("[[plant.branches]]\nmodulus = {modulus:e}\nrelaxation_seconds = {seconds:e}\n")
+        });
+        format!(
+            "name = \"swing-property\"
+duration_seconds = {duration:e}
+
+[device]
+shear_modulus = {mu:e}
+{jlim}relative_permittivity = {eps:e}
+density = {rho:e}
+breakdown_field = {eb:e}
+thickness = {h:e}
+length_active = {l1a:e}
+length_passive = {l1b:e}
+width = {l2:e}
+bar_mass = {m:e}
+prestretch_1 = {l1p:e}
+prestretch_2 = {l2p:e}
+damping = {c:e}
+
+[plant]
+quality_factor = {q:e}
+{branch}
+[amplifier]
+gain = 4000.0
+dac_reference_volts = 2.5
+slew_volts_per_second = 200000.0
+
+[sensor]
+noise = 1e-5
+
+[controller]
+target_hz = {target:e}
+ac_volts = {ac:e}
+ac_hz = {ac_hz:e}
+tick_hz = {tick:e}
+
+[output]
+plot = false
+",
+            duration = self.duration_seconds,
+            mu = p.shear_modulus,
+            eps = p.relative_permittivity,
+            rho = p.density,
+            eb = p.breakdown_field,
+            h = p.thickness,
+            l1a = p.length_active,
+            l1b = p.length_passive,
+            l2 = p.width,
+            m = p.bar_mass,
+            l1p = p.prestretch_1,
+            l2p = p.prestretch_2,
+            c = p.damping,
+            q = self.plant_q,
+            target = self.target_hz,
+            ac = self.ac_volts,
+            ac_hz = self.ac_hz,
+            tick = self.tick_hz,
+        )
+    }
+}
+
+/// The issue's VHB-like membrane and its plant (Q `plant_q`), the device told `told_q` (0:
+/// no damping), `seconds` long; the [controller] table follows.
+fn vhb_like(plant_q: f64, told_q: f64, seconds: f64) -> String {
+    let params = DeviceParams {
+        shear_modulus: 60e3,
+        jlim: Some(90.0),
+        relative_permittivity: 4.5,
+        density: 960.0,
+        breakdown_field: 100e6,
+        thickness: 0.5e-3,
+        length_active: 30e-3,
+        length_passive: 25e-3,
+        width: 50e-3,
+        bar_mass: 3e-3,
+        prestretch_1: 3.0,
+        prestretch_2: 3.0,
+        damping: 0.0,
+    };
+    let damping = if told_q > 0.0 {
+        params.effective_mass() * std::f64::consts::TAU * 33.0 / told_q
+    } else {
+        0.0
+    };
+    format!(
+        "name = \"vhb-like\"
+duration_seconds = {seconds}
+
+[device]
+shear_modulus = 60e3
+jlim = 90.0
+relative_permittivity = 4.5
+density = 960.0
+breakdown_field = 100e6
+thickness = 0.5e-3
+length_active = 30e-3
+length_passive = 25e-3
+width = 50e-3
+bar_mass = 3e-3
+prestretch_1 = 3.0
+prestretch_2 = 3.0
+damping = {damping:e}
+
+[plant]
+quality_factor = {plant_q}
+
+[amplifier]
+gain = 4000.0
+dac_reference_volts = 2.5
+slew_volts_per_second = 200000.0
+
+[sensor]
+noise = 1e-5
+
+[output]
+plot = false
+"
+    )
+}
+
+fn run(text: &str) -> Run {
+    let mut s = scene::parse(text).unwrap_or_else(|e| panic!("{e}\n{text}"));
+    s.run.history = false;
+    s.run.run().unwrap_or_else(|e| panic!("{e}\n{text}"))
+}
+
+fn run_with_history(text: &str) -> Run {
+    let mut s = scene::parse(text).unwrap_or_else(|e| panic!("{e}\n{text}"));
+    s.run.history = true;
+    s.run.run().unwrap_or_else(|e| panic!("{e}\n{text}"))
+}
+
+/// SplitMix64: the cases from a seed, the same every run.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    fn unit(&mut self) -> f64 {
+        (self.next() >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn range(&mut self, low: f64, high: f64) -> f64 {
+        low + (high - low) * self.unit()
+    }
+    fn log_range(&mut self, low: f64, high: f64) -> f64 {
+        (low.ln() + (high.ln() - low.ln()) * self.unit()).exp()
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n as u64) as usize
+    }
+}
