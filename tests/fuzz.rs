@@ -137,7 +137,13 @@ fn settings(
     let mut s = Settings::for_target(target_hz as f32);
     s.margin = margin as f32;
     s.slew_volts_per_second = (limit_volts * rng.range(0.5, 20.0)) as f32;
-    s.tick_hz = [500.0, 1000.0, 2000.0][rng.below(3)];
+    // Mostly the usual rates; a fifth up to 25 kHz, where a slew step is a few volts and a
+    // tracked drive's moves outran it (issue 44).
+    s.tick_hz = if rng.unit() < 0.2 {
+        rng.log_range(2000.0, 25_000.0).round() as f32
+    } else {
+        [500.0, 1000.0, 2000.0][rng.below(3)]
+    };
     s.settle_seconds = rng.range(0.0, 0.3) as f32;
     s.check_seconds = rng.range(0.05, 0.3) as f32;
     if rng.unit() < 0.6 {
@@ -155,7 +161,7 @@ fn settings(
         s.trim_window_seconds = 0.25;
         s.trim_every_seconds = [None, Some(0.5)][rng.below(2)];
         if cfg!(feature = "track") && rng.unit() < 0.4 {
-            s.track_seconds = Some(rng.range(0.05, 0.5) as f32);
+            s.track_seconds = Some(rng.log_range(0.01, 0.5) as f32);
         }
     }
     if cfg!(feature = "probe") && rng.unit() < 0.15 {
@@ -419,6 +425,16 @@ struct Tally {
     first_violation: Option<String>,
     first_gate: Option<String>,
     gates: u64,
+    /// Ticks whose output moved by more than a slew step beyond the AC's (and probe's and
+    /// pulse's) own change, a dead bus's drop apart.
+    slew_violations: u64,
+    first_slew_violation: Option<String>,
+    /// Cases whose plant crossed a check of model.md §6: read by a sensor with the plant the
+    /// device flashed (what the promise covers), and otherwise (no sensor, a lying one, a
+    /// plant softer or stiffer than flashed: docs/safety.md's "not guaranteed").
+    crossings_covered: u64,
+    first_crossing: Option<String>,
+    crossings_uncovered: BTreeMap<String, u64>,
     operations: BTreeMap<String, u64>,
     results: BTreeMap<&'static str, u64>,
 }
@@ -504,10 +520,16 @@ fn fuzz_the_controller() {
 
         // The plant: the device flashed, its μ off by up to ±25% in one case of three, Q 100.
         let mut plant = flashed64;
-        if rng.unit() < 0.33 {
+        let mismatched = rng.unit() < 0.33;
+        if mismatched {
             plant.shear_modulus *= rng.range(0.75, 1.25);
         }
-        let ticks = 200 + rng.below(3000) as u32;
+        // A tracked drive needs time to settle before its bias moves: longer cases.
+        let ticks = if s.track_seconds.is_some() {
+            2_000 + rng.below(40_000) as u32
+        } else {
+            200 + rng.below(3000) as u32
+        };
         let sensor = match rng.below(7) {
             0 => Sensor::None,
             1 => Sensor::NanAt(rng.below(ticks as usize) as u32),
@@ -540,6 +562,9 @@ fn fuzz_the_controller() {
         let mut ops = Operations::new(s, flashed.cast(), amplifier);
         // Where `stop` started the way down (the tick and the voltage sent), until a new plan.
         let mut stopped: Option<(u32, f32)> = None;
+        // The last tick's AC, probe and pulse about the ramp, V (0 on a way down).
+        let mut swing_before = 0.0f32;
+        let mut crossed = false;
         for k in 0..ticks {
             let truth = model.as_ref().map(|m| m.state().stretch as f32);
             let stretch = match sensor {
@@ -587,6 +612,8 @@ fn fuzz_the_controller() {
                 amplifier_volts,
                 current_amps,
             };
+            // The plan this tick's voltage comes from, and whether a descent gives it.
+            let (plan_before, at, descending) = (*c.plan(), c.ticks(), c.phase() == Phase::Faulted);
             let mut out = match sensor {
                 Sensor::InputLostAt(at) if k >= at => c.tick_acquired(Err(InputError::AtRail {
                     channel: Channel::Stretch,
@@ -666,6 +693,31 @@ fn fuzz_the_controller() {
             if let Some(Event::AboveCeiling { .. }) = out.event {
                 tally.held += 1;
             }
+            // Never faster than the slew rate but for the AC's (probe's, pulse's) own change
+            // and one DAC step of rounding each side.
+            let swing_now = if descending || matches!(out.event, Some(Event::Fault(_))) {
+                0.0
+            } else {
+                plan_before.volts(at) - plan_before.ramp_volts(at)
+            };
+            let moved = (out.volts - last_volts).abs();
+            let allowed = slew_step
+                + (swing_now - swing_before).abs()
+                + 2.0 * lsb_volts
+                + 8.0 * f32::EPSILON * out.volts.max(last_volts);
+            if !dead_bus && moved > allowed {
+                tally.slew_violations += 1;
+                tally.first_slew_violation.get_or_insert_with(|| {
+                    format!(
+                        "tick {k}: {last_volts} V to {} V, slew step {slew_step} V, AC part \
+                         {swing_before} V to {swing_now} V, event {:?}, plan {:?}, {s:?}",
+                        out.volts,
+                        out.event,
+                        c.plan()
+                    )
+                });
+            }
+            swing_before = swing_now;
             last_volts = out.volts;
             // The operator, and the background jobs, between ticks.
             match ops.between_ticks(&mut rng, &mut c, &bytes, &mut tally) {
@@ -692,6 +744,32 @@ fn fuzz_the_controller() {
                     model = None;
                 }
             }
+            // The plant against model.md §6 under the voltage it now holds.
+            if let (Some(m), false) = (model.as_ref(), crossed) {
+                let d = m.device();
+                let p = f64::from(out.volts) / d.volts_per_unit();
+                if let Some(mode) = d.first_failure(m.state().stretch, p * p) {
+                    crossed = true;
+                    let covered = matches!(sensor, Sensor::Plant { .. }) && !mismatched;
+                    if covered {
+                        tally.crossings_covered += 1;
+                        tally.first_crossing.get_or_insert_with(|| {
+                            format!(
+                                "tick {k}: {mode:?} at λ {} under {} V, {s:?}, {flashed:?}",
+                                m.state().stretch,
+                                out.volts
+                            )
+                        });
+                    } else {
+                        let why = match sensor {
+                            Sensor::Plant { .. } => "the plant mismatched",
+                            Sensor::None => "no sensor",
+                            _ => "a sensor that fails",
+                        };
+                        *tally.crossings_uncovered.entry(why.into()).or_default() += 1;
+                    }
+                }
+            }
         }
     }
     println!(
@@ -705,6 +783,11 @@ fn fuzz_the_controller() {
         tally.descent_violations,
         tally.gates,
         tally.held
+    );
+    println!(
+        "fuzz: {} ticks faster than the slew beyond the AC's own change; plant crossings: {} \
+         where covered (a sensor, the plant as flashed), {:?} elsewhere",
+        tally.slew_violations, tally.crossings_covered, tally.crossings_uncovered
     );
     println!("fuzz: operations {:?}", tally.operations);
     println!("fuzz: background results {:?}", tally.results);
@@ -720,6 +803,16 @@ fn fuzz_the_controller() {
         tally.descent_violations, 0,
         "the way down broken, first: {:?}",
         tally.first_violation
+    );
+    assert_eq!(
+        tally.slew_violations, 0,
+        "faster than the slew, first: {:?}",
+        tally.first_slew_violation
+    );
+    assert_eq!(
+        tally.crossings_covered, 0,
+        "the plant crossed a limit, first: {:?}",
+        tally.first_crossing
     );
     // Most cases with a clean table must start, or the ticks check little.
     let clean = tally.tables.get("clean").copied().unwrap_or_default();

@@ -756,3 +756,69 @@ fn a_softer_estimate_while_tracking_brings_the_plan_down_to_its_cap() {
     );
     assert_eq!(c.phase(), Phase::Held);
 }
+
+/// Tracking never outruns the slew rate (issue 44): each cycle's move starts from the bias
+/// the output is at, not from the last move's target, so a move the ramp has not finished
+/// is not a jump. A slow slew (2 V a tick) and a plant that stiffens 2% in a step, so that
+/// the integral law asks for more each cycle than the ramp gives: every tick's output,
+/// less its AC, moves by at most a slew step (and a DAC step of rounding each side).
+#[cfg(feature = "track")]
+#[test]
+fn a_tracked_bias_never_moves_faster_than_the_slew() {
+    use de_resonator::{Amplifier, Controller, DeviceParams, Inputs, Settings, REFERENCE_DEVICE};
+    let settings = Settings {
+        ac_volts: 30.0,
+        ac_hz: 45.5,
+        trim_tolerance: Some(5e-4),
+        track_seconds: Some(0.05),
+        slew_volts_per_second: 2000.0,
+        ..Settings::for_target(45.5)
+    };
+    let table = common::made_table(flashed(), 0.05, 64);
+    let amplifier = Amplifier::new(2.5, 4000.0).unwrap();
+    let (mut c, _) = Controller::start(flashed().cast(), &table, amplifier, settings).unwrap();
+    let plant = common::with_quality_factor(REFERENCE_DEVICE, 50.0);
+    let stiff = DeviceParams {
+        shear_modulus: 1.02 * plant.shear_modulus,
+        ..plant
+    };
+    let mut p = common::Plant::new(plant, 1000.0);
+    let step = settings.slew_volts_per_second / settings.tick_hz;
+    let lsb = amplifier.volts(de_resonator::DacCode(1));
+    let (mut last_bias, mut moves, mut driving) = (0.0f32, 0, 0);
+    for k in 0..30_000u32 {
+        if k == 12_000 {
+            p.set_params(stiff);
+        }
+        let (plan, at) = (*c.plan(), c.ticks());
+        let out = c.tick(Inputs::stretch(p.stretch() as f32));
+        assert!(
+            !matches!(out.event, Some(de_resonator::Event::Fault(_))),
+            "tick {k}: {out:?}"
+        );
+        let bias = out.volts - (plan.volts(at) - plan.ramp_volts(at));
+        if k > 0 {
+            assert!(
+                (bias - last_bias).abs() <= step + 2.0 * lsb,
+                "tick {k}: the bias sent went from {last_bias} V to {bias} V, a slew step \
+                 is {step} V"
+            );
+        }
+        if c.phase() == de_resonator::Phase::Driving {
+            driving += 1;
+            if (bias - last_bias).abs() > 0.5 * lsb {
+                moves += 1;
+            }
+        }
+        last_bias = bias;
+        if let Some(job) = c.trim_job() {
+            c.trim_done(job.solve());
+        }
+        p.step(out.volts);
+    }
+    // The test tests moves: tracking moved the bias on many ticks of the drive.
+    assert!(
+        driving > 15_000 && moves > 100,
+        "{driving} ticks driven, {moves} moves"
+    );
+}
