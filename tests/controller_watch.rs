@@ -296,3 +296,79 @@ fn the_leakage_watch_measures_the_dc_current_against_the_voltage() {
         }
     }
 }
+
+/// The monitor acts before a limit (issue 44): at the bias for 44 Hz, a stretch that falls
+/// toward the frame step by step (the membrane swinging back) meets A's tension along 1,
+/// s1(λ) − ε·(Φ/H)²·λ·λ2p² > 0 (model.md §6.3), which fails at λ_limit under the bias and
+/// at λ_near > λ_limit under the bias raised by 1/(1 − margin): both found here from the
+/// stress in SI (tests/common), not from the core. The first fault is `NearLimit`, at the
+/// first sample past λ_near, with its figures, well before λ_limit; then the descent.
+#[test]
+fn the_monitor_takes_the_drive_off_within_the_margin_before_the_limit() {
+    // A held stretch repeats bit for bit: no stuck-sensor check here.
+    let settings = Settings {
+        stuck_samples: None,
+        ..Settings::for_target(44.0)
+    };
+    let mut c = start(settings).unwrap();
+    let p = REFERENCE_DEVICE;
+    // To the bias and its hold.
+    for _ in 0..1_200 {
+        c.tick(Inputs::stretch(2.0));
+    }
+    assert_eq!(c.phase(), Phase::Holding);
+    // The voltage the monitor checks under: the plan's (the DAC's code rounds it).
+    let volts = f64::from(c.plan().bias_volts);
+    // A's tension along 1 at λ under Φ, Pa; its root by bisection below the equilibrium.
+    let tension = |l: f64, volts: f64| {
+        common::s1(&p, l, p.prestretch_2)
+            - common::permittivity(&p) * (volts / p.thickness).powi(2) * l * p.prestretch_2.powi(2)
+    };
+    let root = |volts: f64| {
+        let (mut lo, mut hi) = (0.3, 2.0);
+        assert!(tension(lo, volts) < 0.0 && tension(hi, volts) > 0.0);
+        for _ in 0..100 {
+            let mid = 0.5 * (lo + hi);
+            if tension(mid, volts) > 0.0 {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        hi
+    };
+    let margin = f64::from(settings.margin);
+    let (near, limit) = (root(volts / (1.0 - margin)), root(volts));
+    assert!(near > limit + 1e-3, "{near} {limit}");
+    let step = 1e-4;
+    let mut stretch = 2.0f64;
+    let fault = loop {
+        stretch -= step;
+        let out = c.tick(Inputs::stretch(stretch as f32));
+        if let Some(Event::Fault(fault)) = out.event {
+            break fault;
+        }
+        assert!(
+            stretch > near - step,
+            "no fault at λ {stretch} past λ_near {near}"
+        );
+    };
+    match fault {
+        Fault::NearLimit {
+            mode,
+            stretch: seen,
+            volts: at,
+            ..
+        } => {
+            assert_eq!(mode, de_resonator::FailureMode::LossOfTension1);
+            assert!(
+                f64::from(seen) <= near && f64::from(seen) > near - 2.0 * step,
+                "λ {seen}, λ_near {near}"
+            );
+            assert_eq!(f64::from(at), volts);
+            assert!(fault.to_string().contains("near a limit"), "{fault}");
+        }
+        other => panic!("{other}"),
+    }
+    assert_eq!(fault.stage(), FaultStage::Running);
+}

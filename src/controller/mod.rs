@@ -819,9 +819,10 @@ impl Controller {
             plan.pulse_ticks,
             plan.probe_volts,
         );
-        // From the bias sent at this tick (held: the window's), at the slew rate.
-        plan.start_volts = plan.ramp_volts(k);
+        // From the bias held since the ramp reached it (a window is measured only at the
+        // bias: `State::Holding` follows the ramp's end), at the slew rate.
         plan.start_tick = k.saturating_add(1);
+        plan.start_volts = bias_volts;
         plan.bias_volts = next_bias_volts;
         plan.pulse_ticks = (0, 0);
         let bound = max_volts.min(self.max_volts);

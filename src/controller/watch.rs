@@ -196,11 +196,14 @@ impl Watch {
         }
         let tick = u64::from(k);
         let terms = flashed.stretch_terms(stretch);
-        // The checks under the raised voltage; passing there, they pass at the voltage
-        // itself where the elastic Hessian is definite (`StretchTerms::elastic_definite`),
-        // and are checked at the voltage itself too where it is not.
+        // The checks under the raised voltage; passing there, they pass under the voltage
+        // itself. Every margin but the Hessian's is a term less Φ̄² times a positive
+        // factor. The Hessian's d11 falls with Φ̄², and its determinant is a parabola in Φ̄²
+        // opening downward (the bias term's is −3·λ1²·λ2²), positive at Φ̄² = 0: the elastic
+        // energy is convex in (λ1, λ2) wherever the model is defined (I1 is convex on the
+        // positive quadrant, Gent's energy increasing and convex in I1), so the Hessian
+        // passes on an interval of Φ̄² from 0. Past the Gent pole nothing passes.
         let near = volts / (1.0 - margin);
-        let monotone = terms.elastic_definite();
         if let Some((device, true)) = estimate {
             // Both pass: one device's checks (`StretchTerms::both_pass`). Otherwise each in
             // turn below, which says the first that fails as it always has.
@@ -210,7 +213,7 @@ impl Watch {
             };
             let (f, e) = (of(flashed), of(device));
             let (larger, smaller) = if e.0 > f.0 { (e, f) } else { (f, e) };
-            if monotone && terms.both_pass(larger, smaller) {
+            if terms.both_pass(larger, smaller) {
                 return None;
             }
         }
@@ -226,14 +229,7 @@ impl Watch {
             };
             let breakdown = device.breakdown_field_dimless();
             let p = near / device.volts_per_unit();
-            let raised = match terms.first_failure(p * p, breakdown) {
-                None if !monotone => {
-                    let p = volts / device.volts_per_unit();
-                    terms.first_failure(p * p, breakdown)
-                }
-                raised => raised,
-            };
-            if let Some(mode) = raised {
+            if let Some(mode) = terms.first_failure(p * p, breakdown) {
                 let p = volts / device.volts_per_unit();
                 return Some(
                     match self.monitor.observe_terms(terms, tick, p * p, breakdown) {

@@ -122,14 +122,6 @@ impl<T: Real> StretchTerms<T> {
         breakdown && self.hessian.under_bias(l, l2p, smaller).definiteness() > T::zero()
     }
 
-    /// Whether the elastic Hessian alone is positive definite here. Then the biased one's
-    /// determinant, a parabola in Φ̄² opening downward (the bias term's determinant is
-    /// −3·λ1²·λ2²), is positive on an interval from Φ̄² = 0, and every other margin falls
-    /// with Φ̄²: all checks passing under a Φ̄² pass under any smaller one.
-    pub fn elastic_definite(&self) -> bool {
-        self.hessian.definiteness() > T::zero()
-    }
-
     /// Every margin under Φ̄² (the field's square (Φ̄·λ·λ2p)² given), the breakdown's as given.
     fn with_breakdown(&self, p2: T, field_squared: T, breakdown: T) -> Margins<T> {
         let (l, l2p) = (self.stretch, self.prestretch_2);
