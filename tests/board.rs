@@ -309,7 +309,10 @@ fn every_request_gets_its_reply() {
     // with the figures (model.md §7), the plan in force kept.
     let resonant = b.ask("ac 50 45");
     assert_eq!(code(&resonant), Some(2), "{resonant}");
-    assert!(resonant.contains("harmonic resonance"), "{resonant}");
+    assert!(
+        resonant.contains("harmonic resonance (drive at the natural frequency)"),
+        "{resonant}"
+    );
     assert_eq!(b.ask("get ac_volts"), "ok ac_volts=0");
     // AC on, off the resonance: the settings in force carry it.
     let ac = b.ask("ac 50 41");

@@ -372,3 +372,63 @@ fn the_monitor_takes_the_drive_off_within_the_margin_before_the_limit() {
     }
     assert_eq!(fault.stage(), FaultStage::Running);
 }
+
+/// The monitor's margin on the checks no voltage enters (issue 44): B goes slack along 1
+/// where s1(λB) = 0, λB = λ2p^(−1/2) for any Gent membrane (the stress's numerator), so at
+/// λ_slack = (L1·λ1p − L1B·λ2p^(−1/2))/L1A; the equilibrium λ* at the bias from the statics in
+/// SI (tests/common). A stretch rising from λ* faults `NearLimit` (loss of tension 1) at the
+/// first sample past λ* + (1 − margin)·(λ_slack − λ*), not at λ_slack.
+#[test]
+fn the_monitor_takes_the_drive_off_before_the_passive_membrane_goes_slack() {
+    let settings = Settings {
+        stuck_samples: None,
+        ..Settings::for_target(44.0)
+    };
+    let mut c = start(settings).unwrap();
+    let p = REFERENCE_DEVICE;
+    for _ in 0..1_200 {
+        c.tick(Inputs::stretch(2.2));
+    }
+    assert_eq!(c.phase(), Phase::Holding);
+    let volts = f64::from(c.plan().bias_volts);
+    // λ* by bisection on Φ²(λ) = Φ², rising on the loading branch here.
+    let (mut lo, mut hi) = (p.prestretch_1, 3.0);
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if common::bias_squared(&p, mid) < volts * volts {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let equilibrium = lo;
+    let slack = (common::length_1(&p) * p.prestretch_1 - p.length_passive / p.prestretch_2.sqrt())
+        / p.length_active;
+    let margin = f64::from(settings.margin);
+    let near = equilibrium + (1.0 - margin) * (slack - equilibrium);
+    let step = 1e-4;
+    let mut stretch = equilibrium;
+    let fault = loop {
+        stretch += step;
+        if let Some(Event::Fault(fault)) = c.tick(Inputs::stretch(stretch as f32)).event {
+            break fault;
+        }
+        assert!(stretch < near + step, "no fault at λ {stretch} past {near}");
+    };
+    match fault {
+        Fault::NearLimit {
+            mode,
+            stretch: seen,
+            ..
+        } => {
+            assert_eq!(mode, de_resonator::FailureMode::LossOfTension1);
+            // Within the samples' step and f32's rounding of the band's end.
+            assert!(
+                (f64::from(seen) - near).abs() < 2.0 * step,
+                "λ {seen}, expected past {near} (λ* {equilibrium}, λ_slack {slack})"
+            );
+            assert!(f64::from(seen) < slack - 0.01);
+        }
+        other => panic!("{other}"),
+    }
+}

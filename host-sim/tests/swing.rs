@@ -30,7 +30,9 @@ line = \"ac 80 33\"
     assert_eq!(run.plant_crossing, None, "{:?}", run.fault_words);
     let reply = &run.commands[0].reply;
     assert!(
-        reply.starts_with("err") && reply.contains("drive refused") && reply.contains("largest AC"),
+        reply.starts_with("err 2 drive refused: the swing has no bound in the model: harmonic")
+            && reply.contains("give the device's damping")
+            && reply.contains("largest AC that fits is 0 V"),
         "{reply}"
     );
     // The bias still held, nothing faulted: the refusal leaves the board as it was.

@@ -192,13 +192,23 @@ impl Controller {
         self.ceiling_volts = max_volts;
         self.set_caps(max_volts, self.estimate_volts);
         let plan_ticks = self.set_plan(solved.volts)?;
+        // The monitor's band for the checks no voltage enters, about the tuned bias.
+        let stretch = self
+            .flashed
+            .offset_for_bias(solved.volts, limit.at.offset)
+            .map_or(f32::NAN, |offset| self.flashed.stretch_at(offset));
+        self.watch.band = self.flashed.stretch_band(stretch, settings.margin);
         // The drive's swing about the tuned bias, with the device's damping (model.md §7):
-        // inside the margin of every check, or refused before anything is driven.
+        // inside the margin of every check, or refused before anything is driven. A tracked
+        // drive follows the resonance: checked there.
         if settings.ac_volts > 0.0 && settings.ac_hz > 0.0 {
             let drive = AcDrive {
                 bias_volts: solved.volts,
                 ac_volts: settings.ac_volts,
-                ac_hz: settings.ac_hz,
+                ac_hz: match settings.track_seconds {
+                    Some(_) => solved.natural_frequency_hz,
+                    None => settings.ac_hz,
+                },
                 ramp: Some(Ramp {
                     from_volts: self.plan.start_volts,
                     slew_volts_per_second: settings.slew_volts_per_second,

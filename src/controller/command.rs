@@ -8,6 +8,7 @@ use core::fmt;
 
 use super::fault::Fault;
 use super::plan::Plan;
+use super::watch::Watch;
 use super::{Boot, Controller, Phase, State};
 use crate::drive::{Amplifier, DacCode};
 use crate::{DeviceParams, Settings};
@@ -81,6 +82,8 @@ pub struct Replanned {
     plan: Plan,
     settings: Settings,
     max_volts: f32,
+    /// Its monitor's margins (the band about its bias, the voltage's raise).
+    watch: Watch,
     state: State,
     /// Whether the fresh plan holds the tuned bias (not a trim's probe bias).
     tuned: bool,
@@ -117,6 +120,7 @@ impl ReplanJob {
             plan: fresh.plan,
             settings: fresh.settings,
             max_volts: fresh.max_volts,
+            watch: fresh.watch,
             state: fresh.state,
             tuned: fresh.tuned(),
             ring_gain: fresh.ring_gain(),
@@ -201,6 +205,7 @@ impl Controller {
         plan.probe_off_above(max_volts);
         self.settings = replanned.settings;
         self.set_caps(replanned.max_volts, self.estimate_volts);
+        self.watch.guard_as(&replanned.watch);
         self.plan = plan;
         self.state = replanned.state;
         #[cfg(feature = "trim")]

@@ -208,7 +208,7 @@ impl Controller {
             max_volts,
             plan: Plan::idle(),
             tick: 0,
-            watch: Watch::new(),
+            watch: Watch::new(settings.margin),
             leakage: Leakage::default(),
             last_volts: 0.0,
             last_code: DacCode(0),
@@ -407,15 +407,10 @@ impl Controller {
                 .estimate
                 .as_ref()
                 .map(|device| (device, self.estimate_shares_terms));
-            if let Some(fault) = self.watch.stretch(
-                k,
-                stretch,
-                volts,
-                self.settings.margin,
-                &self.flashed,
-                estimate,
-                stuck,
-            ) {
+            if let Some(fault) =
+                self.watch
+                    .stretch(k, stretch, volts, &self.flashed, estimate, stuck)
+            {
                 return self.fault(fault);
             }
         }
@@ -786,6 +781,12 @@ impl Controller {
     /// plant has drifted since).
     fn pause_for_trim(&mut self, k: u32) {
         self.trim.drop_job();
+        // The bias held where the ramp is now (a tracked drive's last move may not be done):
+        // the retune after the window ramps on from it.
+        let here = self.plan.ramp_volts(k);
+        self.plan.start_tick = k;
+        self.plan.start_volts = here;
+        self.plan.bias_volts = here;
         self.plan.ac_tick = None;
         self.trim.tuned = true;
         self.trim.count = 0;
@@ -899,7 +900,9 @@ impl Controller {
             } => {
                 self.trim.params.shear_modulus = shear_modulus;
                 self.trim.count = self.trim.count.saturating_add(1);
+                // The AC from phase 0, as the swing's check has it switched on.
                 self.plan.ac_tick = Some(k.saturating_add(1));
+                self.plan.ac_phase_start = 0;
                 self.state = State::Holding {
                     until: k,
                     then_measure: false,

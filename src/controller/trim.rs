@@ -12,7 +12,7 @@ use crate::estimate::ring::{
     estimate_shear_modulus, high_passed, model_hz, ring_charge_gain, ring_frequency_hz, ChargeRing,
     TrimError, MAX_WINDOW, TIMING_ERROR_TIMES_RESOLUTION,
 };
-use crate::swing::{AcDrive, Ramp};
+use crate::swing::{AcDrive, Ramp, Resonance, SwingError};
 use crate::tuning::{TuneError, Tuner};
 
 /// The relative frequency error at which the trim before a tracked drive hands over to the
@@ -485,7 +485,16 @@ impl TrimJob {
                 .map_or(s.ac_hz, |offset| device.natural_frequency_hz_at(offset)),
             None => s.ac_hz,
         };
-        if s.ac_volts > 0.0 && ac_hz > 0.0 {
+        if s.ac_volts > 0.0 {
+            // No natural frequency at the new bias (a fold): no swing to bound.
+            if !(ac_hz > 0.0) {
+                return Err(Fault::DriveSwing(SwingError::Unbounded {
+                    resonance: Resonance::Static,
+                    natural_hz: 0.0,
+                    quality_factor: self.quality_factor,
+                    largest_ac_volts: 0.0,
+                }));
+            }
             // From the bias measured at: a tracked drive moves it with the AC on.
             let drive = AcDrive {
                 bias_volts,

@@ -5,7 +5,7 @@
 use super::fault::Fault;
 pub use crate::acquire::Inputs;
 use crate::device::Device;
-use crate::safety::Monitor;
+use crate::safety::{Monitor, StretchBand};
 
 /// Ticks in a row the amplifier may be off its command before it is a fault (its bandwidth
 /// and slew limit lag a step by a tick or two).
@@ -139,6 +139,12 @@ impl Leakage {
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Watch {
     monitor: Monitor<f32>,
+    /// The stretches B's tensions and the Gent lock-up allow about the plan's tuned bias,
+    /// narrowed by the margin (the direct solve's boot stage sets it): the margin on the
+    /// checks no voltage enters.
+    pub(super) band: StretchBand<f32>,
+    /// 1/(1 − margin): the voltage the checks run under, over the tick's.
+    raise: f32,
     /// The last stretch sample and how many times in a row it came (bit for bit).
     repeated: Option<(f32, u32)>,
     /// Ticks in a row the amplifier has been off its command.
@@ -146,9 +152,12 @@ pub(super) struct Watch {
 }
 
 impl Watch {
-    pub(super) const fn new() -> Self {
+    /// A watch for the settings' `margin`, with no band yet.
+    pub(super) fn new(margin: f32) -> Self {
         Self {
             monitor: Monitor::new(),
+            band: StretchBand::everywhere(),
+            raise: 1.0 / (1.0 - margin),
             repeated: None,
             amplifier_off_ticks: 0,
         }
@@ -161,13 +170,13 @@ impl Watch {
     /// voltage raised by 1/(1 − `margin`): a failure there is `NearLimit` (the motion is
     /// taken off before the limit), or `Limit` where it fails at the voltage itself too (a
     /// state outside the model is loss of tension 1).
-    #[allow(clippy::too_many_arguments)]
+    /// Outside the band (the stretches B's tensions and the lock-up allow, narrowed by the
+    /// margin) is `NearLimit` too, or `Limit` where such a check fails at the sample.
     pub(super) fn stretch(
         &mut self,
         k: u32,
         stretch: f32,
         volts: f32,
-        margin: f32,
         flashed: &Device<f32>,
         estimate: Option<(&Device<f32>, bool)>,
         stuck_samples: Option<u32>,
@@ -196,6 +205,17 @@ impl Watch {
         }
         let tick = u64::from(k);
         let terms = flashed.stretch_terms(stretch);
+        if let Some(mode) = self.band.outside(stretch) {
+            return Some(match terms.stretch_only_failure() {
+                Some(mode) => Fault::Limit { mode, tick: k },
+                None => Fault::NearLimit {
+                    mode,
+                    tick: k,
+                    stretch,
+                    volts,
+                },
+            });
+        }
         // The checks under the raised voltage; passing there, they pass under the voltage
         // itself. Every margin but the Hessian's is a term less Φ̄² times a positive
         // factor. The Hessian's d11 falls with Φ̄², and its determinant is a parabola in Φ̄²
@@ -203,7 +223,7 @@ impl Watch {
         // energy is convex in (λ1, λ2) wherever the model is defined (I1 is convex on the
         // positive quadrant, Gent's energy increasing and convex in I1), so the Hessian
         // passes on an interval of Φ̄² from 0. Past the Gent pole nothing passes.
-        let near = volts / (1.0 - margin);
+        let near = volts * self.raise;
         if let Some((device, true)) = estimate {
             // Both pass: one device's checks (`StretchTerms::both_pass`). Otherwise each in
             // turn below, which says the first that fails as it always has.
@@ -245,6 +265,13 @@ impl Watch {
             }
         }
         None
+    }
+
+    /// The margins of another watch's plan (an adopted replan's): its band and raise; the
+    /// sample history stays.
+    pub(super) fn guard_as(&mut self, other: &Watch) {
+        self.band = other.band;
+        self.raise = other.raise;
     }
 
     /// A current sample must be a number (`Sensor`); its size is the plant's business.

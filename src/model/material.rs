@@ -85,6 +85,17 @@ impl<T: Real> Gent<T> {
         (l1 - T::one() / (l1 * l1 * l1 * l2 * l2)) / self.softening(l1, l2)
     }
 
+    /// `stress_1` and `lock_up_margin` at once, the invariant worked out once (the monitor's
+    /// every sample: the same floats as the two apart).
+    pub fn stress_1_and_lock_up(&self, l1: T, l2: T) -> (T, T) {
+        let i1 = Self::first_invariant(l1, l2);
+        let g = T::one() - (i1 - T::of(3.0)) * self.inv_jlim;
+        (
+            (l1 - T::one() / (l1 * l1 * l1 * l2 * l2)) / g,
+            T::one() - i1 * self.inv_jlim,
+        )
+    }
+
     /// `s̄1(a, λ2) − s̄1(b, λ2)` without subtracting two near-equal stresses: every term
     /// carries the factor `a − b`, which the caller passes in (it can often form it exactly).
     /// Used for Φ̄²(λ), where a plain difference loses f32 digits at small bias.
@@ -132,6 +143,11 @@ impl<T: Real> Gent<T> {
 
     /// Hessian of `Ws/μ` in (λ1, λ2): `∂²I1/2g + (∂I1)(∂I1)/(2·Jlim·g²)`.
     pub fn hessian(&self, l1: T, l2: T) -> Hessian<T> {
+        self.hessian_with(l1, l2, self.stiffness_1(l1, l2))
+    }
+
+    /// `hessian` with its d11, `stiffness_1(l1, l2)`, already worked out.
+    pub fn hessian_with(&self, l1: T, l2: T, d11: T) -> Hessian<T> {
         let g = self.softening(l1, l2);
         let inv_l1 = T::one() / l1;
         let inv_l2 = T::one() / l2;
@@ -141,7 +157,7 @@ impl<T: Real> Gent<T> {
         let h2 = l2 - c * inv_l2;
         let lock = T::of(2.0) * self.inv_jlim / (g * g);
         Hessian {
-            d11: self.stiffness_1(l1, l2),
+            d11,
             d12: T::of(2.0) * c * inv_l1 * inv_l2 / g + lock * h1 * h2,
             d22: (T::one() + T::of(3.0) * c * inv_l2 * inv_l2) / g + lock * h2 * h2,
         }

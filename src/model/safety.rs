@@ -122,6 +122,22 @@ impl<T: Real> StretchTerms<T> {
         breakdown && self.hessian.under_bias(l, l2p, smaller).definiteness() > T::zero()
     }
 
+    /// The first of the checks no bias enters that fails here: B's tensions (§6.3, §6.4)
+    /// and the Gent lock-up (§6.6); outside the model, loss of tension 1.
+    pub fn stretch_only_failure(&self) -> Option<FailureMode> {
+        if !self.in_model {
+            return Some(FailureMode::LossOfTension1);
+        }
+        [
+            (FailureMode::LossOfTension1, self.tension_1b),
+            (FailureMode::LossOfTension2b, self.tension_2b),
+            (FailureMode::StretchLimit, self.lock_up),
+        ]
+        .into_iter()
+        .find(|(_, margin)| !(*margin > T::zero()))
+        .map(|(mode, _)| mode)
+    }
+
     /// Every margin under Φ̄² (the field's square (Φ̄·λ·λ2p)² given), the breakdown's as given.
     fn with_breakdown(&self, p2: T, field_squared: T, breakdown: T) -> Margins<T> {
         let (l, l2p) = (self.stretch, self.prestretch_2);
@@ -165,19 +181,22 @@ impl<T: Real> Device<T> {
         let l = stretch;
         let l2p = self.prestretch_2();
         let lb = self.passive_stretch(l);
+        // Each piece once (the monitor's every sample), the same floats as
+        // `elastic_stiffness_dimless`, `hessian`, `stress_1` and `lock_up_margin` give.
+        let d11 = m.stiffness_1(l, l2p);
+        let (stress_1a, lock_a) = m.stress_1_and_lock_up(l, l2p);
+        let (tension_1b, lock_b) = m.stress_1_and_lock_up(lb, l2p);
         StretchTerms {
             in_model: self.in_model(l),
             stretch: l,
             prestretch_2: l2p,
-            stiffness: self.elastic_stiffness_dimless(l),
-            hessian: m.hessian(l, l2p),
-            tension_1b: m.stress_1(lb, l2p),
-            stress_1a: m.stress_1(l, l2p),
+            stiffness: d11 + self.length_ratio() * m.stiffness_1(lb, l2p),
+            hessian: m.hessian_with(l, l2p, d11),
+            tension_1b,
+            stress_1a,
             tension_2a: l2p * m.stress_2(l, l2p),
             tension_2b: l2p * m.stress_2(lb, l2p),
-            lock_up: m
-                .lock_up_margin(l, l2p)
-                .min_margin(m.lock_up_margin(lb, l2p)),
+            lock_up: lock_a.min_margin(lock_b),
         }
     }
 
@@ -281,6 +300,92 @@ impl<T: Real> Device<T> {
         let broken = (k + (k * k + two * two * eb * eb).sqrt()) / two * T::of(1.001);
         // Never below λ1p: a device past a bound at zero bias fails at the scan's first point.
         b_slack.min(locked).min(broken).max(l1p)
+    }
+}
+
+/// The stretches the checks no bias enters allow about an equilibrium, narrowed by the
+/// margin: the run-time monitor's margin on B's tensions and the Gent lock-up, which a
+/// voltage raised by the margin does not move (`Device::stretch_band`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct StretchBand<T> {
+    pub low: T,
+    pub high: T,
+    /// The check that fails past each end.
+    pub low_mode: FailureMode,
+    pub high_mode: FailureMode,
+}
+
+impl<T: Real> StretchBand<T> {
+    /// No band: every stretch inside (before the boot's direct solve finds one).
+    pub fn everywhere() -> Self {
+        Self {
+            low: T::of(f64::NEG_INFINITY),
+            high: T::of(f64::INFINITY),
+            low_mode: FailureMode::LossOfTension1,
+            high_mode: FailureMode::LossOfTension1,
+        }
+    }
+
+    /// The check failing past the band at `stretch`, if it is outside (NaN: outside).
+    pub fn outside(&self, stretch: T) -> Option<FailureMode> {
+        if stretch > self.low && stretch < self.high {
+            None
+        } else if stretch < self.high {
+            Some(self.low_mode)
+        } else {
+            Some(self.high_mode)
+        }
+    }
+}
+
+/// Halvings that find each end of a `StretchBand`.
+const BAND_HALVINGS: usize = 48;
+
+impl<T: Real> Device<T> {
+    /// The stretch band about the equilibrium at `stretch` in which B's tensions and the
+    /// Gent lock-up hold, each end brought toward `stretch` by `margin` of its distance;
+    /// searched from `stretch` out to the model's range below and to B's zero length above.
+    pub fn stretch_band(&self, stretch: T, margin: T) -> StretchBand<T> {
+        let fails = |l: T| self.stretch_terms(l).stretch_only_failure();
+        // From the inside (passing) to `end` (failing, or the search's end): the last
+        // passing stretch and the mode past it.
+        let edge = |end: T| {
+            let Some(mode) = fails(end) else {
+                return (end, FailureMode::LossOfTension1);
+            };
+            let (mut inside, mut outside, mut mode) = (stretch, end, mode);
+            for _ in 0..BAND_HALVINGS {
+                let mid = (inside + outside) / T::of(2.0);
+                match fails(mid) {
+                    Some(m) => {
+                        outside = mid;
+                        mode = m;
+                    }
+                    None => inside = mid,
+                }
+            }
+            (inside, mode)
+        };
+        if fails(stretch).is_some() {
+            // No band about a stretch that fails already: none passes.
+            return StretchBand {
+                low: stretch,
+                high: stretch,
+                low_mode: FailureMode::LossOfTension1,
+                high_mode: FailureMode::LossOfTension1,
+            };
+        }
+        let full = self.prestretch_1() * (T::one() + T::one() / self.length_ratio());
+        let (low, low_mode) = edge(self.model_range().0.min(stretch));
+        let (high, high_mode) = edge(full);
+        let keep = T::one() - margin;
+        StretchBand {
+            low: stretch - (stretch - low) * keep,
+            high: stretch + (high - stretch) * keep,
+            low_mode,
+            high_mode,
+        }
     }
 }
 

@@ -171,7 +171,7 @@ impl<T: Real> fmt::Display for SwingError<T> {
             } => write!(
                 f,
                 "the swing has no bound in the model: {} at {} Hz, Q {}; give the device's \
-                 damping (or measure Q), or an AC of at most {} V",
+                 damping (or measure Q); the largest AC that fits is {} V",
                 resonance.description(),
                 Decimal(natural_hz),
                 Decimal(quality_factor),
@@ -224,6 +224,8 @@ struct About<T> {
     stiffness: T,
     /// c̄ used: the device's, or ω̄/Q measured.
     damping: T,
+    /// dω̄²/dλ at λ*: the motion's own swing modulates the stiffness by it.
+    stiffness_slope: T,
 }
 
 impl<T: Real> Device<T> {
@@ -252,11 +254,17 @@ impl<T: Real> Device<T> {
             Some(q) if q > T::zero() => omega / q,
             _ => self.damping_dimless(),
         };
+        // dω̄²/dλ by a central difference (the bias term does not depend on λ).
+        let h = stretch * T::of(1e-3);
+        let stiffness_slope = (self.elastic_stiffness_dimless(stretch + h)
+            - self.elastic_stiffness_dimless(stretch - h))
+            / (h + h);
         let about = About {
             stretch,
             bias,
             stiffness,
             damping,
+            stiffness_slope,
         };
         let natural_hz = omega * self.rad_per_s_per_unit() / T::of(core::f64::consts::TAU);
         let quality_factor = omega / damping;
@@ -380,7 +388,8 @@ impl<T: Real> Device<T> {
         let widen = T::one() / (T::one() - margin);
         let peak = (about.bias + ac) * widen;
         let trough = (about.bias - ac).max(T::zero());
-        let mut band = (mean, mean);
+        // The band holds the stiffness at the bias and under the drive's mean from the start.
+        let mut band = (mean, about.stiffness);
         let mut resonance = None;
         for _ in 0..BAND_ROUNDS {
             let forced = self.forced(about, ac, drive, ring, band)?;
@@ -441,9 +450,13 @@ impl<T: Real> Device<T> {
         };
         let (first_denominator, _) = worst(drive);
         let (second_denominator, _) = worst(two * drive);
-        let steady = force * half_ac2 / stiff_low;
         let first = force * two * about.bias * ac / first_denominator;
-        let second = force * half_ac2 / second_denominator;
+        // The first-order motion fed back through ℓ2·x·(Φ̄² − Φ̄0²): its product with the
+        // force's Ω term, ℓ2·Φ̄0·Φ̄a·x1, adds to the steady push and to the force at 2Ω
+        // (taken with the sign that adds).
+        let fed_back = l2 * about.bias * ac * first;
+        let steady = (force * half_ac2 + fed_back) / stiff_low;
+        let second = (force * half_ac2 + fed_back) / second_denominator;
         // The modulation's depths over the stiffness at Ω and at 2Ω, pumping at the Mathieu
         // equation's first tongue ν ≈ 2ω: growth ω·h/4 against ω·ζ and the detuning, at
         // the band's ω nearest ν/2.
@@ -454,7 +467,12 @@ impl<T: Real> Device<T> {
             let detuning = (half - omega) / omega;
             depth / stiff_low / T::of(4.0) / (zeta * zeta + detuning * detuning).sqrt()
         };
-        let rho = pump(two * about.bias * ac * l2, drive).max(pump(half_ac2 * l2, two * drive));
+        // At Ω the stiffness is modulated by the drive (2·Φ̄0·Φ̄a·ℓ2) and by the motion's own
+        // swing through the stiffness's slope (dω̄²/dλ·x1).
+        let by_drive = two * about.bias * ac * l2;
+        let at_drive = by_drive + (about.stiffness_slope * first).abs();
+        let (rho_drive, rho_twice) = (pump(at_drive, drive), pump(half_ac2 * l2, two * drive));
+        let rho = rho_drive.max(rho_twice);
         if ac == zero {
             return Ok(Forced {
                 low: about.stretch - ring,
@@ -470,8 +488,15 @@ impl<T: Real> Device<T> {
         if !second.is_finite() {
             return Err(Failed::Unbounded(Resonance::SuperHarmonic));
         }
-        if !(rho < one) {
+        // The modulation at Ω pumps near Ω ≈ 2ω (parametric resonance), by the drive's own
+        // modulation; where only the motion's swing takes it past, the swing's resonance is
+        // the cause (the harmonic's, here). The one at 2Ω pumps near Ω ≈ ω, the drive's own
+        // resonance.
+        if !(pump(by_drive, drive) < one) {
             return Err(Failed::Unbounded(Resonance::Parametric));
+        }
+        if !(rho_drive < one) || !(rho_twice < one) {
+            return Err(Failed::Unbounded(Resonance::Harmonic));
         }
         let pumped = one / (one - rho);
         // The resonance behind the largest amplification (more than twice), for the message.
