@@ -734,3 +734,47 @@ fn a_larger_margin_than_the_tables_scales_its_top() {
         assert!((f64::from(boot.bias_volts) / solved - 1.0).abs() < 1e-5);
     }
 }
+
+/// A boot onto a ring (issue 44, found by the long fuzz run, seed 44): with a slew of 10³⁰
+/// V/s, a fault's way down is a step and so is the next boot's ramp after `clear` (which
+/// waits for 0 V, not for the membrane to come to rest); each rings the membrane by about
+/// the step Δλ = λ* − λ1p, and the rings add past B's slack stretch (the plant crossed at
+/// λ 1.3409). The boot counts the way down's ring with its own and refuses, naming the
+/// limit; the same plan at a slew the membrane follows (10 kV/s) boots.
+#[test]
+fn a_boot_counts_the_ring_of_a_way_down_at_its_slew() {
+    let params = de_resonator::DeviceParams {
+        shear_modulus: 224037.8125,
+        jlim: None,
+        relative_permittivity: 7.09597110748291,
+        density: 1294.0030517578125,
+        breakdown_field: 188106896.0,
+        thickness: 0.00016290080384351313,
+        length_active: 0.03831096366047859,
+        length_passive: 0.02856992371380329,
+        width: 0.0820452868938446,
+        bar_mass: 0.01557159423828125,
+        prestretch_1: 1.1604571342468262,
+        prestretch_2: 1.176698923110962,
+        damping: 0.00048489374332988654,
+    };
+    let table = common::made_table(params, 0.0, 64);
+    let settings = |slew: f32| Settings {
+        margin: 0.036618683,
+        slew_volts_per_second: slew,
+        settle_seconds: 0.20029642,
+        check_seconds: 0.088311195,
+        ac_volts: 3.4572124,
+        ac_hz: 16.244635,
+        ..Settings::for_target(25.479729)
+    };
+    let boot = |slew: f32| Controller::start(params.cast(), &table, amplifier(), settings(slew));
+    match boot(1e30) {
+        Err(Fault::DriveSwing(de_resonator::SwingError::Crosses { mode, .. })) => {
+            assert_eq!(mode, de_resonator::FailureMode::LossOfTension1)
+        }
+        Err(other) => panic!("{other}"),
+        Ok(_) => panic!("a boot onto the ring of an instant way down was taken"),
+    }
+    assert!(boot(10_000.0).is_ok(), "{:?}", boot(10_000.0).err());
+}

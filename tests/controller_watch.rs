@@ -297,6 +297,21 @@ fn the_leakage_watch_measures_the_dc_current_against_the_voltage() {
     }
 }
 
+/// The reference device's controller at 44 Hz (no AC) holding its bias, a stretch of 2.2
+/// read to there (held bit for bit: no stuck-sensor check), and its settings.
+fn holding_at_44_hz() -> (Controller, Settings) {
+    let settings = Settings {
+        stuck_samples: None,
+        ..Settings::for_target(44.0)
+    };
+    let mut c = start(settings).unwrap();
+    for _ in 0..1_200 {
+        c.tick(Inputs::stretch(2.2));
+    }
+    assert_eq!(c.phase(), Phase::Holding);
+    (c, settings)
+}
+
 /// The monitor acts before a limit (issue 44): at the bias for 44 Hz, a stretch that falls
 /// toward the frame step by step (the membrane swinging back) meets A's tension along 1,
 /// s1(λ) − ε·(Φ/H)²·λ·λ2p² > 0 (model.md §6.3), which fails at λ_limit under the bias and
@@ -305,18 +320,8 @@ fn the_leakage_watch_measures_the_dc_current_against_the_voltage() {
 /// first sample past λ_near, with its figures, well before λ_limit; then the descent.
 #[test]
 fn the_monitor_takes_the_drive_off_within_the_margin_before_the_limit() {
-    // A held stretch repeats bit for bit: no stuck-sensor check here.
-    let settings = Settings {
-        stuck_samples: None,
-        ..Settings::for_target(44.0)
-    };
-    let mut c = start(settings).unwrap();
+    let (mut c, settings) = holding_at_44_hz();
     let p = REFERENCE_DEVICE;
-    // To the bias and its hold.
-    for _ in 0..1_200 {
-        c.tick(Inputs::stretch(2.0));
-    }
-    assert_eq!(c.phase(), Phase::Holding);
     // The voltage the monitor checks under: the plan's (the DAC's code rounds it).
     let volts = f64::from(c.plan().bias_volts);
     // A's tension along 1 at λ under Φ, Pa; its root by bisection below the equilibrium.
@@ -380,16 +385,8 @@ fn the_monitor_takes_the_drive_off_within_the_margin_before_the_limit() {
 /// first sample past λ* + (1 − margin)·(λ_slack − λ*), not at λ_slack.
 #[test]
 fn the_monitor_takes_the_drive_off_before_the_passive_membrane_goes_slack() {
-    let settings = Settings {
-        stuck_samples: None,
-        ..Settings::for_target(44.0)
-    };
-    let mut c = start(settings).unwrap();
+    let (mut c, settings) = holding_at_44_hz();
     let p = REFERENCE_DEVICE;
-    for _ in 0..1_200 {
-        c.tick(Inputs::stretch(2.2));
-    }
-    assert_eq!(c.phase(), Phase::Holding);
     let volts = f64::from(c.plan().bias_volts);
     // λ* by bisection on Φ²(λ) = Φ², rising on the loading branch here.
     let (mut lo, mut hi) = (p.prestretch_1, 3.0);

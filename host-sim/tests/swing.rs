@@ -136,6 +136,7 @@ fn no_accepted_drive_crosses_a_limit_on_random_devices() {
                                 from_volts: 0.0,
                                 slew_volts_per_second: defaults.slew_volts_per_second.into(),
                                 settle_seconds: defaults.settle_seconds.into(),
+                                after_descent: true,
                             }),
                         },
                         Tuner::new(Device::new(case.params).unwrap())

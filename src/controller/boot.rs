@@ -198,27 +198,32 @@ impl Controller {
             .offset_for_bias(solved.volts, limit.at.offset)
             .map_or(f32::NAN, |offset| self.flashed.stretch_at(offset));
         self.watch.band = self.flashed.stretch_band(stretch, settings.margin);
-        // The drive's swing about the tuned bias, with the device's damping (model.md §7):
-        // inside the margin of every check, or refused before anything is driven. A tracked
-        // drive follows the resonance: checked there.
-        if settings.ac_volts > 0.0 && settings.ac_hz > 0.0 {
-            let drive = AcDrive {
-                bias_volts: solved.volts,
-                ac_volts: settings.ac_volts,
-                ac_hz: match settings.track_seconds {
-                    Some(_) => solved.natural_frequency_hz,
-                    None => settings.ac_hz,
-                },
-                ramp: Some(Ramp {
-                    from_volts: self.plan.start_volts,
-                    slew_volts_per_second: settings.slew_volts_per_second,
-                    settle_seconds: settings.settle_seconds,
-                }),
-            };
-            self.flashed
-                .check_swing(drive, limit.at.offset, None, settings.margin)
-                .map_err(Fault::DriveSwing)?;
-        }
+        // The swing about the tuned bias, with the device's damping (model.md §7): the
+        // ramp's ring (and a way down's before it: a boot follows `clear` at 0 V, however
+        // the membrane still rings) and the drive's, if any, inside the margin of every
+        // check, or refused before anything is driven. A tracked drive follows the
+        // resonance: checked there.
+        let drive = AcDrive {
+            bias_volts: solved.volts,
+            ac_volts: if settings.ac_hz > 0.0 {
+                settings.ac_volts
+            } else {
+                0.0
+            },
+            ac_hz: match settings.track_seconds {
+                Some(_) => solved.natural_frequency_hz,
+                None => settings.ac_hz,
+            },
+            ramp: Some(Ramp {
+                from_volts: self.plan.start_volts,
+                slew_volts_per_second: settings.slew_volts_per_second,
+                settle_seconds: settings.settle_seconds,
+                after_descent: true,
+            }),
+        };
+        self.flashed
+            .check_swing(drive, limit.at.offset, None, settings.margin)
+            .map_err(Fault::DriveSwing)?;
         // The ring the first pulse will leave in the charge, at the bias it measures at (the
         // tick weighs it against the noise before it pulses).
         #[cfg(feature = "trim")]

@@ -507,6 +507,7 @@ impl TrimJob {
                         Some(_) => 0.0,
                         None => s.settle_seconds,
                     },
+                    after_descent: false,
                 }),
             };
             device

@@ -5,7 +5,7 @@
 use super::fault::Fault;
 pub use crate::acquire::Inputs;
 use crate::device::Device;
-use crate::safety::{Monitor, StretchBand};
+use crate::safety::{FailureMode, Monitor, StretchBand};
 
 /// Ticks in a row the amplifier may be off its command before it is a fault (its bandwidth
 /// and slew limit lag a step by a tick or two).
@@ -205,16 +205,17 @@ impl Watch {
         }
         let tick = u64::from(k);
         let terms = flashed.stretch_terms(stretch);
+        let within_margin = |at_limit: Option<FailureMode>, mode| match at_limit {
+            Some(mode) => Fault::Limit { mode, tick: k },
+            None => Fault::NearLimit {
+                mode,
+                tick: k,
+                stretch,
+                volts,
+            },
+        };
         if let Some(mode) = self.band.outside(stretch) {
-            return Some(match terms.stretch_only_failure() {
-                Some(mode) => Fault::Limit { mode, tick: k },
-                None => Fault::NearLimit {
-                    mode,
-                    tick: k,
-                    stretch,
-                    volts,
-                },
-            });
+            return Some(within_margin(terms.stretch_only_failure(), mode));
         }
         // The checks under the raised voltage; passing there, they pass under the voltage
         // itself. Every margin but the Hessian's is a term less Φ̄² times a positive
@@ -251,17 +252,8 @@ impl Watch {
             let p = near / device.volts_per_unit();
             if let Some(mode) = terms.first_failure(p * p, breakdown) {
                 let p = volts / device.volts_per_unit();
-                return Some(
-                    match self.monitor.observe_terms(terms, tick, p * p, breakdown) {
-                        Some(mode) => Fault::Limit { mode, tick: k },
-                        None => Fault::NearLimit {
-                            mode,
-                            tick: k,
-                            stretch,
-                            volts,
-                        },
-                    },
-                );
+                let at_limit = self.monitor.observe_terms(terms, tick, p * p, breakdown);
+                return Some(within_margin(at_limit, mode));
             }
         }
         None

@@ -64,6 +64,10 @@ pub struct Ramp<T> {
     pub from_volts: T,
     pub slew_volts_per_second: T,
     pub settle_seconds: T,
+    /// Whether the membrane may still ring from a way down at the slew rate between the
+    /// same voltages when the ramp starts (a boot after `clear`, a plan after `stop`: they
+    /// wait for 0 V, not for the ring to die): that ring, undecayed, is counted too.
+    pub after_descent: bool,
 }
 
 /// Which resonance of model.md §7 makes a swing large, or unbounded.
@@ -329,7 +333,7 @@ impl<T: Real> Device<T> {
     /// leaves at most 2v/ω, its |2·sin(ωTr/2)|·v/ω), and a ramp faster than the membrane
     /// leaves at most the step Δλ. Both ends' kinks summed, the lesser of that and the
     /// step, with `RING_ALLOWANCE` for the stiffness's change along the way; decayed over
-    /// the hold at the damping's rate.
+    /// the hold at the damping's rate; and once more, undecayed, after a way down.
     fn ramp_ring(
         &self,
         about: &About<T>,
@@ -360,7 +364,12 @@ impl<T: Real> Device<T> {
         let rate = about.damping * self.rad_per_s_per_unit() / T::of(2.0);
         let decay = (-(rate * ramp.settle_seconds.max(T::zero()))).exp();
         let decay = if decay < T::one() { decay } else { T::one() };
-        Ok(T::of(RING_ALLOWANCE) * ring * decay)
+        let rings = if ramp.after_descent {
+            decay + T::one()
+        } else {
+            decay
+        };
+        Ok(T::of(RING_ALLOWANCE) * ring * rings)
     }
 
     /// The swing's extremes (before the margin) for the dimensionless amplitude `ac` at the
