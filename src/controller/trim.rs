@@ -479,8 +479,7 @@ impl TrimJob {
         // follows the resonance, so it is checked there, with the tracker's Q.
         let quality = (self.quality_factor > 0.0).then_some(self.quality_factor);
         let ac_hz = match self.measured_hz {
-            Some(_) => tuner
-                .device()
+            Some(_) => device
                 .offset_for_bias(bias_volts, tuner.limit().at.offset)
                 .map_or(s.ac_hz, |offset| device.natural_frequency_hz_at(offset)),
             None => s.ac_hz,

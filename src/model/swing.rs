@@ -144,21 +144,6 @@ pub enum SwingError<T> {
     },
 }
 
-impl<T: Real> SwingError<T> {
-    /// The largest AC amplitude that fits, V (0 where no bias holds).
-    pub fn largest_ac_volts(&self) -> T {
-        match *self {
-            SwingError::NoEquilibrium { .. } => T::zero(),
-            SwingError::Unbounded {
-                largest_ac_volts, ..
-            }
-            | SwingError::Crosses {
-                largest_ac_volts, ..
-            } => largest_ac_volts,
-        }
-    }
-}
-
 impl<T: Real> fmt::Display for SwingError<T> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
