@@ -90,6 +90,48 @@ def host_sim(*args):
     return done.stdout
 
 
+def remove_stale(path):
+    """Remove a file left by an earlier run, if it is there: QEMU may unlink its socket between
+    a check and a remove, so absence is not an error."""
+    try:
+        os.remove(path)
+    except FileNotFoundError:
+        pass
+
+
+def stop_group(proc):
+    """SIGTERM the runner's whole process group (runner, QEMU, log decoder) and wait until every
+    member has exited, so none still holds or unlinks a socket the next run binds."""
+    try:
+        os.killpg(proc.pid, signal.SIGTERM)
+    except ProcessLookupError:
+        pass
+    proc.wait()
+    for _ in range(200):
+        if not group_alive(proc.pid):
+            return
+        time.sleep(0.05)
+    try:
+        os.killpg(proc.pid, signal.SIGKILL)
+    except ProcessLookupError:
+        pass
+
+
+def group_alive(pgid):
+    """Whether a process of group `pgid` still runs (zombies, waiting for a reaper, do not)."""
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry}/stat") as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if fields[0] != "Z" and int(fields[2]) == pgid:
+            return True
+    return False
+
+
 class Firmware:
     """QEMU running the firmware with an image; the command port as a line stream."""
 
@@ -99,8 +141,8 @@ class Firmware:
         self.trace = os.path.join(WORK, f"{name}.trace") if trace else None
         self.log = os.path.join(WORK, f"{name}.log")
         for path in (self.sock, self.trace):
-            if path and os.path.exists(path):
-                os.remove(path)
+            if path:
+                remove_stale(path)
         extra = []
         if icount:
             extra += ["-icount", icount]
@@ -157,9 +199,7 @@ class Firmware:
         sys.exit(f"phase never became {phases}: {s}")
 
     def stop(self):
-        # The runner, QEMU and the log decoder: the whole process group.
-        os.killpg(self.qemu.pid, signal.SIGTERM)
-        self.qemu.wait()
+        stop_group(self.qemu)
         self.s.close()
 
     def frames(self):
@@ -605,8 +645,7 @@ def lossy_proxy(upstream, path, every):
     dropped."""
     import threading
     server = socket.socket(socket.AF_UNIX)
-    if os.path.exists(path):
-        os.remove(path)
+    remove_stale(path)
     server.bind(path)
     server.listen(1)
 
@@ -649,8 +688,7 @@ def telemetry():
     for lossy in (False, True):
         cmd, stream = (os.path.join(WORK, name) for name in ("stream.sock", "stream-out.sock"))
         for path in (cmd, stream):
-            if os.path.exists(path):
-                os.remove(path)
+            remove_stale(path)
         env = dict(os.environ, QEMU_IMAGE=image, QEMU_TIMEOUT="60",
                    QEMU_SERIAL1=f"unix:{cmd},server=on,wait=on",
                    QEMU_SERIAL0=f"unix:{stream},server=on,wait=off")
@@ -669,8 +707,7 @@ def telemetry():
         done = subprocess.run([HOST_SIM, "--json", "console", "--unix", cmd, "--record", out,
                                "--stream-unix", source, "--duration-seconds", "2"],
                               capture_output=True, text=True)
-        os.killpg(qemu.pid, signal.SIGTERM)
-        qemu.wait()
+        stop_group(qemu)
         if done.returncode != 0:
             check(False, f"console --record: {done.stderr.strip()}")
             continue
