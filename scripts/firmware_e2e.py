@@ -136,7 +136,7 @@ class Firmware:
     """QEMU running the firmware with an image; the command port as a line stream."""
 
     def __init__(self, name, image, icount="shift=0,sleep=off", trace=True, elf=None,
-                 args=None):
+                 args=None, monitor=None):
         self.sock = os.path.join(WORK, f"{name}.sock")
         self.trace = os.path.join(WORK, f"{name}.trace") if trace else None
         self.log = os.path.join(WORK, f"{name}.log")
@@ -148,6 +148,8 @@ class Firmware:
             extra += ["-icount", icount]
         if self.trace:
             extra += ["-d", "trace:memory_region_ops_write", "-D", self.trace]
+        if monitor:
+            extra += ["-monitor", f"unix:{monitor},server=on,wait=off"]
         env = dict(os.environ, QEMU_SERIAL1=f"unix:{self.sock},server=on,wait=on",
                    QEMU_EXTRA=" ".join(extra), QEMU_TIMEOUT="120")
         if image:
@@ -231,6 +233,88 @@ def reseal(image, **changes):
     for offset, raw in changes.values():
         body[offset:offset + len(raw)] = raw
     return bytes(body) + struct.pack("<I", zlib.crc32(body))
+
+
+def at_rest(fw):
+    """`stop`, then wait for 0 V (the ramp down at the slew rate)."""
+    check(fw.ask("stop").startswith("ok stop"), "stop")
+    for _ in range(600):
+        if float(fw.wait_phase(("holding",))["volts"]) == 0.0:
+            return
+        time.sleep(0.05)
+    check(False, "the output never came to rest at 0 V")
+
+
+def saved_settings(ref):
+    """`save` and `faults clear` at rest, each erase stalling QEMU's chip 2 s (twice the
+    watchdog's window; interrupts masked, as the chip's fetches stall) with no reset; the saved
+    settings survive a reset."""
+    print("== save and faults clear at rest: each erase stalls the chip 2 s, past the watchdog's "
+          "1 s, without a reset (QEMU: .uninit RAM as the flash, a stalling stand-in)")
+    fw = Firmware("saved", ref)
+    check("settings=image" in fw.banner, f"first boot from the image's settings: {fw.banner}")
+    fw.wait_phase(("holding",))
+    reply = fw.ask("set slew_volts_per_second 20000")
+    check(reply.startswith("ok "), f"set: {reply}")
+    fw.wait_phase(("holding",))
+    reply = fw.ask("save")
+    check(reply.startswith("err 7 ") and "at rest at 0 V only" in reply,
+          f"save under the bias refused (an erase stalls the tick): {reply}")
+    # A reset at 0 V only (the core's board): refused under the bias.
+    reply = fw.ask("reset")
+    check(reply.startswith("err 7 reset at 0 V only"), f"reset under the bias (wrong state): {reply}")
+    at_rest(fw)
+    began = time.time()
+    reply = fw.ask("save")
+    check(reply.startswith("ok save"), f"save at rest, no watchdog reset: {reply}")
+    reply = fw.ask("faults clear")
+    check(reply.startswith("ok "), f"faults clear at rest, no watchdog reset: {reply}")
+    check(fw.ask("faults") == "ok faults=0", "the fault log empty after the clear")
+    s = fw.status()
+    check(s["phase"] == "holding" and s["fault"] == "none" and int(s["ticks"]) > 0,
+          f"the same boot ticking on after {time.time() - began:.1f} s of erases: {s}")
+    reply = fw.ask("reset")
+    check(reply.startswith("ok reset"), f"reset: {reply}")
+    lines = [fw.line(), fw.line()]
+    check(lines[0] == "# reset: asked" and lines[1].startswith("# ready ")
+          and "settings=saved" in lines[1], f"after the reset: {lines}")
+    reply = fw.ask("get slew_volts_per_second")
+    check(reply == "ok slew_volts_per_second=20000", f"the saved slew rate in force: {reply}")
+    fw.stop()
+    frames, _ = fw.frames()
+    # Before the restart the output went off: a power-down frame, then the new boot's own.
+    downs = [k for k, f in enumerate(frames) if f[0] == 0x01]
+    check(len(downs) >= 3, f"power-down frames at boot, before the reset, at the new boot: {downs[:4]}")
+
+
+def cut_save(ref):
+    """A save cut by a reset (QEMU's `system_reset`, as a power cut or the reset pin) while its
+    erase stalls the chip: the slot it erased is lost, the other slot's save boots (the
+    two-slot rule)."""
+    print("== a save cut by a reset in its erase loses nothing: the last save boots")
+    monitor = os.path.join(WORK, "cut.monitor")
+    remove_stale(monitor)
+    fw = Firmware("cut", ref, trace=False, monitor=monitor)
+    fw.wait_phase(("holding",))
+    at_rest(fw)
+    check(fw.ask("set slew_volts_per_second 20000").startswith("ok "), "set 20000 at rest")
+    check(fw.ask("save").startswith("ok save"), "the first save")
+    check(fw.ask("set slew_volts_per_second 30000").startswith("ok "), "set 30000 at rest")
+    fw.send(b"save\n")
+    # The erase stalls 2 s of QEMU's clock (seconds of this machine's time under -icount):
+    # the reset lands inside it.
+    time.sleep(0.3)
+    mon = socket.socket(socket.AF_UNIX)
+    mon.connect(monitor)
+    mon.sendall(b"system_reset\n")
+    line = fw.line()
+    check(line.startswith("# ready ") and "settings=saved" in line,
+          f"no reply to the cut save; the board boots again from a saved slot: {line}")
+    reply = fw.ask("get slew_volts_per_second")
+    check(reply == "ok slew_volts_per_second=20000",
+          f"the last whole save in force, the cut one lost: {reply}")
+    mon.close()
+    fw.stop()
 
 
 def main():
@@ -350,34 +434,8 @@ def main():
     check(frames[-1][0] == 0x01 and codes[-1] == 0, f"last frame powers the DAC down: {frames[-1]}")
     check(enable and enable[-1] == "low", f"the amplifier-enable line ends low ({enable[-3:]})")
 
-    print("== settings saved in flash survive a reset (QEMU: .uninit RAM as the flash)")
-    fw = Firmware("saved", ref)
-    check("settings=image" in fw.banner, f"first boot from the image's settings: {fw.banner}")
-    fw.wait_phase(("holding",))
-    reply = fw.ask("set slew_volts_per_second 20000")
-    check(reply.startswith("ok "), f"set: {reply}")
-    fw.wait_phase(("holding",))
-    check(fw.ask("save").startswith("ok save"), "save")
-    # A reset at 0 V only (the core's board): refused under the bias, done after `stop`.
-    reply = fw.ask("reset")
-    check(reply.startswith("err 7 reset at 0 V only"), f"reset under the bias (wrong state): {reply}")
-    check(fw.ask("stop").startswith("ok stop"), "stop")
-    for _ in range(600):
-        if float(fw.wait_phase(("holding",))["volts"]) == 0.0:
-            break
-        time.sleep(0.05)
-    reply = fw.ask("reset")
-    check(reply.startswith("ok reset"), f"reset: {reply}")
-    lines = [fw.line(), fw.line()]
-    check(lines[0] == "# reset: asked" and lines[1].startswith("# ready ")
-          and "settings=saved" in lines[1], f"after the reset: {lines}")
-    reply = fw.ask("get slew_volts_per_second")
-    check(reply == "ok slew_volts_per_second=20000", f"the saved slew rate in force: {reply}")
-    fw.stop()
-    frames, _ = fw.frames()
-    # Before the restart the output went off: a power-down frame, then the new boot's own.
-    downs = [k for k, f in enumerate(frames) if f[0] == 0x01]
-    check(len(downs) >= 3, f"power-down frames at boot, before the reset, at the new boot: {downs[:4]}")
+    saved_settings(ref)
+    cut_save(ref)
 
     print("== the watchdog: a work task past its deadline resets the chip, which comes up refusing")
     fw = Firmware("watchdog", ref)
@@ -733,4 +791,12 @@ def telemetry():
                   f"sequence's span: {recording}")
 
 
-main()
+# E2E_ONLY=name: run one section (a function of this file taking the reference image), while
+# working on it; the whole run is main().
+if os.environ.get("E2E_ONLY"):
+    os.makedirs(WORK, exist_ok=True)
+    only_ref = os.path.join(WORK, "reference.img")
+    host_sim("image", "--target-hz", "44", "--power-up", "drive", "--out", only_ref)
+    globals()[os.environ["E2E_ONLY"]](only_ref)
+else:
+    main()

@@ -98,8 +98,10 @@ pub struct Board {
     pub core_hz: u32,
     /// The flash controller (the settings' storage on silicon).
     pub flash: pac::FLASH,
-    /// The independent watchdog (not emulated by QEMU).
+    /// The independent watchdog (not emulated by QEMU), and the debug unit that stops it
+    /// while a debugger halts the core.
     pub iwdg: pac::IWDG,
+    pub dbgmcu: pac::DBGMCU,
     /// Set when the crystal or the PLL failed and the board runs on HSI (slower, still safe:
     /// every rate is computed from the clock in use).
     pub clock_error: Option<ClockError>,
@@ -156,11 +158,11 @@ fn probe_clocks(rcc: &pac::RCC) -> Result<(), ClockError> {
 }
 
 /// The clocks: HSE + PLL at 168 MHz on silicon (HSI if either fails), reset clocks in QEMU.
-fn clocks(rcc: pac::RCC) -> (Rcc, u32, Option<ClockError>) {
+fn clocks(rcc: Rcc) -> (Rcc, u32, Option<ClockError>) {
     #[cfg(feature = "qemu")]
     {
         // QEMU's SysTick counts at 168 MHz whatever RCC says (QEMU-STM32F405.md §1).
-        (rcc.constrain(), SYSCLK_HZ, None)
+        (rcc, SYSCLK_HZ, None)
     }
     #[cfg(not(feature = "qemu"))]
     {
@@ -176,12 +178,23 @@ fn clocks(rcc: pac::RCC) -> (Rcc, u32, Option<ClockError>) {
 }
 
 impl Board {
-    /// Set up the board; the DAC's chip select high, the amplifier disabled.
+    /// Set up the board. The pins that hold the output safe come first, before the clock
+    /// probe (which may wait milliseconds on a dead crystal): the amplifier's enable driven
+    /// low, the DAC's SYNC high; the command port's RX pulled up (an unconnected port reads
+    /// idle, not noise). Until then only the board's own pull-down holds the enable.
     pub fn new(dp: pac::Peripherals) -> Self {
-        let (mut rcc, core_hz, clock_error) = clocks(dp.RCC);
-        let _ = (HSE_HZ, Config::hsi);
+        let mut rcc = dp.RCC.constrain();
         let gpioa = dp.GPIOA.split(&mut rcc);
         let gpiob = dp.GPIOB.split(&mut rcc);
+        let enable = gpiob
+            .pb0
+            .into_push_pull_output_in_state(stm32f4xx_hal::gpio::PinState::Low);
+        let cs = gpioa
+            .pa4
+            .into_push_pull_output_in_state(stm32f4xx_hal::gpio::PinState::High);
+        let rx_pin = gpioa.pa3.internal_pull_up(true);
+        let (mut rcc, core_hz, clock_error) = clocks(rcc);
+        let _ = (HSE_HZ, Config::hsi);
         #[cfg(not(feature = "qemu"))]
         let streams = stm32f4xx_hal::dma::StreamsTuple::new(dp.DMA2, &mut rcc);
         #[cfg(not(feature = "qemu"))]
@@ -204,23 +217,18 @@ impl Board {
                 },
             }
         };
-        let mut enable = gpiob.pb0.into_push_pull_output();
-        enable.set_low();
         let spi = dp.SPI1.spi(
             (Some(gpioa.pa5), Some(gpioa.pa6), Some(gpioa.pa7)),
             embedded_hal::spi::MODE_1,
             SPI_HZ.Hz(),
             &mut rcc,
         );
-        let cs = gpioa
-            .pa4
-            .into_push_pull_output_in_state(stm32f4xx_hal::gpio::PinState::High);
         let dac = match ExclusiveDevice::new_no_delay(spi, cs) {
             Ok(dac) => dac,
             Err(never) => match never {},
         };
         let serial: Serial<USART2> = match dp.USART2.serial(
-            (gpioa.pa2, gpioa.pa3),
+            (gpioa.pa2, rx_pin),
             serial::Config::default().baudrate(BAUD.bps()),
             &mut rcc,
         ) {
@@ -261,6 +269,7 @@ impl Board {
             core_hz,
             flash: dp.FLASH,
             iwdg: dp.IWDG,
+            dbgmcu: dp.DBGMCU,
             clock_error,
             rcc,
             #[cfg(not(feature = "qemu"))]

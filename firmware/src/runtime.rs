@@ -1,5 +1,6 @@
-//! Runtime glue: exit codes, the panic and HardFault handlers, and the stack meter. The only
-//! `unsafe` of the firmware lives here and in `config` (raw memory the linker names).
+//! Runtime glue: exit codes, the panic and HardFault handlers, and the stack meter. The
+//! firmware's `unsafe` lives here, in `config` (raw memory the linker names) and in
+//! `watchdog` (the IWDG's window around an erase; QEMU's stand-in clock).
 
 /// Why the firmware restarted (the core's board reads it at boot), kept across the reset in
 /// `.uninit` RAM with a check word (QEMU has no reset flags; on silicon the same record works).
@@ -153,7 +154,9 @@ pub mod stack {
 }
 
 /// The reset the chip's own flags say, when the firmware recorded none (RCC_CSR, then
-/// cleared): the IWDG's, or a brown-out (BORRSTF without PORRSTF: a power-on sets both).
+/// cleared): the IWDG's, or a brown-out (BORRSTF without PORRSTF: a power-on sets both),
+/// claimed only where the option bytes turn the brown-out reset on (FLASH_OPTCR's BOR_LEV
+/// not 0b11, "off": the chip's default, docs/firmware.md's bring-up sets level 3).
 /// Never under QEMU (its RCC reads 0; its watchdog stand-in records its reset in RAM).
 fn from_flags() -> Option<ResetCause> {
     #[cfg(not(feature = "qemu"))]
@@ -165,7 +168,7 @@ fn from_flags() -> Option<ResetCause> {
         // WDGRSTF: the independent watchdog's (the IWDG's IWDGRSTF in RM0090).
         let cause = if csr.wdgrstf().bit_is_set() {
             Some(ResetCause::Watchdog)
-        } else if csr.borrstf().bit_is_set() && csr.porrstf().bit_is_clear() {
+        } else if csr.borrstf().bit_is_set() && csr.porrstf().bit_is_clear() && brown_out_on() {
             Some(ResetCause::BrownOut)
         } else {
             None
@@ -175,6 +178,14 @@ fn from_flags() -> Option<ResetCause> {
     }
     #[cfg(feature = "qemu")]
     None
+}
+
+/// Whether the option bytes turn the brown-out reset on (BOR_LEV 0b00, 0b01 or 0b10).
+#[cfg(not(feature = "qemu"))]
+fn brown_out_on() -> bool {
+    // SAFETY: a read of FLASH_OPTCR, which the firmware never writes.
+    let flash = unsafe { &*stm32f4xx_hal::pac::FLASH::ptr() };
+    flash.optcr().read().bor_lev().bits() != 0b11
 }
 
 /// The RAM pages that a reset keeps (`.uninit`: cortex-m-rt does not zero it; QEMU's

@@ -3,6 +3,11 @@
 //! through the HAL), `.uninit` RAM pages under QEMU (whose flash controller is not emulated;
 //! `.uninit` survives `SCB::sys_reset`, as flash survives a power cycle). The layouts and the
 //! power-cut safety are the core's `store` and `fault_log`.
+//!
+//! An erase stalls the chip for seconds (its code runs from the bank it erases), past the
+//! watchdog: every erase runs through `watchdog::through_stall`, which lengthens the dog's
+//! window around it. QEMU's stand-in stalls as long, interrupts masked, so its watchdog
+//! stand-in bites there as the IWDG would without the lengthened window.
 
 use de_resonator::store::FlashKeeper;
 
@@ -13,7 +18,7 @@ pub const LOG_PAGES: usize = 4;
 
 /// The settings' flash as this build has it.
 #[cfg(feature = "qemu")]
-pub type SettingsFlash = de_resonator::store::RamFlash<'static>;
+pub type SettingsFlash = SlowRam;
 #[cfg(not(feature = "qemu"))]
 pub type SettingsFlash = ChipFlash;
 
@@ -27,11 +32,11 @@ pub fn open(controller: stm32f4xx_hal::pac::FLASH) -> Option<FlashKeeper<Setting
         let settings = (SETTINGS_PAGES * de_resonator::store::RAM_PAGE_BYTES) as u32;
         let len = ram.len() as u32;
         Some(FlashKeeper {
-            flash: de_resonator::store::RamFlash::new(ram),
+            flash: SlowRam(de_resonator::store::RamFlash::new(ram)),
             range: 0..settings,
             log: Some(settings..len),
-            // RAM: an erase is over at once.
-            erase_stalls: false,
+            // As the chip: the stand-in's erase stalls.
+            erase_stalls: true,
         })
     }
     #[cfg(not(feature = "qemu"))]
@@ -48,29 +53,131 @@ pub fn open(controller: stm32f4xx_hal::pac::FLASH) -> Option<FlashKeeper<Setting
         let to = core::ptr::addr_of!(_settings_end) as u32;
         let log_from = core::ptr::addr_of!(_faultlog_offset) as u32;
         let log_to = core::ptr::addr_of!(_faultlog_end) as u32;
-        let flash = stm32f4xx_hal::flash::LockedFlash::new(controller);
         Some(FlashKeeper {
-            flash: ChipFlash(flash),
+            flash: ChipFlash(controller),
             range: from..to,
             log: Some(log_from..log_to),
-            // A 128 KB sector's erase stalls the core 2-4 s (one bank), past the watchdog.
+            // A 128 KB sector's erase stalls the core 2-4 s (one bank).
             erase_stalls: true,
         })
     }
 }
 
+/// QEMU's flash: the RAM pages, each erase then a stall as long as a chip's sector erase
+/// (`watchdog::SECTOR_ERASE_MS` of QEMU's clock, interrupts masked, as the chip's fetches
+/// stall), through `watchdog::through_stall` as on the chip (not in the link build, whose
+/// tick host-sim paces).
+#[cfg(feature = "qemu")]
+pub struct SlowRam(pub de_resonator::store::RamFlash<'static>);
+
+#[cfg(feature = "qemu")]
+mod slow_ram {
+    use de_resonator::store::RamFlash;
+    use embedded_storage_async::nor_flash::{ErrorType, NorFlash, ReadNorFlash};
+
+    use super::SlowRam;
+
+    /// A chip's sector erase: `SECTOR_ERASE_MS` of QEMU's clock, interrupts masked, through
+    /// the watchdog's lengthened window.
+    #[cfg(not(feature = "link"))]
+    fn stall() {
+        use crate::board::qemu_clock;
+        use crate::watchdog::{through_stall, SECTOR_ERASE_MS};
+        through_stall(|| {
+            cortex_m::interrupt::free(|_| {
+                let start = qemu_clock::micros();
+                // Few reads of the clock: under -icount each ends QEMU's translated block.
+                while qemu_clock::micros().wrapping_sub(start) < SECTOR_ERASE_MS * 1000 {
+                    cortex_m::asm::delay(100_000);
+                }
+            })
+        });
+    }
+
+    /// The link build's tick is paced by host-sim, not by the chip's clock: no stall.
+    #[cfg(feature = "link")]
+    fn stall() {}
+
+    impl ErrorType for SlowRam {
+        type Error = <RamFlash<'static> as ErrorType>::Error;
+    }
+
+    impl ReadNorFlash for SlowRam {
+        const READ_SIZE: usize = <RamFlash<'static> as ReadNorFlash>::READ_SIZE;
+
+        async fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), Self::Error> {
+            self.0.read(offset, bytes).await
+        }
+
+        fn capacity(&self) -> usize {
+            self.0.capacity()
+        }
+    }
+
+    impl NorFlash for SlowRam {
+        const WRITE_SIZE: usize = <RamFlash<'static> as NorFlash>::WRITE_SIZE;
+        const ERASE_SIZE: usize = <RamFlash<'static> as NorFlash>::ERASE_SIZE;
+
+        async fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
+            let done = self.0.erase(from, to).await;
+            stall();
+            done
+        }
+
+        async fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Self::Error> {
+            self.0.write(offset, bytes).await
+        }
+    }
+
+    impl embedded_storage_async::nor_flash::MultiwriteNorFlash for SlowRam {}
+}
+
 /// The STM32F4's flash controller as embedded-storage's async `NorFlash` (each call blocks
-/// until the controller is done; the HAL's waits on BSY). Not emulated by QEMU: compiled and
-/// clippy-checked in the silicon builds only.
+/// until the controller is done; the HAL's waits on BSY), with what the HAL leaves out: stale
+/// error flags cleared before each operation (one stale PGSERR would fail every later one),
+/// the caches reset after an erase (RM0090 §3.5.2, as ST's HAL does), and each erase through
+/// the watchdog's lengthened window. Not emulated by QEMU: compiled and clippy-checked in the
+/// silicon builds only.
 #[cfg(not(feature = "qemu"))]
-pub struct ChipFlash(stm32f4xx_hal::flash::LockedFlash);
+pub struct ChipFlash(stm32f4xx_hal::pac::FLASH);
 
 #[cfg(not(feature = "qemu"))]
 mod chip {
     use embedded_storage_async::nor_flash::{ErrorType, NorFlash, ReadNorFlash};
     use stm32f4xx_hal::flash::{FlashExt, UnlockedFlash};
+    use stm32f4xx_hal::pac::FLASH;
 
     use super::ChipFlash;
+
+    /// Clear FLASH_SR's sticky flags (written 1 to clear): end of operation and every error.
+    fn clear_flags(flash: &FLASH) {
+        flash.sr().write(|w| {
+            w.eop().clear_bit_by_one();
+            w.operr().clear_bit_by_one();
+            w.wrperr().clear_bit_by_one();
+            w.pgaerr().clear_bit_by_one();
+            w.pgperr().clear_bit_by_one();
+            w.pgserr().clear_bit_by_one()
+        });
+    }
+
+    /// Reset the instruction and data caches, each disabled around its reset (they may hold
+    /// lines of the erased sector).
+    fn flush_caches(flash: &FLASH) {
+        let acr = flash.acr().read();
+        if acr.icen().bit_is_set() {
+            flash.acr().modify(|_, w| w.icen().clear_bit());
+            flash.acr().modify(|_, w| w.icrst().set_bit());
+            flash.acr().modify(|_, w| w.icrst().clear_bit());
+            flash.acr().modify(|_, w| w.icen().set_bit());
+        }
+        if acr.dcen().bit_is_set() {
+            flash.acr().modify(|_, w| w.dcen().clear_bit());
+            flash.acr().modify(|_, w| w.dcrst().set_bit());
+            flash.acr().modify(|_, w| w.dcrst().clear_bit());
+            flash.acr().modify(|_, w| w.dcen().set_bit());
+        }
+    }
 
     impl ErrorType for ChipFlash {
         type Error = stm32f4xx_hal::flash::Error;
@@ -80,11 +187,17 @@ mod chip {
         const READ_SIZE: usize = 1;
 
         async fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), Self::Error> {
-            embedded_storage::nor_flash::ReadNorFlash::read(&mut self.0, offset, bytes)
+            let from = offset as usize;
+            let memory = FlashExt::read(&self.0);
+            let span = memory
+                .get(from..from.saturating_add(bytes.len()))
+                .ok_or(stm32f4xx_hal::flash::Error::Operation)?;
+            bytes.copy_from_slice(span);
+            Ok(())
         }
 
         fn capacity(&self) -> usize {
-            embedded_storage::nor_flash::ReadNorFlash::capacity(&self.0)
+            FlashExt::len(&self.0)
         }
     }
 
@@ -95,10 +208,16 @@ mod chip {
             <UnlockedFlash<'static> as embedded_storage::nor_flash::NorFlash>::ERASE_SIZE;
 
         async fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
-            embedded_storage::nor_flash::NorFlash::erase(&mut self.0.unlocked(), from, to)
+            clear_flags(&self.0);
+            let done = crate::watchdog::through_stall(|| {
+                embedded_storage::nor_flash::NorFlash::erase(&mut self.0.unlocked(), from, to)
+            });
+            flush_caches(&self.0);
+            done
         }
 
         async fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Self::Error> {
+            clear_flags(&self.0);
             embedded_storage::nor_flash::NorFlash::write(&mut self.0.unlocked(), offset, bytes)
         }
     }

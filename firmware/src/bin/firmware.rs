@@ -334,7 +334,7 @@ mod app {
                 logic,
                 busy_idle: board::asked("busy-idle"),
                 hang_after_ticks: board::asked("tick-hangs").then_some(2 * tick_hz as u32),
-                dog: Dog::new(board.iwdg),
+                dog: Dog::new(board.iwdg, &board.dbgmcu),
                 check_in: CheckIn::new(tick_hz),
                 #[cfg(feature = "link")]
                 link_in,
