@@ -34,6 +34,42 @@ pub const FIRST_BUFFER_TICKS: u32 = 10;
 /// The most conversions a second the front end may ask for, all channels together (the
 /// ADC at 21 MHz, 15 cycles a 12-bit conversion, a sampling time of 56 cycles: ~296 kHz).
 pub const MAX_CONVERSIONS_HZ: f32 = 250_000.0;
+/// The ADC's clock `MAX_CONVERSIONS_HZ` is for (84 MHz APB2 / 4), Hz; on another clock (the
+/// 16 MHz HSI fallback: 4 MHz) the limit scales with it ([`max_conversions_hz`]).
+pub const NOMINAL_ADC_CLOCK_HZ: f32 = 21.0e6;
+/// A second stall of the acquisition within this time of the last one it recovered from is a
+/// fault (`InputError::Stalled`); one alone is re-armed and counted, s.
+pub const STALL_REPEAT_SECONDS: f32 = 1.0;
+/// Ticks after a recovered stall whose block may lack a channel's samples (the buffers the
+/// re-arm lost): that channel reads nothing then, not a fault.
+pub const STALL_GRACE_TICKS: u32 = 2;
+
+/// The most conversions a second at an ADC clock of `adc_clock_hz`, all channels together
+/// (`MAX_CONVERSIONS_HZ` scaled: the same sampling time, the same margin).
+pub fn max_conversions_hz(adc_clock_hz: f32) -> f32 {
+    MAX_CONVERSIONS_HZ * (adc_clock_hz / NOMINAL_ADC_CLOCK_HZ)
+}
+
+/// Why the acquisition stopped on silicon and was re-armed (by the firmware's DMA or ADC
+/// interrupt; through the link, host-sim's injected fault).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Stall {
+    /// The ADC converted again before the DMA took its last code (OVR): it stops its DMA
+    /// requests until re-armed.
+    Overrun,
+    /// The DMA stream's transfer error (TEIF): the stream disables itself.
+    TransferError,
+}
+
+impl Stall {
+    pub const fn name(self) -> &'static str {
+        match self {
+            Stall::Overrun => "an ADC overrun",
+            Stall::TransferError => "a DMA transfer error",
+        }
+    }
+}
 
 /// An analog input of the board.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -217,6 +253,22 @@ impl FrontEnd {
         Ok(whole as u32)
     }
 
+    /// The check of the front end's conversions against the ADC's clock in use (the board
+    /// may run on its fallback oscillator, where the ADC converts about 4 times slower).
+    pub fn check_adc_clock(&self, adc_clock_hz: f32) -> Result<(), FrontEndError> {
+        let conversions_hz = self.scan_hz * self.fitted().count() as f32;
+        let max_hz = max_conversions_hz(adc_clock_hz);
+        if conversions_hz <= max_hz {
+            Ok(())
+        } else {
+            Err(FrontEndError::AdcClock {
+                conversions_hz,
+                max_hz,
+                adc_clock_hz,
+            })
+        }
+    }
+
     /// The scans a DMA buffer holds, for `scans_per_tick` (from [`check`](Self::check)):
     /// the largest whole part of a tick's scans that fits [`BUFFER_CODES`], at most half a
     /// tick's (two buffers a tick, so a tick takes whole buffers at a steady phase); 0 with
@@ -261,6 +313,14 @@ pub struct Reader {
     fast: [Option<FastChannel>; 3],
     /// Ticks left that may find no sample yet (0 once one has come).
     waiting: u32,
+    /// Ticks since the last stall recovered from (saturating), and the ticks within which
+    /// another is a fault (`STALL_REPEAT_SECONDS` at the tick rate).
+    since_stall: u32,
+    repeat_ticks: u32,
+    /// Ticks left whose block may lack a channel's samples after a stall.
+    grace: u32,
+    /// The stalls recovered from since power-up.
+    recovered: u32,
 }
 
 /// A channel's full-block path: sums in `[low_sum, high_sum]` read `sum · per_sum − offset`.
@@ -316,17 +376,73 @@ impl Reader {
                 offset: spec.zero_code * spec.per_count,
             })
         });
+        // The tick rate is the scan rate over the scans a tick.
+        let repeat = STALL_REPEAT_SECONDS * front_end.scan_hz / n;
+        let repeat_ticks = if repeat.is_finite() && repeat >= 1.0 {
+            repeat as u32
+        } else {
+            1
+        };
         Self {
             front_end,
             scans: scans_per_tick,
             fast,
             waiting: FIRST_BUFFER_TICKS,
+            since_stall: u32::MAX,
+            repeat_ticks,
+            grace: 0,
+            recovered: 0,
         }
+    }
+
+    /// The stalls of the acquisition recovered from since power-up (re-armed, not faults).
+    pub fn recovered(&self) -> u32 {
+        self.recovered
+    }
+
+    /// A stalled block: recovered from (counted, `STALL_GRACE_TICKS` of grace), or, within
+    /// `STALL_REPEAT_SECONDS` of the last, the fault.
+    #[inline(never)]
+    fn on_stall(&mut self, stall: Stall) -> Result<(), InputError> {
+        if self.since_stall < self.repeat_ticks {
+            return Err(InputError::Stalled {
+                stall,
+                recovered: self.recovered,
+            });
+        }
+        self.since_stall = 0;
+        self.recovered = self.recovered.saturating_add(1);
+        self.grace = STALL_GRACE_TICKS;
+        Ok(())
+    }
+
+    /// A block in a stall's grace: a channel with no sample reads nothing; any other
+    /// reading is checked as [`FrontEnd::inputs`] checks it.
+    #[inline(never)]
+    fn in_grace(&mut self, block: &Block) -> Result<Inputs, InputError> {
+        self.grace -= 1;
+        let read = |spec: &Option<ChannelSpec>, sums: &Sums, channel| match spec {
+            Some(spec) if sums.count > 0 => sums.reading(channel, spec).map(Some),
+            _ => Ok(None),
+        };
+        let [current, amplifier, stretch] = &self.front_end.channels;
+        Ok(Inputs {
+            current_amps: read(current, &block.current, Channel::Current)?,
+            amplifier_volts: read(amplifier, &block.amplifier, Channel::Amplifier)?,
+            stretch: read(stretch, &block.stretch, Channel::Stretch)?,
+        })
     }
 
     /// The block's readings, as [`FrontEnd::inputs`] gives them (to rounding), checked; no
     /// reading while the first sample has not come (at power-up, for a few ticks).
     pub fn inputs(&mut self, block: &Block) -> Result<Inputs, InputError> {
+        self.since_stall = self.since_stall.saturating_add(1);
+        if let Some(stall) = block.stall {
+            self.on_stall(stall)?;
+        }
+        if self.grace > 0 {
+            return self.in_grace(block);
+        }
         if self.waiting > 0 {
             let empty =
                 block.current.count == 0 && block.amplifier.count == 0 && block.stretch.count == 0;
@@ -422,6 +538,8 @@ pub struct Block {
     current: Sums,
     amplifier: Sums,
     stretch: Sums,
+    /// The acquisition stalled and was re-armed since the last tick (the latest cause).
+    stall: Option<Stall>,
 }
 
 impl Block {
@@ -442,7 +560,14 @@ impl Block {
             count: 0,
             highest: 0,
         },
+        stall: None,
     };
+
+    /// The acquisition stopped (`why`) and has been re-armed: the codes it lost are missing
+    /// from this block. The firmware's recovery says it here; the tick's reader decides.
+    pub fn stalled(&mut self, why: Stall) {
+        self.stall = Some(why);
+    }
 
     fn sums(&mut self, channel: Channel) -> &mut Sums {
         match channel {
@@ -568,6 +693,12 @@ pub enum FrontEndError {
     },
     /// Not a whole number of scans a tick, or more conversions than the ADC makes.
     ScanRate { scan_hz: f32, tick_hz: f32 },
+    /// More conversions than the ADC makes on the clock in use.
+    AdcClock {
+        conversions_hz: f32,
+        max_hz: f32,
+        adc_clock_hz: f32,
+    },
 }
 
 impl fmt::Display for FrontEndError {
@@ -622,6 +753,19 @@ impl fmt::Display for FrontEndError {
                 Decimal(tick_hz),
                 Decimal(MAX_CONVERSIONS_HZ)
             ),
+            FrontEndError::AdcClock {
+                conversions_hz,
+                max_hz,
+                adc_clock_hz,
+            } => write!(
+                f,
+                "front end: {} conversions/s, more than the {} the ADC makes on its {} MHz \
+                 clock (the board runs on its fallback oscillator: fix the crystal, or make an \
+                 image with a lower scan_hz)",
+                Decimal(conversions_hz),
+                Decimal(max_hz),
+                Decimal(adc_clock_hz / 1.0e6)
+            ),
         }
     }
 }
@@ -634,6 +778,9 @@ impl core::error::Error for FrontEndError {}
 pub enum InputError {
     /// No sample since the last tick: the ADC or its DMA stopped.
     NoSamples { channel: Channel },
+    /// The acquisition stalled again within `STALL_REPEAT_SECONDS` of a stall it recovered
+    /// from: it cannot keep up (this stall's cause; the stalls recovered from before it).
+    Stalled { stall: Stall, recovered: u32 },
     /// A code above the ADC's full scale (not from this ADC).
     NotACode { channel: Channel, code: u16 },
     /// The block's mean sits at a rail: open (pulled there), shorted or saturated.
@@ -655,6 +802,13 @@ impl fmt::Display for InputError {
                 f,
                 "{} input: no sample this tick (the ADC or its DMA stopped)",
                 channel.name()
+            ),
+            InputError::Stalled { stall, recovered } => write!(
+                f,
+                "the ADC's acquisition stopped again ({}) within {} s of the last stall it was \
+                 re-armed from ({recovered} so far): it cannot keep up",
+                stall.name(),
+                Decimal(STALL_REPEAT_SECONDS)
             ),
             InputError::NotACode { channel, code } => write!(
                 f,

@@ -626,3 +626,97 @@ fn a_readings_code_is_rounded_and_held_in_range() {
     assert_eq!(spec.adc_code(1e6), FULL_SCALE_CODE);
     assert_eq!(spec.adc_code(f32::NAN), 0);
 }
+
+/// A stall of the acquisition (silicon's ADC overrun or DMA transfer error, re-armed by the
+/// firmware) is recovered from and counted: its tick and the next `STALL_GRACE_TICKS - 1` may
+/// lack samples (the buffers the re-arm lost) and read nothing, not a fault; a full block then
+/// reads as before. A second stall within `STALL_REPEAT_SECONDS` of the last recovered one is
+/// the fault, named; one a second or more later is recovered from again. A block the grace
+/// has run out on is `NoSamples` again.
+#[test]
+fn a_stall_is_recovered_once_and_a_repeat_within_a_second_is_a_fault() {
+    use de_resonator::acquire::{Reader, Stall, STALL_GRACE_TICKS, STALL_REPEAT_SECONDS};
+    let fe = front_end(1e-3);
+    let scans_per_tick = fe.check(TICK_HZ as f32).unwrap();
+    let scans = plant_scans(6000.0, SCANS_PER_TICK);
+    let mut rng = Rng(11);
+    let full = |rng: &mut Rng| block(&fe, &scans, 1.0, rng);
+    let stalled = |why| {
+        let mut b = Block::EMPTY;
+        b.stalled(why);
+        b
+    };
+    let mut reader = Reader::new(fe, scans_per_tick);
+    assert!(reader.inputs(&full(&mut rng)).is_ok());
+    assert_eq!(reader.recovered(), 0);
+    // The stall's tick, empty: nothing read, no fault; the grace's other ticks likewise.
+    assert_eq!(reader.inputs(&stalled(Stall::Overrun)), Ok(Inputs::NONE));
+    for _ in 1..STALL_GRACE_TICKS {
+        assert_eq!(reader.inputs(&Block::EMPTY), Ok(Inputs::NONE));
+    }
+    assert_eq!(reader.recovered(), 1);
+    // Full blocks read again; the grace over, an empty block is the fault it always was.
+    assert!(reader.inputs(&full(&mut rng)).is_ok());
+    assert_eq!(
+        reader.inputs(&Block::EMPTY),
+        Err(InputError::NoSamples {
+            channel: Channel::Current
+        })
+    );
+    // A second stall within the window (half of it later): the fault, naming the cause.
+    let mut reader = Reader::new(fe, scans_per_tick);
+    assert!(reader.inputs(&full(&mut rng)).is_ok());
+    assert!(reader.inputs(&stalled(Stall::TransferError)).is_ok());
+    let half = (0.5 * f64::from(STALL_REPEAT_SECONDS) * TICK_HZ) as usize;
+    for _ in 0..half {
+        assert!(reader.inputs(&full(&mut rng)).is_ok());
+    }
+    assert_eq!(
+        reader.inputs(&stalled(Stall::Overrun)),
+        Err(InputError::Stalled {
+            stall: Stall::Overrun,
+            recovered: 1
+        })
+    );
+    // A second stall past the window: recovered from again, counted.
+    let mut reader = Reader::new(fe, scans_per_tick);
+    assert!(reader.inputs(&stalled(Stall::Overrun)).is_ok());
+    let past = (1.01 * f64::from(STALL_REPEAT_SECONDS) * TICK_HZ) as usize;
+    for _ in 0..past {
+        assert!(reader.inputs(&full(&mut rng)).is_ok());
+    }
+    assert!(reader.inputs(&stalled(Stall::TransferError)).is_ok());
+    assert_eq!(reader.recovered(), 2);
+    // A stalled block that still holds samples reads them (checked as ever).
+    let mut partial = full(&mut rng);
+    partial.stalled(Stall::Overrun);
+    let mut reader = Reader::new(fe, scans_per_tick);
+    let read = reader.inputs(&partial).unwrap();
+    assert!(read.stretch.is_some() && read.current_amps.is_some());
+}
+
+/// The ADC's clock in use bounds the conversions: the reference front end (3 channels at
+/// 10 kHz: 30,000 conversions/s) passes at 21 MHz and at the 16 MHz HSI fallback's 4 MHz
+/// (the limit scales: 250,000 · 4/21 ≈ 47,600); at 20 kHz scans (60,000) the fallback refuses
+/// it, naming the clock.
+#[test]
+fn the_adc_clock_in_use_bounds_the_conversions() {
+    use de_resonator::acquire::{max_conversions_hz, MAX_CONVERSIONS_HZ};
+    assert_eq!(max_conversions_hz(21.0e6), MAX_CONVERSIONS_HZ);
+    let hsi_adc_hz = 16.0e6 / 4.0;
+    let fe = front_end(1e-3);
+    assert_eq!(fe.check_adc_clock(21.0e6), Ok(()));
+    assert_eq!(fe.check_adc_clock(hsi_adc_hz), Ok(()));
+    let fast = FrontEnd {
+        scan_hz: 20_000.0,
+        ..fe
+    };
+    assert_eq!(fast.check_adc_clock(21.0e6), Ok(()));
+    let refused = fast.check_adc_clock(hsi_adc_hz).unwrap_err();
+    assert!(matches!(refused, FrontEndError::AdcClock { .. }));
+    let words = refused.to_string();
+    assert!(
+        words.contains("60000 conversions/s") && words.contains("4 MHz"),
+        "{words}"
+    );
+}

@@ -4,16 +4,22 @@
 //! which turns it into the controller's inputs). Everything through the HAL: the channels
 //! are configured through its typed analog pins, chosen by the image's input numbers.
 //!
+//! An ADC overrun or a DMA transfer error stops the acquisition: the interrupt that sees it
+//! re-arms the ADC and its stream and says the stall to the block; the core's reader counts
+//! it, or faults on a second within a second (`acquire::Stall`).
+//!
 //! QEMU emulates neither the ADC's sampling nor DMA: this module is built and clippy-checked
 //! for silicon (`--no-default-features --features rtt`) and not run in CI; under QEMU the
-//! block is filled by a stand-in (`sensor`), and everything after it is the product's code.
+//! block is filled by a stand-in (`sensor`), and everything after it is the product's code
+//! (the link build takes host-sim's injected stalls to the same block and reader).
 
-use de_resonator::acquire::{Block, FrontEnd, BUFFER_CODES};
+use de_resonator::acquire::{Block, FrontEnd, Stall, BUFFER_CODES};
 use stm32f4xx_hal::adc::config::{
     AdcConfig, Clock, Dma, ExternalTrigger, SampleTime, Scan, Sequence, TriggerMode,
 };
 use stm32f4xx_hal::adc::Adc;
-use stm32f4xx_hal::dma::config::DmaConfig;
+use stm32f4xx_hal::dma::config::{DmaConfig, Priority};
+use stm32f4xx_hal::dma::traits::StreamISR as _;
 use stm32f4xx_hal::dma::{DMAError, PeripheralToMemory, Stream0, Transfer};
 use stm32f4xx_hal::gpio::{Analog, PA0, PA1, PB1, PC0, PC1, PC2, PC3, PC4, PC5};
 use stm32f4xx_hal::pac::{ADC1, DMA2, TIM2};
@@ -24,6 +30,15 @@ use stm32f4xx_hal::timer::{CounterHz, Timer};
 /// The sampling time of each conversion, ADC clock cycles (with 12 for the conversion: 68
 /// cycles, 3.2 µs at 21 MHz; the core's `MAX_CONVERSIONS_HZ` is below its rate).
 const SAMPLE_TIME: SampleTime = SampleTime::Cycles_56;
+
+/// The ADC's clock is APB2's over 4 (`Clock::Pclk2_div_4`): 21 MHz from the PLL, 4 MHz on the
+/// HSI fallback.
+pub const ADC_CLOCK_DIVIDER: u32 = 4;
+
+/// The ADC's clock in use, Hz (the image's conversions are checked against it at boot).
+pub fn adc_clock_hz(rcc: &Rcc) -> f32 {
+    (rcc.clocks.pclk2().raw() / ADC_CLOCK_DIVIDER) as f32
+}
 
 /// A DMA buffer: a slice of one of the three static arrays, as long as a buffer's scans.
 type Buffer = &'static mut [u16];
@@ -62,11 +77,16 @@ impl AnalogPins {
     }
 }
 
-/// The running acquisition: the DMA transfer, the buffer not in it, and the scan's timer.
+/// The ADC's stream as the acquisition runs it.
+type AdcTransfer = Transfer<Stream0<DMA2>, 0, Adc<ADC1>, PeripheralToMemory, Buffer>;
+
+/// The running acquisition: the DMA transfer (`None` only inside a re-arm), the buffer not in
+/// it, the stream's configuration (for a re-arm), and the scan's timer.
 pub struct Acquisition {
-    transfer: Transfer<Stream0<DMA2>, 0, Adc<ADC1>, PeripheralToMemory, Buffer>,
+    transfer: Option<AdcTransfer>,
     spare: Option<Buffer>,
     front_end: FrontEnd,
+    dma: DmaConfig,
     _timer: CounterHz<TIM2>,
 }
 
@@ -78,6 +98,14 @@ pub struct Parts {
     pub tim2: TIM2,
     pub pins: AnalogPins,
     pub buffers: &'static mut [[u16; BUFFER_CODES]; 3],
+}
+
+/// ADC1's status and control registers, for what the HAL's `Adc` does not reach: the overrun
+/// flag (OVR) and its interrupt (OVRIE).
+fn adc1() -> &'static stm32f4xx_hal::pac::adc1::RegisterBlock {
+    // SAFETY: ADC1's registers; the overrun bits are touched only here, by the acquisition's
+    // interrupts (one priority), and the HAL's `Adc` writes CR2 only inside a re-arm.
+    unsafe { &*ADC1::ptr() }
 }
 
 impl Acquisition {
@@ -106,10 +134,16 @@ impl Acquisition {
                 return None;
             }
         }
+        // An overrun stops the ADC's DMA requests: its interrupt (ADC) re-arms them.
+        adc1().cr1().modify(|_, w| w.ovrie().set_bit());
         let [a, b, c] = parts.buffers;
         let (a, b, c) = (&mut a[..codes], &mut b[..codes], &mut c[..codes]);
+        // The highest priority of DMA2's streams (the telemetry's stream 7 must not starve
+        // it); a transfer error interrupts too, so the stream is re-armed.
         let dma = DmaConfig::default()
+            .priority(Priority::VeryHigh)
             .transfer_complete_interrupt(true)
+            .transfer_error_interrupt(true)
             .memory_increment(true)
             .double_buffer(true);
         let mut transfer = Transfer::init_peripheral_to_memory(parts.dma, adc, a, Some(b), dma);
@@ -121,31 +155,77 @@ impl Acquisition {
             .start((libm::roundf(front_end.scan_hz) as u32).Hz())
             .ok()?;
         Some(Self {
-            transfer,
+            transfer: Some(transfer),
             spare: Some(c),
             front_end: *front_end,
+            dma,
             _timer: timer,
         })
     }
 
-    /// A buffer is full (DMA2 stream 0's transfer-complete interrupt): hand the stream the
-    /// spare, add the full one's scans to `block`, keep it as the next spare. An interrupt late
-    /// by a whole buffer loses that buffer (a tick takes fewer scans: its checked path reads
-    /// them); one the chip's DMA stopped on (a transfer error) gives no more: the next ticks'
-    /// blocks are empty, a fault by name (`InputError::NoSamples`), down to 0 V, and only a
-    /// reset starts the DMA again.
-    pub fn on_buffer(&mut self, block: &mut Block) {
-        let Some(spare) = self.spare.take() else {
+    /// The DMA's interrupt (a buffer full, or a transfer error) or the ADC's (an overrun).
+    /// A stall first: the stream and the ADC's requests re-armed, the stall said to `block`
+    /// (the core's reader recovers from one and faults on a repeat). Else a full buffer: the
+    /// spare to the stream, the full one's scans to `block`, kept as the next spare. An
+    /// interrupt late by a whole buffer loses that buffer (a tick takes fewer scans: its
+    /// checked path reads them).
+    pub fn on_interrupt(&mut self, block: &mut Block) {
+        if let Some(why) = self.stall() {
+            self.rearm();
+            block.stalled(why);
+            return;
+        }
+        let (Some(transfer), Some(spare)) = (self.transfer.as_mut(), self.spare.take()) else {
             return;
         };
-        match self.transfer.next_transfer(spare) {
+        if !transfer.is_transfer_complete() {
+            self.spare = Some(spare);
+            return;
+        }
+        match transfer.next_transfer(spare) {
             Ok((full, _)) => {
                 block.add_scans(&self.front_end, full);
                 self.spare = Some(full);
             }
-            Err(DMAError::NotReady(buf) | DMAError::SmallBuffer(buf) | DMAError::Overrun(buf)) => {
-                self.spare = Some(buf)
+            Err(DMAError::NotReady(buf) | DMAError::SmallBuffer(buf)) => self.spare = Some(buf),
+            // The HAL's own overrun: too late for the buffer switch, the stream stopped.
+            Err(DMAError::Overrun(buf)) => {
+                self.spare = Some(buf);
+                self.rearm();
+                block.stalled(Stall::TransferError);
             }
         }
+    }
+
+    /// What stopped the acquisition, if anything: the stream's transfer error, or the ADC's
+    /// overrun.
+    fn stall(&self) -> Option<Stall> {
+        if self
+            .transfer
+            .as_ref()
+            .is_some_and(|t| t.is_transfer_error())
+        {
+            Some(Stall::TransferError)
+        } else if adc1().sr().read().ovr().bit_is_set() {
+            Some(Stall::Overrun)
+        } else {
+            None
+        }
+    }
+
+    /// Re-arm after a stall (RM0090 §13.8.1): the stream stopped and its flags cleared, the
+    /// ADC's overrun flag cleared and its DMA requests re-enabled, the stream started again on
+    /// its two buffers; TIM2 triggers the next scan.
+    fn rearm(&mut self) {
+        let Some(transfer) = self.transfer.take() else {
+            return;
+        };
+        let (stream, mut adc, a, b) = transfer.release();
+        adc1().sr().modify(|_, w| w.ovr().clear_bit());
+        adc.set_dma(Dma::Disabled);
+        adc.set_dma(Dma::Continuous);
+        let mut transfer = Transfer::init_peripheral_to_memory(stream, adc, a, b, self.dma);
+        transfer.start(|adc| adc.enable());
+        self.transfer = Some(transfer);
     }
 }

@@ -30,7 +30,7 @@ pub mod analog {
     pub enum Acquisition {}
 
     impl Acquisition {
-        pub fn on_buffer(&mut self, _: &mut Block) {
+        pub fn on_interrupt(&mut self, _: &mut Block) {
             match *self {}
         }
     }

@@ -98,7 +98,15 @@ mod transport {
                 }
                 let codes = self.codes.get(..count).unwrap_or(&[]);
                 let front_end = &self.front_end;
-                add(&mut |block| block.add_scans(front_end, codes));
+                // host-sim's injected stall, said to the block as silicon's recovery says it
+                // once it has re-armed the ADC and its DMA (`analog`).
+                let stall = link::stall_of_flags(header.flags);
+                add(&mut |block| {
+                    block.add_scans(front_end, codes);
+                    if let Some(why) = stall {
+                        block.stalled(why);
+                    }
+                });
                 arrived = true;
             }
             arrived

@@ -4,6 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
+use de_resonator::acquire::Stall;
 use de_resonator::DeviceParams;
 use serde::Deserialize;
 
@@ -197,6 +198,12 @@ struct FaultsFile {
     /// From this time on the stretch input's code repeats its last (a stuck sensor read
     /// through `[front_end]`), s.
     stretch_stuck_after_seconds: Option<f64>,
+    /// When the ADC overruns (its DMA requests stop until re-armed), s.
+    #[serde(default)]
+    adc_overrun_at_seconds: Vec<f64>,
+    /// When the ADC's DMA stream has a transfer error (the stream stops until re-armed), s.
+    #[serde(default)]
+    dma_error_at_seconds: Vec<f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -325,6 +332,7 @@ pub fn parse(text: &str) -> Result<Scene, String> {
         }),
         (None, None) => None,
     };
+    let analog = with_stalls(analog, &file.faults)?;
     let commands = commands(&file, f64::from(settings.tick_hz))?;
     let tolerance = Tolerance {
         rtol: file.plant.rtol,
@@ -439,7 +447,36 @@ fn analog(
         front_end,
         noise_codes,
         stretch_stuck_after_seconds: None,
+        stalls: Vec::new(),
     })
+}
+
+/// The scene's stalls of the acquisition (`[faults]` adc_overrun_at_seconds,
+/// dma_error_at_seconds), in time order, on its front end.
+fn with_stalls(analog: Option<Analog>, faults: &FaultsFile) -> Result<Option<Analog>, String> {
+    let mut stalls: Vec<(f64, Stall)> = (faults.adc_overrun_at_seconds.iter())
+        .map(|&at| (at, Stall::Overrun))
+        .chain((faults.dma_error_at_seconds.iter()).map(|&at| (at, Stall::TransferError)))
+        .collect();
+    if let Some(&(at, _)) = stalls
+        .iter()
+        .find(|(at, _)| !(*at >= 0.0 && at.is_finite()))
+    {
+        return Err(format!(
+            "[faults] adc_overrun_at_seconds, dma_error_at_seconds: {at} must be a time ≥ 0, s"
+        ));
+    }
+    match analog {
+        None if !stalls.is_empty() => Err("[faults] adc_overrun_at_seconds and \
+                                           dma_error_at_seconds need a [front_end] (the ADC \
+                                           they stall)"
+            .into()),
+        None => Ok(None),
+        Some(a) => {
+            stalls.sort_by(|a, b| a.0.total_cmp(&b.0));
+            Ok(Some(Analog { stalls, ..a }))
+        }
+    }
 }
 
 /// A scene's name names its folder under `--out`: one plain path component (letters, digits,

@@ -3,6 +3,7 @@
 
 use std::path::Path;
 
+use de_resonator::acquire::{InputError, Stall};
 use de_resonator::estimate::capacitance::PROBE_SIGMAS;
 use de_resonator::{Device, DeviceParams, FailureMode, Fault, Tuner, REFERENCE_DEVICE};
 use host_sim::engine::hil::Run;
@@ -100,9 +101,16 @@ fn reference_scene_tunes_within_a_tenth_of_a_percent() {
 #[test]
 fn fault_scenes_end_at_zero_volts_and_safe() {
     type IsKind = fn(&Fault) -> bool;
-    let cases: [(&str, IsKind); 3] = [
+    let cases: [(&str, IsKind); 4] = [
         ("fault-sensor-stuck.toml", |f| {
             matches!(f, Fault::SensorStuck { .. })
+        }),
+        // Two stalls recovered from (1.5 s, 3.0 s), the third within 1 s of the last.
+        ("fault-adc-stall.toml", |f| {
+            *f == Fault::Input(InputError::Stalled {
+                stall: Stall::Overrun,
+                recovered: 2,
+            })
         }),
         ("fault-amplifier-saturated.toml", |f| {
             matches!(f, Fault::AmplifierDisagrees { .. })
@@ -121,6 +129,20 @@ fn fault_scenes_end_at_zero_volts_and_safe() {
         assert_eq!(r.final_command_volts, 0.0, "{file}");
         assert_eq!(r.plant_crossing, None, "{file}");
     }
+}
+
+/// The stalls the scene injects: the two recovered from leave the drive running (its only
+/// fault is the third stall's, in the tick of 3.5 s), and the bias was held until then.
+#[test]
+fn stalls_recovered_from_leave_the_drive_running_until_one_repeats() {
+    let r = run("fault-adc-stall.toml");
+    let faults: Vec<f64> = (r.events.iter())
+        .filter(|e| e.what.contains("fault"))
+        .map(|e| e.seconds)
+        .collect();
+    assert_eq!(faults.len(), 1, "{:?}", r.events);
+    assert!((faults[0] - 3.5).abs() <= 1e-3 + 1e-9, "{faults:?}");
+    assert!(r.max_command_volts > 7000.0, "{}", r.max_command_volts);
 }
 
 /// ±20% μ mismatch: the trim measures the ring, re-estimates μ and retunes; the plant ends

@@ -9,7 +9,7 @@
 //! |---|---|---|
 //! | 0 | 2 | magic `DL` |
 //! | 2 | 1 | kind: 1 samples (host → board), 2 a tick's output, 3 the boot (board → host) |
-//! | 3 | 1 | flags: a samples frame's bit 0, the DAC's bus fails from this tick on (`BUS_FAILS`, a test of the link build); 0 otherwise |
+//! | 3 | 1 | flags, on a samples frame (tests of the link build; 0 otherwise): bit 0 the DAC's bus fails from this tick on (`BUS_FAILS`); bit 1 an ADC overrun, bit 2 a DMA transfer error stalled the acquisition, re-armed before this tick (`STALL_OVERRUN`, `STALL_TRANSFER`; the codes it lost are not in the frame) |
 //! | 4 | 4 | the tick's number (from 0; 0 for the boot), u32 |
 //! | 8 | 2 | P, the payload's bytes, u16 (at most `MAX_PAYLOAD`) |
 //! | 10 | P | the payload |
@@ -65,12 +65,36 @@ impl Kind {
 /// A samples frame's flag: the DAC's bus fails from this tick on (the link build's stand-in
 /// for a broken bus: QEMU's SPI never fails).
 pub const BUS_FAILS: u8 = 1;
+/// A samples frame's flags: the acquisition stalled and was re-armed before this tick (the
+/// link build's stand-ins for silicon's ADC overrun and DMA transfer error, which QEMU does
+/// not emulate), said to the tick's block as the firmware's recovery says it.
+pub const STALL_OVERRUN: u8 = 2;
+pub const STALL_TRANSFER: u8 = 4;
+
+/// A stall as a samples frame's flag.
+pub const fn stall_flag(stall: crate::acquire::Stall) -> u8 {
+    match stall {
+        crate::acquire::Stall::Overrun => STALL_OVERRUN,
+        crate::acquire::Stall::TransferError => STALL_TRANSFER,
+    }
+}
+
+/// The stall a samples frame's flags say, if any (a transfer error first: the worse).
+pub const fn stall_of_flags(flags: u8) -> Option<crate::acquire::Stall> {
+    if flags & STALL_TRANSFER != 0 {
+        Some(crate::acquire::Stall::TransferError)
+    } else if flags & STALL_OVERRUN != 0 {
+        Some(crate::acquire::Stall::Overrun)
+    } else {
+        None
+    }
+}
 
 /// A frame's header, once its CRC checked.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Header {
     pub kind: Kind,
-    /// `BUS_FAILS` on a samples frame; 0 otherwise.
+    /// `BUS_FAILS`, `STALL_OVERRUN`, `STALL_TRANSFER` on a samples frame; 0 otherwise.
     pub flags: u8,
     /// The tick the frame is for (0 for the boot).
     pub tick: u32,

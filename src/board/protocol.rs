@@ -500,6 +500,9 @@ pub struct Extras {
     pub readings: Inputs,
     /// Whether the board has a port for the telemetry stream (`stream <hz>`).
     pub stream_port: bool,
+    /// The acquisition's stalls recovered from since power-up (`acquire::Reader::recovered`;
+    /// said when there are any).
+    pub stalls_recovered: u32,
 }
 
 impl fmt::Display for Extras {
@@ -520,6 +523,9 @@ impl fmt::Display for Extras {
             if let Some(value) = reading {
                 write!(f, " {key}={}", Decimal(value))?;
             }
+        }
+        if self.stalls_recovered > 0 {
+            write!(f, " stalls_recovered={}", self.stalls_recovered)?;
         }
         Ok(())
     }
@@ -704,6 +710,7 @@ mod tests {
                     ..Inputs::NONE
                 },
                 stream_port: false,
+                stalls_recovered: 0,
             },
             fault: Some(Fault::Bus),
         };

@@ -8,7 +8,9 @@
 //!   through the image's front end (the core's `acquire`), then one tick of the core's board
 //!   (the controller, its DAC frame on SPI1, the enable line); wakes `job` when a job waits;
 //! - `rx` (USART2): bytes into request lines, queued to `command`; `adc` (DMA2 stream 0,
-//!   silicon): each full buffer of ADC codes added to the tick's block;
+//!   silicon): each full buffer of ADC codes added to the tick's block; `adc` and
+//!   `adc_overrun` (the ADC's interrupt): a DMA transfer error or an ADC overrun re-armed, the
+//!   stall said to the block (the core's reader recovers or faults);
 //! - `command` and `job` (software, lowest): each request answered on USART2 by the core's
 //!   board; the long work (a new plan's checks, a boot, a trim's solve, tracking's slope)
 //!   runs here, preempted by the tick;
@@ -97,6 +99,9 @@ mod app {
         stream_port: Option<StreamPort>,
         /// The fault the tick saw latch, until the command task writes it to the fault log.
         logged: Option<Logged>,
+        /// Silicon's ADC, timer and DMA (none with no channel fitted, none under QEMU): the
+        /// DMA's and the ADC's interrupts serve it.
+        acquisition: Option<Acquisition>,
     }
 
     /// What the command task is given: a request line (from `rx`), or a wake-up for the
@@ -122,6 +127,8 @@ mod app {
         /// Ticks done since boot: the last one's number is one less (none yet: 0).
         ticks: u32,
         readings: Inputs,
+        /// The acquisition's stalls recovered from (the reader's count).
+        stalls_recovered: u32,
     }
 
     #[local]
@@ -130,8 +137,6 @@ mod app {
         sensor: Sensors,
         /// The image's analog front end (none fitted without an image), ready for the tick.
         reader: Reader,
-        /// Silicon's ADC, timer and DMA (none with no channel fitted, none under QEMU).
-        acquisition: Option<Acquisition>,
         serial_rx: Rx<USART2>,
         lines: Lines,
         /// A line that found the queue full, kept until the command task makes room.
@@ -218,6 +223,13 @@ mod app {
                 0
             }
         };
+        // On the HSI fallback the ADC converts about 4 times slower than the image assumed.
+        #[cfg(not(feature = "qemu"))]
+        if let Err(e) =
+            front_end.check_adc_clock(de_resonator_firmware::analog::adc_clock_hz(&board.rcc))
+        {
+            logic.refuse(controller, &e, &mut notice);
+        }
         #[cfg(not(feature = "qemu"))]
         let acquisition = {
             let analog = board.analog;
@@ -305,10 +317,12 @@ mod app {
                 latest: Latest {
                     ticks: 0,
                     readings: Inputs::NONE,
+                    stalls_recovered: 0,
                 },
                 telemetry: Telemetry::default(),
                 stream_port,
                 logged: None,
+                acquisition,
             },
             Local {
                 stage,
@@ -323,7 +337,6 @@ mod app {
                 )
                 .failing_after(board::asked("sensor-fails").then_some(2.0 * tick_hz)),
                 reader: Reader::new(front_end, scans_per_tick),
-                acquisition,
                 serial_rx: board.rx,
                 lines: Lines::default(),
                 held: None,
@@ -430,10 +443,12 @@ mod app {
         let readings = inputs.unwrap_or(Inputs::NONE);
         let tick = *cx.local.next_tick;
         *cx.local.next_tick = tick.wrapping_add(1);
+        let stalls_recovered = cx.local.reader.recovered();
         cx.shared.latest.lock(|l| {
             *l = Latest {
                 ticks: tick.wrapping_add(1),
                 readings,
+                stalls_recovered,
             }
         });
         let ticked = cx.shared.controller.lock(|c| {
@@ -561,12 +576,25 @@ mod app {
         }
     }
 
-    /// A full buffer of ADC codes (silicon): its scans into the tick's block.
-    #[task(binds = DMA2_STREAM0, priority = 2, shared = [block], local = [acquisition])]
-    fn adc(mut cx: adc::Context) {
-        if let Some(acquisition) = cx.local.acquisition.as_mut() {
-            cx.shared.block.lock(|b| acquisition.on_buffer(b));
-        }
+    /// A full buffer of ADC codes, or the DMA's transfer error (silicon): its scans, or the
+    /// re-armed stall, into the tick's block.
+    #[task(binds = DMA2_STREAM0, priority = 2, shared = [block, acquisition])]
+    fn adc(cx: adc::Context) {
+        (cx.shared.acquisition, cx.shared.block).lock(|acquisition, block| {
+            if let Some(acquisition) = acquisition.as_mut() {
+                acquisition.on_interrupt(block);
+            }
+        });
+    }
+
+    /// The ADC's overrun (silicon): the acquisition re-armed, the stall into the tick's block.
+    #[task(binds = ADC, priority = 2, shared = [block, acquisition])]
+    fn adc_overrun(cx: adc_overrun::Context) {
+        (cx.shared.acquisition, cx.shared.block).lock(|acquisition, block| {
+            if let Some(acquisition) = acquisition.as_mut() {
+                acquisition.on_interrupt(block);
+            }
+        });
     }
 
     /// QEMU's watchdog stand-in: its own clock, above the tick (a stuck tick starves it too).
@@ -686,6 +714,7 @@ mod app {
                 clock_us: None,
                 readings: cx.shared.latest.lock(|l| l.readings),
                 stream_port: cx.shared.stream_port.lock(|p| p.is_some()),
+                stalls_recovered: cx.shared.latest.lock(|l| l.stalls_recovered),
             };
             let mut controller = Locked(&mut cx.shared.controller);
             let then = cx

@@ -382,7 +382,7 @@ impl LoopBoard for Qemu<'_> {
         codes: &[u16],
     ) -> Result<(Observed, String), String> {
         let codes = match samples {
-            Samples::Codes => codes,
+            Samples::Codes { .. } => codes,
             Samples::Direct(inputs) if inputs == Inputs::NONE => &[],
             Samples::Direct(_) => {
                 return Err("the scene reads its sensors directly ([sensor], \
@@ -393,11 +393,15 @@ impl LoopBoard for Qemu<'_> {
         };
         let tick = k as u32;
         // The scene's broken bus (the core's board's simulated DAC fails from then on).
-        let flags = if self.wires.bus.fail_after.get().is_some() {
+        let mut flags = if self.wires.bus.fail_after.get().is_some() {
             link::BUS_FAILS
         } else {
             0
         };
+        // The scene's stall, re-armed before this tick (its codes are not in the frame).
+        if let Samples::Codes { stall: Some(why) } = samples {
+            flags |= link::stall_flag(why);
+        }
         let n = link::write_frame(&mut self.frame, (Kind::Samples, flags), tick, |p| {
             link::write_codes(codes, p)
         })

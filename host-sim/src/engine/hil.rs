@@ -7,7 +7,7 @@ use std::cell::Cell;
 use std::convert::Infallible;
 use std::time::Instant;
 
-use de_resonator::acquire::{Block, Channel, FrontEnd, InputError, Reader};
+use de_resonator::acquire::{Block, Channel, FrontEnd, InputError, Reader, Stall};
 use de_resonator::board::link::{self, Booted, Observed, Words};
 use de_resonator::board::port::Extras;
 use de_resonator::board::stream::{self, Receiver, Record, Telemetry};
@@ -226,13 +226,16 @@ pub struct Bench {
 }
 
 /// The board's analog front end in a scene (`[front_end]`): the image's, and the ADC's noise.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct Analog {
     pub front_end: FrontEnd,
     /// The RMS noise of a conversion, in codes (Gaussian, from the scene's seed).
     pub noise_codes: f64,
     /// From this time on the stretch input's code repeats its last (a stuck sensor), s.
     pub stretch_stuck_after_seconds: Option<f64>,
+    /// When the acquisition stalls (silicon's ADC overrun, DMA transfer error), s, in order:
+    /// the tick whose samples span that time loses them, its block says the stall.
+    pub stalls: Vec<(f64, Stall)>,
 }
 
 /// A tick's measurements: read directly (a scene with no front end), or the ADC's codes
@@ -240,7 +243,10 @@ pub struct Analog {
 #[derive(Clone, Copy, Debug)]
 pub enum Samples {
     Direct(Inputs),
-    Codes,
+    /// The codes in `Bench::codes`; a stall re-armed before this tick (its codes lost).
+    Codes {
+        stall: Option<Stall>,
+    },
 }
 
 /// A whole loop: the controller's side (what it is told), the plant's, and the run.
@@ -483,7 +489,7 @@ impl Loop {
             rail_volts: amplifier.max_volts(),
             dac_bits: DAC_BITS,
         };
-        let front_end = self.analog.map_or(FrontEnd::NONE, |a| a.front_end);
+        let front_end = self.analog.as_ref().map_or(FrontEnd::NONE, |a| a.front_end);
         crate::lut::image(
             self.nominal,
             &spec,
@@ -717,7 +723,7 @@ impl Loop {
     /// Tick `k`'s measurements of the plant, the amplifier's input at `input_volts`: read
     /// directly, or (a front end) the ADC's codes into `bench.codes`.
     pub fn measure(&self, bench: &mut Bench, k: u64, input_volts: f64) -> Samples {
-        let Some(analog) = self.analog else {
+        let Some(analog) = &self.analog else {
             return Samples::Direct(self.sense(bench, k, input_volts));
         };
         let membrane_volts = self.plant.volts(&bench.y, input_volts);
@@ -751,17 +757,31 @@ impl Loop {
                 bench.codes.push(code);
             }
         }
-        Samples::Codes
+        // A stall within this tick: its codes lost (drawn all the same, so the noise after it
+        // is the run's without the stall).
+        let dt = 1.0 / f64::from(self.settings.tick_hz);
+        let stall = analog
+            .stalls
+            .iter()
+            .find(|&&(at, _)| at >= t && at < t + dt)
+            .map(|&(_, why)| why);
+        if stall.is_some() {
+            bench.codes.clear();
+        }
+        Samples::Codes { stall }
     }
 
     /// What the core's board's acquisition reads of a tick's samples.
     pub fn acquired(&self, bench: &mut Bench, samples: Samples) -> Result<Inputs, InputError> {
         match samples {
             Samples::Direct(inputs) => Ok(inputs),
-            Samples::Codes => {
+            Samples::Codes { stall } => {
                 let mut block = Block::EMPTY;
                 if let Some(analog) = &self.analog {
                     block.add_scans(&analog.front_end, &bench.codes);
+                }
+                if let Some(why) = stall {
+                    block.stalled(why);
                 }
                 bench.reader.inputs(&block)
             }
@@ -839,7 +859,7 @@ impl Loop {
     pub fn bench(&self, history: bool) -> Bench {
         let current_wanted = self.current_monitor.is_some() || self.analog.is_some() || history;
         let y = self.plant.at_rest();
-        let front_end = self.analog.map_or(FrontEnd::NONE, |a| a.front_end);
+        let front_end = self.analog.as_ref().map_or(FrontEnd::NONE, |a| a.front_end);
         let scans = front_end.check(self.settings.tick_hz).unwrap_or(0);
         Bench {
             port: (y[0], self.plant.volts(&y, 0.0)),
