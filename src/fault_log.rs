@@ -379,13 +379,20 @@ async fn erase_half<F: NorFlash>(
 /// At boot, while a stall harms nothing (nothing driven, no watchdog yet): erase the other
 /// half if the newest's holds `KEPT` entries or more (the newest `KEPT` are all there) and
 /// the other is not erased, so that appends while running, which must not erase on a chip,
-/// have the rest of this half and all of the other. Whether it erased.
+/// have the rest of this half and all of the other. With no entry at all and no free slot in
+/// the first half (another program's bytes in the sectors, QEMU's zeroed RAM), the second is
+/// erased, where the first append goes. Whether it erased.
 #[cfg(feature = "storage")]
 pub async fn prepare<F: NorFlash>(mut flash: F, range: Range<u32>) -> Result<bool, StoreError> {
     let (starts, slots) = halves::<F>(&range)?;
     let found = scan(&mut flash, &range, |_| {}).await?;
     let Some((_, half)) = found.newest else {
-        return Ok(false);
+        let free = |h: usize| found.free.get(h).copied().flatten();
+        if free(0).is_some() || free(1) == Some(0) {
+            return Ok(false);
+        }
+        erase_half(&mut flash, &starts, 1).await?;
+        return Ok(true);
     };
     let used = found.free.get(half).copied().flatten().unwrap_or(slots);
     let other = 1 - half;

@@ -720,3 +720,92 @@ fn the_adc_clock_in_use_bounds_the_conversions() {
         "{words}"
     );
 }
+
+/// Random runs of blocks (full, short of a buffer, empty, stalled with or without samples,
+/// stalls bunched so that some repeat within the window) against the rule written out on its
+/// own: a stall within `STALL_REPEAT_SECONDS` of the last one recovered from is
+/// `Stalled`; any other stall is recovered from, and its tick and the next read whatever
+/// samples they hold; outside that grace an empty block is `NoSamples`; a block with samples
+/// reads every fitted channel, finite.
+#[test]
+fn random_runs_of_stalls_follow_the_rule() {
+    use de_resonator::acquire::{Reader, Stall, STALL_GRACE_TICKS, STALL_REPEAT_SECONDS};
+    let fe = front_end(1e-3);
+    let scans_per_tick = fe.check(TICK_HZ as f32).unwrap();
+    let repeat_ticks = (f64::from(STALL_REPEAT_SECONDS) * TICK_HZ) as i64;
+    let scans = plant_scans(6000.0, SCANS_PER_TICK);
+    let mut rng = Rng(0x5EED_57A1);
+    let full = block(&fe, &scans, 1.0, &mut rng);
+    let short = block(&fe, &scans[..5], 1.0, &mut rng);
+    let (mut stalls, mut faults) = (0, 0);
+    for _ in 0..40 {
+        let mut reader = Reader::new(fe, scans_per_tick);
+        assert!(reader.inputs(&full).is_ok());
+        let mut last_recovered: Option<i64> = None;
+        let mut grace_until = -1i64;
+        let mut run_recovered = 0u32;
+        // Stalls about every 0.2 s to 3 s: some repeat within the window, some do not.
+        let every = rng.range(200.0, 3000.0);
+        for t in 1..6000i64 {
+            let mut b = match rng.below(20) {
+                0 => short,
+                1 => Block::EMPTY,
+                _ => full,
+            };
+            let stall = (rng.unit() < 1.0 / every).then(|| {
+                if rng.below(2) == 0 {
+                    Stall::Overrun
+                } else {
+                    Stall::TransferError
+                }
+            });
+            if let Some(why) = stall {
+                if rng.below(2) == 0 {
+                    b = Block::EMPTY;
+                }
+                b.stalled(why);
+            }
+            let got = reader.inputs(&b);
+            let empty = b.samples(Channel::Stretch) == 0;
+            match stall {
+                Some(why) if last_recovered.is_some_and(|at| t - at < repeat_ticks) => {
+                    faults += 1;
+                    assert!(
+                        matches!(got, Err(InputError::Stalled { stall, .. }) if stall == why),
+                        "tick {t}: {got:?}"
+                    );
+                    continue;
+                }
+                Some(_) => {
+                    stalls += 1;
+                    run_recovered += 1;
+                    last_recovered = Some(t);
+                    grace_until = t + i64::from(STALL_GRACE_TICKS) - 1;
+                }
+                None => {}
+            }
+            if empty && t > grace_until {
+                assert_eq!(
+                    got,
+                    Err(InputError::NoSamples {
+                        channel: Channel::Current
+                    }),
+                    "tick {t}"
+                );
+            } else if empty {
+                assert_eq!(got, Ok(Inputs::NONE), "tick {t}");
+            } else {
+                let read = got.unwrap_or_else(|e| panic!("tick {t}: {e}"));
+                for r in [read.current_amps, read.amplifier_volts, read.stretch] {
+                    assert!(r.is_some_and(f32::is_finite), "tick {t}: {read:?}");
+                }
+            }
+        }
+        // The reader's count is the rule's.
+        assert_eq!(reader.recovered(), run_recovered);
+    }
+    assert!(
+        stalls > 50 && faults > 10,
+        "{stalls} recovered, {faults} faults"
+    );
+}

@@ -153,6 +153,37 @@ fn garbage_holds_no_entry_and_an_append_works_on_it() {
     assert_eq!(read(&mut bytes), newest_first(0..1));
 }
 
+/// A log over bytes that were never this log's (another program's in the sectors, QEMU's
+/// zeroed RAM) takes entries while running, when it must not erase: the boot's `prepare`
+/// erased where the first goes.
+#[test]
+fn the_boots_prepare_readies_a_log_over_foreign_bytes() {
+    for fill in [0x00u8, 0x5A] {
+        let mut bytes = vec![fill; PAGES * RAM_PAGE_BYTES];
+        let no_erase = |bytes: &mut Vec<u8>, n: u32| {
+            block_on(fault_log::append(
+                RamFlash::new(bytes),
+                RANGE,
+                &nth(n),
+                false,
+            ))
+        };
+        assert_eq!(
+            no_erase(&mut bytes, 0),
+            Err(StoreError::LogFull),
+            "{fill:#x}"
+        );
+        let prepare =
+            |bytes: &mut Vec<u8>| block_on(fault_log::prepare(RamFlash::new(bytes), RANGE));
+        assert_eq!(prepare(&mut bytes), Ok(true), "{fill:#x}");
+        assert_eq!(prepare(&mut bytes), Ok(false), "{fill:#x}: once");
+        for n in 0..3 {
+            assert_eq!(no_erase(&mut bytes, n), Ok(n + 1), "{fill:#x}");
+        }
+        assert_eq!(read(&mut bytes), newest_first(0..3), "{fill:#x}");
+    }
+}
+
 #[test]
 fn clear_empties_the_log() {
     let mut bytes = erased();

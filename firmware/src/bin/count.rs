@@ -152,6 +152,28 @@ fn main() -> ! {
             fe.fitted().count(),
             n
         );
+        // A block short of a buffer (an interrupt late by one): the checked path.
+        let short = block_of(&fe, [1e-6, 7450.0, 2.19], 5, 0);
+        let n = count(1000, || {
+            let _ = black_box(reader.inputs(black_box(&short)));
+        });
+        defmt::info!(
+            "the block of a tick short of a buffer, through the front end's checked path ({=usize} channels): {=u32} instructions",
+            fe.fitted().count(),
+            n
+        );
+        // A stall re-armed before the tick (its first: recovered, read in its grace).
+        let mut stalled = short;
+        stalled.stalled(de_resonator::acquire::Stall::Overrun);
+        let mut fresh = Reader::new(fe, 10);
+        let n = count(1, || {
+            let _ = black_box(fresh.inputs(black_box(&stalled)));
+        });
+        defmt::info!(
+            "the block of a stalled tick, recovered from, through the front end ({=usize} channels): {=u32} instructions",
+            fe.fitted().count(),
+            n
+        );
         let mut b = Block::EMPTY;
         let codes = [2047u16; 15];
         let n = count(100, || {
