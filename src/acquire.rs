@@ -40,8 +40,9 @@ pub const NOMINAL_ADC_CLOCK_HZ: f32 = 21.0e6;
 /// A second stall of the acquisition within this time of the last one it recovered from is a
 /// fault (`InputError::Stalled`); one alone is re-armed and counted, s.
 pub const STALL_REPEAT_SECONDS: f32 = 1.0;
-/// Ticks after a recovered stall whose block may lack a channel's samples (the buffers the
-/// re-arm lost): that channel reads nothing then, not a fault.
+/// Ticks from a recovered stall's whose block may lack a channel's samples (the buffers the
+/// re-arm lost): the stall's own tick reads nothing, the next reads what it holds, a channel
+/// with no sample nothing, not a fault.
 pub const STALL_GRACE_TICKS: u32 = 2;
 
 /// The most conversions a second at an ADC clock of `adc_clock_hz`, all channels together
@@ -302,8 +303,9 @@ impl FrontEnd {
 
 /// The front end made ready for the tick at its scans a tick: per channel, the sums of a
 /// full block that read plausibly (the plausible range, inside the rails, as whole sums) and
-/// the reading per sum. A full block within them is read with a multiply and an add; any
-/// other block takes [`FrontEnd::inputs`], which names what is wrong (the tick's budget).
+/// the reading per sum. A full block within them is read with a multiply and an add, a block
+/// short of scans within the same means with a division more; any other block takes
+/// [`FrontEnd::inputs`], which names what is wrong (the tick's budget).
 /// At power-up, until the first sample comes, an empty block is no reading (for at most
 /// [`FIRST_BUFFER_TICKS`] ticks), not a fault.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -323,13 +325,21 @@ pub struct Reader {
     recovered: u32,
 }
 
-/// A channel's full-block path: sums in `[low_sum, high_sum]` read `sum · per_sum − offset`.
+/// A channel's fast path: a full block's sums in `[low_sum, high_sum]` read
+/// `sum · per_sum − offset`; a block short of scans (a buffer lost, a stall's grace) reads its
+/// mean code as the checked path does, `(mean − zero_code) · per_count`, for a mean in
+/// `[low_mean, high_mean]`: the means of `low_sum` and `high_sum`, which the checked path
+/// reads, so every mean between them reads too (its checks are monotone in the mean).
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct FastChannel {
     low_sum: u32,
     high_sum: u32,
     per_sum: f32,
     offset: f32,
+    low_mean: f32,
+    high_mean: f32,
+    zero_code: f32,
+    per_count: f32,
 }
 
 impl Reader {
@@ -374,6 +384,11 @@ impl Reader {
                 high_sum,
                 per_sum: spec.per_count / n,
                 offset: spec.zero_code * spec.per_count,
+                // As `Sums::reading` computes a mean.
+                low_mean: low_sum as f32 / scans_per_tick as f32,
+                high_mean: high_sum as f32 / scans_per_tick as f32,
+                zero_code: spec.zero_code,
+                per_count: spec.per_count,
             })
         });
         // The tick rate is the scan rate over the scans a tick.
@@ -400,8 +415,9 @@ impl Reader {
         self.recovered
     }
 
-    /// A stalled block: recovered from (counted, `STALL_GRACE_TICKS` of grace), or, within
-    /// `STALL_REPEAT_SECONDS` of the last, the fault.
+    /// A stalled block: recovered from (counted; its tick reads nothing, the next
+    /// `STALL_GRACE_TICKS - 1` whatever they hold), or, within `STALL_REPEAT_SECONDS` of the
+    /// last, the fault.
     #[inline(never)]
     fn on_stall(&mut self, stall: Stall) -> Result<(), InputError> {
         if self.since_stall < self.repeat_ticks {
@@ -412,15 +428,14 @@ impl Reader {
         }
         self.since_stall = 0;
         self.recovered = self.recovered.saturating_add(1);
-        self.grace = STALL_GRACE_TICKS;
+        self.grace = STALL_GRACE_TICKS - 1;
         Ok(())
     }
 
-    /// A block in a stall's grace: a channel with no sample reads nothing; any other
-    /// reading is checked as [`FrontEnd::inputs`] checks it.
+    /// A block in a stall's grace that the fast path did not read: a channel with no sample
+    /// reads nothing; any other reading is checked as [`FrontEnd::inputs`] checks it.
     #[inline(never)]
-    fn in_grace(&mut self, block: &Block) -> Result<Inputs, InputError> {
-        self.grace -= 1;
+    fn in_grace(&self, block: &Block) -> Result<Inputs, InputError> {
         let read = |spec: &Option<ChannelSpec>, sums: &Sums, channel| match spec {
             Some(spec) if sums.count > 0 => sums.reading(channel, spec).map(Some),
             _ => Ok(None),
@@ -438,10 +453,13 @@ impl Reader {
     pub fn inputs(&mut self, block: &Block) -> Result<Inputs, InputError> {
         self.since_stall = self.since_stall.saturating_add(1);
         if let Some(stall) = block.stall {
+            // The stall's own tick: its block lost codes to the re-arm; no reading.
             self.on_stall(stall)?;
+            return Ok(Inputs::NONE);
         }
-        if self.grace > 0 {
-            return self.in_grace(block);
+        let grace = self.grace > 0;
+        if grace {
+            self.grace -= 1;
         }
         if self.waiting > 0 {
             let empty =
@@ -458,14 +476,22 @@ impl Reader {
                 return None;
             }
             match fast {
-                Some(f) => {
-                    good &= sums.count == self.scans
-                        && sums.highest <= FULL_SCALE_CODE
+                Some(f) if sums.count == self.scans => {
+                    good &= sums.highest <= FULL_SCALE_CODE
                         && sums.sum >= f.low_sum
                         && sums.sum <= f.high_sum;
                     Some(sums.sum as f32 * f.per_sum - f.offset)
                 }
-                None => {
+                Some(f) if sums.count > 0 => {
+                    let mean = sums.sum as f32 / sums.count as f32;
+                    good &= sums.highest <= FULL_SCALE_CODE
+                        && mean >= f.low_mean
+                        && mean <= f.high_mean;
+                    Some((mean - f.zero_code) * f.per_count)
+                }
+                // A stall's grace: no sample, no reading.
+                _ if grace && sums.count == 0 => None,
+                _ => {
                     good = false;
                     None
                 }
@@ -480,6 +506,8 @@ impl Reader {
         };
         if good {
             Ok(inputs)
+        } else if grace {
+            self.in_grace(block)
         } else {
             self.front_end.inputs(block)
         }

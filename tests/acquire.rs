@@ -628,9 +628,9 @@ fn a_readings_code_is_rounded_and_held_in_range() {
 }
 
 /// A stall of the acquisition (silicon's ADC overrun or DMA transfer error, re-armed by the
-/// firmware) is recovered from and counted: its tick and the next `STALL_GRACE_TICKS - 1` may
-/// lack samples (the buffers the re-arm lost) and read nothing, not a fault; a full block then
-/// reads as before. A second stall within `STALL_REPEAT_SECONDS` of the last recovered one is
+/// firmware) is recovered from and counted: its tick reads nothing, and the next
+/// `STALL_GRACE_TICKS - 1` may lack samples (the buffers the re-arm lost) and read nothing,
+/// not a fault; a full block then reads as before. A second stall within `STALL_REPEAT_SECONDS` of the last recovered one is
 /// the fault, named; one a second or more later is recovered from again. A block the grace
 /// has run out on is `NoSamples` again.
 #[test]
@@ -687,11 +687,14 @@ fn a_stall_is_recovered_once_and_a_repeat_within_a_second_is_a_fault() {
     }
     assert!(reader.inputs(&stalled(Stall::TransferError)).is_ok());
     assert_eq!(reader.recovered(), 2);
-    // A stalled block that still holds samples reads them (checked as ever).
+    // The stall's own tick reads nothing, whatever its block holds (the re-arm cut it); the
+    // next reads a block short of scans.
     let mut partial = full(&mut rng);
     partial.stalled(Stall::Overrun);
     let mut reader = Reader::new(fe, scans_per_tick);
-    let read = reader.inputs(&partial).unwrap();
+    assert_eq!(reader.inputs(&partial), Ok(Inputs::NONE));
+    let short = block(&fe, &scans[..3], 1.0, &mut rng);
+    let read = reader.inputs(&short).unwrap();
     assert!(read.stretch.is_some() && read.current_amps.is_some());
 }
 
@@ -724,8 +727,8 @@ fn the_adc_clock_in_use_bounds_the_conversions() {
 /// Random runs of blocks (full, short of a buffer, empty, stalled with or without samples,
 /// stalls bunched so that some repeat within the window) against the rule written out on its
 /// own: a stall within `STALL_REPEAT_SECONDS` of the last one recovered from is
-/// `Stalled`; any other stall is recovered from, and its tick and the next read whatever
-/// samples they hold; outside that grace an empty block is `NoSamples`; a block with samples
+/// `Stalled`; any other stall is recovered from, its tick reads nothing and the next whatever
+/// samples it holds; outside that grace an empty block is `NoSamples`; a block with samples
 /// reads every fitted channel, finite.
 #[test]
 fn random_runs_of_stalls_follow_the_rule() {
@@ -784,7 +787,13 @@ fn random_runs_of_stalls_follow_the_rule() {
                 }
                 None => {}
             }
-            if empty && t > grace_until {
+            if stall.is_some() {
+                assert_eq!(
+                    got,
+                    Ok(Inputs::NONE),
+                    "tick {t}: a stall's tick reads nothing"
+                );
+            } else if empty && t > grace_until {
                 assert_eq!(
                     got,
                     Err(InputError::NoSamples {

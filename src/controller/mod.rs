@@ -158,8 +158,11 @@ pub struct Controller {
 
     // State.
     state: State,
-    /// The trim's estimate of the device, once it has one (`set_estimate`).
-    estimate: Option<Device<f32>>,
+    /// The trim's estimate of the device, once it has one, in `estimates[estimate_at]`; the
+    /// other slot takes the next, copied into it outside the tick (`trim_done`), so the tick
+    /// that applies it only turns `estimate_at` (the tick's budget: a device is 92 bytes).
+    estimates: [Option<Device<f32>>; 2],
+    estimate_at: usize,
     /// Whether the estimate is the device flashed but for μ: the monitor then checks it on
     /// the flashed device's stretch terms (`Watch::stretch`). Worked out once, when it comes.
     estimate_shares_terms: bool,
@@ -202,7 +205,8 @@ impl Controller {
             state: State::Ramping {
                 then_measure: false,
             },
-            estimate: None,
+            estimates: [None, None],
+            estimate_at: 0,
             estimate_shares_terms: false,
             estimate_volts: f32::INFINITY,
             max_volts,
@@ -343,14 +347,21 @@ impl Controller {
     }
 
     /// The trim's estimate of the device from now on: the waiting result's (a `Retune`'s),
-    /// copied from it once (the tick's budget: a device is large), with its comparison
-    /// `trim_done` worked out.
+    /// copied into the spare slot by `trim_done` with its comparison worked out.
     #[cfg(feature = "trim")]
     fn take_estimate(&mut self) {
-        if let Some(TrimResult::Retune { device, .. }) = &self.trim.result {
-            self.estimate = Some(*device);
+        if let Some(TrimResult::Retune { .. }) = &self.trim.result {
+            self.estimate_at = 1 - self.estimate_at.min(1);
             self.estimate_shares_terms = self.trim.result_shares_terms;
         }
+    }
+
+    /// The trim's estimate of the device, once it has one.
+    #[cfg(any(feature = "probe", feature = "track"))]
+    fn estimate(&self) -> Option<&Device<f32>> {
+        self.estimates
+            .get(self.estimate_at)
+            .and_then(Option::as_ref)
     }
 
     /// No background job is wanted any more: a result of one handed out is dropped.
@@ -403,9 +414,8 @@ impl Controller {
         let commanded_volts = self.amplifier.volts(code);
         if let Some(stretch) = inputs.stretch {
             let stuck = self.settings.stuck_samples;
-            let estimate = self
-                .estimate
-                .as_ref()
+            let estimate = (self.estimates.get(self.estimate_at))
+                .and_then(Option::as_ref)
                 .map(|device| (device, self.estimate_shares_terms));
             if let Some(fault) =
                 self.watch
@@ -712,7 +722,15 @@ impl Controller {
         if self.job_wanted() && current && self.trim.result.is_none() {
             // The estimate's comparison with the device flashed here, outside the tick.
             self.trim.result_shares_terms = match &done.result {
-                TrimResult::Retune { device, .. } => device.differs_only_in_modulus(&self.flashed),
+                TrimResult::Retune { device, .. } => {
+                    // Into the spare slot, here (outside the tick): the tick that applies it
+                    // turns to it.
+                    let spare = 1 - self.estimate_at.min(1);
+                    if let Some(slot) = self.estimates.get_mut(spare) {
+                        *slot = Some(*device);
+                    }
+                    device.differs_only_in_modulus(&self.flashed)
+                }
                 _ => false,
             };
             self.trim.result = Some(done.result);

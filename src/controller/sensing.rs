@@ -115,7 +115,7 @@ impl Controller {
                 let device: &Device<f32> = if flashed {
                     &self.flashed
                 } else {
-                    self.estimate.as_ref()?
+                    self.estimate()?
                 };
                 let (from, to) = estimate.widened();
                 let stretch = if high { to } else { from };

@@ -91,7 +91,7 @@ impl Controller {
         // on the tick after.
         if tracker.observe(phase, stretch) {
             tracker.solve();
-            let device = self.estimate.as_ref().unwrap_or(&self.flashed);
+            let device = self.estimate().unwrap_or(&self.flashed);
             let force = drive_force_per_stretch(device, bias, self.plan.ac_volts);
             let gain = (1.0 / (drive_hz() * track_seconds)).min(1.0);
             self.tracking.fit_inputs = (force, gain);

@@ -343,6 +343,25 @@ fn charge_coulombs(p: &de_resonator::DeviceParams<f32>, stretch: f32, volts: f32
     p.capacitance_farads(stretch) * volts
 }
 
+/// The same tick had its block been short of a buffer (an interrupt late by one), or stalled
+/// and re-armed (its first stall, read in its grace), on copies of the reader: the dearer
+/// (apart from the cycle's loop, so as not to change how it is compiled).
+#[inline(never)]
+fn other_blocks(reader: &Reader, fe: &FrontEnd, readings: [f32; 3], k: u32) -> u32 {
+    let scans = 10;
+    let mut short = block_of(fe, readings, scans / 2, k);
+    let (mut copy, mut result) = (*reader, Ok(Inputs::NONE));
+    let n_short = count(1, || result = copy.inputs(black_box(&short)));
+    short.stalled(de_resonator::acquire::Stall::Overrun);
+    let mut copy = *reader;
+    let n_stalled = count(1, || result = copy.inputs(black_box(&short)));
+    if result.is_err() {
+        defmt::error!("the counted board's stalled block: {}", result);
+        exit(1)
+    }
+    n_short.max(n_stalled)
+}
+
 /// A whole trim cycle (ramp to the probe bias, hold, pulse, ring, solve, retune, ... to the AC
 /// drive), the reference device itself the plant (f32 RK4 between ticks, not counted) read
 /// through the board's front end (its block of ADC codes made between ticks, as the DMA's
@@ -420,6 +439,7 @@ fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
             defmt::error!("the counted board's block: {}", inputs);
             exit(1)
         };
+        let n_front_end = n_front_end.max(other_blocks(&reader, &fe, [amps, volts, stretch], k));
         let mut out = None;
         let n = count(1, || out = Some(c.tick(black_box(inputs))));
         let Some(mut sent) = out else { exit(1) };
@@ -495,7 +515,7 @@ fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
         worst_phase
     );
     defmt::info!(
-        "board tick with {=str}, worst over the cycle: {=u32} instructions (the block through the front end at most {=u32}, the DAC frame at most {=u32})",
+        "board tick with {=str}, worst over the cycle: {=u32} instructions (the block through the front end at most {=u32}, whole, short of a buffer or stalled, the DAC frame at most {=u32})",
         what,
         worst_board,
         worst_front_end,
