@@ -310,6 +310,11 @@ def cut_save(ref):
     line = fw.line()
     check(line.startswith("# ready ") and "settings=saved" in line,
           f"no reply to the cut save; the board boots again from a saved slot: {line}")
+    # The cut save had begun: the command task logged it (then erased for 2 s, replying only
+    # after its write), so the reset landed inside it, not before it.
+    with open(fw.log) as f:
+        saves = f.read().count('command: b"save"')
+    check(saves == 2, f"the board took both saves before the reset: {saves} in its log")
     reply = fw.ask("get slew_volts_per_second")
     check(reply == "ok slew_volts_per_second=20000",
           f"the last whole save in force, the cut one lost: {reply}")

@@ -38,8 +38,10 @@ pub const MAX_CONVERSIONS_HZ: f32 = 250_000.0;
 /// 16 MHz HSI fallback: 4 MHz) the limit scales with it ([`max_conversions_hz`]).
 pub const NOMINAL_ADC_CLOCK_HZ: f32 = 21.0e6;
 /// A second stall of the acquisition within this time of the last one it recovered from is a
-/// fault (`InputError::Stalled`); one alone is re-armed and counted, s.
-pub const STALL_REPEAT_SECONDS: f32 = 1.0;
+/// fault (`InputError::Stalled`); one alone is re-armed and counted, s. Ten of the leakage
+/// watch's windows (`LEAKAGE_WINDOW_SECONDS`): a stall's tick reads no current, which starts
+/// that watch's window again, so stalls it recovers from leave it whole windows between.
+pub const STALL_REPEAT_SECONDS: f32 = 10.0;
 /// Ticks from a recovered stall's whose block may lack a channel's samples (the buffers the
 /// re-arm lost): the stall's own tick reads nothing, the next reads what it holds, a channel
 /// with no sample nothing, not a fault.
@@ -307,7 +309,10 @@ impl FrontEnd {
 /// short of scans within the same means with a division more; any other block takes
 /// [`FrontEnd::inputs`], which names what is wrong (the tick's budget).
 /// At power-up, until the first sample comes, an empty block is no reading (for at most
-/// [`FIRST_BUFFER_TICKS`] ticks), not a fault.
+/// [`FIRST_BUFFER_TICKS`] ticks), not a fault. A block that says a stall (the firmware
+/// re-armed the ADC and its DMA) is counted and reads nothing, the next reads what it holds
+/// (a channel with no sample nothing); a second stall within [`STALL_REPEAT_SECONDS`], or
+/// two in one block, is [`InputError::Stalled`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Reader {
     front_end: FrontEnd,
@@ -419,8 +424,9 @@ impl Reader {
     /// `STALL_GRACE_TICKS - 1` whatever they hold), or, within `STALL_REPEAT_SECONDS` of the
     /// last, the fault.
     #[inline(never)]
-    fn on_stall(&mut self, stall: Stall) -> Result<(), InputError> {
-        if self.since_stall < self.repeat_ticks {
+    fn on_stall(&mut self, stall: Stall, stalls: u8) -> Result<(), InputError> {
+        // Two in one block: two within a tick.
+        if stalls > 1 || self.since_stall < self.repeat_ticks {
             return Err(InputError::Stalled {
                 stall,
                 recovered: self.recovered,
@@ -449,12 +455,13 @@ impl Reader {
     }
 
     /// The block's readings, as [`FrontEnd::inputs`] gives them (to rounding), checked; no
-    /// reading while the first sample has not come (at power-up, for a few ticks).
+    /// reading while the first sample has not come (at power-up, for a few ticks), nor at a
+    /// stall recovered from (see [`Reader`]).
     pub fn inputs(&mut self, block: &Block) -> Result<Inputs, InputError> {
         self.since_stall = self.since_stall.saturating_add(1);
         if let Some(stall) = block.stall {
             // The stall's own tick: its block lost codes to the re-arm; no reading.
-            self.on_stall(stall)?;
+            self.on_stall(stall, block.stalls)?;
             return Ok(Inputs::NONE);
         }
         let grace = self.grace > 0;
@@ -566,8 +573,10 @@ pub struct Block {
     current: Sums,
     amplifier: Sums,
     stretch: Sums,
-    /// The acquisition stalled and was re-armed since the last tick (the latest cause).
+    /// The acquisition stalled and was re-armed since the last tick (the latest cause), and
+    /// how many times.
     stall: Option<Stall>,
+    stalls: u8,
 }
 
 impl Block {
@@ -589,12 +598,14 @@ impl Block {
             highest: 0,
         },
         stall: None,
+        stalls: 0,
     };
 
     /// The acquisition stopped (`why`) and has been re-armed: the codes it lost are missing
     /// from this block. The firmware's recovery says it here; the tick's reader decides.
     pub fn stalled(&mut self, why: Stall) {
         self.stall = Some(why);
+        self.stalls = self.stalls.saturating_add(1);
     }
 
     fn sums(&mut self, channel: Channel) -> &mut Sums {

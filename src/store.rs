@@ -271,7 +271,8 @@ pub struct FlashKeeper<F> {
     pub log: Option<Range<u32>>,
     /// Whether an erase stalls the chip (its code runs from this flash bank, for longer than
     /// the watchdog waits): the log then erases only at boot (`Keeper::prepare_faults`), never
-    /// while running. RAM: `false`.
+    /// while running, and `save` and `faults clear` wait for rest at 0 V. The chip, and the
+    /// firmware's QEMU stand-in that stalls as the chip does: `true`; host-sim's RAM: `false`.
     pub erase_stalls: bool,
 }
 

@@ -741,15 +741,15 @@ fn random_runs_of_stalls_follow_the_rule() {
     let full = block(&fe, &scans, 1.0, &mut rng);
     let short = block(&fe, &scans[..5], 1.0, &mut rng);
     let (mut stalls, mut faults) = (0, 0);
-    for _ in 0..40 {
+    for _ in 0..20 {
         let mut reader = Reader::new(fe, scans_per_tick);
         assert!(reader.inputs(&full).is_ok());
         let mut last_recovered: Option<i64> = None;
         let mut grace_until = -1i64;
         let mut run_recovered = 0u32;
-        // Stalls about every 0.2 s to 3 s: some repeat within the window, some do not.
-        let every = rng.range(200.0, 3000.0);
-        for t in 1..6000i64 {
+        // Stalls about every 2 s to 20 s: some repeat within the window, some do not.
+        let every = rng.range(2_000.0, 20_000.0);
+        for t in 1..40_000i64 {
             let mut b = match rng.below(20) {
                 0 => short,
                 1 => Block::EMPTY,
@@ -814,7 +814,49 @@ fn random_runs_of_stalls_follow_the_rule() {
         assert_eq!(reader.recovered(), run_recovered);
     }
     assert!(
-        stalls > 50 && faults > 10,
+        stalls > 40 && faults > 10,
         "{stalls} recovered, {faults} faults"
+    );
+}
+
+/// The repeat window's edge: a second stall `repeat_ticks − 1` ticks after the first is the
+/// fault, one `repeat_ticks` after is recovered from; two stalls in one block are the fault.
+#[test]
+fn the_repeat_windows_edge_and_two_stalls_in_a_block() {
+    use de_resonator::acquire::{Reader, Stall, STALL_REPEAT_SECONDS};
+    let fe = front_end(1e-3);
+    let scans_per_tick = fe.check(TICK_HZ as f32).unwrap();
+    let repeat_ticks = (f64::from(STALL_REPEAT_SECONDS) * TICK_HZ) as usize;
+    let scans = plant_scans(6000.0, SCANS_PER_TICK);
+    let mut rng = Rng(23);
+    let full = block(&fe, &scans, 1.0, &mut rng);
+    let mut stalled = Block::EMPTY;
+    stalled.stalled(Stall::Overrun);
+    for (gap, faults) in [(repeat_ticks - 1, true), (repeat_ticks, false)] {
+        let mut reader = Reader::new(fe, scans_per_tick);
+        assert!(reader.inputs(&full).is_ok());
+        assert_eq!(reader.inputs(&stalled), Ok(Inputs::NONE));
+        // The stall's tick, then gap − 1 ticks: the next stall `gap` ticks after the first.
+        for _ in 1..gap {
+            assert!(reader.inputs(&full).is_ok());
+        }
+        let got = reader.inputs(&stalled);
+        assert_eq!(
+            got.is_err(),
+            faults,
+            "a second stall {gap} ticks on: {got:?}"
+        );
+    }
+    let mut twice = Block::EMPTY;
+    twice.stalled(Stall::Overrun);
+    twice.stalled(Stall::TransferError);
+    let mut reader = Reader::new(fe, scans_per_tick);
+    assert!(reader.inputs(&full).is_ok());
+    assert_eq!(
+        reader.inputs(&twice),
+        Err(InputError::Stalled {
+            stall: Stall::TransferError,
+            recovered: 0
+        })
     );
 }

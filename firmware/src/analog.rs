@@ -164,11 +164,10 @@ impl Acquisition {
     }
 
     /// The DMA's interrupt (a buffer full, or a transfer error) or the ADC's (an overrun).
-    /// A stall first: the stream and the ADC's requests re-armed, the stall said to `block`
-    /// (the core's reader recovers from one and faults on a repeat). Else a full buffer: the
-    /// spare to the stream, the full one's scans to `block`, kept as the next spare. An
-    /// interrupt late by a whole buffer loses that buffer (a tick takes fewer scans: its
-    /// checked path reads them).
+    /// A stall first: the stream and the ADC re-armed, the stall said to `block` (the core's
+    /// reader recovers from one and faults on a repeat). Else a full buffer: the spare to the
+    /// stream, the full one's scans to `block`, kept as the next spare. An interrupt too late
+    /// for the buffer switch (the HAL's overrun: the stream stopped) is a stall too.
     pub fn on_interrupt(&mut self, block: &mut Block) {
         if let Some(why) = self.stall() {
             self.rearm();
@@ -213,19 +212,32 @@ impl Acquisition {
         }
     }
 
-    /// Re-arm after a stall (RM0090 §13.8.1): the stream stopped and its flags cleared, the
-    /// ADC's overrun flag cleared and its DMA requests re-enabled, the stream started again on
-    /// its two buffers; TIM2 triggers the next scan.
+    /// Re-arm after a stall (RM0090 §13.8.1, using the DMA: overrun recovery): the ADC off (ADON cleared: its scan
+    /// starts again at the first channel, so the codes stay in their channels' places) and its
+    /// DMA requests off; the stream stopped, its flags cleared; the ADC's flags cleared (OVR
+    /// among them, written 0; the ADC is off, so none comes back at once); the stream set up
+    /// again on its two buffers and enabled, then the ADC's DMA requests on, then the ADC on
+    /// (its 3 µs start-up before TIM2's next trigger, 100 µs apart at 10 kHz).
     fn rearm(&mut self) {
-        let Some(transfer) = self.transfer.take() else {
+        let Some(mut transfer) = self.transfer.take() else {
             return;
         };
-        let (stream, mut adc, a, b) = transfer.release();
-        adc1().sr().modify(|_, w| w.ovr().clear_bit());
-        adc.set_dma(Dma::Disabled);
-        adc.set_dma(Dma::Continuous);
+        transfer.pause(|adc| {
+            adc.disable();
+            adc.set_dma(Dma::Disabled);
+        });
+        let (stream, adc, a, b) = transfer.release();
+        // rc_w0 flags: a write of 0 clears each, and the ADC is off.
+        adc1()
+            .sr()
+            .write(|w| w.ovr().clear_bit().eoc().clear_bit().strt().clear_bit());
         let mut transfer = Transfer::init_peripheral_to_memory(stream, adc, a, b, self.dma);
-        transfer.start(|adc| adc.enable());
+        transfer.start(|adc| {
+            adc.set_dma(Dma::Continuous);
+            adc.enable();
+        });
+        // t_STAB, 3 µs at most (datasheet), at 168 MHz.
+        cortex_m::asm::delay(504);
         self.transfer = Some(transfer);
     }
 }

@@ -43,14 +43,18 @@ impl Dog {
 
 /// Run `erase`, a flash erase that stalls every fetch (the tick's too) for seconds, with the
 /// IWDG's window lengthened past it (prescaler /256, reload 0xFFF: `STALL_WINDOW_MS` at the
-/// shortest), then the window it had restored and the dog fed. Harmless before the dog
-/// starts (a reload does not start it).
+/// shortest), then the window it had restored and the dog fed. Before the dog has started
+/// (the boot's erases, a board refusing after a watchdog reset) there is nothing to lengthen.
 #[cfg(not(feature = "qemu"))]
 pub fn through_stall<R>(erase: impl FnOnce() -> R) -> R {
-    let before = iwdg::window();
-    iwdg::set_window(iwdg::STALL_PRESCALER, iwdg::STALL_RELOAD);
+    let before = STARTED
+        .load(core::sync::atomic::Ordering::Relaxed)
+        .then(iwdg::window)
+        .flatten();
+    let lengthened =
+        before.is_some() && iwdg::set_window(iwdg::STALL_PRESCALER, iwdg::STALL_RELOAD);
     let done = erase();
-    if let Some((prescaler, reload)) = before {
+    if let (Some((prescaler, reload)), true) = (before, lengthened) {
         iwdg::set_window(prescaler, reload);
     }
     done
@@ -89,27 +93,36 @@ mod iwdg {
         settled(r).then(|| (r.pr().read().pr().bits(), r.rlr().read().rl().bits()))
     }
 
-    /// Set the window, then reload the counter with it.
-    pub fn set_window(prescaler: u8, reload: u16) {
+    /// Set the window, then reload the counter with it; whether the update completed (if
+    /// not, the counter is reloaded all the same, with the window in force).
+    pub fn set_window(prescaler: u8, reload: u16) -> bool {
         cortex_m::interrupt::free(|_| {
             let r = registers();
             // SAFETY (the key, the prescaler): any 16-bit key and any 3-bit prescaler are
             // values the register takes.
             r.kr().write(|w| unsafe { w.key().bits(KEY_ACCESS) });
-            let _ = settled(r);
-            r.pr().write(|w| unsafe { w.pr().bits(prescaler) });
-            r.rlr().write(|w| w.rl().set(reload));
-            let _ = settled(r);
+            let done = settled(r) && {
+                r.pr().write(|w| unsafe { w.pr().bits(prescaler) });
+                r.rlr().write(|w| w.rl().set(reload));
+                settled(r)
+            };
             r.kr().write(|w| unsafe { w.key().bits(KEY_RELOAD) });
-        });
+            done
+        })
     }
 }
+
+/// Whether the IWDG has been started: before that its clock (the LSI) is off, so a window
+/// update would never complete, and would only land, wrong, at the start.
+#[cfg(not(feature = "qemu"))]
+static STARTED: core::sync::atomic::AtomicBool = core::sync::atomic::AtomicBool::new(false);
 
 #[cfg(not(feature = "qemu"))]
 impl Watchdog for Dog {
     fn start(&mut self, timeout_ms: u32) {
         use stm32f4xx_hal::prelude::*;
         self.0.start(timeout_ms.millis());
+        STARTED.store(true, core::sync::atomic::Ordering::Relaxed);
     }
 
     fn feed(&mut self) {

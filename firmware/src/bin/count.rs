@@ -152,17 +152,17 @@ fn main() -> ! {
             fe.fitted().count(),
             n
         );
-        // A block short of a buffer (an interrupt late by one): the checked path.
+        // A block short of a buffer (an interrupt late by one, the tick after a stall).
         let short = block_of(&fe, [1e-6, 7450.0, 2.19], 5, 0);
         let n = count(1000, || {
             let _ = black_box(reader.inputs(black_box(&short)));
         });
         defmt::info!(
-            "the block of a tick short of a buffer, through the front end's checked path ({=usize} channels): {=u32} instructions",
+            "the block of a tick short of a buffer, through the front end (by its mean; {=usize} channels): {=u32} instructions",
             fe.fitted().count(),
             n
         );
-        // A stall re-armed before the tick (its first: recovered, read in its grace).
+        // A stall re-armed before the tick (its first: recovered, its tick reads nothing).
         let mut stalled = short;
         stalled.stalled(de_resonator::acquire::Stall::Overrun);
         let mut fresh = Reader::new(fe, 10);
@@ -343,9 +343,10 @@ fn charge_coulombs(p: &de_resonator::DeviceParams<f32>, stretch: f32, volts: f32
     p.capacitance_farads(stretch) * volts
 }
 
-/// The same tick had its block been short of a buffer (an interrupt late by one), or stalled
-/// and re-armed (its first stall, read in its grace), on copies of the reader: the dearer
-/// (apart from the cycle's loop, so as not to change how it is compiled).
+/// The same tick had its block been short of a buffer (an interrupt late by one, the tick
+/// after a stall), or stalled and re-armed (its first stall: its tick reads nothing), on
+/// copies of the reader: the dearer (apart from the cycle's loop, so as not to change how it
+/// is compiled).
 #[inline(never)]
 fn other_blocks(reader: &Reader, fe: &FrontEnd, readings: [f32; 3], k: u32) -> u32 {
     let scans = 10;

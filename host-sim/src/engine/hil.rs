@@ -1033,6 +1033,9 @@ pub struct CoreBoard<'w> {
     logic: board::Board<'w, NoKeeper>,
     /// The last tick's readings, for `status`.
     readings: Inputs,
+    /// The acquisition's stalls the reader recovered from (a stalled tick it read), for
+    /// `status`, as the firmware counts them.
+    stalls_recovered: u32,
     stage: OutputStage<&'w SimulatedDac, &'w EnableLine>,
     booted: Booted,
     refusal: Option<String>,
@@ -1058,6 +1061,7 @@ impl<'w> CoreBoard<'w> {
             slot,
             logic,
             readings: Inputs::NONE,
+            stalls_recovered: 0,
             stage,
             booted,
             refusal,
@@ -1079,10 +1083,13 @@ impl LoopBoard for CoreBoard<'_> {
         &mut self,
         k: u64,
         inputs: Result<Inputs, InputError>,
-        _: Samples,
+        samples: Samples,
         _: &[u16],
     ) -> Result<(Observed, String), String> {
         self.readings = inputs.unwrap_or(Inputs::NONE);
+        if let (Samples::Codes { stall: Some(_) }, Ok(_)) = (samples, &inputs) {
+            self.stalls_recovered += 1;
+        }
         let ticked = board::tick::drive(&mut self.slot, &mut self.stage, inputs);
         if ticked.is_some_and(|t| t.job_wanted) {
             let slot = &mut self.slot;
@@ -1134,6 +1141,7 @@ impl LoopBoard for CoreBoard<'_> {
         let extras = Extras {
             readings: self.readings,
             stream_port: true,
+            stalls_recovered: self.stalls_recovered,
             ..Extras::default()
         };
         let mut reply = ReplyLine::new();
