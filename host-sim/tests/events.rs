@@ -179,12 +179,23 @@ fn a_crossing_between_samples_is_located_to_a_nanosecond() {
     assert_eq!(f(&report["steps"]), 6.0);
 }
 
-/// The stiff reference finds the same crossing between its samples, through a quintic on its
-/// own samples eight times as dense: to its tolerance's level (1e-10 a step).
+/// The stiff reference, Radau, finds the same crossing between its samples, through its
+/// collocation polynomial between its steps: to its tolerance's level (1e-10 a step).
+#[test]
+fn radau_locates_the_crossing_between_samples_too() {
+    stiff_locates_the_crossing("reference-radau");
+}
+
+/// BDF (the `bdf` feature) finds it too, through a quintic on its own samples eight times as
+/// dense.
 #[test]
 #[cfg_attr(not(feature = "bdf"), ignore = "BDF: --features bdf")]
 fn bdf_locates_the_crossing_between_samples_too() {
-    let (report, here, _) = crossing_run("reference-bdf");
+    stiff_locates_the_crossing("reference-bdf");
+}
+
+fn stiff_locates_the_crossing(method: &str) {
+    let (report, here, _) = crossing_run(method);
     let (t, mode, stretch, _) = here.first.unwrap();
     let first = &report["first_limit"];
     assert_eq!(first["mode"], mode, "{report}");

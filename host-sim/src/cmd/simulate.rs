@@ -52,8 +52,9 @@ pub struct SimulateArgs {
     pub start: Start,
     /// The integrator: a reference (adaptive, f64) or a core fixed-step method.
     ///
-    /// `reference` (adaptive DOP853, rtol = atol = 1e-12, f64), `reference-bdf` (adaptive
-    /// BDF at 1e-10, for stiff scenes) or a core fixed-step method: rk4, verlet,
+    /// `reference` (adaptive DOP853, rtol = atol = 1e-12, f64), `reference-radau` (adaptive
+    /// Radau IIA 5 at 1e-10, for stiff scenes), `reference-bdf` (adaptive BDF at 1e-10, with
+    /// `--features bdf`) or a core fixed-step method: rk4, verlet,
     /// implicit-midpoint, each with -f32 (as on the target) or -f64.
     #[arg(long, value_name = "M", value_enum, default_value_t = Choice::Reference, hide_possible_values = true)]
     pub method: Choice,
@@ -70,7 +71,7 @@ pub struct SimulateArgs {
     pub step_seconds: Option<f64>,
     /// The reference's relative tolerance.
     ///
-    /// Default: 1e-12 (`reference`), 1e-10 (`reference-bdf`).
+    /// Default: 1e-12 (`reference`), 1e-10 (`reference-radau`, `reference-bdf`).
     #[arg(long, value_name = "R", allow_negative_numbers = true)]
     pub rtol: Option<f64>,
     /// The reference's absolute tolerance (on the stretch, and on its rate in the model's time
@@ -133,7 +134,7 @@ pub struct SimulateReport {
     pub device: DeviceInfo,
     pub inputs: Inputs,
     pub method: &'static str,
-    /// The adaptive solver that ran (`null` for a core method): `bdf` when the reference
+    /// The adaptive solver that ran (`null` for a core method): `radau` when the reference
     /// found the scene stiff for DOP853, with `solver_note` saying so.
     pub solver: Option<&'static str>,
     pub solver_note: Option<String>,

@@ -886,9 +886,13 @@ mod tests {
                 ..REFERENCE_DEVICE
             },
         ];
-        // The scenes' DOP853; BDF (the stiff plants' solver, looser) where built in.
+        // The scenes' DOP853; Radau (the stiff plants' solver, looser: its turns' rate, the
+        // quintic's through a step a tick long, to 3e-6); BDF where built in.
         // The turn's rate is the quintic's through a step a tick long: near zero, to 1e-6.
-        let mut solvers = vec![(Solver::Dop853, [2e-9, 2e-9, 2e-9, 2e-9, 1e-6])];
+        let mut solvers = vec![
+            (Solver::Dop853, [2e-9, 2e-9, 2e-9, 2e-9, 1e-6]),
+            (Solver::Radau, [1e-6, 1e-6, 1e-6, 1e-6, 3e-6]),
+        ];
         if cfg!(feature = "bdf") {
             solvers.push((Solver::Bdf, [1e-6; 5]));
         }

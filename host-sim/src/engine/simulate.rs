@@ -21,7 +21,8 @@ use differential_equations::solout::Solout;
 /// Relative and absolute tolerance of the reference integrator.
 pub const REFERENCE_TOLERANCE: f64 = 1e-12;
 
-/// Tolerance of the stiff reference (BDF, orders 1 to 5): tighter costs many tiny steps.
+/// Tolerance of the stiff references (Radau IIA 5; BDF, orders 1 to 5): tighter costs many
+/// tiny steps.
 pub const STIFF_REFERENCE_TOLERANCE: f64 = 1e-10;
 
 /// Events (the first crossing of a check) are located to this, s.
@@ -35,14 +36,18 @@ const BDF_EVENT_SUBDIVISION: usize = 8;
 /// The most samples a run keeps (two f64 each, and as many monitor checks): 16 M, 256 MB.
 pub const MAX_SAMPLES: f64 = 16.0 * 1024.0 * 1024.0;
 
-/// An adaptive f64 solver from `differential-equations` (in scenes: `dop853` or `bdf`).
+/// An adaptive f64 solver (in scenes: `dop853`, `radau` or `bdf`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Solver {
     /// Dormand–Prince 8(5,3), explicit: the reference for non-stiff scenes.
     Dop853,
-    /// Backward differentiation formulas, implicit: for stiff scenes (a very light bar,
-    /// a membrane near slack), where DOP853's step is bound by stability, not accuracy.
+    /// Radau IIA of order 5 (Hairer's RADAU5, `differential-equations`), implicit: the stiff
+    /// reference in every build, for scenes (a very light bar, a membrane near slack, a fast
+    /// viscous branch) where DOP853's step is bound by stability, not accuracy.
+    Radau,
+    /// Backward differentiation formulas (diffsol, the `bdf` feature), implicit: a second
+    /// stiff method to compare.
     Bdf,
 }
 
@@ -61,7 +66,9 @@ pub enum Start {
 pub enum Choice {
     /// Adaptive DOP853 at rtol = atol = 1e-12, f64.
     Reference,
-    /// Adaptive BDF at rtol = atol = 1e-10, f64: the stiff reference.
+    /// Adaptive Radau IIA 5 at rtol = atol = 1e-10, f64: the stiff reference.
+    ReferenceRadau,
+    /// Adaptive BDF at rtol = atol = 1e-10, f64 (the `bdf` feature).
     ReferenceBdf,
     /// A core fixed-step method, in f32 (as on the target) or f64.
     Core { method: Method, single: bool },
@@ -69,8 +76,9 @@ pub enum Choice {
 
 impl Choice {
     /// Every method: the references, then each core method in f32 and f64.
-    pub const ALL: [Choice; 8] = [
+    pub const ALL: [Choice; 9] = [
         Choice::Reference,
+        Choice::ReferenceRadau,
         Choice::ReferenceBdf,
         Choice::Core {
             method: Method::Rk4,
@@ -106,11 +114,12 @@ impl Choice {
             .collect()
     }
 
-    /// Its name: `reference`, `reference-bdf`, and `rk4`, `verlet`, `implicit-midpoint` with
-    /// `-f32` or `-f64`.
+    /// Its name: `reference`, `reference-radau`, `reference-bdf`, and `rk4`, `verlet`,
+    /// `implicit-midpoint` with `-f32` or `-f64`.
     pub fn name(&self) -> &'static str {
         match self {
             Choice::Reference => "reference",
+            Choice::ReferenceRadau => "reference-radau",
             Choice::ReferenceBdf => "reference-bdf",
             Choice::Core { method, single } => match (method, single) {
                 (Method::Rk4, true) => "rk4-f32",
@@ -129,6 +138,7 @@ impl Choice {
     pub fn solver(self) -> Option<Solver> {
         match self {
             Choice::Reference => Some(Solver::Dop853),
+            Choice::ReferenceRadau => Some(Solver::Radau),
             Choice::ReferenceBdf => Some(Solver::Bdf),
             Choice::Core { .. } => None,
         }
@@ -140,6 +150,7 @@ impl Solver {
     pub fn name(self) -> &'static str {
         match self {
             Solver::Dop853 => "dop853",
+            Solver::Radau => "radau",
             Solver::Bdf => "bdf",
         }
     }
@@ -148,7 +159,7 @@ impl Solver {
     pub fn default_tolerance(self) -> Tolerance {
         Tolerance::both(match self {
             Solver::Dop853 => REFERENCE_TOLERANCE,
-            Solver::Bdf => STIFF_REFERENCE_TOLERANCE,
+            Solver::Radau | Solver::Bdf => STIFF_REFERENCE_TOLERANCE,
         })
     }
 }
@@ -285,16 +296,18 @@ pub fn simulate(scene: &OpenLoop, choice: Choice, step_seconds: f64) -> Result<O
     let start = scene.start_stretch(&device)?;
     let started = Instant::now();
     let mut outcome = match choice {
-        // DOP853's stiffness test (Hairer's) hands a stiff scene to BDF, as LSODA would.
+        // DOP853's stiffness test (Hairer's) hands a stiff scene to Radau, as LSODA would to
+        // its BDF.
         Choice::Reference => match reference(scene, &device, start, step_seconds, Solver::Dop853) {
             Err(why) if why.starts_with(STIFF_FOR_DOP853) => {
-                let mut out = reference(scene, &device, start, step_seconds, Solver::Bdf)
+                let mut out = reference(scene, &device, start, step_seconds, Solver::Radau)
                     .map_err(|e| format!("{why}; {e}"))?;
-                out.switched = Some("DOP853 found the scene stiff; solved by BDF".into());
+                out.switched = Some("DOP853 found the scene stiff; solved by Radau".into());
                 out
             }
             done => done?,
         },
+        Choice::ReferenceRadau => reference(scene, &device, start, step_seconds, Solver::Radau)?,
         Choice::ReferenceBdf => reference(scene, &device, start, step_seconds, Solver::Bdf)?,
         Choice::Core {
             method,
@@ -579,14 +592,18 @@ impl Solver {
             _ => return Err("a solve needs an end after its start".into()),
         };
         let ys = match self {
-            Solver::Dop853 => {
+            Solver::Dop853 | Solver::Radau => {
                 let mut samples = Samples {
                     times,
                     ys: Vec::with_capacity(times.len()),
                     failed: None,
                     on_step,
                 };
-                let (end, _) = dop853(ode, t0, t1, y, tolerance, 0.0, true, &mut samples)?;
+                let (end, _) = if self == Solver::Radau {
+                    radau(ode, t0, t1, y, tolerance, 0.0, &mut samples)?
+                } else {
+                    dop853(ode, t0, t1, y, tolerance, 0.0, true, &mut samples)?
+                };
                 if let Some(why) = samples.failed {
                     return Err(why);
                 }
@@ -687,6 +704,15 @@ impl Solver {
                     rate: None,
                 })
             }
+            Solver::Radau => {
+                let mut first = FirstStep(None, on_step);
+                let (end, next) = radau(ode, t0, t1, y, tolerance, h0, &mut first)?;
+                Ok(Advanced {
+                    y: end,
+                    first_step: first.0.map_or(next, |h| 1.25 * h),
+                    rate: None,
+                })
+            }
             Solver::Bdf => {
                 let (ys, h) = bdf(ode, y, &[t0, t1], tolerance, h0)?;
                 let end = ys.last().copied().ok_or("no state returned")?;
@@ -748,8 +774,8 @@ impl<const N: usize> Solout<f64, [f64; N]> for FirstStep<'_, '_, N> {
 pub const STIFF_FOR_DOP853: &str = "stiff for DOP853";
 
 /// DOP853's refusal of a stiff problem.
-const STIFF: &str = "stiff for DOP853 (Hairer's test): use BDF (`--method reference-bdf`, or \
-                     `solver = \"bdf\"` in a scene's [plant])";
+const STIFF: &str = "stiff for DOP853 (Hairer's test): use Radau (`--method reference-radau`, \
+                     or `solver = \"radau\"` in a scene's [plant])";
 
 /// A solve whose step fell to nothing.
 const STEP_SIZE_FELL: &str =
@@ -785,6 +811,42 @@ fn dop853<const N: usize, F: ODE<f64, [f64; N]>, O: Solout<f64, [f64; N]>>(
     })?;
     Ok((*method.y(), method.h()))
 }
+
+/// Radau IIA 5 (differential-equations' RADAU5: three stages, simplified Newton on a
+/// finite-difference Jacobian, Hairer's step control) from `t0` to `t1`, `solout` seeing every
+/// step with its dense output (the collocation polynomial): the state at the end and the next
+/// step. `h0` 0 estimates the first step.
+fn radau<const N: usize, F: ODE<f64, [f64; N]>, O: Solout<f64, [f64; N]>>(
+    ode: &F,
+    t0: f64,
+    t1: f64,
+    y: [f64; N],
+    Tolerance { rtol, atol }: Tolerance,
+    h0: f64,
+    solout: &mut O,
+) -> Result<([f64; N], f64), String> {
+    // RADAU5 controls its error at rtol' = 0.1·rtol^(2/3), atol' = atol·rtol'/rtol (Hairer's
+    // code, and this one): the tolerances asked for are handed over so that rtol' and atol'
+    // are them, down to its floor (rtol above 10 ulp: rtol' 1e-11). Newton's tolerance from
+    // them, as RADAU5 sets FNEWT (0 asks for it; the library's fixed 3e-3 stops Newton short).
+    let handed = |rtol: f64| (10.0 * rtol).powf(1.5).max(RADAU_RTOL_FLOOR);
+    let (inner_rtol, inner_atol) = (handed(rtol), atol * handed(rtol) / rtol);
+    let mut method = ImplicitRungeKutta::radau5()
+        .rtol(inner_rtol)
+        .atol(inner_atol)
+        .h0(h0)
+        .newton_tol(0.0)
+        .max_steps(usize::MAX);
+    solve_ode(&mut method, ode, t0, t1, &y, solout).map_err(|e| match e {
+        SolveError::StepSize { .. } => STEP_SIZE_FELL.to_string(),
+        SolveError::BadInput { msg } => msg,
+        e => format!("Radau stopped: {e:?}"),
+    })?;
+    Ok((*method.y(), method.h()))
+}
+
+/// The least relative tolerance RADAU5 takes (more than 10 × its unit roundoff, 1e-16).
+const RADAU_RTOL_FLOOR: f64 = 2e-15;
 
 /// diffsol's BDF (variable order 1 to 5, as SciPy's `BDF` and MATLAB's ode15s) over `times`
 /// (from `times[0]`, where the state is `y`): the states at `times[1..]` from its dense
@@ -869,8 +931,9 @@ fn bdf<const N: usize, F: ODE<f64, [f64; N]>>(
 }
 
 /// What a BDF solve says in a build without the `bdf` feature.
-pub const BDF_NOT_BUILT: &str = "BDF (the stiff reference) is not in this build: build host-sim \
-     with `--features bdf` (cargo run --release -p host-sim --features bdf -- ...)";
+pub const BDF_NOT_BUILT: &str = "BDF is not in this build (Radau, `reference-radau` or \
+     `solver = \"radau\"`, is the stiff method in every build): build host-sim with \
+     `--features bdf` (cargo run --release -p host-sim --features bdf -- ...)";
 
 fn reference(
     scene: &OpenLoop,
@@ -890,8 +953,9 @@ fn reference(
         |tau: f64, y: &[f64; 2]| device.first_failure(y[0], drive.bias_dimless_squared_at(tau));
     let key = |y: &[f64; 2]| (y[0], y[1]);
     let ys = match solver {
-        // DOP853's 7th-order dense output between its own steps.
-        Solver::Dop853 => {
+        // DOP853's 7th-order dense output between its own steps; Radau's collocation
+        // polynomial between its own.
+        Solver::Dop853 | Solver::Radau => {
             let mut on_step = |a, b, at: &mut dyn FnMut(f64) -> [f64; 2]| {
                 watch.step(a, b, at, key, fails);
             };
@@ -1014,11 +1078,18 @@ mod tests {
         assert!(worst < 1e-10, "{worst}");
     }
 
-    /// The stiff reference (BDF at 1e-10) against DOP853 at 1e-12 on a driven scene and on a
-    /// light bar (ω 30 times the reference's): a second method agreeing to its tolerance.
+    /// The stiff methods (Radau IIA 5 in every build, BDF where built, each at 1e-10) against
+    /// DOP853 at 1e-12 on a driven scene and on a light bar (ω 30 times the reference's): a
+    /// second method agreeing to its tolerance.
     #[test]
-    #[cfg_attr(not(feature = "bdf"), ignore = "BDF: --features bdf")]
-    fn bdf_agrees_with_dop853() {
+    fn stiff_methods_agree_with_dop853() {
+        stiff_agrees_with_dop853(Solver::Radau);
+        if cfg!(feature = "bdf") {
+            stiff_agrees_with_dop853(Solver::Bdf);
+        }
+    }
+
+    fn stiff_agrees_with_dop853(solver: Solver) {
         let light = DeviceParams {
             bar_mass: 0.0,
             density: 9.6,
@@ -1033,14 +1104,19 @@ mod tests {
             let drive = Drive::from_volts(&device, bias, ac, hz);
             let y0 = [device.stretch_for_bias(bias, 3.0).unwrap(), 0.0];
             let (end, every) = (seconds * scale, seconds / 50.0 * scale);
-            let (bdf, dop853) = (Tolerance::both(1e-10), Tolerance::both(1e-12));
-            let stiff = solve(Solver::Bdf, &device, drive, y0, end, every, bdf).unwrap();
+            let (own, dop853) = (solver.default_tolerance(), Tolerance::both(1e-12));
+            let stiff = solve(solver, &device, drive, y0, end, every, own).unwrap();
             let accurate = solve(Solver::Dop853, &device, drive, y0, end, every, dop853).unwrap();
             let swing = accurate.iter().map(|y| y[0]).fold(0.0, f64::max)
                 - accurate.iter().map(|y| y[0]).fold(f64::INFINITY, f64::min);
             assert!(swing > 1e-3, "the scene moves: {swing}");
             for (a, b) in stiff.iter().zip(&accurate) {
-                assert!((a[0] - b[0]).abs() < 1e-6 * swing, "{} vs {}", a[0], b[0]);
+                assert!(
+                    (a[0] - b[0]).abs() < 1e-6 * swing,
+                    "{solver:?}: {} vs {}",
+                    a[0],
+                    b[0]
+                );
             }
         }
     }
@@ -1057,7 +1133,11 @@ mod tests {
         let y0 = [device.stretch_for_bias(7000.0, 3.0).unwrap(), 0.0];
         // Samples at an awkward spacing, off the solver's steps.
         let (end, every) = (0.5 * scale, 0.5 / 731.0 * scale);
-        let solvers = [(Solver::Dop853, 1e-12, 1e-10), (Solver::Bdf, 1e-10, 1e-7)];
+        let solvers = [
+            (Solver::Dop853, 1e-12, 1e-10),
+            (Solver::Radau, STIFF_REFERENCE_TOLERANCE, 1e-7),
+            (Solver::Bdf, 1e-10, 1e-7),
+        ];
         for (solver, tol, within) in solvers.into_iter().filter(built) {
             let tolerance = Tolerance::both(tol);
             let dense = solve(solver, &device, drive, y0, end, every, tolerance).unwrap();
@@ -1128,7 +1208,11 @@ mod tests {
         let (straight, _) = Solver::Dop853
             .advance(&motion, 0.0, 0.5 * scale, y0, Tolerance::both(1e-13), None)
             .unwrap();
-        for choice in [Choice::Reference, Choice::ReferenceBdf] {
+        for choice in [
+            Choice::Reference,
+            Choice::ReferenceRadau,
+            Choice::ReferenceBdf,
+        ] {
             if choice == Choice::ReferenceBdf && !cfg!(feature = "bdf") {
                 continue;
             }
@@ -1196,6 +1280,6 @@ mod tests {
         }
         assert!(Choice::from_str("euler", false).is_err());
         let names: Vec<&str> = Choice::value_variants().iter().map(Choice::name).collect();
-        assert!(names.contains(&"rk4-f32") && names.len() == 8);
+        assert!(names.contains(&"reference-radau") && names.len() == 9);
     }
 }

@@ -238,7 +238,7 @@ fn run_case(case: &Case) -> Result<CaseReport, String> {
         tolerance: None,
     };
     let solver = if case.stiff {
-        Choice::ReferenceBdf
+        Choice::ReferenceRadau
     } else {
         Choice::Reference
     };
