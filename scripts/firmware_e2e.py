@@ -376,10 +376,18 @@ def main():
     time.sleep(0.2)
     fw.send(b"tus\n")
     check(fw.line().startswith("ok phase=driving"), "a request sent in two halves is one request")
+    # A serial terminal's Enter: `\r` ends a request; `\r\n` ends one, not two (an empty
+    # second line would be answered `err 1` before the next request's reply).
+    fw.send(b"status\r")
+    check(fw.line().startswith("ok phase=driving"), "a request ended by a terminal's \\r")
+    fw.send(b"status\r\nstatus\n")
+    replies = [fw.line(), fw.line()]
+    check(all(r.startswith("ok phase=driving") for r in replies),
+          f"\\r\\n ends one request: {[r[:20] for r in replies]}")
     # Garbage and a 10 kB flood: each line gets exactly one `err`, nothing is misread.
     rng = random.Random(7)
-    lines = [bytes(rng.choice(range(0, 256)) for _ in range(rng.randint(1, 60))).replace(b"\n", b"")
-             for _ in range(40)]
+    lines = [bytes(rng.choice(range(0, 256)) for _ in range(rng.randint(1, 60)))
+             .replace(b"\n", b"").replace(b"\r", b"") for _ in range(40)]
     lines += [b"x" * 300, b"target", b"target 4.4.4", b"set margin", b"get nothing", b"\xff\xfe"]
     words = [b"tar", b"get", b"44", b"stop", b"ac", b"1e9", b"clear", b"-", b" "]
     flood = []

@@ -866,3 +866,60 @@ fn a_save_on_a_chip_waits_for_rest() {
         }
     }
 }
+
+/// The bytes a terminal or a program sends, into lines: a line ends at `\n` (a program), `\r`
+/// (a serial terminal's Enter: picocom, minicom, PuTTY) or `\r\n` (one end, not two); Enter
+/// on nothing is an empty line (answered, not waited on); an overlong line is one `TooLong`
+/// at its end, whatever ends it.
+#[test]
+fn lines_end_at_a_line_feed_a_carriage_return_or_both() {
+    use de_resonator::board::protocol::MAX_LINE;
+    use de_resonator::board::Lines;
+    let lines_of = |bytes: &[u8]| {
+        let mut lines = Lines::default();
+        bytes
+            .iter()
+            .filter_map(|&b| lines.push(b))
+            .collect::<Vec<Line>>()
+    };
+    for ending in ["\n", "\r", "\r\n"] {
+        let sent = format!("status{ending}get tick_hz{ending}");
+        assert_eq!(
+            lines_of(sent.as_bytes()),
+            [line("status"), line("get tick_hz")],
+            "{ending:?}"
+        );
+    }
+    assert_eq!(
+        lines_of(b"a\r\rb\n\nc\r\n\r\n"),
+        [
+            line("a"),
+            line(""),
+            line("b"),
+            line(""),
+            line("c"),
+            line("")
+        ]
+    );
+    // A request split anywhere, a `\r\n` split between two reads, as bytes arrive.
+    let mut lines = Lines::default();
+    let got: Vec<Line> = [&b"sta"[..], b"tus\r", b"\nstop\r"]
+        .iter()
+        .flat_map(|part| {
+            part.iter()
+                .filter_map(|&b| lines.push(b))
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    assert_eq!(got, [line("status"), line("stop")]);
+    let long = [b'x'; MAX_LINE + 5];
+    for ending in [&b"\r"[..], b"\n", b"\r\n"] {
+        let sent: Vec<u8> = long
+            .iter()
+            .chain(ending)
+            .chain(b"info\r")
+            .copied()
+            .collect();
+        assert_eq!(lines_of(&sent), [Line::TooLong, line("info")], "{ending:?}");
+    }
+}

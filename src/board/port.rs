@@ -16,7 +16,7 @@ use crate::device::Field;
 use crate::numerics::decimal::Decimal;
 
 /// One request as received: its bytes, or why it has none.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Line {
     Text(Vec<u8, MAX_LINE>),
     /// Longer than `MAX_LINE`: the rest was dropped up to its `\n`.
@@ -26,18 +26,25 @@ pub enum Line {
 }
 
 /// Bytes into lines: at most `MAX_LINE` bytes a line, an overlong or garbled line reported
-/// once at its end; a `\r\n` is a `\n`.
+/// once at its end. A line ends at `\n`, at `\r` (a serial terminal's Enter), or at `\r\n`
+/// (one end, not two).
 #[derive(Default)]
 pub struct Lines {
     text: Vec<u8, MAX_LINE>,
     overlong: bool,
     garbled: bool,
+    /// The last byte ended a line with `\r`: a `\n` now is the rest of that end.
+    after_cr: bool,
 }
 
 impl Lines {
     /// Take one byte; a line when it ends one.
     pub fn push(&mut self, byte: u8) -> Option<Line> {
-        if byte == b'\n' {
+        let after_cr = core::mem::take(&mut self.after_cr);
+        if byte == b'\n' && after_cr {
+            return None;
+        }
+        if byte == b'\n' || byte == b'\r' {
             let line = if self.garbled {
                 Line::Garbled
             } else if self.overlong {
@@ -45,11 +52,11 @@ impl Lines {
             } else {
                 Line::Text(self.text.clone())
             };
-            *self = Self::default();
+            *self = Self {
+                after_cr: byte == b'\r',
+                ..Self::default()
+            };
             return Some(line);
-        }
-        if byte == b'\r' {
-            return None;
         }
         if self.text.push(byte).is_err() {
             self.overlong = true;

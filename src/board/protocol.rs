@@ -1,8 +1,8 @@
 //! The command port's line protocol, one definition for the firmware that serves it and the
 //! host that talks to it: a person can type it, a program can parse it.
 //!
-//! A request is one line of ASCII, at most `MAX_LINE` bytes, ended by `\n` (a `\r` before it
-//! is dropped). Every request gets exactly one reply line:
+//! A request is one line of ASCII, at most `MAX_LINE` bytes, ended by `\n`, `\r` (a serial
+//! terminal's Enter) or `\r\n`. Every request gets exactly one reply line:
 //! - `ok <what was done>`, or `ok <key>=<value> ...` for `status` and `get`;
 //! - `err <code> <message>`, `code` an [`ErrorCode`] number.
 //!
