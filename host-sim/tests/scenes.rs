@@ -285,10 +285,10 @@ fn tracking_holds_a_creeping_plant_within_a_tenth_of_a_percent() {
     );
 }
 
-/// The stiff plant (a 0.2 ms branch) integrates with BDF through the whole run, safely.
+/// The stiff plant (a 0.2 ms branch) integrates with Radau through the whole run, safely, in
+/// every build.
 #[test]
-#[cfg_attr(not(feature = "bdf"), ignore = "BDF: --features bdf")]
-fn stiff_scene_runs_with_bdf() {
+fn stiff_scene_runs_with_radau() {
     let r = run("stiff-relaxation.toml");
     assert!(r.refused.is_none() && r.fault.is_none(), "{r:?}");
     assert_eq!(r.ticks, 2000);

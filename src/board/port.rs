@@ -19,7 +19,7 @@ use crate::numerics::decimal::Decimal;
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Line {
     Text(Vec<u8, MAX_LINE>),
-    /// Longer than `MAX_LINE`: the rest was dropped up to its `\n`.
+    /// Longer than `MAX_LINE`: the rest was dropped up to its end.
     TooLong,
     /// A byte was lost on the wire (overrun, framing or noise): the line is not trusted.
     Garbled,

@@ -390,8 +390,10 @@ pub fn console(args: &ConsoleArgs, json: bool) -> Result<ConsoleReport, String> 
         Some(path) => {
             let text = std::fs::read_to_string(path)
                 .map_err(|e| format!("cannot read script {}: {e}", path.display()))?;
+            // A line ends at \n, \r or \r\n, as on the board (a script with old Mac line
+            // ends is one request a line, not one the board would split).
             let lines: Vec<String> = text
-                .lines()
+                .split(['\n', '\r'])
                 .map(str::trim)
                 .filter(|l| !l.is_empty() && !l.starts_with('#'))
                 .map(String::from)

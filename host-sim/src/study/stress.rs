@@ -21,7 +21,7 @@ struct Case {
     /// AC amplitude as a fraction of the limit voltage, at the natural frequency.
     ac_of_limit: f64,
     start: Start,
-    /// Stiff: the reference is BDF (DOP853's step would be bound by stability).
+    /// Stiff: the reference is Radau IIA 5 (DOP853's step would be bound by stability).
     stiff: bool,
 }
 

@@ -520,6 +520,8 @@ impl<E, T: Real, Y: State<T>> Radau5<E, T, Y> {
         self.hhfac = T::from_f64(0.5).unwrap();
         self.h = constrain_step_size(self.h * self.hhfac, self.h_min, self.h_max);
         self.h = (self.filter)(self.h);
+        // de-resonator's patch: the halved step is decomposed (RADAU5's GOTO 20).
+        self.call_decomp = true;
         self.reject = true;
         self.status = Status::RejectedStep;
     }

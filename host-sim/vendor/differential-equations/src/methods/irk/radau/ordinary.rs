@@ -319,6 +319,9 @@ impl<T: Real, Y: State<T>> OrdinaryNumericalMethod<T, Y> for Radau5<Ordinary, T,
                         self.hhfac = T::from_f64(0.8).unwrap() * qnewt.powf(exponent);
                         self.h *= self.hhfac;
                         self.h = (self.filter)(self.h);
+                        // de-resonator's patch: a new h needs its decomposition (RADAU5's
+                        // GOTO 20).
+                        self.call_decomp = true;
                         self.status = Status::RejectedStep;
                         self.reject = true;
                         return Ok(evals);
@@ -479,8 +482,10 @@ impl<T: Real, Y: State<T>> OrdinaryNumericalMethod<T, Y> for Radau5<Ordinary, T,
             self.hhfac = self.h;
 
             if self.theta < self.thet {
-                // Skip jacobian recomputation
+                // Skip jacobian recomputation; de-resonator's patch: the new h is decomposed
+                // (RADAU5's GOTO 20).
                 self.call_jac = false;
+                self.call_decomp = true;
                 return Ok(evals);
             }
 
@@ -504,6 +509,8 @@ impl<T: Real, Y: State<T>> OrdinaryNumericalMethod<T, Y> for Radau5<Ordinary, T,
             // Constrain step size to [h_min, h_max]
             self.h = constrain_step_size(self.h, self.h_min, self.h_max);
             self.h = (self.filter)(self.h);
+            // de-resonator's patch: the shorter step is decomposed (RADAU5's GOTO 20).
+            self.call_decomp = true;
         }
 
         Ok(evals)
@@ -525,7 +532,12 @@ impl<T: Real, Y: State<T>> OrdinaryNumericalMethod<T, Y> for Radau5<Ordinary, T,
         self.h
     }
     fn set_h(&mut self, h: T) {
-        self.h = (self.filter)(h);
+        let h = (self.filter)(h);
+        // de-resonator's patch: a step cut (to the end) is decomposed at its own length.
+        if h != self.h {
+            self.call_decomp = true;
+        }
+        self.h = h;
     }
     fn status(&self) -> &Status<T, Y> {
         &self.status
