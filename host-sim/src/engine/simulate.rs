@@ -803,13 +803,18 @@ fn dop853<const N: usize, F: ODE<f64, [f64; N]>, O: Solout<f64, [f64; N]>>(
     if !dense {
         method = method.without_dense_output();
     }
-    solve_ode(&mut method, ode, t0, t1, &y, solout).map_err(|e| match e {
+    solve_ode(&mut method, ode, t0, t1, &y, solout).map_err(stopped)?;
+    Ok((*method.y(), method.h()))
+}
+
+/// Why a solve of the library's stopped, in words.
+fn stopped<const N: usize>(e: SolveError<f64, [f64; N]>) -> String {
+    match e {
         SolveError::StepSize { .. } => STEP_SIZE_FELL.to_string(),
         SolveError::Stiffness { .. } => STIFF.to_string(),
         SolveError::BadInput { msg } => msg,
         e => format!("the reference solver stopped: {e:?}"),
-    })?;
-    Ok((*method.y(), method.h()))
+    }
 }
 
 /// Radau IIA 5 (differential-equations' RADAU5: three stages, simplified Newton on a
@@ -839,11 +844,7 @@ fn radau<const N: usize, F: ODE<f64, [f64; N]>, O: Solout<f64, [f64; N]>>(
         .h0(h0)
         .newton_tol(0.0)
         .max_steps(usize::MAX);
-    solve_ode(&mut method, ode, t0, t1, &y, solout).map_err(|e| match e {
-        SolveError::StepSize { .. } => STEP_SIZE_FELL.to_string(),
-        SolveError::BadInput { msg } => msg,
-        e => format!("Radau stopped: {e:?}"),
-    })?;
+    solve_ode(&mut method, ode, t0, t1, &y, solout).map_err(stopped)?;
     Ok((*method.y(), method.h()))
 }
 
