@@ -580,17 +580,21 @@ mod app {
     /// re-armed stall, into the tick's block.
     #[task(binds = DMA2_STREAM0, priority = 2, shared = [block, acquisition])]
     fn adc(cx: adc::Context) {
-        (cx.shared.acquisition, cx.shared.block).lock(|acquisition, block| {
-            if let Some(acquisition) = acquisition.as_mut() {
-                acquisition.on_interrupt(block);
-            }
-        });
+        serve_acquisition(cx.shared.acquisition, cx.shared.block);
     }
 
     /// The ADC's overrun (silicon): the acquisition re-armed, the stall into the tick's block.
     #[task(binds = ADC, priority = 2, shared = [block, acquisition])]
     fn adc_overrun(cx: adc_overrun::Context) {
-        (cx.shared.acquisition, cx.shared.block).lock(|acquisition, block| {
+        serve_acquisition(cx.shared.acquisition, cx.shared.block);
+    }
+
+    /// Either acquisition interrupt: the acquisition, if any, serves it into the block.
+    fn serve_acquisition(
+        acquisition: impl rtic::Mutex<T = Option<Acquisition>>,
+        block: impl rtic::Mutex<T = Block>,
+    ) {
+        (acquisition, block).lock(|acquisition, block| {
             if let Some(acquisition) = acquisition.as_mut() {
                 acquisition.on_interrupt(block);
             }
