@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Every check CI runs, from a fresh machine: installs what it needs, then formats, lints
-# (host and Cortex-M4F target), builds the core for the target, runs all tests and the two
-# fuzzers, and runs the firmware under QEMU (installing qemu-system-arm, defmt-print and
-# cargo-fuzz when missing). Ends with the time each step took.
+# (host and Cortex-M4F target), builds the core for the target, runs all tests, the Python
+# package's tests and examples, the two fuzzers, and runs the firmware under QEMU (installing
+# qemu-system-arm, defmt-print, cargo-fuzz and the Python packages when missing). Ends with
+# the time each step took.
 # Usage: scripts/test-all.sh [--quick]
 #   --quick  a developer's inner loop: format, clippy on the host, the workspace's tests
 #            (no target builds, fuzzers or firmware; a few minutes once built)
@@ -88,6 +89,14 @@ cargo build --locked -p de-resonator --target "$TARGET" --release --features def
 
 step "tests (core integration tests, host-sim unit and CLI tests with BDF; the fuzz test has its own step)"
 cargo test --locked --workspace --features host-sim/bdf -- --skip fuzz_the_controller
+
+step "Python: pip install ./python (maturin), pytest python/tests, the examples' figures"
+# The package and what its tests and examples use (numpy, SciPy, matplotlib, Dask), into the
+# interpreter CI runs; the tests compare against the CLI the step above built.
+python3 -m pip install --quiet --disable-pip-version-check "./python[test]"
+HOST_SIM="$PWD/target/debug/host-sim" python3 -m pytest -q python/tests
+python3 python/examples/figures.py --out out/python
+python3 python/examples/monte_carlo.py --devices 5000 --workers 2 --plot out/python/monte-carlo.svg
 
 step "the core's tests without its optional trim feature (as the firmware builds it)"
 cargo test --locked -q -p de-resonator --no-default-features -- --skip fuzz_the_controller

@@ -55,35 +55,60 @@ pub fn parse_noting(text: &str) -> Result<(DeviceParams<f64>, Notes), String> {
                 None => message,
             }
         })?;
+    let given: Vec<Entry> = file
+        .iter()
+        .map(|(key, value)| {
+            let number = match value.get_ref() {
+                toml::Value::Float(x) => Ok(*x),
+                toml::Value::Integer(n) => Ok(*n as f64),
+                other => Err(other.type_str()),
+            };
+            (
+                key.get_ref().as_str(),
+                number,
+                Some(line_of(key.span().start)),
+            )
+        })
+        .collect();
+    build(&given)
+}
+
+/// A key, its value (or the TOML type it has instead of a number) and its line.
+type Entry<'a> = (&'a str, Result<f64, &'static str>, Option<usize>);
+
+/// A device from its keys and values (the device file's, in SI units; the Python package's
+/// keyword arguments), on the rules of [`parse`]: an absent key takes the reference device's
+/// value, an absent `jlim` makes it neo-Hookean.
+pub fn from_keys(keys: &[(&str, f64)]) -> Result<(DeviceParams<f64>, Notes), String> {
+    let given: Vec<Entry> = keys.iter().map(|&(k, v)| (k, Ok(v), None)).collect();
+    build(&given)
+}
+
+/// [`parse_noting`]'s and [`from_keys`]'s work: each key, its value and the line it is on
+/// (for the error).
+fn build(entries: &[Entry]) -> Result<(DeviceParams<f64>, Notes), String> {
     let mut params = DeviceParams {
         jlim: None,
         ..REFERENCE_DEVICE
     };
     let mut given = Vec::new();
-    for (key, value) in &file {
-        let line = line_of(key.span().start);
-        let field = Field::from_key(key.get_ref()).ok_or_else(|| {
+    for &(key, number, line) in entries {
+        let at = line.map_or(String::new(), |line| format!("line {line}: "));
+        let field = Field::from_key(key).ok_or_else(|| {
             let keys: Vec<String> = Field::ALL
                 .iter()
                 .map(|f| format!("`{}`", f.key()))
                 .collect();
             format!(
-                "line {line}: unknown field `{}`, expected one of {}",
-                key.get_ref(),
+                "{at}unknown field `{key}`, expected one of {}",
                 keys.join(", ")
             )
         })?;
-        let number = match value.get_ref() {
-            toml::Value::Float(x) => *x,
-            toml::Value::Integer(n) => *n as f64,
-            other => {
-                return Err(format!(
-                    "line {line}: `{}` must be a number, not a {}",
-                    field.key(),
-                    other.type_str()
-                ))
-            }
-        };
+        let number = number
+            .map_err(|kind| format!("{at}`{}` must be a number, not a {kind}", field.key()))?;
+        if given.contains(&field) {
+            return Err(format!("{at}`{key}` is given twice"));
+        }
         params.set(field, number);
         if field == Field::Jlim {
             // Written out, jlim is the Gent limit, whatever its value (0 is refused later).

@@ -1,8 +1,38 @@
 //! Long work: independent jobs over the machine's cores, with a progress bar on stderr (shown
-//! only on a terminal, so pipes and JSON consumers see nothing of it).
+//! only on a terminal, so pipes and JSON consumers see nothing of it), and a way to stop it
+//! (a caller's flag, read by the long loops: the Python package's Ctrl-C).
+
+use std::cell::RefCell;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
+
+/// What a long loop stopped by its caller's flag says.
+pub const INTERRUPTED: &str = "interrupted";
+
+thread_local! {
+    /// The flag that stops this thread's long work, while `stoppable` runs it.
+    static STOP: RefCell<Option<Arc<AtomicBool>>> = const { RefCell::new(None) };
+}
+
+/// Run `job` on this thread with `stop` as the flag its long loops read ([`stopped`]).
+pub fn stoppable<R>(stop: Arc<AtomicBool>, job: impl FnOnce() -> R) -> R {
+    let before = STOP.with(|s| s.replace(Some(stop)));
+    let out = job();
+    STOP.with(|s| *s.borrow_mut() = before);
+    out
+}
+
+/// Whether this thread's caller asked its long work to stop (never, outside `stoppable`).
+pub fn stopped() -> bool {
+    STOP.with(|s| {
+        s.borrow()
+            .as_ref()
+            .is_some_and(|f| f.load(Ordering::Relaxed))
+    })
+}
 
 /// A progress bar of `len` jobs titled `what`, on stderr (hidden when it is not a terminal).
 pub fn bar(what: &str, len: usize) -> ProgressBar {
@@ -14,13 +44,18 @@ pub fn bar(what: &str, len: usize) -> ProgressBar {
 }
 
 /// `job` applied to every item, in order, on all cores (rayon), with a progress bar titled
-/// `what`.
+/// `what`; the jobs see the caller's stop flag ([`stopped`]).
 pub fn map<I: Sync, O: Send>(what: &str, items: &[I], job: impl Fn(&I) -> O + Sync) -> Vec<O> {
     let bar = bar(what, items.len());
+    // The caller's stop flag, read by the jobs on rayon's threads too.
+    let stop = STOP.with(|s| s.borrow().clone());
     let out = items
         .par_iter()
         .map(|item| {
-            let out = job(item);
+            let out = match &stop {
+                Some(flag) => stoppable(flag.clone(), || job(item)),
+                None => job(item),
+            };
             bar.inc(1);
             out
         })
@@ -31,6 +66,21 @@ pub fn map<I: Sync, O: Send>(what: &str, items: &[I], job: impl Fn(&I) -> O + Sy
 
 #[cfg(test)]
 mod tests {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+
+    #[test]
+    fn stopped_reads_the_callers_flag_only_inside_stoppable() {
+        let flag = Arc::new(AtomicBool::new(false));
+        assert!(!super::stopped());
+        super::stoppable(flag.clone(), || {
+            assert!(!super::stopped());
+            flag.store(true, Ordering::Relaxed);
+            assert!(super::stopped());
+        });
+        assert!(!super::stopped());
+    }
+
     #[test]
     fn keeps_order_and_runs_every_job() {
         let items: Vec<u64> = (0..1000).collect();

@@ -1130,7 +1130,7 @@ fn flags_say_what_is_wrong() {
         "--duration-seconds",
         "0.1",
     ]);
-    assert!(err.contains("needs --ac-hz"), "{err}");
+    assert!(err.contains("needs ac_hz (--ac-hz)"), "{err}");
     let dir = out_dir("lut-ext");
     std::fs::create_dir_all(&dir).unwrap();
     let csv = format!("{dir}/table.csv");

@@ -261,7 +261,7 @@ pub fn curve(args: &CurveArgs) -> Result<CurveReport, String> {
 
 /// The loading branch of one device from 0 V to its limit, at offsets evenly spaced in √δ
 /// (so evenly spaced in bias near 0 V, where Φ ∝ √δ, model.md §5).
-fn one_curve(
+pub fn one_curve(
     p: de_resonator::DeviceParams<f64>,
     margin: f64,
     target_hz: Option<f64>,

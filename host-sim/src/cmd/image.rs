@@ -142,7 +142,7 @@ pub struct ImageReport {
     pub table: Option<TableSummary>,
     pub verdict: Verdict,
     #[serde(skip)]
-    written: bool,
+    pub written: bool,
 }
 
 #[derive(Serialize, Debug)]
@@ -307,23 +307,32 @@ pub fn image(args: &ImageArgs) -> Result<ImageReport, String> {
         .as_ref()
         .ok_or("give --out FILE (or --check FILE)")?;
     prepare_file(out)?;
+    let (bytes, mut report) = build(args, out.display().to_string())?;
+    write_path(out, &bytes)?;
+    report.written = true;
+    Ok(report)
+}
+
+/// The image `args` ask for (a scene's, or a device's with its settings and amplifier) and
+/// what it holds, `file` its name in the report; refused (not made) if the firmware's boot
+/// would refuse it.
+pub fn build(args: &ImageArgs, file: String) -> Result<(Vec<u8>, ImageReport), String> {
     if let Some(path) = &args.scene {
         let scene = crate::scene::load(path)?;
         let bytes = scene.run.image()?;
-        let mut report = describe(&bytes, out.display().to_string())?;
+        let report = describe(&bytes, file)?;
         if let Verdict::Refuses { reason } = &report.verdict {
             return Err(format!(
                 "scene {}: the firmware would refuse its image: {reason}",
                 scene.name
             ));
         }
-        write_path(out, &bytes)?;
-        report.written = true;
-        return Ok(report);
+        return Ok((bytes, report));
     }
     let (params, name) = args.device.params()?;
     let target_hz = args.target_hz.or_else(|| {
-        (args.device.device.is_none() && args.settings.is_none()).then_some(REFERENCE_TARGET_HZ)
+        (args.device.device.is_none() && args.device.given.is_none() && args.settings.is_none())
+            .then_some(REFERENCE_TARGET_HZ)
     });
     let (settings, front_end) = match &args.settings {
         Some(path) => crate::settings_file::load(path, target_hz)?,
@@ -356,16 +365,14 @@ pub fn image(args: &ImageArgs) -> Result<ImageReport, String> {
         args.power_up.into(),
     )
     .map_err(|e| format!("{name}: {e}"))?;
-    // Checked before writing: an image the firmware would refuse is not written.
-    let mut report = describe(&bytes, out.display().to_string())?;
+    // Checked before writing: an image the firmware would refuse is not made.
+    let report = describe(&bytes, file)?;
     if let Verdict::Refuses { reason } = &report.verdict {
         return Err(format!(
             "{name}: the firmware would refuse this image: {reason}"
         ));
     }
-    write_path(out, &bytes)?;
-    report.written = true;
-    Ok(report)
+    Ok((bytes, report))
 }
 
 fn check(path: &PathBuf) -> Result<ImageReport, String> {
@@ -398,7 +405,7 @@ fn summary(table: &Table<'_>, bytes: usize) -> TableSummary {
 }
 
 /// What `bytes` hold (an image, or a bare table), and what the firmware's boot says of it.
-fn describe(bytes: &[u8], file: String) -> Result<ImageReport, String> {
+pub fn describe(bytes: &[u8], file: String) -> Result<ImageReport, String> {
     let refuse = |reason: String| Verdict::Refuses { reason };
     if bytes.starts_with(&table::MAGIC) {
         // A bare table: what it holds, and its own checks (it has no settings to boot with).

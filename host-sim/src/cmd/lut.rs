@@ -144,11 +144,28 @@ pub fn lut(args: &LutArgs) -> Result<LutReport, String> {
         LutFormat::Csv => super::csv(&points)?,
     };
     write_path(&args.out, &written)?;
+    Ok(report(
+        name,
+        &made,
+        margin,
+        format,
+        vec![args.out.display().to_string()],
+    ))
+}
+
+/// What `lut` reports of a table made (`files`: where it was written, as `format`).
+pub fn report(
+    device: DeviceInfo,
+    made: &lut::Made,
+    margin: f64,
+    format: LutFormat,
+    files: Vec<String>,
+) -> LutReport {
     let first = made.points.first().copied().unwrap_or((f32::NAN, f32::NAN));
     let last = made.points.last().copied().unwrap_or((f32::NAN, f32::NAN));
-    Ok(LutReport {
-        device: name,
-        files: vec![args.out.display().to_string()],
+    LutReport {
+        device,
+        files,
         format: match format {
             LutFormat::Bin => "bin",
             LutFormat::Csv => "csv",
@@ -164,5 +181,5 @@ pub fn lut(args: &LutArgs) -> Result<LutReport, String> {
             worst_hz: made.errors.worst_hz,
             volts_of_top: made.errors.volts.unwrap_or(f64::NAN),
         },
-    })
+    }
 }

@@ -60,14 +60,27 @@ pub struct DeviceArgs {
     /// Default: the built-in reference device.
     #[arg(long, value_name = "FILE")]
     pub device: Option<PathBuf>,
+    /// A device given as values (the Python package's `Device`), over the file and the
+    /// reference, with what it is called.
+    #[arg(skip)]
+    pub given: Option<(DeviceParams<f64>, String)>,
 }
 
 impl DeviceArgs {
+    /// A device given as values, called `source`.
+    pub fn given(params: DeviceParams<f64>, source: String) -> Self {
+        Self {
+            device: None,
+            given: Some((params, source)),
+        }
+    }
+
     /// The device's parameters (the reference's without a file) and what it is.
     pub fn params(&self) -> Result<(DeviceParams<f64>, DeviceInfo), String> {
-        let (params, source) = match &self.device {
-            Some(path) => (device_file::load(path)?, path.display().to_string()),
-            None => (REFERENCE_DEVICE, "reference device (built in)".into()),
+        let (params, source) = match (&self.given, &self.device) {
+            (Some((params, source)), _) => (*params, source.clone()),
+            (None, Some(path)) => (device_file::load(path)?, path.display().to_string()),
+            (None, None) => (REFERENCE_DEVICE, "reference device (built in)".into()),
         };
         Ok((params, DeviceInfo::new(source, &params)))
     }

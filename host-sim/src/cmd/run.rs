@@ -387,10 +387,15 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<RunReport, String> {
         let recorded = super::record::write(&path, &header, records, receiver, tick_hz)?;
         files.push(recorded.file);
     }
+    Ok(report(&scene, &run, files))
+}
+
+/// What a scene's run reports (the files it wrote named in `files`).
+pub fn report(scene: &Scene, run: &Run, files: Vec<String>) -> RunReport {
     // The target in force at the end (a scene's command may have changed it).
     let target = run.target_hz;
     let hz = run.natural_frequency_hz;
-    Ok(RunReport {
+    RunReport {
         scene: scene.name.clone(),
         description: scene.description.clone(),
         device: DeviceInfo::new(scene.device_source.clone(), &scene.run.nominal),
@@ -412,8 +417,8 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<RunReport, String> {
         plant_crossing: Crossing::with_state(run.plant_crossing, run.plant_crossing_state),
         plant_crossing_description: run.plant_crossing.map(|(mode, _)| mode.description()),
         final_membrane_volts: run.final_membrane_volts,
-        sensed: SensedReport::of(&run),
-        tracked: TrackedReport::of(&run),
+        sensed: SensedReport::of(run),
+        tracked: TrackedReport::of(run),
         events: run
             .events
             .iter()
@@ -447,7 +452,7 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<RunReport, String> {
             .map(|b| b.relaxation_seconds)
             .filter(|&s| s * target < 10.0)
             .collect(),
-    })
+    }
 }
 
 /// Write what a scene asked for (history CSV, plot) into `dir`; the paths written.

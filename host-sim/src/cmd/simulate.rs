@@ -5,7 +5,7 @@ use std::fmt;
 use std::path::PathBuf;
 
 use clap::Args;
-use de_resonator::Device;
+use de_resonator::{Device, DeviceParams};
 use serde::Serialize;
 
 use super::{prepare_file, sig, write_path, Crossing, DeviceArgs, DeviceInfo, Report};
@@ -213,52 +213,96 @@ impl Report for SimulateReport {
     }
 }
 
-pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
-    let (mut params, device) = args.device.params()?;
-    if let Some(c) = args.damping {
-        params.damping = c;
+/// What a run of the motion is asked, whoever asks (the CLI, the Python package): checked
+/// into the open-loop scene and its output step.
+#[derive(Clone, Copy, Debug)]
+pub struct Asked {
+    pub bias_volts: f64,
+    pub ac_volts: f64,
+    pub ac_hz: Option<f64>,
+    /// c, N·s, over the device's.
+    pub damping: Option<f64>,
+    pub duration_seconds: f64,
+    pub start: Start,
+    pub method: Choice,
+    pub step_seconds: Option<f64>,
+    pub rtol: Option<f64>,
+    pub atol: Option<f64>,
+}
+
+impl Asked {
+    /// The scene on `params` (its damping replaced if asked) and the output step (the
+    /// default: 1/64 of the period at 0 V); errors name the device as `device` says it.
+    pub fn scene(
+        &self,
+        mut params: DeviceParams<f64>,
+        device: &DeviceInfo,
+    ) -> Result<(OpenLoop, f64), String> {
+        if let Some(c) = self.damping {
+            params.damping = c;
+        }
+        let checked = Device::new(params).map_err(|e| format!("{device}: {e}"))?;
+        let ac_hz = match self.ac_hz {
+            Some(hz) if !(hz.is_finite() && hz >= 0.0) => {
+                return Err(format!("ac_hz {hz}: need a finite frequency ≥ 0"))
+            }
+            Some(hz) => hz,
+            None if self.ac_volts != 0.0 => {
+                return Err(format!(
+                    "ac_volts {} needs ac_hz (--ac-hz): the drive's frequency",
+                    sig(self.ac_volts)
+                ))
+            }
+            None => 0.0,
+        };
+        let step = self
+            .step_seconds
+            .unwrap_or(1.0 / (64.0 * checked.natural_frequency_hz(checked.prestretch_1())));
+        let tolerance = match (self.rtol, self.atol) {
+            (None, None) => None,
+            (rtol, atol) => {
+                let default = self.method.solver().unwrap_or(Solver::Dop853);
+                let rtol = rtol.unwrap_or(default.default_tolerance().rtol);
+                Some(Tolerance {
+                    rtol,
+                    atol: atol.unwrap_or(rtol),
+                })
+            }
+        };
+        let scene = OpenLoop {
+            params,
+            bias_volts: self.bias_volts,
+            ac_volts: self.ac_volts,
+            drive_hz: ac_hz,
+            duration_seconds: self.duration_seconds,
+            start: self.start,
+            tolerance,
+        };
+        Ok((scene, step))
     }
-    let checked = Device::new(params).map_err(|e| format!("{device}: {e}"))?;
-    let ac_hz = match args.ac_hz {
-        Some(hz) if !(hz.is_finite() && hz >= 0.0) => {
-            return Err(format!("--ac-hz {hz}: need a finite frequency ≥ 0"))
-        }
-        Some(hz) => hz,
-        None if args.ac_volts != 0.0 => {
-            return Err(format!(
-                "--ac-volts {} needs --ac-hz: the drive's frequency",
-                sig(args.ac_volts)
-            ))
-        }
-        None => 0.0,
+}
+
+pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
+    let (params, device) = args.device.params()?;
+    let asked = Asked {
+        bias_volts: args.bias_volts,
+        ac_volts: args.ac_volts,
+        ac_hz: args.ac_hz,
+        damping: args.damping,
+        duration_seconds: args.duration_seconds,
+        start: args.start,
+        method: args.method,
+        step_seconds: args.step_seconds,
+        rtol: args.rtol,
+        atol: args.atol,
     };
-    let step = args
-        .step_seconds
-        .unwrap_or(1.0 / (64.0 * checked.natural_frequency_hz(checked.prestretch_1())));
-    let tolerance = match (args.rtol, args.atol) {
-        (None, None) => None,
-        (rtol, atol) => {
-            let default = args.method.solver().unwrap_or(Solver::Dop853);
-            let rtol = rtol.unwrap_or(default.default_tolerance().rtol);
-            Some(Tolerance {
-                rtol,
-                atol: atol.unwrap_or(rtol),
-            })
-        }
-    };
+    let (scene, step) = asked.scene(params, &device)?;
+    let checked = Device::new(scene.params).map_err(|e| format!("{device}: {e}"))?;
+    let (ac_hz, tolerance) = (scene.drive_hz, scene.tolerance);
     // Where the files go, checked before the work.
     for path in [&args.csv, &args.plot].into_iter().flatten() {
         prepare_file(path)?;
     }
-    let scene = OpenLoop {
-        params,
-        bias_volts: args.bias_volts,
-        ac_volts: args.ac_volts,
-        drive_hz: ac_hz,
-        duration_seconds: args.duration_seconds,
-        start: args.start,
-        tolerance,
-    };
     let out = simulate::simulate(&scene, args.method, step).map_err(|e| e.to_string())?;
     let volts_at =
         |t: f64| args.bias_volts + args.ac_volts * (std::f64::consts::TAU * ac_hz * t).sin();
@@ -292,7 +336,7 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
             bias_volts: args.bias_volts,
             ac_volts: args.ac_volts,
             ac_hz,
-            damping: params.damping,
+            damping: scene.params.damping,
             duration_seconds: args.duration_seconds,
             start: args.start,
             step_seconds: args.step_seconds,

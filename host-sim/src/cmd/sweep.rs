@@ -208,6 +208,17 @@ impl Report for SweepReport {
 }
 
 pub fn sweep(args: &SweepArgs) -> Result<SweepReport, String> {
+    let (mut report, panel) = measure(args, || prepare_dir(&args.out))?;
+    report.files = write_csv_and_plot(&args.out, "sweep", &report.points, &[panel])?;
+    Ok(report)
+}
+
+/// The sweep's report (no files) and its plot; `ready` runs once the arguments are checked,
+/// before the work (where the files go, for the CLI).
+pub fn measure(
+    args: &SweepArgs,
+    ready: impl FnOnce() -> Result<(), String>,
+) -> Result<(SweepReport, Panel), String> {
     let (mut params, device) = args.device.params()?;
     let quality = args.quality_factor;
     if !(quality.is_finite() && quality >= 0.0) {
@@ -255,7 +266,7 @@ pub fn sweep(args: &SweepArgs) -> Result<SweepReport, String> {
             sig((steps * 2e-8 / 2.0).round())
         ));
     }
-    prepare_dir(&args.out)?;
+    ready()?;
     if quality > 0.0 {
         params.damping = params.effective_mass() * std::f64::consts::TAU * natural_hz / quality;
         s.params = params;
@@ -280,8 +291,7 @@ pub fn sweep(args: &SweepArgs) -> Result<SweepReport, String> {
         .count();
     let stopped = points.iter().filter(|p| p.stopped).count();
     let panel = plot(&device, &s, f0, quality, &points, stopped);
-    let files = write_csv_and_plot(&args.out, "sweep", &points, &[panel])?;
-    Ok(SweepReport {
+    let report = SweepReport {
         device,
         limit_volts,
         bias_volts,
@@ -302,8 +312,9 @@ pub fn sweep(args: &SweepArgs) -> Result<SweepReport, String> {
         points,
         crossed_limit,
         stopped,
-        files,
-    })
+        files: Vec::new(),
+    };
+    Ok((report, panel))
 }
 
 /// The response against drive frequency in Hz: measured points as a line (broken where runs

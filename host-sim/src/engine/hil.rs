@@ -558,6 +558,9 @@ impl Loop {
         for k in 0..ticks {
             if k % every == 0 {
                 progress.set_position(k);
+                if crate::work::stopped() {
+                    return Err(crate::work::INTERRUPTED.into());
+                }
             }
             let t = k as f64 * tick_seconds;
             for c in self.commands.iter().filter(|c| c.tick == k) {

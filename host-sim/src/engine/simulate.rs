@@ -2,6 +2,7 @@
 //! or f64, the code the firmware runs) or the reference (adaptive DOP853, f64), under the
 //! dynamic safety monitor.
 
+use std::cell::Cell;
 use std::time::Instant;
 
 use crate::engine::erk::{self, StepEnds, Stop, DOP853, DOPRI5};
@@ -218,6 +219,8 @@ pub struct Outcome {
     /// DOP853 for Radau when it did.
     pub solver: Option<Solver>,
     pub switched: Option<String>,
+    /// The right-hand sides the adaptive solver evaluated (`None` for a core method).
+    pub evaluations: Option<u64>,
 }
 
 impl OpenLoop {
@@ -341,6 +344,7 @@ fn outcome(samples: Vec<f64>, velocities: Vec<f64>) -> Outcome {
         step_seconds: f64::NAN,
         solver: None,
         switched: None,
+        evaluations: None,
     }
 }
 
@@ -399,6 +403,9 @@ fn core<T: Real>(
     monitor.observe(&device, 0, T::of(start), it.bias_dimless_squared());
     let mut last = it.state();
     for k in 1..=steps {
+        if k % 4096 == 0 && crate::work::stopped() {
+            return Err(RunError::Failed(crate::work::INTERRUPTED.into()));
+        }
         if let Err(e) = it.step() {
             // Past the guarded range the model is no longer trusted: stop, say why.
             if monitor.first_crossing().is_none() {
@@ -517,6 +524,10 @@ impl<const N: usize> Solout<f64, [f64; N]> for Samples<'_, N> {
     where
         I: Interpolation<f64, [f64; N]> + ?Sized,
     {
+        if crate::work::stopped() {
+            self.failed = Some(crate::work::INTERRUPTED.into());
+            return ControlFlag::Terminate;
+        }
         if let Some(hook) = self.on_step.as_mut().filter(|_| t_curr > t_prev) {
             let mut failed = None;
             let mut at = |t: f64| {
@@ -950,6 +961,10 @@ fn reference(
     let tolerance = scene.tolerance.unwrap_or(solver.default_tolerance());
     let times = sample_times(step_seconds * scale, scene.duration_seconds * scale);
     let motion = Motion { device, drive };
+    let counted = Counted {
+        ode: &motion,
+        evaluations: Cell::new(0),
+    };
     // The events on the solver's path, in dimensionless time.
     let mut watch = Watch::new(EVENT_RESOLUTION_SECONDS * scale);
     let fails =
@@ -962,7 +977,13 @@ fn reference(
             let mut on_step = |a, b, at: &mut dyn FnMut(f64) -> [f64; 2]| {
                 watch.step(a, b, at, key, fails);
             };
-            solver.sample(&motion, [start, 0.0], &times, tolerance, Some(&mut on_step))?
+            solver.sample(
+                &counted,
+                [start, 0.0],
+                &times,
+                tolerance,
+                Some(&mut on_step),
+            )?
         }
         // BDF gives samples only (its own dense output at the times asked): taken at
         // `BDF_EVENT_SUBDIVISION` times the output's rate, a quintic through them (value,
@@ -977,7 +998,7 @@ fn reference(
                 })
                 .chain(times.last().copied())
                 .collect();
-            let all = solver.sample(&motion, [start, 0.0], &fine, tolerance, None)?;
+            let all = solver.sample(&counted, [start, 0.0], &fine, tolerance, None)?;
             let jet = |tau: f64, y: &[f64; 2]| {
                 let mut rate = [0.0; 2];
                 motion.diff(tau, y, &mut rate);
@@ -1008,7 +1029,25 @@ fn reference(
     out.first_limit = watch.first.map(|(tau, mode, _)| (mode, tau / scale));
     out.first_limit_state = watch.first.map(|(_, _, y)| (y[0], y[1] * scale));
     out.solver = Some(solver);
+    out.evaluations = Some(counted.evaluations.get());
     Ok(out)
+}
+
+/// An equation of motion that counts its right-hand sides (a solve's `nfev`).
+struct Counted<'a, F> {
+    ode: &'a F,
+    evaluations: Cell<u64>,
+}
+
+impl<F: ODE<f64, [f64; 2]>> ODE<f64, [f64; 2]> for Counted<'_, F> {
+    fn diff(&self, t: f64, y: &[f64; 2], dydt: &mut [f64; 2]) {
+        self.evaluations.set(self.evaluations.get() + 1);
+        self.ode.diff(t, y, dydt);
+    }
+
+    fn jacobian(&self, t: f64, y: &[f64; 2], j: &mut Matrix<f64>) {
+        self.ode.jacobian(t, y, j);
+    }
 }
 
 #[cfg(test)]

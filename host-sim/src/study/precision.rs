@@ -351,6 +351,7 @@ mod tests {
             step_seconds: dt,
             solver: None,
             switched: None,
+            evaluations: None,
         };
         let found = upward_crossings(&out, dt, 0.0);
         assert_eq!(found.len(), 3);

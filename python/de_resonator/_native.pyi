@@ -1,0 +1,155 @@
+"""Type stubs of de_resonator._native (the Rust extension). Units are SI, named in keys."""
+
+from os import PathLike
+from typing import Any, Literal, Optional, Sequence, Union
+
+import numpy as np
+import numpy.typing as npt
+
+from . import Result
+
+ArrayLike = npt.ArrayLike
+Method = Literal[
+    "reference",
+    "reference-radau",
+    "reference-bdf",
+    "rk4-f32",
+    "rk4-f64",
+    "verlet-f32",
+    "verlet-f64",
+    "implicit-midpoint-f32",
+    "implicit-midpoint-f64",
+]
+
+class Device:
+    """A dielectric elastomer resonator (docs/model.md). Keywords: the device file's keys in
+    SI units; absent keys take the reference device's values, an absent `jlim` makes it
+    neo-Hookean. ValueError with the model's reason if it refuses a value."""
+
+    def __init__(
+        self,
+        *,
+        shear_modulus: float = ...,
+        jlim: float = ...,
+        relative_permittivity: float = ...,
+        density: float = ...,
+        breakdown_field: float = ...,
+        thickness: float = ...,
+        length_active: float = ...,
+        length_passive: float = ...,
+        width: float = ...,
+        bar_mass: float = ...,
+        prestretch_1: float = ...,
+        prestretch_2: float = ...,
+        damping: float = ...,
+    ) -> None: ...
+    @staticmethod
+    def reference() -> Device:
+        """The reference device of docs/model.md §9."""
+    @staticmethod
+    def from_file(path: Union[str, PathLike[str]]) -> Device:
+        """A device file (TOML, SI units), as `host-sim --device FILE` reads it."""
+    @staticmethod
+    def from_toml(text: str) -> Device:
+        """A device file's text."""
+    @property
+    def material(self) -> Literal["gent", "neo_hookean"]: ...
+    @property
+    def source(self) -> str: ...
+    def to_dict(self) -> dict[str, float]:
+        """The keys and values (SI): `Device(**d)` makes the same device."""
+    def __getitem__(self, key: str) -> float: ...
+    def __eq__(self, other: object) -> bool: ...
+    def safe(self, margin: float = 0.05) -> Result:
+        """The safe region: `limit` (mode, volts V, stretch, natural_frequency_hz Hz),
+        `max_bias_volts` (V), `tunable_range_hz` (Hz), `zero_bias_frequency_hz` (Hz)."""
+    def tune(self, target_hz: float, margin: float = 0.05) -> Result:
+        """The smallest bias for `target_hz`: `bias_volts` (V), `stretch`,
+        `natural_frequency_hz` (Hz) and the safe region. ValueError out of reach."""
+    def frequency(self, bias_volts: ArrayLike) -> Union[float, npt.NDArray[np.float64]]:
+        """The natural frequency (Hz) at each bias (V); NaN where none holds it."""
+    def tune_many(self, targets_hz: ArrayLike, margin: float = 0.05) -> Result:
+        """`tune` for each target: arrays `bias_volts` (V), `stretch`,
+        `natural_frequency_hz` (Hz) with NaN where out of reach, `ok` (bool), and `reason`
+        (a list, None where tuned)."""
+    def curve(
+        self, points: int = 200, margin: float = 0.05, target_hz: Optional[float] = None
+    ) -> Result:
+        """The tuning curve to the limit: arrays `bias_volts` (V), `natural_frequency_hz`
+        (Hz), `stretch`, `beyond_margin`; `limit`, `max_bias_volts`, `tunable_range_hz`,
+        `target`, `problem`."""
+    def family(
+        self,
+        prestretch_1: Optional[Sequence[float]] = None,
+        prestretch_2: Optional[Sequence[float]] = None,
+        points: int = 200,
+        margin: float = 0.05,
+        target_hz: Optional[float] = None,
+    ) -> list[Result]:
+        """A `curve` for each pre-stretch pair (λ1p × λ2p)."""
+    def lut(
+        self,
+        points: Optional[int] = None,
+        margin: float = 0.05,
+        out: Optional[Union[str, PathLike[str]]] = None,
+    ) -> Result:
+        """The tuning table to flash: `data` (bytes), float32 arrays `natural_frequency_hz` (Hz) and
+        `bias_volts` (V), `crc32`, `interpolation_error`; `out` writes it (.csv: points)."""
+    def sweep(
+        self,
+        bias_volts: Optional[float] = None,
+        ac_volts: Optional[float] = None,
+        quality_factor: float = 200.0,
+        from_ratio: float = 0.3,
+        to_ratio: float = 2.4,
+        points: int = 211,
+        periods: float = 400.0,
+        steps_per_period: float = 48.0,
+    ) -> Result:
+        """The frequency response: arrays `drive_hz` (Hz), `ratio`, `amplitude` (NaN where a
+        run stopped), `crossed`; `peaks`, `natural_frequency_hz`, `damping` (N·s)."""
+
+def simulate(
+    device: Device,
+    bias_volts: float,
+    *,
+    duration_seconds: float,
+    ac_volts: float = 0.0,
+    ac_hz: Optional[float] = None,
+    method: Method = "reference",
+    rtol: Optional[float] = None,
+    atol: Optional[float] = None,
+    step_seconds: Optional[float] = None,
+    start: Literal["equilibrium", "prestretch"] = "equilibrium",
+    damping: Optional[float] = None,
+    stop_at_limit: bool = True,
+) -> Result:
+    """The motion under Φ(t) = bias_volts + ac_volts·sin(2π·ac_hz·t), checked against
+    docs/model.md §6: a Result like SciPy's OdeResult (`t` s, `y` 2 × n: stretch and dλ/dt
+    1/s, `volts` V, `status` 0 or 1, `message`, `success`, `t_events`, `y_events`, `limit`,
+    `min_stretch`, `max_stretch`, `nfev`)."""
+
+def run_scene(scene: str) -> Result:
+    """A scene (a file's path, or its TOML text) as `host-sim run` runs it: the report
+    (`run --json`'s keys) and `history` (per tick: `time_seconds` s, `dac_code`, `dac_on`,
+    `enable`, `phase`, `stretch`, `membrane_volts` V, `current_amps` A)."""
+
+def image(
+    device: Optional[Device] = None,
+    *,
+    settings: Optional[Union[str, PathLike[str]]] = None,
+    target_hz: Optional[float] = None,
+    dac_reference_volts: float = 2.5,
+    gain: float = 4000.0,
+    rail_volts: Optional[float] = None,
+    power_up: Literal["wait", "drive"] = "wait",
+    scene: Optional[Union[str, PathLike[str]]] = None,
+    out: Optional[Union[str, PathLike[str]]] = None,
+) -> Result:
+    """The configuration image to flash: `data` (bytes) and what it holds (`verdict`, `table`,
+    `settings`, `amplifier`); ValueError if the firmware's boot would refuse it."""
+
+def check_image(image: Union[bytes, str, PathLike[str]]) -> Result:
+    """What an image or a table holds, and whether the firmware's boot accepts it."""
+
+def _device_from_keys(keys: dict[str, float]) -> Device: ...

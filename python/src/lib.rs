@@ -1,0 +1,922 @@
+//! `de_resonator._native`: the core and host-sim's engines from Python, over numpy arrays.
+//! No second implementation: every figure comes from the code the CLI and the firmware run
+//! (the core's `Tuner` and `Device`, host-sim's `simulate`, `curve` and scenes); the
+//! reports are the CLI's `--json` ones, as Python objects. The package around it
+//! (`python/de_resonator`) adds the result type and the type stubs.
+
+use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{mpsc, Arc};
+use std::time::Duration;
+
+use de_resonator::{Device, DeviceParams, Field, Limit, Tuner, REFERENCE_DEVICE};
+use host_sim::cmd::curve::{one_curve, Curve};
+use host_sim::cmd::image::{ImageArgs, PowerUpArg};
+use host_sim::cmd::lut::LutFormat;
+use host_sim::cmd::safe::Region;
+use host_sim::cmd::simulate::Asked;
+use host_sim::cmd::sweep::SweepArgs;
+use host_sim::cmd::{DeviceArgs, DeviceInfo};
+use host_sim::engine::simulate::{self as engine, Choice, Start};
+use host_sim::{device_file, scene, work};
+use numpy::ndarray::{Array2, ArrayD};
+use numpy::{AllowTypeChange, IntoPyArray, PyArrayLikeDyn, PyUntypedArrayMethods};
+use pyo3::exceptions::{PyKeyError, PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyDict, PyList};
+use serde::Serialize;
+
+/// A value error with the core's (or host-sim's) message.
+fn value_error(why: impl std::fmt::Display) -> PyErr {
+    PyValueError::new_err(why.to_string())
+}
+
+/// `job` on a thread of its own with the GIL released, the caller's thread waiting for it and
+/// for Ctrl-C: a `KeyboardInterrupt` raises the job's stop flag (`work::stopped`, read by
+/// the long loops) and is raised once the job has stopped. The job's error is a
+/// `ValueError` with its message.
+fn stoppable<R: Send>(
+    py: Python<'_>,
+    job: impl FnOnce() -> Result<R, String> + Send,
+) -> PyResult<R> {
+    let stop = Arc::new(AtomicBool::new(false));
+    std::thread::scope(|scope| {
+        let (done, mut finished) = mpsc::channel();
+        let flag = stop.clone();
+        let worker = scope.spawn(move || {
+            let out = work::stoppable(flag, job);
+            let _ = done.send(());
+            out
+        });
+        loop {
+            let waiting = &mut finished;
+            let ended = py.detach(move || {
+                !matches!(
+                    waiting.recv_timeout(Duration::from_millis(50)),
+                    Err(mpsc::RecvTimeoutError::Timeout)
+                )
+            });
+            if ended {
+                break;
+            }
+            if let Err(interrupt) = py.check_signals() {
+                stop.store(true, Ordering::Relaxed);
+                let _ = py.detach(|| worker.join());
+                return Err(interrupt);
+            }
+        }
+        match worker.join() {
+            Ok(out) => out.map_err(value_error),
+            Err(_) => Err(PyRuntimeError::new_err("the computation panicked")),
+        }
+    })
+}
+
+/// A serde report as the package's `Result` (a dict whose keys are attributes too), through
+/// JSON: the same keys and values as the CLI's `--json`.
+fn result<'py>(py: Python<'py>, report: &impl Serialize) -> PyResult<Bound<'py, PyAny>> {
+    let text = serde_json::to_string(report).map_err(value_error)?;
+    let dict = py.import("json")?.call_method1("loads", (text,))?;
+    wrap(py, dict)
+}
+
+/// A dict as the package's `Result`.
+fn wrap<'py>(py: Python<'py>, dict: Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+    py.import("de_resonator")?.getattr("Result")?.call1((dict,))
+}
+
+/// Values as an array of any shape, from anything numpy takes (any numeric dtype: coerced to
+/// float64 and copied), `f` applied to each with the GIL released; a 0-d input gives a float.
+fn map_array<'py>(
+    py: Python<'py>,
+    values: PyArrayLikeDyn<'py, f64, AllowTypeChange>,
+    f: impl Fn(f64) -> f64 + Send + Sync,
+) -> PyResult<Bound<'py, PyAny>> {
+    let shape = values.shape().to_vec();
+    let input: Vec<f64> = values.as_array().iter().copied().collect();
+    let out = stoppable(py, || {
+        let mut out = Vec::with_capacity(input.len());
+        for (k, &x) in input.iter().enumerate() {
+            if k % 1024 == 0 && work::stopped() {
+                return Err(work::INTERRUPTED.to_string());
+            }
+            out.push(f(x));
+        }
+        Ok(out)
+    })?;
+    if shape.is_empty() {
+        return Ok(out[0].into_pyobject(py)?.into_any());
+    }
+    let array = ArrayD::from_shape_vec(shape, out).map_err(value_error)?;
+    Ok(array.into_pyarray(py).into_any())
+}
+
+/// A dielectric elastomer resonator (docs/model.md): a pre-stretched membrane with mass
+/// bars. Keyword arguments are the device file's keys in SI units (shear_modulus Pa, jlim,
+/// relative_permittivity, density kg/m³, breakdown_field V/m, thickness m, length_active m,
+/// length_passive m, width m, bar_mass kg, prestretch_1, prestretch_2, damping N·s); an
+/// absent key takes the reference device's value, an absent `jlim` makes it neo-Hookean.
+/// A value the model refuses raises ValueError with the model's reason.
+#[pyclass(name = "Device", module = "de_resonator", frozen, eq)]
+#[derive(Clone)]
+struct Device_ {
+    params: DeviceParams<f64>,
+    /// Where it came from: a file, `keywords`, or the reference device.
+    source: String,
+}
+
+/// Two devices are equal when their values are (wherever they came from).
+impl PartialEq for Device_ {
+    fn eq(&self, other: &Self) -> bool {
+        self.params == other.params
+    }
+}
+
+impl Device_ {
+    /// The device from checked parameters.
+    fn new(params: DeviceParams<f64>, source: String) -> PyResult<Self> {
+        Device::new(params).map_err(|e| value_error(format!("{source}: {e}")))?;
+        Ok(Self { params, source })
+    }
+
+    fn device(&self) -> Device<f64> {
+        // Checked when made.
+        Device::new(self.params).expect("a checked device")
+    }
+
+    fn tuner(&self) -> Tuner<f64> {
+        Tuner::new(self.device())
+    }
+
+    fn info(&self) -> DeviceInfo {
+        DeviceInfo::new(self.source.clone(), &self.params)
+    }
+
+    /// The margin checked: 0 ≤ margin < 1.
+    fn margin(margin: f64) -> PyResult<f64> {
+        if (0.0..1.0).contains(&margin) {
+            Ok(margin)
+        } else {
+            Err(value_error(format!("margin {margin}: need 0 ≤ margin < 1")))
+        }
+    }
+}
+
+/// The device from keyword arguments: the device file's keys.
+fn from_keys(keys: &Bound<'_, PyDict>) -> PyResult<Device_> {
+    let mut pairs = Vec::new();
+    for (key, value) in keys.iter() {
+        let key: String = key.extract()?;
+        let number: f64 = value.extract().map_err(|_| {
+            value_error(format!(
+                "`{key}` must be a number (SI units), not {value:?}"
+            ))
+        })?;
+        pairs.push((key, number));
+    }
+    let borrowed: Vec<(&str, f64)> = pairs.iter().map(|(k, v)| (k.as_str(), *v)).collect();
+    let (params, notes) = device_file::from_keys(&borrowed).map_err(value_error)?;
+    let device = Device_::new(params, "keywords".into())?;
+    warn(keys.py(), &notes.implausible)?;
+    Ok(device)
+}
+
+/// Each line a `UserWarning` (a value no real membrane has: a unit slip).
+fn warn(py: Python<'_>, lines: &[String]) -> PyResult<()> {
+    let warnings = py.import("warnings")?;
+    for line in lines {
+        warnings.call_method1("warn", (line.as_str(),))?;
+    }
+    Ok(())
+}
+
+#[pymethods]
+impl Device_ {
+    #[new]
+    #[pyo3(signature = (**keys))]
+    fn py_new(keys: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
+        match keys {
+            Some(keys) => from_keys(keys),
+            None => Self::reference(),
+        }
+    }
+
+    /// The reference device of docs/model.md §9 (built in).
+    #[staticmethod]
+    fn reference() -> PyResult<Self> {
+        Self::new(REFERENCE_DEVICE, "reference device (built in)".into())
+    }
+
+    /// A device file (TOML, SI units, flat keys), as `host-sim --device FILE` reads it.
+    #[staticmethod]
+    fn from_file(py: Python<'_>, path: std::path::PathBuf) -> PyResult<Self> {
+        let text = std::fs::read_to_string(&path)
+            .map_err(|e| value_error(format!("cannot read {}: {e}", path.display())))?;
+        let source = path.display().to_string();
+        let (params, notes) =
+            device_file::parse_noting(&text).map_err(|e| value_error(format!("{source}: {e}")))?;
+        let device = Self::new(params, source)?;
+        warn(py, &notes.implausible)?;
+        Ok(device)
+    }
+
+    /// A device file's text.
+    #[staticmethod]
+    fn from_toml(py: Python<'_>, text: &str) -> PyResult<Self> {
+        let (params, notes) = device_file::parse_noting(text).map_err(value_error)?;
+        let device = Self::new(params, "toml".into())?;
+        warn(py, &notes.implausible)?;
+        Ok(device)
+    }
+
+    /// The device's keys and values (SI units), as a device file holds them: `Device(**d)`
+    /// makes the same device. `jlim` is absent for a neo-Hookean membrane.
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let dict = PyDict::new(py);
+        for field in Field::ALL {
+            if field == Field::Jlim && self.params.jlim.is_none() {
+                continue;
+            }
+            dict.set_item(field.key(), self.params.get(field))?;
+        }
+        Ok(dict)
+    }
+
+    /// `gent` or `neo_hookean` (docs/model.md §3).
+    #[getter]
+    fn material(&self) -> &'static str {
+        self.info().material
+    }
+
+    /// Where the device came from: a file's path, `keywords`, `toml` or the reference.
+    #[getter]
+    fn source(&self) -> &str {
+        &self.source
+    }
+
+    /// A device's value by its key (SI units): `device["thickness"]`.
+    fn __getitem__(&self, key: &str) -> PyResult<f64> {
+        let field = Field::from_key(key).ok_or_else(|| PyKeyError::new_err(key.to_string()))?;
+        match (field, self.params.jlim) {
+            (Field::Jlim, None) => Err(PyKeyError::new_err("jlim (neo-Hookean: no jlim)")),
+            _ => Ok(self.params.get(field)),
+        }
+    }
+
+    fn __repr__(&self) -> String {
+        let material = match self.params.jlim {
+            Some(_) => "Gent",
+            None => "neo-Hookean",
+        };
+        let keys: Vec<String> = Field::ALL
+            .iter()
+            .filter(|&&f| !(f == Field::Jlim && self.params.jlim.is_none()))
+            .map(|&f| format!("{}={:?}", f.key(), self.params.get(f)))
+            .collect();
+        format!("Device({}) # {material}", keys.join(", "))
+    }
+
+    /// Pickled by its keys: worker processes (Dask, multiprocessing) get the same device.
+    fn __reduce__<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyDict>,))> {
+        let make = py
+            .import("de_resonator._native")?
+            .getattr("_device_from_keys")?;
+        Ok((make, (self.to_dict(py)?,)))
+    }
+
+    /// The safe region (docs/model.md §§5–7): the limit first reached on the loading branch
+    /// (mode, volts V, stretch, natural_frequency_hz Hz), the highest bias within `margin`
+    /// (max_bias_volts V) and the tunable range (tunable_range_hz Hz): `host-sim safe --json`.
+    #[pyo3(signature = (margin = 0.05))]
+    fn safe<'py>(&self, py: Python<'py>, margin: f64) -> PyResult<Bound<'py, PyAny>> {
+        let margin = Self::margin(margin)?;
+        let region = Region::new(self.info(), &self.tuner(), margin).map_err(value_error)?;
+        result(py, &region)
+    }
+
+    /// The smallest bias that tunes the natural frequency to `target_hz` (Hz) within `margin`
+    /// of the limit: bias_volts V, stretch, natural_frequency_hz Hz, and the safe region
+    /// (`host-sim tune --json`). A target out of reach raises ValueError with the range.
+    #[pyo3(signature = (target_hz, margin = 0.05))]
+    fn tune<'py>(
+        &self,
+        py: Python<'py>,
+        target_hz: f64,
+        margin: f64,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let margin = Self::margin(margin)?;
+        let tuner = self.tuner();
+        let region = Region::new(self.info(), &tuner, margin).map_err(value_error)?;
+        let bias = tuner
+            .tune(target_hz, margin)
+            .map_err(|e| value_error(format!("{e} (margin {margin})")))?;
+        result(
+            py,
+            &host_sim::cmd::safe::TuneReport {
+                region,
+                target_hz,
+                bias_volts: bias.volts,
+                stretch: bias.stretch,
+                natural_frequency_hz: bias.natural_frequency_hz,
+            },
+        )
+    }
+
+    /// The small-oscillation natural frequency (Hz) at a static bias (V) on the loading
+    /// branch (docs/model.md §5), for a number or an array of any shape and numeric dtype;
+    /// NaN where no equilibrium holds the bias (negative, or past the limit).
+    fn frequency<'py>(
+        &self,
+        py: Python<'py>,
+        bias_volts: PyArrayLikeDyn<'py, f64, AllowTypeChange>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let device = self.device();
+        let limit = Limit::of(&device);
+        map_array(py, bias_volts, |volts| {
+            match limit.stretch_for_bias(&device, volts) {
+                Some(stretch) if volts >= 0.0 => device.natural_frequency_hz(stretch),
+                _ => f64::NAN,
+            }
+        })
+    }
+
+    /// `tune` for every target of an array (Hz, any numeric dtype), with the GIL released: a
+    /// Result of arrays of the targets' shape, `bias_volts` (V), `stretch`,
+    /// `natural_frequency_hz` (NaN where a target is out of reach), `ok` (bool) and
+    /// `reason` (a list, None where tuned).
+    #[pyo3(signature = (targets_hz, margin = 0.05))]
+    fn tune_many<'py>(
+        &self,
+        py: Python<'py>,
+        targets_hz: PyArrayLikeDyn<'py, f64, AllowTypeChange>,
+        margin: f64,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let margin = Self::margin(margin)?;
+        let shape = targets_hz.shape().to_vec();
+        let targets: Vec<f64> = targets_hz.as_array().iter().copied().collect();
+        let tuner = self.tuner();
+        let tuned = stoppable(py, || {
+            let mut out = Vec::with_capacity(targets.len());
+            for (k, &hz) in targets.iter().enumerate() {
+                if k % 256 == 0 && work::stopped() {
+                    return Err(work::INTERRUPTED.to_string());
+                }
+                out.push(tuner.tune(hz, margin).map_err(|e| e.to_string()));
+            }
+            Ok(out)
+        })?;
+        let column = |f: &dyn Fn(&de_resonator::Equilibrium<f64>) -> f64| -> PyResult<_> {
+            let values: Vec<f64> = tuned
+                .iter()
+                .map(|t| t.as_ref().map_or(f64::NAN, f))
+                .collect();
+            Ok(ArrayD::from_shape_vec(shape.clone(), values)
+                .map_err(value_error)?
+                .into_pyarray(py))
+        };
+        let ok: Vec<bool> = tuned.iter().map(Result::is_ok).collect();
+        let reasons: Vec<Option<String>> = tuned.iter().map(|t| t.clone().err()).collect();
+        let dict = PyDict::new(py);
+        dict.set_item(
+            "targets_hz",
+            ArrayD::from_shape_vec(shape.clone(), targets)
+                .map_err(value_error)?
+                .into_pyarray(py),
+        )?;
+        dict.set_item("bias_volts", column(&|e| e.volts)?)?;
+        dict.set_item("stretch", column(&|e| e.stretch)?)?;
+        dict.set_item("natural_frequency_hz", column(&|e| e.natural_frequency_hz)?)?;
+        dict.set_item(
+            "ok",
+            ArrayD::from_shape_vec(shape, ok)
+                .map_err(value_error)?
+                .into_pyarray(py),
+        )?;
+        dict.set_item("reason", PyList::new(py, reasons)?)?;
+        dict.set_item("margin", margin)?;
+        wrap(py, dict.into_any())
+    }
+
+    /// The tuning curve (`host-sim curve`): the loading branch from 0 V to the limit at
+    /// `points` biases, as arrays ready for matplotlib (bias_volts V, natural_frequency_hz
+    /// Hz, stretch, beyond_margin bool), with the limit, max_bias_volts and
+    /// tunable_range_hz; `target_hz` marks the smallest bias for it.
+    #[pyo3(signature = (points = 200, margin = 0.05, target_hz = None))]
+    fn curve<'py>(
+        &self,
+        py: Python<'py>,
+        points: usize,
+        margin: f64,
+        target_hz: Option<f64>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        curves(py, vec![self.params], points, margin, target_hz)?
+            .into_iter()
+            .next()
+            .ok_or_else(|| PyRuntimeError::new_err("no curve"))
+    }
+
+    /// A family of curves over pre-stretches: one `curve` for each pair of `prestretch_1` ×
+    /// `prestretch_2` (numbers or sequences); a pair that makes no valid device has no
+    /// points and its `problem` says why.
+    #[pyo3(signature = (prestretch_1 = None, prestretch_2 = None, points = 200, margin = 0.05, target_hz = None))]
+    fn family<'py>(
+        &self,
+        py: Python<'py>,
+        prestretch_1: Option<Vec<f64>>,
+        prestretch_2: Option<Vec<f64>>,
+        points: usize,
+        margin: f64,
+        target_hz: Option<f64>,
+    ) -> PyResult<Bound<'py, PyList>> {
+        let ones = prestretch_1.unwrap_or(vec![self.params.prestretch_1]);
+        let twos = prestretch_2.unwrap_or(vec![self.params.prestretch_2]);
+        let mut devices = Vec::new();
+        for &l1 in &ones {
+            for &l2 in &twos {
+                let mut p = self.params;
+                p.set(Field::Prestretch1, l1);
+                p.set(Field::Prestretch2, l2);
+                devices.push(p);
+            }
+        }
+        PyList::new(py, curves(py, devices, points, margin, target_hz)?)
+    }
+
+    /// The tuning table the firmware flashes (`host-sim lut`): `points` (None: the fewest of
+    /// 64 … 1024 that interpolate within 1e-5 in frequency) within `margin`. A Result with
+    /// `data` (the table's bytes as flashed), `natural_frequency_hz` and `bias_volts` (float32
+    /// arrays, the table's points) and `lut --json`'s keys; `out` writes it (a `.csv` name:
+    /// the points as CSV, else the bytes).
+    #[pyo3(signature = (points = None, margin = 0.05, out = None))]
+    fn lut<'py>(
+        &self,
+        py: Python<'py>,
+        points: Option<usize>,
+        margin: f64,
+        out: Option<std::path::PathBuf>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let margin = Self::margin(margin)?;
+        let params = self.params;
+        let made = stoppable(py, move || {
+            host_sim::lut::make(params, margin, points, true).map_err(|e| e.to_string())
+        })?;
+        let csv = out
+            .as_ref()
+            .and_then(|p| p.extension())
+            .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
+        let format = if csv { LutFormat::Csv } else { LutFormat::Bin };
+        let mut files = Vec::new();
+        if let Some(path) = &out {
+            let bytes = if csv {
+                let rows: Vec<host_sim::cmd::lut::Point> = made
+                    .points
+                    .iter()
+                    .map(
+                        |&(natural_frequency_hz, bias_volts)| host_sim::cmd::lut::Point {
+                            natural_frequency_hz,
+                            bias_volts,
+                        },
+                    )
+                    .collect();
+                host_sim::cmd::csv(&rows).map_err(value_error)?
+            } else {
+                made.bytes.clone()
+            };
+            files.push(host_sim::cmd::write_path(path, &bytes).map_err(value_error)?);
+        }
+        let report = host_sim::cmd::lut::report(self.info(), &made, margin, format, files);
+        let out = result(py, &report)?;
+        out.set_item("data", PyBytes::new(py, &made.bytes))?;
+        let hz: Vec<f32> = made.points.iter().map(|p| p.0).collect();
+        let volts: Vec<f32> = made.points.iter().map(|p| p.1).collect();
+        out.set_item("natural_frequency_hz", hz.into_pyarray(py))?;
+        out.set_item("bias_volts", volts.into_pyarray(py))?;
+        Ok(out)
+    }
+
+    /// The frequency response (`host-sim sweep`): the settled stretch amplitude at `points`
+    /// drive frequencies from `from_ratio`·f0 to `to_ratio`·f0, with `ac_volts` (V) on
+    /// `bias_volts` (V; defaults 0.2 and 0.6 of the limit's voltage), damped to
+    /// `quality_factor` (0: the device's damping), each run `periods` periods of f0 by RK4 at
+    /// `steps_per_period`. A Result with `sweep --json`'s keys and arrays `drive_hz` (Hz),
+    /// `ratio`, `amplitude` (NaN where the run stopped), `crossed` (bool).
+    #[pyo3(signature = (bias_volts = None, ac_volts = None, quality_factor = 200.0, from_ratio = 0.3, to_ratio = 2.4, points = 211, periods = 400.0, steps_per_period = 48.0))]
+    #[allow(clippy::too_many_arguments)]
+    fn sweep<'py>(
+        &self,
+        py: Python<'py>,
+        bias_volts: Option<f64>,
+        ac_volts: Option<f64>,
+        quality_factor: f64,
+        from_ratio: f64,
+        to_ratio: f64,
+        points: usize,
+        periods: f64,
+        steps_per_period: f64,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let args = SweepArgs {
+            bias_volts,
+            ac_volts,
+            quality_factor,
+            from_ratio,
+            to_ratio,
+            points,
+            periods,
+            steps_per_period,
+            out: std::path::PathBuf::new(),
+            device: DeviceArgs::given(self.params, self.source.clone()),
+        };
+        let (report, _) = stoppable(py, || host_sim::cmd::sweep::measure(&args, || Ok(())))?;
+        let out = result(py, &report)?;
+        let column = |f: &dyn Fn(&host_sim::cmd::sweep::Point) -> f64| {
+            report
+                .points
+                .iter()
+                .map(f)
+                .collect::<Vec<f64>>()
+                .into_pyarray(py)
+        };
+        out.set_item("drive_hz", column(&|p| p.drive_hz))?;
+        out.set_item("ratio", column(&|p| p.ratio))?;
+        out.set_item("amplitude", column(&|p| p.amplitude.unwrap_or(f64::NAN)))?;
+        let crossed: Vec<bool> = report
+            .points
+            .iter()
+            .map(|p| p.first_limit_mode.is_some())
+            .collect();
+        out.set_item("crossed", crossed.into_pyarray(py))?;
+        Ok(out)
+    }
+}
+
+/// The curves of `devices`, with the GIL released.
+fn curves<'py>(
+    py: Python<'py>,
+    devices: Vec<DeviceParams<f64>>,
+    points: usize,
+    margin: f64,
+    target_hz: Option<f64>,
+) -> PyResult<Vec<Bound<'py, PyAny>>> {
+    let margin = Device_::margin(margin)?;
+    if !(2..=host_sim::cmd::curve::MAX_POINTS).contains(&points) {
+        return Err(value_error(format!(
+            "points {points}: need 2 to {}",
+            host_sim::cmd::curve::MAX_POINTS
+        )));
+    }
+    if let Some(hz) = target_hz.filter(|hz| !(hz.is_finite() && *hz > 0.0)) {
+        return Err(value_error(format!(
+            "target_hz {hz}: need a finite frequency > 0"
+        )));
+    }
+    let made: Vec<Curve> = stoppable(py, || {
+        let mut made = Vec::with_capacity(devices.len());
+        for p in &devices {
+            if work::stopped() {
+                return Err(work::INTERRUPTED.to_string());
+            }
+            made.push(one_curve(*p, margin, target_hz, points));
+        }
+        Ok(made)
+    })?;
+    made.iter()
+        .map(|c| {
+            let column = |f: &dyn Fn(&host_sim::cmd::curve::Point) -> f64| {
+                c.points
+                    .iter()
+                    .map(f)
+                    .collect::<Vec<f64>>()
+                    .into_pyarray(py)
+            };
+            let dict = PyDict::new(py);
+            dict.set_item("prestretch_1", c.prestretch_1)?;
+            dict.set_item("prestretch_2", c.prestretch_2)?;
+            dict.set_item("bias_volts", column(&|p| p.bias_volts))?;
+            dict.set_item("natural_frequency_hz", column(&|p| p.natural_frequency_hz))?;
+            dict.set_item("stretch", column(&|p| p.stretch))?;
+            let beyond: Vec<bool> = c.points.iter().map(|p| p.beyond_margin).collect();
+            dict.set_item("beyond_margin", beyond.into_pyarray(py))?;
+            let summary = result(py, &Summary { curve: c })?;
+            dict.update(summary.cast::<PyDict>()?.as_mapping())?;
+            wrap(py, dict.into_any())
+        })
+        .collect()
+}
+
+/// A curve's limit, range, target and problem, as `curve --json` says them.
+struct Summary<'a> {
+    curve: &'a Curve,
+}
+
+impl Serialize for Summary<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let c = self.curve;
+        let mut map = s.serialize_map(Some(5))?;
+        map.serialize_entry("limit", &c.limit)?;
+        map.serialize_entry("max_bias_volts", &c.max_bias_volts)?;
+        map.serialize_entry("tunable_range_hz", &c.tunable_range_hz)?;
+        map.serialize_entry("target", &c.target)?;
+        map.serialize_entry("problem", &c.problem)?;
+        map.end()
+    }
+}
+
+/// The motion from rest under Φ(t) = bias_volts + ac_volts·sin(2π·ac_hz·t) (V, Hz), watched
+/// by the six checks of docs/model.md §6, as `host-sim simulate` runs it, for
+/// `duration_seconds` (s). `method`: `reference` (adaptive DOP853, f64, rtol = atol = 1e-12,
+/// stiff cases handed to Radau), `reference-radau`, or a core fixed-step method (`rk4`,
+/// `verlet`, `implicit-midpoint`, each `-f32` as on the target or `-f64`); `step_seconds`:
+/// the output spacing (default 1/64 of the period at 0 V); `start`: `equilibrium` (at rest
+/// at the bias) or `prestretch` (the voltage switched on at t = 0); `damping` (N·s)
+/// overrides the device's. Returns a Result shaped like SciPy's OdeResult: `t` (s), `y`
+/// (2 × n: stretch, dλ/dt in 1/s), `volts`, `status` (0: the end reached with no limit
+/// crossed; 1: a limit crossed, its time in `t_events[0]`, the state in `y_events[0]`,
+/// its mode in `message` and `limit`), `success`, `min_stretch`, `max_stretch` (over the
+/// whole run), `nfev` (the adaptive solver's right-hand sides). With `stop_at_limit` (the
+/// default) the samples end at the crossing, as at SciPy's terminal event; without, they
+/// run to the end.
+#[pyfunction]
+#[pyo3(signature = (device, bias_volts, *, duration_seconds, ac_volts = 0.0, ac_hz = None, method = "reference", rtol = None, atol = None, step_seconds = None, start = "equilibrium", damping = None, stop_at_limit = true))]
+#[allow(clippy::too_many_arguments)]
+fn simulate<'py>(
+    py: Python<'py>,
+    device: &Device_,
+    bias_volts: f64,
+    duration_seconds: f64,
+    ac_volts: f64,
+    ac_hz: Option<f64>,
+    method: &str,
+    rtol: Option<f64>,
+    atol: Option<f64>,
+    step_seconds: Option<f64>,
+    start: &str,
+    damping: Option<f64>,
+    stop_at_limit: bool,
+) -> PyResult<Bound<'py, PyAny>> {
+    let choice = Choice::ALL
+        .into_iter()
+        .find(|c| c.name() == method)
+        .ok_or_else(|| {
+            let names: Vec<&str> = Choice::ALL.iter().map(Choice::name).collect();
+            value_error(format!("method `{method}`: one of {}", names.join(", ")))
+        })?;
+    let start = match start {
+        "equilibrium" => Start::Equilibrium,
+        "prestretch" => Start::Prestretch,
+        other => {
+            return Err(value_error(format!(
+                "start `{other}`: `equilibrium` or `prestretch`"
+            )))
+        }
+    };
+    let asked = Asked {
+        bias_volts,
+        ac_volts,
+        ac_hz,
+        damping,
+        duration_seconds,
+        start,
+        method: choice,
+        step_seconds,
+        rtol,
+        atol,
+    };
+    let (scene, step) = asked
+        .scene(device.params, &device.info())
+        .map_err(value_error)?;
+    let (ac_hz, tolerance) = (scene.drive_hz, scene.tolerance);
+    let out = stoppable(py, || {
+        engine::simulate(&scene, choice, step).map_err(|e| e.to_string())
+    })?;
+    let mut t: Vec<f64> = (0..out.samples.len())
+        .map(|k| k as f64 * out.step_seconds)
+        .collect();
+    let (mut stretch, mut rate) = (out.samples.clone(), out.velocities.clone());
+    // Stopped at the first crossing, as SciPy's terminal event: the samples before it, then
+    // the crossing itself.
+    if let (true, Some((_, at)), Some((x, v))) =
+        (stop_at_limit, out.first_limit, out.first_limit_state)
+    {
+        let before = t.iter().take_while(|&&s| s < at).count();
+        t.truncate(before);
+        stretch.truncate(before);
+        rate.truncate(before);
+        t.push(at);
+        stretch.push(x);
+        rate.push(v);
+    }
+    let n = t.len();
+    let volts: Vec<f64> = t
+        .iter()
+        .map(|&t| bias_volts + ac_volts * (std::f64::consts::TAU * ac_hz * t).sin())
+        .collect();
+    let mut y = Array2::<f64>::zeros((2, n));
+    for k in 0..n {
+        y[(0, k)] = stretch[k];
+        y[(1, k)] = rate[k];
+    }
+    let dict = PyDict::new(py);
+    dict.set_item("t", t.into_pyarray(py))?;
+    dict.set_item("y", y.into_pyarray(py))?;
+    dict.set_item("volts", volts.into_pyarray(py))?;
+    let (status, message, t_events, y_events) = match (out.first_limit, out.first_limit_state) {
+        (Some((mode, at)), state) => {
+            let (stretch, rate) = state.unwrap_or((f64::NAN, f64::NAN));
+            (
+                1,
+                format!(
+                    "a limit was crossed: {} ({}) at t = {at} s",
+                    mode.name(),
+                    mode.description()
+                ),
+                vec![at],
+                vec![stretch, rate],
+            )
+        }
+        (None, _) => (
+            0,
+            "the end of the interval was reached; no limit crossed".to_string(),
+            vec![],
+            vec![],
+        ),
+    };
+    let events = t_events.len();
+    dict.set_item("status", status)?;
+    dict.set_item("message", message)?;
+    dict.set_item("success", true)?;
+    dict.set_item("limit", out.first_limit.map(|(mode, _)| mode.name()))?;
+    dict.set_item("t_events", PyList::new(py, [t_events.into_pyarray(py)])?)?;
+    let y_events = Array2::from_shape_vec((events, 2), y_events).map_err(value_error)?;
+    dict.set_item("y_events", PyList::new(py, [y_events.into_pyarray(py)])?)?;
+    dict.set_item("min_stretch", out.min_stretch)?;
+    dict.set_item("max_stretch", out.max_stretch)?;
+    dict.set_item("method", choice.name())?;
+    dict.set_item("solver", out.solver.map(engine::Solver::name))?;
+    dict.set_item("solver_note", out.switched.clone())?;
+    dict.set_item(
+        "tolerance",
+        out.solver.map(|s| {
+            let t = tolerance.unwrap_or(s.default_tolerance());
+            (t.rtol, t.atol)
+        }),
+    )?;
+    dict.set_item("nfev", out.evaluations)?;
+    dict.set_item("step_seconds", out.step_seconds)?;
+    dict.set_item("stopped", out.stopped.clone())?;
+    dict.set_item("run_seconds", out.run_seconds)?;
+    wrap(py, dict.into_any())
+}
+
+/// A scene (the path of a scene file, or its TOML text) run as `host-sim run` runs it: the
+/// core's board ticking against the full plant. Returns the report (`run --json`'s keys)
+/// with `history`: per tick `time_seconds` (s), `dac_code`, `dac_on`, `enable`, `phase`
+/// (a list), `stretch`, `membrane_volts` (V), `current_amps` (A), as arrays. Writes no files.
+#[pyfunction]
+fn run_scene<'py>(py: Python<'py>, scene: &str) -> PyResult<Bound<'py, PyAny>> {
+    let mut parsed = if scene.contains('\n') || scene.contains('=') {
+        scene::parse(scene).map_err(value_error)?
+    } else {
+        scene::load(Path::new(scene)).map_err(value_error)?
+    };
+    parsed.plot = false;
+    parsed.history = false;
+    parsed.run.history = true;
+    let (parsed, run) = stoppable(py, move || {
+        let run = parsed.run.run()?;
+        Ok((parsed, run))
+    })?;
+    let report = host_sim::cmd::run::report(&parsed, &run, Vec::new());
+    let out = result(py, &report)?;
+    let history = PyDict::new(py);
+    let h = &run.history;
+    let column = |f: &dyn Fn(&host_sim::engine::hil::Sample) -> f64| {
+        h.iter().map(f).collect::<Vec<f64>>().into_pyarray(py)
+    };
+    history.set_item("time_seconds", column(&|s| s.seconds))?;
+    history.set_item("stretch", column(&|s| s.stretch))?;
+    history.set_item("membrane_volts", column(&|s| s.membrane_volts))?;
+    history.set_item("current_amps", column(&|s| s.current_amps))?;
+    history.set_item(
+        "dac_code",
+        h.iter()
+            .map(|s| s.dac_code)
+            .collect::<Vec<u16>>()
+            .into_pyarray(py),
+    )?;
+    history.set_item(
+        "dac_on",
+        h.iter()
+            .map(|s| s.dac_on)
+            .collect::<Vec<bool>>()
+            .into_pyarray(py),
+    )?;
+    history.set_item(
+        "enable",
+        h.iter()
+            .map(|s| s.enable)
+            .collect::<Vec<bool>>()
+            .into_pyarray(py),
+    )?;
+    let phases: Vec<&str> = h
+        .iter()
+        .map(|s| s.phase.map_or("none", |p| p.name()))
+        .collect();
+    history.set_item("phase", PyList::new(py, phases)?)?;
+    out.set_item("history", wrap(py, history.into_any())?)?;
+    Ok(out)
+}
+
+/// A configuration image to flash (`host-sim image`): for `device` (None: the reference) with
+/// `settings` (a settings file's path: the keys of a scene's [controller]), `target_hz` (Hz,
+/// over the settings'), the amplifier (`dac_reference_volts` V, `gain` V/V, `rail_volts` V)
+/// and `power_up` (`wait` for `start`, or `drive`); or a scene's image (`scene`: its path).
+/// A Result with `data` (the bytes) and `image --check --json`'s keys (`bytes`: their
+/// count); `out` writes them. An image
+/// the firmware's boot would refuse raises ValueError saying why.
+#[pyfunction]
+#[pyo3(signature = (device = None, *, settings = None, target_hz = None, dac_reference_volts = 2.5, gain = 4000.0, rail_volts = None, power_up = "wait", scene = None, out = None))]
+#[allow(clippy::too_many_arguments)]
+fn image<'py>(
+    py: Python<'py>,
+    device: Option<&Device_>,
+    settings: Option<std::path::PathBuf>,
+    target_hz: Option<f32>,
+    dac_reference_volts: f32,
+    gain: f32,
+    rail_volts: Option<f32>,
+    power_up: &str,
+    scene: Option<std::path::PathBuf>,
+    out: Option<std::path::PathBuf>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let power_up = match power_up {
+        "wait" => PowerUpArg::Wait,
+        "drive" => PowerUpArg::Drive,
+        other => {
+            return Err(value_error(format!(
+                "power_up `{other}`: `wait` or `drive`"
+            )))
+        }
+    };
+    let args = ImageArgs {
+        out: None,
+        check: None,
+        scene,
+        device: device.map_or_else(DeviceArgs::default, |d| {
+            DeviceArgs::given(d.params, d.source.clone())
+        }),
+        settings,
+        target_hz,
+        dac_reference_volts,
+        gain,
+        rail_volts,
+        power_up,
+    };
+    let name = out
+        .as_ref()
+        .map_or("(in memory)".into(), |p| p.display().to_string());
+    let (bytes, report) = stoppable(py, || host_sim::cmd::image::build(&args, name))?;
+    if let Some(path) = &out {
+        host_sim::cmd::write_path(path, &bytes).map_err(value_error)?;
+    }
+    let dict = result(py, &report)?;
+    dict.set_item("data", PyBytes::new(py, &bytes))?;
+    Ok(dict)
+}
+
+/// What an image or a table holds and whether the firmware's boot accepts it (`host-sim
+/// image --check`): from its bytes, or a file's path.
+#[pyfunction]
+fn check_image<'py>(py: Python<'py>, image: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+    let (bytes, name) = match image.cast::<PyBytes>() {
+        Ok(bytes) => (bytes.as_bytes().to_vec(), "(bytes)".to_string()),
+        Err(_) => {
+            let path: std::path::PathBuf = image.extract()?;
+            let bytes = std::fs::read(&path)
+                .map_err(|e| value_error(format!("cannot read {}: {e}", path.display())))?;
+            (bytes, path.display().to_string())
+        }
+    };
+    let report = host_sim::cmd::image::describe(&bytes, name).map_err(value_error)?;
+    result(py, &report)
+}
+
+/// Pickling's way back: the device from its keys (`Device.to_dict()`).
+#[pyfunction]
+fn _device_from_keys(keys: &Bound<'_, PyDict>) -> PyResult<Device_> {
+    from_keys(keys)
+}
+
+#[pymodule]
+fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<Device_>()?;
+    m.add_function(wrap_pyfunction!(simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(run_scene, m)?)?;
+    m.add_function(wrap_pyfunction!(image, m)?)?;
+    m.add_function(wrap_pyfunction!(check_image, m)?)?;
+    m.add_function(wrap_pyfunction!(_device_from_keys, m)?)?;
+    Ok(())
+}

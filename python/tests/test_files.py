@@ -1,0 +1,75 @@
+"""lut, sweep, image and check_image: the CLI's files and JSON for the same inputs, and what
+the model says of the response's peak."""
+
+import json
+import subprocess
+
+import numpy as np
+import pytest
+
+import de_resonator as dr
+from conftest import ROOT
+
+
+def cli(host_sim, *args):
+    out = subprocess.run([host_sim, *args, "--json"], capture_output=True, text=True)
+    assert out.returncode in (0, 1), out.stderr
+    return json.loads(out.stdout)
+
+
+def test_the_table_is_the_clis_byte_for_byte(host_sim, tmp_path):
+    device = dr.Device.reference()
+    table = device.lut()
+    theirs = cli(host_sim, "lut", "--out", str(tmp_path / "t.bin"))
+    assert table.data == (tmp_path / "t.bin").read_bytes() and table.bytes == len(table.data)
+    assert table.crc32 == theirs["crc32"] and table.points == theirs["points"]
+    assert table.natural_frequency_hz.dtype == np.float32 and len(table.bias_volts) == table.points
+    # The table's points lie on the device's curve (f32 rounding apart).
+    assert device.frequency(table.bias_volts.astype(float)) == pytest.approx(
+        table.natural_frequency_hz.astype(float), rel=1e-5)
+    written = device.lut(points=64, out=tmp_path / "t.csv")
+    assert (tmp_path / "t.csv").read_text().startswith("natural_frequency_hz,bias_volts")
+    assert written.files == [str(tmp_path / "t.csv")] and written.format == "csv"
+    with pytest.raises(ValueError, match="points"):
+        device.lut(points=1)
+
+
+def test_the_sweep_is_the_clis_and_peaks_at_the_natural_frequency(host_sim, tmp_path):
+    device = dr.Device.reference()
+    ours = device.sweep(points=41, periods=120, from_ratio=0.8, to_ratio=1.2,
+                        bias_volts=4000.0, ac_volts=40.0, quality_factor=50)
+    theirs = cli(host_sim, "sweep", "--points", "41", "--periods", "120", "--from-ratio", "0.8",
+                 "--to-ratio", "1.2", "--bias-volts", "4000", "--ac-volts", "40",
+                 "--quality-factor", "50", "--out", str(tmp_path))
+    assert ours.amplitude.tolist() == [p["amplitude"] for p in theirs["points"]]
+    assert ours.peaks == theirs["peaks"]
+    f0 = device.frequency(4000.0)
+    assert ours.natural_frequency_hz == pytest.approx(f0, rel=1e-9)
+    # A Q of 50: the peak within a half-width (f0/2Q) of f0.
+    top = ours.drive_hz[np.nanargmax(ours.amplitude)]
+    assert abs(top - f0) < f0 / 100 + (ours.drive_hz[1] - ours.drive_hz[0])
+    with pytest.raises(ValueError, match="quality-factor -1"):
+        device.sweep(quality_factor=-1)
+
+
+def test_the_image_is_the_clis_and_its_check_accepts_it(host_sim, tmp_path):
+    device = dr.Device(shear_modulus=60e3)
+    ours = device.safe()
+    target = sum(ours.tunable_range_hz) / 2
+    made = dr.image(device, target_hz=target, power_up="drive", out=tmp_path / "py.img")
+    toml = tmp_path / "d.toml"
+    toml.write_text("shear_modulus = 60e3\n")
+    subprocess.run([host_sim, "image", "--device", str(toml), "--target-hz", repr(target),
+                    "--power-up", "drive", "--out", str(tmp_path / "cli.img")], check=True,
+                   capture_output=True)
+    assert made.data == (tmp_path / "py.img").read_bytes() == (tmp_path / "cli.img").read_bytes()
+    assert made.verdict == dr.check_image(made.data).verdict
+    assert dr.check_image(tmp_path / "cli.img") == {**dr.check_image(made.data),
+                                                     "file": str(tmp_path / "cli.img")}
+    assert dr.image().data == dr.image(dr.Device.reference(), target_hz=44.0).data
+    with pytest.raises(ValueError, match="give the target"):
+        dr.image(device)
+    with pytest.raises(ValueError, match="power_up `later`"):
+        dr.image(power_up="later")
+    scene = dr.image(scene=ROOT / "scenes" / "reference.toml")
+    assert scene.verdict == dr.check_image(scene.data).verdict

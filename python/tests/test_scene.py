@@ -1,0 +1,42 @@
+"""run_scene: a scene as `host-sim run` runs it, the report and the history as arrays."""
+
+import json
+import subprocess
+
+import numpy as np
+import pytest
+
+import de_resonator as dr
+from conftest import ROOT
+
+
+def test_the_reference_scene_reports_as_the_cli_and_gives_its_history(host_sim, tmp_path):
+    ours = dr.run_scene(str(ROOT / "scenes" / "reference.toml"))
+    out = subprocess.run(
+        [host_sim, "run", str(ROOT / "scenes" / "reference.toml"), "--out", str(tmp_path),
+         "--json"], capture_output=True, text=True,
+    )
+    assert out.returncode == 0, out.stderr
+    theirs = json.loads(out.stdout)
+    for key in ["ticks", "bias_volts", "natural_frequency_hz", "relative_error", "fault",
+                "plant_crossing", "events", "commands", "final_membrane_volts"]:
+        assert ours[key] == theirs[key], key
+    history = ours.history
+    assert history.time_seconds.shape == (ours.ticks,)
+    assert history.dac_code.dtype == np.uint16 and history.enable.dtype == np.bool_
+    assert len(history.phase) == ours.ticks and history.phase[-1] == "driving"
+    # The plant's natural frequency the report gives is the target's within the scene's
+    # tolerance, and the stretch history ends near the tuned stretch's.
+    assert abs(ours.relative_error) < 1e-3
+
+
+def test_a_scene_from_its_text_and_its_errors():
+    text = (ROOT / "scenes" / "reference.toml").read_text()
+    short = text.replace("duration_seconds = 10.0", "duration_seconds = 0.5")
+    assert short != text
+    ours = dr.run_scene(short)
+    assert ours.simulated_seconds == 0.5
+    with pytest.raises(ValueError, match="cannot read scene"):
+        dr.run_scene("no-such-scene.toml")
+    with pytest.raises(ValueError, match="unknown field"):
+        dr.run_scene("name = 'x'\nnonsense = 1\n")
