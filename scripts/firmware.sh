@@ -100,6 +100,9 @@ grep -q '^# ready .*power_up=wait' target/qemu-script.log
 grep -q '^ok phase=holding target_hz=44 ' target/qemu-script.log
 sleep 0.5
 if pgrep -f "unix:$PWD/target/qemu/fw.sock" | grep -q .; then echo "scripts/qemu.sh left QEMU running" >&2; exit 1; fi
+
+step "a person at a serial terminal: picocom in tmux on the firmware's command port (scripts/qemu.sh --pty)"
+HOST_SIM="$host_sim" python3 scripts/terminal_test.py qemu "$host_sim"
 cd firmware
 
 step "the firmware in the loop: every shipped scene through the link build under QEMU, tick for tick against the core"

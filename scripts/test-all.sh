@@ -58,11 +58,15 @@ rustup show active-toolchain
 rustup component add clippy rustfmt
 rustup target add "$TARGET"
 
-step "QEMU (qemu-system-arm) and defmt-print for the firmware runs"
-if ! command -v qemu-system-arm >/dev/null; then
+step "QEMU (qemu-system-arm), defmt-print, and picocom with tmux for the terminal tests"
+missing=()
+for tool in qemu-system-arm:qemu-system-arm picocom:picocom tmux:tmux; do
+    command -v "${tool%%:*}" >/dev/null || missing+=("${tool##*:}")
+done
+if [ "${#missing[@]}" -gt 0 ]; then
     SUDO=$([ "$(id -u)" = 0 ] || echo sudo)
     $SUDO apt-get update -qq
-    $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq qemu-system-arm
+    $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}"
 fi
 qemu-system-arm --version | head -1
 if ! command -v defmt-print >/dev/null; then
@@ -89,6 +93,9 @@ cargo build --locked -p de-resonator --target "$TARGET" --release --features def
 
 step "tests (core integration tests, host-sim unit and CLI tests with BDF; the fuzz test has its own step)"
 cargo test --locked --workspace --features host-sim/bdf -- --skip fuzz_the_controller
+
+step "a person at a serial terminal: picocom in tmux on host-sim serve --pty"
+python3 scripts/terminal_test.py serve "$PWD/target/debug/host-sim"
 
 step "Python: pip install ./python (maturin), pytest python/tests, the examples' figures"
 # The package and what its tests and examples use (numpy, SciPy, matplotlib, Dask), into the

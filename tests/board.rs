@@ -621,7 +621,7 @@ fn an_image_that_waits_drives_only_at_start() {
     assert!(b.notice.starts_with("ready "), "{}", b.notice);
     assert!(
         b.notice
-            .ends_with("power_up=wait (the output off at 0 V: `start` to drive)"),
+            .ends_with("power_up=wait output=off (the output off at 0 V: `start` to drive)"),
         "{}",
         b.notice
     );
@@ -648,14 +648,18 @@ fn an_image_that_waits_drives_only_at_start() {
     // One that drives at power-up says so and ramps at once.
     let bytes = image_of(&Settings::for_target(44.0), &spec(), PowerUp::Drive);
     let mut b = Bench::boot(&bytes, None::<NoKeeper>, None);
-    assert!(b.notice.ends_with("power_up=drive"), "{}", b.notice);
+    assert!(
+        b.notice.ends_with("power_up=drive output=on"),
+        "{}",
+        b.notice
+    );
     assert!(b.run(100, Inputs::NONE) > 0.0);
     // After a `reset` (asked at rest at 0 V) it comes up off: no command named `reset`
     // switches the high voltage on.
     let mut b = Bench::boot(&bytes, None::<NoKeeper>, Some(ResetCause::Asked));
     assert!(
         b.notice
-            .ends_with("power_up=drive (the output off at 0 V: `start` to drive)"),
+            .ends_with("power_up=drive output=off (after a reset the output stays off at 0 V: `start` to drive)"),
         "{}",
         b.notice
     );
@@ -879,7 +883,7 @@ fn lines_end_at_a_line_feed_a_carriage_return_or_both() {
         let mut lines = Lines::default();
         bytes
             .iter()
-            .filter_map(|&b| lines.push(b))
+            .filter_map(|&b| lines.push(b).line)
             .collect::<Vec<Line>>()
     };
     for ending in ["\n", "\r", "\r\n"] {
@@ -907,7 +911,7 @@ fn lines_end_at_a_line_feed_a_carriage_return_or_both() {
         .iter()
         .flat_map(|part| {
             part.iter()
-                .filter_map(|&b| lines.push(b))
+                .filter_map(|&b| lines.push(b).line)
                 .collect::<Vec<_>>()
         })
         .collect();
@@ -922,4 +926,56 @@ fn lines_end_at_a_line_feed_a_carriage_return_or_both() {
             .collect();
         assert_eq!(lines_of(&sent), [Line::TooLong, line("info")], "{ending:?}");
     }
+}
+
+/// What a person at a serial terminal types gets a serial console's echo and editing; a
+/// program (LF or CRLF, no edits) sees not one byte more than before.
+#[test]
+fn a_terminal_gets_echo_and_editing_and_a_program_gets_neither() {
+    use de_resonator::board::{Echo, Lines, REPLY_END, TERMINAL_REPLY_END};
+    let typed = |lines: &mut Lines, bytes: &[u8]| {
+        let mut echoed = Vec::new();
+        let mut got = Vec::new();
+        for &b in bytes {
+            let pushed = lines.push(b);
+            pushed.echo.bytes(|e| echoed.push(e));
+            got.extend(pushed.line);
+        }
+        (got, echoed)
+    };
+    // Programs: LF or CRLF line ends, whatever they send, no echo, `\n` after replies.
+    for ending in ["\n", "\r\n"] {
+        let mut lines = Lines::default();
+        let sent = format!("status{ending}get tick_hz{ending}stop{ending}");
+        let (got, echoed) = typed(&mut lines, sent.as_bytes());
+        assert_eq!(got, [line("status"), line("get tick_hz"), line("stop")]);
+        assert!(echoed.is_empty(), "{ending:?}: {echoed:?}");
+        assert_eq!(lines.reply_end(), REPLY_END);
+    }
+    // A terminal: Enter is a bare CR. The first line is answered as to a program (a CR
+    // followed by nothing yet is not known); from the byte after it, echo and editing.
+    let mut lines = Lines::default();
+    let (got, echoed) = typed(&mut lines, b"status\r");
+    assert_eq!((got, echoed), (vec![line("status")], vec![]));
+    assert!(!lines.terminal());
+    let (got, echoed) = typed(&mut lines, b"stpo\x7f\x7fop\r");
+    assert_eq!(got, [line("stop")]);
+    // The first byte after the bare CR: back to the line's start, the prompt, the byte.
+    assert_eq!(echoed, b"\r> stpo\x08 \x08\x08 \x08op\r\n");
+    assert!(lines.terminal());
+    assert_eq!(lines.reply_end(), TERMINAL_REPLY_END);
+    // Ctrl-U rubs out the line; backspace on an empty line does nothing; a control byte is
+    // kept in the line (and refused there) but not echoed.
+    let (got, echoed) = typed(&mut lines, b"help\x15\x08inf\x01o\r");
+    assert_eq!(
+        got,
+        [Line::Text(heapless::Vec::from_slice(b"inf\x01o").unwrap())]
+    );
+    assert_eq!(echoed, b"help\x08 \x08\x08 \x08\x08 \x08\x08 \x08info\r\n");
+    // An edit marks a terminal at once, whatever its line ends.
+    let mut lines = Lines::default();
+    let (got, echoed) = typed(&mut lines, b"statux\x08s\n");
+    assert_eq!(got, [line("status")]);
+    assert_eq!(echoed, b"\x08 \x08s\r\n");
+    assert_eq!(lines.push(b'x').echo, Echo::Byte(b'x'));
 }

@@ -633,6 +633,134 @@ fn the_protocol_covers_what_help_says() {
     );
 }
 
+/// `help <command>` knows every command `parse` knows, and only those; `help` of a typo
+/// suggests the nearest command or setting.
+#[test]
+fn help_knows_every_command_and_suggests_for_a_typo() {
+    use de_resonator::board::protocol::{ParseError, Topic, COMMANDS};
+    for (k, (name, said)) in COMMANDS.iter().enumerate() {
+        let asked = format!("help {name}");
+        assert_eq!(
+            protocol::parse(asked.as_bytes()),
+            Ok(Command::Help(Some(Topic::Command(k as u8)))),
+            "{name}"
+        );
+        assert!(said.starts_with(name), "{name}: {said}");
+        assert!(protocol::HELP.contains(name), "{name}");
+        // The command itself parses: bare, or with what its form asks.
+        let form = said.split(':').next().unwrap_or_default();
+        let example = form
+            .replace("<Hz>", "44")
+            .replace("<volts>", "10")
+            .replace("<setting>", "margin")
+            .replace("<value>", "0.05")
+            .replace("<n>", "1");
+        let first = example.split(" | ").next().unwrap_or_default();
+        let first = first.replace(['[', ']'], "");
+        let words: Vec<&str> = first
+            .split_whitespace()
+            .take_while(|w| !w.contains('|'))
+            .collect();
+        let bare = if words.len() > 1 && ["command", "setting"].contains(&words[1]) {
+            words[0].to_string()
+        } else {
+            words.join(" ")
+        };
+        assert!(protocol::parse(bare.as_bytes()).is_ok(), "{name}: `{bare}`");
+    }
+    // Every word `parse` takes as a command is in the list (and so in `help`).
+    for word in ["sto", "stat", "targe", "tirm", "faultz"] {
+        assert!(protocol::parse(word.as_bytes()).is_err(), "{word}");
+    }
+    assert_eq!(
+        protocol::parse(b"help stpo"),
+        Err(ParseError::UnknownTopic {
+            nearest: Some(Topic::Command(
+                COMMANDS.iter().position(|c| c.0 == "stop").unwrap() as u8
+            ))
+        })
+    );
+    assert_eq!(
+        protocol::parse(b"help marign"),
+        Err(ParseError::UnknownTopic {
+            nearest: Some(Topic::Setting(de_resonator::controller::Setting::Margin))
+        })
+    );
+    assert_eq!(
+        protocol::parse(b"help foo"),
+        Err(ParseError::UnknownTopic { nearest: None })
+    );
+    let said = ParseError::UnknownTopic {
+        nearest: Some(Topic::Command(0)),
+    }
+    .to_string();
+    assert!(said.contains("did you mean `help`?"), "{said}");
+}
+
+/// A unit after a number is its own unit or named in the error; a count refuses a fraction.
+#[test]
+fn units_after_numbers_are_taken_or_named_and_counts_are_whole() {
+    use de_resonator::board::protocol::ParseError;
+    use de_resonator::controller::Setting;
+    let target = Ok(Command::Target { hz: 33.5 });
+    for line in [
+        "target 33.5",
+        "target 33.5 Hz",
+        "target 33.5Hz",
+        "target 33.5 hz",
+    ] {
+        assert_eq!(protocol::parse(line.as_bytes()), target, "{line}");
+    }
+    let ac = Ok(Command::Ac {
+        volts: 80.0,
+        hz: 33.0,
+    });
+    for line in ["ac 80 33", "ac 80 V 33 Hz", "ac 80V 33Hz", "ac 80 v 33"] {
+        assert_eq!(protocol::parse(line.as_bytes()), ac, "{line}");
+    }
+    for (line, index, unit) in [
+        ("target 33.5 kHz", 1, "Hz"),
+        ("target 33.5kHz", 1, "Hz"),
+        ("ac 80 mV 33", 1, "V"),
+        ("ac 80 33 V", 2, "Hz"),
+        ("set slew_volts_per_second 1e4 V", 2, "V/s"),
+    ] {
+        let got = protocol::parse(line.as_bytes());
+        assert_eq!(got, Err(ParseError::WrongUnit { index, unit }), "{line}");
+        let said = got.unwrap_err().to_string();
+        assert!(
+            said.contains(&format!("argument {index} is in {unit}")),
+            "{said}"
+        );
+    }
+    assert_eq!(
+        protocol::parse(b"set slew_volts_per_second 1e4 V/s"),
+        Ok(Command::Set(Setting::SlewVoltsPerSecond, 1e4))
+    );
+    assert_eq!(
+        protocol::parse(b"stream 100Hz"),
+        Ok(Command::Stream(Some(100.0)))
+    );
+    assert_eq!(protocol::parse(b"target 33.5 Hz 2"), Err(ParseError::Extra));
+    assert_eq!(
+        protocol::parse(b"target Hz"),
+        Err(ParseError::BadNumber { index: 1 })
+    );
+    // A count: a fraction is refused, not rounded (1.5 would have been 1).
+    assert_eq!(
+        protocol::parse(b"set stuck_samples 1.5"),
+        Err(ParseError::NotWhole { index: 2 })
+    );
+    assert_eq!(
+        protocol::parse(b"set stuck_samples 100"),
+        Ok(Command::Set(Setting::StuckSamples, 100.0))
+    );
+    assert!(Setting::ALL
+        .iter()
+        .filter(|s| s.whole())
+        .all(|s| s.unit() == "samples"));
+}
+
 /// A fitted channel on an input the layout cannot hold (0xFF means "not fitted") is refused
 /// when the image is written, not read back as no channel.
 #[test]

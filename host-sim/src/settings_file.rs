@@ -42,7 +42,14 @@ pub fn from_table(
                 keys.join(", ")
             )
         })?;
-        settings.set(setting, number(key, value)?);
+        let value = number(key, value)?;
+        if setting.whole() && value.fract() != 0.0 {
+            return Err(format!(
+                "{section} `{key}` = {value}: a whole number of {} (a fraction is not rounded)",
+                setting.unit()
+            ));
+        }
+        settings.set(setting, value);
     }
     Ok(settings)
 }

@@ -1120,7 +1120,7 @@ fn flags_say_what_is_wrong() {
         "--duration-seconds",
         "0.1",
     ]);
-    assert!(err.contains("--ac-hz -44"), "{err}");
+    assert!(err.contains("(--ac-hz) -44"), "{err}");
     let err = refused(&[
         "simulate",
         "--bias-volts",

@@ -35,7 +35,10 @@ fn the_virtual_board_answers_every_request_as_the_firmware() {
     let ready = report["notices"][0].as_str().unwrap();
     assert!(ready.starts_with("# ready target_hz=44 "), "{ready}");
     // A scene's board drives at power-up (the scene runs from t = 0).
-    assert!(ready.ends_with(" settings=image power_up=drive"), "{ready}");
+    assert!(
+        ready.ends_with(" settings=image power_up=drive output=on"),
+        "{ready}"
+    );
     assert!(
         close(number(ready, "bias_volts"), tuned_bias(44.0), 1e-4),
         "{ready}"
@@ -48,7 +51,7 @@ fn the_virtual_board_answers_every_request_as_the_firmware() {
         .collect();
     assert!(replies[0].starts_with("ok phase="), "{}", replies[0]);
     assert_eq!(replies[1], "ok target_hz=44");
-    assert!(replies[2].starts_with("ok commands: help [setting] | status"));
+    assert!(replies[2].starts_with("ok commands: help [command | setting] | status"));
 
     board.wait_for("driving", |s| s.contains("phase=driving"));
     // In range: the bias of the f64 solve for 45 Hz, ramped from 44 Hz's.
@@ -247,7 +250,12 @@ fn lines_in_one_write_are_answered_in_order_across_a_reset() {
     stream.write_all(b"help\nreset\nget target_hz\n").unwrap();
     let mut lines = BufReader::new(stream).lines().map(Result::unwrap);
     let mut next = || lines.next().unwrap();
-    assert!(next().starts_with("# ready "), "the banner first");
+    // Asked `stop` since its boot: the start-up line is not the state now; the status is.
+    let now = next();
+    assert!(
+        now.starts_with("# now phase=") && now.contains(" output="),
+        "{now}"
+    );
     assert!(next().starts_with("ok commands:"));
     assert_eq!(next(), "ok reset: output off, restarting");
     assert_eq!(next(), "# reset: asked");
@@ -354,4 +362,89 @@ fn the_console_says_when_the_board_went_away() {
     assert_eq!(report["exchanges"].as_array().unwrap().len(), 1);
     let said = String::from_utf8_lossy(&out.stderr);
     assert!(said.contains("the board closed the connection"), "{said}");
+}
+
+/// Issue 46, 2: one connection controls the board; another connected meanwhile reads (its
+/// requests that change the board get `err 3`), is told so on connecting, and takes over
+/// when the first leaves. A new connection to a faulted board hears the fault, not the
+/// start-up line.
+#[test]
+fn one_connection_controls_the_board_and_a_new_one_hears_the_state_now() {
+    use std::io::{BufRead, BufReader, Write};
+    use std::os::unix::net::UnixStream;
+    let board = Served::start(None, "max", "two-clients");
+    let connect = || {
+        let stream = UnixStream::connect(&board.connection[1]).unwrap();
+        stream
+            .set_read_timeout(Some(std::time::Duration::from_secs(10)))
+            .unwrap();
+        let reader = BufReader::new(stream.try_clone().unwrap());
+        (stream, reader.lines().map(Result::unwrap))
+    };
+    let (mut a, mut a_lines) = connect();
+    assert!(a_lines.next().unwrap().starts_with("# ready "));
+    let (mut b, mut b_lines) = connect();
+    let first = b_lines.next().unwrap();
+    assert!(first.starts_with("# "), "{first}");
+    let told = b_lines.next().unwrap();
+    assert!(
+        told.starts_with("# another connection controls the board"),
+        "{told}"
+    );
+    b.write_all(b"stop\nstatus\nfaults clear\n").unwrap();
+    let refused = b_lines.next().unwrap();
+    assert!(
+        refused.starts_with("err 3 another connection controls the board"),
+        "{refused}"
+    );
+    let status = b_lines.next().unwrap();
+    assert!(
+        status.starts_with("ok phase=driving")
+            || status.starts_with("ok phase=ramping")
+            || status.starts_with("ok phase=holding"),
+        "{status}"
+    );
+    assert!(
+        status.contains(" output=on "),
+        "B's stop did not end A's drive: {status}"
+    );
+    assert!(
+        b_lines.next().unwrap().starts_with("err 3 "),
+        "faults clear changes the log"
+    );
+    a.write_all(b"status\n").unwrap();
+    assert!(a_lines.next().unwrap().contains(" output=on "));
+    drop(a_lines);
+    drop(a);
+    assert_eq!(
+        b_lines.next().unwrap(),
+        "# this connection now controls the board"
+    );
+    b.write_all(b"stop\n").unwrap();
+    assert!(
+        b_lines.next().unwrap().starts_with("ok stop"),
+        "B controls now"
+    );
+}
+
+/// Issue 46, 2: a new connection to a faulted board hears the fault now (not `# ready`).
+#[test]
+fn a_new_connection_to_a_faulted_board_hears_the_fault() {
+    let board = Served::start(
+        Some(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../scenes/fault-sensor-stuck.toml"
+        )),
+        "max",
+        "faulted-hears",
+    );
+    board.wait_for("the fault", |s| s.contains("phase=faulted"));
+    let (report, ok) = board.console(&["status"]);
+    assert!(ok, "{report}");
+    let first = report["notices"][0].as_str().unwrap();
+    assert!(
+        first.starts_with("# now phase=faulted") && first.contains(" output="),
+        "{first}"
+    );
+    assert!(!first.contains("fault=none"), "{first}");
 }

@@ -31,7 +31,7 @@ use crate::image::{Image, ImageError, PowerUp};
 use crate::numerics::decimal::Decimal;
 use crate::safety::FailureMode;
 
-pub use port::{Line, Lines, ReplyLine, Shared, Then};
+pub use port::{Echo, Line, Lines, Pushed, ReplyLine, Shared, Then, REPLY_END, TERMINAL_REPLY_END};
 
 /// Why the firmware restarted, as it recorded it before the reset.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -225,8 +225,25 @@ impl<'a, K: Keeper> Board<'a, K> {
                     Decimal(max_volts),
                     image.0.power_up.name()
                 );
-                if waits {
-                    let _ = write!(started.notice, " (the output off at 0 V: `start` to drive)");
+                let _ = write!(
+                    started.notice,
+                    " output={}",
+                    if waits { "off" } else { "on" }
+                );
+                match (waits, image.0.power_up) {
+                    (true, PowerUp::Drive) => {
+                        let _ = write!(
+                            started.notice,
+                            " (after a reset the output stays off at 0 V: `start` to drive)"
+                        );
+                    }
+                    (true, _) => {
+                        let _ = write!(
+                            started.notice,
+                            " (the output off at 0 V: `start` to drive)"
+                        );
+                    }
+                    (false, _) => {}
                 }
             }
         }

@@ -8,7 +8,7 @@ use heapless::{String, Vec};
 
 use super::{Board, Keeper};
 use crate::board::protocol::{
-    self, Command, ErrorCode, MaxBy, ParseError, Refused, Status, MAX_LINE,
+    self, Command, ErrorCode, MaxBy, ParseError, Refused, Status, Topic, MAX_LINE,
 };
 use crate::board::stream;
 use crate::controller::{Controller, Phase, Refusal, Setting, Settings};
@@ -28,6 +28,13 @@ pub enum Line {
 /// Bytes into lines: at most `MAX_LINE` bytes a line, an overlong or garbled line reported
 /// once at its end. A line ends at `\n`, at `\r` (a serial terminal's Enter), or at `\r\n`
 /// (one end, not two).
+///
+/// A person at a serial terminal gets what a serial console gives: what they type echoed,
+/// backspace or DEL and Ctrl-U (Ctrl-C too) mending the line, a prompt after each reply. A
+/// terminal is known by its Enter, a `\r` that no `\n` follows, or by an edit; from then on
+/// (the byte after that `\r`) the connection is a terminal's. A program (`host-sim
+/// console`, a script) ends its lines with `\n` or `\r\n` and never edits: it sees not one
+/// byte more than before. Edit bytes are never part of a line, in either mode.
 #[derive(Default)]
 pub struct Lines {
     text: Vec<u8, MAX_LINE>,
@@ -35,15 +42,73 @@ pub struct Lines {
     garbled: bool,
     /// The last byte ended a line with `\r`: a `\n` now is the rest of that end.
     after_cr: bool,
+    /// A person at a terminal: echo, and a prompt after each reply.
+    terminal: bool,
 }
 
+/// What one byte gives: the line it ends, and what to send back to a person typing.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Pushed {
+    pub line: Option<Line>,
+    pub echo: Echo,
+}
+
+/// Bytes a terminal shows as the person types (nothing to a program).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Echo {
+    Nothing,
+    /// The byte typed.
+    Byte(u8),
+    /// This many characters rubbed out (`\b \b` each).
+    Erase(u8),
+    /// Enter: to the start of the next line, where the reply goes.
+    NewLine,
+    /// The first byte typed once the port knows a terminal: back to the start of the line
+    /// the last reply's `\n` left the cursor on, the prompt, then the byte.
+    Begin(u8),
+}
+
+impl Echo {
+    /// Each byte of the echo, in order, to `out`.
+    pub fn bytes(self, mut out: impl FnMut(u8)) {
+        match self {
+            Echo::Nothing => {}
+            Echo::Byte(b) => out(b),
+            Echo::Erase(n) => {
+                for _ in 0..n {
+                    b"\x08 \x08".iter().for_each(|&b| out(b));
+                }
+            }
+            Echo::NewLine => b"\r\n".iter().for_each(|&b| out(b)),
+            Echo::Begin(b) => {
+                b"\r> ".iter().for_each(|&b| out(b));
+                out(b);
+            }
+        }
+    }
+}
+
+/// What ends a reply to a program: a line feed.
+pub const REPLY_END: &str = "\n";
+/// What ends a reply to a person at a terminal: a whole new line, and the prompt.
+pub const TERMINAL_REPLY_END: &str = "\r\n> ";
+
+/// Backspace, DEL (what most terminals send for backspace), Ctrl-U and Ctrl-C.
+const BACKSPACE: u8 = 0x08;
+const DELETE: u8 = 0x7f;
+const KILL_LINE: u8 = 0x15;
+const INTERRUPT: u8 = 0x03;
+
 impl Lines {
-    /// Take one byte; a line when it ends one.
-    pub fn push(&mut self, byte: u8) -> Option<Line> {
+    /// Take one byte: the line it ends, if it ends one, and its echo.
+    pub fn push(&mut self, byte: u8) -> Pushed {
         let after_cr = core::mem::take(&mut self.after_cr);
         if byte == b'\n' && after_cr {
-            return None;
+            return self.pushed(None, Echo::Nothing);
         }
+        // A `\r` that no `\n` followed: a terminal's Enter.
+        let known_now = after_cr && !self.terminal;
+        self.terminal |= after_cr;
         if byte == b'\n' || byte == b'\r' {
             let line = if self.garbled {
                 Line::Garbled
@@ -52,21 +117,72 @@ impl Lines {
             } else {
                 Line::Text(self.text.clone())
             };
+            let terminal = self.terminal;
             *self = Self {
                 after_cr: byte == b'\r',
+                terminal,
                 ..Self::default()
             };
-            return Some(line);
+            return self.pushed(Some(line), Echo::NewLine);
         }
-        if self.text.push(byte).is_err() {
-            self.overlong = true;
+        match byte {
+            BACKSPACE | DELETE => {
+                self.terminal = true;
+                let erased = self.text.pop().is_some();
+                self.pushed(
+                    None,
+                    if erased {
+                        Echo::Erase(1)
+                    } else {
+                        Echo::Nothing
+                    },
+                )
+            }
+            KILL_LINE | INTERRUPT => {
+                self.terminal = true;
+                let erased = self.text.len() as u8;
+                self.text.clear();
+                self.overlong = false;
+                self.pushed(None, Echo::Erase(erased))
+            }
+            _ => {
+                if self.text.push(byte).is_err() {
+                    self.overlong = true;
+                }
+                let shown = (b' '..=b'~').contains(&byte) || byte == b'\t';
+                let echo = match (shown, known_now) {
+                    (true, true) => Echo::Begin(byte),
+                    (true, false) => Echo::Byte(byte),
+                    (false, _) => Echo::Nothing,
+                };
+                self.pushed(None, echo)
+            }
         }
-        None
+    }
+
+    /// The echo only to a terminal.
+    fn pushed(&self, line: Option<Line>, echo: Echo) -> Pushed {
+        let echo = if self.terminal { echo } else { Echo::Nothing };
+        Pushed { line, echo }
     }
 
     /// A byte was lost: the line it belonged to is dropped at its end.
     pub fn lost(&mut self) {
         self.garbled = true;
+    }
+
+    /// Whether a person at a terminal is typing (echo and prompts).
+    pub fn terminal(&self) -> bool {
+        self.terminal
+    }
+
+    /// What ends a reply on this connection: [`REPLY_END`] or [`TERMINAL_REPLY_END`].
+    pub fn reply_end(&self) -> &'static str {
+        if self.terminal {
+            TERMINAL_REPLY_END
+        } else {
+            REPLY_END
+        }
     }
 }
 
@@ -188,7 +304,12 @@ impl<K: Keeper> Board<'_, K> {
                 let _ = write!(out, "ok {}", protocol::HELP);
                 return Then::Reply;
             }
-            Command::Help(Some(setting)) => {
+            Command::Help(Some(Topic::Command(k))) => {
+                let said = protocol::COMMANDS.get(usize::from(k)).map_or("", |c| c.1);
+                let _ = write!(out, "ok {said}");
+                return Then::Reply;
+            }
+            Command::Help(Some(Topic::Setting(setting))) => {
                 let _ = write!(
                     out,
                     "ok {} ({}): {}",
@@ -530,6 +651,7 @@ fn status(
         target_hz: c.settings().target_hz,
         bias_volts: c.plan().bias_volts,
         volts: c.last_volts(),
+        output_on: !c.at_rest(),
         max_volts,
         max_by,
         limit,

@@ -24,16 +24,102 @@ pub const MAX_LINE: usize = 96;
 
 /// What `help` answers, one line.
 pub const HELP: &str =
-    "commands: help [setting] | status | info | start | target <Hz> | ac <volts> <Hz> | \
-                        stop | trim | clear | get [setting] | set <setting> <value> | save | \
-                        reset | stream <Hz> | stream off | faults [<n> | clear] (`get` lists \
-                        every setting; `help <setting>` its unit and range)";
+    "commands: help [command | setting] | status | info | start | target <Hz> | \
+                        ac <volts> <Hz> | stop | trim | clear | get [setting] | \
+                        set <setting> <value> | save | reset | stream <Hz> | stream off | \
+                        faults [<n> | clear] (`help <command>` says what one does; `get` lists \
+                        every setting, `help <setting>` its unit and range)";
+
+/// Each command's name, its form and what it does: what `help <command>` answers, and where
+/// `help`'s suggestion for a typo is found (a test holds it to the names `parse` knows).
+pub const COMMANDS: [(&str, &str); 15] = [
+    (
+        "help",
+        "help [command | setting]: the commands, or what one command does, or one \
+              setting's unit and range",
+    ),
+    (
+        "status",
+        "status: the phase, whether the output is on and its volts, the target, the \
+                bias, the cap in force, the limit, the last fault, the ticks",
+    ),
+    (
+        "info",
+        "info: the firmware's version, the image's CRC, the telemetry record's layout",
+    ),
+    (
+        "start",
+        "start: switch the high voltage on: ramp at the slew rate to the bias of the \
+               settings in force (checked as `target` is)",
+    ),
+    (
+        "target",
+        "target <Hz>: tune to this natural frequency: the bias solved within the \
+                margin, the plan checked in the model, a ramp there; switches the output on",
+    ),
+    (
+        "ac",
+        "ac <volts> <Hz>: a new AC drive on the bias (0 V: none), its swing checked \
+            against every limit first; switches the output on",
+    ),
+    (
+        "stop",
+        "stop: AC off, then down to 0 V at the slew rate; the output off",
+    ),
+    (
+        "trim",
+        "trim: measure the natural frequency now and trim the bias to the target",
+    ),
+    (
+        "clear",
+        "clear: re-arm after a fault, at 0 V: the boot checks again, the output left \
+               off (`start` switches it on)",
+    ),
+    (
+        "get",
+        "get [setting]: one setting's value, or every setting's",
+    ),
+    (
+        "set",
+        "set <setting> <value>: a new value, the plan checked again (err 2 names the \
+             rule it breaks); at rest the output stays off",
+    ),
+    (
+        "save",
+        "save: store the settings in force in flash (at rest at 0 V); the board boots \
+              with them",
+    ),
+    (
+        "reset",
+        "reset: restart the firmware (at rest at 0 V: `stop` first); it comes up \
+               with the output off",
+    ),
+    (
+        "stream",
+        "stream <Hz> | stream off: send the telemetry records at this rate on the \
+                stream port, or stop",
+    ),
+    (
+        "faults",
+        "faults [<n> | clear]: the fault log, newest first; entry n whole; or empty \
+                it (at rest)",
+    ),
+];
+
+/// What `help` is asked about.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Topic {
+    /// A command, by its index in [`COMMANDS`].
+    Command(u8),
+    Setting(Setting),
+}
 
 /// A request.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Command {
-    /// The commands, or one setting's meaning, unit and range.
-    Help(Option<Setting>),
+    /// The commands, or what one command does, or one setting's meaning, unit and range.
+    Help(Option<Topic>),
     /// Phase, target, bias, cap, limit mode, last fault, ticks.
     Status,
     /// What runs: the firmware's version, the image's CRC, the stream's record layout and
@@ -141,6 +227,10 @@ pub enum ParseError {
     UnknownSetting {
         nearest: Option<Setting>,
     },
+    /// `help` of a word that is no command and no setting; the nearest of either.
+    UnknownTopic {
+        nearest: Option<Topic>,
+    },
     /// Argument `index` (from 1) is missing.
     Missing {
         index: u8,
@@ -149,6 +239,15 @@ pub enum ParseError {
     Extra,
     /// Argument `index` (from 1) is not a decimal number.
     BadNumber {
+        index: u8,
+    },
+    /// Argument `index` has a unit after it that is not its own (`unit`).
+    WrongUnit {
+        index: u8,
+        unit: &'static str,
+    },
+    /// Argument `index` counts something: a fraction is refused, not rounded.
+    NotWhole {
         index: u8,
     },
 }
@@ -167,10 +266,31 @@ impl fmt::Display for ParseError {
                 }
                 write!(f, " (`get` lists every setting)")
             }
+            ParseError::UnknownTopic { nearest } => {
+                write!(f, "no command or setting has this name")?;
+                match nearest {
+                    Some(Topic::Command(k)) => {
+                        let name = COMMANDS.get(usize::from(k)).map_or("", |c| c.0);
+                        write!(f, "; did you mean `{name}`?")?;
+                    }
+                    Some(Topic::Setting(s)) => write!(f, "; did you mean `{}`?", s.key())?,
+                    None => {}
+                }
+                write!(f, " (`help` lists the commands, `get` every setting)")
+            }
             ParseError::Missing { index } => write!(f, "argument {index} is missing"),
             ParseError::Extra => write!(f, "too many arguments"),
             ParseError::BadNumber { index } => {
                 write!(f, "argument {index} is not a decimal number")
+            }
+            ParseError::WrongUnit { index, unit } => {
+                write!(
+                    f,
+                    "argument {index} is in {unit} (a unit after it must be {unit})"
+                )
+            }
+            ParseError::NotWhole { index } => {
+                write!(f, "argument {index} must be a whole number (it counts)")
             }
         }
     }
@@ -189,32 +309,40 @@ pub fn parse(line: &[u8]) -> Result<Command, ParseError> {
         return Err(ParseError::NotText);
     }
     let text = core::str::from_utf8(line).map_err(|_| ParseError::NotText)?;
-    let mut words = text.split_ascii_whitespace();
+    let mut words = text.split_ascii_whitespace().peekable();
     let name = words.next().ok_or(ParseError::Empty)?;
     let mut args = Args { words, index: 0 };
     let command = match name {
-        "help" => Command::Help(args.optional_setting()?),
+        "help" => Command::Help(args.optional_topic()?),
         "status" => Command::Status,
         "info" => Command::Info,
         "start" => Command::Start,
-        "target" => Command::Target { hz: args.number()? },
+        "target" => Command::Target {
+            hz: args.number_in("Hz")?,
+        },
         "ac" => Command::Ac {
-            volts: args.number()?,
-            hz: args.number()?,
+            volts: args.number_in("V")?,
+            hz: args.number_in("Hz")?,
         },
         "stop" => Command::Stop,
         "trim" => Command::Trim,
         "clear" => Command::Clear,
         "get" => Command::Get(args.optional_setting()?),
-        "set" => Command::Set(args.setting()?, args.number()?),
+        "set" => {
+            let setting = args.setting()?;
+            let value = args.number_in(setting.unit())?;
+            if setting.whole() && libm::truncf(value) != value {
+                return Err(ParseError::NotWhole { index: 2 });
+            }
+            Command::Set(setting, value)
+        }
         "save" => Command::Save,
         "reset" => Command::Reset,
         "stream" => match args.words.next() {
             Some("off") => Command::Stream(None),
             Some(word) => {
                 args.index += 1;
-                let hz = parse_number(word).ok_or(ParseError::BadNumber { index: 1 })?;
-                Command::Stream(Some(hz))
+                Command::Stream(Some(args.with_unit(word, "Hz")?))
             }
             None => return Err(ParseError::Missing { index: 1 }),
         },
@@ -238,11 +366,47 @@ pub fn parse(line: &[u8]) -> Result<Command, ParseError> {
 }
 
 struct Args<'a, I: Iterator<Item = &'a str>> {
-    words: I,
+    words: core::iter::Peekable<I>,
     index: u8,
 }
 
 impl<'a, I: Iterator<Item = &'a str>> Args<'a, I> {
+    /// A number in `unit`: `33.5`, `33.5Hz` or `33.5 Hz` (the unit's case ignored); another
+    /// unit after it is named in the error, never ignored.
+    fn number_in(&mut self, unit: &'static str) -> Result<f32, ParseError> {
+        let word = self.word()?;
+        self.with_unit(word, unit)
+    }
+
+    /// `word` (argument `self.index`) as a number in `unit`, its unit written on it or the
+    /// next word.
+    fn with_unit(&mut self, word: &'a str, unit: &'static str) -> Result<f32, ParseError> {
+        let index = self.index;
+        if let Some(x) = parse_number(word) {
+            // A unit as the next word: its own is taken, a word of letters that is not
+            // (`kHz`, `mV`) is named; anything else is the next argument.
+            if let Some(&next) = self.words.peek() {
+                if next.eq_ignore_ascii_case(unit) && !unit.is_empty() {
+                    self.words.next();
+                } else if looks_like_unit(next) && !unit_free(unit) {
+                    return Err(ParseError::WrongUnit { index, unit });
+                }
+            }
+            return Ok(x);
+        }
+        // The unit written on the number: `33.5Hz`.
+        let split = word
+            .bytes()
+            .position(|b| b.is_ascii_alphabetic() && b != b'e' && b != b'E')
+            .unwrap_or(word.len());
+        let (number, written) = word.split_at(split);
+        match parse_number(number) {
+            Some(x) if written.eq_ignore_ascii_case(unit) && !unit.is_empty() => Ok(x),
+            Some(_) if !written.is_empty() => Err(ParseError::WrongUnit { index, unit }),
+            _ => Err(ParseError::BadNumber { index }),
+        }
+    }
+
     fn word(&mut self) -> Result<&'a str, ParseError> {
         self.index += 1;
         self.words
@@ -250,16 +414,45 @@ impl<'a, I: Iterator<Item = &'a str>> Args<'a, I> {
             .ok_or(ParseError::Missing { index: self.index })
     }
 
-    fn number(&mut self) -> Result<f32, ParseError> {
-        let word = self.word()?;
-        parse_number(word).ok_or(ParseError::BadNumber { index: self.index })
-    }
-
     fn setting(&mut self) -> Result<Setting, ParseError> {
         let word = self.word()?;
         Setting::from_key(word).ok_or(ParseError::UnknownSetting {
             nearest: nearest_setting(word),
         })
+    }
+
+    /// A command or a setting if a word is left, `None` if none is.
+    fn optional_topic(&mut self) -> Result<Option<Topic>, ParseError> {
+        let Some(word) = self.words.next() else {
+            return Ok(None);
+        };
+        self.index += 1;
+        if let Some(k) = COMMANDS.iter().position(|c| c.0 == word) {
+            return Ok(Some(Topic::Command(k as u8)));
+        }
+        if let Some(s) = Setting::from_key(word) {
+            return Ok(Some(Topic::Setting(s)));
+        }
+        let command = COMMANDS
+            .iter()
+            .enumerate()
+            .map(|(k, c)| (edit_distance(word.as_bytes(), c.0.as_bytes()), k, c.0.len()))
+            .filter(|&(d, _, len)| d <= len.div_ceil(3))
+            .min_by_key(|&(d, _, _)| d)
+            .map(|(d, k, _)| (d, Topic::Command(k as u8)));
+        let setting = nearest_setting(word).map(|s| {
+            (
+                edit_distance(word.as_bytes(), s.key().as_bytes()),
+                Topic::Setting(s),
+            )
+        });
+        // The nearer; a command on a tie.
+        let nearest = [command, setting]
+            .into_iter()
+            .flatten()
+            .min_by_key(|&(d, _)| d)
+            .map(|(_, topic)| topic);
+        Err(ParseError::UnknownTopic { nearest })
     }
 
     /// A setting if a word is left, `None` if none is.
@@ -276,6 +469,16 @@ impl<'a, I: Iterator<Item = &'a str>> Args<'a, I> {
             }
         }
     }
+}
+
+/// Letters (and `/`) only: a unit someone typed (`kHz`, `mV`, `V/s`).
+fn looks_like_unit(word: &str) -> bool {
+    word.bytes().all(|b| b.is_ascii_alphabetic() || b == b'/')
+}
+
+/// A unit no one writes after the number (a fraction, a count): nothing after it is one.
+fn unit_free(unit: &str) -> bool {
+    matches!(unit, "fraction" | "samples" | "")
 }
 
 /// The setting whose key is nearest `word` (edit distance, case ignored) if it is within a
@@ -455,6 +658,9 @@ pub struct Status {
     pub bias_volts: f32,
     /// The voltage commanded at the last tick, V.
     pub volts: f32,
+    /// Whether the output is on: anything but at rest at 0 V (stopped, waiting for `start`,
+    /// or faulted with the descent over). A ramp down after `stop` is still on.
+    pub output_on: bool,
     /// The highest voltage the board may command: the cap in force, or the amplifier's top
     /// (rail or top code) where lower, V.
     pub max_volts: f32,
@@ -535,12 +741,13 @@ impl fmt::Display for Status {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "phase={} target_hz={} bias_volts={} volts={} max_volts={} max_by={} limit={} \
-             ticks={}{}",
+            "phase={} target_hz={} bias_volts={} volts={} output={} max_volts={} max_by={} \
+             limit={} ticks={}{}",
             self.phase.name(),
             Decimal(self.target_hz),
             Decimal(self.bias_volts),
             Decimal(self.volts),
+            if self.output_on { "on" } else { "off" },
             Decimal(self.max_volts),
             self.max_by.name(),
             self.limit.map_or("unknown", FailureMode::name),
@@ -566,7 +773,7 @@ impl fmt::Display for Refused<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "phase=refused volts=0{} fault={}",
+            "phase=refused volts=0 output=off{} fault={}",
             self.hardware, self.why
         )
     }
@@ -639,13 +846,20 @@ mod tests {
         assert_eq!(parse(b"help"), Ok(Command::Help(None)));
         assert_eq!(
             parse(b"help ac_volts"),
-            Ok(Command::Help(Some(Setting::AcVolts)))
+            Ok(Command::Help(Some(Topic::Setting(Setting::AcVolts))))
         );
         assert_eq!(parse(b""), Err(ParseError::Empty));
         assert_eq!(parse(b"target"), Err(ParseError::Missing { index: 1 }));
         assert_eq!(parse(b"ac 100"), Err(ParseError::Missing { index: 2 }));
         assert_eq!(parse(b"stop now"), Err(ParseError::Extra));
-        assert_eq!(parse(b"target 4x"), Err(ParseError::BadNumber { index: 1 }));
+        assert_eq!(
+            parse(b"target 4x"),
+            Err(ParseError::WrongUnit {
+                index: 1,
+                unit: "Hz"
+            })
+        );
+        assert_eq!(parse(b"target x4"), Err(ParseError::BadNumber { index: 1 }));
         assert_eq!(
             parse(b"get volume"),
             Err(ParseError::UnknownSetting { nearest: None })
@@ -697,6 +911,7 @@ mod tests {
             target_hz: 44.0,
             bias_volts: 7449.5,
             volts: 7500.25,
+            output_on: true,
             max_volts: 9361.9,
             max_by: MaxBy::Cap,
             limit: Some(FailureMode::Emi),
@@ -720,6 +935,7 @@ mod tests {
         assert_eq!(reply.field("phase"), Some("driving"));
         assert_eq!(reply.field("bias_volts"), Some("7449.5"));
         assert_eq!(reply.field("limit"), Some("emi"));
+        assert_eq!(reply.field("output"), Some("on"));
         let amps = reply
             .field("current_amps")
             .and_then(|v| v.parse::<f32>().ok());

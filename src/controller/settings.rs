@@ -442,6 +442,11 @@ impl Setting {
         }
     }
 
+    /// Whether it counts something: a fraction is refused, never rounded.
+    pub fn whole(self) -> bool {
+        matches!(self, Setting::StuckSamples)
+    }
+
     /// What the checks ask of it, said when they refuse it.
     pub fn rule(self) -> &'static str {
         match self {

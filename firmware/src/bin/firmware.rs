@@ -108,7 +108,10 @@ mod app {
     /// fault the tick left in `logged` (flash work, outside the tick; should the queue be
     /// full, the task finds it at its next line).
     pub enum Work {
-        Line(Line),
+        /// A request, and what ends its reply on this connection (`Lines::reply_end`).
+        Line(Line, &'static str),
+        /// What a person at a terminal sees as they type.
+        Echo(logic::Echo),
         Log,
     }
 
@@ -140,7 +143,7 @@ mod app {
         serial_rx: Rx<USART2>,
         lines: Lines,
         /// A line that found the queue full, kept until the command task makes room.
-        held: Option<Line>,
+        held: Option<(Line, &'static str)>,
         to_command: Sender<'static, Work, QUEUE>,
         /// The tick's end of the command task's queue: a fault to log.
         to_log: Sender<'static, Work, QUEUE>,
@@ -635,10 +638,11 @@ mod app {
         let to_command = cx.local.to_command;
         let held = cx.local.held;
         let stash = cx.local.stash;
-        if let Some(line) = held.take() {
-            if let Err(TrySendError::Full(Work::Line(line))) = to_command.try_send(Work::Line(line))
+        if let Some((line, end)) = held.take() {
+            if let Err(TrySendError::Full(Work::Line(line, end))) =
+                to_command.try_send(Work::Line(line, end))
             {
-                *held = Some(line);
+                *held = Some((line, end));
                 match rx.read() {
                     Ok(byte) if stash.is_none() => *stash = Some(byte),
                     Ok(_) | Err(nb::Error::Other(_)) => lines.lost(),
@@ -652,11 +656,17 @@ mod app {
         loop {
             match next.take().unwrap_or_else(|| rx.read()) {
                 Ok(byte) => {
-                    if let Some(line) = lines.push(byte) {
-                        if let Err(TrySendError::Full(Work::Line(line))) =
-                            to_command.try_send(Work::Line(line))
+                    let pushed = lines.push(byte);
+                    if pushed.echo != logic::Echo::Nothing {
+                        // Shown only: a full queue drops it.
+                        let _ = to_command.try_send(Work::Echo(pushed.echo));
+                    }
+                    if let Some(line) = pushed.line {
+                        let end = lines.reply_end();
+                        if let Err(TrySendError::Full(Work::Line(line, end))) =
+                            to_command.try_send(Work::Line(line, end))
                         {
-                            *held = Some(line);
+                            *held = Some((line, end));
                             rx.unlisten();
                             return;
                         }
@@ -697,8 +707,15 @@ mod app {
                 }
                 let _ = done;
             }
-            let Work::Line(line) = work else {
-                continue;
+            let (line, end) = match work {
+                Work::Line(line, end) => (line, end),
+                Work::Echo(echo) => {
+                    echo.bytes(|b| {
+                        let _ = nb::block!(embedded_hal_nb::serial::Write::write(cx.local.tx, b));
+                    });
+                    continue;
+                }
+                Work::Log => continue,
             };
             #[cfg(feature = "defmt")]
             if let Line::Text(bytes) = &line {
@@ -725,7 +742,7 @@ mod app {
                 .local
                 .logic
                 .serve(&line, &mut controller, &extras, &mut reply);
-            let _ = writeln!(cx.local.tx, "{reply}");
+            let _ = write!(cx.local.tx, "{reply}{end}");
             if let Then::Stream(every) = then {
                 cx.shared.telemetry.lock(|t| t.set(every));
             }

@@ -10,6 +10,7 @@
 use std::fmt;
 use std::io::{BufRead, BufReader, IsTerminal, Read, Write};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -427,6 +428,7 @@ pub fn console(args: &ConsoleArgs, json: bool) -> Result<ConsoleReport, String> 
         heard,
         timeout: Duration::from_secs_f64(args.timeout),
     };
+    let mut left_by_interrupt = false;
     let mut report = ConsoleReport {
         notices: Vec::new(),
         exchanges: Vec::new(),
@@ -439,10 +441,14 @@ pub fn console(args: &ConsoleArgs, json: bool) -> Result<ConsoleReport, String> 
         Some(path) => Some(Recording::start(args, path, &mut session, echo)?),
         None => None,
     };
+    // Ctrl-C: a flag, read between requests and in a `wait` (the session then says what the
+    // board is still doing as it ends).
+    let interrupted = Arc::new(AtomicBool::new(false));
+    let _ = signal_hook::flag::register(signal_hook::consts::SIGINT, interrupted.clone());
     let requests: Box<dyn Iterator<Item = String>> = match script {
         Some(lines) => Box::new(lines.into_iter()),
         None if recording.is_some() => Box::new(std::iter::empty()),
-        None => Box::new(std::io::stdin().lock().lines().map_while(Result::ok)),
+        None => Box::new(typed(interrupted.clone())),
     };
     let show_prompt = || {
         if prompt {
@@ -452,6 +458,10 @@ pub fn console(args: &ConsoleArgs, json: bool) -> Result<ConsoleReport, String> 
     };
     show_prompt();
     for request in requests {
+        if interrupted.swap(false, Ordering::Relaxed) {
+            left_by_interrupt = true;
+            break;
+        }
         let request = request.trim().to_string();
         if request.is_empty() || request.starts_with('#') {
             show_prompt();
@@ -469,7 +479,7 @@ pub fn console(args: &ConsoleArgs, json: bool) -> Result<ConsoleReport, String> 
                 key,
                 values,
                 within,
-            })) => wait(&mut session, &key, &values, within, echo),
+            })) => wait(&mut session, &key, &values, within, echo, &interrupted),
             Some(Err(why)) => Err(why),
             None => session.ask(&request).map(|line| {
                 if echo {
@@ -499,6 +509,10 @@ pub fn console(args: &ConsoleArgs, json: bool) -> Result<ConsoleReport, String> 
             eprintln!("error: {why}");
         }
         show_prompt();
+    }
+    left_by_interrupt |= interrupted.load(Ordering::Relaxed);
+    if echo && !report.closed_by_board {
+        eprintln!("{}", leaving(&mut session, left_by_interrupt));
     }
     report.notices = notices.lock().map(|n| n.clone()).unwrap_or_default();
     if let Some(recording) = recording {
@@ -626,9 +640,17 @@ fn wait(
     values: &[String],
     within: Duration,
     echo: bool,
+    interrupted: &AtomicBool,
 ) -> Result<(), String> {
     let end = Instant::now() + within;
     loop {
+        // Ctrl-C cancels the wait, not the session.
+        if interrupted.swap(false, Ordering::Relaxed) {
+            if echo {
+                eprintln!("wait {key}={}: cancelled (Ctrl-C)", values.join("|"));
+            }
+            return Ok(());
+        }
         let line = session.ask("status")?;
         // The field as the board wrote it (`volts=0`), or as a number equal to the one
         // asked for (`wait volts=0.0`).
@@ -652,6 +674,57 @@ fn wait(
             ));
         }
         std::thread::sleep(Duration::from_millis(100));
+    }
+}
+
+/// The lines typed on stdin, read on a thread of their own: the iterator ends at the end of
+/// input, or at Ctrl-C (`interrupted` set) while waiting for a line.
+fn typed(interrupted: Arc<AtomicBool>) -> impl Iterator<Item = String> {
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        for line in std::io::stdin().lock().lines().map_while(Result::ok) {
+            if tx.send(line).is_err() {
+                return;
+            }
+        }
+    });
+    std::iter::from_fn(move || loop {
+        match rx.recv_timeout(Duration::from_millis(100)) {
+            Ok(line) => return Some(line),
+            Err(mpsc::RecvTimeoutError::Timeout) if interrupted.load(Ordering::Relaxed) => {
+                return None
+            }
+            Err(mpsc::RecvTimeoutError::Timeout) => {}
+            Err(mpsc::RecvTimeoutError::Disconnected) => return None,
+        }
+    })
+}
+
+/// What the console says as it leaves: what the board is still doing (it keeps its own
+/// rules: leaving changes nothing).
+fn leaving(session: &mut Session, interrupted: bool) -> String {
+    let how = if interrupted { "Ctrl-C: " } else { "" };
+    let Ok(line) = session.ask("status") else {
+        return format!("{how}leaving; the board did not answer `status`");
+    };
+    let field = |key| {
+        Reply::parse(&line)
+            .and_then(|r| r.field(key))
+            .unwrap_or("?")
+    };
+    match field("output") {
+        "on" => format!(
+            "{how}leaving with the output ON: the board is {} at {} V (bias {} V) and goes on \
+             as it was told; `stop` brings it to 0 V",
+            field("phase"),
+            field("volts"),
+            field("bias_volts")
+        ),
+        "off" => format!(
+            "{how}leaving; the board is {} with the output off at 0 V",
+            field("phase")
+        ),
+        _ => format!("{how}leaving; the board says `{line}`"),
     }
 }
 

@@ -26,7 +26,7 @@ use super::{sig, Report};
 use crate::scene;
 
 #[derive(Args, Debug)]
-#[command(group(clap::ArgGroup::new("socket").required(true).args(["tcp", "unix"])))]
+#[command(group(clap::ArgGroup::new("socket").required(true).args(["tcp", "unix", "pty"])))]
 pub struct ServeArgs {
     /// The scene (TOML) whose device, image settings and plant the board runs.
     ///
@@ -38,6 +38,10 @@ pub struct ServeArgs {
     /// Serve on a Unix socket at PATH (a stale socket there is replaced).
     #[arg(long, value_name = "PATH")]
     pub unix: Option<PathBuf>,
+    /// Serve on a pseudo-terminal, as a board's USB serial port: its path is printed
+    /// (`/dev/pts/N`) for any terminal program (`picocom /dev/pts/N`, screen, minicom).
+    #[arg(long)]
+    pub pty: bool,
     /// Send the telemetry stream (`stream <hz>` starts it) to clients of a TCP socket,
     /// HOST:PORT: COBS-framed records, as a board's stream UART sends them.
     ///
@@ -176,7 +180,29 @@ struct Client {
     lines: Lines,
     out: Vec<u8>,
     gone: bool,
+    /// The one connection whose requests may change the board (the oldest); the others
+    /// read (`read_only`).
+    controls: bool,
 }
+
+/// What a connection that does not control the board may ask: what changes nothing.
+fn read_only(line: &Line) -> bool {
+    use de_resonator::board::protocol::{self, Command, FaultsAsk};
+    match line {
+        Line::Text(bytes) => match protocol::parse(bytes) {
+            Ok(Command::Help(_) | Command::Status | Command::Info | Command::Get(_)) => true,
+            Ok(Command::Faults(ask)) => ask != FaultsAsk::Clear,
+            Ok(_) => false,
+            // Not a request: the board's own `err 1` says why.
+            Err(_) => true,
+        },
+        Line::TooLong | Line::Garbled => true,
+    }
+}
+
+/// What a connection that does not control the board hears on connecting.
+const READS_ONLY: &str = "# another connection controls the board: this one reads (status, \
+                          info, get, help, faults); the rest get err 3 until that one leaves";
 
 /// Bytes read from one client at one poll, at most: a client that never stops sending
 /// cannot hold the board's ticks.
@@ -191,17 +217,20 @@ impl Client {
             lines: Lines::default(),
             out: Vec::new(),
             gone: false,
+            controls: false,
         }
     }
 
-    /// Queue a line for the client.
+    /// Queue a line for the client, ended as its connection ends lines (a prompt after it
+    /// for a person at a terminal).
     fn say(&mut self, line: &str) {
         if self.out.len() > QUEUED_BYTES {
             self.gone = true;
             return;
         }
         self.out.extend_from_slice(line.as_bytes());
-        self.out.push(b'\n');
+        self.out
+            .extend_from_slice(self.lines.reply_end().as_bytes());
     }
 
     /// Queue a stream frame; dropped (a gap the receiver counts) while the client is more
@@ -236,7 +265,11 @@ impl Client {
                 Ok(0) => self.gone = true,
                 Ok(n) => {
                     left -= n;
-                    lines.extend(buf[..n].iter().filter_map(|&b| self.lines.push(b)));
+                    for &b in &buf[..n] {
+                        let pushed = self.lines.push(b);
+                        pushed.echo.bytes(|e| self.out.push(e));
+                        lines.extend(pushed.line);
+                    }
                 }
                 Err(e) if e.kind() == ErrorKind::WouldBlock => break,
                 Err(e) if e.kind() == ErrorKind::Interrupted => {}
@@ -249,6 +282,55 @@ impl Client {
 enum Listener {
     Tcp(TcpListener),
     Unix(UnixListener, PathBuf),
+    /// A pseudo-terminal's master: one client, for good (taken at the first accept).
+    Pty(std::cell::RefCell<Option<Pty>>),
+}
+
+/// A pseudo-terminal's master side, non-blocking: while no program has the terminal open,
+/// reads find nothing (not an end), and writes are kept by the terminal as far as it can.
+struct Pty(nix::pty::PtyMaster);
+
+impl Pty {
+    /// A new pseudo-terminal in raw mode (no echo or line editing of its own: the board
+    /// does those), and its path.
+    fn open() -> Result<(Self, String), String> {
+        use nix::fcntl::OFlag;
+        use nix::sys::termios::{cfmakeraw, tcgetattr, tcsetattr, SetArg};
+        use std::os::fd::AsRawFd;
+        let failed = |e: nix::Error| format!("cannot open a pseudo-terminal: {e}");
+        let master = nix::pty::posix_openpt(OFlag::O_RDWR | OFlag::O_NOCTTY | OFlag::O_NONBLOCK)
+            .map_err(failed)?;
+        nix::pty::grantpt(&master).map_err(failed)?;
+        nix::pty::unlockpt(&master).map_err(failed)?;
+        let path = nix::pty::ptsname_r(&master).map_err(failed)?;
+        let mut raw = tcgetattr(master.as_raw_fd()).map_err(failed)?;
+        cfmakeraw(&mut raw);
+        tcsetattr(master.as_raw_fd(), SetArg::TCSANOW, &raw).map_err(failed)?;
+        Ok((Pty(master), path))
+    }
+}
+
+impl Read for Pty {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        match self.0.read(buf) {
+            // EIO: no program has the terminal open now; one may later.
+            Err(e) if e.raw_os_error() == Some(libc::EIO) => Err(ErrorKind::WouldBlock.into()),
+            other => other,
+        }
+    }
+}
+
+impl Write for Pty {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        match self.0.write(buf) {
+            Err(e) if e.raw_os_error() == Some(libc::EIO) => Err(ErrorKind::WouldBlock.into()),
+            other => other,
+        }
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.0.flush()
+    }
 }
 
 impl Listener {
@@ -295,6 +377,10 @@ impl Listener {
                 s.set_nonblocking(true).ok()?;
                 Some(Box::new(s))
             }
+            Listener::Pty(pty) => pty
+                .borrow_mut()
+                .take()
+                .map(|p| Box::new(p) as Box<dyn Conn>),
         }
     }
 }
@@ -333,7 +419,16 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
     // The image the scene's board boots from (`run`'s and the firmware's in the loop).
     let bytes = lp.image()?;
     let mut flash = Flash::new();
-    let (listener, at) = Listener::bind(args.tcp.as_deref(), args.unix.as_ref())?;
+    let (listener, at) = if args.pty {
+        let (pty, path) = Pty::open()?;
+        // The path alone on stdout, for a script; how to use it on stderr.
+        println!("{path}");
+        eprintln!("the command port on {path}: `picocom {path}` (any terminal program)");
+        let at = format!("pty {path}");
+        (Listener::Pty(std::cell::RefCell::new(Some(pty))), at)
+    } else {
+        Listener::bind(args.tcp.as_deref(), args.unix.as_ref())?
+    };
     let streams = match (&args.stream_tcp, &args.stream_unix) {
         (None, None) => None,
         (tcp, unix) => {
@@ -372,6 +467,8 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
         (board, said)
     };
     let (mut logic, mut banner) = boot(&mut slot, Some(&mut flash), None);
+    // A request served since the last boot: the start-up line no longer says the state.
+    let mut asked_since_boot = false;
     for line in &banner {
         eprintln!("{line}");
     }
@@ -402,16 +499,6 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
         };
         if now >= next_poll || due.is_some_and(|d| d > now) {
             next_poll = now + POLL;
-            // New clients hear the last boot's start-up line, as a terminal on the board's
-            // port would have.
-            while let Some(stream) = listener.accept() {
-                let mut client = Client::new(stream);
-                for line in &banner {
-                    client.say(line);
-                }
-                clients.push(client);
-                report.clients += 1;
-            }
             if let Some(streams) = &streams {
                 while let Some(stream) = streams.accept() {
                     stream_clients.push(Client::new(stream));
@@ -429,10 +516,41 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
                 client.read_lines(&mut lines);
                 queue.extend(lines.into_iter().map(|line| (i, line)));
             }
+            // A new client hears the board's state now: the last boot's start-up line while
+            // it still says it (nothing asked since, no fault), else the status now.
+            while let Some(stream) = listener.accept() {
+                let mut client = Client::new(stream);
+                let faulted = slot.as_ref().is_some_and(|c| c.latched_fault().is_some());
+                if asked_since_boot || faulted {
+                    let mut now = ReplyLine::new();
+                    let status = crate::engine::hil::command_line("status")?;
+                    logic.serve(&status, &mut &mut slot, &extras, &mut now);
+                    client.say(&format!("{NOTICE}now {}", now.trim_start_matches("ok ")));
+                } else {
+                    for line in &banner {
+                        client.say(line);
+                    }
+                }
+                // (A client that left since the last poll was found gone by its read.)
+                client.controls = !clients.iter().any(|c| c.controls && !c.gone);
+                if !client.controls {
+                    client.say(READS_ONLY);
+                }
+                clients.push(client);
+                report.clients += 1;
+            }
             // In the order received; after a `reset`, the rest go to the board booted anew.
             for (i, line) in queue {
                 report.requests += 1;
                 let mut reply = ReplyLine::new();
+                if !clients[i].controls && !read_only(&line) {
+                    clients[i].say(
+                        "err 3 another connection controls the board: this one reads (status, \
+                         info, get, help, faults) until that one leaves",
+                    );
+                    continue;
+                }
+                asked_since_boot = true;
                 let then = logic.serve(&line, &mut &mut slot, &extras, &mut reply);
                 clients[i].say(&reply);
                 if let Then::Stream(every) = then {
@@ -448,6 +566,7 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
                     let _ = board::tick::drive(&mut slot, &mut stage, Ok(Inputs::NONE));
                     let keeper = logic.into_keeper();
                     (logic, banner) = boot(&mut slot, keeper, Some(ResetCause::Asked));
+                    asked_since_boot = false;
                     for line in &banner {
                         eprintln!("{line}");
                         clients.iter_mut().for_each(|c| c.say(line));
@@ -456,6 +575,14 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
             }
             clients.iter_mut().for_each(Client::flush);
             clients.retain(|c| !c.gone);
+            // The controlling connection gone: the oldest left takes over, and is told.
+            if !clients.iter().any(|c| c.controls) {
+                if let Some(next) = clients.first_mut() {
+                    next.controls = true;
+                    next.say("# this connection now controls the board");
+                    next.flush();
+                }
+            }
             stream_clients.iter_mut().for_each(Client::flush);
             stream_clients.retain(|c| !c.gone);
             if let Some(due) = due.filter(|&d| d > Instant::now()) {

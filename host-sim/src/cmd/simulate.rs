@@ -244,7 +244,7 @@ impl Asked {
         let checked = Device::new(params).map_err(|e| format!("{device}: {e}"))?;
         let ac_hz = match self.ac_hz {
             Some(hz) if !(hz.is_finite() && hz >= 0.0) => {
-                return Err(format!("ac_hz {hz}: need a finite frequency ≥ 0"))
+                return Err(format!("ac_hz (--ac-hz) {hz}: need a finite frequency ≥ 0"))
             }
             Some(hz) => hz,
             None if self.ac_volts != 0.0 => {

@@ -1168,11 +1168,11 @@ impl LoopBoard for CoreBoard<'_> {
 }
 
 /// A scripted line as the command port's reader makes it.
-fn command_line(line: &str) -> Result<Line, String> {
+pub(crate) fn command_line(line: &str) -> Result<Line, String> {
     let mut lines = Lines::default();
     line.bytes()
         .chain(std::iter::once(b'\n'))
-        .filter_map(|b| lines.push(b))
+        .filter_map(|b| lines.push(b).line)
         .last()
         .ok_or_else(|| format!("`{line}`: not a command line"))
 }
