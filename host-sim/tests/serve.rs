@@ -448,3 +448,34 @@ fn a_new_connection_to_a_faulted_board_hears_the_fault() {
     );
     assert!(!first.contains("fault=none"), "{first}");
 }
+
+/// Issue 46, 2: Ctrl-C in a `wait` cancels the wait, not the session; leaving says what the
+/// board is still doing (here: driving, the output on).
+#[test]
+fn ctrl_c_cancels_a_wait_and_leaving_says_the_output_is_on() {
+    use nix::sys::signal::{kill, Signal};
+    use nix::unistd::Pid;
+    use std::process::Stdio;
+    let board = Served::start(None, "1", "console-interrupt");
+    let script = common::scratch("console-interrupt").join("script.txt");
+    std::fs::write(&script, "wait phase=faulted 60\nstatus\n").unwrap();
+    let child = common::host_sim()
+        .arg("console")
+        .args(&board.connection)
+        .arg("--script")
+        .arg(&script)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_secs(3));
+    kill(Pid::from_raw(child.id() as i32), Signal::SIGINT).unwrap();
+    let started = std::time::Instant::now();
+    let done = child.wait_with_output().unwrap();
+    assert!(started.elapsed().as_secs() < 20, "the wait was not cancelled");
+    let out = String::from_utf8_lossy(&done.stdout);
+    let err = String::from_utf8_lossy(&done.stderr);
+    assert!(err.contains("wait phase=faulted: cancelled (Ctrl-C)"), "{err}");
+    assert!(out.contains("> status\nok phase="), "the session went on: {out}");
+    assert!(err.contains("leaving with the output ON"), "{err}");
+}

@@ -99,20 +99,29 @@ def main():
     rows.append(("SciPy `solve_ivp` DOP853 on the equation in Python, the same", seconds,
                  f"{theirs.nfev:,} right-hand sides; stretches within {gap:.1e}"))
 
-    # 3. The Dask Monte Carlo.
-    devices = monte_carlo.draw_devices(args.devices, seed=0)
-    seconds, plain = timed(lambda: monte_carlo.run(devices))
-    rows.append((f"Monte Carlo, {args.devices:,} devices, a plain loop", seconds, "no Dask"))
+    # 3. The Dask Monte Carlo: drawn where it runs (seeds travel), and devices sent pickled.
+    seconds, plain = timed(lambda: monte_carlo.study(args.devices, seed=0, chunks=8))
+    rows.append((f"Monte Carlo, {args.devices:,} devices drawn and summarised, a plain loop",
+                 seconds, "8 chunks, no Dask"))
+    devices = monte_carlo.draw_devices(args.devices // 10, seed=0)
+    seconds, plain_sent = timed(lambda: monte_carlo.run(devices))
+    rows.append((f"{len(devices):,} devices drawn here, summarised in a plain loop", seconds, ""))
     from dask.distributed import Client, LocalCluster
 
     for workers in [1, 2]:
         with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                           dashboard_address=None) as cluster, Client(cluster) as client:
-            monte_carlo.run(devices[:1000], client)  # the workers warmed
-            seconds, spread = timed(lambda: monte_carlo.run(devices, client))
-        assert np.array_equal(spread, plain)
-        rows.append((f"the same on a LocalCluster of {workers} worker process"
-                     f"{'es' if workers > 1 else ''}", seconds, "the plain loop's numbers"))
+            monte_carlo.study(2000, seed=1, client=client, chunks=8)  # the workers warmed
+            seconds, spread = timed(lambda: monte_carlo.study(args.devices, seed=0,
+                                                              client=client, chunks=8))
+            assert np.array_equal(spread, plain)
+            plural = "es" if workers > 1 else ""
+            rows.append((f"the study on a LocalCluster of {workers} worker process{plural}",
+                         seconds, "the plain loop's numbers; seeds travel"))
+            seconds, sent = timed(lambda: monte_carlo.run(devices, client))
+            assert np.array_equal(sent, plain_sent)
+            rows.append((f"{len(devices):,} pickled devices sent to {workers} worker{plural[1:]}",
+                         seconds, "the plain loop's numbers"))
 
     print(f"{os.cpu_count()} cores, Python {sys.version.split()[0]}, numpy {np.__version__}\n")
     print("| what | seconds | note |\n|---|---|---|")

@@ -2,8 +2,10 @@
 
 Devices are drawn around the reference device with the spreads a lab sees (shear modulus
 ±10%, thickness ±5%, each pre-stretch ±2%, one standard deviation), and each is asked for its
-safe region: the tunable range and the limit's voltage. The devices travel to the workers
-pickled (by their keys) in chunks; the work is `Device.safe`, the same code the CLI runs.
+safe region: the tunable range and the limit's voltage. `study` sends each worker a seed and
+a count, and the worker draws and summarises its chunk (only seeds and results travel);
+`run` sends devices already drawn, pickled by their keys. The work is `Device.safe`, the same
+code the CLI runs.
 
     python python/examples/monte_carlo.py --devices 20000 --workers 2
     python python/examples/monte_carlo.py --devices 100000 --scheduler tcp://host:8786
@@ -68,6 +70,23 @@ def run(devices, client=None, chunks=None):
     return np.vstack(client.gather(futures))
 
 
+def draw_and_summarise(seed, count):
+    """One chunk of a study drawn where it runs: `count` devices from `seed`, summarised."""
+    return summarise(draw_devices(count, seed))
+
+
+def study(count, seed=0, client=None, chunks=8):
+    """A Monte Carlo of `count` devices in `chunks` pieces, each drawn from its own seed on the
+    worker that summarises it (only the seeds travel, not the devices); without a client,
+    the same pieces in one loop here, so the numbers are the same either way."""
+    sizes = [count // chunks + (k < count % chunks) for k in range(chunks)]
+    seeds = [seed * 100_003 + k for k in range(chunks)]
+    if client is None:
+        return np.vstack([draw_and_summarise(s, n) for s, n in zip(seeds, sizes) if n])
+    futures = client.map(draw_and_summarise, seeds, sizes, pure=False)
+    return np.vstack([f for f in client.gather(futures) if len(f)])
+
+
 def report(rows):
     """The distribution as text: the quantiles of each column."""
     lines = [f"{len(rows)} devices; quantiles 5%, 50%, 95%"]
@@ -108,11 +127,13 @@ def main(argv=None):
     parser.add_argument("--workers", type=int, default=2,
                         help="a LocalCluster of this many processes (0: a plain loop)")
     parser.add_argument("--scheduler", help="a Dask scheduler's address, in place of a LocalCluster")
+    parser.add_argument("--chunks", type=int, default=8,
+                        help="pieces of the study, each drawn from its own seed (the numbers "
+                             "depend on it, not on the workers)")
     parser.add_argument("--plot", help="write the histograms to this file (SVG, PNG)")
     args = parser.parse_args(argv)
-    if args.devices < 1:
-        parser.error("--devices must be at least 1")
-    devices = draw_devices(args.devices, args.seed)
+    if args.devices < 1 or args.chunks < 1:
+        parser.error("--devices and --chunks must be at least 1")
     started = time.perf_counter()
     if args.scheduler or args.workers > 0:
         from dask.distributed import Client, LocalCluster
@@ -120,12 +141,15 @@ def main(argv=None):
         if args.scheduler:
             client = Client(args.scheduler)
         else:
-            cluster = LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True)
+            cluster = LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True,
+                                   dashboard_address=None)
             client = Client(cluster)
         with client:
-            rows = run(devices, client)
+            workers = len(client.scheduler_info()["workers"])
+            print(f"  on {workers} workers")
+            rows = study(args.devices, args.seed, client, chunks=args.chunks)
     else:
-        rows = run(devices)
+        rows = study(args.devices, args.seed, chunks=args.chunks)
     seconds = time.perf_counter() - started
     print(report(rows))
     print(f"  {seconds:.2f} s ({args.workers if not args.scheduler else 'cluster'} workers)")

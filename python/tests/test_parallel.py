@@ -50,8 +50,10 @@ def test_the_dask_example_gives_the_plain_loops_numbers_on_two_worker_processes(
                       dashboard_address=None) as cluster, Client(cluster) as client:
         spread = monte_carlo.run(devices, client)
         assert len(client.scheduler_info()["workers"]) == 2
+        seeded = monte_carlo.study(1000, seed=5, client=client, chunks=6)
     assert spread.shape == (400, 4)
     assert np.array_equal(spread, plain)
+    assert np.array_equal(seeded, monte_carlo.study(1000, seed=5, chunks=6))
     # The draw's spread shows in the result: not one device 400 times.
     assert np.ptp(plain[:, 2]) > 0.1 * np.mean(plain[:, 2])
 
