@@ -795,3 +795,31 @@ fn an_image_refuses_a_channel_it_could_not_read_back() {
         }))
     );
 }
+
+/// Issue 46: a target out of the table's range is refused for its range, first: not for a
+/// setting only the out-of-range target makes wrong (the trim's window counts target
+/// periods: 200 Hz at a 1 kHz tick has too few samples a period). Where the target is in
+/// range, the setting is refused by its own rule.
+#[test]
+fn a_target_out_of_range_is_refused_for_its_range_before_a_setting_it_implies() {
+    let t = reference_table();
+    let trimmed = |target_hz: f32, window: f32| Settings {
+        trim_tolerance: Some(0.01),
+        trim_window_seconds: window,
+        ..Settings::for_target(target_hz)
+    };
+    let start = |settings| Controller::start(REFERENCE_DEVICE.cast(), &t, amplifier(), settings);
+    match start(trimmed(200.0, 0.5)) {
+        Err(Fault::Table(e)) => assert!(e.to_string().contains("200"), "{e}"),
+        other => panic!("{:?}", other.map(|(_, boot)| boot)),
+    }
+    match start(trimmed(44.0, 0.001)) {
+        Err(Fault::Setting { setting, .. }) => {
+            assert_eq!(
+                setting,
+                de_resonator::controller::Setting::TrimWindowSeconds
+            )
+        }
+        other => panic!("{:?}", other.map(|(_, boot)| boot)),
+    }
+}

@@ -1233,3 +1233,34 @@ fn the_tuning_curve_and_its_family() {
     refused(&["curve", "--prestretch-1", "1:2"]);
     refused(&["curve", "--prestretch-1", "1:2:100000"]);
 }
+
+/// Issue 46: the amplifier's flags are warned of as a device file's values are: a DAC
+/// reference of 2500 "V" (millivolts typed as volts) is made, and said to be no DAC's.
+#[test]
+fn an_amplifier_flag_no_real_stage_has_is_warned_of() {
+    let dir = std::env::temp_dir().join(format!("host-sim-amp-warn-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("x.img");
+    let done = host_sim(&[
+        "image",
+        "--dac-reference-volts",
+        "2500",
+        "--gain",
+        "1.6",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&done.stderr);
+    assert!(
+        err.contains(
+            "warning: `--dac-reference-volts` = 2500 V is outside what any DAC's reference has"
+        ),
+        "{err}"
+    );
+    assert!(
+        !err.contains("--gain"),
+        "1.6 V/V is a gain some stage has: {err}"
+    );
+    let plain = host_sim(&["image", "--out", out.to_str().unwrap()]);
+    assert!(!String::from_utf8_lossy(&plain.stderr).contains("warning"));
+}

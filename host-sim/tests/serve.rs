@@ -472,10 +472,19 @@ fn ctrl_c_cancels_a_wait_and_leaving_says_the_output_is_on() {
     kill(Pid::from_raw(child.id() as i32), Signal::SIGINT).unwrap();
     let started = std::time::Instant::now();
     let done = child.wait_with_output().unwrap();
-    assert!(started.elapsed().as_secs() < 20, "the wait was not cancelled");
+    assert!(
+        started.elapsed().as_secs() < 20,
+        "the wait was not cancelled"
+    );
     let out = String::from_utf8_lossy(&done.stdout);
     let err = String::from_utf8_lossy(&done.stderr);
-    assert!(err.contains("wait phase=faulted: cancelled (Ctrl-C)"), "{err}");
-    assert!(out.contains("> status\nok phase="), "the session went on: {out}");
+    assert!(
+        err.contains("wait phase=faulted: cancelled (Ctrl-C)"),
+        "{err}"
+    );
+    assert!(
+        out.contains("> status\nok phase="),
+        "the session went on: {out}"
+    );
     assert!(err.contains("leaving with the output ON"), "{err}");
 }

@@ -875,6 +875,9 @@ fn image<'py>(
         rail_volts,
         power_up,
     };
+    if args.scene.is_none() {
+        warn(py, &host_sim::cmd::image::amplifier_warnings(&args))?;
+    }
     let name = out
         .as_ref()
         .map_or("(in memory)".into(), |p| p.display().to_string());

@@ -69,6 +69,8 @@ def test_the_image_is_the_clis_and_its_check_accepts_it(host_sim, tmp_path):
     assert dr.image().data == dr.image(dr.Device.reference(), target_hz=44.0).data
     with pytest.raises(ValueError, match="give the target"):
         dr.image(device)
+    with pytest.warns(UserWarning, match="`--dac-reference-volts` = 2500 V is outside"):
+        dr.image(dac_reference_volts=2500.0, gain=1.6)
     with pytest.raises(ValueError, match="power_up `later`"):
         dr.image(power_up="later")
     scene = dr.image(scene=ROOT / "scenes" / "reference.toml")

@@ -50,14 +50,25 @@ impl Checked {
     /// (1 − margin)·limit.
     fn new(params: DeviceParams<f32>, table: &[u8], settings: &Settings) -> Result<Self, Fault> {
         let device = Device::new(params).map_err(Fault::Device)?;
-        settings.check()?;
         let table = Table::parse(table).map_err(Fault::Table)?;
         table.check_device(&params).map_err(Fault::Table)?;
+        // A target the table does not reach is the operator's reason: said before a setting
+        // it would make wrong (the trim's window counts target periods).
+        let in_range = settings.target_hz.is_finite() && settings.target_hz > 0.0;
+        let table_volts = if in_range {
+            Some(table.bias_volts(settings.target_hz).map_err(Fault::Table)?)
+        } else {
+            None
+        };
+        settings.check()?;
         let top_volts = table.max_volts();
         Ok(Self {
             device,
             top_volts,
-            table_volts: table.bias_volts(settings.target_hz).map_err(Fault::Table)?,
+            table_volts: match table_volts {
+                Some(volts) => volts,
+                None => table.bias_volts(settings.target_hz).map_err(Fault::Table)?,
+            },
             max_volts: top_volts * ((1.0 - settings.margin) / (1.0 - table.margin())).min(1.0),
         })
     }

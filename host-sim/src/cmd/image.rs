@@ -307,10 +307,55 @@ pub fn image(args: &ImageArgs) -> Result<ImageReport, String> {
         .as_ref()
         .ok_or("give --out FILE (or --check FILE)")?;
     prepare_file(out)?;
+    if args.scene.is_none() {
+        for warning in amplifier_warnings(args) {
+            eprintln!("warning: {warning}");
+        }
+    }
     let (bytes, mut report) = build(args, out.display().to_string())?;
     write_path(out, &bytes)?;
     report.written = true;
     Ok(report)
+}
+
+/// What no real amplifier stage has, each with its unit and the range any has: a unit slip
+/// (millivolts typed as volts), warned of as a device file's implausible values are.
+pub fn amplifier_warnings(args: &ImageArgs) -> Vec<String> {
+    let mut said = Vec::new();
+    let mut check = |flag: &str, value: f32, low: f32, high: f32, unit: &str, slip: &str| {
+        if value.is_finite() && !(low..=high).contains(&value) {
+            said.push(format!(
+                "`{flag}` = {value} {unit} is outside what any {slip} ({low} .. {high} {unit})"
+            ));
+        }
+    };
+    check(
+        "--dac-reference-volts",
+        args.dac_reference_volts,
+        0.5,
+        10.0,
+        "V",
+        "DAC's reference has: millivolts typed as volts?",
+    );
+    check(
+        "--gain",
+        args.gain,
+        1.0,
+        1e5,
+        "V/V",
+        "high-voltage amplifier has",
+    );
+    if let Some(rail) = args.rail_volts {
+        check(
+            "--rail-volts",
+            rail,
+            1.0,
+            1e5,
+            "V",
+            "amplifier's output rail has",
+        );
+    }
+    said
 }
 
 /// The image `args` ask for (a scene's, or a device's with its settings and amplifier) and
