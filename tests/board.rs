@@ -972,9 +972,16 @@ fn a_terminal_gets_echo_and_editing_and_a_program_gets_neither() {
         [Line::Text(heapless::Vec::from_slice(b"inf\x01o").unwrap())]
     );
     assert_eq!(echoed, b"help\x08 \x08\x08 \x08\x08 \x08\x08 \x08info\r\n");
-    // An edit marks a terminal at once, whatever its line ends.
+    // A line ended by `\n` is a program's: the terminal's mode ends with it, and a script
+    // that follows on the same port sees its plain replies.
+    let (got, echoed) = typed(&mut lines, b"status\nget tick_hz\n");
+    assert_eq!(got, [line("status"), line("get tick_hz")]);
+    assert_eq!(echoed, b"status");
+    assert!(!lines.terminal());
+    assert_eq!(lines.reply_end(), REPLY_END);
+    // An edit marks a terminal at once.
     let mut lines = Lines::default();
-    let (got, echoed) = typed(&mut lines, b"statux\x08s\n");
+    let (got, echoed) = typed(&mut lines, b"statux\x08s\r");
     assert_eq!(got, [line("status")]);
     assert_eq!(echoed, b"\x08 \x08s\r\n");
     assert_eq!(lines.push(b'x').echo, Echo::Byte(b'x'));

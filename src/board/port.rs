@@ -32,9 +32,11 @@ pub enum Line {
 /// A person at a serial terminal gets what a serial console gives: what they type echoed,
 /// backspace or DEL and Ctrl-U (Ctrl-C too) mending the line, a prompt after each reply. A
 /// terminal is known by its Enter, a `\r` that no `\n` follows, or by an edit; from then on
-/// (the byte after that `\r`) the connection is a terminal's. A program (`host-sim
-/// console`, a script) ends its lines with `\n` or `\r\n` and never edits: it sees not one
-/// byte more than before. Edit bytes are never part of a line, in either mode.
+/// (the byte after that `\r`) the connection is a terminal's, until a line ends with `\n`
+/// (a program's: the board's one UART may serve a terminal, then a script). A program
+/// (`host-sim console`, a script) ends its lines with `\n` or `\r\n` and never edits: it
+/// sees not one byte more than before, unless a terminal's line is half typed when it
+/// starts. Edit bytes are never part of a line, in either mode.
 #[derive(Default)]
 pub struct Lines {
     text: Vec<u8, MAX_LINE>,
@@ -117,7 +119,9 @@ impl Lines {
             } else {
                 Line::Text(self.text.clone())
             };
-            let terminal = self.terminal;
+            // A line a program ended (`\n`): the connection is a program's again, whatever
+            // came before (the board's one UART serves a terminal, then a script).
+            let terminal = self.terminal && byte == b'\r';
             *self = Self {
                 after_cr: byte == b'\r',
                 terminal,
