@@ -932,6 +932,7 @@ fn lines_end_at_a_line_feed_a_carriage_return_or_both() {
 /// program (LF or CRLF, no edits) sees not one byte more than before.
 #[test]
 fn a_terminal_gets_echo_and_editing_and_a_program_gets_neither() {
+    use de_resonator::board::protocol::MAX_LINE;
     use de_resonator::board::{Echo, Lines, REPLY_END, TERMINAL_REPLY_END};
     let typed = |lines: &mut Lines, bytes: &[u8]| {
         let mut echoed = Vec::new();
@@ -979,6 +980,26 @@ fn a_terminal_gets_echo_and_editing_and_a_program_gets_neither() {
     assert_eq!(echoed, b"status");
     assert!(!lines.terminal());
     assert_eq!(lines.reply_end(), REPLY_END);
+    // Past the longest line nothing is echoed, and backspace takes those bytes first: the
+    // screen and the line agree. A control byte is kept but not shown, and rubbed out
+    // without moving the cursor.
+    let mut lines = Lines::default();
+    let _ = typed(&mut lines, b"\r");
+    let mut long = b"x".repeat(MAX_LINE + 4);
+    long.extend([0x7f; MAX_LINE + 4]);
+    long.extend(b"st\x1bx\x7f\x7fatus\r");
+    let (got, echoed) = typed(&mut lines, &long);
+    assert_eq!(got, [line("status")]);
+    let mut expected = b"\r> ".to_vec();
+    expected.extend(b"x".repeat(MAX_LINE));
+    expected.extend(b"\x08 \x08".repeat(MAX_LINE));
+    expected.extend(b"stx\x08 \x08atus\r\n");
+    assert_eq!(echoed, expected);
+    // Ctrl-U rubs out what was shown, and a byte lost from the line goes with it.
+    lines.lost();
+    let (got, echoed) = typed(&mut lines, b"s\x01t\x15info\r");
+    assert_eq!(got, [line("info")]);
+    assert_eq!(echoed, b"st\x08 \x08\x08 \x08info\r\n");
     // An edit marks a terminal at once.
     let mut lines = Lines::default();
     let (got, echoed) = typed(&mut lines, b"statux\x08s\r");

@@ -742,6 +742,7 @@ fn units_after_numbers_are_taken_or_named_and_counts_are_whole() {
         Ok(Command::Stream(Some(100.0)))
     );
     assert_eq!(protocol::parse(b"target 33.5 Hz 2"), Err(ParseError::Extra));
+    assert_eq!(protocol::parse(b"target 44 extra"), Err(ParseError::Extra));
     assert_eq!(
         protocol::parse(b"target Hz"),
         Err(ParseError::BadNumber { index: 1 })

@@ -394,7 +394,7 @@ fn one_connection_controls_the_board_and_a_new_one_hears_the_state_now() {
     b.write_all(b"stop\nstatus\nfaults clear\n").unwrap();
     let refused = b_lines.next().unwrap();
     assert!(
-        refused.starts_with("err 3 another connection controls the board"),
+        refused.starts_with("err 8 another connection controls the board"),
         "{refused}"
     );
     let status = b_lines.next().unwrap();
@@ -409,7 +409,7 @@ fn one_connection_controls_the_board_and_a_new_one_hears_the_state_now() {
         "B's stop did not end A's drive: {status}"
     );
     assert!(
-        b_lines.next().unwrap().starts_with("err 3 "),
+        b_lines.next().unwrap().starts_with("err 8 "),
         "faults clear changes the log"
     );
     a.write_all(b"status\n").unwrap();

@@ -12,7 +12,6 @@ ArrayLike = npt.ArrayLike
 Method = Literal[
     "reference",
     "reference-radau",
-    "reference-bdf",
     "rk4-f32",
     "rk4-f64",
     "verlet-f32",

@@ -162,11 +162,20 @@ impl Device_ {
     }
 }
 
-/// The device from keyword arguments: the device file's keys.
-fn from_keys(keys: &Bound<'_, PyDict>) -> PyResult<Device_> {
+/// The device from keyword arguments: the device file's keys. `jlim=None` says neo-Hookean;
+/// keywords without `jlim` make it neo-Hookean too, as a device file does, and say so (a
+/// warning); `quiet` (a pickled device coming back) says nothing.
+fn from_keys(keys: &Bound<'_, PyDict>, quiet: bool) -> PyResult<Device_> {
     let mut pairs = Vec::new();
+    let mut jlim_given = false;
     for (key, value) in keys.iter() {
         let key: String = key.extract()?;
+        if key == Field::Jlim.key() {
+            jlim_given = true;
+            if value.is_none() {
+                continue;
+            }
+        }
         let number: f64 = value.extract().map_err(|_| {
             value_error(format!(
                 "`{key}` must be a number (SI units), not {value:?}"
@@ -177,7 +186,17 @@ fn from_keys(keys: &Bound<'_, PyDict>) -> PyResult<Device_> {
     let borrowed: Vec<(&str, f64)> = pairs.iter().map(|(k, v)| (k.as_str(), *v)).collect();
     let (params, notes) = device_file::from_keys(&borrowed).map_err(value_error)?;
     let device = Device_::new(params, "keywords".into())?;
-    warn(keys.py(), &notes.implausible)?;
+    if !quiet {
+        let mut said = notes.implausible;
+        if !jlim_given {
+            said.push(
+                "no `jlim`: the material is neo-Hookean, as in a device file (give `jlim` for \
+                 Gent, or `jlim=None` to say neo-Hookean)"
+                    .into(),
+            );
+        }
+        warn(keys.py(), &said)?;
+    }
     Ok(device)
 }
 
@@ -196,8 +215,8 @@ impl Device_ {
     #[pyo3(signature = (**keys))]
     fn py_new(keys: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
         match keys {
-            Some(keys) => from_keys(keys),
-            None => Self::reference(),
+            Some(keys) if !keys.is_empty() => from_keys(keys, false),
+            _ => Self::reference(),
         }
     }
 
@@ -229,15 +248,15 @@ impl Device_ {
         Ok(device)
     }
 
-    /// The device's keys and values (SI units), as a device file holds them: `Device(**d)`
-    /// makes the same device. `jlim` is absent for a neo-Hookean membrane.
+    /// The device's keys and values (SI units): `Device(**d)` makes the same device.
+    /// `jlim` is None for a neo-Hookean membrane.
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let dict = PyDict::new(py);
         for field in Field::ALL {
-            if field == Field::Jlim && self.params.jlim.is_none() {
-                continue;
+            match (field, self.params.jlim) {
+                (Field::Jlim, None) => dict.set_item(field.key(), py.None())?,
+                _ => dict.set_item(field.key(), self.params.get(field))?,
             }
-            dict.set_item(field.key(), self.params.get(field))?;
         }
         Ok(dict)
     }
@@ -270,8 +289,10 @@ impl Device_ {
         };
         let keys: Vec<String> = Field::ALL
             .iter()
-            .filter(|&&f| !(f == Field::Jlim && self.params.jlim.is_none()))
-            .map(|&f| format!("{}={:?}", f.key(), self.params.get(f)))
+            .map(|&f| match (f, self.params.jlim) {
+                (Field::Jlim, None) => "jlim=None".to_string(),
+                _ => format!("{}={:?}", f.key(), self.params.get(f)),
+            })
             .collect();
         format!("Device({}) # {material}", keys.join(", "))
     }
@@ -408,7 +429,7 @@ impl Device_ {
     fn curve<'py>(
         &self,
         py: Python<'py>,
-        points: usize,
+        points: i64,
         margin: f64,
         target_hz: Option<f64>,
     ) -> PyResult<Bound<'py, PyAny>> {
@@ -425,14 +446,14 @@ impl Device_ {
     fn family<'py>(
         &self,
         py: Python<'py>,
-        prestretch_1: Option<Vec<f64>>,
-        prestretch_2: Option<Vec<f64>>,
-        points: usize,
+        prestretch_1: Option<&Bound<'py, PyAny>>,
+        prestretch_2: Option<&Bound<'py, PyAny>>,
+        points: i64,
         margin: f64,
         target_hz: Option<f64>,
     ) -> PyResult<Bound<'py, PyList>> {
-        let ones = prestretch_1.unwrap_or(vec![self.params.prestretch_1]);
-        let twos = prestretch_2.unwrap_or(vec![self.params.prestretch_2]);
+        let ones = numbers(prestretch_1, self.params.prestretch_1)?;
+        let twos = numbers(prestretch_2, self.params.prestretch_2)?;
         let mut devices = Vec::new();
         for &l1 in &ones {
             for &l2 in &twos {
@@ -454,11 +475,12 @@ impl Device_ {
     fn lut<'py>(
         &self,
         py: Python<'py>,
-        points: Option<usize>,
+        points: Option<i64>,
         margin: f64,
         out: Option<std::path::PathBuf>,
     ) -> PyResult<Bound<'py, PyAny>> {
         let margin = Self::margin(margin)?;
+        let points = points.map(|n| count("points", n, 1024)).transpose()?;
         let params = self.params;
         let made = stoppable(py, move || {
             host_sim::lut::make(params, margin, points, true).map_err(|e| e.to_string())
@@ -513,10 +535,11 @@ impl Device_ {
         quality_factor: f64,
         from_ratio: f64,
         to_ratio: f64,
-        points: usize,
+        points: i64,
         periods: f64,
         steps_per_period: f64,
     ) -> PyResult<Bound<'py, PyAny>> {
+        let points = count("points", points, usize::MAX)?;
         let args = SweepArgs {
             bias_volts,
             ac_volts,
@@ -552,21 +575,37 @@ impl Device_ {
     }
 }
 
+/// A number or a sequence of numbers as a list (`None`: the default alone).
+fn numbers(given: Option<&Bound<'_, PyAny>>, default: f64) -> PyResult<Vec<f64>> {
+    match given {
+        None => Ok(vec![default]),
+        Some(one) => match one.extract::<f64>() {
+            Ok(x) => Ok(vec![x]),
+            Err(_) => one
+                .extract::<Vec<f64>>()
+                .map_err(|_| value_error(format!("{one}: give a number or a sequence of numbers"))),
+        },
+    }
+}
+
+/// A count from Python: within 2 ..= `most`, or a ValueError naming it.
+fn count(name: &str, given: i64, most: usize) -> PyResult<usize> {
+    usize::try_from(given)
+        .ok()
+        .filter(|n| (2..=most).contains(n))
+        .ok_or_else(|| value_error(format!("{name} {given}: need 2 to {most}")))
+}
+
 /// The curves of `devices`, with the GIL released.
 fn curves<'py>(
     py: Python<'py>,
     devices: Vec<DeviceParams<f64>>,
-    points: usize,
+    points: i64,
     margin: f64,
     target_hz: Option<f64>,
 ) -> PyResult<Vec<Bound<'py, PyAny>>> {
     let margin = Device_::margin(margin)?;
-    if !(2..=host_sim::cmd::curve::MAX_POINTS).contains(&points) {
-        return Err(value_error(format!(
-            "points {points}: need 2 to {}",
-            host_sim::cmd::curve::MAX_POINTS
-        )));
-    }
+    let points = count("points", points, host_sim::cmd::curve::MAX_POINTS)?;
     if let Some(hz) = target_hz.filter(|hz| !(hz.is_finite() && *hz > 0.0)) {
         return Err(value_error(format!(
             "target_hz {hz}: need a finite frequency > 0"
@@ -776,11 +815,16 @@ fn simulate<'py>(
 /// with `history`: per tick `time_seconds` (s), `dac_code`, `dac_on`, `enable`, `phase`
 /// (a list), `stretch`, `membrane_volts` (V), `current_amps` (A), as arrays. Writes no files.
 #[pyfunction]
-fn run_scene<'py>(py: Python<'py>, scene: &str) -> PyResult<Bound<'py, PyAny>> {
-    let mut parsed = if scene.contains('\n') || scene.contains('=') {
-        scene::parse(scene).map_err(value_error)?
-    } else {
-        scene::load(Path::new(scene)).map_err(value_error)?
+fn run_scene<'py>(py: Python<'py>, scene: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+    // A path (str or os.PathLike) to a file, else a str of TOML (it holds `=` or a newline).
+    let mut parsed = match scene.extract::<String>() {
+        Ok(text) if !Path::new(&text).is_file() && (text.contains('\n') || text.contains('=')) => {
+            scene::parse(&text).map_err(value_error)?
+        }
+        _ => {
+            let path: std::path::PathBuf = scene.extract()?;
+            scene::load(&path).map_err(value_error)?
+        }
     };
     parsed.plot = false;
     parsed.history = false;
@@ -910,7 +954,7 @@ fn check_image<'py>(py: Python<'py>, image: &Bound<'py, PyAny>) -> PyResult<Boun
 /// Pickling's way back: the device from its keys (`Device.to_dict()`).
 #[pyfunction]
 fn _device_from_keys(keys: &Bound<'_, PyDict>) -> PyResult<Device_> {
-    from_keys(keys)
+    from_keys(keys, true)
 }
 
 #[pymodule]

@@ -2,6 +2,7 @@
 tests' independent values (never the package's own output)."""
 
 import numpy as np
+from scipy.optimize import brentq
 
 EPS0 = 8.8541878128e-12
 
@@ -80,9 +81,15 @@ class Model:
         )
         return [rate, (force - self.c * rate) / self.mass]
 
-    def emi_hessian_positive(self, lam, d=1e-4):
-        """§6.2: the Hessian of Ws − ½ε(Φ/H)²λ1²λ2² at (λ, λ2p) positive definite."""
-        e2 = (self.bias_volts(lam) / self.h) ** 2
+    def stretch_for_bias(self, volts, top):
+        """§5: the loading branch's stretch that `volts` holds, by brentq between λ1p and
+        `top` (a stretch past it on the branch)."""
+        return brentq(lambda x: self.bias_volts(x) - volts, self.l1p, top, xtol=1e-15)
+
+    def emi_hessian_positive(self, lam, d=1e-4, volts=None):
+        """§6.2: the Hessian of Ws − ½ε(Φ/H)²λ1²λ2² at (λ, λ2p) positive definite, Φ the
+        static bias at λ unless `volts` is given."""
+        e2 = ((self.bias_volts(lam) if volts is None else volts) / self.h) ** 2
 
         def free(a, b):
             if self.jlim is None:

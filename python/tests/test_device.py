@@ -33,12 +33,20 @@ def test_reference_device_is_the_built_in_one():
 
 
 def test_keywords_take_the_reference_values_and_an_absent_jlim_is_neo_hookean():
-    device = dr.Device(shear_modulus=60e3)
-    assert device.material == "neo_hookean" and "jlim" not in device.to_dict()
+    with pytest.warns(UserWarning, match="no `jlim`: the material is neo-Hookean"):
+        device = dr.Device(shear_modulus=60e3)
+    assert device.material == "neo_hookean" and device.to_dict()["jlim"] is None
     assert device["thickness"] == dr.Device.reference()["thickness"]
-    assert "neo-Hookean" in repr(device)
+    assert "neo-Hookean" in repr(device) and "jlim=None" in repr(device)
     with pytest.raises(KeyError):
         device["jlim"]
+    # Said outright, no warning; the same device.
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert dr.Device(shear_modulus=60e3, jlim=None) == device
+        assert dr.Device(**device.to_dict()) == device
 
 
 def test_a_wrong_value_raises_value_error_with_the_models_reason():
@@ -54,7 +62,7 @@ def test_a_wrong_value_raises_value_error_with_the_models_reason():
 
 def test_a_value_no_membrane_has_is_warned_of():
     with pytest.warns(UserWarning, match="`thickness` = 0.5 m is outside"):
-        dr.Device(thickness=0.5)
+        dr.Device(thickness=0.5, jlim=120)
 
 
 def test_a_device_file_reads_as_the_cli_reads_it(tmp_path, host_sim):
@@ -77,8 +85,15 @@ def test_a_device_file_reads_as_the_cli_reads_it(tmp_path, host_sim):
 
 
 def test_pickle_round_trip_keeps_the_device():
-    for device in [dr.Device.reference(), dr.Device(shear_modulus=60e3), *random_devices(5, 1)]:
-        again = pickle.loads(pickle.dumps(device))
+    import warnings
+
+    neo = dr.Device(shear_modulus=60e3, jlim=None)
+    with pytest.warns(UserWarning, match="thickness"):
+        odd = dr.Device(jlim=90, thickness=0.5)
+    for device in [dr.Device.reference(), neo, odd, *random_devices(5, 1)]:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # nothing said again on the way back
+            again = pickle.loads(pickle.dumps(device))
         assert again == device and again.to_dict() == device.to_dict()
     result = dr.Device().safe()
     assert pickle.loads(pickle.dumps(result)) == result
@@ -172,6 +187,7 @@ def test_the_curve_is_the_clis_and_lies_on_the_statics(tmp_path, host_sim):
 
 def test_a_family_has_a_curve_for_each_pair_and_says_which_make_no_device():
     family = dr.Device().family(prestretch_1=[1.5, 2.0, 2.5], prestretch_2=[0.5, 2.0])
+    assert len(dr.Device().family(prestretch_1=2.5)) == 1
     assert len(family) == 6
     assert [(c.prestretch_1, c.prestretch_2) for c in family][:2] == [(1.5, 0.5), (1.5, 2.0)]
     bad = [c for c in family if c.prestretch_2 == 0.5]

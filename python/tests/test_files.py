@@ -9,6 +9,7 @@ import pytest
 
 import de_resonator as dr
 from conftest import ROOT
+from model import Model
 
 
 def cli(host_sim, *args):
@@ -24,9 +25,12 @@ def test_the_table_is_the_clis_byte_for_byte(host_sim, tmp_path):
     assert table.data == (tmp_path / "t.bin").read_bytes() and table.bytes == len(table.data)
     assert table.crc32 == theirs["crc32"] and table.points == theirs["points"]
     assert table.natural_frequency_hz.dtype == np.float32 and len(table.bias_volts) == table.points
-    # The table's points lie on the device's curve (f32 rounding apart).
-    assert device.frequency(table.bias_volts.astype(float)) == pytest.approx(
-        table.natural_frequency_hz.astype(float), rel=1e-5)
+    # The table's points lie on the statics' curve (model.md §5 in tests/model.py; f32).
+    m = Model(device.to_dict())
+    top = device.safe(margin=0.0).limit["stretch"]
+    for hz, volts in zip(table.natural_frequency_hz, table.bias_volts):
+        lam = m.stretch_for_bias(float(volts), top) if volts > 0 else m.l1p
+        assert m.frequency_hz(lam) == pytest.approx(float(hz), rel=2e-6)
     written = device.lut(points=64, out=tmp_path / "t.csv")
     assert (tmp_path / "t.csv").read_text().startswith("natural_frequency_hz,bias_volts")
     assert written.files == [str(tmp_path / "t.csv")] and written.format == "csv"
@@ -43,7 +47,8 @@ def test_the_sweep_is_the_clis_and_peaks_at_the_natural_frequency(host_sim, tmp_
                  "--quality-factor", "50", "--out", str(tmp_path))
     assert ours.amplitude.tolist() == [p["amplitude"] for p in theirs["points"]]
     assert ours.peaks == theirs["peaks"]
-    f0 = device.frequency(4000.0)
+    m = Model(device.to_dict())
+    f0 = m.frequency_hz(m.stretch_for_bias(4000.0, device.safe(margin=0.0).limit["stretch"]))
     assert ours.natural_frequency_hz == pytest.approx(f0, rel=1e-9)
     # A Q of 50: the peak within a half-width (f0/2Q) of f0.
     top = ours.drive_hz[np.nanargmax(ours.amplitude)]
@@ -53,7 +58,7 @@ def test_the_sweep_is_the_clis_and_peaks_at_the_natural_frequency(host_sim, tmp_
 
 
 def test_the_image_is_the_clis_and_its_check_accepts_it(host_sim, tmp_path):
-    device = dr.Device(shear_modulus=60e3)
+    device = dr.Device(shear_modulus=60e3, jlim=None)
     ours = device.safe()
     target = sum(ours.tunable_range_hz) / 2
     made = dr.image(device, target_hz=target, power_up="drive", out=tmp_path / "py.img")
@@ -70,7 +75,7 @@ def test_the_image_is_the_clis_and_its_check_accepts_it(host_sim, tmp_path):
     with pytest.raises(ValueError, match="give the target"):
         dr.image(device)
     with pytest.warns(UserWarning, match="`--dac-reference-volts` = 2500 V is outside"):
-        dr.image(dac_reference_volts=2500.0, gain=1.6)
+        dr.image(dac_reference_volts=2500.0, gain=4.0)
     with pytest.raises(ValueError, match="power_up `later`"):
         dr.image(power_up="later")
     scene = dr.image(scene=ROOT / "scenes" / "reference.toml")

@@ -90,7 +90,36 @@ def test_a_crossing_is_status_1_with_the_event_and_its_mode():
     theirs = scipy_run(device, 0.99 * limit["volts"], 0.05 * limit["volts"], 40.0,
                        np.array([0.0, t_cross]), ours.y[0, 0])
     assert theirs.y[0, -1] == pytest.approx(stretch, rel=1e-8)
-    assert not m.emi_hessian_positive(stretch * (1 + 1e-3)) or stretch >= limit["stretch"] * 0.99
+    # There, under the voltage of that instant, the Hessian of §6.2 stops being positive.
+    volts = 0.99 * limit["volts"] + 0.05 * limit["volts"] * np.sin(2 * np.pi * 40.0 * t_cross)
+    assert m.emi_hessian_positive(stretch * (1 - 1e-4), volts=volts)
+    assert not m.emi_hessian_positive(stretch * (1 + 1e-4), volts=volts)
+
+
+def test_a_core_method_stops_at_its_crossing_too():
+    device = dr.Device.reference()
+    limit = device.safe().limit
+    for method in ["rk4-f32", "verlet-f64"]:
+        run = dr.simulate(device, 0.95 * limit["volts"], ac_volts=0.2 * limit["volts"],
+                          ac_hz=40.0, duration_seconds=0.5, start="prestretch", method=method)
+        assert run.status == 1, method
+        [t_cross] = run.t_events[0]
+        [[stretch, rate]] = run.y_events[0]
+        assert np.isfinite([stretch, rate]).all(), method
+        assert run.t[-1] == t_cross and run.y[0, -1] == stretch and run.t[-2] < t_cross
+        whole = dr.simulate(device, 0.95 * limit["volts"], ac_volts=0.2 * limit["volts"],
+                            ac_hz=40.0, duration_seconds=0.5, start="prestretch",
+                            method=method, stop_at_limit=False)
+        assert whole.t[-1] == pytest.approx(0.5)
+
+
+def test_a_drive_that_is_not_a_number_is_refused_not_run():
+    device = dr.Device.reference()
+    for bad in [dict(ac_volts=float("nan"), ac_hz=40.0), dict(ac_volts=float("inf"), ac_hz=40.0)]:
+        with pytest.raises(ValueError, match="must be a finite number"):
+            dr.simulate(device, 5000.0, duration_seconds=0.05, **bad)
+    with pytest.raises(ValueError, match="must be a finite number"):
+        dr.simulate(device, float("nan"), duration_seconds=0.05, start="prestretch")
 
 
 def test_bad_inputs_raise_value_error_with_a_clear_message():

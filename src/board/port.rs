@@ -40,7 +40,8 @@ pub enum Line {
 #[derive(Default)]
 pub struct Lines {
     text: Vec<u8, MAX_LINE>,
-    overlong: bool,
+    /// Bytes past `MAX_LINE`, dropped (and not echoed): the line is too long while any are.
+    beyond: usize,
     garbled: bool,
     /// The last byte ended a line with `\r`: a `\n` now is the rest of that end.
     after_cr: bool,
@@ -95,6 +96,11 @@ pub const REPLY_END: &str = "\n";
 /// What ends a reply to a person at a terminal: a whole new line, and the prompt.
 pub const TERMINAL_REPLY_END: &str = "\r\n> ";
 
+/// A byte a terminal shows as typed: printable ASCII and tab (what a request may hold).
+fn shown(byte: u8) -> bool {
+    (b' '..=b'~').contains(&byte) || byte == b'\t'
+}
+
 /// Backspace, DEL (what most terminals send for backspace), Ctrl-U and Ctrl-C.
 const BACKSPACE: u8 = 0x08;
 const DELETE: u8 = 0x7f;
@@ -114,7 +120,7 @@ impl Lines {
         if byte == b'\n' || byte == b'\r' {
             let line = if self.garbled {
                 Line::Garbled
-            } else if self.overlong {
+            } else if self.beyond > 0 {
                 Line::TooLong
             } else {
                 Line::Text(self.text.clone())
@@ -132,29 +138,33 @@ impl Lines {
         match byte {
             BACKSPACE | DELETE => {
                 self.terminal = true;
-                let erased = self.text.pop().is_some();
-                self.pushed(
-                    None,
-                    if erased {
-                        Echo::Erase(1)
-                    } else {
-                        Echo::Nothing
-                    },
-                )
+                // A byte dropped past the end goes first (it was never shown); a byte that
+                // was not shown (a control byte) is rubbed out without moving the cursor.
+                if self.beyond > 0 {
+                    self.beyond -= 1;
+                    return self.pushed(None, Echo::Nothing);
+                }
+                let echo = match self.text.pop() {
+                    Some(b) if shown(b) => Echo::Erase(1),
+                    _ => Echo::Nothing,
+                };
+                self.pushed(None, echo)
             }
             KILL_LINE | INTERRUPT => {
                 self.terminal = true;
-                let erased = self.text.len() as u8;
+                let erased = self.text.iter().filter(|&&b| shown(b)).count() as u8;
                 self.text.clear();
-                self.overlong = false;
+                self.beyond = 0;
+                // The line is gone, and a byte lost from it with it.
+                self.garbled = false;
                 self.pushed(None, Echo::Erase(erased))
             }
             _ => {
                 if self.text.push(byte).is_err() {
-                    self.overlong = true;
+                    self.beyond = self.beyond.saturating_add(1);
+                    return self.pushed(None, Echo::Nothing);
                 }
-                let shown = (b' '..=b'~').contains(&byte) || byte == b'\t';
-                let echo = match (shown, known_now) {
+                let echo = match (shown(byte), known_now) {
                     (true, true) => Echo::Begin(byte),
                     (true, false) => Echo::Byte(byte),
                     (false, _) => Echo::Nothing,

@@ -31,7 +31,7 @@ pub const HELP: &str =
                         every setting, `help <setting>` its unit and range)";
 
 /// Each command's name, its form and what it does: what `help <command>` answers, and where
-/// `help`'s suggestion for a typo is found (a test holds it to the names `parse` knows).
+/// `help`'s suggestion for a typo is found. `parse` takes no other command.
 pub const COMMANDS: [(&str, &str); 15] = [
     (
         "help",
@@ -188,10 +188,14 @@ pub enum ErrorCode {
     Unsupported = 6,
     /// Not in this state: the request needs the output at rest at 0 V (`stop` first).
     State = 7,
+    /// Another connection controls the board: this one reads (`status`, `info`, `get`,
+    /// `help`, `faults`) until that one leaves. Where a board serves several connections
+    /// (`host-sim serve`); never on a board's one serial port.
+    NotInControl = 8,
 }
 
 impl ErrorCode {
-    pub const ALL: [ErrorCode; 7] = [
+    pub const ALL: [ErrorCode; 8] = [
         ErrorCode::Syntax,
         ErrorCode::Refused,
         ErrorCode::Busy,
@@ -199,6 +203,7 @@ impl ErrorCode {
         ErrorCode::Config,
         ErrorCode::Unsupported,
         ErrorCode::State,
+        ErrorCode::NotInControl,
     ];
 
     /// The code with this number.
@@ -311,6 +316,10 @@ pub fn parse(line: &[u8]) -> Result<Command, ParseError> {
     let text = core::str::from_utf8(line).map_err(|_| ParseError::NotText)?;
     let mut words = text.split_ascii_whitespace().peekable();
     let name = words.next().ok_or(ParseError::Empty)?;
+    // The commands are COMMANDS' (what `help` says): no command without its help.
+    if !COMMANDS.iter().any(|c| c.0 == name) {
+        return Err(ParseError::UnknownCommand);
+    }
     let mut args = Args { words, index: 0 };
     let command = match name {
         "help" => Command::Help(args.optional_topic()?),
@@ -471,9 +480,10 @@ impl<'a, I: Iterator<Item = &'a str>> Args<'a, I> {
     }
 }
 
-/// Letters (and `/`) only: a unit someone typed (`kHz`, `mV`, `V/s`).
+/// A short word of letters (and `/`): a unit someone typed (`kHz`, `mV`, `V/s`), not a
+/// word of more (`extra`: the next argument, too many).
 fn looks_like_unit(word: &str) -> bool {
-    word.bytes().all(|b| b.is_ascii_alphabetic() || b == b'/')
+    word.len() <= 4 && word.bytes().all(|b| b.is_ascii_alphabetic() || b == b'/')
 }
 
 /// A unit no one writes after the number (a fraction, a count): nothing after it is one.

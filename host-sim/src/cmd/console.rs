@@ -510,13 +510,14 @@ pub fn console(args: &ConsoleArgs, json: bool) -> Result<ConsoleReport, String> 
         }
         show_prompt();
     }
+    report.notices = notices.lock().map(|n| n.clone()).unwrap_or_default();
+    if let Some(recording) = recording {
+        report.recording =
+            Some(recording.finish(args, &mut session, &report.notices, &interrupted)?);
+    }
     left_by_interrupt |= interrupted.load(Ordering::Relaxed);
     if echo && !report.closed_by_board {
         eprintln!("{}", leaving(&mut session, left_by_interrupt));
-    }
-    report.notices = notices.lock().map(|n| n.clone()).unwrap_or_default();
-    if let Some(recording) = recording {
-        report.recording = Some(recording.finish(args, &mut session, &report.notices)?);
     }
     Ok(report)
 }
@@ -595,19 +596,22 @@ impl Recording {
     }
 
     /// Wait out the duration, stop the stream, and write the CSV (and the plot).
+    /// Ctrl-C (`interrupted`) ends the recording early, kept as far as it went.
     fn finish(
         self,
         args: &ConsoleArgs,
         session: &mut Session,
         notices: &[String],
+        interrupted: &AtomicBool,
     ) -> Result<record::Recorded, String> {
         let duration = match (args.duration_seconds, args.script.is_some()) {
             (Some(s), _) => Duration::from_secs_f64(s),
             (None, true) => Duration::ZERO,
             (None, false) => Duration::from_secs_f64(DEFAULT_RECORD_SECONDS),
         };
-        if let Some(left) = duration.checked_sub(self.started.elapsed()) {
-            std::thread::sleep(left);
+        while self.started.elapsed() < duration && !interrupted.load(Ordering::Relaxed) {
+            let left = duration.saturating_sub(self.started.elapsed());
+            std::thread::sleep(left.min(Duration::from_millis(50)));
         }
         let stopped = session.ask("stream off");
         // The frames in flight when the board stopped.

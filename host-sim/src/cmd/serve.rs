@@ -200,9 +200,22 @@ fn read_only(line: &Line) -> bool {
     }
 }
 
+/// The controlling connection gone (found by its read): the oldest left takes over, and is
+/// told.
+fn promote(clients: &mut [Client]) {
+    if clients.iter().any(|c| c.controls && !c.gone) {
+        return;
+    }
+    if let Some(next) = clients.iter_mut().find(|c| !c.gone) {
+        next.controls = true;
+        next.say("# this connection now controls the board");
+        next.flush();
+    }
+}
+
 /// What a connection that does not control the board hears on connecting.
 const READS_ONLY: &str = "# another connection controls the board: this one reads (status, \
-                          info, get, help, faults); the rest get err 3 until that one leaves";
+                          info, get, help, faults); the rest get err 8 until that one leaves";
 
 /// Bytes read from one client at one poll, at most: a client that never stops sending
 /// cannot hold the board's ticks.
@@ -516,6 +529,7 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
                 client.read_lines(&mut lines);
                 queue.extend(lines.into_iter().map(|line| (i, line)));
             }
+            promote(&mut clients);
             // A new client hears the board's state now: the last boot's start-up line while
             // it still says it (nothing asked since, no fault), else the status now.
             while let Some(stream) = listener.accept() {
@@ -544,10 +558,11 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
                 report.requests += 1;
                 let mut reply = ReplyLine::new();
                 if !clients[i].controls && !read_only(&line) {
-                    clients[i].say(
-                        "err 3 another connection controls the board: this one reads (status, \
-                         info, get, help, faults) until that one leaves",
-                    );
+                    let code = de_resonator::board::protocol::ErrorCode::NotInControl;
+                    clients[i].say(&format!(
+                        "err {code} another connection controls the board: this one reads \
+                         (status, info, get, help, faults) until that one leaves"
+                    ));
                     continue;
                 }
                 asked_since_boot = true;
@@ -575,14 +590,7 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
             }
             clients.iter_mut().for_each(Client::flush);
             clients.retain(|c| !c.gone);
-            // The controlling connection gone: the oldest left takes over, and is told.
-            if !clients.iter().any(|c| c.controls) {
-                if let Some(next) = clients.first_mut() {
-                    next.controls = true;
-                    next.say("# this connection now controls the board");
-                    next.flush();
-                }
-            }
+            promote(&mut clients);
             stream_clients.iter_mut().for_each(Client::flush);
             stream_clients.retain(|c| !c.gone);
             if let Some(due) = due.filter(|&d| d > Instant::now()) {

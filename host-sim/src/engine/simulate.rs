@@ -272,6 +272,16 @@ pub fn simulate(scene: &OpenLoop, choice: Choice, step_seconds: f64) -> Result<O
     if !(step_seconds.is_finite() && step_seconds > 0.0) {
         return Err(format!("step {step_seconds} s must be positive").into());
     }
+    // (A drive that is not a number would have the solvers reject every step, forever.)
+    for (what, value) in [
+        ("bias", scene.bias_volts),
+        ("AC amplitude", scene.ac_volts),
+        ("AC frequency", scene.drive_hz),
+    ] {
+        if !value.is_finite() {
+            return Err(format!("the {what} {value} must be a finite number").into());
+        }
+    }
     if scene.tolerance.is_some() && matches!(choice, Choice::Core { .. }) {
         let why = "a tolerance applies to the reference methods only (the core's are fixed-step)";
         return Err(why.to_string().into());
@@ -427,9 +437,13 @@ fn core<T: Real>(
     out.stopped = stopped;
     out.min_stretch = out.min_stretch.min(extremes.min);
     out.max_stretch = out.max_stretch.max(extremes.max);
-    out.first_limit = monitor
-        .first_crossing()
-        .map(|c| (c.mode, c.tick as f64 * step_seconds));
+    let first = monitor.first_crossing();
+    out.first_limit = first.map(|c| (c.mode, c.tick as f64 * step_seconds));
+    // The state at the step the monitor first saw failing (the method's own samples).
+    out.first_limit_state = first.and_then(|c| {
+        let k = usize::try_from(c.tick).ok()?;
+        Some((*out.samples.get(k)?, *out.velocities.get(k)?))
+    });
     Ok(out)
 }
 
