@@ -72,6 +72,8 @@ mod app {
 
     /// Request lines queued from the receive interrupt to the command task.
     const QUEUE: usize = 4;
+    /// The echo's bytes waiting for the command task (a pasted line's, a backspace's three).
+    const ECHO_BYTES: usize = 128;
 
     #[shared]
     struct Shared {
@@ -110,8 +112,8 @@ mod app {
     pub enum Work {
         /// A request, and what ends its reply on this connection (`Lines::reply_end`).
         Line(Line, &'static str),
-        /// What a person at a terminal sees as they type.
-        Echo(logic::Echo),
+        /// Echo bytes are waiting (`echo_in`): send them.
+        Echo,
         Log,
     }
 
@@ -144,6 +146,10 @@ mod app {
         lines: Lines,
         /// A line that found the queue full, kept until the command task makes room.
         held: Option<(Line, &'static str)>,
+        /// What a person at a terminal sees as they type: the receiver's bytes to echo, sent
+        /// by the command task (before the reply of the line they belong to).
+        echo_in: heapless::spsc::Producer<'static, u8, ECHO_BYTES>,
+        echo_out: heapless::spsc::Consumer<'static, u8, ECHO_BYTES>,
         to_command: Sender<'static, Work, QUEUE>,
         /// The tick's end of the command task's queue: a fault to log.
         to_log: Sender<'static, Work, QUEUE>,
@@ -174,6 +180,7 @@ mod app {
 
     // The slot uninitialized (in .bss, not a 3 KB `None` copied from flash to `.data`).
     #[init(local = [
+        echo_bytes: heapless::spsc::Queue<u8, ECHO_BYTES> = heapless::spsc::Queue::new(),
         slot: MaybeUninit<Option<Controller>> = MaybeUninit::uninit(),
         buffers: [[u16; BUFFER_CODES]; 3] = [[0; BUFFER_CODES]; 3],
         frames: [[u8; FRAME_BYTES]; 2] = [[0; FRAME_BYTES]; 2],
@@ -300,6 +307,7 @@ mod app {
         };
         let (to_command, from_rx) = make_channel!(Work, QUEUE);
         let to_log = to_command.clone();
+        let (echo_in, echo_out) = cx.local.echo_bytes.split();
         if command::spawn().is_err() {
             de_resonator_firmware::exit(104);
         }
@@ -343,6 +351,8 @@ mod app {
                 serial_rx: board.rx,
                 lines: Lines::default(),
                 held: None,
+                echo_in,
+                echo_out,
                 to_command,
                 to_log,
                 from_rx,
@@ -631,9 +641,10 @@ mod app {
     /// (`stash`): reading it lowers the interrupt line, which QEMU's USART does not lower when
     /// RXNEIE is cleared; the rest wait in the USART (QEMU), or overrun and garble their line
     /// (silicon), which then gets its `err`.
-    #[task(binds = USART2, priority = 2, local = [serial_rx, lines, held, stash: Option<u8> = None, to_command])]
+    #[task(binds = USART2, priority = 2, local = [serial_rx, lines, held, stash: Option<u8> = None, to_command, echo_in])]
     fn rx(cx: rx::Context) {
         let rx = cx.local.serial_rx;
+        let echo_in = cx.local.echo_in;
         let lines = cx.local.lines;
         let to_command = cx.local.to_command;
         let held = cx.local.held;
@@ -658,8 +669,12 @@ mod app {
                 Ok(byte) => {
                     let pushed = lines.push(byte);
                     if pushed.echo != logic::Echo::Nothing {
-                        // Shown only: a full queue drops it.
-                        let _ = to_command.try_send(Work::Echo(pushed.echo));
+                        // Shown only: past the buffer's room a byte is not shown. The wake-up
+                        // may find the queue full: the next line's drains it anyway.
+                        pushed.echo.bytes(|b| {
+                            let _ = echo_in.enqueue(b);
+                        });
+                        let _ = to_command.try_send(Work::Echo);
                     }
                     if let Some(line) = pushed.line {
                         let end = lines.reply_end();
@@ -688,7 +703,7 @@ mod app {
     }
 
     /// Each request answered, one reply line each.
-    #[task(priority = 1, shared = [controller, tick_cycles_max, last_tick_us, output_off, latest, telemetry, logged, stream_port], local = [from_rx, tx, logic])]
+    #[task(priority = 1, shared = [controller, tick_cycles_max, last_tick_us, output_off, latest, telemetry, logged, stream_port], local = [from_rx, tx, logic, echo_out])]
     async fn command(mut cx: command::Context) {
         let mut reply = ReplyLine::new();
         while let Ok(work) = cx.local.from_rx.recv().await {
@@ -707,15 +722,13 @@ mod app {
                 }
                 let _ = done;
             }
+            // What was typed, shown before anything else (a line's reply after its echo).
+            while let Some(b) = cx.local.echo_out.dequeue() {
+                let _ = nb::block!(embedded_hal_nb::serial::Write::write(cx.local.tx, b));
+            }
             let (line, end) = match work {
                 Work::Line(line, end) => (line, end),
-                Work::Echo(echo) => {
-                    echo.bytes(|b| {
-                        let _ = nb::block!(embedded_hal_nb::serial::Write::write(cx.local.tx, b));
-                    });
-                    continue;
-                }
-                Work::Log => continue,
+                Work::Echo | Work::Log => continue,
             };
             #[cfg(feature = "defmt")]
             if let Line::Text(bytes) = &line {
