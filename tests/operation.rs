@@ -814,6 +814,8 @@ fn a_target_out_of_range_is_refused_for_its_range_before_a_setting_it_implies() 
         Err(Fault::Table(e)) => assert!(e.to_string().contains("200"), "{e}"),
         other => panic!("{:?}", other.map(|(_, boot)| boot)),
     }
+    // (Without the trim the window is not checked: a trim asked for is refused itself.)
+    #[cfg(feature = "trim")]
     match start(trimmed(44.0, 0.001)) {
         Err(Fault::Setting { setting, .. }) => {
             assert_eq!(
