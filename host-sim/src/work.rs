@@ -43,6 +43,19 @@ pub fn bar(what: &str, len: usize) -> ProgressBar {
     bar
 }
 
+/// `job` applied to every item, in order, on this thread; stopped between items when the
+/// caller's flag is raised ([`stopped`]: `INTERRUPTED`).
+pub fn each<I, O>(items: &[I], mut job: impl FnMut(&I) -> O) -> Result<Vec<O>, String> {
+    let mut out = Vec::with_capacity(items.len());
+    for item in items {
+        if stopped() {
+            return Err(INTERRUPTED.to_string());
+        }
+        out.push(job(item));
+    }
+    Ok(out)
+}
+
 /// `job` applied to every item, in order, on all cores (rayon), with a progress bar titled
 /// `what`; the jobs see the caller's stop flag ([`stopped`]).
 pub fn map<I: Sync, O: Send>(what: &str, items: &[I], job: impl Fn(&I) -> O + Sync) -> Vec<O> {
@@ -79,6 +92,22 @@ mod tests {
             assert!(super::stopped());
         });
         assert!(!super::stopped());
+    }
+
+    #[test]
+    fn each_stops_between_items_once_the_flag_is_raised() {
+        let flag = Arc::new(AtomicBool::new(false));
+        let items: Vec<u32> = (0..10).collect();
+        let done = super::stoppable(flag.clone(), || {
+            super::each(&items, |&k| {
+                if k == 3 {
+                    flag.store(true, Ordering::Relaxed);
+                }
+                k
+            })
+        });
+        assert_eq!(done, Err(super::INTERRUPTED.to_string()));
+        assert_eq!(super::each(&items, |&k| 2 * k).unwrap()[9], 18);
     }
 
     #[test]

@@ -94,16 +94,7 @@ fn map_array<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let shape = values.shape().to_vec();
     let input: Vec<f64> = values.as_array().iter().copied().collect();
-    let out = stoppable(py, || {
-        let mut out = Vec::with_capacity(input.len());
-        for (k, &x) in input.iter().enumerate() {
-            if k % 1024 == 0 && work::stopped() {
-                return Err(work::INTERRUPTED.to_string());
-            }
-            out.push(f(x));
-        }
-        Ok(out)
-    })?;
+    let out = stoppable(py, || work::each(&input, |&x| f(x)))?;
     if shape.is_empty() {
         return Ok(out[0].into_pyobject(py)?.into_any());
     }
@@ -380,14 +371,9 @@ impl Device_ {
         let targets: Vec<f64> = targets_hz.as_array().iter().copied().collect();
         let tuner = self.tuner();
         let tuned = stoppable(py, || {
-            let mut out = Vec::with_capacity(targets.len());
-            for (k, &hz) in targets.iter().enumerate() {
-                if k % 256 == 0 && work::stopped() {
-                    return Err(work::INTERRUPTED.to_string());
-                }
-                out.push(tuner.tune(hz, margin).map_err(|e| e.to_string()));
-            }
-            Ok(out)
+            work::each(&targets, |&hz| {
+                tuner.tune(hz, margin).map_err(|e| e.to_string())
+            })
         })?;
         let column = |f: &dyn Fn(&de_resonator::Equilibrium<f64>) -> f64| -> PyResult<_> {
             let values: Vec<f64> = tuned
@@ -492,21 +478,7 @@ impl Device_ {
         let format = if csv { LutFormat::Csv } else { LutFormat::Bin };
         let mut files = Vec::new();
         if let Some(path) = &out {
-            let bytes = if csv {
-                let rows: Vec<host_sim::cmd::lut::Point> = made
-                    .points
-                    .iter()
-                    .map(
-                        |&(natural_frequency_hz, bias_volts)| host_sim::cmd::lut::Point {
-                            natural_frequency_hz,
-                            bias_volts,
-                        },
-                    )
-                    .collect();
-                host_sim::cmd::csv(&rows).map_err(value_error)?
-            } else {
-                made.bytes.clone()
-            };
+            let bytes = host_sim::cmd::lut::file_bytes(&made, format).map_err(value_error)?;
             files.push(host_sim::cmd::write_path(path, &bytes).map_err(value_error)?);
         }
         let report = host_sim::cmd::lut::report(self.info(), &made, margin, format, files);
@@ -612,14 +584,7 @@ fn curves<'py>(
         )));
     }
     let made: Vec<Curve> = stoppable(py, || {
-        let mut made = Vec::with_capacity(devices.len());
-        for p in &devices {
-            if work::stopped() {
-                return Err(work::INTERRUPTED.to_string());
-            }
-            made.push(one_curve(*p, margin, target_hz, points));
-        }
-        Ok(made)
+        work::each(&devices, |p| one_curve(*p, margin, target_hz, points))
     })?;
     made.iter()
         .map(|c| {
@@ -630,38 +595,17 @@ fn curves<'py>(
                     .collect::<Vec<f64>>()
                     .into_pyarray(py)
             };
-            let dict = PyDict::new(py);
-            dict.set_item("prestretch_1", c.prestretch_1)?;
-            dict.set_item("prestretch_2", c.prestretch_2)?;
+            // `curve --json`'s keys, its points as arrays.
+            let dict = result(py, c)?;
+            dict.del_item("points")?;
             dict.set_item("bias_volts", column(&|p| p.bias_volts))?;
             dict.set_item("natural_frequency_hz", column(&|p| p.natural_frequency_hz))?;
             dict.set_item("stretch", column(&|p| p.stretch))?;
             let beyond: Vec<bool> = c.points.iter().map(|p| p.beyond_margin).collect();
             dict.set_item("beyond_margin", beyond.into_pyarray(py))?;
-            let summary = result(py, &Summary { curve: c })?;
-            dict.update(summary.cast::<PyDict>()?.as_mapping())?;
-            wrap(py, dict.into_any())
+            Ok(dict)
         })
         .collect()
-}
-
-/// A curve's limit, range, target and problem, as `curve --json` says them.
-struct Summary<'a> {
-    curve: &'a Curve,
-}
-
-impl Serialize for Summary<'_> {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        use serde::ser::SerializeMap;
-        let c = self.curve;
-        let mut map = s.serialize_map(Some(5))?;
-        map.serialize_entry("limit", &c.limit)?;
-        map.serialize_entry("max_bias_volts", &c.max_bias_volts)?;
-        map.serialize_entry("tunable_range_hz", &c.tunable_range_hz)?;
-        map.serialize_entry("target", &c.target)?;
-        map.serialize_entry("problem", &c.problem)?;
-        map.end()
-    }
 }
 
 /// The motion from rest under Φ(t) = bias_volts + ac_volts·sin(2π·ac_hz·t) (V, Hz), watched

@@ -131,19 +131,7 @@ pub fn lut(args: &LutArgs) -> Result<LutReport, String> {
     };
     prepare_file(&args.out)?;
     let made = lut::make(params, margin, args.points, true).map_err(|e| format!("{name}: {e}"))?;
-    let points: Vec<Point> = made
-        .points
-        .iter()
-        .map(|&(natural_frequency_hz, bias_volts)| Point {
-            natural_frequency_hz,
-            bias_volts,
-        })
-        .collect();
-    let written = match format {
-        LutFormat::Bin => made.bytes.clone(),
-        LutFormat::Csv => super::csv(&points)?,
-    };
-    write_path(&args.out, &written)?;
+    write_path(&args.out, &file_bytes(&made, format)?)?;
     Ok(report(
         name,
         &made,
@@ -151,6 +139,24 @@ pub fn lut(args: &LutArgs) -> Result<LutReport, String> {
         format,
         vec![args.out.display().to_string()],
     ))
+}
+
+/// A table made as its file holds it: the bytes to flash, or its points as CSV.
+pub fn file_bytes(made: &lut::Made, format: LutFormat) -> Result<Vec<u8>, String> {
+    match format {
+        LutFormat::Bin => Ok(made.bytes.clone()),
+        LutFormat::Csv => {
+            let points: Vec<Point> = made
+                .points
+                .iter()
+                .map(|&(natural_frequency_hz, bias_volts)| Point {
+                    natural_frequency_hz,
+                    bias_volts,
+                })
+                .collect();
+            super::csv(&points)
+        }
+    }
 }
 
 /// What `lut` reports of a table made (`files`: where it was written, as `format`).
