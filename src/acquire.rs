@@ -124,6 +124,10 @@ pub struct ChannelSpec {
     pub low: f32,
     /// The highest plausible reading.
     pub high: f32,
+    /// The input's RMS noise a conversion, in codes, as the board's maker measured it (0:
+    /// not declared, the quantisation alone): what the trim's ring is weighed against before
+    /// any voltage (`InputNoise`), checked again against the noise heard in the hold.
+    pub noise_codes: f32,
 }
 
 impl ChannelSpec {
@@ -154,7 +158,28 @@ impl ChannelSpec {
         }
     }
 
+    /// The RMS noise of a tick's reading, the mean of `scans` conversions (the reading's
+    /// unit): the declared noise averaged over the scans, and the quantisation, q/√12 a
+    /// conversion, averaged too where the noise dithers it (half a code or more), else not.
+    pub fn tick_noise(&self, scans: u32) -> f32 {
+        let scans = scans.max(1) as f32;
+        let noise = self.noise_codes * self.noise_codes;
+        let quantisation = 1.0 / 12.0;
+        let codes_squared = if self.noise_codes >= 0.5 {
+            (noise + quantisation) / scans
+        } else {
+            noise / scans + quantisation
+        };
+        libm::fabsf(self.per_count) * libm::sqrtf(codes_squared)
+    }
+
     fn check(&self, channel: Channel) -> Result<(), FrontEndError> {
+        if !(self.noise_codes >= 0.0 && self.noise_codes.is_finite()) {
+            return Err(FrontEndError::Noise {
+                channel,
+                noise_codes: self.noise_codes,
+            });
+        }
         if self.input > MAX_INPUT || BOARD_INPUTS & (1 << self.input) == 0 {
             return Err(FrontEndError::Input {
                 channel,
@@ -186,6 +211,27 @@ impl ChannelSpec {
     }
 }
 
+/// The RMS noise of a tick's stretch and current readings as the image's front end declares
+/// it (`ChannelSpec::tick_noise`): `None` where the input is not read through it (not
+/// fitted; or a host's ideal sensor), and the trim then weighs its ring against the noise it
+/// hears alone.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct InputNoise {
+    /// The stretch sensor's, a tick.
+    pub stretch: Option<f32>,
+    /// The current monitor's, A a tick.
+    pub amps: Option<f32>,
+}
+
+impl InputNoise {
+    /// Nothing declared.
+    pub const UNDECLARED: InputNoise = InputNoise {
+        stretch: None,
+        amps: None,
+    };
+}
+
 /// The board's analog front end, as the image states it: the conversion rate and each
 /// channel's wiring (`None`: not fitted; a board without a displacement sensor runs
 /// sensorless from the current monitor).
@@ -211,6 +257,16 @@ impl FrontEnd {
             .into_iter()
             .zip(self.channels.iter())
             .filter_map(|(c, spec)| spec.as_ref().map(|s| (c, s)))
+    }
+
+    /// The noise of a tick's stretch and current readings at `scans_per_tick` (from
+    /// [`check`](Self::check)), for the trim's checks.
+    pub fn input_noise(&self, scans_per_tick: u32) -> InputNoise {
+        let [current, _, stretch] = &self.channels;
+        InputNoise {
+            stretch: stretch.map(|c| c.tick_noise(scans_per_tick)),
+            amps: current.map(|c| c.tick_noise(scans_per_tick)),
+        }
     }
 
     /// Whether no channel is fitted.
@@ -716,6 +772,8 @@ pub enum FrontEndError {
     Input { channel: Channel, input: u8 },
     /// Two channels on one input.
     SameInput { input: u8 },
+    /// The declared noise is negative, NaN or infinite.
+    Noise { channel: Channel, noise_codes: f32 },
     /// The scale is zero, NaN or infinite.
     Scale {
         channel: Channel,
@@ -748,6 +806,15 @@ impl fmt::Display for FrontEndError {
                 "front end: {} channel on ADC input {input}, not an analog input of the board \
                  (IN0, IN1, IN9, IN10..IN15: PA0, PA1, PB1, PC0..PC5)",
                 channel.name()
+            ),
+            FrontEndError::Noise {
+                channel,
+                noise_codes,
+            } => write!(
+                f,
+                "front end: {} channel's noise_codes {} is not a number of codes ≥ 0",
+                channel.name(),
+                Decimal(noise_codes)
             ),
             FrontEndError::SameInput { input } => {
                 write!(f, "front end: two channels on ADC input {input}")

@@ -7,16 +7,16 @@
 //! | offset | size | what |
 //! |---|---|---|
 //! | 0 | 4 | magic `DERI` |
-//! | 4 | 2 | version, u16 = 2 |
+//! | 4 | 2 | version, u16 = 3 |
 //! | 6 | 2 | S, the number of settings, u16 = 21 (an image with another S is refused) |
 //! | 8 | 4 | L, the image's length in bytes with its CRC, u32 |
 //! | 12 | 52 | the 13 device parameters in `DeviceParams` order (`jlim` 0 = neo-Hookean) |
 //! | 64 | 14 | the amplifier: DAC reference V, gain V/V, rail V, DAC bits u16 (16) |
 //! | 78 | 2 | at power-up, u16: 0 = wait for `start` with the output off, 1 = drive ([`PowerUp`]) |
 //! | 80 | 4 | the front end's scans a second (`acquire::FrontEnd`) |
-//! | 84 | 3 · 20 | per channel in `Channel::ALL` order: ADC input u8 (0xFF = not fitted), 3 zero bytes, zero code, per count, plausible low, plausible high |
-//! | 144 | 4·S | the default settings in `Setting::ALL` order (0 = off for those that can be) |
-//! | 144 + 4·S | L − 148 − 4·S | the tuning table (`table`'s layout, with its own CRC) |
+//! | 84 | 3 · 24 | per channel in `Channel::ALL` order: ADC input u8 (0xFF = not fitted), 3 zero bytes, zero code, per count, plausible low, plausible high, RMS noise a conversion in codes (0: not declared) |
+//! | 156 | 4·S | the default settings in `Setting::ALL` order (0 = off for those that can be) |
+//! | 156 + 4·S | L − 160 − 4·S | the tuning table (`table`'s layout, with its own CRC) |
 //! | L − 4 | 4 | CRC-32 (IEEE 802.3) of every byte before it, u32 |
 //!
 //! `Image::parse` checks the frame (magic, version, length, CRC), the amplifier and the front
@@ -25,7 +25,7 @@
 
 use core::fmt;
 
-use crate::acquire::{ChannelSpec, FrontEnd, FrontEndError, MAX_INPUT};
+use crate::acquire::{ChannelSpec, FrontEnd, FrontEndError, InputNoise, MAX_INPUT};
 use crate::device::DeviceParams;
 use crate::drive::{Amplifier, CodeError};
 use crate::table::{crc32, f32_at, u16_at, u32_at, Table, TableError};
@@ -34,12 +34,12 @@ use crate::{Setting, Settings};
 /// The first four bytes of an image.
 pub const MAGIC: [u8; 4] = *b"DERI";
 /// The layout version this code reads and writes.
-pub const VERSION: u16 = 2;
+pub const VERSION: u16 = 3;
 /// The DAC this code drives (the DAC8551): its resolution.
 pub const DAC_BITS: u16 = 16;
 /// Where the front end starts, and its bytes a channel.
 const FRONT_END_AT: usize = 80;
-const CHANNEL_BYTES: usize = 20;
+const CHANNEL_BYTES: usize = 24;
 /// The input byte of a channel not fitted.
 const NOT_FITTED: u8 = 0xFF;
 /// Bytes before the settings.
@@ -265,6 +265,7 @@ impl<'a> Image<'a> {
                 per_count: f32_at(bytes, at + 8),
                 low: f32_at(bytes, at + 12),
                 high: f32_at(bytes, at + 16),
+                noise_codes: f32_at(bytes, at + 20),
             });
         }
         // A tick rate that is no rate is the controller's to refuse, by name.
@@ -283,6 +284,14 @@ impl<'a> Image<'a> {
             table,
             crc: stored,
         })
+    }
+
+    /// What a controller needs of the board at `tick_hz`: the amplifier's transfer and the
+    /// noise the front end declares for a tick's readings (a front end the rate does not
+    /// suit is refused elsewhere; its noise is taken at one scan a tick, the most).
+    pub fn board(&self, amplifier: Amplifier, tick_hz: f32) -> (Amplifier, InputNoise) {
+        let scans = self.front_end.check(tick_hz).unwrap_or(1);
+        (amplifier, self.front_end.input_noise(scans))
     }
 
     /// Write an image into `out`; the bytes written. What is written parses back.
@@ -321,8 +330,11 @@ impl<'a> Image<'a> {
             .chain(front_end.scan_hz.to_le_bytes())
             .chain(front_end.channels.iter().flat_map(|spec| {
                 let (input, numbers) = match spec {
-                    Some(c) => (c.input, [c.zero_code, c.per_count, c.low, c.high]),
-                    None => (NOT_FITTED, [0.0; 4]),
+                    Some(c) => (
+                        c.input,
+                        [c.zero_code, c.per_count, c.low, c.high, c.noise_codes],
+                    ),
+                    None => (NOT_FITTED, [0.0; 5]),
                 };
                 [input, 0, 0, 0]
                     .into_iter()

@@ -97,6 +97,7 @@ fn front_end(amps_full: f32) -> FrontEnd {
                 per_count: amps_full / 2000.0,
                 low: -amps_full,
                 high: amps_full,
+                noise_codes: 0.0,
             }),
             Some(ChannelSpec {
                 input: 11,
@@ -104,6 +105,7 @@ fn front_end(amps_full: f32) -> FrontEnd {
                 per_count: 10_000.0 / 3800.0,
                 low: -100.0,
                 high: 10_000.0,
+                noise_codes: 0.0,
             }),
             Some(ChannelSpec {
                 input: 12,
@@ -111,6 +113,7 @@ fn front_end(amps_full: f32) -> FrontEnd {
                 per_count,
                 low,
                 high,
+                noise_codes: 0.0,
             }),
         ],
     }
@@ -619,6 +622,7 @@ fn a_readings_code_is_rounded_and_held_in_range() {
         per_count: 2.0,
         low: -100.0,
         high: 7_000.0,
+        noise_codes: 0.0,
     };
     assert_eq!(spec.adc_code(0.0), 100);
     assert_eq!(spec.adc_code(1.2), 101);

@@ -7,6 +7,7 @@ mod common;
 
 use common::{amplifier, reference_table, start_reference as start};
 
+use de_resonator::acquire::InputNoise;
 use de_resonator::table::{self, Table, TableError};
 use de_resonator::{
     Amplifier, CodeError, Controller, Device, Event, Fault, Inputs, Phase, Setting, Settings,
@@ -107,7 +108,14 @@ fn stages_one_by_one_are_start() {
     // In place, as the firmware boots: the same controller in the slot, over whatever the
     // slot held; a refusal leaves it empty, never the old controller nor a half-checked one.
     let mut slot = Some(c);
-    let boot = Controller::start_in(&mut slot, params, &table, amplifier(), settings).unwrap();
+    let boot = Controller::start_in(
+        &mut slot,
+        params,
+        &table,
+        (amplifier(), InputNoise::UNDECLARED),
+        settings,
+    )
+    .unwrap();
     assert_eq!(boot, boot_all);
     assert_eq!(slot.as_ref().unwrap().plan(), all.plan());
     // A stage's refusal leaves the controller faulted at 0 V, whoever carries on with it:
@@ -130,7 +138,13 @@ fn stages_one_by_one_are_start() {
         (&table[..], small, settings),
     ] {
         let mut slot = Some(all.clone());
-        let fault = Controller::start_in(&mut slot, params, table, amplifier, settings);
+        let fault = Controller::start_in(
+            &mut slot,
+            params,
+            table,
+            (amplifier, InputNoise::UNDECLARED),
+            settings,
+        );
         assert!(fault.is_err() && slot.is_none(), "{fault:?}");
     }
 }

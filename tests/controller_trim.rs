@@ -407,7 +407,7 @@ fn the_trim_measures_the_ring_in_the_current() {
     assert!(error.abs() < 1e-3, "{error} at {bias} V");
 }
 
-/// The ring the trim's pulse leaves in the charge, as `estimate::ring::ring_charge_gain` predicts it
+/// The ring the trim's pulse leaves in the charge, as `estimate::ring::RingGain` predicts it
 /// from the statics, against the charge of the model integrated through the pulse (undamped,
 /// noise-free, the plant as told): its first swing after the pulse within 5% (the prediction
 /// is linear in the pulse). A slow ramp (1 kV/s), so that the ring its end leaves is a
@@ -415,7 +415,7 @@ fn the_trim_measures_the_ring_in_the_current() {
 #[cfg(feature = "trim")]
 #[test]
 fn the_ring_in_the_charge_is_the_one_the_statics_predict() {
-    use de_resonator::estimate::ring::ring_charge_gain;
+    use de_resonator::estimate::ring::{RingGain, RingInput};
     let settings = Settings {
         trim_tolerance: Some(1e-3),
         slew_volts_per_second: 1000.0,
@@ -439,8 +439,8 @@ fn the_ring_in_the_charge_is_the_one_the_statics_predict() {
         - first.iter().copied().fold(f64::MAX, f64::min);
     let device = Device::new(REFERENCE_DEVICE.cast::<f32>()).unwrap();
     let limit = Tuner::new(device).limit().at.offset;
-    let gain = ring_charge_gain(&device, limit, bias, pulse_ticks / 1000.0);
-    let predicted = f64::from(gain * bias * bias * settings.trim_pulse_volts);
+    let gain = RingGain::at(&device, limit, bias, pulse_ticks / 1000.0);
+    let predicted = f64::from(gain.ring(RingInput::Charge, bias, settings.trim_pulse_volts));
     assert!(
         (0.5 * swing / predicted - 1.0).abs() < 0.05,
         "{} C measured, {predicted} C predicted at {bias} V",

@@ -526,7 +526,7 @@ fn every_wrong_image_is_refused_with_its_reason() {
     assert!(matches!(Image::parse(&rail), Err(ImageError::Amplifier(_))));
     // A setting out of range passes the frame and is the boot's to refuse, by name.
     let mut margin = good.clone();
-    margin[148..152].copy_from_slice(&1.5f32.to_le_bytes());
+    margin[160..164].copy_from_slice(&1.5f32.to_le_bytes());
     reseal(&mut margin);
     let read = Image::parse(&margin).unwrap();
     let a = read.amplifier.amplifier().unwrap();
@@ -775,6 +775,7 @@ fn an_image_refuses_a_channel_it_could_not_read_back() {
         per_count: 1e-7,
         low: -1e-4,
         high: 1e-4,
+        noise_codes: 0.0,
     };
     let front_end = FrontEnd {
         scan_hz: 10_000.0,

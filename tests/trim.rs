@@ -3,7 +3,7 @@
 mod common;
 
 use de_resonator::estimate::ring::{
-    estimate_shear_modulus, high_passed, ring_frequency_hz, ChargeRing, MAX_WINDOW,
+    estimate_shear_modulus, high_passed, ring_frequency_hz, RingFit, MAX_WINDOW, MIN_RESOLUTION,
     TIMING_ERROR_TIMES_RESOLUTION,
 };
 use de_resonator::{Device, DeviceParams, TrimError, REFERENCE_DEVICE};
@@ -24,7 +24,9 @@ fn ring_frequency_of_a_damped_drifting_sine() {
                     + 2e-6 * noise
             })
             .collect();
-        let f = ring_frequency_hz(samples.iter().copied(), 1000.0).unwrap();
+        let f = ring_frequency_hz(samples.iter().copied(), 1000.0, 0.0, 0.0)
+            .unwrap()
+            .0;
         assert!((f - hz).abs() < 1e-4 * hz, "{f} for {hz}");
     }
 }
@@ -34,12 +36,12 @@ fn ring_frequency_of_a_damped_drifting_sine() {
 fn no_ring_is_an_error() {
     let flat = [2.2f32; 300];
     assert!(matches!(
-        ring_frequency_hz(flat.iter().copied(), 1000.0),
+        ring_frequency_hz(flat.iter().copied(), 1000.0, 0.0, 0.0),
         Err(TrimError::NoRing { .. })
     ));
     let missing = [f32::NAN; MAX_WINDOW];
     assert!(matches!(
-        ring_frequency_hz(missing.iter().copied(), 1000.0),
+        ring_frequency_hz(missing.iter().copied(), 1000.0, 0.0, 0.0),
         Err(TrimError::NoRing { crossings: 0 })
     ));
 }
@@ -124,17 +126,86 @@ fn the_charge_window_tells_its_ring_and_noise() {
     ] {
         let half = (0.5 * 1000.0 / hz).round() as usize;
         let quiet = charge_window(hz, 2e-5, 3e-7, seed);
-        let ring = ChargeRing::of(&quiet, half);
+        let ring = RingFit::of(&quiet, half, 0.0);
         assert!((ring.noise / 3e-7 - 1.0).abs() < 0.1, "{hz}: {ring:?}");
         assert!((ring.amplitude / 2e-5 - 1.0).abs() < 0.1, "{hz}: {ring:?}");
-        let noisy = ChargeRing::of(&charge_window(hz, 2e-5, 3e-6, seed), half);
+        let noisy = RingFit::of(&charge_window(hz, 2e-5, 3e-6, seed), half, 0.0);
         let ratio = noisy.resolution / ring.resolution;
         assert!((ratio / 0.1 - 1.0).abs() < 0.2, "{hz}: {ratio}");
-        let f = ring_frequency_hz(high_passed(&quiet, half), 1000.0).unwrap();
+        let f = ring_frequency_hz(high_passed(&quiet, half), 1000.0, 0.0, 0.0)
+            .unwrap()
+            .0;
         let claimed = TIMING_ERROR_TIMES_RESOLUTION / ring.resolution;
         assert!(
             (f / hz as f32 - 1.0).abs() < 3.0 * claimed,
             "{f} for {hz}: {claimed:e} claimed"
         );
     }
+}
+
+/// A stretch window's running sum, as the trim times it: white noise of `sigma` a sample on
+/// a ring of `amplitude` at `hz` (500 samples at 1 kHz, phase `phase`) over a creeping level.
+fn stretch_sum(hz: f64, amplitude: f64, sigma: f64, phase: f64, rng: &mut common::Rng) -> Vec<f32> {
+    let mut sum = 0.0;
+    (0..500)
+        .map(|k| {
+            let t = k as f64 / 1000.0;
+            let ring = amplitude * (std::f64::consts::TAU * hz * t + phase).sin();
+            sum += 3e-3 * t + ring + sigma * rng.gaussian();
+            sum as f32
+        })
+        .collect()
+}
+
+/// The one resolution rule on the stretch: over 300 windows of its running sum, at three
+/// frequencies and noise a twentieth and a seventh of the ring (resolutions 60 to 500: the
+/// trim times none below `MIN_RESOLUTION`), the fit finds the sensor's
+/// noise within 20% (a window's own scatter) and the ring's amplitude in the sum (a·P/(2π))
+/// within 20% where the noise leaves it resolvable; the frequency's relative error times the
+/// resolution has the RMS `TIMING_ERROR_TIMES_RESOLUTION` claims (within 0.6–1.5 of it,
+/// against the frequency put in), as for the charge; a floor above the noise is the noise
+/// the fit takes.
+#[test]
+fn the_stretch_is_held_to_the_same_resolution() {
+    let mut rng = common::Rng(0x2545_f491_4f6c_dd1d);
+    let (mut sum, mut n) = (0.0f64, 0.0f64);
+    for hz in [29.5f64, 44.0, 61.7] {
+        let half = (0.5 * 1000.0 / hz).round() as usize;
+        let in_sum = 1e-3 * 1000.0 / (std::f64::consts::TAU * hz);
+        for sigma in [5e-5, 1.5e-4] {
+            for _ in 0..50 {
+                let phase = rng.range(0.0, std::f64::consts::TAU);
+                let window = stretch_sum(hz, 1e-3, sigma, phase, &mut rng);
+                let fit = RingFit::of(&window, half, 0.0);
+                assert!(
+                    (f64::from(fit.noise) / sigma - 1.0).abs() < 0.2,
+                    "{hz}: {fit:?}"
+                );
+                assert!(
+                    (f64::from(fit.amplitude) / in_sum - 1.0).abs() < 0.2,
+                    "{hz}: {fit:?}"
+                );
+                assert!(fit.resolution >= MIN_RESOLUTION, "{hz}: {fit:?}");
+                let f = ring_frequency_hz(
+                    high_passed(&window, half),
+                    1000.0,
+                    fit.band(half),
+                    half as f32,
+                )
+                .unwrap()
+                .0;
+                let error = f64::from(f) / hz - 1.0;
+                sum += (error * f64::from(fit.resolution)).powi(2);
+                n += 1.0;
+                let floored = RingFit::of(&window, half, 1e-2);
+                assert_eq!(floored.noise, 1e-2);
+            }
+        }
+    }
+    let rms = (sum / n).sqrt() / f64::from(TIMING_ERROR_TIMES_RESOLUTION);
+    eprintln!("stretch: RMS of error x resolution {rms} of the claim");
+    assert!(
+        (0.6..1.5).contains(&rms),
+        "{rms} of the claimed timing error"
+    );
 }

@@ -415,7 +415,9 @@ fn commands(file: &SceneFile, tick_hz: f64) -> Result<Vec<Scripted>, String> {
 }
 
 /// The scene's `[front_end]`: the board's (the settings file's keys) and `noise_codes`, the
-/// ADC's RMS noise a conversion (default 1 code). The sensors are then read through it:
+/// ADC's RMS noise a conversion in the plant (default 1 code), which each channel's image
+/// declares too unless the channel says otherwise (its own `noise_codes`: a board whose maker
+/// measured another figure). The sensors are then read through it:
 /// `[sensor]` and `[current_monitor]` are for scenes without one.
 fn analog(
     table: &toml::Table,
@@ -439,7 +441,7 @@ fn analog(
             .filter(|x| x.is_finite() && *x >= 0.0)
             .ok_or_else(|| format!("[front_end] noise_codes {v}: a number of codes ≥ 0"))?,
     };
-    let front_end = crate::settings_file::front_end(&table, "[front_end]")?;
+    let front_end = crate::settings_file::front_end(&table, "[front_end]", noise_codes as f32)?;
     front_end
         .check(settings.tick_hz)
         .map_err(|e| format!("[front_end]: {e}"))?;

@@ -64,7 +64,7 @@ pub fn load(path: &Path, target_hz: Option<f32>) -> Result<(Settings, FrontEnd),
         .map_err(|e| format!("settings file {}: {e}", path.display()))?;
     let section = format!("settings file {}:", path.display());
     let front_end = match table.remove("front_end") {
-        Some(toml::Value::Table(t)) => front_end(&t, &format!("{section} [front_end]"))?,
+        Some(toml::Value::Table(t)) => front_end(&t, &format!("{section} [front_end]"), 0.0)?,
         Some(other) => {
             return Err(format!(
                 "{section} front_end must be a table, not a {}",
@@ -76,13 +76,28 @@ pub fn load(path: &Path, target_hz: Option<f32>) -> Result<(Settings, FrontEnd),
     Ok((from_table(&table, &section, target_hz)?, front_end))
 }
 
-/// The keys of a channel's table in `[front_end]`.
-const CHANNEL_KEYS: [&str; 5] = ["input", "zero_code", "per_count", "low", "high"];
+/// The keys of a channel's table in `[front_end]`: the wiring (every one needed), then
+/// `noise_codes` (optional).
+const CHANNEL_KEYS: [&str; 6] = [
+    "input",
+    "zero_code",
+    "per_count",
+    "low",
+    "high",
+    "noise_codes",
+];
+/// How many of `CHANNEL_KEYS` a channel needs.
+const WIRING_KEYS: usize = 5;
 
 /// A `[front_end]` table: `scan_hz`, and a table per fitted channel (`current`, `amplifier`,
-/// `stretch`) with every key of `CHANNEL_KEYS` (a front end is wiring: nothing defaulted).
-/// The core checks it when the image is made.
-pub fn front_end(table: &toml::Table, section: &str) -> Result<FrontEnd, String> {
+/// `stretch`) with every wiring key of `CHANNEL_KEYS` (a front end is wiring: nothing
+/// defaulted) and its RMS noise a conversion, `noise_codes` (`default_noise_codes` if left
+/// out). The core checks it when the image is made.
+pub fn front_end(
+    table: &toml::Table,
+    section: &str,
+    default_noise_codes: f32,
+) -> Result<FrontEnd, String> {
     let mut front_end = FrontEnd::NONE;
     for (key, value) in table {
         if key == "scan_hz" {
@@ -102,7 +117,7 @@ pub fn front_end(table: &toml::Table, section: &str) -> Result<FrontEnd, String>
                 CHANNEL_KEYS.join(", ")
             ));
         };
-        let mut values = [0.0f32; 5];
+        let mut values = [0.0, 0.0, 0.0, 0.0, 0.0, default_noise_codes];
         for (name, v) in t {
             let Some(i) = CHANNEL_KEYS.iter().position(|n| n == name) else {
                 return Err(format!(
@@ -112,10 +127,11 @@ pub fn front_end(table: &toml::Table, section: &str) -> Result<FrontEnd, String>
             };
             values[i] = number(&format!("{section} {key}.{name}"), v)?;
         }
-        if let Some(missing) = CHANNEL_KEYS.iter().find(|n| !t.contains_key(**n)) {
+        let wiring = CHANNEL_KEYS.get(..WIRING_KEYS).unwrap_or(&CHANNEL_KEYS);
+        if let Some(missing) = wiring.iter().find(|n| !t.contains_key(**n)) {
             return Err(format!("{section} {key} needs `{missing}`"));
         }
-        let [input, zero_code, per_count, low, high] = values;
+        let [input, zero_code, per_count, low, high, noise_codes] = values;
         let highest = f32::from(de_resonator::acquire::MAX_INPUT);
         if !((0.0..=highest).contains(&input) && input.fract() == 0.0) {
             return Err(format!(
@@ -128,6 +144,7 @@ pub fn front_end(table: &toml::Table, section: &str) -> Result<FrontEnd, String>
             per_count,
             low,
             high,
+            noise_codes,
         });
     }
     if !front_end.is_empty() && !table.contains_key("scan_hz") {

@@ -870,6 +870,7 @@ fn image<'py>(
         .as_ref()
         .map_or("(in memory)".into(), |p| p.display().to_string());
     let (bytes, report) = stoppable(py, || host_sim::cmd::image::build(&args, name))?;
+    warn(py, &host_sim::cmd::image::noise_warnings(&report))?;
     if let Some(path) = &out {
         host_sim::cmd::write_path(path, &bytes).map_err(value_error)?;
     }

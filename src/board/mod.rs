@@ -259,7 +259,8 @@ impl<'a, K: Keeper> Board<'a, K> {
         settings: Settings,
     ) -> Result<f32, crate::controller::Fault> {
         self.idle_settings = settings;
-        let boot = Controller::start_in(slot, image.params, image.table, amplifier, settings)?;
+        let board = image.board(amplifier, settings.tick_hz);
+        let boot = Controller::start_in(slot, image.params, image.table, board, settings)?;
         self.limit = boot.limit.map(|l| l.mode);
         self.refusal = None;
         self.booted = Some(boot);

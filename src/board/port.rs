@@ -603,7 +603,8 @@ impl<K: Keeper> Board<'_, K> {
             .with(|c| c.as_ref().map(|c| *c.settings()))
             .unwrap_or(self.idle_settings);
         let mut fresh = None;
-        match Controller::start_in(&mut fresh, image.params, image.table, amplifier, settings) {
+        let board = image.board(amplifier, settings.tick_hz);
+        match Controller::start_in(&mut fresh, image.params, image.table, board, settings) {
             Ok(boot) => {
                 // Re-armed, not switched on: the new controller stopped at 0 V (the stage
                 // off), until `start`, `target` or `ac`.

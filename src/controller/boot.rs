@@ -6,6 +6,7 @@ use super::fault::Fault;
 use super::plan::Plan;
 use super::settings::guarded;
 use super::{Controller, State};
+use crate::acquire::InputNoise;
 use crate::device::Device;
 use crate::drive::Amplifier;
 use crate::safety::Limit;
@@ -74,8 +75,13 @@ impl Checked {
     }
 
     /// A controller with its first plan from the table, ramping from `from_volts`.
-    fn controller(&self, amplifier: Amplifier, settings: Settings, from_volts: f32) -> Controller {
-        let mut controller = Controller::new(self.device, amplifier, settings, self.max_volts);
+    fn controller(
+        &self,
+        board: (Amplifier, InputNoise),
+        settings: Settings,
+        from_volts: f32,
+    ) -> Controller {
+        let mut controller = Controller::new(self.device, board, settings, self.max_volts);
         controller.plan.start_volts = from_volts;
         controller
     }
@@ -109,16 +115,17 @@ impl Controller {
     }
 
     /// `start` with the controller built in `slot`, where it stays: no copy of it on the
-    /// stack (the firmware's RAM). On a refusal the slot is left empty.
+    /// stack (the firmware's RAM), on a board whose front end declares `inputs` (the trim's
+    /// ring is weighed against them before any voltage). On a refusal the slot is left empty.
     pub fn start_in(
         slot: &mut Option<Self>,
         params: DeviceParams<f32>,
         table: &[u8],
-        amplifier: Amplifier,
+        board: (Amplifier, InputNoise),
         settings: Settings,
     ) -> Result<Boot, Fault> {
         let result =
-            Self::checks_in(slot, params, table, amplifier, settings, 0.0).map(|(_, boot)| boot);
+            Self::checks_in(slot, params, table, board, settings, 0.0).map(|(_, boot)| boot);
         if result.is_err() {
             *slot = None;
         }
@@ -130,12 +137,12 @@ impl Controller {
         slot: &'s mut Option<Self>,
         params: DeviceParams<f32>,
         table: &[u8],
-        amplifier: Amplifier,
+        board: (Amplifier, InputNoise),
         settings: Settings,
         from_volts: f32,
     ) -> Result<(&'s mut Self, Boot), Fault> {
         let checked = Checked::new(params, table, &settings)?;
-        let controller = slot.insert(checked.controller(amplifier, settings, from_volts));
+        let controller = slot.insert(checked.controller(board, settings, from_volts));
         let boot = checked.plan(controller)?;
         let boot = controller.cross_check(boot)?;
         let boot = controller.check_plan(boot)?;
@@ -151,7 +158,8 @@ impl Controller {
         settings: Settings,
     ) -> Result<(Self, Boot), Fault> {
         let checked = Checked::new(params, table, &settings)?;
-        let mut controller = checked.controller(amplifier, settings, 0.0);
+        let board = (amplifier, InputNoise::UNDECLARED);
+        let mut controller = checked.controller(board, settings, 0.0);
         let boot = checked.plan(&mut controller)?;
         Ok((controller, boot))
     }
@@ -235,16 +243,29 @@ impl Controller {
         self.flashed
             .check_swing(drive, limit.at.offset, None, settings.margin)
             .map_err(Fault::DriveSwing)?;
-        // The ring the first pulse will leave in the charge, at the bias it measures at (the
-        // tick weighs it against the noise before it pulses).
+        // The ring the first pulse will leave, at the bias it measures at, and the share of
+        // it the device's damping leaves over the window (model.md §7: decay c/(2·M)): weighed
+        // against the noise the front end declares now, before any voltage, and against the
+        // noise heard by the tick before it pulses.
         #[cfg(feature = "trim")]
         if self.trim_wanted() {
-            self.trim.ring_gain = crate::estimate::ring::ring_charge_gain(
+            use crate::estimate::ring::{ring_share, RingGain};
+            self.trim.ring_gain = RingGain::at(
                 &self.flashed,
                 limit.at.offset,
                 self.plan.bias_volts,
                 super::trim::pulse_seconds(&settings),
             );
+            let p = self.flashed.params();
+            let decay = p.damping / (2.0 * p.effective_mass());
+            self.trim.ring_seen = ring_share(decay, settings.trim_window_seconds);
+            let bias = self.plan.bias_volts;
+            if let Some(error) = self
+                .trim
+                .unresolvable_declared(&settings, bias, self.inputs)
+            {
+                return Err(Fault::Trim(error));
+            }
         }
         Ok(Boot {
             bias_volts: solved.volts,

@@ -10,7 +10,9 @@ use super::fault::Fault;
 use super::plan::Plan;
 use super::watch::Watch;
 use super::{Boot, Controller, Phase, State};
+use crate::acquire::InputNoise;
 use crate::drive::{Amplifier, DacCode};
+use crate::estimate::ring::RingGain;
 use crate::{DeviceParams, Settings};
 
 /// Why a request to a running controller was not done. The controller runs on as before.
@@ -69,6 +71,7 @@ impl fmt::Display for Refusal {
 pub struct ReplanJob {
     params: DeviceParams<f32>,
     amplifier: Amplifier,
+    inputs: InputNoise,
     settings: Settings,
     /// The plan in force when the job was made: `adopt` takes the result only if it still is.
     plan: Plan,
@@ -87,9 +90,10 @@ pub struct Replanned {
     state: State,
     /// Whether the fresh plan holds the tuned bias (not a trim's probe bias).
     tuned: bool,
-    /// The ring its first pulse leaves in the charge, C/V³ (NaN: none, or not known).
+    /// The ring its first pulse leaves, and the share of it the device's damping leaves
+    /// (`Controller::ring_gain`).
     #[cfg_attr(not(feature = "trim"), allow(dead_code))]
-    ring_gain: f32,
+    ring_gain: (RingGain, f32),
     boot: Boot,
     /// The plan in force when the job was made.
     was: Plan,
@@ -111,7 +115,7 @@ impl ReplanJob {
             &mut slot,
             self.params,
             table,
-            self.amplifier,
+            (self.amplifier, self.inputs),
             self.settings,
             self.plan.bias_volts,
         )
@@ -169,6 +173,7 @@ impl Controller {
         Ok(ReplanJob {
             params: *self.flashed.params(),
             amplifier: self.amplifier,
+            inputs: self.inputs,
             settings: Settings {
                 tick_hz: self.settings.tick_hz,
                 ..settings
@@ -211,7 +216,7 @@ impl Controller {
         #[cfg(feature = "trim")]
         {
             self.trim.restart(*self.flashed.params());
-            self.trim.ring_gain = replanned.ring_gain;
+            (self.trim.ring_gain, self.trim.ring_seen) = replanned.ring_gain;
         }
         self.set_tuned(replanned.tuned);
         Ok(Boot {

@@ -377,8 +377,8 @@ pub enum Event {
         measured_hz: f32,
         shear_modulus: f32,
         next_bias_volts: f32,
-        /// How well the ring was resolved, where it was timed in the charge
-        /// (`crate::estimate::ring::ChargeRing::resolution`; its relative timing error is about
+        /// How well the ring was resolved, where it was timed with one
+        /// (`crate::estimate::ring::RingFit::resolution`; its relative timing error is about
         /// `TIMING_ERROR_TIMES_RESOLUTION` over it).
         resolution: Option<f32>,
     },

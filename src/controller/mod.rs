@@ -52,9 +52,12 @@ pub use settings::{Setting, Settings, F32_GUARD, MAX_TRIMS, TRIM_SECANT_STEP};
 pub use trim::{TrimDone, TrimJob, TrimResult};
 pub use watch::{Inputs, AMPLIFIER_TICKS, LEAKAGE_WINDOW_SECONDS};
 
-use crate::acquire::InputError;
+use crate::acquire::{InputError, InputNoise};
 use crate::device::Device;
 use crate::drive::{Amplifier, DacCode};
+use crate::estimate::ring::RingGain;
+#[cfg(feature = "trim")]
+use crate::estimate::ring::RingInput;
 use gate::gate;
 use watch::{Leakage, LeakageLimits, Ring, Watch};
 
@@ -147,6 +150,9 @@ pub struct Controller {
     /// estimates.
     flashed: Device<f32>,
     amplifier: Amplifier,
+    /// The inputs' noise the image's front end declares (the trim's ring is weighed against
+    /// it before any voltage).
+    inputs: InputNoise,
     /// Checked by `from_table`.
     settings: Settings,
     /// The cap fixed at boot from the device flashed, at most (1 − margin)·Φlimit, V.
@@ -195,10 +201,16 @@ pub struct Controller {
 
 impl Controller {
     /// A controller before its plan: what the boot stages fill in.
-    fn new(device: Device<f32>, amplifier: Amplifier, settings: Settings, max_volts: f32) -> Self {
+    fn new(
+        device: Device<f32>,
+        (amplifier, inputs): (Amplifier, InputNoise),
+        settings: Settings,
+        max_volts: f32,
+    ) -> Self {
         Self {
             flashed: device,
             amplifier,
+            inputs,
             settings,
             ceiling_volts: max_volts,
             operator_volts: max_volts,
@@ -509,14 +521,20 @@ impl Controller {
                 // settled before). The probe's edges would drown it: off until the trim is
                 // applied, as for the window, while the noise is still to be heard.
                 let settle = self.settings.settle_seconds * self.settings.tick_hz;
-                if let Ring::Current(amps) = ring {
-                    if !self.trim.hold_noise.heard() {
-                        self.plan.probe_volts = 0.0;
+                let settled = (until.saturating_sub(k) as f32) < 0.75 * settle;
+                match ring {
+                    Ring::Current(amps) => {
+                        if !self.trim.hold_noise.heard() {
+                            self.plan.probe_volts = 0.0;
+                        }
+                        if settled && self.plan.probe_volts == 0.0 {
+                            self.trim.hold_noise.observe(RingInput::Charge, amps);
+                        }
                     }
-                    let settled = (until.saturating_sub(k) as f32) < 0.75 * settle;
-                    if settled && self.plan.probe_volts == 0.0 {
-                        self.trim.hold_noise.observe(amps);
+                    Ring::Stretch(stretch) if settled => {
+                        self.trim.hold_noise.observe(RingInput::Stretch, stretch);
                     }
+                    _ => {}
                 }
                 Ok(None)
             }
@@ -592,12 +610,13 @@ impl Controller {
         true
     }
 
-    /// The ring the next pulse leaves in the charge, C/V³ (NaN: none, or not known).
-    fn ring_gain(&self) -> f32 {
+    /// The ring the next pulse leaves, and its share the device's damping leaves (`UNKNOWN`,
+    /// 1: none, or not known).
+    fn ring_gain(&self) -> (RingGain, f32) {
         #[cfg(feature = "trim")]
-        return self.trim.ring_gain;
+        return (self.trim.ring_gain, self.trim.ring_seen);
         #[cfg(not(feature = "trim"))]
-        f32::NAN
+        (RingGain::UNKNOWN, 1.0)
     }
 
     /// Whether the bias planned is the one the estimate gives for the target.
@@ -698,7 +717,12 @@ impl Controller {
         }
         self.trim.handed_out = true;
         let (bias, cap) = (self.plan.bias_volts, self.max_volts);
-        Some(TrimJob::new(&self.trim, self.settings, bias, cap))
+        Some(TrimJob::new(
+            &self.trim,
+            self.settings,
+            (bias, cap),
+            self.inputs,
+        ))
     }
 
     /// Whether a job waits to be handed out (`trim_job`): the window's solve, or tracking's
@@ -741,7 +765,10 @@ impl Controller {
     /// the charge is too weak against the noise heard in the hold: that is said first.
     fn start_measuring(&mut self, k: u32) -> Result<(), Fault> {
         let s = self.settings;
-        if let Some(error) = self.trim.unresolvable(&s, self.plan.bias_volts) {
+        if let Some(error) = self
+            .trim
+            .unresolvable(&s, self.plan.bias_volts, self.inputs)
+        {
             return Err(Fault::Trim(error));
         }
         let pulse = trim::pulse_ticks(&s);
@@ -750,7 +777,8 @@ impl Controller {
         self.plan.pulse_volts = s.trim_pulse_volts;
         // No clearing (512 stores): every tick of the window writes its slot.
         self.trim.window_from = from.saturating_add(pulse);
-        self.trim.charge = 0.0;
+        self.trim.sum = 0.0;
+        self.trim.origin = f32::NAN;
         self.trim.from_charge = false;
         // The probe's charge would swamp the ring's: off until the trim is applied.
         self.plan.probe_volts = 0.0;
@@ -760,11 +788,12 @@ impl Controller {
     }
 
     /// Record this tick's sample; at the window's end, hand the solve out and bring the probe
-    /// back (`Plan::probe_back`: a fault if it no longer fits). From the current,
-    /// the ring is its running sum, the charge (Q = C(λ)·Φ at a constant bias, model.md §8,
-    /// so it follows λ): the sum turns the monitor's noise into a slow wander, which the
-    /// crossings' fit averages out, where the current's own crossings would multiply. The
-    /// window's first tenth of a target period is skipped (NaN): the step back from the
+    /// back (`Plan::probe_back`: a fault if it no longer fits). The ring is timed in its
+    /// input's running sum: the current's is the charge (Q = C(λ)·Φ at a constant bias,
+    /// model.md §8, so it follows λ), the stretch's carries its ring a quarter period on; the
+    /// sum turns the input's noise into a slow wander, which the crossings' fit averages out,
+    /// where the input's own crossings would multiply (`estimate::ring::RingFit`). From the
+    /// current, the window's first tenth of a target period is skipped (NaN): the step back from the
     /// pulse charges the membrane then (C·dΦ/dt, far above the ring's Φ·C'·dλ/dt).
     fn record(&mut self, k: u32, ring: Ring) -> Result<(), Fault> {
         let s = &self.settings;
@@ -774,13 +803,19 @@ impl Controller {
         };
         let settling = (0.1 * s.tick_hz / s.target_hz) as u32 + 1;
         let sample = match ring {
-            Ring::Stretch(stretch) => stretch,
+            Ring::Stretch(stretch) if stretch.is_finite() => {
+                if self.trim.origin.is_nan() {
+                    self.trim.origin = stretch;
+                }
+                self.trim.sum += stretch - self.trim.origin;
+                self.trim.sum
+            }
             Ring::Current(amps) if at >= settling => {
                 self.trim.from_charge = true;
-                self.trim.charge += amps;
-                self.trim.charge
+                self.trim.sum += amps;
+                self.trim.sum
             }
-            Ring::Current(_) | Ring::Nothing => f32::NAN,
+            Ring::Stretch(_) | Ring::Current(_) | Ring::Nothing => f32::NAN,
         };
         // The mean of each stride of ticks (a NaN in it: none).
         let part = sample / stride as f32;
@@ -821,7 +856,7 @@ impl Controller {
         bias_volts: f32,
         next_bias_volts: f32,
         max_volts: f32,
-        (measured_hz, shear_modulus, ring_gain, ring_seen): (f32, f32, f32, f32),
+        (measured_hz, shear_modulus, ring_gain, ring_seen): (f32, f32, RingGain, f32),
     ) -> Result<(), Fault> {
         self.trim.params.shear_modulus = shear_modulus;
         self.trim.count = self.trim.count.saturating_add(1);

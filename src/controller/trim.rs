@@ -7,10 +7,11 @@
 
 use super::fault::Fault;
 use super::settings::{guarded, Settings, MAX_TRIMS, TRIM_SECANT_STEP};
+use crate::acquire::InputNoise;
 use crate::device::{Device, DeviceParams};
 use crate::estimate::ring::{
-    estimate_shear_modulus, high_passed, model_hz, ring_charge_gain, ring_frequency_hz, ChargeRing,
-    TrimError, MAX_WINDOW, TIMING_ERROR_TIMES_RESOLUTION,
+    estimate_shear_modulus, high_passed, model_hz, ring_frequency_hz, NoiseFrom, RingFit, RingGain,
+    RingInput, TrimError, MAX_WINDOW, TIMING_ERROR_TIMES_RESOLUTION,
 };
 use crate::swing::{AcDrive, Ramp, Resonance, SwingError};
 use crate::tuning::{TuneError, Tuner};
@@ -34,17 +35,19 @@ pub(super) struct TrimState {
     /// The first tick of the window, and the samples in it (NaN: no sample that tick).
     pub(super) window_from: u32,
     pub(super) window: [f32; MAX_WINDOW],
-    /// The current's running sum over the window (its charge, in A·ticks), when the ring
-    /// comes from the current.
-    pub(super) charge: f32,
+    /// The ring input's running sum over the window: the current's (its charge, A·ticks),
+    /// or the stretch's less its first sample (stretch·ticks).
+    pub(super) sum: f32,
+    /// The window's first stretch sample (NaN: none yet).
+    pub(super) origin: f32,
     /// Whether the window holds that charge (no displacement sensor).
     pub(super) from_charge: bool,
-    /// The ring the next pulse leaves in the charge, C/V³ (`ring_charge_gain` at the bias
-    /// planned; NaN: not known), the share of it the last window showed (the plant's
-    /// damping, the window's settling: 1 before any), and the current monitor's noise heard
-    /// in the hold before it: with these the tick says before it pulses whether the ring can
-    /// be timed.
-    pub(super) ring_gain: f32,
+    /// The ring the next pulse leaves (`RingGain::at` the bias planned; `UNKNOWN`: not
+    /// known), the share of it the last window showed (the plant's damping, the window's
+    /// settling; before any, the device's damping's), and the ring input's noise heard in the
+    /// hold before it: with these the tick says before it pulses whether the ring can be
+    /// timed.
+    pub(super) ring_gain: RingGain,
     pub(super) ring_seen: f32,
     pub(super) hold_noise: HoldNoise,
     /// The solve's answer, once the caller has given it.
@@ -72,9 +75,10 @@ impl TrimState {
             previous: None,
             window_from: 0,
             window: [f32::NAN; MAX_WINDOW],
-            charge: 0.0,
+            sum: 0.0,
+            origin: f32::NAN,
             from_charge: false,
-            ring_gain: f32::NAN,
+            ring_gain: RingGain::UNKNOWN,
             ring_seen: 1.0,
             hold_noise: HoldNoise::default(),
             result: None,
@@ -107,9 +111,10 @@ impl TrimState {
         self.previous = None;
         self.window_from = 0;
         self.window.fill(f32::NAN);
-        self.charge = 0.0;
+        self.sum = 0.0;
+        self.origin = f32::NAN;
         self.from_charge = false;
-        self.ring_gain = f32::NAN;
+        self.ring_gain = RingGain::UNKNOWN;
         self.ring_seen = 1.0;
         self.hold_noise = HoldNoise::default();
         self.drop_job();
@@ -121,14 +126,16 @@ impl TrimState {
     }
 }
 
-/// The current monitor's noise in the holds before the pulses (no probe then, the bias still;
-/// heard afresh in each, but under a probe only until it has been heard once: the probe is
-/// taken off for that hold, and stays on in the later ones):
-/// the sums of the current's fourth differences, whose variance is 70·σ² for white noise and
-/// which pass a ring of eight or more ticks a period at most (2·sin(π/8))⁴ = 0.34 of its
-/// amplitude, far less at the usual twenty and more (the AC's ring after a drive stops).
+/// The ring input's noise in the holds before the pulses (the stretch sensor's, or the
+/// current monitor's with no probe then, the bias still; heard afresh in each, but under a
+/// probe only until it has been heard once: the probe is taken off for that hold, and stays
+/// on in the later ones): the sums of the input's fourth differences, whose variance is
+/// 70·σ² for white noise and which pass a ring of eight or more ticks a period at most
+/// (2·sin(π/8))⁴ = 0.34 of its amplitude, far less at the usual twenty and more (the AC's
+/// ring after a drive stops), and a trend (creep, the ramp's end) not at all.
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct HoldNoise {
+    input: Option<RingInput>,
     last: [f32; 4],
     seen: u8,
     sum: f32,
@@ -139,10 +146,17 @@ impl HoldNoise {
     /// Fewest differences the noise is told from.
     const MIN_COUNT: f32 = 32.0;
 
-    pub(super) fn observe(&mut self, amps: f32) {
+    /// A sample of `input` (another input than the last: heard afresh).
+    pub(super) fn observe(&mut self, input: RingInput, sample: f32) {
+        if self.input != Some(input) {
+            *self = Self {
+                input: Some(input),
+                ..Self::default()
+            };
+        }
         let [a, b, c, d] = self.last;
         if self.seen >= 4 {
-            let fourth = a - 4.0 * b + 6.0 * c - 4.0 * d + amps;
+            let fourth = a - 4.0 * b + 6.0 * c - 4.0 * d + sample;
             if fourth.is_finite() {
                 self.sum += fourth * fourth;
                 self.count += 1.0;
@@ -150,7 +164,7 @@ impl HoldNoise {
         } else {
             self.seen += 1;
         }
-        self.last = [b, c, d, amps];
+        self.last = [b, c, d, sample];
     }
 
     /// Whether enough of the noise has been heard to tell it.
@@ -158,9 +172,10 @@ impl HoldNoise {
         self.count >= Self::MIN_COUNT
     }
 
-    /// The noise's variance a tick, A² (none heard: no current, or a sensor's stretch).
-    fn variance(&self) -> Option<f32> {
-        self.heard().then_some(self.sum / (70.0 * self.count))
+    /// The input heard and its noise's RMS a tick (none heard: `None`).
+    fn noise(&self) -> Option<(RingInput, f32)> {
+        let input = self.input.filter(|_| self.heard())?;
+        Some((input, libm::sqrtf(self.sum / (70.0 * self.count))))
     }
 }
 
@@ -185,40 +200,88 @@ pub(super) fn pulse_seconds(s: &Settings) -> f32 {
     pulse_ticks(s) as f32 / s.tick_hz
 }
 
-/// The ring a pulse at `bias_volts` leaves in the charge, A·ticks (the window's unit), for a
-/// ring gain of `gain` C/V³ (`crate::estimate::ring::ring_charge_gain`).
-fn ring_ticks(gain: f32, bias_volts: f32, s: &Settings) -> f32 {
-    gain * bias_volts * bias_volts * s.trim_pulse_volts * s.tick_hz
+/// The noise the image's front end declares for `input`, a tick (`None`: not read through
+/// it).
+fn declared(inputs: InputNoise, input: RingInput) -> Option<f32> {
+    match input {
+        RingInput::Stretch => inputs.stretch,
+        RingInput::Charge => inputs.amps,
+    }
+}
+
+/// The ring a pulse at `bias_volts` would leave in `input`, `share` of the undamped one,
+/// weighed against `noise` (a tick) by `RingFit::resolution` over the window (its periods
+/// less the one the high-pass takes), and refused where below what the tolerance
+/// needs. NaN figures (no prediction) say nothing.
+fn predicted(
+    s: &Settings,
+    (input, gain, share): (RingInput, RingGain, f32),
+    bias_volts: f32,
+    (noise, from): (f32, NoiseFrom),
+) -> Option<TrimError> {
+    let ring = share * gain.ring(input, bias_volts, s.trim_pulse_volts);
+    if ring.is_nan() || noise.is_nan() {
+        return None;
+    }
+    let amplitude = input.in_window(ring, s.target_hz, s.tick_hz);
+    let periods = s.trim_window_seconds * s.target_hz - 1.0;
+    let resolution = RingFit::resolution(amplitude, noise, s.tick_hz / s.target_hz, periods);
+    let needed = RingFit::needed(ring_tolerance(s));
+    if resolution >= needed {
+        return None;
+    }
+    Some(TrimError::Unresolvable {
+        input,
+        from,
+        resolution,
+        needed,
+        ring,
+        noise,
+    })
 }
 
 impl TrimState {
-    /// Before the pulse at `bias_volts`: the ring it would leave in the charge against the
-    /// noise heard in the hold, as `ChargeRing::resolution` would find it (undamped), and a
-    /// refusal where that is below what the tolerance needs. Nothing to say with a sensor's
-    /// stretch, or the ring's gain unknown.
-    pub(super) fn unresolvable(&self, s: &Settings, bias_volts: f32) -> Option<TrimError> {
-        let variance = self.hold_noise.variance()?;
-        // An unknown gain (NaN) says nothing.
-        if self.ring_gain.is_nan() {
-            return None;
-        }
-        let amplitude = ring_ticks(self.ring_gain * self.ring_seen, bias_volts, s);
-        let noise_amps = libm::sqrtf(variance);
-        // (The window's periods less the one its high-pass takes, as `ChargeRing` counts.)
-        let periods = s.trim_window_seconds * s.target_hz - 1.0;
-        let resolution =
-            ChargeRing::resolution_of(amplitude, noise_amps, s.tick_hz / s.target_hz, periods);
-        let needed = ChargeRing::needed(self.tuned.then_some(ring_tolerance(s)));
-        // A ring too weak, or no ring (NaN), is refused.
-        if resolution >= needed {
-            return None;
-        }
-        Some(TrimError::Unresolvable {
-            resolution,
-            needed,
-            ring_coulombs: amplitude / s.tick_hz,
-            noise_amps,
-        })
+    /// Before any voltage (at boot, at `target`): the ring the first pulse would leave at
+    /// `bias_volts` (its share of the undamped ring the device's damping leaves over the
+    /// window, `ring_seen`) against the noise the image's front end declares for the input
+    /// the trim will time it in (the stretch where a sensor is read through it, else the
+    /// current), and a refusal where that is below what the tolerance needs. Nothing to say
+    /// where neither is declared.
+    pub(super) fn unresolvable_declared(
+        &self,
+        s: &Settings,
+        bias_volts: f32,
+        inputs: InputNoise,
+    ) -> Option<TrimError> {
+        let (input, noise) = match (inputs.stretch, inputs.amps) {
+            (Some(noise), _) => (RingInput::Stretch, noise),
+            (None, Some(noise)) => (RingInput::Charge, noise),
+            (None, None) => return None,
+        };
+        let ring = (input, self.ring_gain, self.ring_seen);
+        predicted(s, ring, bias_volts, (noise, NoiseFrom::Image))
+    }
+
+    /// Before the pulse at `bias_volts`: the same, against the larger of the noise heard in
+    /// the hold and the one declared (the one rule, checked again). Nothing to say before any
+    /// noise is heard.
+    pub(super) fn unresolvable(
+        &self,
+        s: &Settings,
+        bias_volts: f32,
+        inputs: InputNoise,
+    ) -> Option<TrimError> {
+        let (input, heard) = self.hold_noise.noise()?;
+        let noise = match declared(inputs, input) {
+            Some(floor) if floor > heard => (floor, NoiseFrom::Image),
+            _ => (heard, NoiseFrom::Hold),
+        };
+        predicted(
+            s,
+            (input, self.ring_gain, self.ring_seen),
+            bias_volts,
+            noise,
+        )
     }
 }
 
@@ -237,9 +300,11 @@ pub struct TrimJob {
     cap_volts: f32,
     /// Whether the window holds the charge (high-passed before its crossings are found).
     from_charge: bool,
-    /// The ring the statics gave its pulse, C/V³, and the share of it the window before
-    /// showed (`TrimState::ring_gain`, `ring_seen`).
-    ring_gain: f32,
+    /// The noise the image's front end declares for the inputs (the floor of the window's).
+    inputs: InputNoise,
+    /// The ring the statics gave its pulse, and the share of it the window before showed
+    /// (`TrimState::ring_gain`, `ring_seen`).
+    ring_gain: RingGain,
     ring_seen: f32,
     /// Measured by the tracker (the window is not read), Hz, and its Q (NaN: none).
     measured_hz: Option<f32>,
@@ -269,14 +334,14 @@ pub enum TrimResult {
     /// Ramp to `bias_volts` and measure again; `max_volts` is the estimate's own cap (the
     /// controller takes the lowest of it and the caps in force); `device` is the estimate
     /// (built here, not in the tick), `ring_gain` the ring its next pulse leaves in the
-    /// charge (`crate::estimate::ring::ring_charge_gain`) and `ring_seen` the share of such a ring the
-    /// window showed.
+    /// `ring_gain` the ring its next pulse leaves (`crate::estimate::ring::RingGain`) and
+    /// `ring_seen` the share of such a ring the window showed.
     Retune {
         measured_hz: f32,
         shear_modulus: f32,
         bias_volts: f32,
         max_volts: f32,
-        ring_gain: f32,
+        ring_gain: RingGain,
         ring_seen: f32,
         resolution: Option<f32>,
         device: Device<f32>,
@@ -294,12 +359,13 @@ pub enum TrimResult {
 }
 
 impl TrimJob {
-    /// The job for the window in `state`, measured at `bias_volts`.
+    /// The job for the window in `state`, measured at `bias_volts`, on inputs that declare
+    /// `inputs`.
     pub(super) fn new(
         state: &TrimState,
         settings: Settings,
-        bias_volts: f32,
-        cap_volts: f32,
+        (bias_volts, cap_volts): (f32, f32),
+        inputs: InputNoise,
     ) -> Self {
         Self {
             window: state.window,
@@ -312,6 +378,7 @@ impl TrimJob {
             previous: state.previous,
             cap_volts,
             from_charge: state.from_charge,
+            inputs,
             ring_gain: state.ring_gain,
             ring_seen: state.ring_seen,
             measured_hz: state.tracked_hz,
@@ -345,7 +412,7 @@ impl TrimJob {
             Some(_) => s.trim_tolerance.unwrap_or(0.0),
             None => ring_tolerance(&s),
         };
-        // What the timing may be off by, relative (the charge's; a sensor's is far below),
+        // What the timing may be off by, relative,
         // and the resolution that says so.
         let mut timing_error = 0.0;
         let mut resolution = None;
@@ -357,41 +424,69 @@ impl TrimJob {
             None => {
                 let (stride, _) = s.trim_window();
                 let sample_hz = s.tick_hz / stride as f32;
-                if self.from_charge {
-                    // A period of the ring the model expects at the bias (the target's if
-                    // none): a mismatch of a few percent only scales the ring a little.
-                    let expected_hz = model_hz(&self.params, self.bias_volts);
-                    let hz = if expected_hz > 0.0 {
-                        expected_hz
-                    } else {
-                        s.target_hz
-                    };
-                    let half = (libm::roundf(0.5 * sample_hz / hz) as usize).min(window.len());
-                    // Too weak a ring is said, not estimated from (a window with neither
-                    // ring nor noise has no ring to time: `NoRing`, below).
-                    let ring = ChargeRing::of(window, half);
-                    let needed = ChargeRing::needed(self.tuned.then_some(tolerance));
-                    let heard = ring.amplitude > 0.0 || ring.noise > 0.0;
-                    if heard && !(ring.resolution >= needed) {
-                        return Err(Fault::Trim(TrimError::Unresolvable {
-                            resolution: ring.resolution,
-                            needed,
-                            ring_coulombs: ring.amplitude / s.tick_hz,
-                            noise_amps: ring.noise / libm::sqrtf(stride as f32),
-                        }));
-                    }
-                    let measured_hz = ring_frequency_hz(high_passed(window, half), sample_hz)
-                        .map_err(Fault::Trim)?;
-                    timing_error = TIMING_ERROR_TIMES_RESOLUTION / ring.resolution;
-                    resolution = Some(ring.resolution);
-                    let seen = ring.amplitude / ring_ticks(self.ring_gain, self.bias_volts, &s);
-                    if seen > 0.0 && seen.is_finite() {
-                        ring_seen = seen;
-                    }
-                    measured_hz
+                let input = if self.from_charge {
+                    RingInput::Charge
                 } else {
-                    ring_frequency_hz(window.iter().copied(), sample_hz).map_err(Fault::Trim)?
+                    RingInput::Stretch
+                };
+                // A period of the ring the model expects at the bias (the target's if none):
+                // a mismatch of a few percent only scales the ring a little.
+                let expected_hz = model_hz(&self.params, self.bias_volts);
+                let hz = if expected_hz > 0.0 {
+                    expected_hz
+                } else {
+                    s.target_hz
+                };
+                let half = (libm::roundf(0.5 * sample_hz / hz) as usize).min(window.len());
+                // The declared noise, a sample: the sum's steps over a stride of ticks.
+                let per_sample = libm::sqrtf(stride as f32);
+                let floor = declared(self.inputs, input).map_or(0.0, |noise| noise * per_sample);
+                // Too weak a ring is said, not estimated from (a window with neither ring nor
+                // noise has no ring to time: `NoRing`, below).
+                let ring = RingFit::of(window, half, floor);
+                let needed = RingFit::needed(tolerance);
+                let heard = ring.amplitude > 0.0 || ring.noise > 0.0;
+                // The sum's ring as the input's (C, stretch).
+                let to_ring = 1.0 / input.in_window(1.0, hz, s.tick_hz);
+                let refused = |resolution: f32| {
+                    Fault::Trim(TrimError::Unresolvable {
+                        input,
+                        from: NoiseFrom::Window,
+                        resolution,
+                        needed,
+                        ring: ring.amplitude * to_ring,
+                        noise: ring.noise / per_sample,
+                    })
+                };
+                if heard && !(ring.resolution >= needed) {
+                    return Err(refused(ring.resolution));
                 }
+                // Timed where the ring stands out of the noise (`ring_frequency_hz`'s band and
+                // its check of each half period): a ring that fades into the noise before
+                // the window ends is resolved over the share it was timed in.
+                let (measured_hz, span) = ring_frequency_hz(
+                    high_passed(window, half),
+                    sample_hz,
+                    ring.band(half),
+                    half as f32,
+                )
+                .map_err(Fault::Trim)?;
+                let timed = ring.resolution * span;
+                if heard && !(timed >= needed) {
+                    return Err(refused(timed));
+                }
+                if timed.is_finite() {
+                    timing_error = TIMING_ERROR_TIMES_RESOLUTION / timed;
+                    resolution = Some(timed);
+                }
+                let predicted = self
+                    .ring_gain
+                    .ring(input, self.bias_volts, s.trim_pulse_volts);
+                let seen = ring.amplitude * to_ring / predicted;
+                if seen > 0.0 && seen.is_finite() {
+                    ring_seen = seen;
+                }
+                measured_hz
             }
         };
         let shear_modulus = estimate_shear_modulus(&self.params, self.bias_volts, measured_hz)
@@ -518,7 +613,7 @@ impl TrimJob {
             shear_modulus,
             bias_volts,
             max_volts: estimate_volts,
-            ring_gain: ring_charge_gain(
+            ring_gain: RingGain::at(
                 &device,
                 tuner.limit().at.offset,
                 bias_volts,
@@ -560,7 +655,8 @@ mod tests {
             previous,
             cap_volts: 9361.9,
             from_charge: false,
-            ring_gain: f32::NAN,
+            inputs: InputNoise::UNDECLARED,
+            ring_gain: RingGain::UNKNOWN,
             ring_seen: 1.0,
             measured_hz: None,
             quality_factor: f32::NAN,

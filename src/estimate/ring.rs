@@ -25,7 +25,7 @@ pub const MIN_CROSSINGS: usize = 6;
 /// high-pass takes off its ends (`high_passed`).
 pub const MIN_WINDOW_PERIODS: f32 = MIN_CROSSINGS as f32 / 2.0 + 1.0;
 
-/// The least resolution (`ChargeRing::resolution`) a ring in the charge must show to be
+/// The least resolution (`RingFit::resolution`) a ring in the charge must show to be
 /// timed. On the reference device (BENCHMARKS.md) the crossings locked onto the noise's wander
 /// in some seeds at 39 and below (the frequency percent off); none did in twelve at 43 and
 /// more. The bound is a quarter above the highest lost.
@@ -51,14 +51,40 @@ pub enum TrimError {
     NoEstimate { measured_hz: f32, volts: f32 },
     /// After the most trims allowed, the frequency is still off the target.
     NotConverged { measured_hz: f32, target_hz: f32 },
-    /// The ring in the charge is too weak against the current monitor's noise to be timed
-    /// to the tolerance (`ChargeRing`): no estimate is made from it.
+    /// The ring is too weak against its input's noise to be timed to the tolerance
+    /// (`RingFit`, `RingInput::resolution`): no estimate is made from it. `ring` is its
+    /// amplitude (`input.unit()`), `noise` the input's a tick (`input.noise_unit()`), heard
+    /// as `from` says.
     Unresolvable {
+        input: RingInput,
+        from: NoiseFrom,
         resolution: f32,
         needed: f32,
-        ring_coulombs: f32,
-        noise_amps: f32,
+        ring: f32,
+        noise: f32,
     },
+}
+
+/// Where a refusal's noise figure came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum NoiseFrom {
+    /// The image's front end (its declared noise and quantisation), before any voltage.
+    Image,
+    /// Heard in the hold before the pulse.
+    Hold,
+    /// Heard in the window after it.
+    Window,
+}
+
+impl NoiseFrom {
+    const fn words(self) -> &'static str {
+        match self {
+            NoiseFrom::Image => "as the image's front end declares it, before any voltage",
+            NoiseFrom::Hold => "heard in the hold before the pulse",
+            NoiseFrom::Window => "heard in the window after it",
+        }
+    }
 }
 
 impl core::error::Error for TrimError {}
@@ -79,21 +105,34 @@ impl fmt::Display for TrimError {
                 Decimal(volts)
             ),
             TrimError::Unresolvable {
+                input,
+                from,
                 resolution,
                 needed,
-                ring_coulombs,
-                noise_amps,
-            } => write!(
-                f,
-                "the ring in the current is too weak to time: {} C of charge against the \
-                 monitor's noise of {} A a tick gives a resolution of {} over the window, {} \
-                 needed; fit a displacement sensor, raise trim_pulse_volts or \
-                 trim_window_seconds, or widen trim_tolerance",
-                Decimal(ring_coulombs),
-                Decimal(noise_amps),
-                Decimal(resolution),
-                Decimal(needed)
-            ),
+                ring,
+                noise,
+            } => {
+                let (what, remedy) = match input {
+                    RingInput::Stretch => ("stretch", "a finer or quieter stretch sensor"),
+                    RingInput::Charge => ("current", "a displacement sensor"),
+                };
+                write!(
+                    f,
+                    "the ring in the {what} is too weak to time: {} {} of ring against {} \
+                     noise of {} {} a tick ({}) gives a resolution of {} over the window, {} \
+                     needed ({}x the ring); fit {remedy}, raise trim_pulse_volts or \
+                     trim_window_seconds, or widen trim_tolerance",
+                    Decimal(ring),
+                    input.unit(),
+                    input.noise_source(),
+                    Decimal(noise),
+                    input.noise_unit(),
+                    from.words(),
+                    Decimal(resolution),
+                    Decimal(needed),
+                    Decimal(needed / resolution),
+                )
+            }
             TrimError::NotConverged {
                 measured_hz,
                 target_hz,
@@ -112,11 +151,19 @@ impl fmt::Display for TrimError {
 /// ways, are found by linear interpolation; f = 1/(2·slope) of the least-squares line
 /// through crossing time against crossing number. The line's error (a ring is never quite
 /// orthogonal to it: 1e-3 of f over 14 periods, measured) shifts upward and downward
-/// crossings in opposite directions, and the slope fit averages that out.
+/// crossings in opposite directions, and the slope fit averages that out. A crossing counts
+/// only once the ring has left the band ±`band` on the other side since the last: noise
+/// about a zero adds no crossings (0 takes every crossing). Where a decaying ring fades into
+/// the noise, its crossings come too soon or too late against `half_samples` (half a period
+/// as expected, in samples; 0: not checked): counting stops at the first more than half of
+/// that off, as a miscounted crossing would shift every count after it. The frequency, and
+/// the share of the samples the crossings counted span (1: all).
 pub fn ring_frequency_hz(
     samples: impl Iterator<Item = f32> + Clone,
     sample_hz: f32,
-) -> Result<f32, TrimError> {
+    band: f32,
+    half_samples: f32,
+) -> Result<(f32, f32), TrimError> {
     let (mut n, mut st, mut sy, mut stt, mut sty) = line_sums(samples.clone());
     let det = n * stt - st * st;
     if !(n >= 3.0 && det > 0.0) {
@@ -125,9 +172,16 @@ pub fn ring_frequency_hz(
     let slope = (n * sty - st * sy) / det;
     let offset = (sy - slope * st) / n;
     let middle = samples.clone().count() as f32 * 0.5;
+    let band = if band > 0.0 { band } else { 0.0 };
     // Crossing number against crossing time, summed as they come.
     (n, st, sy, stt, sty) = (0.0, 0.0, 0.0, 0.0, 0.0);
     let mut previous: Option<(usize, f32)> = None;
+    // The side of the band the ring was last beyond (true: above), and the last zero crossing
+    // since: counted once the ring is beyond the band on the other side.
+    let mut side: Option<bool> = None;
+    let mut last_zero: Option<f32> = None;
+    let mut last_at = f32::NAN;
+    let total = 2.0 * middle;
     for (k, y) in samples.enumerate() {
         if !y.is_finite() {
             continue;
@@ -135,7 +189,27 @@ pub fn ring_frequency_hz(
         let r = y - (offset + slope * (k as f32 - middle));
         if let Some((j, p)) = previous {
             if (p < 0.0) != (r < 0.0) {
-                let at = j as f32 + (k - j) as f32 * (-p / (r - p)) - middle;
+                last_zero = Some(j as f32 + (k - j) as f32 * (-p / (r - p)) - middle);
+            }
+        }
+        previous = Some((k, r));
+        let now = if r > band {
+            true
+        } else if r < -band {
+            false
+        } else {
+            continue;
+        };
+        if let (Some(was), Some(at)) = (side, last_zero) {
+            if was != now {
+                let interval = at - last_at;
+                if half_samples > 0.0
+                    && n > 0.0
+                    && !(interval >= 0.5 * half_samples && interval <= 1.5 * half_samples)
+                {
+                    break;
+                }
+                last_at = at;
                 st += n;
                 sy += at;
                 stt += n * n;
@@ -143,7 +217,8 @@ pub fn ring_frequency_hz(
                 n += 1.0;
             }
         }
-        previous = Some((k, r));
+        side = Some(now);
+        last_zero = None;
     }
     let det = n * stt - st * st;
     if !(n >= MIN_CROSSINGS as f32 && det > 0.0) {
@@ -152,7 +227,8 @@ pub fn ring_frequency_hz(
         });
     }
     let samples_per_crossing = (n * sty - st * sy) / det;
-    Ok(sample_hz / (2.0 * samples_per_crossing))
+    let span = (n - 1.0) * samples_per_crossing / total;
+    Ok((sample_hz / (2.0 * samples_per_crossing), span.min(1.0)))
 }
 
 /// Each sample less the mean of the `2·half + 1` centred on it (about one period of the
@@ -174,17 +250,68 @@ pub fn high_passed(samples: &[f32], half: usize) -> impl Iterator<Item = f32> + 
     })
 }
 
-/// What a window of the charge (the current's running sum, in A·ticks, a sample the mean of
-/// a stride of ticks) tells of its own ring and noise, from the window alone.
+/// The input a ring is timed in: the stretch from a displacement sensor (white noise a
+/// sample), or the charge, the running sum of the amplifier's current (a random walk).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum RingInput {
+    Stretch,
+    Charge,
+}
+
+impl RingInput {
+    /// The ring's unit, for a refusal's words.
+    pub const fn unit(self) -> &'static str {
+        match self {
+            RingInput::Stretch => "(stretch)",
+            RingInput::Charge => "C",
+        }
+    }
+
+    /// The noise's unit a tick (the stretch sensor's, or the current monitor's).
+    pub const fn noise_unit(self) -> &'static str {
+        match self {
+            RingInput::Stretch => "(stretch)",
+            RingInput::Charge => "A",
+        }
+    }
+
+    /// What the noise is the noise of.
+    pub const fn noise_source(self) -> &'static str {
+        match self {
+            RingInput::Stretch => "the stretch sensor's",
+            RingInput::Charge => "the current monitor's",
+        }
+    }
+
+    /// The ring in the window's unit (A·ticks, stretch·ticks: both inputs are timed in their
+    /// running sum) for a ring of `ring` (C, stretch) at `hz`, ticking at `tick_hz`: the
+    /// charge is the current's sum already; the stretch's sum carries a ring of a·P/(2π),
+    /// P = tick_hz/hz ticks a period.
+    pub fn in_window(self, ring: f32, hz: f32, tick_hz: f32) -> f32 {
+        match self {
+            RingInput::Charge => ring * tick_hz,
+            RingInput::Stretch => ring * tick_hz / (core::f32::consts::TAU * hz),
+        }
+    }
+}
+
+/// What a window of a ring input's running sum (a sample the mean of a stride of ticks)
+/// tells of its own ring and noise, from the window alone. Both inputs are timed so: the
+/// current's sum is the charge (Q = C(λ)·Φ, model.md §8); the stretch's sum turns a
+/// sensor's white noise into the same slow wander, which the high-pass (`high_passed`)
+/// follows and the crossings' fit averages out, where white noise on the stretch itself adds
+/// crossings near each zero. One rule then holds for every ring (`resolution`).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ChargeRing {
-    /// The ring's amplitude, A·ticks: from the high-passed window's mean square less the
-    /// noise's share of it.
+pub struct RingFit {
+    /// The ring's amplitude in the sum (A·ticks, stretch·ticks): from the high-passed
+    /// window's mean square less the noise's share of it.
     pub amplitude: f32,
-    /// The noise of the charge's steps from sample to sample, A·ticks: the current monitor's
-    /// noise summed over a stride. From the fourth differences of the charge (the third of
-    /// the current, variance 20·σ² for white noise), which a ring of eight or more samples a
-    /// period passes at most (2·sin(π/8))⁴ = 0.34 of, far less at the usual 20 and more.
+    /// The noise of the sum's steps from sample to sample (the input's noise summed over a
+    /// stride), never below the floor given (the noise the front end declares,
+    /// `acquire::InputNoise`). From the fourth differences of the sum (the input's third,
+    /// variance 20·σ² for white noise), which a ring of eight or more samples a period passes
+    /// at most (2·sin(π/8))⁴ = 0.34 of, far less at the usual 20 and more.
     pub noise: f32,
     /// The ring against the noise it is timed through: its amplitude over the high-passed
     /// noise of a period, √P·noise, times the periods in the window N/P. The frequency's
@@ -192,9 +319,10 @@ pub struct ChargeRing {
     pub resolution: f32,
 }
 
-impl ChargeRing {
-    /// The ring and noise of `samples`, high-passed over `2·half + 1` of them (a period).
-    pub fn of(samples: &[f32], half: usize) -> Self {
+impl RingFit {
+    /// The ring and noise of `samples`, high-passed over `2·half + 1` of them (a period), the
+    /// noise taken as at least `floor` a sample.
+    pub fn of(samples: &[f32], half: usize, floor: f32) -> Self {
         let (mut sum, mut count) = (0.0f32, 0.0f32);
         for d in samples.windows(5) {
             if let [a, b, c, d, e] = *d {
@@ -205,7 +333,13 @@ impl ChargeRing {
                 }
             }
         }
-        let noise_squared = sum / (20.0 * count);
+        let heard = sum / (20.0 * count);
+        let floor = if floor.is_finite() { floor } else { 0.0 };
+        let noise_squared = if heard >= floor * floor {
+            heard
+        } else {
+            floor * floor
+        };
         let (mut square, mut n) = (0.0f32, 0.0f32);
         for y in high_passed(samples, half) {
             if y.is_finite() {
@@ -220,7 +354,7 @@ impl ChargeRing {
         let walk = noise_squared * h * (h + 1.0) / (3.0 * span);
         let amplitude = libm::sqrtf(2.0 * (square / n - walk).max(0.0));
         let noise = libm::sqrtf(noise_squared);
-        let resolution = Self::resolution_of(amplitude, noise, span, n / span);
+        let resolution = Self::resolution(amplitude, noise, span, n / span);
         Self {
             amplitude,
             noise,
@@ -228,20 +362,33 @@ impl ChargeRing {
         }
     }
 
+    /// The band about zero (`ring_frequency_hz`) that the high-passed noise leaves only one
+    /// time in 370 (three deviations: a random walk less its centred mean over
+    /// `2·half + 1` steps has the deviation noise·√(h(h + 1)/(3L))).
+    pub fn band(&self, half: usize) -> f32 {
+        let h = half as f32;
+        3.0 * self.noise * libm::sqrtf(h * (h + 1.0) / (3.0 * (2.0 * h + 1.0)))
+    }
+
     /// The resolution of a ring of `amplitude` through steps of `noise` (the same unit, a
-    /// sample), `per_period` samples a period over `periods` periods (see `resolution`).
-    pub fn resolution_of(amplitude: f32, noise: f32, per_period: f32, periods: f32) -> f32 {
+    /// sample), `per_period` samples a period over `periods` periods: the one rule every ring
+    /// the trim times is held to, from its window or predicted before its pulse.
+    pub fn resolution(amplitude: f32, noise: f32, per_period: f32, periods: f32) -> f32 {
         amplitude / (noise * libm::sqrtf(per_period)) * periods
     }
 
-    /// The resolution a measurement needs: `MIN_RESOLUTION`; and one that may find the
-    /// frequency on target within `tolerance` (relative; the bias the tuned one), its timing
-    /// error's two deviations within two thirds of the tolerance, so that a third is left
-    /// for the trim to land in.
-    pub fn needed(tolerance: Option<f32>) -> f32 {
-        tolerance.map_or(MIN_RESOLUTION, |tolerance| {
-            MIN_RESOLUTION.max(3.0 * TIMING_ERROR_TIMES_RESOLUTION / tolerance)
-        })
+    /// The resolution a measurement needs: `MIN_RESOLUTION`, and one that finds the
+    /// frequency within `tolerance` (relative), its timing error's two deviations within two
+    /// thirds of the tolerance, so that a third is left for the trim to land in. Every
+    /// reading is held to it, the first too: a reading's error moves the next bias by it
+    /// over the device's tuning slope, which on a barely tunable device is the whole range.
+    pub fn needed(tolerance: f32) -> f32 {
+        let by_tolerance = 3.0 * TIMING_ERROR_TIMES_RESOLUTION / tolerance;
+        if by_tolerance > MIN_RESOLUTION {
+            by_tolerance
+        } else {
+            MIN_RESOLUTION
+        }
     }
 }
 
@@ -263,26 +410,62 @@ fn line_sums(samples: impl Iterator<Item = f32> + Clone) -> (f32, f32, f32, f32,
     sums
 }
 
-/// The ring the trim's pulse leaves in the charge, per volt of pulse and per volt² of bias,
-/// C/V³ (NaN where `volts` has no equilibrium below `limit_offset`). The pulse, ΔΦ down for
-/// `pulse_seconds`, moves the equilibrium by Δλ = Φ·C'(λ)·ΔΦ/(L1A·M·ω²) (model.md §4: the
-/// electrical term of M·λ'' is Φ²·C'(λ)/(2·L1A); §5: the stiffness is M·ω²) and leaves a ring
-/// of 2·Δλ·|sin(ω·T/2)| in the stretch, which the charge Q = C(λ)·Φ carries as Φ·C'(λ) times
-/// it (model.md §8). Undamped: the plant's damping only lowers it.
-pub fn ring_charge_gain(
-    device: &Device<f32>,
-    limit_offset: f32,
-    volts: f32,
-    pulse_seconds: f32,
-) -> f32 {
-    let Some(offset) = device.offset_for_bias(volts, limit_offset) else {
-        return f32::NAN;
+/// The ring the trim's pulse leaves, as the statics predict it (undamped: the plant's
+/// damping only lowers it). The pulse, ΔΦ down for `pulse_seconds` at the bias Φ, moves the
+/// equilibrium by Δλ = Φ·C'(λ)·ΔΦ/(L1A·M·ω²) (model.md §4: the electrical term of M·λ'' is
+/// Φ²·C'(λ)/(2·L1A); §5: the stiffness is M·ω²) and leaves a ring of 2·Δλ·|sin(ω·T/2)| in
+/// the stretch, which the charge Q = C(λ)·Φ carries as Φ·C'(λ) times it (model.md §8).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RingGain {
+    /// The ring in the stretch per volt of bias and per volt of pulse, 1/V².
+    pub stretch_per_volt_squared: f32,
+    /// C'(λ) at the bias, F: the charge's ring per volt of bias and per unit of stretch.
+    pub farads_per_stretch: f32,
+}
+
+impl RingGain {
+    /// Not known (no equilibrium, or no prediction wanted).
+    pub const UNKNOWN: RingGain = RingGain {
+        stretch_per_volt_squared: f32::NAN,
+        farads_per_stretch: f32::NAN,
     };
-    let p = device.params();
-    let slope = 2.0 * p.farads_per_stretch_squared() * device.stretch_at(offset);
-    let omega = core::f32::consts::TAU * device.natural_frequency_hz_at(offset);
-    let sine = libm::fabsf(libm::sinf(0.5 * omega * pulse_seconds));
-    2.0 * slope * slope * sine / (p.length_active * p.effective_mass() * omega * omega)
+
+    /// The prediction at `volts` on the loading branch below `limit_offset` (`UNKNOWN` where
+    /// `volts` has no equilibrium there).
+    pub fn at(device: &Device<f32>, limit_offset: f32, volts: f32, pulse_seconds: f32) -> Self {
+        let Some(offset) = device.offset_for_bias(volts, limit_offset) else {
+            return Self::UNKNOWN;
+        };
+        let p = device.params();
+        let slope = 2.0 * p.farads_per_stretch_squared() * device.stretch_at(offset);
+        let omega = core::f32::consts::TAU * device.natural_frequency_hz_at(offset);
+        let sine = libm::fabsf(libm::sinf(0.5 * omega * pulse_seconds));
+        Self {
+            stretch_per_volt_squared: 2.0 * slope * sine
+                / (p.length_active * p.effective_mass() * omega * omega),
+            farads_per_stretch: slope,
+        }
+    }
+
+    /// The ring in `input` a pulse of `pulse_volts` at `bias_volts` leaves: stretch, or C.
+    pub fn ring(&self, input: RingInput, bias_volts: f32, pulse_volts: f32) -> f32 {
+        let stretch = self.stretch_per_volt_squared * bias_volts * pulse_volts;
+        match input {
+            RingInput::Stretch => stretch,
+            RingInput::Charge => self.farads_per_stretch * bias_volts * stretch,
+        }
+    }
+}
+
+/// The share of an undamped ring's amplitude a window of `window_seconds` shows (its RMS
+/// against a steady ring's) when the ring decays at `decay_per_second` (ζ·ω, 1/s; model.md
+/// §7: c/(2·M)): √(τ/(2T)·(1 − e^(−2T/τ))), τ = 1/decay. 1 undamped.
+pub fn ring_share(decay_per_second: f32, window_seconds: f32) -> f32 {
+    let x = 2.0 * decay_per_second * window_seconds;
+    if !(x > 1e-6) {
+        return 1.0;
+    }
+    libm::sqrtf((1.0 - libm::expf(-x)) / x)
 }
 
 /// The natural frequency the model gives at `volts` on the loading branch before its limit,

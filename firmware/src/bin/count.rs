@@ -216,7 +216,8 @@ fn main() -> ! {
     // Stack high-water of each boot stage and of a tick with its DAC frame, from here.
     let mut slot = None;
     let Ok(_) = deepest("the whole boot, in place as the firmware boots", || {
-        Controller::start_in(&mut slot, device(), TABLE, amp, settings())
+        let inputs = front_end(Sensing::Stretch).input_noise(10);
+        Controller::start_in(&mut slot, device(), TABLE, (amp, inputs), settings())
     }) else {
         exit(1)
     };
@@ -305,6 +306,7 @@ fn front_end(sensing: Sensing) -> FrontEnd {
             per_count,
             low,
             high,
+            noise_codes: 1.0,
         })
     };
     FrontEnd {

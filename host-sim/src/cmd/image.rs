@@ -170,6 +170,8 @@ pub struct ChannelSummary {
     pub per_count: f32,
     pub low: f32,
     pub high: f32,
+    /// The RMS noise of a conversion it declares, codes (0: not declared).
+    pub noise_codes: f32,
 }
 
 impl FrontEndSummary {
@@ -186,6 +188,7 @@ impl FrontEndSummary {
                     per_count: s.per_count,
                     low: s.low,
                     high: s.high,
+                    noise_codes: s.noise_codes,
                 })
                 .collect(),
         }
@@ -241,14 +244,19 @@ impl fmt::Display for ImageReport {
                 let n = |x: f32| sig(f64::from(x));
                 writeln!(
                     f,
-                    "  {:<13} ADC IN{}: {} {} a count, 0 at code {}, plausible {} .. {}",
+                    "  {:<13} ADC IN{}: {} {} a count, 0 at code {}, plausible {} .. {}, {}",
                     c.channel,
                     c.input,
                     n(c.per_count),
                     c.unit,
                     n(c.zero_code),
                     n(c.low),
-                    n(c.high)
+                    n(c.high),
+                    if c.noise_codes > 0.0 {
+                        format!("noise {} codes rms", n(c.noise_codes))
+                    } else {
+                        "noise not declared".to_string()
+                    }
                 )?;
             }
         }
@@ -313,9 +321,29 @@ pub fn image(args: &ImageArgs) -> Result<ImageReport, String> {
         }
     }
     let (bytes, mut report) = build(args, out.display().to_string())?;
+    for warning in noise_warnings(&report) {
+        eprintln!("warning: {warning}");
+    }
     write_path(out, &bytes)?;
     report.written = true;
     Ok(report)
+}
+
+/// The channels whose noise the image does not declare: the trim's ring is then weighed
+/// against their quantisation alone before any voltage (and against the noise heard after).
+pub fn noise_warnings(report: &ImageReport) -> Vec<String> {
+    let channels = report.front_end.iter().flat_map(|fe| fe.channels.iter());
+    channels
+        .filter(|c| c.noise_codes == 0.0 && c.channel != "amplifier")
+        .map(|c| {
+            format!(
+                "[front_end.{}] declares no noise_codes: before any voltage the trim weighs its \
+                 ring against the quantisation alone (give the RMS noise of a conversion, as \
+                 measured on the board)",
+                c.channel
+            )
+        })
+        .collect()
 }
 
 /// What no real amplifier stage has, each with its unit and the range any has: a unit slip
