@@ -26,7 +26,7 @@ fn ring_frequency_of_a_damped_drifting_sine() {
             .collect();
         let f = ring_frequency_hz(samples.iter().copied(), 1000.0, 0.0, 0.0)
             .unwrap()
-            .0;
+            .hz;
         assert!((f - hz).abs() < 1e-4 * hz, "{f} for {hz}");
     }
 }
@@ -134,7 +134,7 @@ fn the_charge_window_tells_its_ring_and_noise() {
         assert!((ratio / 0.1 - 1.0).abs() < 0.2, "{hz}: {ratio}");
         let f = ring_frequency_hz(high_passed(&quiet, half), 1000.0, 0.0, 0.0)
             .unwrap()
-            .0;
+            .hz;
         let claimed = TIMING_ERROR_TIMES_RESOLUTION / ring.resolution;
         assert!(
             (f / hz as f32 - 1.0).abs() < 3.0 * claimed,
@@ -193,7 +193,7 @@ fn the_stretch_is_held_to_the_same_resolution() {
                     half as f32,
                 )
                 .unwrap()
-                .0;
+                .hz;
                 let error = f64::from(f) / hz - 1.0;
                 sum += (error * f64::from(fit.resolution)).powi(2);
                 n += 1.0;

@@ -914,3 +914,53 @@ fn a_trim_the_image_says_cannot_resolve_is_refused_before_any_voltage() {
         );
     }
 }
+
+/// Issue 45's barely tunable device (jlim 100, λ1p 4, λ2p 1: 53.52–54.01 Hz) sensorless on a
+/// creeping plant (Q 40, a 500 Pa branch over 6 s), the current monitor 1 µA rms at 10 kHz, a
+/// 20 V probe at 250 Hz, target 53.81 Hz. The code before timed its first ring at a resolution
+/// of 57 and adopted 53.881 Hz (0.13% off, the bias moved 4,016 → 4,985 V). Read directly, the
+/// monitor's noise heard in the hold refuses the ring before the pulse (no reading adopted,
+/// 0 V at the end); read through the board's ADC (2 codes, which the image declares), the boot
+/// refuses it before any voltage.
+#[test]
+fn the_barely_tunable_device_never_adopts_a_reading_it_cannot_resolve() {
+    use de_resonator::{EventKind, TrimError};
+    let scene_text = |seed: u32, monitor: &str| {
+        format!(
+            "name = \"gent\"\nduration_seconds = 2.0\nseed = {seed}\n[device]\njlim = 100.0\n\
+             prestretch_1 = 4.0\nprestretch_2 = 1.0\ndamping = 2.8e-4\n[plant]\n\
+             quality_factor = 40.0\nbranches = [{{ modulus = 500.0, relaxation_seconds = 6.0 }}]\n\
+             leakage_ohms = 1e12\n[amplifier]\nbandwidth_hz = 2000.0\n\
+             slew_volts_per_second = 200000.0\n{monitor}[controller]\ntarget_hz = 53.81\n\
+             ac_volts = 60.0\nac_hz = 50.0\ntrim_tolerance = 1e-3\nprobe_volts = 20.0\n\
+             probe_hz = 250.0\n"
+        )
+    };
+    let run = |text: String| {
+        let mut s = scene::parse(&text).unwrap();
+        s.run.history = false;
+        s.run.run().unwrap()
+    };
+    for seed in 1..=4 {
+        let direct = "[current_monitor]\nnoise_amps = 1e-6\nsample_hz = 10000.0\n\
+                      resolution_amps = 1e-7\n";
+        let r = run(scene_text(seed, direct));
+        assert!(
+            matches!(r.fault, Some(Fault::Trim(TrimError::Unresolvable { .. }))),
+            "seed {seed}: {:?}",
+            r.fault
+        );
+        assert!(r.events.iter().all(|e| e.kind != EventKind::Trimmed));
+        assert!(r.final_membrane_volts.abs() < 1.0, "seed {seed}");
+        let adc = "[front_end]\nscan_hz = 10000.0\nnoise_codes = 2.0\n[front_end.current]\n\
+                   input = 10\nzero_code = 2048.0\nper_count = 4.8828125e-7\nlow = -9e-4\n\
+                   high = 9e-4\n";
+        let r = run(scene_text(seed, adc));
+        let refused = r.refused.clone().unwrap_or_default();
+        assert!(
+            refused.contains("before any voltage"),
+            "seed {seed}: {refused}"
+        );
+        assert_eq!(r.max_command_volts, 0.0, "seed {seed}");
+    }
+}

@@ -101,8 +101,9 @@ impl Keeper for NoKeeper {
     }
 }
 
-/// Why the board drives nothing, one line.
-pub type Reason = String<200>;
+/// Why the board drives nothing, one line (room for the longest refusal with its figures:
+/// a ring too weak to time, about 330 bytes).
+pub type Reason = String<384>;
 
 /// The board's state besides the controller: the image, the settings `clear` boots with
 /// while nothing runs (a running controller holds the settings in force: one copy), why it

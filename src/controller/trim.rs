@@ -464,17 +464,20 @@ impl TrimJob {
                 // Timed where the ring stands out of the noise (`ring_frequency_hz`'s band and
                 // its check of each half period): a ring that fades into the noise before
                 // the window ends is resolved over the share it was timed in.
-                let (measured_hz, span) = ring_frequency_hz(
+                let timing = ring_frequency_hz(
                     high_passed(window, half),
                     sample_hz,
                     ring.band(half),
                     half as f32,
                 )
                 .map_err(Fault::Trim)?;
-                let timed = ring.resolution * span;
+                // And no more than the crossings' own scatter about their line says.
+                let scattered = TIMING_ERROR_TIMES_RESOLUTION / timing.scatter;
+                let timed = (ring.resolution * timing.span).min(scattered);
                 if heard && !(timed >= needed) {
                     return Err(refused(timed));
                 }
+                let measured_hz = timing.hz;
                 if timed.is_finite() {
                     timing_error = TIMING_ERROR_TIMES_RESOLUTION / timed;
                     resolution = Some(timed);

@@ -80,7 +80,7 @@ pub enum NoiseFrom {
 impl NoiseFrom {
     const fn words(self) -> &'static str {
         match self {
-            NoiseFrom::Image => "as the image's front end declares it, before any voltage",
+            NoiseFrom::Image => "declared in the image, before any voltage",
             NoiseFrom::Hold => "heard in the hold before the pulse",
             NoiseFrom::Window => "heard in the window after it",
         }
@@ -118,10 +118,10 @@ impl fmt::Display for TrimError {
                 };
                 write!(
                     f,
-                    "the ring in the {what} is too weak to time: {} {} of ring against {} \
-                     noise of {} {} a tick ({}) gives a resolution of {} over the window, {} \
-                     needed ({}x the ring); fit {remedy}, raise trim_pulse_volts or \
-                     trim_window_seconds, or widen trim_tolerance",
+                    "the ring in the {what} is too weak to time: {}{} against {} noise of {}{} \
+                     a tick ({}): resolution {}, {} needed ({}x the ring would do); fit \
+                     {remedy}, raise trim_pulse_volts or trim_window_seconds, or widen \
+                     trim_tolerance",
                     Decimal(ring),
                     input.unit(),
                     input.noise_source(),
@@ -146,6 +146,18 @@ impl fmt::Display for TrimError {
     }
 }
 
+/// A ring timed by `ring_frequency_hz`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Timed {
+    /// Its frequency, Hz.
+    pub hz: f32,
+    /// The share of the window's samples the crossings counted span (1: all).
+    pub span: f32,
+    /// The frequency's relative standard error from the crossings' own scatter (0: none
+    /// seen).
+    pub scatter: f32,
+}
+
 /// The frequency of the ring in `samples` (at `sample_hz`, NaN where there was none), Hz.
 /// The trend (creep, drift) is taken off by a least-squares line; the crossings of zero, both
 /// ways, are found by linear interpolation; f = 1/(2·slope) of the least-squares line
@@ -156,79 +168,152 @@ impl fmt::Display for TrimError {
 /// about a zero adds no crossings (0 takes every crossing). Where a decaying ring fades into
 /// the noise, its crossings come too soon or too late against `half_samples` (half a period
 /// as expected, in samples; 0: not checked): counting stops at the first more than half of
-/// that off, as a miscounted crossing would shift every count after it. The frequency, and
-/// the share of the samples the crossings counted span (1: all).
+/// that off, as a miscounted crossing would shift every count after it. The crossings'
+/// scatter about their line, a second pass, says how well the slope is known whatever the
+/// noise and the ring's decay.
 pub fn ring_frequency_hz(
     samples: impl Iterator<Item = f32> + Clone,
     sample_hz: f32,
     band: f32,
     half_samples: f32,
-) -> Result<(f32, f32), TrimError> {
-    let (mut n, mut st, mut sy, mut stt, mut sty) = line_sums(samples.clone());
+) -> Result<Timed, TrimError> {
+    let (n, st, sy, stt, sty) = line_sums(samples.clone());
     let det = n * stt - st * st;
     if !(n >= 3.0 && det > 0.0) {
         return Err(TrimError::NoRing { crossings: 0 });
     }
     let slope = (n * sty - st * sy) / det;
-    let offset = (sy - slope * st) / n;
-    let middle = samples.clone().count() as f32 * 0.5;
-    let band = if band > 0.0 { band } else { 0.0 };
-    // Crossing number against crossing time, summed as they come.
-    (n, st, sy, stt, sty) = (0.0, 0.0, 0.0, 0.0, 0.0);
-    let mut previous: Option<(usize, f32)> = None;
-    // The side of the band the ring was last beyond (true: above), and the last zero crossing
-    // since: counted once the ring is beyond the band on the other side.
-    let mut side: Option<bool> = None;
-    let mut last_zero: Option<f32> = None;
-    let mut last_at = f32::NAN;
-    let total = 2.0 * middle;
-    for (k, y) in samples.enumerate() {
-        if !y.is_finite() {
-            continue;
+    let trend = Trend {
+        offset: (sy - slope * st) / n,
+        slope,
+        middle: samples.clone().count() as f32 * 0.5,
+        band: if band > 0.0 { band } else { 0.0 },
+        half_samples,
+    };
+    // Crossing number against crossing time, summed as they come, upward and downward
+    // crossings apart: each way's line takes its own offset (the trend line's error and a
+    // large ring's mean moving with its amplitude shift the two ways oppositely, which a
+    // line through both would take partly as slope), and the two slopes' mean cancels what of
+    // that offset moves along the window.
+    let mut ways = [[0.0f32; 5]; 2];
+    trend.crossings(samples.clone(), f32::INFINITY, |k, at| {
+        let way = (k as usize) & 1;
+        if let Some([n, st, sy, stt, sty]) = ways.get_mut(way) {
+            let j = libm::floorf(0.5 * k);
+            *st += j;
+            *sy += at;
+            *stt += j * j;
+            *sty += j * at;
+            *n += 1.0;
         }
-        let r = y - (offset + slope * (k as f32 - middle));
-        if let Some((j, p)) = previous {
-            if (p < 0.0) != (r < 0.0) {
-                last_zero = Some(j as f32 + (k - j) as f32 * (-p / (r - p)) - middle);
-            }
-        }
-        previous = Some((k, r));
-        let now = if r > band {
-            true
-        } else if r < -band {
-            false
-        } else {
-            continue;
-        };
-        if let (Some(was), Some(at)) = (side, last_zero) {
-            if was != now {
-                let interval = at - last_at;
-                if half_samples > 0.0
-                    && n > 0.0
-                    && !(interval >= 0.5 * half_samples && interval <= 1.5 * half_samples)
-                {
-                    break;
-                }
-                last_at = at;
-                st += n;
-                sy += at;
-                stt += n * n;
-                sty += n * at;
-                n += 1.0;
-            }
-        }
-        side = Some(now);
-        last_zero = None;
-    }
-    let det = n * stt - st * st;
-    if !(n >= MIN_CROSSINGS as f32 && det > 0.0) {
+    });
+    let slope = |[n, st, sy, stt, sty]: [f32; 5]| {
+        let det = n * stt - st * st;
+        (n >= 3.0 && det > 0.0).then(|| (n * sty - st * sy) / det)
+    };
+    let n = ways[0][0] + ways[1][0];
+    let (Some(even), Some(odd), true) = (slope(ways[0]), slope(ways[1]), n >= MIN_CROSSINGS as f32)
+    else {
         return Err(TrimError::NoRing {
             crossings: n.min(f32::from(u16::MAX)) as u16,
         });
+    };
+    // Each way's slope is a period.
+    let samples_per_crossing = 0.25 * (even + odd);
+    // The crossings' own scatter about each way's line, less its share along a parabola in
+    // the crossing number (a chirp: a large ring's frequency moves as it decays, which is no
+    // noise): the timing's error whatever the noise's colour (an ADC's is not white; noise
+    // at the ring's frequency moves the crossings more than its fourth differences say).
+    let lines = [(ways[0], even), (ways[1], odd)]
+        .map(|([n, st, sy, ..], slope)| (slope, (sy - slope * st) / n));
+    let middle = 0.5 * (n - 1.0);
+    let mean_square = (n * n - 1.0) / 12.0;
+    let (mut rr, mut rq, mut qq) = (0.0f32, 0.0f32, 0.0f32);
+    trend.crossings(samples, n, |k, at| {
+        if let Some(&(slope, first)) = lines.get((k as usize) & 1) {
+            let r = at - (first + slope * libm::floorf(0.5 * k));
+            let q = (k - middle) * (k - middle) - mean_square;
+            rr += r * r;
+            rq += r * q;
+            qq += q * q;
+        }
+    });
+    let residuals = (rr - if qq > 0.0 { rq * rq / qq } else { 0.0 }).max(0.0);
+    // Each way's slope's variance: σ² over Σ(j − j̄)² = m(m² − 1)/12 for its m crossings;
+    // the period is their mean.
+    let sigma_squared = residuals / (n - 5.0);
+    let spread = |m: f32| m * (m * m - 1.0) / 12.0;
+    let period_variance =
+        0.25 * sigma_squared * (1.0 / spread(ways[0][0]) + 1.0 / spread(ways[1][0]));
+    let scatter = libm::sqrtf(period_variance) / (2.0 * samples_per_crossing);
+    let span = (n - 1.0) * samples_per_crossing / (2.0 * trend.middle);
+    Ok(Timed {
+        hz: sample_hz / (2.0 * samples_per_crossing),
+        span: span.min(1.0),
+        scatter: if scatter.is_finite() { scatter } else { 0.0 },
+    })
+}
+
+/// The line `ring_frequency_hz` takes off the samples, and how it counts crossings.
+struct Trend {
+    offset: f32,
+    slope: f32,
+    middle: f32,
+    band: f32,
+    half_samples: f32,
+}
+
+impl Trend {
+    /// Each counted crossing in turn, at most `most`: (its number, its time from the middle,
+    /// samples).
+    fn crossings(
+        &self,
+        samples: impl Iterator<Item = f32>,
+        most: f32,
+        mut each: impl FnMut(f32, f32),
+    ) {
+        let mut previous: Option<(usize, f32)> = None;
+        // The side of the band the ring was last beyond (true: above), and the last zero
+        // crossing since: counted once the ring is beyond the band on the other side.
+        let mut side: Option<bool> = None;
+        let mut last_zero: Option<f32> = None;
+        let mut last_at = f32::NAN;
+        let mut n = 0.0f32;
+        for (k, y) in samples.enumerate() {
+            if !y.is_finite() {
+                continue;
+            }
+            let r = y - (self.offset + self.slope * (k as f32 - self.middle));
+            if let Some((j, p)) = previous {
+                if (p < 0.0) != (r < 0.0) {
+                    last_zero = Some(j as f32 + (k - j) as f32 * (-p / (r - p)) - self.middle);
+                }
+            }
+            previous = Some((k, r));
+            let now = if r > self.band {
+                true
+            } else if r < -self.band {
+                false
+            } else {
+                continue;
+            };
+            if let (Some(was), Some(at)) = (side, last_zero) {
+                if was != now {
+                    let interval = at - last_at;
+                    let half = self.half_samples;
+                    let regular = interval >= 0.5 * half && interval <= 1.5 * half;
+                    if n >= most || (half > 0.0 && n > 0.0 && !regular) {
+                        return;
+                    }
+                    each(n, at);
+                    last_at = at;
+                    n += 1.0;
+                }
+            }
+            side = Some(now);
+            last_zero = None;
+        }
     }
-    let samples_per_crossing = (n * sty - st * sy) / det;
-    let span = (n - 1.0) * samples_per_crossing / total;
-    Ok((sample_hz / (2.0 * samples_per_crossing), span.min(1.0)))
 }
 
 /// Each sample less the mean of the `2·half + 1` centred on it (about one period of the
@@ -260,19 +345,19 @@ pub enum RingInput {
 }
 
 impl RingInput {
-    /// The ring's unit, for a refusal's words.
+    /// The ring's unit, for a refusal's words (with its space; the stretch has none).
     pub const fn unit(self) -> &'static str {
         match self {
-            RingInput::Stretch => "(stretch)",
-            RingInput::Charge => "C",
+            RingInput::Stretch => "",
+            RingInput::Charge => " C",
         }
     }
 
-    /// The noise's unit a tick (the stretch sensor's, or the current monitor's).
+    /// The noise's unit a tick (the stretch sensor's, or the current monitor's; as `unit`).
     pub const fn noise_unit(self) -> &'static str {
         match self {
-            RingInput::Stretch => "(stretch)",
-            RingInput::Charge => "A",
+            RingInput::Stretch => "",
+            RingInput::Charge => " A",
         }
     }
 
