@@ -7,6 +7,8 @@
 # - `host-sim simulate --method reference-bdf`, whole process, against SUNDIALS CVODE's BDF
 #   (scripts/peers/cvode_scene.c, compiled here), whole process, on a damped scene where BDF
 #   is the right choice: the same drive with c = 10 N·s from the pre-stretch, 1 s, 1e-10.
+# - Radau IIA 5 (every build) and BDF against CVODE on the damped scene and a stiff one
+#   (c = 10,000 N·s at 5912.84 V, issue 29's), all from the pre-stretch, 1 s, 1e-10.
 # The peers restate the equations (scripts/peers/scene.py and the C file), sharing no code
 # with the core; each comparison checks the final stretches agree before it times anything.
 # Usage: scripts/bench-peers.sh [RUNS]
@@ -89,6 +91,28 @@ print(f"  {'  of which the solve (in-process)':34}{ours['run_seconds'] * 1e3:10.
 print(f"  {'CVODE BDF, whole process':34}{peer_best * 1e3:10.2f}{peer_mean * 1e3:10.2f}")
 print(f"  ratio (best, whole processes): {best / peer_best:.2f} (goal ≤ 2), CVODE took "
       f"{peer['steps']} steps")
+
+print("The stiff methods side by side (issue 45), from the pre-stretch, 1 s, 1e-10: whole "
+      "process best and mean, the solve in-process, and the final stretch")
+cases = [("damped, c = 10 N·s, 7000 V + 200 V at 30 Hz", "7000", "200", "30", "10"),
+         ("stiff, c = 10,000 N·s, 5912.84 V", "5912.84", "0", "30", "10000")]
+print(f"  {'scene':46}{'method':18}{'best ms':>9}{'mean ms':>9}{'solve ms':>9}  final stretch")
+for name, bias, ac, hz, damping in cases:
+    args = ["--bias-volts", bias, "--ac-volts", ac, "--ac-hz", hz, "--duration-seconds", "1",
+            "--damping", damping, "--start", "prestretch"]
+    finals = {}
+    for method in ["reference-radau", "reference-bdf"]:
+        ours, best, mean = whole(host_sim(*args, "--method", method))
+        finals[method] = ours["final"]["stretch"]
+        print(f"  {name:46}{method:18}{best * 1e3:9.2f}{mean * 1e3:9.2f}"
+              f"{ours['run_seconds'] * 1e3:9.2f}  {finals[method]:.12f}")
+    peer, peer_best, peer_mean = whole(["target/cvode_scene", bias, ac, hz, damping, "1",
+                                        repr(ours["step_seconds"]), "1e-10", "1"])
+    print(f"  {name:46}{'CVODE BDF':18}{peer_best * 1e3:9.2f}{peer_mean * 1e3:9.2f}"
+          f"{peer['best_seconds'] * 1e3:9.2f}  {peer['final_stretch']:.12f} "
+          f"({peer['steps']} steps)")
+    for method, final in finals.items():
+        agree(f"{method} on {name}", final, peer["final_stretch"], 1e-8)
 if failed:
     sys.exit(f"the final states disagree: {failed}")
 PY

@@ -526,9 +526,10 @@ def main():
     bad_images = {
         "empty": None,
         "crc": good[:-1] + bytes([good[-1] ^ 0xFF]),
-        "version": reseal(good, v=(4, struct.pack("<H", 1))),  # the layout before the front end
+        "version": reseal(good, v=(4, struct.pack("<H", 2))),  # the layout before the noise
         "amplifier": reseal(good, a=(76, struct.pack("<H", 12))),
-        "settings": reseal(good, s=(148, struct.pack("<f", 1.5))),  # margin (ALL[1]) = 1.5
+        # margin (ALL[1]) = 1.5: the settings from byte 156 (src/image.rs, layout 3)
+        "settings": reseal(good, s=(160, struct.pack("<f", 1.5))),
     }
     words = {"empty": "no configuration image", "crc": "CRC", "version": "version",
              "amplifier": "DAC", "settings": "margin"}
