@@ -44,7 +44,7 @@ pub use controller::{
     ReplanJob, Replanned, Setting, Settings, BUS_FAULT_SAID, EVENT_VALUES, FAULT_KEYS, FAULT_SAID,
 };
 #[cfg(feature = "trim")]
-pub use controller::{TrimDone, TrimJob, TrimResult};
+pub use controller::{NextRing, TrimDone, TrimJob, TrimResult};
 pub use device::{Device, DeviceParams, Field, ParamError, Problem, REFERENCE_DEVICE};
 pub use drive::{Amplifier, CodeError, Dac8551, DacCode, DacError, PowerMode};
 pub use estimate::ring::TrimError;

@@ -466,8 +466,7 @@ fn a_retune_whose_probe_would_pass_the_cap_is_refused_when_it_comes() {
                     shear_modulus: REFERENCE_DEVICE.shear_modulus as f32,
                     bias_volts: 3000.0,
                     max_volts: 3010.0,
-                    ring_gain: de_resonator::estimate::ring::RingGain::UNKNOWN,
-                    ring_seen: 1.0,
+                    ring: de_resonator::NextRing::UNKNOWN,
                     resolution: None,
                     device,
                 };

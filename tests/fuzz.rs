@@ -377,22 +377,25 @@ fn tampered(rng: &mut Rng, mut done: TrimDone) -> TrimDone {
                 shear_modulus,
                 bias_volts,
                 max_volts,
-                ring_gain,
-                ring_seen,
+                ring,
                 resolution,
                 device,
             },
         ) => TrimResult::Retune {
             resolution,
-            ring_seen: wild(rng) as f32 * ring_seen,
+            ring: de_resonator::NextRing {
+                gain: de_resonator::estimate::ring::RingGain {
+                    stretch_per_volt_squared: wild(rng) as f32 * ring.gain.stretch_per_volt_squared,
+                    farads_per_stretch: wild(rng) as f32 * ring.gain.farads_per_stretch,
+                },
+                seen: wild(rng) as f32 * ring.seen,
+                span: wild(rng) as f32 * ring.span,
+            },
             measured_hz,
             shear_modulus,
             bias_volts: wild_volts(rng, bias_volts),
             max_volts: wild_volts(rng, max_volts),
-            ring_gain: de_resonator::estimate::ring::RingGain {
-                stretch_per_volt_squared: wild(rng) as f32 * ring_gain.stretch_per_volt_squared,
-                farads_per_stretch: wild(rng) as f32 * ring_gain.farads_per_stretch,
-            },
+
             device,
         },
         (1, _) => TrimResult::Converged {

@@ -785,7 +785,12 @@ fn scene_commands_and_front_ends_are_checked() {
 /// channel (IN12, 5.4e-4 a count, 10 scans a 1 kHz tick), target 60 Hz, a tracked 60 V drive.
 /// `noise_codes` (the ADC's noise, which the image declares too) and the stretch sensor
 /// (`[sensor]`: the plant read directly) as given.
-fn low_prestretch_scene(noise_codes: f64, sensor: Option<f64>, seconds: f64) -> String {
+fn low_prestretch_scene(
+    noise_codes: f64,
+    sensor: Option<f64>,
+    seconds: f64,
+    damping: f64,
+) -> String {
     let front_end = match sensor {
         Some(noise) => format!("[sensor]\nnoise = {noise:e}\n"),
         None => format!(
@@ -796,7 +801,7 @@ fn low_prestretch_scene(noise_codes: f64, sensor: Option<f64>, seconds: f64) -> 
     };
     format!(
         "name = \"low-prestretch\"\nduration_seconds = {seconds}\n\
-         [device]\nprestretch_1 = 1.2\nprestretch_2 = 1.2\ndamping = 2.8e-4\n\
+         [device]\nprestretch_1 = 1.2\nprestretch_2 = 1.2\ndamping = {damping:e}\n\
          [plant]\nquality_factor = 40.0\n\
          branches = [{{ modulus = 500.0, relaxation_seconds = 6.0 }}]\n\
          [amplifier]\nbandwidth_hz = 2000.0\nslew_volts_per_second = 200000.0\n\
@@ -811,14 +816,17 @@ fn low_prestretch_scene(noise_codes: f64, sensor: Option<f64>, seconds: f64) -> 
 /// an ideal sensor (1e-6 of noise: the peer). From 0.25 to 1 code of ADC noise each reading is
 /// within four of the deviations its resolution claims (`TIMING_ERROR_TIMES_RESOLUTION`) of the
 /// peer's (the code before measured 55–62 Hz here and asked for 22.5–35 kV); at 1.5 and 2
-/// codes the ring is refused as too weak to time, at 0 V, with its figures, and no reading
-/// is adopted. Over 20 s at 1 code the tracked drive (the low pre-stretch tunes slowly: 0.8%
+/// codes the ring is refused as too weak to time with its figures: before any voltage where
+/// the device is told the plant's damping, in the window after the pulse (no reading adopted,
+/// 0 V at the end) where it is told half of it. Over 20 s at 1 code the tracked drive (the low pre-stretch tunes slowly: 0.8%
 /// of f takes 5.8 → 9.6 kV) brings the plant's own natural frequency (its separate statics)
 /// within 1e-3 of the target.
 #[test]
 fn a_trim_through_the_stretch_channel_adopts_only_what_it_resolves() {
     use de_resonator::estimate::ring::TIMING_ERROR_TIMES_RESOLUTION;
     use de_resonator::{EventKind, TrimError};
+    // The device told the plant's damping: c = M·ω/Q for Q 40 at 60 Hz, N·s.
+    const TOLD: f64 = 5.6e-4;
     let run = |text: String| {
         let mut s = scene::parse(&text).unwrap();
         s.run.history = false;
@@ -830,10 +838,10 @@ fn a_trim_through_the_stretch_channel_adopts_only_what_it_resolves() {
             .find(|e| e.kind == EventKind::Trimmed)
             .map(|e| (e.values[1].1, e.values[4].1))
     };
-    let peer = run(low_prestretch_scene(0.0, Some(1e-6), 2.2));
+    let peer = run(low_prestretch_scene(0.0, Some(1e-6), 2.2, TOLD));
     let (peer_hz, _) = first_trim(&peer).expect("the ideal sensor's trim");
     for noise_codes in [0.25, 0.5, 1.0] {
-        let r = run(low_prestretch_scene(noise_codes, None, 2.2));
+        let r = run(low_prestretch_scene(noise_codes, None, 2.2, TOLD));
         assert_eq!(r.fault, None, "{noise_codes}");
         let (hz, resolution) = first_trim(&r).expect("a trim");
         let claimed = f64::from(TIMING_ERROR_TIMES_RESOLUTION) / resolution;
@@ -844,7 +852,17 @@ fn a_trim_through_the_stretch_channel_adopts_only_what_it_resolves() {
         );
     }
     for noise_codes in [1.5, 2.0] {
-        let r = run(low_prestretch_scene(noise_codes, None, 2.2));
+        // Told the plant's damping, the boot refuses the ring before any voltage.
+        let r = run(low_prestretch_scene(noise_codes, None, 2.2, TOLD));
+        let refused = r.refused.clone().unwrap_or_default();
+        assert!(
+            refused.contains("ring in the stretch is too weak")
+                && refused.contains("before any voltage"),
+            "{noise_codes} codes: {refused}"
+        );
+        assert_eq!(r.max_command_volts, 0.0, "{noise_codes} codes");
+        // Told half of it, the boot's prediction passes and the window refuses the ring.
+        let r = run(low_prestretch_scene(noise_codes, None, 2.2, 0.5 * TOLD));
         assert!(
             matches!(r.fault, Some(Fault::Trim(TrimError::Unresolvable { .. }))),
             "{noise_codes} codes: {:?}",
@@ -855,7 +873,7 @@ fn a_trim_through_the_stretch_channel_adopts_only_what_it_resolves() {
         assert!(words.contains("ring in the stretch is too weak"), "{words}");
         assert!(r.final_membrane_volts.abs() < 1.0, "{noise_codes} codes");
     }
-    let r = run(low_prestretch_scene(1.0, None, 20.0));
+    let r = run(low_prestretch_scene(1.0, None, 20.0, TOLD));
     assert_eq!((r.fault, r.plant_crossing), (None, None));
     let error = r.natural_frequency_hz / 60.0 - 1.0;
     assert!(error.abs() < 1e-3, "{error:e}");

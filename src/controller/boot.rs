@@ -243,27 +243,14 @@ impl Controller {
         self.flashed
             .check_swing(drive, limit.at.offset, None, settings.margin)
             .map_err(Fault::DriveSwing)?;
-        // The ring the first pulse will leave, at the bias it measures at, and the share of
-        // it the device's damping leaves over the window (model.md §7: decay c/(2·M)): weighed
-        // against the noise the front end declares now, before any voltage, and against the
-        // noise heard by the tick before it pulses.
+        // The ring the first pulse will leave at the bias it measures at, as the device's
+        // damping leaves it over the window, against the noise the front end declares: now,
+        // before any voltage, and by the tick before it pulses against the noise it hears.
         #[cfg(feature = "trim")]
         if self.trim_wanted() {
-            use crate::estimate::ring::{ring_share, RingGain};
-            self.trim.ring_gain = RingGain::at(
-                &self.flashed,
-                limit.at.offset,
-                self.plan.bias_volts,
-                super::trim::pulse_seconds(&settings),
-            );
-            let p = self.flashed.params();
-            let decay = p.damping / (2.0 * p.effective_mass());
-            self.trim.ring_seen = ring_share(decay, settings.trim_window_seconds);
-            let bias = self.plan.bias_volts;
-            if let Some(error) = self
-                .trim
-                .unresolvable_declared(&settings, bias, self.inputs)
-            {
+            let (bias, offset) = (self.plan.bias_volts, limit.at.offset);
+            let plan = (&self.flashed, offset, bias, &settings);
+            if let Some(error) = self.trim.plan_ring(plan, self.inputs) {
                 return Err(Fault::Trim(error));
             }
         }

@@ -12,7 +12,6 @@ use super::watch::Watch;
 use super::{Boot, Controller, Phase, State};
 use crate::acquire::InputNoise;
 use crate::drive::{Amplifier, DacCode};
-use crate::estimate::ring::RingGain;
 use crate::{DeviceParams, Settings};
 
 /// Why a request to a running controller was not done. The controller runs on as before.
@@ -90,10 +89,9 @@ pub struct Replanned {
     state: State,
     /// Whether the fresh plan holds the tuned bias (not a trim's probe bias).
     tuned: bool,
-    /// The ring its first pulse leaves, and the share of it the device's damping leaves
-    /// (`Controller::ring_gain`).
-    #[cfg_attr(not(feature = "trim"), allow(dead_code))]
-    ring_gain: (RingGain, f32),
+    /// What the trim expects of its first pulse's ring.
+    #[cfg(feature = "trim")]
+    ring: super::NextRing,
     boot: Boot,
     /// The plan in force when the job was made.
     was: Plan,
@@ -127,7 +125,8 @@ impl ReplanJob {
             watch: fresh.watch,
             state: fresh.state,
             tuned: fresh.tuned(),
-            ring_gain: fresh.ring_gain(),
+            #[cfg(feature = "trim")]
+            ring: fresh.next_ring(),
             boot,
             was: self.plan,
         })
@@ -216,7 +215,7 @@ impl Controller {
         #[cfg(feature = "trim")]
         {
             self.trim.restart(*self.flashed.params());
-            (self.trim.ring_gain, self.trim.ring_seen) = replanned.ring_gain;
+            self.trim.ring = replanned.ring;
         }
         self.set_tuned(replanned.tuned);
         Ok(Boot {

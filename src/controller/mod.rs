@@ -49,13 +49,12 @@ pub use fault::{
 pub use plan::{Plan, MAX_PLAN_TICKS};
 pub use settings::{Setting, Settings, F32_GUARD, MAX_TRIMS, TRIM_SECANT_STEP};
 #[cfg(feature = "trim")]
-pub use trim::{TrimDone, TrimJob, TrimResult};
+pub use trim::{NextRing, TrimDone, TrimJob, TrimResult};
 pub use watch::{Inputs, AMPLIFIER_TICKS, LEAKAGE_WINDOW_SECONDS};
 
 use crate::acquire::{InputError, InputNoise};
 use crate::device::Device;
 use crate::drive::{Amplifier, DacCode};
-use crate::estimate::ring::RingGain;
 #[cfg(feature = "trim")]
 use crate::estimate::ring::RingInput;
 use gate::gate;
@@ -610,13 +609,11 @@ impl Controller {
         true
     }
 
-    /// The ring the next pulse leaves, and its share the device's damping leaves (`UNKNOWN`,
-    /// 1: none, or not known).
-    fn ring_gain(&self) -> (RingGain, f32) {
-        #[cfg(feature = "trim")]
-        return (self.trim.ring_gain, self.trim.ring_seen);
-        #[cfg(not(feature = "trim"))]
-        (RingGain::UNKNOWN, 1.0)
+    /// What the trim expects of the ring its next pulse leaves (`NextRing::UNKNOWN`: none,
+    /// or not known).
+    #[cfg(feature = "trim")]
+    fn next_ring(&self) -> trim::NextRing {
+        self.trim.ring
     }
 
     /// Whether the bias planned is the one the estimate gives for the target.
@@ -856,12 +853,11 @@ impl Controller {
         bias_volts: f32,
         next_bias_volts: f32,
         max_volts: f32,
-        (measured_hz, shear_modulus, ring_gain, ring_seen): (f32, f32, RingGain, f32),
+        (measured_hz, shear_modulus, ring): (f32, f32, trim::NextRing),
     ) -> Result<(), Fault> {
         self.trim.params.shear_modulus = shear_modulus;
         self.trim.count = self.trim.count.saturating_add(1);
-        self.trim.ring_gain = ring_gain;
-        self.trim.ring_seen = ring_seen;
+        self.trim.ring = ring;
         self.trim.previous = Some((bias_volts * bias_volts, measured_hz));
         // The new plan built in place (the tick's budget: a plan is large), the fields it
         // changes restored if a check refuses it.
@@ -918,8 +914,7 @@ impl Controller {
                 shear_modulus,
                 bias_volts: next_bias_volts,
                 max_volts,
-                ring_gain,
-                ring_seen,
+                ring,
                 resolution,
                 ..
             } => {
@@ -928,7 +923,7 @@ impl Controller {
                     bias_volts,
                     next_bias_volts,
                     max_volts,
-                    (measured_hz, shear_modulus, ring_gain, ring_seen),
+                    (measured_hz, shear_modulus, ring),
                 );
                 self.trim.result = None;
                 applied?;

@@ -10,8 +10,8 @@ use super::settings::{guarded, Settings, MAX_TRIMS, TRIM_SECANT_STEP};
 use crate::acquire::InputNoise;
 use crate::device::{Device, DeviceParams};
 use crate::estimate::ring::{
-    estimate_shear_modulus, high_passed, model_hz, ring_frequency_hz, NoiseFrom, RingFit, RingGain,
-    RingInput, TrimError, MAX_WINDOW, TIMING_ERROR_TIMES_RESOLUTION,
+    estimate_shear_modulus, high_passed, model_hz, ring_frequency_hz, ring_share, ring_span,
+    NoiseFrom, RingFit, RingGain, RingInput, TrimError, MAX_WINDOW, TIMING_ERROR_TIMES_RESOLUTION,
 };
 use crate::swing::{AcDrive, Ramp, Resonance, SwingError};
 use crate::tuning::{TuneError, Tuner};
@@ -47,8 +47,7 @@ pub(super) struct TrimState {
     /// settling; before any, the device's damping's), and the ring input's noise heard in the
     /// hold before it: with these the tick says before it pulses whether the ring can be
     /// timed.
-    pub(super) ring_gain: RingGain,
-    pub(super) ring_seen: f32,
+    pub(super) ring: NextRing,
     pub(super) hold_noise: HoldNoise,
     /// The solve's answer, once the caller has given it.
     pub(super) result: Option<TrimResult>,
@@ -78,8 +77,7 @@ impl TrimState {
             sum: 0.0,
             origin: f32::NAN,
             from_charge: false,
-            ring_gain: RingGain::UNKNOWN,
-            ring_seen: 1.0,
+            ring: NextRing::UNKNOWN,
             hold_noise: HoldNoise::default(),
             result: None,
             result_shares_terms: false,
@@ -114,8 +112,7 @@ impl TrimState {
         self.sum = 0.0;
         self.origin = f32::NAN;
         self.from_charge = false;
-        self.ring_gain = RingGain::UNKNOWN;
-        self.ring_seen = 1.0;
+        self.ring = NextRing::UNKNOWN;
         self.hold_noise = HoldNoise::default();
         self.drop_job();
     }
@@ -123,6 +120,48 @@ impl TrimState {
     /// No job is wanted: a result of one handed out is dropped when it comes.
     pub(super) fn drop_job(&mut self) {
         self.want_job(None);
+    }
+}
+
+/// What the trim expects of the ring its next pulse leaves: the statics' prediction, the
+/// share of its amplitude the window shows (the damping's: the device's before any window,
+/// then the last window's), and the share of the window it stands out of the noise in (the
+/// crossings counted: a damped ring fades into the noise; likewise).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NextRing {
+    pub gain: RingGain,
+    pub seen: f32,
+    pub span: f32,
+}
+
+impl NextRing {
+    /// Nothing known: no prediction.
+    pub const UNKNOWN: NextRing = NextRing {
+        gain: RingGain::UNKNOWN,
+        seen: 1.0,
+        span: 1.0,
+    };
+
+    /// Before any window: the ring at `bias_volts` on `device` (below `limit_offset`), its
+    /// share over the window at the device's damping (model.md §7: decay c/(2·M)), and the
+    /// share of the window it stands above `band` in (the window's unit; 0: all).
+    pub(super) fn planned(
+        device: &Device<f32>,
+        limit_offset: f32,
+        (bias_volts, s): (f32, &Settings),
+        (input, band): (RingInput, f32),
+    ) -> Self {
+        let gain = RingGain::at(device, limit_offset, bias_volts, pulse_seconds(s));
+        let p = device.params();
+        let decay = p.damping / (2.0 * p.effective_mass());
+        let window = s.trim_window_seconds;
+        let ring = gain.ring(input, bias_volts, s.trim_pulse_volts);
+        let amplitude = input.in_window(ring, s.target_hz, s.tick_hz);
+        Self {
+            gain,
+            seen: ring_share(decay, window),
+            span: ring_span(decay, window, amplitude / band),
+        }
     }
 }
 
@@ -209,23 +248,25 @@ fn declared(inputs: InputNoise, input: RingInput) -> Option<f32> {
     }
 }
 
-/// The ring a pulse at `bias_volts` would leave in `input`, `share` of the undamped one,
+/// The ring a pulse at `bias_volts` would leave in `input`, the share `next` expects of the
+/// undamped one over the share of the window it stands out of the noise in,
 /// weighed against `noise` (a tick) by `RingFit::resolution` over the window (its periods
 /// less the one the high-pass takes), and refused where below what the tolerance
 /// needs. NaN figures (no prediction) say nothing.
 fn predicted(
     s: &Settings,
-    (input, gain, share): (RingInput, RingGain, f32),
+    (input, next): (RingInput, NextRing),
     bias_volts: f32,
     (noise, from): (f32, NoiseFrom),
 ) -> Option<TrimError> {
-    let ring = share * gain.ring(input, bias_volts, s.trim_pulse_volts);
+    let ring = next.seen * next.gain.ring(input, bias_volts, s.trim_pulse_volts);
     if ring.is_nan() || noise.is_nan() {
         return None;
     }
     let amplitude = input.in_window(ring, s.target_hz, s.tick_hz);
     let periods = s.trim_window_seconds * s.target_hz - 1.0;
-    let resolution = RingFit::resolution(amplitude, noise, s.tick_hz / s.target_hz, periods);
+    let resolution =
+        next.span * RingFit::resolution(amplitude, noise, s.tick_hz / s.target_hz, periods);
     let needed = RingFit::needed(ring_tolerance(s));
     if resolution >= needed {
         return None;
@@ -241,25 +282,30 @@ fn predicted(
 }
 
 impl TrimState {
-    /// Before any voltage (at boot, at `target`): the ring the first pulse would leave at
-    /// `bias_volts` (its share of the undamped ring the device's damping leaves over the
-    /// window, `ring_seen`) against the noise the image's front end declares for the input
-    /// the trim will time it in (the stretch where a sensor is read through it, else the
-    /// current), and a refusal where that is below what the tolerance needs. Nothing to say
-    /// where neither is declared.
-    pub(super) fn unresolvable_declared(
-        &self,
-        s: &Settings,
-        bias_volts: f32,
+    /// Before any voltage (at boot, at `target`): what the first pulse's ring will be at
+    /// `bias_volts` on the device flashed (`NextRing::planned`), and a refusal where it
+    /// cannot be timed to the tolerance against the noise the image's front end declares for
+    /// the input the trim will time it in (the stretch where a sensor is read through it,
+    /// else the current). Nothing to refuse where neither is declared.
+    pub(super) fn plan_ring(
+        &mut self,
+        (device, limit_offset, bias_volts, s): (&Device<f32>, f32, f32, &Settings),
         inputs: InputNoise,
     ) -> Option<TrimError> {
-        let (input, noise) = match (inputs.stretch, inputs.amps) {
-            (Some(noise), _) => (RingInput::Stretch, noise),
-            (None, Some(noise)) => (RingInput::Charge, noise),
-            (None, None) => return None,
+        let declared = match (inputs.stretch, inputs.amps) {
+            (Some(noise), _) => Some((RingInput::Stretch, noise)),
+            (None, Some(noise)) => Some((RingInput::Charge, noise)),
+            (None, None) => None,
         };
-        let ring = (input, self.ring_gain, self.ring_seen);
-        predicted(s, ring, bias_volts, (noise, NoiseFrom::Image))
+        let (input, noise) = declared.unwrap_or((RingInput::Stretch, 0.0));
+        // The crossings' band (`RingFit::band`) for that noise, in the window's samples.
+        let (stride, _) = s.trim_window();
+        let half = libm::roundf(0.5 * s.tick_hz / (stride as f32 * s.target_hz));
+        let walk = libm::sqrtf(half * (half + 1.0) / (3.0 * (2.0 * half + 1.0)));
+        let band = 3.0 * noise * libm::sqrtf(stride as f32) * walk;
+        self.ring = NextRing::planned(device, limit_offset, (bias_volts, s), (input, band));
+        let (input, noise) = declared?;
+        predicted(s, (input, self.ring), bias_volts, (noise, NoiseFrom::Image))
     }
 
     /// Before the pulse at `bias_volts`: the same, against the larger of the noise heard in
@@ -276,12 +322,7 @@ impl TrimState {
             Some(floor) if floor > heard => (floor, NoiseFrom::Image),
             _ => (heard, NoiseFrom::Hold),
         };
-        predicted(
-            s,
-            (input, self.ring_gain, self.ring_seen),
-            bias_volts,
-            noise,
-        )
+        predicted(s, (input, self.ring), bias_volts, noise)
     }
 }
 
@@ -302,10 +343,8 @@ pub struct TrimJob {
     from_charge: bool,
     /// The noise the image's front end declares for the inputs (the floor of the window's).
     inputs: InputNoise,
-    /// The ring the statics gave its pulse, and the share of it the window before showed
-    /// (`TrimState::ring_gain`, `ring_seen`).
-    ring_gain: RingGain,
-    ring_seen: f32,
+    /// What the window before showed of the ring (`TrimState::ring`).
+    ring: NextRing,
     /// Measured by the tracker (the window is not read), Hz, and its Q (NaN: none).
     measured_hz: Option<f32>,
     quality_factor: f32,
@@ -333,16 +372,13 @@ pub enum TrimResult {
     },
     /// Ramp to `bias_volts` and measure again; `max_volts` is the estimate's own cap (the
     /// controller takes the lowest of it and the caps in force); `device` is the estimate
-    /// (built here, not in the tick), `ring_gain` the ring its next pulse leaves in the
-    /// `ring_gain` the ring its next pulse leaves (`crate::estimate::ring::RingGain`) and
-    /// `ring_seen` the share of such a ring the window showed.
+    /// (built here, not in the tick), `ring` what its next pulse's ring is expected to be.
     Retune {
         measured_hz: f32,
         shear_modulus: f32,
         bias_volts: f32,
         max_volts: f32,
-        ring_gain: RingGain,
-        ring_seen: f32,
+        ring: NextRing,
         resolution: Option<f32>,
         device: Device<f32>,
     },
@@ -379,8 +415,7 @@ impl TrimJob {
             cap_volts,
             from_charge: state.from_charge,
             inputs,
-            ring_gain: state.ring_gain,
-            ring_seen: state.ring_seen,
+            ring: state.ring,
             measured_hz: state.tracked_hz,
             quality_factor: state.tracked_quality,
             job: state.job,
@@ -418,7 +453,7 @@ impl TrimJob {
         let mut resolution = None;
         // The ring seen against the one the statics gave for this bias: the plant's damping
         // and the window's settling, which the next pulse's reckoning then takes in.
-        let mut ring_seen = self.ring_seen;
+        let (mut ring_seen, mut ring_span) = (self.ring.seen, self.ring.span);
         let measured_hz = match self.measured_hz {
             Some(hz) => hz,
             None => {
@@ -483,12 +518,14 @@ impl TrimJob {
                     resolution = Some(timed);
                 }
                 let predicted = self
-                    .ring_gain
+                    .ring
+                    .gain
                     .ring(input, self.bias_volts, s.trim_pulse_volts);
                 let seen = ring.amplitude * to_ring / predicted;
                 if seen > 0.0 && seen.is_finite() {
                     ring_seen = seen;
                 }
+                ring_span = timing.span;
                 measured_hz
             }
         };
@@ -616,13 +653,16 @@ impl TrimJob {
             shear_modulus,
             bias_volts,
             max_volts: estimate_volts,
-            ring_gain: RingGain::at(
-                &device,
-                tuner.limit().at.offset,
-                bias_volts,
-                pulse_seconds(&s),
-            ),
-            ring_seen,
+            ring: NextRing {
+                gain: RingGain::at(
+                    &device,
+                    tuner.limit().at.offset,
+                    bias_volts,
+                    pulse_seconds(&s),
+                ),
+                seen: ring_seen,
+                span: ring_span,
+            },
             resolution,
             device,
         })
@@ -659,8 +699,7 @@ mod tests {
             cap_volts: 9361.9,
             from_charge: false,
             inputs: InputNoise::UNDECLARED,
-            ring_gain: RingGain::UNKNOWN,
-            ring_seen: 1.0,
+            ring: NextRing::UNKNOWN,
             measured_hz: None,
             quality_factor: f32::NAN,
             job: 0,

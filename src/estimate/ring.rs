@@ -542,6 +542,17 @@ impl RingGain {
     }
 }
 
+/// The share of a window of `window_seconds` a ring decaying at `decay_per_second` stands
+/// above a band `ratio` times below its first amplitude in: its crossings count until
+/// ln(ratio)/decay (`ring_frequency_hz`). 1 undamped, or where nothing says (no band).
+pub fn ring_span(decay_per_second: f32, window_seconds: f32, ratio: f32) -> f32 {
+    if !(decay_per_second > 0.0 && ratio.is_finite() && window_seconds > 0.0) {
+        return 1.0;
+    }
+    let fades = libm::logf(ratio.max(1.0)) / decay_per_second;
+    (fades / window_seconds).clamp(0.0, 1.0)
+}
+
 /// The share of an undamped ring's amplitude a window of `window_seconds` shows (its RMS
 /// against a steady ring's) when the ring decays at `decay_per_second` (ζ·ω, 1/s; model.md
 /// §7: c/(2·M)): √(τ/(2T)·(1 − e^(−2T/τ))), τ = 1/decay. 1 undamped.
