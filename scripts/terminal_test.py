@@ -7,7 +7,8 @@ port on a pseudo-terminal, the screen read back with capture-pane.
 
 Types `status⏎`, then `stpo`, two backspaces, `op⏎` (a typo mended), then `help stop⏎`, and
 asserts what the screen shows: each answered, the typing echoed after a prompt, the mended
-line taken as `stop`. Needs picocom and tmux (scripts/test-all.sh installs them).
+line taken as `stop`; then Enter twice on an empty line (a fresh prompt each, no `err`)
+and `get tick_hz⏎`. Needs picocom and tmux (scripts/test-all.sh installs them).
 """
 
 import os
@@ -94,10 +95,15 @@ def main():
         shown = wait_for("ok stop: AC off")
         if "> help stop" not in shown:
             fail("`help stop` is not echoed after a prompt", shown)
+        # Enter on an empty line: a fresh prompt, no refusal; then a request still answered.
+        type_keys("Enter", "Enter", "get tick_hz", "Enter")
+        shown = wait_for("ok tick_hz")
         if "err 1" in shown:
             fail("a line was refused as not a request", shown)
+        if ">\n>\n> get tick_hz" not in "\n".join(l.rstrip() for l in shown.splitlines()):
+            fail("Enter on an empty line does not give a fresh prompt", shown)
         print(f"terminal_test ({mode}): picocom on {path}: status answered, a typo mended, "
-              "help stop answered")
+              "help stop answered, Enter on an empty line a fresh prompt")
         print(shown.rstrip())
         return 0
     finally:

@@ -1006,4 +1006,17 @@ fn a_terminal_gets_echo_and_editing_and_a_program_gets_neither() {
     assert_eq!(got, [line("status")]);
     assert_eq!(echoed, b"\x08 \x08s\r\n");
     assert_eq!(lines.push(b'x').echo, Echo::Byte(b'x'));
+    // Enter on an empty line at a terminal: a fresh prompt, as a shell gives, and no request
+    // (no `err`); the terminal's mode holds. A program's empty line is still a request.
+    let mut lines = Lines::default();
+    let _ = typed(&mut lines, b"status\r");
+    let (got, echoed) = typed(&mut lines, b"\r\r");
+    assert_eq!((got, echoed), (vec![], b"\r\n> \r\n> ".to_vec()));
+    assert!(lines.terminal());
+    let (got, _) = typed(&mut lines, b"stop\r");
+    assert_eq!(got, [line("stop")]);
+    let mut lines = Lines::default();
+    let (got, echoed) = typed(&mut lines, b"\n\r\n");
+    assert_eq!(got, [line(""), line("")]);
+    assert!(echoed.is_empty());
 }

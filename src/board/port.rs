@@ -66,6 +66,9 @@ pub enum Echo {
     Erase(u8),
     /// Enter: to the start of the next line, where the reply goes.
     NewLine,
+    /// Enter on an empty line at a terminal: a new line and the prompt, as a shell gives (no
+    /// request, no reply).
+    Prompt,
     /// The first byte typed once the port knows a terminal: back to the start of the line
     /// the last reply's `\n` left the cursor on, the prompt, then the byte.
     Begin(u8),
@@ -83,6 +86,7 @@ impl Echo {
                 }
             }
             Echo::NewLine => b"\r\n".iter().for_each(|&b| out(b)),
+            Echo::Prompt => TERMINAL_REPLY_END.bytes().for_each(&mut out),
             Echo::Begin(b) => {
                 b"\r> ".iter().for_each(|&b| out(b));
                 out(b);
@@ -122,6 +126,14 @@ impl Lines {
                 Line::Garbled
             } else if self.beyond > 0 {
                 Line::TooLong
+            } else if self.text.is_empty() && self.terminal && byte == b'\r' {
+                // A person pressed Enter on nothing: a fresh prompt, not an error.
+                *self = Self {
+                    after_cr: true,
+                    terminal: true,
+                    ..Self::default()
+                };
+                return self.pushed(None, Echo::Prompt);
             } else {
                 Line::Text(self.text.clone())
             };
