@@ -1265,3 +1265,27 @@ fn an_amplifier_flag_no_real_stage_has_is_warned_of() {
     let plain = host_sim(&["image", "--out", out.to_str().unwrap()]);
     assert!(!String::from_utf8_lossy(&plain.stderr).contains("warning"));
 }
+
+/// `image` boots what it writes as the board does, with the noise its front end declares: a
+/// scene whose ADC (20 codes, declared) leaves the trim's first ring unresolvable is not
+/// written (status 2, the refusal's figures); at the shipped 2 codes it is.
+#[test]
+fn image_refuses_a_trim_its_declared_noise_cannot_resolve() {
+    let shipped = include_str!("../../scenes/sensorless-soft.toml");
+    let noisy = DeviceFile::new(
+        "noisy-scene.toml",
+        &shipped.replace("noise_codes = 2.0", "noise_codes = 20.0"),
+    );
+    let out = std::env::temp_dir().join(format!("host-sim-cli-{}.img", std::process::id()));
+    let out = out.to_str().unwrap();
+    let said = refused(&["image", "--scene", noisy.path(), "--out", out]);
+    assert!(
+        said.contains("too weak to time") && said.contains("before any voltage"),
+        "{said}"
+    );
+    assert!(!std::path::Path::new(out).exists());
+    let shipped = DeviceFile::new("shipped-scene.toml", shipped);
+    let written = host_sim(&["image", "--scene", shipped.path(), "--out", out]);
+    assert_eq!(written.status.code(), Some(0), "{written:?}");
+    let _ = std::fs::remove_file(out);
+}

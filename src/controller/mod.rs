@@ -758,8 +758,8 @@ impl Controller {
         }
     }
 
-    /// Pulse now; measure the ring from the pulse's end. Not where the ring it would leave in
-    /// the charge is too weak against the noise heard in the hold: that is said first.
+    /// Pulse now; measure the ring from the pulse's end. Not where the ring it would leave is
+    /// too weak against the noise heard in the hold (or declared): that is said first.
     fn start_measuring(&mut self, k: u32) -> Result<(), Fault> {
         let s = self.settings;
         if let Some(error) = self
@@ -776,6 +776,7 @@ impl Controller {
         self.trim.window_from = from.saturating_add(pulse);
         self.trim.sum = 0.0;
         self.trim.origin = f32::NAN;
+        self.trim.last = f32::NAN;
         self.trim.from_charge = false;
         // The probe's charge would swamp the ring's: off until the trim is applied.
         self.plan.probe_volts = 0.0;
@@ -799,25 +800,33 @@ impl Controller {
             return Ok(());
         };
         let settling = (0.1 * s.tick_hz / s.target_hz) as u32 + 1;
+        // The window's input is its first sample's: a tick without a stretch sample in a
+        // stretch window carries the last one (the sum goes on), and one input never mixes
+        // into the other's sum.
+        let stretch_window = !self.trim.origin.is_nan();
         let sample = match ring {
-            Ring::Stretch(stretch) if stretch.is_finite() => {
-                if self.trim.origin.is_nan() {
+            Ring::Stretch(stretch) if stretch.is_finite() && !self.trim.from_charge => {
+                if !stretch_window {
                     self.trim.origin = stretch;
                 }
+                self.trim.last = stretch;
                 self.trim.sum += stretch - self.trim.origin;
                 self.trim.sum
             }
-            Ring::Current(amps) if at >= settling => {
+            Ring::Current(amps) if at >= settling && !stretch_window => {
                 self.trim.from_charge = true;
                 self.trim.sum += amps;
                 self.trim.sum
             }
+            _ if stretch_window => {
+                self.trim.sum += self.trim.last - self.trim.origin;
+                self.trim.sum
+            }
             Ring::Stretch(_) | Ring::Current(_) | Ring::Nothing => f32::NAN,
         };
-        // The mean of each stride of ticks (a NaN in it: none).
-        let part = sample / stride as f32;
+        // The sum at each stride's last tick: its steps sum a stride of the input's ticks.
         if let Some(slot) = self.trim.window.get_mut((at / stride) as usize) {
-            *slot = if at % stride == 0 { part } else { *slot + part };
+            *slot = sample;
         }
         if at.saturating_add(1) >= stride.saturating_mul(len as u32) {
             self.state = State::Solving;
@@ -846,7 +855,7 @@ impl Controller {
 
     /// A `Retune`'s new plan at tick `k`: from `bias_volts` to `next_bias_volts` under the
     /// lower of its cap and the cap in force, checked; the estimate taken from the result
-    /// (still waiting in `trim.result`). `(f, μ, ring gain, ring seen)` the trim's memory.
+    /// (still waiting in `trim.result`). `(f, μ, the next ring)` the trim's memory.
     fn retune(
         &mut self,
         k: u32,

@@ -32,22 +32,22 @@ pub(super) struct TrimState {
     pub(super) count: u8,
     /// The last measurement: (bias², measured f), for the secant step.
     pub(super) previous: Option<(f32, f32)>,
-    /// The first tick of the window, and the samples in it (NaN: no sample that tick).
+    /// The first tick of the window, and in it the input's running sum at each stride's
+    /// last tick (NaN: no sample yet).
     pub(super) window_from: u32,
     pub(super) window: [f32; MAX_WINDOW],
     /// The ring input's running sum over the window: the current's (its charge, A·ticks),
     /// or the stretch's less its first sample (stretch·ticks).
     pub(super) sum: f32,
-    /// The window's first stretch sample (NaN: none yet).
+    /// The window's first stretch sample, and its last (NaN: none yet).
     pub(super) origin: f32,
+    pub(super) last: f32,
     /// Whether the window holds that charge (no displacement sensor).
     pub(super) from_charge: bool,
-    /// The ring the next pulse leaves (`RingGain::at` the bias planned; `UNKNOWN`: not
-    /// known), the share of it the last window showed (the plant's damping, the window's
-    /// settling; before any, the device's damping's), and the ring input's noise heard in the
-    /// hold before it: with these the tick says before it pulses whether the ring can be
-    /// timed.
+    /// What the next pulse's ring is expected to be (`NextRing`).
     pub(super) ring: NextRing,
+    /// The ring input's noise heard in the hold before it: with these two the tick says
+    /// before it pulses whether the ring can be timed.
     pub(super) hold_noise: HoldNoise,
     /// The solve's answer, once the caller has given it.
     pub(super) result: Option<TrimResult>,
@@ -76,6 +76,7 @@ impl TrimState {
             window: [f32::NAN; MAX_WINDOW],
             sum: 0.0,
             origin: f32::NAN,
+            last: f32::NAN,
             from_charge: false,
             ring: NextRing::UNKNOWN,
             hold_noise: HoldNoise::default(),
@@ -111,6 +112,7 @@ impl TrimState {
         self.window.fill(f32::NAN);
         self.sum = 0.0;
         self.origin = f32::NAN;
+        self.last = f32::NAN;
         self.from_charge = false;
         self.ring = NextRing::UNKNOWN;
         self.hold_noise = HoldNoise::default();
@@ -260,13 +262,18 @@ fn predicted(
     (noise, from): (f32, NoiseFrom),
 ) -> Option<TrimError> {
     let ring = next.seen * next.gain.ring(input, bias_volts, s.trim_pulse_volts);
-    if ring.is_nan() || noise.is_nan() {
+    // No prediction (an unknown gain) says nothing; a noise that is no number leaves no
+    // resolution (refused, not passed).
+    if ring.is_nan() {
         return None;
     }
     let amplitude = input.in_window(ring, s.target_hz, s.tick_hz);
     let periods = s.trim_window_seconds * s.target_hz - 1.0;
-    let resolution =
-        next.span * RingFit::resolution(amplitude, noise, s.tick_hz / s.target_hz, periods);
+    let resolution = if noise >= 0.0 {
+        next.span * RingFit::resolution(amplitude, noise, s.tick_hz / s.target_hz, periods)
+    } else {
+        0.0
+    };
     let needed = RingFit::needed(ring_tolerance(s));
     if resolution >= needed {
         return None;

@@ -525,9 +525,18 @@ pub fn describe(bytes: &[u8], file: String) -> Result<ImageReport, String> {
         .amplifier()
         .map_err(|e| e.to_string())
         .and_then(|amplifier| {
-            Controller::start(parsed.params, parsed.table, amplifier, parsed.settings)
-                .map(|(_, boot)| (boot, amplifier.max_volts()))
-                .map_err(|e| e.to_string())
+            // With the noise its front end declares, as the board boots it.
+            let board = parsed.board(amplifier, parsed.settings.tick_hz);
+            let mut slot = None;
+            Controller::start_in(
+                &mut slot,
+                parsed.params,
+                parsed.table,
+                board,
+                parsed.settings,
+            )
+            .map(|boot| (boot, amplifier.max_volts()))
+            .map_err(|e| e.to_string())
         }) {
         // The most it commands: the cap, or the amplifier's top where lower (as `status`).
         Ok((boot, top_volts)) => Verdict::Drives {
