@@ -872,9 +872,9 @@ fn a_save_on_a_chip_waits_for_rest() {
 }
 
 /// The bytes a terminal or a program sends, into lines: a line ends at `\n` (a program), `\r`
-/// (a serial terminal's Enter: picocom, minicom, PuTTY) or `\r\n` (one end, not two); Enter
-/// on nothing is an empty line (answered, not waited on); an overlong line is one `TooLong`
-/// at its end, whatever ends it.
+/// (a serial terminal's Enter: picocom, minicom, PuTTY) or `\r\n` (one end, not two); a
+/// program's Enter on nothing is an empty line (answered, not waited on), a terminal's a
+/// fresh prompt; an overlong line is one `TooLong` at its end, whatever ends it.
 #[test]
 fn lines_end_at_a_line_feed_a_carriage_return_or_both() {
     use de_resonator::board::protocol::MAX_LINE;
@@ -894,16 +894,11 @@ fn lines_end_at_a_line_feed_a_carriage_return_or_both() {
             "{ending:?}"
         );
     }
+    // The second bare `\r` is a terminal's Enter on nothing: a fresh prompt, no line; a
+    // program's empty lines (`\n`, `\r\n`) are lines, answered.
     assert_eq!(
         lines_of(b"a\r\rb\n\nc\r\n\r\n"),
-        [
-            line("a"),
-            line(""),
-            line("b"),
-            line(""),
-            line("c"),
-            line("")
-        ]
+        [line("a"), line("b"), line(""), line("c"), line("")]
     );
     // A request split anywhere, a `\r\n` split between two reads, as bytes arrive.
     let mut lines = Lines::default();
