@@ -7,8 +7,9 @@
 //! `RamFlash` in QEMU and in tests (which can fail or tear a write at any byte).
 //!
 //! sequential-storage (a map, each write a new item) was built and measured first: it passed
-//! the same power-cut tests, and cost 10.7 KB of the firmware's flash at its size profile,
-//! taking everything on over the 64 KB goal; this store costs about 1 KB (BENCHMARKS.md).
+//! the same power-cut tests, and cost 10.7 KB of the firmware's flash at its size profile then
+//! (a 64 KB goal of the time, since withdrawn: the code has 256 KB, sectors 0–5); this store
+//! costs about 1 KB (BENCHMARKS.md).
 //!
 //! The blob is versioned: version (u16), the number of settings (u16), then each setting as
 //! f32 in `Setting::ALL` order (0 = off where it can be). A blob of another version is
