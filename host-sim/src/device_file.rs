@@ -44,6 +44,16 @@ pub fn parse(text: &str) -> Result<DeviceParams<f64>, String> {
     parse_noting(text).map(|(params, _)| params)
 }
 
+/// A device file's text for `params`, what [`parse`] reads back: every key, a line each,
+/// `jlim` left out for a neo-Hookean membrane (for scenes and tests that write a device).
+pub fn text(params: &DeviceParams<f64>) -> String {
+    Field::ALL
+        .into_iter()
+        .filter(|&field| !(field == Field::Jlim && params.jlim.is_none()))
+        .map(|field| format!("{} = {:e}\n", field.key(), params.get(field)))
+        .collect()
+}
+
 /// [`parse`], and what the file left out or holds that no real membrane has.
 pub fn parse_noting(text: &str) -> Result<(DeviceParams<f64>, Notes), String> {
     let line_of = |at: usize| text.get(..at).unwrap_or(text).matches('\n').count() + 1;
@@ -207,6 +217,21 @@ mod tests {
     fn the_shipped_reference_file_is_the_built_in_device() {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../devices/reference.toml");
         assert_eq!(load(&path).unwrap(), REFERENCE_DEVICE);
+    }
+
+    /// What `text` writes, `parse` reads back exactly: a Gent device and a neo-Hookean one.
+    #[test]
+    fn text_reads_back_as_the_device() {
+        let gent = DeviceParams {
+            shear_modulus: 51_234.567_891,
+            prestretch_1: 1.0 / 3.0,
+            ..REFERENCE_DEVICE
+        };
+        let neo = DeviceParams { jlim: None, ..gent };
+        for params in [gent, neo] {
+            assert_eq!(parse(&text(&params)).unwrap(), params);
+        }
+        assert!(!text(&neo).contains("jlim"));
     }
 
     #[test]

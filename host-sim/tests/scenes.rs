@@ -545,7 +545,7 @@ fn each_device_class_runs_at_faster_ticks_with_default_settings() {
 /// fault and never a wrong frequency.
 #[test]
 fn sensorless_trim_tunes_every_device_it_can_resolve_and_says_so_where_it_cannot() {
-    use de_resonator::{Field, TrimError};
+    use de_resonator::TrimError;
     let mut seed = 0x2027_u64;
     let mut uniform = |low: f64, high: f64| {
         seed = seed
@@ -586,11 +586,7 @@ fn sensorless_trim_tunes_every_device_it_can_resolve_and_says_so_where_it_cannot
         tried += 1;
         let target = f0 + 0.5 * (f1 - f0);
         let noise_amps = 10f64.powf(uniform(-6.5, -4.5));
-        let device_lines: String = Field::ALL
-            .iter()
-            .filter(|&&field| field != Field::Jlim || params.jlim.is_some())
-            .map(|&field| format!("{} = {:e}\n", field.key(), params.get(field)))
-            .collect();
+        let device_lines = host_sim::device_file::text(&params);
         let scene = |sensing: &str, extra: &str| {
             format!(
                 "name = \"random\"\nduration_seconds = 8.0\nseed = {tried}\n\n[device]\n\

@@ -4,7 +4,7 @@
 //! the equation of motion, with the plant's own damping and viscous branches), never on the
 //! core's prediction.
 
-use de_resonator::{AcDrive, Device, DeviceParams, Field, Phase, Ramp, Settings, Tuner};
+use de_resonator::{AcDrive, Device, DeviceParams, Phase, Ramp, Settings, Tuner};
 
 use host_sim::engine::hil::Run;
 use host_sim::scene;
@@ -259,11 +259,7 @@ fn scene_text(
     seconds: f64,
     controller: &str,
 ) -> String {
-    let device: String = Field::ALL
-        .into_iter()
-        .filter(|&field| !(field == Field::Jlim && params.jlim.is_none()))
-        .map(|field| format!("{} = {:e}\n", field.key(), params.get(field)))
-        .collect();
+    let device = host_sim::device_file::text(params);
     format!(
         "name = \"swing\"
 duration_seconds = {seconds:e}

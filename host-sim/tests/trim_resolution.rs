@@ -5,7 +5,7 @@
 
 use de_resonator::estimate::ring::TIMING_ERROR_TIMES_RESOLUTION;
 use de_resonator::REFERENCE_DEVICE;
-use de_resonator::{Device, DeviceParams, EventKind, Fault, Field, TrimError, Tuner};
+use de_resonator::{Device, DeviceParams, EventKind, Fault, TrimError, Tuner};
 use host_sim::engine::hil::Run;
 use host_sim::scene;
 
@@ -65,11 +65,7 @@ fn every_reading_is_within_its_resolution_or_refused_with_its_figures() {
         }
         tried += 1;
         let target = f0 + uniform(0.2, 0.8) * (f1 - f0);
-        let device_lines: String = Field::ALL
-            .iter()
-            .filter(|&&field| field != Field::Jlim || params.jlim.is_some())
-            .map(|&field| format!("{} = {:e}\n", field.key(), params.get(field)))
-            .collect();
+        let device_lines = host_sim::device_file::text(&params);
         let quality = 10f64.powf(uniform(1.3, 2.6));
         let creep = if uniform(0.0, 1.0) < 0.5 {
             format!(

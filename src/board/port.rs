@@ -122,30 +122,30 @@ impl Lines {
         let known_now = after_cr && !self.terminal;
         self.terminal |= after_cr;
         if byte == b'\n' || byte == b'\r' {
-            let line = if self.garbled {
-                Line::Garbled
-            } else if self.beyond > 0 {
-                Line::TooLong
-            } else if self.text.is_empty() && self.terminal && byte == b'\r' {
-                // A person pressed Enter on nothing: a fresh prompt, not an error.
-                *self = Self {
-                    after_cr: true,
-                    terminal: true,
-                    ..Self::default()
-                };
-                return self.pushed(None, Echo::Prompt);
-            } else {
-                Line::Text(self.text.clone())
-            };
             // A line a program ended (`\n`): the connection is a program's again, whatever
             // came before (the board's one UART serves a terminal, then a script).
             let terminal = self.terminal && byte == b'\r';
+            let line = if self.garbled {
+                Some(Line::Garbled)
+            } else if self.beyond > 0 {
+                Some(Line::TooLong)
+            } else if self.text.is_empty() && terminal {
+                // A person pressed Enter on nothing: a fresh prompt, not an error.
+                None
+            } else {
+                Some(Line::Text(self.text.clone()))
+            };
             *self = Self {
                 after_cr: byte == b'\r',
                 terminal,
                 ..Self::default()
             };
-            return self.pushed(Some(line), Echo::NewLine);
+            let echo = if line.is_some() {
+                Echo::NewLine
+            } else {
+                Echo::Prompt
+            };
+            return self.pushed(line, echo);
         }
         match byte {
             BACKSPACE | DELETE => {

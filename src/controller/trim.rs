@@ -241,6 +241,13 @@ pub(super) fn pulse_seconds(s: &Settings) -> f32 {
     pulse_ticks(s) as f32 / s.tick_hz
 }
 
+/// Half a period of a ring at `hz` in the window's samples (a stride of ticks each): the
+/// high-pass's half span.
+fn half_samples(s: &Settings, hz: f32) -> usize {
+    let (stride, _) = s.trim_window();
+    libm::roundf(0.5 * s.tick_hz / (stride as f32 * hz)) as usize
+}
+
 /// The noise the image's front end declares for `input`, a tick (`None`: not read through
 /// it).
 fn declared(inputs: InputNoise, input: RingInput) -> Option<f32> {
@@ -305,11 +312,10 @@ impl TrimState {
             (None, None) => None,
         };
         let (input, noise) = declared.unwrap_or((RingInput::Stretch, 0.0));
-        // The crossings' band (`RingFit::band`) for that noise, in the window's samples.
+        // The crossings' band for that noise, a window's sample summing a stride of ticks.
         let (stride, _) = s.trim_window();
-        let half = libm::roundf(0.5 * s.tick_hz / (stride as f32 * s.target_hz));
-        let walk = libm::sqrtf(half * (half + 1.0) / (3.0 * (2.0 * half + 1.0)));
-        let band = 3.0 * noise * libm::sqrtf(stride as f32) * walk;
+        let per_sample = libm::sqrtf(stride as f32);
+        let band = RingFit::band_of(noise * per_sample, half_samples(s, s.target_hz));
         self.ring = NextRing::planned(device, limit_offset, (bias_volts, s), (input, band));
         let (input, noise) = declared?;
         predicted(s, (input, self.ring), bias_volts, (noise, NoiseFrom::Image))
@@ -479,7 +485,7 @@ impl TrimJob {
                 } else {
                     s.target_hz
                 };
-                let half = (libm::roundf(0.5 * sample_hz / hz) as usize).min(window.len());
+                let half = half_samples(&s, hz).min(window.len());
                 // The declared noise, a sample: the sum's steps over a stride of ticks.
                 let per_sample = libm::sqrtf(stride as f32);
                 let floor = declared(self.inputs, input).map_or(0.0, |noise| noise * per_sample);

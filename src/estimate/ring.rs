@@ -402,6 +402,13 @@ impl RingInput {
     }
 }
 
+/// The variance of a random walk of unit steps less its centred mean over L = 2h + 1 steps
+/// (`high_passed`, h = `half`): h(h + 1)/(3L).
+fn walk_variance(half: usize) -> f32 {
+    let h = half as f32;
+    h * (h + 1.0) / (3.0 * (2.0 * h + 1.0))
+}
+
 /// What a window of a ring input's running sum (a sample the mean of a stride of ticks)
 /// tells of its own ring and noise, from the window alone. Both inputs are timed so: the
 /// current's sum is the charge (Q = C(λ)·Φ, model.md §8); the stretch's sum turns a
@@ -454,11 +461,8 @@ impl RingFit {
                 n += 1.0;
             }
         }
-        // A random walk less its centred mean over L = 2h + 1 steps: variance
-        // σ²·h(h + 1)/(3L).
-        let h = half as f32;
-        let span = 2.0 * h + 1.0;
-        let walk = noise_squared * h * (h + 1.0) / (3.0 * span);
+        let span = 2.0 * half as f32 + 1.0;
+        let walk = noise_squared * walk_variance(half);
         let amplitude = libm::sqrtf(2.0 * (square / n - walk).max(0.0));
         let noise = libm::sqrtf(noise_squared);
         let resolution = Self::resolution(amplitude, noise, span, n / span);
@@ -470,11 +474,15 @@ impl RingFit {
     }
 
     /// The band about zero (`ring_frequency_hz`) that the high-passed noise leaves only one
-    /// time in 370 (three deviations: a random walk less its centred mean over
-    /// `2·half + 1` steps has the deviation noise·√(h(h + 1)/(3L))).
+    /// time in 370, for this window's noise (`band_of`).
     pub fn band(&self, half: usize) -> f32 {
-        let h = half as f32;
-        3.0 * self.noise * libm::sqrtf(h * (h + 1.0) / (3.0 * (2.0 * h + 1.0)))
+        Self::band_of(self.noise, half)
+    }
+
+    /// The band for steps of `noise` high-passed over `2·half + 1` samples: three deviations
+    /// of the walk left (`walk_variance`).
+    pub fn band_of(noise: f32, half: usize) -> f32 {
+        3.0 * noise * libm::sqrtf(walk_variance(half))
     }
 
     /// The resolution of a ring of `amplitude` through steps of `noise` (the same unit, a
