@@ -4,10 +4,11 @@
 //! scene read through an ideal displacement sensor.
 
 use de_resonator::estimate::ring::TIMING_ERROR_TIMES_RESOLUTION;
-use de_resonator::REFERENCE_DEVICE;
-use de_resonator::{Device, DeviceParams, EventKind, Fault, TrimError, Tuner};
+use de_resonator::{EventKind, Fault, TrimError};
 use host_sim::engine::hil::Run;
 use host_sim::scene;
+
+mod common;
 
 /// The first trim's reading: (measured Hz, resolution; NaN where none was claimed).
 fn first_trim(r: &Run) -> Option<(f64, f64)> {
@@ -27,64 +28,36 @@ fn every_reading_is_within_its_resolution_or_refused_with_its_figures() {
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(200);
-    let mut seed = 0x4545_u64;
-    let mut uniform = |low: f64, high: f64| {
-        seed = seed
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        low + (high - low) * ((seed >> 11) as f64 / (1u64 << 53) as f64)
-    };
+    let mut u = common::Uniform(0x4545);
     let (mut tried, mut adopted, mut refused, mut other) = (0, 0, 0, 0);
     let mut worst = 0.0f64;
     let mut ratios = Vec::new();
     while tried < cases {
-        let params = DeviceParams {
-            shear_modulus: uniform(20e3, 150e3),
-            jlim: (uniform(0.0, 1.0) < 0.7).then(|| uniform(40.0, 150.0)),
-            thickness: uniform(0.5e-3, 2e-3),
-            length_active: uniform(10e-3, 40e-3),
-            length_passive: uniform(10e-3, 60e-3),
-            width: uniform(20e-3, 60e-3),
-            bar_mass: uniform(0.5e-3, 5e-3),
-            prestretch_1: uniform(1.2, 4.0),
-            prestretch_2: uniform(1.0, 3.5),
-            ..REFERENCE_DEVICE
-        };
-        let Ok(device) = Device::new(params) else {
+        let Some((params, f0, f1)) = common::tunable_device(&mut u, Some(0.7), 1.2) else {
             continue;
         };
-        let tuner = Tuner::new(device);
-        let (Ok(top), at_zero) = (tuner.max_bias(0.05), tuner.zero_bias()) else {
-            continue;
-        };
-        let (f0, f1) = (at_zero.natural_frequency_hz, top.natural_frequency_hz);
-        // A ring the 1 kHz tick and the 0.5 s window can time, and a bias the scenes' 10 kV
-        // amplifier reaches.
-        if !((20.0..100.0).contains(&f0) && (20.0..100.0).contains(&f1)) || top.volts > 9000.0 {
-            continue;
-        }
         tried += 1;
-        let target = f0 + uniform(0.2, 0.8) * (f1 - f0);
+        let target = f0 + u.draw(0.2, 0.8) * (f1 - f0);
         let device_lines = host_sim::device_file::text(&params);
-        let quality = 10f64.powf(uniform(1.3, 2.6));
-        let creep = if uniform(0.0, 1.0) < 0.5 {
+        let quality = 10f64.powf(u.draw(1.3, 2.6));
+        let creep = if u.draw(0.0, 1.0) < 0.5 {
             format!(
                 "branches = [{{ modulus = {:e}, relaxation_seconds = {} }}]\n",
-                uniform(0.005, 0.03) * params.shear_modulus,
-                uniform(1.0, 10.0)
+                u.draw(0.005, 0.03) * params.shear_modulus,
+                u.draw(1.0, 10.0)
             )
         } else {
             String::new()
         };
         let plant = format!(
             "[plant]\nshear_modulus_scale = {}\nquality_factor = {quality}\nleakage_ohms = 1e12\n{creep}",
-            uniform(0.97, 1.03)
+            u.draw(0.97, 1.03)
         );
-        let noise_codes = 10f64.powf(uniform(-0.7, 1.0));
-        let (sensing, extra) = if uniform(0.0, 1.0) < 0.5 {
+        let noise_codes = 10f64.powf(u.draw(-0.7, 1.0));
+        let (sensing, extra) = if u.draw(0.0, 1.0) < 0.5 {
             // The stretch over λ1p·(0.8 .. 0.8 + span) in 3,700 codes from code 200.
             let low = 0.8 * params.prestretch_1;
-            let per_count = uniform(0.3, 1.5) * params.prestretch_1 / 3700.0;
+            let per_count = u.draw(0.3, 1.5) * params.prestretch_1 / 3700.0;
             (
                 format!(
                     "[front_end]\nscan_hz = 10000.0\nnoise_codes = {noise_codes}\n\
@@ -96,7 +69,7 @@ fn every_reading_is_within_its_resolution_or_refused_with_its_figures() {
                 "",
             )
         } else {
-            let per_count = 10f64.powf(uniform(-6.7, -5.5));
+            let per_count = 10f64.powf(u.draw(-6.7, -5.5));
             (
                 format!(
                     "[front_end]\nscan_hz = 10000.0\nnoise_codes = {noise_codes}\n\

@@ -193,3 +193,50 @@ pub fn last_volts(reply: &str) -> f64 {
         .and_then(|v| v.parse().ok())
         .unwrap_or_else(|| panic!("no volts at the end of {reply}"))
 }
+
+/// The random scene tests' draws: a 64-bit LCG (Knuth's MMIX constants), uniform in a range.
+pub struct Uniform(pub u64);
+
+impl Uniform {
+    pub fn draw(&mut self, low: f64, high: f64) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        low + (high - low) * ((self.0 >> 11) as f64 / (1u64 << 53) as f64)
+    }
+}
+
+/// A random device the scenes' board can trim, with its natural frequencies at no bias and
+/// at its top under a 5% margin (Hz), or `None` where it is not one: μ 20–150 kPa, a Gent
+/// `jlim` of 40–150 (a share `gent_share` of the time, else neo-Hookean; `None`: always),
+/// λ1p from `prestretch_1_low` to 4, the rest of a bench device's sizes; both frequencies a
+/// ring the 1 kHz tick and the 0.5 s window can time (20–100 Hz), the top's bias within the
+/// scenes' 10 kV amplifier (9 kV).
+pub fn tunable_device(
+    u: &mut Uniform,
+    gent_share: Option<f64>,
+    prestretch_1_low: f64,
+) -> Option<(de_resonator::DeviceParams<f64>, f64, f64)> {
+    use de_resonator::{Device, DeviceParams, Tuner, REFERENCE_DEVICE};
+    let params = DeviceParams {
+        shear_modulus: u.draw(20e3, 150e3),
+        jlim: match gent_share {
+            None => Some(u.draw(40.0, 150.0)),
+            Some(share) => (u.draw(0.0, 1.0) < share).then(|| u.draw(40.0, 150.0)),
+        },
+        thickness: u.draw(0.5e-3, 2e-3),
+        length_active: u.draw(10e-3, 40e-3),
+        length_passive: u.draw(10e-3, 60e-3),
+        width: u.draw(20e-3, 60e-3),
+        bar_mass: u.draw(0.5e-3, 5e-3),
+        prestretch_1: u.draw(prestretch_1_low, 4.0),
+        prestretch_2: u.draw(1.0, 3.5),
+        ..REFERENCE_DEVICE
+    };
+    let tuner = Tuner::new(Device::new(params).ok()?);
+    let (top, at_zero) = (tuner.max_bias(0.05).ok()?, tuner.zero_bias());
+    let (f0, f1) = (at_zero.natural_frequency_hz, top.natural_frequency_hz);
+    let timed = (20.0..100.0).contains(&f0) && (20.0..100.0).contains(&f1);
+    (timed && top.volts <= 9000.0).then_some((params, f0, f1))
+}
