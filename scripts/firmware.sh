@@ -103,6 +103,9 @@ if pgrep -f "unix:$PWD/target/qemu/fw.sock" | grep -q .; then echo "scripts/qemu
 
 step "a person at a serial terminal: picocom in tmux on the firmware's command port (scripts/qemu.sh --pty)"
 HOST_SIM="$host_sim" python3 scripts/terminal_test.py qemu "$host_sim"
+
+step "the live page against the firmware: host-sim dash in headless Chromium on scripts/qemu.sh --no-console"
+HOST_SIM="$host_sim" python3 scripts/dash_test.py qemu "$host_sim"
 cd firmware
 
 step "the firmware in the loop: every shipped scene through the link build under QEMU, tick for tick against the core"

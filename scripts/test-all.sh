@@ -58,9 +58,9 @@ rustup show active-toolchain
 rustup component add clippy rustfmt
 rustup target add "$TARGET"
 
-step "QEMU (qemu-system-arm), defmt-print, and picocom with tmux for the terminal tests"
+step "QEMU (qemu-system-arm), defmt-print, picocom with tmux for the terminal tests, Chromium with selenium for the page's"
 missing=()
-for tool in qemu-system-arm:qemu-system-arm picocom:picocom tmux:tmux; do
+for tool in qemu-system-arm:qemu-system-arm picocom:picocom tmux:tmux chromium:chromium chromedriver:chromium-driver; do
     command -v "${tool%%:*}" >/dev/null || missing+=("${tool##*:}")
 done
 if [ "${#missing[@]}" -gt 0 ]; then
@@ -73,6 +73,10 @@ if ! command -v defmt-print >/dev/null; then
     cargo install --locked defmt-print --version 1.2.0
 fi
 defmt-print --version
+# The browser tests' driver, pinned (4.53.0's dependencies do not install here; 4.51.0's do).
+python3 -c 'import selenium, sys; sys.exit(selenium.__version__ != "4.51.0")' 2>/dev/null ||
+    python3 -m pip install --quiet --disable-pip-version-check selenium==4.51.0
+chromium --version
 
 step "format"
 cargo fmt --all -- --check
@@ -96,6 +100,9 @@ cargo test --locked --workspace --features host-sim/bdf -- --skip fuzz_the_contr
 
 step "a person at a serial terminal: picocom in tmux on host-sim serve --pty"
 python3 scripts/terminal_test.py serve "$PWD/target/debug/host-sim"
+
+step "the live page: host-sim dash in headless Chromium (selenium) against host-sim serve"
+python3 scripts/dash_test.py serve "$PWD/target/debug/host-sim"
 
 step "Python: pip install ./python (maturin), pytest python/tests, the examples' figures"
 # The package and what its tests and examples use (numpy, SciPy, matplotlib, Dask), into the

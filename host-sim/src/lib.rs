@@ -9,6 +9,8 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod cmd;
+pub mod command_port;
+pub mod dash;
 pub mod device_file;
 pub mod engine;
 pub mod lut;

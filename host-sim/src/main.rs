@@ -118,6 +118,15 @@ enum Command {
     /// codes and start-up line as the board. Events go to stderr as they happen; with
     /// --seconds it stops there and reports (status 1 if the plant crossed a limit).
     Serve(cmd::serve::ServeArgs),
+    /// A live page for the board in the browser: plots, controls, the fault log.
+    ///
+    /// A live dashboard served on loopback (--listen, default 127.0.0.1:8080): the telemetry
+    /// stream's voltage, stretch, current and tracking plotted live, the device's tuning curve
+    /// with the operating point, the controls (target, ac, start, stop, trim, clear, settings)
+    /// as the protocol's own lines with the board's replies verbatim, the fault log, the
+    /// request log, a recording in `console --record`'s CSV. The board is reached as `console`
+    /// reaches it: a serial port, `serve`'s socket or QEMU's.
+    Dash(host_sim::dash::DashArgs),
 }
 
 fn main() -> ExitCode {
@@ -147,6 +156,7 @@ fn main() -> ExitCode {
         Command::Image(args) => cmd::image::image(&args).map(|r| emit(&r, json)),
         Command::Console(args) => cmd::console::console(&args, json).map(|r| emit(&r, json)),
         Command::Serve(args) => cmd::serve::serve(&args).map(|r| emit(&r, json)),
+        Command::Dash(args) => host_sim::dash::dash(&args, json).map(|r| emit(&r, json)),
     };
     match result {
         Ok((out, failure, to_stderr)) => {

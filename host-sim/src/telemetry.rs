@@ -21,7 +21,17 @@ pub enum Source {
 }
 
 impl Source {
-    fn open(&self) -> Result<Box<dyn Read + Send>, String> {
+    /// Where the stream is, as said to the user.
+    pub fn describe(&self) -> String {
+        match self {
+            Source::Port { device, baud } => format!("{device} at {baud} baud"),
+            Source::Tcp(address) => format!("tcp:{address}"),
+            Source::Unix(path) => format!("unix:{}", path.display()),
+        }
+    }
+
+    /// Connect to the stream (reads time out after 50 ms: a quiet stream).
+    pub fn open(&self) -> Result<Box<dyn Read + Send>, String> {
         let quiet = Some(READ_TIMEOUT);
         match self {
             Source::Tcp(address) => {
@@ -58,35 +68,12 @@ pub struct Recorder {
 impl Recorder {
     /// Connect to the stream and read it until `finish`.
     pub fn start(source: &Source) -> Result<Self, String> {
-        let mut port = source.open()?;
+        let port = source.open()?;
         let stop = Arc::new(AtomicBool::new(false));
         let stopping = stop.clone();
         let reader = std::thread::spawn(move || {
-            let mut receiver = Receiver::default();
             let mut records = Vec::new();
-            let mut buf = [0u8; 4096];
-            while !stopping.load(Ordering::Relaxed) {
-                let n = match port.read(&mut buf) {
-                    Ok(0) => break,
-                    Ok(n) => n,
-                    Err(e)
-                        if matches!(
-                            e.kind(),
-                            std::io::ErrorKind::WouldBlock
-                                | std::io::ErrorKind::TimedOut
-                                | std::io::ErrorKind::Interrupted
-                        ) =>
-                    {
-                        continue
-                    }
-                    Err(e) => return Err(format!("the stream's connection failed: {e}")),
-                };
-                for &b in &buf[..n] {
-                    if let Some(Ok(record)) = receiver.push(b) {
-                        records.push(record);
-                    }
-                }
-            }
+            let receiver = read(port, &stopping, |new, _| records.extend_from_slice(new))?;
             Ok((records, receiver))
         });
         Ok(Recorder { stop, reader })
@@ -100,4 +87,41 @@ impl Recorder {
             .join()
             .map_err(|_| "the stream's reader stopped unexpectedly".to_string())?
     }
+}
+
+/// Read records from `port` until `stop` (or the stream's end): `take` gets each read's new
+/// records (none when the stream was quiet for a read's timeout) and the receiver's counts.
+pub fn read(
+    mut port: Box<dyn Read + Send>,
+    stop: &AtomicBool,
+    mut take: impl FnMut(&[Record], &Receiver),
+) -> Result<Receiver, String> {
+    let mut receiver = Receiver::default();
+    let mut new = Vec::new();
+    let mut buf = [0u8; 4096];
+    while !stop.load(Ordering::Relaxed) {
+        let n = match port.read(&mut buf) {
+            Ok(0) => break,
+            Ok(n) => n,
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    std::io::ErrorKind::WouldBlock
+                        | std::io::ErrorKind::TimedOut
+                        | std::io::ErrorKind::Interrupted
+                ) =>
+            {
+                0
+            }
+            Err(e) => return Err(format!("the stream's connection failed: {e}")),
+        };
+        new.clear();
+        for &b in &buf[..n] {
+            if let Some(Ok(record)) = receiver.push(b) {
+                new.push(record);
+            }
+        }
+        take(&new, &receiver);
+    }
+    Ok(receiver)
 }

@@ -138,7 +138,7 @@ mod common;
 
 /// `console --json` against the virtual board (`serve`) on TCP, and `serve --json` itself.
 #[test]
-fn the_console_and_the_virtual_board_match_the_schema() {
+fn the_console_the_dash_and_the_virtual_board_match_the_schema() {
     let board = common::Served::start(None, "max", "tcp");
     let dir = scratch("console");
     let script = format!("{dir}/script.txt");
@@ -152,6 +152,9 @@ nonsense
     let mut args: Vec<&str> = board.connection.iter().map(String::as_str).collect();
     args.extend(["--script", &script]);
     conforms("console", &args);
+    let mut args: Vec<&str> = board.connection.iter().map(String::as_str).collect();
+    args.extend(["--listen", "127.0.0.1:0", "--seconds", "0.5"]);
+    conforms("dash", &args);
     drop(board);
     let socket = format!("{dir}/serve.sock");
     conforms(

@@ -8,40 +8,28 @@
 //! values; a script fails when the time runs out).
 
 use std::fmt;
-use std::io::{BufRead, BufReader, IsTerminal, Read, Write};
+use std::io::{BufRead, IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc::{self, Receiver, RecvTimeoutError};
+use std::sync::mpsc;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use clap::Args;
-use de_resonator::board::protocol::{Reply, NOTICE};
+use de_resonator::board::protocol::Reply;
 use serde::Serialize;
 use serde_json::{Map, Value};
 
+use crate::command_port::{fields, gone, PortArgs, Session, StreamArgs};
+
 use super::record;
 use super::Report;
-use crate::telemetry::{Recorder, Source};
+use crate::telemetry::Recorder;
 
 #[derive(Args, Debug)]
-#[command(group(clap::ArgGroup::new("connection").required(true).args(["port", "tcp", "unix"])))]
-#[command(group(clap::ArgGroup::new("stream_source").multiple(false)))]
 pub struct ConsoleArgs {
-    /// A serial port (a board's USART2 through a USB adapter), e.g.
-    ///
-    /// /dev/ttyUSB0.
-    #[arg(long, value_name = "DEVICE")]
-    pub port: Option<String>,
-    /// A TCP socket, HOST:PORT (QEMU's `-chardev socket,host=…,port=…,server=on`).
-    #[arg(long, value_name = "HOST:PORT")]
-    pub tcp: Option<String>,
-    /// A Unix socket (QEMU's `-chardev socket,path=…,server=on`).
-    #[arg(long, value_name = "PATH")]
-    pub unix: Option<PathBuf>,
-    /// The serial port's baud rate.
-    #[arg(long, value_name = "BAUD", default_value_t = 115_200)]
-    pub baud: u32,
+    #[command(flatten)]
+    pub board: PortArgs,
     /// Requests from FILE, one a line (`#` comments and blank lines skipped); status 1 if any gets
     /// an `err` or a `wait` runs out of time.
     ///
@@ -59,18 +47,8 @@ pub struct ConsoleArgs {
     /// The recording lasts --duration-seconds, or the script's run (stdin is not read).
     #[arg(long, value_name = "FILE.csv", requires = "stream_source")]
     pub record: Option<PathBuf>,
-    /// The stream's serial port (the board's stream UART), e.g. /dev/ttyUSB1.
-    #[arg(long, value_name = "DEVICE", group = "stream_source")]
-    pub stream_port: Option<String>,
-    /// The stream on a TCP socket (`serve --stream-tcp`, QEMU's chardev), HOST:PORT.
-    #[arg(long, value_name = "HOST:PORT", group = "stream_source")]
-    pub stream_tcp: Option<String>,
-    /// The stream on a Unix socket.
-    #[arg(long, value_name = "PATH", group = "stream_source")]
-    pub stream_unix: Option<PathBuf>,
-    /// The stream's serial port's baud rate.
-    #[arg(long, value_name = "BAUD", default_value_t = 2_000_000)]
-    pub stream_baud: u32,
+    #[command(flatten)]
+    pub stream: StreamArgs,
     /// Records a second asked of the board (`stream <HZ>`).
     #[arg(long, value_name = "HZ", default_value_t = 100.0)]
     pub stream_hz: f64,
@@ -80,14 +58,6 @@ pub struct ConsoleArgs {
     /// Draw the recording to FILE.svg: the voltage commanded under the cap, the stretch.
     #[arg(long, value_name = "FILE.svg", requires = "record")]
     pub plot: Option<PathBuf>,
-    /// How long to wait for a reply, s.
-    #[arg(
-        long,
-        value_name = "S",
-        default_value_t = 10.0,
-        allow_negative_numbers = true
-    )]
-    pub timeout: f64,
 }
 
 /// One request and its reply.
@@ -157,128 +127,10 @@ impl Report for ConsoleReport {
     }
 }
 
-/// The fields of a reply line: `ok`'s pairs, `err`'s code and message.
-pub fn fields(line: &str) -> Map<String, Value> {
-    let mut map = Map::new();
-    match Reply::parse(line) {
-        Some(reply @ Reply::Ok(_)) => {
-            for (key, value) in reply.pairs() {
-                let value = match value.parse::<f64>() {
-                    Ok(n) if n.is_finite() => Value::from(n),
-                    _ => Value::from(value),
-                };
-                map.insert(key.into(), value);
-            }
-        }
-        Some(Reply::Err { code, message }) => {
-            map.insert("code".into(), Value::from(code as u8));
-            map.insert("message".into(), Value::from(message));
-        }
-        None => {}
-    }
-    map
-}
-
-trait Port: Read + Write {}
-impl<T: Read + Write> Port for T {}
-
-/// A connection: its reading half and its writing half.
-type Halves = (Box<dyn Read + Send>, Box<dyn Port>);
-
-/// The connection asked for: a reader and a writer on it.
-fn connect(args: &ConsoleArgs, timeout: Duration) -> Result<Halves, String> {
-    if let Some(address) = &args.tcp {
-        let stream = std::net::TcpStream::connect(address)
-            .map_err(|e| format!("cannot connect to {address}: {e}"))?;
-        stream
-            .set_read_timeout(Some(timeout))
-            .map_err(|e| e.to_string())?;
-        let reader = stream.try_clone().map_err(|e| e.to_string())?;
-        return Ok((Box::new(reader), Box::new(stream)));
-    }
-    if let Some(path) = &args.unix {
-        let stream = std::os::unix::net::UnixStream::connect(path)
-            .map_err(|e| format!("cannot connect to {}: {e}", path.display()))?;
-        stream
-            .set_read_timeout(Some(timeout))
-            .map_err(|e| e.to_string())?;
-        let reader = stream.try_clone().map_err(|e| e.to_string())?;
-        return Ok((Box::new(reader), Box::new(stream)));
-    }
-    let name = args.port.as_deref().ok_or("give --port, --tcp or --unix")?;
-    let port = serialport::new(name, args.baud)
-        .timeout(timeout)
-        .open()
-        .map_err(|e| format!("cannot open serial port {name}: {e}"))?;
-    let reader = port.try_clone().map_err(|e| e.to_string())?;
-    Ok((Box::new(reader), Box::new(port)))
-}
-
 /// A line on stdout as it happens; a reader gone (a closed pipe) is not an error.
 fn say(line: &str) {
     let mut out = std::io::stdout().lock();
     let _ = writeln!(out, "{line}").and_then(|()| out.flush());
-}
-
-/// What the reader thread hands the requests: a reply line, or the end of the connection.
-enum Heard {
-    Reply(String),
-    NotAReply(String),
-    Closed(String),
-}
-
-/// Read every line the board sends: notices kept (and shown at once when `echo`), the rest
-/// handed on.
-fn listen(
-    reader: Box<dyn Read + Send>,
-    notices: Arc<Mutex<Vec<String>>>,
-    echo: bool,
-) -> Receiver<Heard> {
-    let (tx, rx) = mpsc::channel();
-    std::thread::spawn(move || {
-        let mut reader = BufReader::new(reader);
-        // Kept across read timeouts: a line that arrives in pieces is read whole.
-        let mut line = String::new();
-        loop {
-            let heard = match reader.read_line(&mut line) {
-                Ok(0) => Heard::Closed("the board closed the connection".into()),
-                Ok(_) if !line.ends_with('\n') => continue,
-                Ok(_) => {
-                    let whole = std::mem::take(&mut line);
-                    let line = whole.trim_end().to_string();
-                    if line.starts_with(NOTICE) {
-                        if echo {
-                            say(&line);
-                        }
-                        if let Ok(mut kept) = notices.lock() {
-                            kept.push(line);
-                        }
-                        continue;
-                    }
-                    if Reply::parse(&line).is_some() {
-                        Heard::Reply(line)
-                    } else {
-                        Heard::NotAReply(line)
-                    }
-                }
-                // A read timeout is only a quiet line: keep listening.
-                Err(e)
-                    if matches!(
-                        e.kind(),
-                        std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
-                    ) =>
-                {
-                    continue
-                }
-                Err(e) => Heard::Closed(format!("the connection failed: {e}")),
-            };
-            let closed = matches!(heard, Heard::Closed(_));
-            if tx.send(heard).is_err() || closed {
-                return;
-            }
-        }
-    });
-    rx
 }
 
 /// A request of the console's own (not sent to the board).
@@ -336,57 +188,7 @@ fn local(request: &str) -> Option<Result<Local, String>> {
     }
 }
 
-/// A connected console: the writer, the reader thread's lines, the replies' timeout.
-struct Session {
-    writer: Box<dyn Port>,
-    heard: Receiver<Heard>,
-    timeout: Duration,
-}
-
-impl Session {
-    /// Send one request and wait for its reply; `Err` when the board went away or is silent.
-    fn ask(&mut self, request: &str) -> Result<String, String> {
-        // A connection the board closed is said as such, not as the write's error; a reply
-        // that came after its request's time ran out is dropped, not taken for this one's.
-        while let Ok(heard) = self.heard.try_recv() {
-            if let Heard::Closed(why) = heard {
-                return Err(why);
-            }
-        }
-        self.writer
-            .write_all(format!("{request}\n").as_bytes())
-            .and_then(|()| self.writer.flush())
-            .map_err(|e| match e.kind() {
-                std::io::ErrorKind::BrokenPipe | std::io::ErrorKind::ConnectionReset => {
-                    "the board closed the connection".to_string()
-                }
-                _ => format!("cannot send `{request}`: {e}"),
-            })?;
-        match self.heard.recv_timeout(self.timeout) {
-            Ok(Heard::Reply(line)) => Ok(line),
-            Ok(Heard::NotAReply(line)) => Err(format!("not a reply: {line:?}")),
-            Ok(Heard::Closed(why)) => Err(why),
-            Err(RecvTimeoutError::Timeout) => Err(format!(
-                "no reply to `{request}` in {} s",
-                self.timeout.as_secs_f64()
-            )),
-            Err(RecvTimeoutError::Disconnected) => Err("the board closed the connection".into()),
-        }
-    }
-}
-
-/// Whether an error means the board went away (the session ends, said as such).
-fn gone(why: &str) -> bool {
-    why.starts_with("the board closed") || why.starts_with("the connection failed")
-}
-
 pub fn console(args: &ConsoleArgs, json: bool) -> Result<ConsoleReport, String> {
-    if !(args.timeout > 0.0 && args.timeout.is_finite()) {
-        return Err(format!(
-            "--timeout {} must be a positive number of seconds",
-            args.timeout
-        ));
-    }
     let script = match &args.script {
         Some(path) => {
             let text = std::fs::read_to_string(path)
@@ -410,24 +212,26 @@ pub fn console(args: &ConsoleArgs, json: bool) -> Result<ConsoleReport, String> 
         None => None,
     };
     let prompt = script.is_none() && !json && std::io::stdin().is_terminal();
-    let (reader, writer) = connect(args, Duration::from_millis(200))?;
     let echo = !json;
     if echo {
-        eprintln!("connected to {}", target(args));
+        eprintln!("connected to {}", args.board.describe());
     }
     let notices = Arc::new(Mutex::new(Vec::new()));
-    let heard = listen(reader, notices.clone(), echo);
+    let kept = notices.clone();
+    let mut session = Session::open(&args.board, move |line| {
+        if echo {
+            say(&line);
+        }
+        if let Ok(mut kept) = kept.lock() {
+            kept.push(line);
+        }
+    })?;
     // A board that starts as the console connects (QEMU's socket, `serve`) says its start-up
     // line first, and may not listen before it: the first request waits for it, a while.
     let end = Instant::now() + STARTUP_WAIT;
     while Instant::now() < end && notices.lock().map_or(true, |n| n.is_empty()) {
         std::thread::sleep(Duration::from_millis(20));
     }
-    let mut session = Session {
-        writer,
-        heard,
-        timeout: Duration::from_secs_f64(args.timeout),
-    };
     let mut left_by_interrupt = false;
     let mut report = ConsoleReport {
         notices: Vec::new(),
@@ -554,15 +358,10 @@ impl Recording {
                 "--duration-seconds {s}: a positive number of seconds"
             ));
         }
-        let source = match (&args.stream_port, &args.stream_tcp, &args.stream_unix) {
-            (Some(device), _, _) => Source::Port {
-                device: device.clone(),
-                baud: args.stream_baud,
-            },
-            (_, Some(address), _) => Source::Tcp(address.clone()),
-            (_, _, Some(path)) => Source::Unix(path.clone()),
-            _ => return Err("--record needs --stream-port, --stream-tcp or --stream-unix".into()),
-        };
+        let source = args
+            .stream
+            .source()
+            .ok_or("--record needs --stream-port, --stream-tcp or --stream-unix")?;
         let mut header = Vec::new();
         let mut tick_hz = f64::NAN;
         for request in ["info", "get", "status"] {
@@ -706,7 +505,7 @@ fn typed(interrupted: Arc<AtomicBool>) -> impl Iterator<Item = String> {
 
 /// What the console says as it leaves: what the board is still doing (it keeps its own
 /// rules: leaving changes nothing).
-fn leaving(session: &mut Session, interrupted: bool) -> String {
+pub(crate) fn leaving(session: &mut Session, interrupted: bool) -> String {
     let how = if interrupted { "Ctrl-C: " } else { "" };
     let Ok(line) = session.ask("status") else {
         return format!("{how}leaving; the board did not answer `status`");
@@ -729,15 +528,5 @@ fn leaving(session: &mut Session, interrupted: bool) -> String {
             field("phase")
         ),
         _ => format!("{how}leaving; the board says `{line}`"),
-    }
-}
-
-/// Where the console connects, as said to the user.
-fn target(args: &ConsoleArgs) -> String {
-    match (&args.tcp, &args.unix, &args.port) {
-        (Some(address), _, _) => format!("tcp:{address}"),
-        (_, Some(path), _) => format!("unix:{}", path.display()),
-        (_, _, Some(port)) => format!("{port} at {} baud", args.baud),
-        _ => "nothing".into(),
     }
 }

@@ -76,21 +76,38 @@ impl Row {
     }
 }
 
-/// Write the records to `path`: `#` header lines (`header`, then the counts), then the CSV.
-pub fn write(
-    path: &Path,
+/// What a stream's receiver counted over a recording.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Counts {
+    pub records: u64,
+    pub lost: u64,
+    pub bad_frames: u64,
+}
+
+impl Counts {
+    pub fn of(receiver: &Receiver) -> Self {
+        Counts {
+            records: receiver.records,
+            lost: receiver.lost,
+            bad_frames: receiver.bad_frames,
+        }
+    }
+}
+
+/// The recording as CSV: `#` header lines (`header`, then the counts), then the rows.
+pub fn csv(
     header: &[String],
     records: &[Record],
-    receiver: &Receiver,
+    counts: Counts,
     tick_hz: f64,
-) -> Result<Recorded, String> {
+) -> Result<Vec<u8>, String> {
     let mut text = format!("# de-resonator telemetry, record layout {VERSION}\n");
     for line in header {
         text.push_str(&format!("# {line}\n"));
     }
     text.push_str(&format!(
         "# records={} lost={} bad_frames={} (lost records are missing rows, not filled in)\n",
-        receiver.records, receiver.lost, receiver.bad_frames
+        counts.records, counts.lost, counts.bad_frames
     ));
     let rows: Vec<Row> = records.iter().map(|r| Row::of(r, tick_hz)).collect();
     let mut bytes = text.into_bytes();
@@ -101,6 +118,18 @@ pub fn write(
         w.write_record(COLUMNS).map_err(|e| e.to_string())?;
         bytes.extend(w.into_inner().map_err(|e| e.to_string())?);
     }
+    Ok(bytes)
+}
+
+/// Write the records to `path` ([`csv`]).
+pub fn write(
+    path: &Path,
+    header: &[String],
+    records: &[Record],
+    receiver: &Receiver,
+    tick_hz: f64,
+) -> Result<Recorded, String> {
+    let bytes = csv(header, records, Counts::of(receiver), tick_hz)?;
     std::fs::write(path, bytes).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     Ok(Recorded {
         file: path.display().to_string(),

@@ -1,0 +1,479 @@
+// de-resonator dash: the page. It talks only to host-sim's dash server: the board's replies
+// and the stream's records come as server-sent events (/api/events), requests go as the
+// protocol's own lines (/api/command) and come back verbatim. It draws at most once an
+// animation frame, over the chosen window of the records it holds.
+"use strict";
+
+// Okabe–Ito: told apart by colour-blind readers; dashes as the second cue.
+const C = { blue: "#0072B2", orange: "#E69F00", green: "#009E73", red: "#D55E00",
+  sky: "#56B4E9", purple: "#CC79A7", black: "#000000", grey: "#777777" };
+const KEEP_SECONDS = 60;
+
+// What the page knows; `window.dash` is read by the browser tests and the benchmark.
+const dash = window.dash = {
+  hello: null, tickHz: NaN, columns: {}, received: 0, gaps: 0, restarts: 0, lastSeq: null,
+  redraws: 0, fps: 0, drawMs: 0, lastReplyMs: NaN, lastReply: "", status: null, connected: false,
+  errors: [],
+};
+
+// The records held, a column each (time in s from the board's tick).
+const cols = { t: [], volts: [], amp: [], cap: [], stretch: [], sensed: [], lo: [], hi: [],
+  current: [], fhz: [], q: [], bias: [], phase: [], fault: [] };
+// Which optional inputs the board has sent (a plot shows only once its data exists).
+const seen = { current: false, track: false };
+dash.cols = cols;
+let dirty = false;
+let paused = false;
+let windowSeconds = 10;
+
+const $ = (id) => document.getElementById(id);
+const fmt = (x, digits = 4) => (x == null || !isFinite(x)) ? "—" : Number(x).toPrecision(digits);
+
+// --- requests ---------------------------------------------------------------------------
+
+async function send(line) {
+  const t0 = performance.now();
+  let text, ok = false;
+  try {
+    const r = await fetch("/api/command", { method: "POST", body: line });
+    const j = await r.json();
+    ok = !!j.ok;
+    text = j.reply !== undefined ? j.reply : "error: " + j.error;
+  } catch (e) {
+    text = "error: no answer from dash (" + e + ")";
+  }
+  dash.lastReplyMs = performance.now() - t0;
+  dash.lastReply = text;
+  const out = $("reply");
+  out.textContent = "> " + line + "\n" + text;
+  out.classList.toggle("err", !ok);
+  return text;
+}
+
+function bind() {
+  $("stop").onclick = () => send("stop");
+  $("start").onclick = () => send("start");
+  $("trim").onclick = () => send("trim");
+  $("clear").onclick = () => send("clear");
+  $("faults-refresh").onclick = () => send("faults");
+  $("target-form").onsubmit = (e) => { e.preventDefault(); send("target " + $("target-hz").value.trim()); };
+  $("ac-form").onsubmit = (e) => {
+    e.preventDefault();
+    send("ac " + $("ac-volts").value.trim() + " " + $("ac-hz").value.trim());
+  };
+  $("set-form").onsubmit = (e) => {
+    e.preventDefault();
+    send("set " + $("setting").value + " " + $("setting-value").value.trim());
+  };
+  $("get-send").onclick = () => send("get " + $("setting").value);
+  $("save").onclick = () => send("save");
+  $("setting").onchange = showSetting;
+  $("raw-form").onsubmit = (e) => { e.preventDefault(); send($("raw").value.trim()); };
+  $("window").onchange = () => { windowSeconds = Number($("window").value); dirty = true; };
+  $("pause").onchange = () => { paused = $("pause").checked; dirty = true; };
+  $("record-start").onclick = () => record("start");
+  $("record-stop").onclick = () => record("stop");
+}
+
+async function record(what) {
+  const r = await fetch("/api/record/" + what, { method: "POST" });
+  const j = await r.json();
+  if (j.error) $("record-state").textContent = j.error;
+}
+
+// --- events -----------------------------------------------------------------------------
+
+function connect() {
+  const events = new EventSource("/api/events");
+  events.addEventListener("hello", (e) => hello(JSON.parse(e.data)));
+  events.addEventListener("records", (e) => records(JSON.parse(e.data)));
+  events.addEventListener("status", (e) => status(JSON.parse(e.data)));
+  events.addEventListener("faults", (e) => faults(JSON.parse(e.data)));
+  events.addEventListener("notice", (e) => notice(JSON.parse(e.data)));
+  events.addEventListener("exchange", (e) => logEntry(JSON.parse(e.data)));
+  events.addEventListener("settings", (e) => settingsValues(JSON.parse(e.data)));
+  events.addEventListener("link", (e) => link(JSON.parse(e.data)));
+  events.addEventListener("stream", (e) => streamSaid(JSON.parse(e.data)));
+  events.addEventListener("recording", (e) => recordingSaid(JSON.parse(e.data)));
+  events.onopen = () => { dash.connected = true; $("conn").textContent = "live"; };
+  events.onerror = () => {
+    dash.connected = false;
+    $("conn").textContent = "dash not reachable: the board goes on as it was told";
+  };
+}
+
+function hello(h) {
+  dash.hello = h;
+  dash.tickHz = h.tick_hz;
+  h.columns.forEach((name, i) => { dash.columns[name] = i; });
+  const crc = h.image_crc || "?";
+  $("device").textContent = (h.firmware || "") + ", image " + crc;
+  facts($("board"), [
+    ["board", h.board], ["firmware", h.firmware], ["image CRC", crc], ["tick", h.tick_hz + " Hz"],
+    ["stream", h.stream || "none (give dash --stream-…)"],
+    ...Object.entries(h.device || {}).map(([k, v]) => [k, String(v)]),
+  ]);
+  const select = $("setting");
+  select.innerHTML = "";
+  for (const s of h.settings) {
+    const o = document.createElement("option");
+    o.value = s.key; o.textContent = s.key; o.dataset.help = s.help; o.dataset.value = s.value;
+    select.appendChild(o);
+  }
+  showSetting();
+  const ac = Object.fromEntries(h.settings.map((s) => [s.key, s.value]));
+  if (ac.ac_volts !== undefined && !$("ac-volts").value) $("ac-volts").value = ac.ac_volts;
+  if (ac.ac_hz !== undefined && !$("ac-hz").value) $("ac-hz").value = ac.ac_hz;
+  if (h.curve) {
+    const [lo, hi] = h.curve.tunable_range_hz;
+    $("range").textContent = "tunable range " + fmt(lo, 5) + " – " + fmt(hi, 5) +
+      " Hz (the device's curve under the margin " + h.curve.margin + "; the board decides)";
+  } else {
+    $("range").textContent = "no tuning curve: " + (h.curve_problem || "the board names no device");
+  }
+  $("log").tBodies[0].innerHTML = "";
+  (h.log || []).forEach(logEntry);
+  $("notices").innerHTML = "";
+  (h.notices || []).forEach((line) => notice({ line }));
+  if (h.status && h.status.fields) status(h.status);
+  if (h.faults && h.faults.summary) faults(h.faults);
+  if (h.link) link(h.link);
+  streamSaid({ reply: h.stream_reply });
+  recordingSaid({ on: h.recording });
+  makePlots();
+}
+
+function records(rows) {
+  const k = dash.columns;
+  const tickHz = dash.tickHz;
+  for (const r of rows) {
+    const seq = r[k.sequence];
+    if (dash.lastSeq !== null) {
+      const step = (seq - dash.lastSeq) >>> 0;
+      if (seq < dash.lastSeq && dash.lastSeq - seq > 1000) dash.restarts += 1; // a reset
+      else if (step > 1) dash.gaps += step - 1;
+    }
+    dash.lastSeq = seq;
+    dash.received += 1;
+    const t = r[k.tick] / tickHz;
+    if (cols.t.length && t < cols.t[cols.t.length - 1]) clearColumns(); // the board restarted
+    cols.t.push(t);
+    cols.volts.push(r[k.volts]);
+    cols.amp.push(r[k.amplifier_volts]);
+    cols.cap.push(r[k.max_volts]);
+    cols.stretch.push(r[k.stretch]);
+    const s = r[k.sensed_stretch], sd = r[k.sensed_sigma];
+    cols.sensed.push(s);
+    cols.lo.push(s == null || sd == null ? null : s - sd);
+    cols.hi.push(s == null || sd == null ? null : s + sd);
+    cols.current.push(r[k.current_amps]);
+    seen.current = seen.current || r[k.current_amps] != null;
+    seen.track = seen.track || r[k.tracked_hz] != null;
+    cols.fhz.push(r[k.tracked_hz]);
+    cols.q.push(r[k.quality_factor]);
+    cols.bias.push(r[k.bias_volts]);
+    cols.phase.push(r[k.phase]);
+    cols.fault.push(r[k.fault]);
+    dash.last = r;
+  }
+  // Older than the longest window: dropped in one piece now and then.
+  const t = cols.t;
+  if (t.length && t[0] < t[t.length - 1] - KEEP_SECONDS * 1.1) {
+    const cut = lowerBound(t, t[t.length - 1] - KEEP_SECONDS);
+    for (const c of Object.values(cols)) c.splice(0, cut);
+  }
+  dirty = true;
+}
+
+function clearColumns() { for (const c of Object.values(cols)) c.length = 0; }
+
+function lowerBound(a, x) {
+  let lo = 0, hi = a.length;
+  while (lo < hi) { const m = (lo + hi) >> 1; if (a[m] < x) lo = m + 1; else hi = m; }
+  return lo;
+}
+
+function status(s) {
+  dash.status = s;
+  const f = s.fields || {};
+  const out = $("output");
+  const on = f.output === "on";
+  out.className = "badge " + (f.output === undefined ? "unknown" : on ? "on" : "off");
+  out.textContent = "output " + (f.output === undefined ? "?" : on ? "ON " + fmt(f.volts, 5) + " V" : "off 0 V");
+  $("phase").textContent = (f.phase || "?") + ", target " + fmt(f.target_hz, 4) + " Hz, bias " +
+    fmt(f.bias_volts, 5) + " V, cap " + fmt(f.max_volts, 5) + " V (" + (f.max_by || "?") + ")";
+  const fault = $("fault");
+  const words = f.fault && f.fault !== "none" ? String(s.line).split(" fault=")[1] : "";
+  fault.textContent = words ? "FAULT: " + words : "no fault";
+  fault.classList.toggle("active", !!words);
+  $("fault-words").textContent = words ? "latched: " + words + " (clear, then start)" : "";
+  dirty = true;
+}
+
+function faults(f) {
+  const list = $("faults");
+  list.innerHTML = "";
+  const head = document.createElement("li");
+  head.textContent = f.summary;
+  list.appendChild(head);
+  for (const e of f.entries || []) {
+    const li = document.createElement("li");
+    li.textContent = e.line;
+    list.appendChild(li);
+  }
+}
+
+function notice(n) {
+  const li = document.createElement("li");
+  li.textContent = (n.at ? new Date(n.at).toLocaleTimeString() + " " : "") + n.line;
+  $("notices").prepend(li);
+}
+
+function logEntry(e) {
+  const body = $("log").tBodies[0];
+  const tr = document.createElement("tr");
+  tr.className = (e.ok ? "" : "err ") + (e.origin === "dash" ? "dash" : "");
+  for (const text of [new Date(e.at).toLocaleTimeString(), e.origin, e.request, e.reply, fmt(e.ms, 2)]) {
+    const td = document.createElement("td");
+    td.textContent = text;
+    tr.appendChild(td);
+  }
+  body.prepend(tr);
+  while (body.rows.length > 200) body.deleteRow(body.rows.length - 1);
+}
+
+function settingsValues(values) {
+  for (const o of $("setting").options) {
+    if (values[o.value] !== undefined) o.dataset.value = values[o.value];
+  }
+  showSetting();
+}
+
+function showSetting() {
+  const o = $("setting").selectedOptions[0];
+  if (!o) return;
+  $("setting-help").textContent = o.dataset.help + " — now " + o.dataset.value;
+  $("setting-value").placeholder = o.dataset.value;
+}
+
+function link(l) {
+  dash.link = l;
+  facts($("link"), [
+    ["records", l.records + " (at dash)"], ["lost", l.lost + " (board → dash)"],
+    ["bad frames", String(l.bad_frames)], ["on this page", dash.received + ", " + dash.gaps + " gaps"],
+    ["dropped", l.dropped_to_pages + " (dash → pages)"],
+    ["redraw", fmt(dash.fps, 3) + " /s, " + fmt(dash.drawMs, 2) + " ms each"],
+    ["last reply", isFinite(dash.lastReplyMs) ? fmt(dash.lastReplyMs, 3) + " ms" : "—"],
+  ]);
+}
+
+function streamSaid(s) {
+  dash.streamReply = s.reply;
+  const note = !dash.hello || !dash.hello.stream
+    ? "no telemetry stream: start dash with --stream-port, --stream-tcp or --stream-unix"
+    : s.reply && !s.reply.startsWith("ok") ? "the board's stream: " + s.reply : "";
+  $("plot-note").textContent = note;
+}
+
+function recordingSaid(r) {
+  $("record-start").disabled = !!r.on;
+  $("record-stop").disabled = !r.on;
+  if (r.on) $("record-state").textContent = "recording…";
+  else if (r.records !== undefined) {
+    $("record-state").textContent = r.records + " records, " + r.lost + " lost, " + r.bad_frames +
+      " bad frames";
+    $("record-file").hidden = false;
+  }
+}
+
+function facts(dl, pairs) {
+  dl.innerHTML = "";
+  for (const [k, v] of pairs) {
+    const dt = document.createElement("dt"); dt.textContent = k;
+    const dd = document.createElement("dd"); dd.textContent = v == null ? "—" : v;
+    dl.append(dt, dd);
+  }
+}
+
+// --- plots ------------------------------------------------------------------------------
+
+let plots = null;
+
+function width() { return Math.max(300, $("plots").clientWidth - 4); }
+
+function line(label, colour, extra = {}) {
+  return Object.assign({ label, stroke: colour, width: 1.5, spanGaps: false,
+    value: (u, v) => fmt(v, 5) }, extra);
+}
+
+function timePlot(id, title, yLabel, series, extra = {}) {
+  const opts = Object.assign({
+    title, width: width(), height: 180,
+    scales: { x: { time: false } },
+    axes: [{ label: "time on the board, s" }, { label: yLabel, size: 70 }],
+    series: [{ label: "t, s", value: (u, v) => fmt(v, 6) }, ...series],
+    legend: { live: true },
+  }, extra);
+  const el = $(id);
+  el.innerHTML = "";
+  return new uPlot(opts, [[], ...series.map(() => [])], el);
+}
+
+function makePlots() {
+  const h = dash.hello;
+  const limit = h.curve && h.curve.limit;
+  plots = {
+    volts: timePlot("plot-volts", "voltage", "V", [
+      line("commanded", C.blue),
+      line("measured (amplifier)", C.orange, { dash: [6, 3] }),
+      line("cap in force", C.red, { dash: [2, 3] }),
+      line("plan's bias", C.grey, { dash: [10, 4], width: 1 }),
+      line(limit ? "limit (" + limit.mode + ", static)" : "limit", C.black, { dash: [12, 4, 2, 4], width: 1 }),
+    ]),
+    stretch: timePlot("plot-stretch", "stretch λ", "λ", [
+      line("sensor", C.blue),
+      line("λ from C", C.green, { dash: [6, 3] }),
+      line("λ from C − σ", C.green, { width: 0.5 }),
+      line("λ from C + σ", C.green, { width: 0.5 }),
+      line("static limit", C.black, { dash: [12, 4, 2, 4], width: 1 }),
+    ], { bands: [{ series: [4, 3], fill: "rgba(0,158,115,0.15)" }] }),
+    current: timePlot("plot-current", "current", "A", [line("current", C.purple)]),
+    track: timePlot("plot-track", "tracking: f and Q", "Hz", [
+      line("f tracked", C.blue),
+      line("Q", C.orange, { dash: [6, 3], scale: "q" }),
+    ], { axes: [{ label: "time on the board, s" }, { label: "Hz", size: 70 },
+      { label: "Q", scale: "q", side: 1, size: 60, grid: { show: false } }] }),
+    curve: curvePlot(),
+  };
+  window.addEventListener("resize", () => {
+    for (const p of Object.values(plots)) if (p) p.setSize({ width: width(), height: p.height });
+  });
+  dirty = true;
+}
+
+// The flashed device's tuning curve: f against bias to the limit, the margin's highest bias,
+// the tunable range; the operating point (the voltage commanded now) moving on it.
+function curvePlot() {
+  const el = $("plot-curve");
+  el.innerHTML = "";
+  const c = dash.hello.curve;
+  if (!c) { el.textContent = "no tuning curve: " + (dash.hello.curve_problem || ""); return null; }
+  const x = c.points.map((p) => p.bias_volts);
+  const inside = c.points.map((p) => (p.beyond_margin ? null : p.natural_frequency_hz));
+  // Dashed from the last point within the margin on, so the two parts join.
+  const beyond = c.points.map((p, i) => {
+    const next = c.points[i + 1];
+    return p.beyond_margin || (next && next.beyond_margin) ? p.natural_frequency_hz : null;
+  });
+  dash.curve = { x, f: c.points.map((p) => p.natural_frequency_hz) };
+  const n = x.length;
+  const point = new Array(n).fill(null);
+  const opts = {
+    title: "tuning curve (model, from the image's device): f against bias",
+    width: width(), height: 240,
+    scales: { x: { time: false } },
+    axes: [{ label: "bias, V" }, { label: "natural frequency, Hz", size: 70 }],
+    series: [
+      { label: "bias, V", value: (u, v) => fmt(v, 5) },
+      line("within the margin", C.blue, { width: 2 }),
+      line("beyond the margin (refused)", C.blue, { dash: [3, 3] }),
+      line("now (commanded)", C.red, { width: 0, points: { show: true, size: 11, fill: C.red } }),
+    ],
+    hooks: { draw: [(u) => curveMarks(u, c)] },
+  };
+  dash.curvePoint = point;
+  return new uPlot(opts, [x, inside, beyond, point], el);
+}
+
+// The margin's highest bias and the tunable range as labelled lines (drawn on the canvas).
+function curveMarks(u, c) {
+  const ctx = u.ctx;
+  const left = u.bbox.left, top = u.bbox.top, w = u.bbox.width, hgt = u.bbox.height;
+  ctx.save();
+  ctx.font = 12 * devicePixelRatio + "px system-ui, sans-serif";
+  ctx.lineWidth = devicePixelRatio;
+  // Each line's label to its left, on a row of its own (two lines close together).
+  const vline = (v, colour, dashes, label, row) => {
+    const px = u.valToPos(v, "x", true);
+    ctx.strokeStyle = colour; ctx.setLineDash(dashes);
+    ctx.beginPath(); ctx.moveTo(px, top); ctx.lineTo(px, top + hgt); ctx.stroke();
+    ctx.fillStyle = colour; ctx.setLineDash([]);
+    ctx.textAlign = "right";
+    ctx.fillText(label, px - 4 * devicePixelRatio, top + (14 + 16 * row) * devicePixelRatio);
+  };
+  const hline = (f, label) => {
+    const py = u.valToPos(f, "y", true);
+    ctx.strokeStyle = C.grey; ctx.setLineDash([4, 4]);
+    ctx.beginPath(); ctx.moveTo(left, py); ctx.lineTo(left + w, py); ctx.stroke();
+    ctx.fillStyle = C.grey; ctx.setLineDash([]); ctx.textAlign = "left";
+    ctx.fillText(label, left + 4 * devicePixelRatio, py - 4 * devicePixelRatio);
+  };
+  vline(c.max_bias_volts, C.orange, [6, 4], "margin's highest bias " + fmt(c.max_bias_volts, 5) + " V", 2);
+  if (c.limit) vline(c.limit.volts, C.black, [2, 3], c.limit.mode + " limit " + fmt(c.limit.volts, 5) + " V", 3);
+  const [lo, hi] = c.tunable_range_hz;
+  hline(lo, "tunable " + fmt(lo, 5) + " Hz");
+  hline(hi, "tunable " + fmt(hi, 5) + " Hz");
+  ctx.restore();
+}
+
+function fAt(volts) {
+  const { x, f } = dash.curve;
+  if (!(volts >= 0) || volts > x[x.length - 1]) return null;
+  const i = Math.max(1, lowerBound(x, volts));
+  const s = (volts - x[i - 1]) / (x[i] - x[i - 1] || 1);
+  return f[i - 1] + s * (f[i] - f[i - 1]);
+}
+
+function draw() {
+  const t0 = performance.now();
+  const t = cols.t;
+  const end = t.length ? t[t.length - 1] : 0;
+  const from = lowerBound(t, end - windowSeconds);
+  const s = (c) => c.slice(from);
+  const limit = dash.hello.curve && dash.hello.curve.limit;
+  const tt = s(t);
+  const flat = (v) => tt.map(() => v);
+  plots.volts.setData([tt, s(cols.volts), s(cols.amp), s(cols.cap), s(cols.bias),
+    flat(limit ? limit.volts : null)]);
+  plots.stretch.setData([tt, s(cols.stretch), s(cols.sensed), s(cols.lo), s(cols.hi),
+    flat(limit ? limit.stretch : null)]);
+  for (const [name, id, data] of [["current", "plot-current", [tt, s(cols.current)]],
+    ["track", "plot-track", [tt, s(cols.fhz), s(cols.q)]]]) {
+    $(id).hidden = !seen[name];
+    if (seen[name]) plots[name].setData(data);
+  }
+  const missing = [!seen.current && "current (no current input)",
+    !seen.track && "f and Q (not tracking)"].filter(Boolean);
+  $("unmeasured").textContent = missing.length ? "not plotted, nothing received: " + missing.join(", ") : "";
+  if (plots.curve && dash.curve) {
+    const volts = dash.last ? dash.last[dash.columns.volts] : dash.status && dash.status.fields.volts;
+    const point = dash.curvePoint.fill(null);
+    if (volts != null) {
+      const { x } = dash.curve;
+      const i = Math.min(x.length - 1, lowerBound(x, volts));
+      const f = fAt(volts);
+      if (f != null) { point[i] = f; }
+    }
+    plots.curve.setData([dash.curve.x, plots.curve.data[1], plots.curve.data[2], point]);
+  }
+  dash.drawMs = performance.now() - t0;
+  dash.redraws += 1;
+}
+
+// At most one redraw an animation frame, and only when something changed.
+let frames = [];
+function frame(now) {
+  if (dirty && !paused && plots) {
+    dirty = false;
+    draw();
+    frames.push(now);
+  }
+  while (frames.length && frames[0] < now - 1000) frames.shift();
+  dash.fps = frames.length;
+  requestAnimationFrame(frame);
+}
+
+window.addEventListener("error", (e) => dash.errors.push(String(e.message)));
+bind();
+connect();
+requestAnimationFrame(frame);

@@ -1,0 +1,636 @@
+//! The dashboard's board side: one command-port session shared by the pages' requests and the
+//! status poll (one request at a time, in order), the telemetry stream read into batches for
+//! the pages, a recording kept on request, and what a page is told as it opens (`hello`).
+
+use std::collections::VecDeque;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::mpsc::{self, Receiver, SyncSender, TrySendError};
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+
+use de_resonator::board::protocol::Reply;
+use de_resonator::board::stream::{Record, VERSION};
+use de_resonator::Fault;
+use serde::Serialize;
+use serde_json::{json, Value};
+
+use super::DashArgs;
+use crate::cmd::record::{self, Counts};
+use crate::command_port::{fields, gone, Session};
+use crate::telemetry::{self, Source};
+
+/// Requests and replies kept for a page that opens later.
+const LOG_KEPT: usize = 200;
+/// Events queued for a page before it is counted as too slow (its records dropped).
+const PAGE_QUEUE: usize = 4096;
+/// How often the stream's records go to the pages in one event.
+const BATCH: Duration = Duration::from_millis(20);
+/// How long the first request waits for a start-up line (a board already running says none).
+const STARTUP_WAIT: Duration = Duration::from_secs(2);
+/// The points of the tuning curve drawn.
+const CURVE_POINTS: usize = 200;
+/// The most fault entries read back for the page.
+const FAULTS_SHOWN: usize = 8;
+
+/// The columns of a record as the page gets it (a row: an array in this order).
+pub const COLUMNS: [&str; 15] = [
+    "sequence",
+    "tick",
+    "volts",
+    "amplifier_volts",
+    "max_volts",
+    "stretch",
+    "sensed_stretch",
+    "sensed_sigma",
+    "current_amps",
+    "tracked_hz",
+    "quality_factor",
+    "bias_volts",
+    "phase",
+    "fault",
+    "enable",
+];
+
+/// One record for the page, in [`COLUMNS`]' order (NaN and nothing as `null`).
+#[derive(Serialize)]
+struct Row(
+    u32,
+    u32,
+    f32,
+    Option<f32>,
+    f32,
+    Option<f32>,
+    Option<f32>,
+    Option<f32>,
+    Option<f32>,
+    Option<f32>,
+    Option<f32>,
+    f32,
+    &'static str,
+    &'static str,
+    u8,
+);
+
+impl Row {
+    fn of(r: &Record) -> Self {
+        Row(
+            r.sequence,
+            r.tick,
+            r.volts,
+            r.inputs.amplifier_volts,
+            r.max_volts,
+            r.inputs.stretch,
+            r.sensed.map(|s| s.0),
+            r.sensed.map(|s| s.1),
+            r.inputs.current_amps,
+            r.tracked.map(|t| t.0),
+            r.tracked.map(|t| t.1),
+            r.bias_volts,
+            r.phase.map_or("none", |p| p.name()),
+            r.fault.and_then(Fault::key_of).unwrap_or(""),
+            u8::from(r.enabled),
+        )
+    }
+}
+
+/// The pages' event queues: each event goes to every open page.
+#[derive(Default)]
+struct Hub {
+    pages: Mutex<Vec<SyncSender<Arc<str>>>>,
+    /// Records a page could not take (its queue full).
+    dropped: AtomicU64,
+}
+
+impl Hub {
+    /// Send `data` as event `kind` to every page; a page gone is forgotten, one too slow has
+    /// its `records` counted as dropped.
+    fn publish(&self, kind: &str, data: &dyn std::fmt::Display, records: u64) {
+        let event: Arc<str> = format!("event: {kind}\ndata: {data}\n\n").into();
+        let mut pages = lock(&self.pages);
+        pages.retain(|page| match page.try_send(event.clone()) {
+            Ok(()) => true,
+            Err(TrySendError::Full(_)) => {
+                self.dropped.fetch_add(records, Ordering::Relaxed);
+                true
+            }
+            Err(TrySendError::Disconnected(_)) => false,
+        });
+    }
+}
+
+/// A mutex's guard, also after a thread panicked holding it (the data is still whole).
+fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// Milliseconds since the Unix epoch, for the page's log.
+fn now_ms() -> u64 {
+    SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map_or(0, |d| d.as_millis() as u64)
+}
+
+/// A recording made from the page: the header as `console --record` writes it, the records.
+struct Recording {
+    header: Vec<String>,
+    records: Vec<Record>,
+    from: Counts,
+}
+
+/// Everything the dashboard's threads share.
+pub struct Shared {
+    session: Mutex<Session>,
+    hub: Hub,
+    /// What a page is told first: the board, its device's curve, its settings.
+    hello: Mutex<Value>,
+    log: Mutex<VecDeque<Value>>,
+    status: Mutex<Value>,
+    faults: Mutex<Value>,
+    notices: Mutex<Vec<String>>,
+    counts: Mutex<Counts>,
+    recording: Mutex<Option<Recording>>,
+    last_recording: Mutex<Option<Vec<u8>>>,
+    requests: AtomicU64,
+    stopped: Mutex<Option<String>>,
+    stop: AtomicBool,
+    stream: Option<Source>,
+    stream_request: String,
+    /// The `stream <hz>` reply (null without a stream).
+    stream_reply: Mutex<Option<String>>,
+    tick_hz: Mutex<f64>,
+}
+
+impl Shared {
+    /// Connect to the board, wait for its start-up line (a board that starts as a client
+    /// connects says it first), and learn what it runs.
+    pub fn connect(args: &DashArgs) -> Result<Arc<Self>, String> {
+        let notices = Arc::new(Mutex::new(Vec::<String>::new()));
+        let early = notices.clone();
+        // Notices before the pages' hub exists are kept; later ones go to the pages too.
+        let hub_slot: Arc<Mutex<Option<Arc<Shared>>>> = Arc::new(Mutex::new(None));
+        let later = hub_slot.clone();
+        let session = Session::open(&args.board, move |line| match lock(&later).as_ref() {
+            Some(shared) => shared.notice(line),
+            None => lock(&early).push(line),
+        })?;
+        let end = Instant::now() + STARTUP_WAIT;
+        while Instant::now() < end && lock(&notices).is_empty() {
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        let shared = Arc::new(Shared {
+            session: Mutex::new(session),
+            hub: Hub::default(),
+            hello: Mutex::new(Value::Null),
+            log: Mutex::new(VecDeque::new()),
+            status: Mutex::new(Value::Null),
+            faults: Mutex::new(Value::Null),
+            notices: Mutex::new(lock(&notices).clone()),
+            counts: Mutex::new(Counts::default()),
+            recording: Mutex::new(None),
+            last_recording: Mutex::new(None),
+            requests: AtomicU64::new(0),
+            stopped: Mutex::new(None),
+            stop: AtomicBool::new(false),
+            stream: args.stream.source(),
+            stream_request: format!("stream {}", args.stream_hz),
+            stream_reply: Mutex::new(None),
+            tick_hz: Mutex::new(f64::NAN),
+        });
+        *lock(&hub_slot) = Some(shared.clone());
+        shared.learn(&args.board.describe())?;
+        Ok(shared)
+    }
+
+    /// Ask the board what it runs (`info`, `get`, `help` for each setting) and make the
+    /// hello: the device's tuning curve from `info`'s device and `get`'s margin.
+    fn learn(&self, board: &str) -> Result<(), String> {
+        let info = self.ask_own("info")?;
+        let get = self.ask_own("get")?;
+        let info_fields = fields(&info);
+        let get_fields = fields(&get);
+        let tick_hz = get_fields
+            .get("tick_hz")
+            .or(info_fields.get("tick_hz"))
+            .and_then(Value::as_f64)
+            .ok_or_else(|| format!("the board's `info` and `get` say no tick rate: `{get}`"))?;
+        *lock(&self.tick_hz) = tick_hz;
+        let mut settings = Vec::new();
+        if let Some(reply) = Reply::parse(&get) {
+            for (key, value) in reply.pairs() {
+                // Not logged: twenty lines of help would bury the operator's requests.
+                let help = lock(&self.session).ask(&format!("help {key}"))?;
+                let help = Reply::parse(&help)
+                    .and_then(|r| match r {
+                        Reply::Ok(text) => Some(text.to_string()),
+                        Reply::Err { .. } => None,
+                    })
+                    .unwrap_or_default();
+                settings.push(json!({"key": key, "value": value, "help": help}));
+            }
+        }
+        let (curve, curve_problem) = match tuning_curve(&info_fields, &get_fields) {
+            Ok(curve) => (curve, Value::Null),
+            Err(why) => (Value::Null, Value::from(why)),
+        };
+        let device: serde_json::Map<String, Value> = info_fields
+            .iter()
+            .filter_map(|(k, v)| {
+                k.strip_prefix("device.")
+                    .map(|k| (k.to_string(), v.clone()))
+            })
+            .collect();
+        *lock(&self.hello) = json!({
+            "board": board,
+            "info": info,
+            "firmware": info_fields.get("firmware"),
+            "image_crc": info_fields.get("image_crc"),
+            "device": device,
+            "tick_hz": tick_hz,
+            "settings": settings,
+            "curve": curve,
+            "curve_problem": curve_problem,
+            "columns": COLUMNS,
+            "stream": self.stream.as_ref().map(Source::describe),
+            "record_layout": VERSION,
+        });
+        Ok(())
+    }
+
+    /// A request of the dashboard's own (logged as such, not counted as a page's).
+    fn ask_own(&self, request: &str) -> Result<String, String> {
+        self.exchange(request, "dash").map(|(line, _)| line)
+    }
+
+    /// A request to the board and its reply, logged and told to every page.
+    fn exchange(&self, request: &str, origin: &str) -> Result<(String, f64), String> {
+        let started = Instant::now();
+        let reply = lock(&self.session).ask(request);
+        let ms = started.elapsed().as_secs_f64() * 1e3;
+        let line = match reply {
+            Ok(line) => line,
+            Err(why) => {
+                if gone(&why) {
+                    *lock(&self.stopped) = Some(why.clone());
+                }
+                return Err(why);
+            }
+        };
+        let entry = json!({
+            "origin": origin,
+            "request": request,
+            "reply": line,
+            "ok": matches!(Reply::parse(&line), Some(Reply::Ok(_))),
+            "ms": ms,
+            "at": now_ms(),
+        });
+        {
+            let mut log = lock(&self.log);
+            if log.len() == LOG_KEPT {
+                log.pop_front();
+            }
+            log.push_back(entry.clone());
+        }
+        self.hub.publish("exchange", &entry, 0);
+        Ok((line, ms))
+    }
+
+    /// A page's request: sent verbatim (one line of printable ASCII), its reply verbatim.
+    /// What it changes follows: the settings read again, the stream asked again after a
+    /// reset (the board's rate starts at off).
+    pub fn command(&self, request: &str) -> Result<Value, String> {
+        let request = request.trim_end_matches(['\r', '\n']);
+        if request.is_empty() || request.len() > 200 {
+            return Err("a request is one line of 1 to 200 characters".into());
+        }
+        if !request.bytes().all(|b| (0x20..0x7f).contains(&b)) {
+            return Err(
+                "a request is one line of printable ASCII (no line end inside: one request a \
+                 time)"
+                    .into(),
+            );
+        }
+        self.requests.fetch_add(1, Ordering::Relaxed);
+        let (line, ms) = self.exchange(request, "page")?;
+        let ok = matches!(Reply::parse(&line), Some(Reply::Ok(_)));
+        let verb = request.split_whitespace().next().unwrap_or("");
+        if ok && matches!(verb, "set" | "reset" | "save" | "clear") {
+            self.refresh_settings();
+        }
+        if ok && verb == "reset" && self.stream.is_some() {
+            std::thread::sleep(Duration::from_millis(300));
+            self.ask_stream();
+        }
+        Ok(json!({"request": request, "reply": line, "ok": ok, "fields": fields(&line), "ms": ms}))
+    }
+
+    /// `get` again: the settings' values told to the pages (and kept in the hello).
+    fn refresh_settings(&self) {
+        let Ok(get) = self.ask_own("get") else { return };
+        let Some(reply) = Reply::parse(&get) else {
+            return;
+        };
+        let values: serde_json::Map<String, Value> = reply
+            .pairs()
+            .map(|(k, v)| (k.to_string(), Value::from(v)))
+            .collect();
+        let mut hello = lock(&self.hello);
+        if let Some(settings) = hello.get_mut("settings").and_then(Value::as_array_mut) {
+            for s in settings {
+                let value = s["key"].as_str().and_then(|k| values.get(k)).cloned();
+                if let Some(value) = value {
+                    s["value"] = value;
+                }
+            }
+        }
+        drop(hello);
+        self.hub.publish("settings", &Value::Object(values), 0);
+    }
+
+    /// `stream <hz>`: the board's stream started (its reply kept for the pages).
+    fn ask_stream(&self) {
+        let reply = self
+            .ask_own(&self.stream_request)
+            .unwrap_or_else(|why| format!("(no reply: {why})"));
+        *lock(&self.stream_reply) = Some(reply.clone());
+        self.hub.publish(
+            "stream",
+            &json!({"request": self.stream_request, "reply": reply}),
+            0,
+        );
+    }
+
+    /// A line the board said on its own: kept, and told to the pages.
+    fn notice(&self, line: String) {
+        let entry = json!({"line": line, "at": now_ms()});
+        lock(&self.notices).push(line);
+        self.hub.publish("notice", &entry, 0);
+    }
+
+    /// A new page: its queue, and what it is told first.
+    pub fn subscribe(&self) -> (Value, Receiver<Arc<str>>) {
+        let (tx, rx) = mpsc::sync_channel(PAGE_QUEUE);
+        let mut hello = lock(&self.hello).clone();
+        hello["log"] = Value::from(lock(&self.log).iter().cloned().collect::<Vec<_>>());
+        hello["notices"] = Value::from(lock(&self.notices).clone());
+        hello["status"] = lock(&self.status).clone();
+        hello["faults"] = lock(&self.faults).clone();
+        hello["link"] = self.link();
+        hello["stream_reply"] = Value::from(lock(&self.stream_reply).clone());
+        hello["recording"] = Value::from(lock(&self.recording).is_some());
+        lock(&self.hub.pages).push(tx);
+        (hello, rx)
+    }
+
+    /// The link's health: the stream's counts, what the pages could not take.
+    fn link(&self) -> Value {
+        let c = *lock(&self.counts);
+        json!({
+            "records": c.records,
+            "lost": c.lost,
+            "bad_frames": c.bad_frames,
+            "dropped_to_pages": self.dropped(),
+            "requests": self.requests(),
+        })
+    }
+
+    /// Start keeping the stream's records, the header asked of the board now.
+    pub fn record_start(&self) -> Result<Value, String> {
+        if self.stream.is_none() {
+            return Err(
+                "no telemetry stream: start dash with --stream-port, --stream-tcp or \
+                        --stream-unix to record"
+                    .into(),
+            );
+        }
+        if lock(&self.recording).is_some() {
+            return Err("a recording is already under way".into());
+        }
+        let mut header = Vec::new();
+        for request in ["info", "get", "status"] {
+            header.push(format!("{request}: {}", self.ask_own(request)?));
+        }
+        let stream = lock(&self.stream_reply).clone().unwrap_or_default();
+        header.push(format!("{}: {stream}", self.stream_request));
+        *lock(&self.recording) = Some(Recording {
+            header,
+            records: Vec::new(),
+            from: *lock(&self.counts),
+        });
+        self.hub.publish("recording", &json!({"on": true}), 0);
+        Ok(json!({"recording": true}))
+    }
+
+    /// Stop keeping records: the CSV (as `console --record` writes it) kept for download.
+    pub fn record_stop(&self) -> Result<Value, String> {
+        let Some(recording) = lock(&self.recording).take() else {
+            return Err("no recording is under way".into());
+        };
+        let now = *lock(&self.counts);
+        let counts = Counts {
+            records: now.records - recording.from.records,
+            lost: now.lost - recording.from.lost,
+            bad_frames: now.bad_frames - recording.from.bad_frames,
+        };
+        let mut header = recording.header;
+        header.extend(
+            lock(&self.notices)
+                .iter()
+                .map(|n| format!("board said: {n}")),
+        );
+        let tick_hz = *lock(&self.tick_hz);
+        let csv = record::csv(&header, &recording.records, counts, tick_hz)?;
+        let bytes = csv.len();
+        *lock(&self.last_recording) = Some(csv);
+        let said = json!({
+            "on": false,
+            "records": recording.records.len(),
+            "lost": counts.lost,
+            "bad_frames": counts.bad_frames,
+            "bytes": bytes,
+            "url": "/api/recording.csv",
+        });
+        self.hub.publish("recording", &said, 0);
+        Ok(said)
+    }
+
+    /// The last recording's CSV.
+    pub fn recording_csv(&self) -> Option<Vec<u8>> {
+        lock(&self.last_recording).clone()
+    }
+
+    pub fn counts(&self) -> Counts {
+        *lock(&self.counts)
+    }
+
+    pub fn requests(&self) -> u64 {
+        self.requests.load(Ordering::Relaxed)
+    }
+
+    pub fn dropped(&self) -> u64 {
+        self.hub.dropped.load(Ordering::Relaxed)
+    }
+
+    /// Why the session ended, if the board went away.
+    pub fn stopped(&self) -> Option<String> {
+        lock(&self.stopped).clone()
+    }
+
+    /// A snapshot for tools and tests: the link, the last status.
+    pub fn state(&self) -> Value {
+        json!({
+            "link": self.link(),
+            "status": lock(&self.status).clone(),
+            "stopped": self.stopped(),
+        })
+    }
+}
+
+/// The device's tuning curve from `info`'s `device.*` and `get`'s margin (model.md §5–§6):
+/// f against bias to the limit, the margin's highest bias, the tunable range.
+fn tuning_curve(
+    info: &serde_json::Map<String, Value>,
+    get: &serde_json::Map<String, Value>,
+) -> Result<Value, String> {
+    let keys: Vec<(&str, f64)> = info
+        .iter()
+        .filter_map(|(k, v)| Some((k.strip_prefix("device.")?, v.as_f64()?)))
+        .collect();
+    if keys.is_empty() {
+        return Err("the board's `info` names no device".into());
+    }
+    let (params, _) = crate::device_file::from_keys(&keys)?;
+    let margin = get
+        .get("margin")
+        .and_then(Value::as_f64)
+        .ok_or("the board's `get` says no margin")?;
+    let curve = crate::cmd::curve::one_curve(params, margin, None, CURVE_POINTS);
+    if let Some(problem) = &curve.problem {
+        return Err(problem.clone());
+    }
+    let mut value = serde_json::to_value(&curve).map_err(|e| e.to_string())?;
+    value["margin"] = Value::from(margin);
+    Ok(value)
+}
+
+/// The dashboard's threads: the status poll and the stream's reader.
+pub struct Workers {
+    threads: Vec<JoinHandle<()>>,
+}
+
+/// Start the stream (`stream <hz>`) and the threads that poll the status and read the
+/// stream.
+pub fn start(shared: &Arc<Shared>, args: &DashArgs) -> Result<Workers, String> {
+    let mut threads = Vec::new();
+    if let Some(source) = shared.stream.clone() {
+        let port = source.open()?;
+        shared.ask_stream();
+        let s = shared.clone();
+        threads.push(std::thread::spawn(move || read_stream(&s, port)));
+    }
+    let s = shared.clone();
+    let every = Duration::from_secs_f64(args.poll_seconds);
+    threads.push(std::thread::spawn(move || poll(&s, every)));
+    Ok(Workers { threads })
+}
+
+impl Workers {
+    /// Stop the threads and the stream; what the board is still doing, in words.
+    pub fn finish(self, shared: &Shared) -> String {
+        shared.stop.store(true, Ordering::Relaxed);
+        if shared.stream.is_some() && shared.stopped().is_none() {
+            let _ = shared.ask_own("stream off");
+        }
+        for t in self.threads {
+            let _ = t.join();
+        }
+        if shared.stopped().is_some() {
+            return "the board went away".into();
+        }
+        crate::cmd::console::leaving(&mut lock(&shared.session), false)
+    }
+}
+
+/// Ask `status` every `every`, and the fault log when the fault changes: told to the pages.
+fn poll(shared: &Shared, every: Duration) {
+    let mut last_fault: Option<String> = None;
+    let mut polls = 0u64;
+    while !shared.stop.load(Ordering::Relaxed) && shared.stopped().is_none() {
+        let line = lock(&shared.session).ask("status");
+        match line {
+            Ok(line) => {
+                let status = json!({"line": line, "fields": fields(&line), "at": now_ms()});
+                *lock(&shared.status) = status.clone();
+                shared.hub.publish("status", &status, 0);
+                let fault = Reply::parse(&line)
+                    .and_then(|r| r.field("fault"))
+                    .map(String::from);
+                // The log read when the fault changes, and now and then (a fault cleared
+                // and a new one between two polls).
+                if fault != last_fault || polls.is_multiple_of(20) {
+                    read_faults(shared);
+                    last_fault = fault;
+                }
+            }
+            Err(why) if gone(&why) => {
+                *lock(&shared.stopped) = Some(why);
+                return;
+            }
+            Err(_) => {}
+        }
+        polls += 1;
+        let link = shared.link();
+        shared.hub.publish("link", &link, 0);
+        std::thread::sleep(every);
+    }
+}
+
+/// `faults`, and each entry it lists (the newest few): told to the pages.
+fn read_faults(shared: &Shared) {
+    let Ok(summary) = lock(&shared.session).ask("faults") else {
+        return;
+    };
+    // `ok faults=N | n cause t=… | …`: the entries' numbers.
+    let numbers: Vec<u32> = summary
+        .split('|')
+        .skip(1)
+        .filter_map(|part| part.split_whitespace().next()?.parse().ok())
+        .collect();
+    let mut entries = Vec::new();
+    for n in numbers.iter().rev().take(FAULTS_SHOWN) {
+        if let Ok(line) = lock(&shared.session).ask(&format!("faults {n}")) {
+            entries.push(json!({"line": line, "fields": fields(&line)}));
+        }
+    }
+    let faults = json!({"summary": summary, "entries": entries});
+    *lock(&shared.faults) = faults.clone();
+    shared.hub.publish("faults", &faults, 0);
+}
+
+/// Read the stream into batches for the pages (and the recording).
+fn read_stream(shared: &Shared, port: Box<dyn std::io::Read + Send>) {
+    let mut pending: Vec<Row> = Vec::new();
+    let mut last = Instant::now();
+    let result = telemetry::read(port, &shared.stop, |new, receiver| {
+        pending.extend(new.iter().map(Row::of));
+        *lock(&shared.counts) = Counts::of(receiver);
+        if let Some(recording) = lock(&shared.recording).as_mut() {
+            recording.records.extend_from_slice(new);
+        }
+        if !pending.is_empty() && last.elapsed() >= BATCH {
+            let n = pending.len() as u64;
+            // f32 written as f32 (7449.8784, not 7449.87841796875).
+            let rows = serde_json::to_string(&pending).unwrap_or_else(|_| "[]".into());
+            shared.hub.publish("records", &rows, n);
+            pending.clear();
+            last = Instant::now();
+        }
+    });
+    if let Err(why) = result {
+        shared.hub.publish(
+            "notice",
+            &json!({"line": format!("# dash: {why}"), "at": now_ms()}),
+            0,
+        );
+    }
+}

@@ -1,0 +1,202 @@
+//! `host-sim dash`, the live page's server, against the virtual board as a page uses it
+//! (plain HTTP from the test): the page and its assets served, requests passed verbatim and
+//! one line at a time, the events a page opens with, the report as it leaves. The page
+//! itself in Chromium: scripts/dash_test.py.
+
+mod common;
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::TcpStream;
+use std::process::{Child, Stdio};
+use std::time::Duration;
+
+use common::{number, Served};
+use serde_json::Value;
+
+/// `dash --json` on a board: the process and the page's `host:port` (said on stderr; stdout
+/// carries the report).
+fn dash(board: &Served, extra: &[&str]) -> (Child, String) {
+    let mut command = common::host_sim();
+    command.arg("dash").args(&board.connection);
+    if let Some(stream) = &board.stream {
+        command.args(["--stream-unix", stream]);
+    }
+    let mut child = command
+        .args(["--json", "--listen", "127.0.0.1:0"])
+        .args(extra)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("host-sim dash starts");
+    let mut stderr = BufReader::new(child.stderr.take().unwrap());
+    let mut line = String::new();
+    while !line.starts_with("dash: open ") {
+        line.clear();
+        if stderr.read_line(&mut line).unwrap() == 0 {
+            panic!("dash ended before it served");
+        }
+    }
+    std::thread::spawn(move || for _ in stderr.lines() {});
+    let address = line
+        .trim()
+        .strip_prefix("dash: open http://")
+        .unwrap_or_else(|| panic!("dash's first line: {line:?}"))
+        .trim_end_matches('/')
+        .to_string();
+    (child, address)
+}
+
+/// One HTTP/1.0 request (a body in one piece, not chunked): the status code and the body.
+fn http(address: &str, method: &str, path: &str, body: &str) -> (u16, String) {
+    let mut s = TcpStream::connect(address).unwrap();
+    s.set_read_timeout(Some(Duration::from_secs(20))).unwrap();
+    write!(
+        s,
+        "{method} {path} HTTP/1.0\r\nHost: {address}\r\nContent-Length: {}\r\n\r\n{body}",
+        body.len()
+    )
+    .unwrap();
+    let mut text = String::new();
+    s.read_to_string(&mut text).unwrap();
+    let code = text[9..12].parse().unwrap();
+    let body = text
+        .split_once("\r\n\r\n")
+        .map_or("", |(_, b)| b)
+        .to_string();
+    (code, body)
+}
+
+/// The first event a page gets: `hello`'s data.
+fn hello(address: &str) -> Value {
+    let mut s = TcpStream::connect(address).unwrap();
+    s.set_read_timeout(Some(Duration::from_secs(20))).unwrap();
+    write!(s, "GET /api/events HTTP/1.1\r\nHost: {address}\r\n\r\n").unwrap();
+    let reader = BufReader::new(s);
+    let mut event = String::new();
+    for line in reader.lines() {
+        let line = line.unwrap();
+        if let Some(kind) = line.strip_prefix("event: ") {
+            event = kind.to_string();
+        } else if let Some(data) = line.strip_prefix("data: ") {
+            assert_eq!(event, "hello", "the first event");
+            return serde_json::from_str(data).unwrap();
+        }
+    }
+    panic!("no hello event");
+}
+
+#[test]
+fn the_page_talks_to_the_board_only_in_its_protocol() {
+    let board = Served::streaming(None, "5", "dash");
+    let (child, address) = dash(&board, &["--seconds", "20"]);
+    // The page and its vendored plotting library.
+    let (code, page) = http(&address, "GET", "/", "");
+    assert_eq!(code, 200);
+    assert!(page.contains("id=\"stop\""), "a Stop on the page");
+    let (code, uplot) = http(&address, "GET", "/uPlot.iife.min.js", "");
+    assert_eq!(code, 200);
+    assert!(uplot.contains("uPlot"));
+
+    // What a page opens with: the board's device, its curve and settings with their rules.
+    let first = hello(&address);
+    assert!(first["info"].as_str().unwrap().starts_with("ok firmware="));
+    let range = first["curve"]["tunable_range_hz"].as_array().unwrap();
+    let (low, high) = (range[0].as_f64().unwrap(), range[1].as_f64().unwrap());
+    // The image's target (44 Hz) is one the board tunes to: inside the curve's range.
+    assert!(low < 44.0 && 44.0 < high, "{low}..{high}");
+    let settings = first["settings"].as_array().unwrap();
+    let margin = settings.iter().find(|s| s["key"] == "margin").unwrap();
+    assert!(margin["help"]
+        .as_str()
+        .unwrap()
+        .starts_with("margin (fraction)"));
+
+    // One line at a time, verbatim: a line end inside is refused before the board.
+    let (code, body) = http(&address, "POST", "/api/command", "status\nstop");
+    assert_eq!(code, 400, "{body}");
+    assert!(body.contains("one request a time"), "{body}");
+    let (code, body) = http(&address, "POST", "/api/command", "status");
+    assert_eq!(code, 200, "{body}");
+    let reply: Value = serde_json::from_str(&body).unwrap();
+    let line = reply["reply"].as_str().unwrap();
+    assert!(
+        line.starts_with("ok phase=") && line.contains(" output="),
+        "{line}"
+    );
+    // A target past the range: the board's own refusal, its code and words.
+    board.wait_for("at the bias", |s| s.contains("phase=driving"));
+    let (_, body) = http(
+        &address,
+        "POST",
+        "/api/command",
+        &format!("target {}", high + 5.0),
+    );
+    let reply: Value = serde_json::from_str(&body).unwrap();
+    assert_eq!(reply["ok"], false, "{body}");
+    assert!(
+        reply["reply"].as_str().unwrap().starts_with("err 2 "),
+        "{body}"
+    );
+
+    // A recording: refused while none runs, then the CSV with `console --record`'s header.
+    let (code, _) = http(&address, "POST", "/api/record/stop", "");
+    assert_eq!(code, 409);
+    let (code, _) = http(&address, "POST", "/api/record/start", "");
+    assert_eq!(code, 200);
+    std::thread::sleep(Duration::from_millis(500));
+    let (code, said) = http(&address, "POST", "/api/record/stop", "");
+    assert_eq!(code, 200, "{said}");
+    let (code, csv) = http(&address, "GET", "/api/recording.csv", "");
+    assert_eq!(code, 200);
+    assert!(
+        csv.starts_with("# de-resonator telemetry, record layout "),
+        "{}",
+        &csv[..200.min(csv.len())]
+    );
+    assert!(csv.contains("\nsequence,tick,time_seconds,volts,"), "{csv}");
+
+    // The board's state as dash leaves: said, not changed (the output still on).
+    let (code, _) = http(&address, "POST", "/api/command", "stop");
+    assert_eq!(code, 200);
+    let _ = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status();
+    let out = child.wait_with_output().unwrap();
+    let report: Value = serde_json::from_slice(&out.stdout)
+        .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&out.stderr)));
+    assert!(report["records"].as_u64().unwrap() > 0, "{report}");
+    assert_eq!(report["lost"], 0, "{report}");
+    // status, target, stop: the line refused before the board is not one.
+    assert_eq!(report["requests"], 3, "{report}");
+    let leaving = report["leaving"].as_str().unwrap();
+    assert!(leaving.contains("output off"), "{leaving}");
+    // The board is where the page left it: stopped, and a second client reads so.
+    let status = board.replies(&["status"]).remove(0);
+    assert!(status.contains("output=off"), "{status}");
+    assert_eq!(number(&status, "volts"), 0.0, "{status}");
+}
+
+#[test]
+fn beyond_loopback_is_warned_of_and_bad_flags_refused() {
+    let board = Served::start(None, "5", "dash-warn");
+    let out = common::host_sim()
+        .arg("dash")
+        .args(&board.connection)
+        .args(["--listen", "0.0.0.0:0", "--seconds", "0.5"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("warning: serving the page on 0.0.0.0"),
+        "{stderr}"
+    );
+    assert!(out.status.success(), "{stderr}");
+    let out = common::host_sim()
+        .arg("dash")
+        .args(&board.connection)
+        .args(["--stream-hz", "-3"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--stream-hz"));
+}
