@@ -58,25 +58,43 @@ rustup show active-toolchain
 rustup component add clippy rustfmt
 rustup target add "$TARGET"
 
-step "QEMU (qemu-system-arm), defmt-print, picocom with tmux for the terminal tests, Chromium with selenium for the page's"
-missing=()
-for tool in qemu-system-arm:qemu-system-arm picocom:picocom tmux:tmux chromium:chromium chromedriver:chromium-driver; do
-    command -v "${tool%%:*}" >/dev/null || missing+=("${tool##*:}")
-done
-if [ "${#missing[@]}" -gt 0 ]; then
-    SUDO=$([ "$(id -u)" = 0 ] || echo sudo)
-    $SUDO apt-get update -qq
-    $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}"
-fi
-qemu-system-arm --version | head -1
+step "the system's tools: QEMU, picocom and tmux, Chromium and its driver, selenium (installing in the background while the workspace builds), defmt-print"
+# Network-bound, so they install beside the builds; awaited (tools_ready) before the first
+# step that uses them, their log shown if they fail.
+mkdir -p target
+tools_log=target/tools-install.log
+(
+    set -euo pipefail
+    missing=()
+    for tool in qemu-system-arm:qemu-system-arm picocom:picocom tmux:tmux chromium:chromium chromedriver:chromium-driver; do
+        command -v "${tool%%:*}" >/dev/null || missing+=("${tool##*:}")
+    done
+    if [ "${#missing[@]}" -gt 0 ]; then
+        SUDO=$([ "$(id -u)" = 0 ] || echo sudo)
+        $SUDO apt-get update -qq
+        $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}"
+    fi
+    # The browser tests' driver, pinned (4.53.0's dependencies do not install here; 4.51.0's do).
+    python3 -c 'import selenium, sys; sys.exit(selenium.__version__ != "4.51.0")' 2>/dev/null ||
+        python3 -m pip install --quiet --disable-pip-version-check selenium==4.51.0
+) >"$tools_log" 2>&1 &
+tools_pid=$!
+tools_ready() {
+    [ -n "$tools_pid" ] || return 0
+    if ! wait "$tools_pid"; then
+        cat "$tools_log" >&2
+        echo "test-all.sh: installing the system's tools failed (above; $tools_log)" >&2
+        exit 1
+    fi
+    tools_pid=""
+    qemu-system-arm --version | head -1
+    chromium --version 2>/dev/null
+    python3 -c 'import selenium; print("selenium", selenium.__version__)'
+}
 if ! command -v defmt-print >/dev/null; then
     cargo install --locked defmt-print --version 1.2.0
 fi
 defmt-print --version
-# The browser tests' driver, pinned (4.53.0's dependencies do not install here; 4.51.0's do).
-python3 -c 'import selenium, sys; sys.exit(selenium.__version__ != "4.51.0")' 2>/dev/null ||
-    python3 -m pip install --quiet --disable-pip-version-check selenium==4.51.0
-chromium --version
 
 step "format"
 cargo fmt --all -- --check
@@ -99,6 +117,7 @@ step "tests (core integration tests, host-sim unit and CLI tests with BDF; the f
 cargo test --locked --workspace --features host-sim/bdf -- --skip fuzz_the_controller
 
 step "a person at a serial terminal: picocom in tmux on host-sim serve --pty"
+tools_ready
 python3 scripts/terminal_test.py serve "$PWD/target/debug/host-sim"
 
 step "the live page: host-sim dash in headless Chromium (selenium) against host-sim serve"
