@@ -1,15 +1,45 @@
 #!/usr/bin/env bash
-# Regenerate the plots the README shows (docs/plots/), from the built-in reference device.
+# Every figure in docs/plots/, made again by the commands that make it, from the built-in
+# reference device and the shipped scenes. With --check (CI), made in a scratch folder and
+# compared with the committed ones instead: byte for byte (the SVGs' positions are written to
+# a hundredth of a pixel, so the last bits of a float do not move them), except
+#   work-precision.svg        its x axis is measured run time (its ticks move with it):
+#                             compared by its words but numbers (titles, axes, series);
+#                             the speeds are measured, BENCHMARKS.md
+#   python-tuning-family.svg  matplotlib's: compared by its words (titles, labels, ticks,
+#                             legend); its curves are the Python tests' (python/tests)
+# A figure that drifted is named, with the command that makes it; `scripts/plots.sh` (no
+# --check) writes them all to docs/plots/.
+# Usage: scripts/plots.sh [--check]
+# Environment: HOST_SIM=path uses that host-sim (default: the release build, with bdf);
+# the Python figure needs the package installed (pip install ./python), else it is skipped
+# with a note (--check: an error).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cargo build --locked --release -q -p host-sim --features bdf
-hs=target/release/host-sim
-out=docs/plots
+check=0
+case "${1:-}" in
+    --check) check=1 ;;
+    "") ;;
+    -h|--help) sed -n '2,17p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    *) echo "plots.sh: unknown argument \`$1\` (see --help)" >&2; exit 2 ;;
+esac
+if [ -n "${HOST_SIM:-}" ]; then
+    hs="$(realpath "$HOST_SIM")"
+    profile=test
+else
+    cargo build --locked --release -q -p host-sim --features bdf
+    hs=target/release/host-sim
+    profile=release
+fi
+cargo build --locked -q -p host-sim --example sensorless_noise --profile "$profile"
+example="target/$([ "$profile" = test ] && echo debug || echo release)/examples/sensorless_noise"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
+out=docs/plots
+[ "$check" = 1 ] && out="$tmp/plots"
 mkdir -p "$out"
-# Exit status 1 is a finding (a limit crossed), not a failure of this script.
-ran() { "$hs" "$@" >/dev/null || [ $? -eq 1 ]; }
+# Exit status 1 is a finding (a limit crossed, a fault), not a failure of this script.
+ran() { "$hs" "$@" >/dev/null 2>&1 || [ $? -eq 1 ]; }
 ran curve --target-hz 44 --out "$tmp/curve" && cp "$tmp/curve/curve.svg" "$out/curve.svg"
 ran curve --prestretch-1 1.5:3:7 --prestretch-2 1.5:2.5:3 --out "$tmp/family" \
     && cp "$tmp/family/curve.svg" "$out/curve-family.svg"
@@ -20,4 +50,42 @@ ran sweep --out "$tmp/sweep" && cp "$tmp/sweep/sweep.svg" "$out/sweep.svg"
 ran simulate --bias-volts 9400 --start prestretch --duration-seconds 0.05 \
     --plot "$out/simulate-crossing.svg"
 ran report --out "$tmp/report" && cp "$tmp/report/work-precision.svg" "$out/work-precision.svg"
-ls -l "$out"
+"$example" "$out/sensorless-noise.svg" >/dev/null
+if python3 -c 'import de_resonator' 2>/dev/null; then
+    python3 python/examples/figures.py --out "$tmp/python" >/dev/null
+    cp "$tmp/python/tuning-family.svg" "$out/python-tuning-family.svg"
+elif [ "$check" = 1 ]; then
+    echo "plots.sh: the Python package is not installed (pip install ./python)" >&2
+    exit 1
+else
+    echo "plots.sh: python-tuning-family.svg kept as it was (pip install ./python to remake it)" >&2
+fi
+if [ "$check" = 0 ]; then
+    ls -l "$out"
+    exit 0
+fi
+# The comparison: each committed figure against the one made now.
+words() { grep -o '<text[^>]*>[^<]*' "$1" | sed 's/<text[^>]*>//'; }
+names() { words "$1" | grep -Ev '^[-+0-9.,eE×·^ ]*$'; }
+drifted=0
+for made in "$out"/*.svg; do
+    name=$(basename "$made")
+    kept="docs/plots/$name"
+    case "$name" in
+        work-precision.svg) same() { cmp -s <(names "$kept") <(names "$made"); } ;;
+        python-tuning-family.svg) same() { cmp -s <(words "$kept") <(words "$made"); } ;;
+        *) same() { cmp -s "$kept" "$made"; } ;;
+    esac
+    if [ ! -f "$kept" ] || ! same; then
+        echo "plots.sh: docs/plots/$name differs from what its command makes now" >&2
+        drifted=1
+    fi
+done
+for kept in docs/plots/*.svg; do
+    [ -f "$out/$(basename "$kept")" ] || { echo "plots.sh: nothing makes $kept" >&2; drifted=1; }
+done
+if [ "$drifted" = 1 ]; then
+    echo "plots.sh: run scripts/plots.sh and commit docs/plots/ (each figure read before)" >&2
+    exit 1
+fi
+echo "plots.sh: the $(ls "$out" | wc -l) figures in docs/plots/ are what their commands make"

@@ -131,6 +131,9 @@ HOST_SIM="$PWD/target/debug/host-sim" python3 -m pytest -q python/tests
 python3 python/examples/figures.py --out out/python
 python3 python/examples/monte_carlo.py --devices 5000 --workers 2 --plot out/python/monte-carlo.svg
 
+step "docs/plots/: every figure the docs show is what its command makes now (scripts/plots.sh --check)"
+HOST_SIM="$PWD/target/debug/host-sim" scripts/plots.sh --check
+
 step "the core's tests without its optional trim feature (as the firmware builds it)"
 cargo test --locked -q -p de-resonator --no-default-features -- --skip fuzz_the_controller
 

@@ -3,9 +3,10 @@
 //! on) at noise levels from 0.1 to 1000 µA rms a conversion of the ADC (averaged over each
 //! tick's scans), several seeds each; the plant's final frequency error, or the fault; and the
 //! stretch from C: its rms error against the plant's mean stretch over each window, and the
-//! standard error it reports. Prints a table and writes docs/plots/sensorless-noise.svg.
+//! standard error it reports. Prints a table and writes docs/plots/sensorless-noise.svg (or
+//! the file given; scripts/plots.sh).
 //!
-//! `cargo run --release -p host-sim --example sensorless_noise`
+//! `cargo run --release -p host-sim --example sensorless_noise [-- FILE.svg]`
 
 use std::path::Path;
 
@@ -151,7 +152,9 @@ fn main() -> Result<(), String> {
             ..Panel::default()
         },
     ];
-    let out = root.join("docs/plots/sensorless-noise.svg");
+    let out = std::env::args()
+        .nth(1)
+        .map_or_else(|| root.join("docs/plots/sensorless-noise.svg"), Into::into);
     std::fs::write(&out, svg(&panels)).map_err(|e| e.to_string())?;
     println!("wrote {}", out.display());
     Ok(())

@@ -785,12 +785,71 @@ pub fn svg(panels: &[Panel]) -> String {
         }
     }
     out.push_str("</svg>\n");
+    round_attributes(&out)
+}
+
+/// Numbers inside attribute values (positions, in px) to 2 decimals: a hundredth of a pixel
+/// is below what a screen or a printer shows, and the file is the same wherever the last
+/// bits of a float differ (docs/plots/ is compared with what scripts/plots.sh makes). Text
+/// (labels, titles) is left as written.
+fn round_attributes(svg: &str) -> String {
+    let mut out = String::with_capacity(svg.len());
+    // Inside a tag, and inside a quoted value of it.
+    let (mut in_tag, mut in_value) = (false, false);
+    let mut chars = svg.char_indices().peekable();
+    while let Some((i, c)) = chars.next() {
+        match c {
+            '<' if !in_value => in_tag = true,
+            '>' if !in_value => in_tag = false,
+            '"' if in_tag => in_value = !in_value,
+            _ => {}
+        }
+        let starts_number = in_value
+            && (c.is_ascii_digit() || c == '-')
+            && !out.ends_with(|p: char| p.is_ascii_alphanumeric() || p == '.' || p == '#');
+        if !starts_number {
+            out.push(c);
+            continue;
+        }
+        let mut end = i + c.len_utf8();
+        while let Some(&(j, d)) = chars.peek() {
+            if d.is_ascii_digit()
+                || d == '.'
+                || d == 'e'
+                || d == 'E'
+                || d == '-' && end == j && svg[..j].ends_with(['e', 'E'])
+            {
+                end = j + d.len_utf8();
+                chars.next();
+            } else {
+                break;
+            }
+        }
+        let word = &svg[i..end];
+        match word.parse::<f64>() {
+            Ok(x) if word.contains('.') => {
+                let rounded = format!("{x:.2}");
+                let rounded = rounded.trim_end_matches('0').trim_end_matches('.');
+                out.push_str(if rounded == "-0" { "0" } else { rounded });
+            }
+            _ => out.push_str(word),
+        }
+    }
     out
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn positions_are_rounded_and_text_is_not() {
+        let svg = r##"<line x1="715.02" y1="339.3206085338543" stroke="#d55e00" stroke-dasharray="4 3"/><text x="-0.001">"2.166666"</text><polyline points="1.005,2.5e-3 3,4"/>"##;
+        assert_eq!(
+            round_attributes(svg),
+            r##"<line x1="715.02" y1="339.32" stroke="#d55e00" stroke-dasharray="4 3"/><text x="0">"2.166666"</text><polyline points="1,0 3,4"/>"##
+        );
+    }
 
     #[test]
     fn log_axis_spans_whole_decades_and_drops_what_it_cannot_draw() {

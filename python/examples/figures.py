@@ -13,6 +13,10 @@ import sys
 import matplotlib
 
 matplotlib.use("Agg")
+# The same figure is the same file (ids from a fixed salt), its words kept as text (read by
+# scripts/plots.sh --check, and by a reader's search).
+matplotlib.rcParams["svg.hashsalt"] = "de-resonator"
+matplotlib.rcParams["svg.fonttype"] = "none"
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
