@@ -25,14 +25,13 @@ case "${1:-}" in
 esac
 if [ -n "${HOST_SIM:-}" ]; then
     hs="$(realpath "$HOST_SIM")"
-    profile=test
 else
-    cargo build --locked --release -q -p host-sim --features bdf
+    cargo build --locked --release -q -p host-sim --features bdf --bin host-sim --example sensorless_noise
     hs=target/release/host-sim
-    profile=release
 fi
-cargo build --locked -q -p host-sim --example sensorless_noise --profile "$profile"
-example="target/$([ "$profile" = test ] && echo debug || echo release)/examples/sensorless_noise"
+# The example beside the binary (`cargo test` builds it with the tests' host-sim).
+example="$(dirname "$hs")/examples/sensorless_noise"
+[ -x "$example" ] || { echo "plots.sh: no $example (cargo test, or cargo build --example sensorless_noise, builds it)" >&2; exit 2; }
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 out=docs/plots
