@@ -66,6 +66,11 @@ pub enum Stall {
 }
 
 impl Stall {
+    /// Every stall, in order (the fault log keeps one by its index).
+    pub const ALL: [Stall; 2] = [Stall::Overrun, Stall::TransferError];
+}
+
+impl Stall {
     pub const fn name(self) -> &'static str {
         match self {
             Stall::Overrun => "an ADC overrun",

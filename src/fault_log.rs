@@ -1,8 +1,9 @@
 //! The fault log: the last faults the board met, kept in flash beside
 //! the saved settings so that the reason of a trip outlives a reset or a power cut. Each
-//! entry is the cause with its words (the fault's own sentence, cut at `WORDS_BYTES`), the
-//! board's tick and time since boot, and the voltage, current and stretch when it came; a
-//! watchdog reset and a brown-out are entries too.
+//! entry is the cause with its figures (`Fault::figures`: the fault's sentence is written
+//! again from them, whole, with every figure in it), the board's tick and time since boot,
+//! and the voltage, current and stretch when it came; a watchdog reset and a brown-out are
+//! entries too.
 //!
 //! Two halves of whole flash pages, each room for at least `KEPT` entries. An entry is written
 //! at the first erased slot of the half that holds the newest one, its CRC in a write of its
@@ -17,19 +18,23 @@
 //!
 //! | offset | size | what |
 //! |---|---|---|
-//! | 0 | 2 | magic `DF` |
+//! | 0 | 2 | magic `DG` |
 //! | 2 | 1 | cause: `Fault::number` (1–24), 0xF0 a watchdog reset, 0xF1 a brown-out |
-//! | 3 | 1 | the words' length, bytes |
+//! | 3 | 1 | 0: the fault's figures follow; 1: the cause says it all (a reset) |
 //! | 4 | 4 | sequence number, u32 (from 1; the newest is the largest, wrapping) |
 //! | 8 | 4 | the board's tick since boot, u32 |
 //! | 12 | 4 | time since boot, s, f32 |
 //! | 16 | 4 | the voltage commanded, V, f32 |
 //! | 20 | 4 | the amplifier's current, A, f32 (NaN: not measured) |
 //! | 24 | 4 | the stretch sample, f32 (NaN: not measured) |
-//! | 28 | 32 | the words, UTF-8 (the rest zero) |
+//! | 28 | 4 | the figures' indices (`Figures::details`) |
+//! | 32 | 28 | the figures' numbers, 7 × u32 (f32 as its bits) |
 //! | 60 | 4 | CRC-32 (IEEE 802.3) of bytes 0–59 |
+//!
+//! An entry of the layout before (magic `DF`) is read as it was: its words, cut at 32 bytes,
+//! at bytes 28–59 (their length at byte 3).
 
-use core::fmt::{self, Write as _};
+use core::fmt;
 #[cfg(feature = "storage")]
 use core::ops::Range;
 
@@ -39,7 +44,7 @@ use heapless::String;
 #[cfg(feature = "storage")]
 use heapless::Vec;
 
-use crate::controller::Fault;
+use crate::controller::{Fault, Figures};
 #[cfg(feature = "storage")]
 use crate::store::{flash_error, StoreError};
 use crate::table::newer;
@@ -50,12 +55,17 @@ use crate::table::{crc32, f32_at, u32_at, Put};
 pub const KEPT: usize = 32;
 /// An entry's bytes.
 pub const ENTRY_BYTES: usize = 64;
-/// The words an entry keeps, bytes at most.
+/// The words an entry of the layout before kept, bytes at most.
 pub const WORDS_BYTES: usize = 32;
 #[cfg(feature = "storage")]
-const MAGIC: [u8; 2] = *b"DF";
+const MAGIC: [u8; 2] = *b"DG";
+/// The layout before: the words, cut.
+#[cfg(feature = "storage")]
+const MAGIC_WORDS: [u8; 2] = *b"DF";
 #[cfg(feature = "storage")]
 const WORDS_AT: usize = 28;
+#[cfg(feature = "storage")]
+const FIGURES_AT: usize = 28;
 #[cfg(feature = "storage")]
 const CRC_AT: usize = ENTRY_BYTES - 4;
 const WATCHDOG: u8 = 0xF0;
@@ -92,6 +102,15 @@ impl Cause {
         }
     }
 
+    /// A reset's sentence (a fault's is its figures').
+    pub fn words(self) -> &'static str {
+        match self {
+            Cause::Fault(n) => Fault::key_of(n).unwrap_or("fault"),
+            Cause::Watchdog => "watchdog reset: a task hung or ran too long",
+            Cause::BrownOut => "brown-out reset: the supply fell",
+        }
+    }
+
     /// Its key: the fault's (`FAULT_KEYS`), `watchdog` or `brown_out`.
     pub fn key(self) -> &'static str {
         match self {
@@ -116,16 +135,44 @@ pub struct Entry {
     pub volts: f32,
     pub current_amps: Option<f32>,
     pub stretch: Option<f32>,
-    /// What happened, in words (the fault's sentence, cut).
-    pub words: String<WORDS_BYTES>,
+    /// What happened: a fault's figures, or the cause alone.
+    pub said: Said,
+}
+
+/// What an entry says happened, beside its cause.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Said {
+    /// The fault's figures: its sentence, whole.
+    Figures(Figures),
+    /// The cause says it all (a reset).
+    Cause,
+    /// An entry of the layout before: its words, cut at `WORDS_BYTES`.
+    Words(String<WORDS_BYTES>),
+}
+
+/// An entry's sentence (`Entry::words`).
+pub struct Words<'a>(&'a Entry);
+
+impl fmt::Display for Words<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.0.said {
+            Said::Figures(fig) => match Fault::from_figures(fig) {
+                Some(fault) => write!(f, "{fault}"),
+                None => write!(
+                    f,
+                    "fault {} (figures this firmware does not read)",
+                    fig.number
+                ),
+            },
+            Said::Cause => f.write_str(self.0.cause.words()),
+            Said::Words(words) => f.write_str(words),
+        }
+    }
 }
 
 impl Entry {
-    /// An entry for `fault`, its words its sentence (cut at `WORDS_BYTES`, at a character's
-    /// boundary).
+    /// An entry for `fault`: its figures.
     pub fn of_fault(fault: &Fault, tick: u32, seconds: f32, volts: f32) -> Self {
-        let mut words = Cut(String::new());
-        let _ = write!(words, "{fault}");
         Entry {
             sequence: 0,
             cause: Cause::Fault(fault.number()),
@@ -134,14 +181,12 @@ impl Entry {
             volts,
             current_amps: None,
             stretch: None,
-            words: words.0,
+            said: Said::Figures(fault.figures()),
         }
     }
 
     /// An entry for a reset the boot found (`Cause::Watchdog`, `Cause::BrownOut`), at tick 0.
-    pub fn of_reset(cause: Cause, words: &str) -> Self {
-        let mut cut = Cut(String::new());
-        let _ = cut.write_str(words);
+    pub fn of_reset(cause: Cause) -> Self {
         Entry {
             sequence: 0,
             cause,
@@ -150,16 +195,30 @@ impl Entry {
             volts: 0.0,
             current_amps: None,
             stretch: None,
-            words: cut.0,
+            said: Said::Cause,
         }
+    }
+
+    /// What happened, in words: the fault's sentence written again from its figures.
+    pub fn words(&self) -> Words<'_> {
+        Words(self)
     }
 
     #[cfg(feature = "storage")]
     fn to_bytes(&self) -> [u8; ENTRY_BYTES] {
         let mut out = [0u8; ENTRY_BYTES];
         let mut put = Put(&mut out, 0);
-        put.bytes(&MAGIC);
-        put.bytes(&[self.cause.byte(), self.words.len() as u8]);
+        let figures = match &self.said {
+            Said::Figures(fig) => Some(fig),
+            _ => None,
+        };
+        let (magic, third) = match &self.said {
+            Said::Words(words) => (MAGIC_WORDS, words.len() as u8),
+            Said::Figures(_) => (MAGIC, 0),
+            Said::Cause => (MAGIC, 1),
+        };
+        put.bytes(&magic);
+        put.bytes(&[self.cause.byte(), third]);
         put.bytes(&self.sequence.to_le_bytes());
         put.bytes(&self.tick.to_le_bytes());
         for x in [
@@ -170,7 +229,16 @@ impl Entry {
         ] {
             put.bytes(&x.to_le_bytes());
         }
-        put.bytes(self.words.as_bytes());
+        match (&self.said, figures) {
+            (Said::Words(words), _) => put.bytes(words.as_bytes()),
+            (_, Some(fig)) => {
+                put.bytes(&fig.details);
+                for v in fig.values {
+                    put.bytes(&v.to_le_bytes());
+                }
+            }
+            _ => {}
+        }
         let crc = crc32(out.get(..CRC_AT).unwrap_or(&[]));
         if let Some(tail) = out.get_mut(CRC_AT..) {
             tail.copy_from_slice(&crc.to_le_bytes());
@@ -182,21 +250,42 @@ impl Entry {
     /// An entry from its bytes, if they are a whole one (magic, CRC, fields).
     fn from_bytes(bytes: &[u8]) -> Option<Self> {
         let body = bytes.get(..CRC_AT)?;
-        if body.get(..2) != Some(&MAGIC[..]) || crc32(body) != u32_at(bytes, CRC_AT) {
+        if crc32(body) != u32_at(bytes, CRC_AT) {
             return None;
         }
-        let len = usize::from(*bytes.get(3)?);
-        let text = core::str::from_utf8(bytes.get(WORDS_AT..WORDS_AT + len)?).ok()?;
+        let cause = Cause::of(*bytes.get(2)?)?;
+        let third = *bytes.get(3)?;
+        let said = match (body.get(..2)?, third) {
+            (m, len) if m == MAGIC_WORDS => {
+                let len = usize::from(len);
+                let text = core::str::from_utf8(bytes.get(WORDS_AT..WORDS_AT + len)?).ok()?;
+                Said::Words(String::try_from(text).ok()?)
+            }
+            (m, 1) if m == MAGIC => Said::Cause,
+            (m, 0) if m == MAGIC => {
+                let mut fig = Figures {
+                    number: cause.byte(),
+                    ..Figures::default()
+                };
+                fig.details
+                    .copy_from_slice(bytes.get(FIGURES_AT..FIGURES_AT + 4)?);
+                for (k, v) in fig.values.iter_mut().enumerate() {
+                    *v = u32_at(bytes, FIGURES_AT + 4 + 4 * k);
+                }
+                Said::Figures(fig)
+            }
+            _ => return None,
+        };
         let number = |x: f32| (!x.is_nan()).then_some(x);
         Some(Entry {
             sequence: u32_at(bytes, 4),
-            cause: Cause::of(*bytes.get(2)?)?,
+            cause,
             tick: u32_at(bytes, 8),
             seconds: f32_at(bytes, 12),
             volts: f32_at(bytes, 16),
             current_amps: number(f32_at(bytes, 20)),
             stretch: number(f32_at(bytes, 24)),
-            words: String::try_from(text).ok()?,
+            said,
         })
     }
 }
@@ -217,20 +306,6 @@ pub fn keep_newest<T>(kept: &mut [Option<T>], sequence: impl Fn(&T) -> u32, item
         if carry.is_none() {
             break;
         }
-    }
-}
-
-/// A `String` that takes what fits and cuts at a character's boundary.
-struct Cut(String<WORDS_BYTES>);
-
-impl fmt::Write for Cut {
-    fn write_str(&mut self, s: &str) -> fmt::Result {
-        for c in s.chars() {
-            if self.0.push(c).is_err() {
-                break;
-            }
-        }
-        Ok(())
     }
 }
 

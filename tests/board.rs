@@ -802,6 +802,31 @@ fn the_fault_log_lists_the_newest_first_across_resets() {
         "the watchdog's entry, in the older half"
     );
     assert_eq!(code(&bench.ask("faults 42")), Some(2), "no such entry");
+    // A long sentence kept whole with every figure in it: the reading, the limit, the
+    // voltage sent before the fault, the inputs read.
+    let trip = Fault::NearLimit {
+        mode: de_resonator::FailureMode::LossOfTension2b,
+        tick: 51_234,
+        stretch: 1.0123,
+        volts: 7498.017,
+    };
+    let stretch = Inputs {
+        stretch: Some(1.0123),
+        ..Inputs::NONE
+    };
+    let logged = bench
+        .board
+        .log_fault(&trip, (51_234, 51.234), 7498.017, &stretch);
+    assert_eq!(logged, Some(Ok(42)));
+    let sentence = trip.to_string();
+    assert!(sentence.len() > 100, "{sentence}");
+    assert_eq!(
+        bench.ask("faults 42"),
+        format!(
+            "ok sequence=42 cause=near_limit tick=51234 seconds=51.234 volts=7498.017 \
+             stretch=1.0123 words={sentence}"
+        )
+    );
     // Clearing erases flash (a stall on a chip): at rest at 0 V only. A board that drives at
     // power-up, ramping:
     drop(bench);

@@ -69,11 +69,11 @@ fn entries_read_back_newest_first_with_their_data() {
         tick: 1004,
     }
     .to_string();
-    assert!(sentence.len() > 32);
+    assert!(sentence.len() > 32, "longer than the layout before kept");
     assert_eq!(
-        newest.words.as_str(),
-        &sentence[..32],
-        "the fault's own sentence, cut at 32 bytes"
+        newest.words().to_string(),
+        sentence,
+        "the fault's own sentence, whole, written again from its figures"
     );
 }
 
@@ -250,21 +250,58 @@ fn appends_that_must_not_erase_and_the_boots_prepare() {
 #[test]
 fn resets_are_entries_too() {
     let mut bytes = erased();
-    append(
-        &mut bytes,
-        &Entry::of_reset(Cause::Watchdog, "watchdog reset"),
-        None,
-    )
-    .unwrap();
-    append(
-        &mut bytes,
-        &Entry::of_reset(Cause::BrownOut, "brown-out reset"),
-        None,
-    )
-    .unwrap();
+    append(&mut bytes, &Entry::of_reset(Cause::Watchdog), None).unwrap();
+    append(&mut bytes, &Entry::of_reset(Cause::BrownOut), None).unwrap();
     let log = read(&mut bytes);
     assert_eq!(
         log.iter().map(|e| e.cause.key()).collect::<Vec<_>>(),
         ["brown_out", "watchdog"]
     );
+    assert_eq!(
+        log[1].words().to_string(),
+        "watchdog reset: a task hung or ran too long"
+    );
+}
+
+/// An entry of the layout before (magic `DF`, its words cut at 32 bytes) still reads, as it
+/// was written: a firmware update keeps the log it finds.
+#[test]
+fn an_entry_of_the_layout_before_reads_as_it_was() {
+    let mut bytes = erased();
+    let words = "sensor sample 39 is not a number";
+    let mut old = [0u8; 64];
+    old[..2].copy_from_slice(b"DF");
+    old[2] = 12; // Fault::Sensor's number
+    old[3] = words.len() as u8;
+    old[4..8].copy_from_slice(&7u32.to_le_bytes());
+    old[8..12].copy_from_slice(&3900u32.to_le_bytes());
+    old[12..16].copy_from_slice(&3.9f32.to_le_bytes());
+    old[16..20].copy_from_slice(&5.0f32.to_le_bytes());
+    old[20..24].copy_from_slice(&f32::NAN.to_le_bytes());
+    old[24..28].copy_from_slice(&f32::NAN.to_le_bytes());
+    old[28..28 + words.len()].copy_from_slice(words.as_bytes());
+    // CRC-32 (IEEE 802.3), written out here: the layout's, not the code's helper.
+    let mut crc = !0u32;
+    for &b in &old[..60] {
+        crc ^= u32::from(b);
+        for _ in 0..8 {
+            crc = if crc & 1 != 0 {
+                (crc >> 1) ^ 0xEDB8_8320
+            } else {
+                crc >> 1
+            };
+        }
+    }
+    old[60..].copy_from_slice(&(!crc).to_le_bytes());
+    bytes[..64].copy_from_slice(&old);
+    let log = read(&mut bytes);
+    assert_eq!(log.len(), 1);
+    assert_eq!(
+        (log[0].sequence, log[0].cause.key(), log[0].tick),
+        (7, "sensor", 3900)
+    );
+    assert_eq!(log[0].words().to_string(), words);
+    // The next entry is written in the new layout after it, and both read.
+    assert_eq!(append(&mut bytes, &nth(0), None), Ok(8));
+    assert_eq!(read(&mut bytes).len(), 2);
 }

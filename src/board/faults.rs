@@ -16,15 +16,12 @@ use crate::numerics::decimal::Decimal;
 impl<K: Keeper> Board<'_, K> {
     /// Log a reset the boot found; `None` without a log.
     pub(super) fn log_reset(&mut self, cause: ResetCause) -> Option<Result<u32, K::Error>> {
-        let (cause, words) = match cause {
-            ResetCause::Watchdog => (
-                Cause::Watchdog,
-                "watchdog reset: a task hung or ran too long",
-            ),
-            ResetCause::BrownOut => (Cause::BrownOut, "brown-out reset: the supply fell"),
+        let cause = match cause {
+            ResetCause::Watchdog => Cause::Watchdog,
+            ResetCause::BrownOut => Cause::BrownOut,
             ResetCause::Asked => return None,
         };
-        self.keeper.as_mut()?.log(&Entry::of_reset(cause, words))
+        self.keeper.as_mut()?.log(&Entry::of_reset(cause))
     }
 
     /// Log `fault`, latched at board tick `tick` (`seconds` since boot) with `volts` sent
@@ -139,5 +136,5 @@ fn one(e: &Entry, out: &mut ReplyLine) {
     if let Some(stretch) = e.stretch {
         let _ = write!(out, " stretch={}", Decimal(stretch));
     }
-    let _ = write!(out, " words={}", e.words);
+    let _ = write!(out, " words={}", e.words());
 }

@@ -29,6 +29,7 @@
 mod boot;
 mod command;
 mod fault;
+mod fault_figures;
 mod gate;
 mod plan;
 #[cfg(feature = "probe")]
@@ -46,6 +47,7 @@ pub use fault::{
     Event, EventKind, Fault, FaultStage, Output, BUS_FAULT_SAID, EVENT_VALUES, FAULT_KEYS,
     FAULT_SAID,
 };
+pub use fault_figures::Figures;
 pub use plan::{Plan, MAX_PLAN_TICKS};
 pub use settings::{Setting, Settings, F32_GUARD, MAX_TRIMS, TRIM_SECANT_STEP};
 #[cfg(feature = "trim")]

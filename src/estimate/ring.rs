@@ -79,6 +79,11 @@ pub enum NoiseFrom {
 }
 
 impl NoiseFrom {
+    /// Every source, in order (the fault log keeps one by its index).
+    pub const ALL: [NoiseFrom; 3] = [NoiseFrom::Image, NoiseFrom::Hold, NoiseFrom::Window];
+}
+
+impl NoiseFrom {
     const fn words(self) -> &'static str {
         match self {
             NoiseFrom::Image => "declared in the image, before any voltage",
@@ -363,6 +368,11 @@ pub fn high_passed(samples: &[f32], half: usize) -> impl Iterator<Item = f32> + 
 pub enum RingInput {
     Stretch,
     Charge,
+}
+
+impl RingInput {
+    /// Both inputs, in order (the fault log keeps one by its index).
+    pub const ALL: [RingInput; 2] = [RingInput::Stretch, RingInput::Charge];
 }
 
 impl RingInput {

@@ -148,6 +148,10 @@ pub enum Problem {
     },
 }
 
+/// The derived scales a device's parameters must keep finite and positive
+/// (`Problem::DerivedNotFinite`), in the order they are checked.
+pub const SCALES: [&str; 5] = ["H·√(μ/ε)", "μ·L2·H/M", "E_B·√(ε/μ)", "L1A/L1B", "c·T0/M"];
+
 /// A bad device parameter: which field, and what is wrong with it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -395,12 +399,13 @@ impl<T: Real> Device<T> {
         let breakdown_field_dimless = p.breakdown_field * sqrt_eps / sqrt_mu;
         let damping_dimless = p.damping / (mass * rad_per_s_per_unit);
         let length_ratio = p.length_active / p.length_passive;
+        let [volts_scale, omega_scale, field_scale, length_scale, damping_scale] = SCALES;
         let derived = [
-            (Field::ShearModulus, "H·√(μ/ε)", volts_per_unit),
+            (Field::ShearModulus, volts_scale, volts_per_unit),
             // Squared, so that ω² in rad²/s² is finite too.
-            (Field::Density, "μ·L2·H/M", rad_per_s_per_unit.squared()),
-            (Field::BreakdownField, "E_B·√(ε/μ)", breakdown_field_dimless),
-            (Field::LengthPassive, "L1A/L1B", length_ratio),
+            (Field::Density, omega_scale, rad_per_s_per_unit.squared()),
+            (Field::BreakdownField, field_scale, breakdown_field_dimless),
+            (Field::LengthPassive, length_scale, length_ratio),
         ];
         for (field, scale, value) in derived {
             if !value.is_finite() || !(value > T::zero()) {
@@ -408,7 +413,7 @@ impl<T: Real> Device<T> {
             }
         }
         if !damping_dimless.is_finite() {
-            let scale = "c·T0/M";
+            let scale = damping_scale;
             return err(Field::Damping, Problem::DerivedNotFinite { scale });
         }
         let (a, b) = (l1p.to_f64(), l2p.to_f64());

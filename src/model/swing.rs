@@ -85,6 +85,16 @@ pub enum Resonance {
 }
 
 impl Resonance {
+    /// Every resonance, in order (the fault log keeps one by its index).
+    pub const ALL: [Resonance; 4] = [
+        Resonance::Harmonic,
+        Resonance::SuperHarmonic,
+        Resonance::Parametric,
+        Resonance::Static,
+    ];
+}
+
+impl Resonance {
     /// What it is, for people.
     pub fn description(self) -> &'static str {
         match self {
