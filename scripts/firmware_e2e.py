@@ -346,6 +346,8 @@ def main():
     check(enable and enable[0] == "low" and "high" in enable,
           f"the enable line low until start, then high: {enable[:3]}")
 
+    one_port(waits)
+
     print("== the reference image: commands, replies and the DAC frames")
     fw = Firmware("reference", ref)
     check(fw.banner.startswith("# ready "), f"start-up notice: {fw.banner}")
@@ -745,6 +747,40 @@ def lossy_proxy(upstream, path, every):
             except OSError:
                 return
     threading.Thread(target=run, daemon=True).start()
+
+
+def one_port(image):
+    """The command port is one line buffer whoever writes to it (a UART; QEMU's socket): a
+    console that comes after a connection left half a line (`sta`) refuses it first, never
+    runs it, and its own requests are answered as sent (no `stastatus`); one that connects
+    while another holds QEMU's socket is told that the port says nothing, and why."""
+    print("== one port, one line: a half line left behind, a second connection")
+    fw = Firmware("one-port", image)
+    fw.send(b"sta")
+    time.sleep(0.3)
+    script = os.path.join(WORK, "one-port.txt")
+    with open(script, "w") as f:
+        f.write("status\n")
+    # The first leaves with `sta` half sent (its file and socket closed: the connection
+    # ends): the next console ends it, then asks.
+    fw.f.close()
+    fw.s.close()
+    done = subprocess.run([HOST_SIM, "--json", "console", "--unix", fw.sock, "--script",
+                           script], capture_output=True, text=True)
+    replies = [e["reply"] for e in json.loads(done.stdout)["exchanges"]] if done.stdout else []
+    check(done.returncode == 0 and replies and replies[0].startswith("ok phase="),
+          f"the next console refuses the half line and its `status` is answered: {replies} "
+          f"{done.stderr.strip()[-200:]}")
+    # A second connection while another holds the socket: QEMU does not take it.
+    holder = socket.socket(socket.AF_UNIX)
+    holder.connect(fw.sock)
+    time.sleep(0.3)
+    second = subprocess.run([HOST_SIM, "--json", "console", "--unix", fw.sock, "--script",
+                             script, "--timeout", "2"], capture_output=True, text=True)
+    holder.close()
+    fw.stop()
+    check(second.returncode == 2 and "one connection at a time" in second.stderr,
+          f"a second connection is told the port says nothing: {second.stderr.strip()[-300:]}")
 
 
 def telemetry():

@@ -258,6 +258,31 @@ impl Session {
     }
 }
 
+/// What a client sends first for a clean line: a byte no request may hold, then a line end.
+/// Whatever an earlier connection left half sent is refused with it (`err 1 … not printable`),
+/// never run: a half `start` must not switch the output on.
+const CLEAN_LINE: &str = "\u{0}";
+
+impl Session {
+    /// Start from a clean line. A board's port is one line buffer whoever writes to it (a
+    /// UART, QEMU's socket): a line half sent by an earlier connection would be glued to this
+    /// one's first request. A byte no request holds and a line end refuse whatever is there
+    /// (the board's reply read and dropped). `Err` when the board says nothing: under QEMU the
+    /// port serves one connection at a time, and another is connected.
+    pub fn clean_line(&mut self) -> Result<(), String> {
+        match self.ask(CLEAN_LINE) {
+            Ok(_) => Ok(()),
+            Err(why) if gone(&why) => Err(why),
+            Err(_) => Err(format!(
+                "no reply in {} s: the board's port says nothing. Under QEMU it serves one \
+                 connection at a time (is another console or dash connected?); on a board, \
+                 check the port and its baud rate",
+                self.timeout.as_secs_f64()
+            )),
+        }
+    }
+}
+
 /// Whether an error means the board went away (the session ends, said as such).
 pub fn gone(why: &str) -> bool {
     why.starts_with("the board closed") || why.starts_with("the connection failed")

@@ -232,6 +232,8 @@ pub fn console(args: &ConsoleArgs, json: bool) -> Result<ConsoleReport, String> 
     while Instant::now() < end && notices.lock().map_or(true, |n| n.is_empty()) {
         std::thread::sleep(Duration::from_millis(20));
     }
+    // A clean line first: a half line an earlier connection left is refused, not glued.
+    session.clean_line()?;
     let mut left_by_interrupt = false;
     let mut report = ConsoleReport {
         notices: Vec::new(),

@@ -170,7 +170,7 @@ impl Shared {
         // Notices before the pages' hub exists are kept; later ones go to the pages too.
         let hub_slot: Arc<Mutex<Option<Arc<Shared>>>> = Arc::new(Mutex::new(None));
         let later = hub_slot.clone();
-        let session = Session::open(&args.board, move |line| match lock(&later).as_ref() {
+        let mut session = Session::open(&args.board, move |line| match lock(&later).as_ref() {
             Some(shared) => shared.notice(line),
             None => lock(&early).push(line),
         })?;
@@ -178,6 +178,8 @@ impl Shared {
         while Instant::now() < end && lock(&notices).is_empty() {
             std::thread::sleep(Duration::from_millis(20));
         }
+        // A clean line first: a half line an earlier connection left is refused, not glued.
+        session.clean_line()?;
         let shared = Arc::new(Shared {
             session: Mutex::new(session),
             hub: Hub::default(),
