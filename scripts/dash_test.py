@@ -126,6 +126,10 @@ class Page:
     def __init__(self, driver, url):
         self.d = driver
         self.url = url
+        # A page of an earlier dash (stopped) goes first, and what the browser logged for it
+        # (its events' reconnections) with it.
+        driver.get("about:blank")
+        driver.get_log("browser")
         driver.get(url)
         wait_until(lambda: self.js("return window.dash && dash.hello !== null"), 20,
                    "the page's hello")

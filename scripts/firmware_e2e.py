@@ -687,6 +687,10 @@ def main():
               and float(re.search(r"volts=([0-9.]+)", entry).group(1)) > 1000,
               f"after the reset, the same log; the first entry whole (2 s in, at the drive's "
               f"voltage, its words): {entry}")
+        second = fw.ask("faults 2")
+        check(second.endswith(f" words={s['fault']}") and len(s["fault"]) > 32,
+              f"the second entry's words whole, with their figures, as status said them "
+              f"({len(s['fault'])} bytes): {second}")
         fw.stop()
         ram_within_budget(s, TRIM_ELF, "a fault's descent and a clear (a whole boot) while ticking")
         frames, enable = fw.frames()
