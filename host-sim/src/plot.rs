@@ -80,13 +80,15 @@ const FONT: f64 = 11.0;
 const CHAR: f64 = 0.62;
 /// Above this many points a series is drawn as its min/max envelope per pixel column.
 const MAX_POINTS_PER_PIXEL: f64 = 2.0;
+/// Series' colours: Okabe and Ito's, which colour-blind readers tell apart (blue, orange,
+/// bluish green, reddish purple, sky blue, black, vermillion, grey); red is the limits'.
 pub const COLOURS: [&str; 8] = [
-    "#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf",
+    "#0072B2", "#E69F00", "#009E73", "#CC79A7", "#56B4E9", "#000000", "#D55E00", "#999999",
 ];
 /// Guides' colours when their labels go in the legend (none is the series' blue or the
 /// limits' red).
 const GUIDE_COLOURS: [&str; 7] = [
-    "#7f7f7f", "#ff7f0e", "#2ca02c", "#9467bd", "#8c564b", "#e377c2", "#17becf",
+    "#999999", "#E69F00", "#009E73", "#CC79A7", "#56B4E9", "#000000", "#D55E00",
 ];
 /// Levels' dash patterns and reds when their labels go in the legend.
 const LEVEL_STYLES: [(&str, &str); 4] = [
@@ -95,6 +97,25 @@ const LEVEL_STYLES: [(&str, &str); 4] = [
     (RED, "10 3 2 3"),
     ("#8b0000", "12 4"),
 ];
+
+/// 10^e as people write it: 1, 10, 100, 10³, 10⁻³.
+fn power_of_ten(e: i32) -> String {
+    match e {
+        0 => "1".into(),
+        1 => "10".into(),
+        2 => "100".into(),
+        _ => {
+            const SUPERSCRIPT: [char; 10] = ['⁰', '¹', '²', '³', '⁴', '⁵', '⁶', '⁷', '⁸', '⁹'];
+            let digits: String = e
+                .unsigned_abs()
+                .to_string()
+                .chars()
+                .filter_map(|d| d.to_digit(10).and_then(|d| SUPERSCRIPT.get(d as usize)))
+                .collect();
+            format!("10{}{digits}", if e < 0 { "⁻" } else { "" })
+        }
+    }
+}
 
 /// An axis: data range mapped onto pixels, linear or log10.
 struct Axis {
@@ -146,7 +167,7 @@ impl Axis {
             let every = ((b - a) / 8).max(1);
             return (a..=b)
                 .step_by(every as usize)
-                .map(|e| (10f64.powi(e), format!("1e{e}")))
+                .map(|e| (10f64.powi(e), power_of_ten(e)))
                 .collect();
         }
         let span = self.high - self.low;
@@ -841,6 +862,15 @@ fn round_attributes(svg: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn powers_of_ten_are_written_as_people_write_them() {
+        let written: Vec<String> = [-12, -3, -1, 0, 1, 2, 3, 10].map(power_of_ten).into();
+        assert_eq!(
+            written,
+            ["10⁻¹²", "10⁻³", "10⁻¹", "1", "10", "100", "10³", "10¹⁰"]
+        );
+    }
 
     #[test]
     fn positions_are_rounded_and_text_is_not() {

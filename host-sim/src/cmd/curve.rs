@@ -332,11 +332,12 @@ pub fn one_curve(
 }
 
 /// f against bias. One device: the curve, its limit (red ×), the margin's highest bias, the
-/// tunable range as two levels, the target. A family: a colour per λ2p, a curve per λ1p
-/// labelled with its λ1p, and through each colour's limits the safe region's edge, dashed red.
+/// tunable range as two levels, the target. A family: a colour per λ2p, a curve per λ1p (the
+/// group's first and last labelled with their λ1p), and through each group's limits its part
+/// of the safe region's edge, dashed in the group's colour.
 fn plot(device: &DeviceInfo, curves: &[Curve], family: bool) -> Panel {
     let mut panel = Panel {
-        title: format!("Tuning curve: {}", device.source),
+        title: format!("Tuning curve: {}", device.title()),
         x_label: "bias, V".into(),
         y_label: "natural frequency, Hz".into(),
         ..Panel::default()
@@ -383,8 +384,9 @@ fn plot(device: &DeviceInfo, curves: &[Curve], family: bool) -> Panel {
                     colour: Some(colour),
                     ..Style::default()
                 },
-                // In a family, each curve says which λ1p it is (its colour says the λ2p).
-                label: if family {
+                // In a family, the group's first and last curves say which λ1p they are (the
+                // colour says the λ2p; the legend the range between): more would pile up.
+                label: if family && (k == 0 || k + 1 == members.len()) {
                     format!("λ1p {}", short(c.prestretch_1))
                 } else {
                     String::new()
@@ -393,18 +395,14 @@ fn plot(device: &DeviceInfo, curves: &[Curve], family: bool) -> Panel {
         }
         if family {
             panel.series.push(Series {
-                name: if g == 0 {
-                    "limits: the safe region's edge".into()
-                } else {
-                    String::new()
-                },
+                name: format!("λ2p {}: the safe region's edge (limits)", short(l2)),
                 points: members
                     .iter()
                     .filter_map(|c| c.limit.as_ref())
                     .map(|l| (l.volts, l.natural_frequency_hz))
                     .collect(),
                 style: Style {
-                    colour: Some(RED),
+                    colour: Some(colour),
                     dashed: true,
                     ..Style::default()
                 },
@@ -419,7 +417,7 @@ fn plot(device: &DeviceInfo, curves: &[Curve], family: bool) -> Panel {
                     x: v,
                     y: t.target_hz,
                     label: format!("target {} Hz", sig(t.target_hz)),
-                    colour: "#2ca02c",
+                    colour: crate::plot::COLOURS[2],
                 });
             }
         }

@@ -119,6 +119,19 @@ impl DeviceInfo {
     }
 }
 
+impl DeviceInfo {
+    /// The device's name for a figure's title: the file's name without its folder and
+    /// extension (`soft-vhb`), or `reference device`.
+    pub fn title(&self) -> String {
+        if self.source.starts_with("reference device") {
+            return "reference device".into();
+        }
+        std::path::Path::new(&self.source)
+            .file_stem()
+            .map_or(self.source.clone(), |s| s.to_string_lossy().into_owned())
+    }
+}
+
 impl Display for DeviceInfo {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self.jlim {

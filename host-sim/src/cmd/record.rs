@@ -190,10 +190,13 @@ pub fn plot(records: &[Record], receiver: &Receiver, tick_hz: f64, title: &str) 
         x_label: "time, s".into(),
         y_label: "V".into(),
         series: vec![series("commanded", &|r| Some(r.volts)), cap],
-        notes: vec![format!(
-            "{} records, {} lost, {} bad frames",
-            receiver.records, receiver.lost, receiver.bad_frames
-        )],
+        notes: vec![
+            format!(
+                "{} records, {} lost, {} bad frames",
+                receiver.records, receiver.lost, receiver.bad_frames
+            ),
+            aliasing(records, tick_hz),
+        ],
         ..Panel::default()
     };
     let mut stretch = Panel {
@@ -214,6 +217,28 @@ pub fn plot(records: &[Record], receiver: &Receiver, tick_hz: f64, title: &str) 
         panels.push(stretch);
     }
     panels
+}
+
+/// The note a record rate needs: motion faster than half of it (a drive, a ring) is drawn
+/// aliased, as a slower wave or none.
+fn aliasing(records: &[Record], tick_hz: f64) -> String {
+    let mut gaps: Vec<u32> = records
+        .windows(2)
+        .map(|w| w[1].tick.wrapping_sub(w[0].tick))
+        .filter(|&g| g > 0)
+        .collect();
+    gaps.sort_unstable();
+    match gaps.get(gaps.len() / 2) {
+        Some(&ticks) => {
+            let hz = tick_hz / f64::from(ticks);
+            format!(
+                "a record every {ticks} ticks ({} Hz): motion above {} Hz is drawn aliased",
+                crate::cmd::sig(hz),
+                crate::cmd::sig(hz / 2.0)
+            )
+        }
+        None => "too few records for their rate".into(),
+    }
 }
 
 #[cfg(test)]

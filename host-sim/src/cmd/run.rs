@@ -531,7 +531,9 @@ fn plot(scene: &Scene, run: &Run) -> Vec<Panel> {
         if let Some((mode, stretch)) = boot.limit {
             stretch_levels.push((
                 f64::from(stretch),
-                format!("device's limit stretch ({})", mode.name()),
+                // The static limit (§6 on the loading branch at rest): a drive's swing
+                // about its bias may pass it, the monitor checks the dynamic one (§6, §7).
+                format!("static limit stretch ({}, at rest)", mode.name()),
             ));
         }
     }

@@ -414,7 +414,7 @@ fn plot(
         format!("{} V AC at {} Hz", sig(scene.ac_volts), sig(scene.drive_hz))
     };
     Panel {
-        title: format!("{}: {} V, {ac}", device.source, sig(scene.bias_volts)),
+        title: format!("{}: {} V, {ac}", device.title(), sig(scene.bias_volts)),
         x_label: "time, s".into(),
         y_label: "stretch λ".into(),
         series: vec![Series {
