@@ -144,13 +144,24 @@ fn each_family_curve_says_its_prestretch() {
     let labels = texts(&svg);
     let curves = v["curves"].as_array().unwrap();
     assert_eq!(curves.len(), 21);
+    // Each λ2p group's first and last curve says its λ1p, in the group's colour (one colour
+    // a group); the ones between are the legend's range (more labels would pile up).
+    let ends = |l1: f64| {
+        curves
+            .iter()
+            .filter(|c| c["prestretch_1"].as_f64() == Some(l1))
+            .filter(|c| {
+                let group: Vec<f64> = curves
+                    .iter()
+                    .filter(|d| d["prestretch_2"] == c["prestretch_2"])
+                    .filter_map(|d| d["prestretch_1"].as_f64())
+                    .collect();
+                group.first() == Some(&l1) || group.last() == Some(&l1)
+            })
+            .count()
+    };
     for c in curves {
         let l1 = c["prestretch_1"].as_f64().unwrap();
-        let l2 = c["prestretch_2"].as_f64().unwrap();
-        let same_l1 = curves
-            .iter()
-            .filter(|d| d["prestretch_1"].as_f64() == Some(l1))
-            .count();
         let named: Vec<&Text> = labels
             .iter()
             .filter(|t| {
@@ -160,12 +171,16 @@ fn each_family_curve_says_its_prestretch() {
                     .is_some_and(|v| (v - l1).abs() < 1e-9)
             })
             .collect();
-        assert_eq!(named.len(), same_l1, "λ1p {l1} (λ2p {l2}): {named:?}");
-        // One label a colour, that is, a λ2p.
+        assert_eq!(named.len(), ends(l1), "λ1p {l1}: {named:?}");
         let mut colours: Vec<&str> = named.iter().map(|t| t.fill.as_str()).collect();
         colours.sort();
         colours.dedup();
-        assert_eq!(colours.len(), same_l1, "λ1p {l1}: {colours:?}");
+        assert_eq!(colours.len(), named.len(), "λ1p {l1}: {colours:?}");
+    }
+    // Each group's edge in the legend, by its λ2p.
+    for l2 in ["1.5", "2", "2.5"] {
+        let edge = format!("λ2p {l2}: the safe region's edge (limits)");
+        assert!(labels.iter().any(|t| t.content == edge), "{edge}");
     }
 }
 
