@@ -261,6 +261,8 @@ impl Entry {
                 let text = core::str::from_utf8(bytes.get(WORDS_AT..WORDS_AT + len)?).ok()?;
                 Said::Words(String::try_from(text).ok()?)
             }
+            // A reset is said by its cause, whatever the byte.
+            (m, _) if m == MAGIC && !matches!(cause, Cause::Fault(_)) => Said::Cause,
             (m, 1) if m == MAGIC => Said::Cause,
             (m, 0) if m == MAGIC => {
                 let mut fig = Figures {

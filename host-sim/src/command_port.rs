@@ -208,7 +208,13 @@ pub struct Session {
     pub writer: Box<dyn Port>,
     pub heard: Receiver<Heard>,
     pub timeout: Duration,
+    /// A request went unanswered in time: its reply may still come, and must not be taken
+    /// for the next one's.
+    late: bool,
 }
+
+/// How long a port must stay quiet, after a reply came late, before the next request.
+const QUIET: Duration = Duration::from_millis(300);
 
 impl Session {
     /// Connect to the port and listen on it, notices to `notice`.
@@ -224,6 +230,7 @@ impl Session {
             writer,
             heard: listen(reader, notice),
             timeout: Duration::from_secs_f64(args.timeout),
+            late: false,
         })
     }
 
@@ -236,6 +243,20 @@ impl Session {
                 return Err(why);
             }
         }
+        // After a reply came late: wait for the port to be quiet (the late reply dropped).
+        if self.late {
+            loop {
+                match self.heard.recv_timeout(QUIET) {
+                    Ok(Heard::Closed(why)) => return Err(why),
+                    Ok(_) => continue,
+                    Err(RecvTimeoutError::Timeout) => break,
+                    Err(RecvTimeoutError::Disconnected) => {
+                        return Err("the board closed the connection".into())
+                    }
+                }
+            }
+            self.late = false;
+        }
         self.writer
             .write_all(format!("{request}\n").as_bytes())
             .and_then(|()| self.writer.flush())
@@ -247,12 +268,19 @@ impl Session {
             })?;
         match self.heard.recv_timeout(self.timeout) {
             Ok(Heard::Reply(line)) => Ok(line),
-            Ok(Heard::NotAReply(line)) => Err(format!("not a reply: {line:?}")),
+            Ok(Heard::NotAReply(line)) => {
+                self.late = true;
+                Err(format!("not a reply: {line:?}"))
+            }
             Ok(Heard::Closed(why)) => Err(why),
-            Err(RecvTimeoutError::Timeout) => Err(format!(
-                "no reply to `{request}` in {} s",
-                self.timeout.as_secs_f64()
-            )),
+            Err(RecvTimeoutError::Timeout) => {
+                self.late = true;
+                Err(format!(
+                    "no reply to `{}` in {} s",
+                    request.escape_debug(),
+                    self.timeout.as_secs_f64()
+                ))
+            }
             Err(RecvTimeoutError::Disconnected) => Err("the board closed the connection".into()),
         }
     }
@@ -271,14 +299,22 @@ impl Session {
     /// port serves one connection at a time, and another is connected.
     pub fn clean_line(&mut self) -> Result<(), String> {
         match self.ask(CLEAN_LINE) {
-            Ok(_) => Ok(()),
-            Err(why) if gone(&why) => Err(why),
-            Err(_) => Err(format!(
+            // The line refused, as it must be (a NUL is in no request).
+            Ok(reply) if matches!(Reply::parse(&reply), Some(Reply::Err { code, .. }) if code as u8 == 1) => {
+                Ok(())
+            }
+            // Never expected: the NUL was lost on the way and a half line ran.
+            Ok(reply) => Err(format!(
+                "the board ran a line left half sent on its port before this connection: \
+                 `{reply}` (check the board: `status`)"
+            )),
+            Err(why) if why.starts_with("no reply") => Err(format!(
                 "no reply in {} s: the board's port says nothing. Under QEMU it serves one \
                  connection at a time (is another console or dash connected?); on a board, \
                  check the port and its baud rate",
                 self.timeout.as_secs_f64()
             )),
+            Err(why) => Err(why),
         }
     }
 }

@@ -46,13 +46,30 @@ fn dash(board: &Served, extra: &[&str]) -> (Child, String) {
     (child, address)
 }
 
-/// One HTTP/1.0 request (a body in one piece, not chunked): the status code and the body.
+/// One HTTP/1.0 request as the page sends it (a body in one piece, not chunked; a POST with
+/// the page's header): the status code and the body.
 fn http(address: &str, method: &str, path: &str, body: &str) -> (u16, String) {
+    let act = if method == "POST" {
+        "X-Dash-Request: 1\r\n"
+    } else {
+        ""
+    };
+    raw(
+        address,
+        &format!("Host: {address}\r\n{act}"),
+        method,
+        path,
+        body,
+    )
+}
+
+/// A request with the headers given: the status code and the body.
+fn raw(address: &str, headers: &str, method: &str, path: &str, body: &str) -> (u16, String) {
     let mut s = TcpStream::connect(address).unwrap();
     s.set_read_timeout(Some(Duration::from_secs(20))).unwrap();
     write!(
         s,
-        "{method} {path} HTTP/1.0\r\nHost: {address}\r\nContent-Length: {}\r\n\r\n{body}",
+        "{method} {path} HTTP/1.0\r\n{headers}Content-Length: {}\r\n\r\n{body}",
         body.len()
     )
     .unwrap();
@@ -110,6 +127,28 @@ fn the_page_talks_to_the_board_only_in_its_protocol() {
         .as_str()
         .unwrap()
         .starts_with("margin (fraction)"));
+
+    // Only the page's own requests: another site's page (its Origin), a name pointed at this
+    // machine (DNS rebinding: its Host), or a request without the page's header cannot start
+    // the board; the board never hears them.
+    let port = address.rsplit(':').next().unwrap();
+    for (headers, why) in [
+        (format!("Host: {address}\r\n"), "X-Dash-Request"),
+        (
+            format!("Host: {address}\r\nX-Dash-Request: 1\r\nOrigin: http://evil.example\r\n"),
+            "may not use",
+        ),
+        (
+            format!("Host: evil.example:{port}\r\nX-Dash-Request: 1\r\n"),
+            "not served as",
+        ),
+    ] {
+        let (code, body) = raw(&address, &headers, "POST", "/api/command", "start");
+        assert_eq!(code, 403, "{headers}: {body}");
+        assert!(body.contains(why), "{body}");
+    }
+    let (code, _) = raw(&address, "Host: evil.example\r\n", "GET", "/api/state", "");
+    assert_eq!(code, 403, "a rebinding page reads nothing either");
 
     // One line at a time, verbatim: a line end inside is refused before the board.
     let (code, body) = http(&address, "POST", "/api/command", "status\nstop");

@@ -5,6 +5,12 @@
 //!
 //! `Fault::figures` and `Fault::from_figures` are each other's inverse on every fault the
 //! controller makes (tested on one of each kind); a model run's step count is kept to 2³² − 1.
+//!
+//! Flash holds positions: in `Setting::ALL`, `Field::ALL`, `FailureMode::ALL`, `Channel::ALL`,
+//! `Stall::ALL`, `Method::ALL`, `Resonance::ALL`, `RingInput::ALL`, `NoiseFrom::ALL`,
+//! `device::SCALES`, and each error's variant numbers below. They are part of the log's
+//! layout: a list only grows at its end (a test pins each order), or an older entry would
+//! read as another fault.
 
 use crate::acquire::{Channel, InputError, Stall};
 use crate::device::{Field, ParamError, Problem, SCALES};
@@ -62,8 +68,8 @@ impl Put {
     }
 }
 
-/// Reads them back in the same order; `None` past what was written or for an index no value
-/// has (bytes of another version, or damaged).
+/// Reads them back in the same order: `None` past the room or for an index no value has
+/// (bytes of another version, or damaged); zero past what was written.
 struct Take<'a>(&'a Figures, usize, usize);
 
 impl Take<'_> {
@@ -896,6 +902,112 @@ mod tests {
             }
             assert_eq!(back, Some(fault));
         }
+    }
+
+    /// The lists whose positions flash holds, in their order: a reorder would read an older
+    /// entry as another fault (the names written out here, not taken from the code).
+    #[test]
+    fn the_positions_flash_holds_keep_their_order() {
+        let settings: Vec<&str> = Setting::ALL.iter().map(|s| s.key()).collect();
+        assert_eq!(
+            settings,
+            [
+                "target_hz",
+                "margin",
+                "slew_volts_per_second",
+                "tick_hz",
+                "settle_seconds",
+                "ac_volts",
+                "ac_hz",
+                "check_seconds",
+                "agreement",
+                "amplifier_tolerance_volts",
+                "stuck_samples",
+                "trim_tolerance",
+                "trim_window_seconds",
+                "trim_pulse_volts",
+                "trim_probe_fraction",
+                "trim_every_seconds",
+                "leakage_floor_ohms",
+                "leakage_fall_per_second",
+                "track_seconds",
+                "probe_volts",
+                "probe_hz",
+            ]
+        );
+        let fields: Vec<&str> = Field::ALL.iter().map(|f| f.key()).collect();
+        assert_eq!(
+            fields,
+            [
+                "shear_modulus",
+                "jlim",
+                "relative_permittivity",
+                "density",
+                "breakdown_field",
+                "thickness",
+                "length_active",
+                "length_passive",
+                "width",
+                "bar_mass",
+                "prestretch_1",
+                "prestretch_2",
+                "damping",
+            ]
+        );
+        assert_eq!(
+            FailureMode::ALL,
+            [
+                FailureMode::DeviceInstability,
+                FailureMode::Emi,
+                FailureMode::LossOfTension1,
+                FailureMode::LossOfTension2a,
+                FailureMode::LossOfTension2b,
+                FailureMode::Breakdown,
+                FailureMode::StretchLimit,
+            ]
+        );
+        assert_eq!(
+            Channel::ALL,
+            [Channel::Current, Channel::Amplifier, Channel::Stretch]
+        );
+        assert_eq!(Stall::ALL, [Stall::Overrun, Stall::TransferError]);
+        assert_eq!(
+            Method::ALL,
+            [Method::Rk4, Method::Verlet, Method::ImplicitMidpoint]
+        );
+        assert_eq!(
+            Resonance::ALL,
+            [
+                Resonance::Harmonic,
+                Resonance::SuperHarmonic,
+                Resonance::Parametric,
+                Resonance::Static
+            ]
+        );
+        assert_eq!(RingInput::ALL, [RingInput::Stretch, RingInput::Charge]);
+        assert_eq!(
+            NoiseFrom::ALL,
+            [NoiseFrom::Image, NoiseFrom::Hold, NoiseFrom::Window]
+        );
+        assert_eq!(
+            SCALES,
+            ["H·√(μ/ε)", "μ·L2·H/M", "E_B·√(ε/μ)", "L1A/L1B", "c·T0/M"]
+        );
+        // A fault's figures as the layout has them: number 14, no index, the count and the
+        // sample's bits.
+        let stuck = Fault::SensorStuck {
+            samples: 100,
+            value: 2.5,
+        }
+        .figures();
+        assert_eq!(
+            stuck,
+            Figures {
+                number: 14,
+                details: [0; DETAILS],
+                values: [100, 0x4020_0000, 0, 0, 0, 0, 0],
+            }
+        );
     }
 
     #[test]

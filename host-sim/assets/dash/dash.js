@@ -8,11 +8,14 @@
 const C = { blue: "#0072B2", orange: "#E69F00", green: "#009E73", red: "#D55E00",
   sky: "#56B4E9", purple: "#CC79A7", black: "#000000", grey: "#777777" };
 const KEEP_SECONDS = 60;
+// What a request that acts carries (the server refuses one without it: another site's page).
+const ACT = { "X-Dash-Request": "1" };
 
 // What the page knows; `window.dash` is read by the browser tests and the benchmark.
 const dash = window.dash = {
   hello: null, tickHz: NaN, columns: {}, received: 0, gaps: 0, restarts: 0, lastSeq: null,
   redraws: 0, fps: 0, drawMs: 0, lastReplyMs: NaN, lastReply: "", status: null, connected: false,
+  lastTick: null, tickBase: 0,
   errors: [],
 };
 
@@ -35,7 +38,7 @@ async function send(line) {
   const t0 = performance.now();
   let text, ok = false;
   try {
-    const r = await fetch("/api/command", { method: "POST", body: line });
+    const r = await fetch("/api/command", { method: "POST", body: line, headers: ACT });
     const j = await r.json();
     ok = !!j.ok;
     text = j.reply !== undefined ? j.reply : "error: " + j.error;
@@ -76,9 +79,13 @@ function bind() {
 }
 
 async function record(what) {
-  const r = await fetch("/api/record/" + what, { method: "POST" });
-  const j = await r.json();
-  if (j.error) $("record-state").textContent = j.error;
+  try {
+    const r = await fetch("/api/record/" + what, { method: "POST", headers: ACT });
+    const j = await r.json();
+    if (j.error) $("record-state").textContent = j.error;
+  } catch (e) {
+    $("record-state").textContent = "no answer from dash (" + e + ")";
+  }
 }
 
 // --- events -----------------------------------------------------------------------------
@@ -103,7 +110,10 @@ function connect() {
 }
 
 function hello(h) {
+  // A hello again (the events reconnected, perhaps to a new dash): a fresh start.
   dash.hello = h;
+  dash.lastSeq = null; dash.lastTick = null; dash.tickBase = 0;
+  clearColumns();
   dash.tickHz = h.tick_hz;
   h.columns.forEach((name, i) => { dash.columns[name] = i; });
   const crc = h.image_crc || "?";
@@ -148,15 +158,20 @@ function records(rows) {
   const tickHz = dash.tickHz;
   for (const r of rows) {
     const seq = r[k.sequence];
+    // The receiver's rule (stream.rs): a step forward of less than 2³¹ is records lost (the
+    // u32 wraps); a step back is the board counting again from a reset.
     if (dash.lastSeq !== null) {
-      const step = (seq - dash.lastSeq) >>> 0;
-      if (seq < dash.lastSeq && dash.lastSeq - seq > 1000) dash.restarts += 1; // a reset
-      else if (step > 1) dash.gaps += step - 1;
+      const missing = (seq - dash.lastSeq - 1) >>> 0;
+      if (missing < 2 ** 31) dash.gaps += missing;
+      else { dash.restarts += 1; clearColumns(); dash.tickBase = 0; dash.lastTick = null; }
     }
     dash.lastSeq = seq;
     dash.received += 1;
-    const t = r[k.tick] / tickHz;
-    if (cols.t.length && t < cols.t[cols.t.length - 1]) clearColumns(); // the board restarted
+    // The board's tick is a u32: past its wrap, time goes on.
+    const tick = r[k.tick];
+    if (dash.lastTick !== null && tick < dash.lastTick) dash.tickBase += 2 ** 32;
+    dash.lastTick = tick;
+    const t = (dash.tickBase + tick) / tickHz;
     cols.t.push(t);
     cols.volts.push(r[k.volts]);
     cols.amp.push(r[k.amplifier_volts]);
@@ -226,7 +241,9 @@ function faults(f) {
 function notice(n) {
   const li = document.createElement("li");
   li.textContent = (n.at ? new Date(n.at).toLocaleTimeString() + " " : "") + n.line;
-  $("notices").prepend(li);
+  const list = $("notices");
+  list.prepend(li);
+  while (list.children.length > 200) list.lastChild.remove();
 }
 
 function logEntry(e) {
@@ -320,6 +337,7 @@ function timePlot(id, title, yLabel, series, extra = {}) {
 }
 
 function makePlots() {
+  if (plots) for (const p of Object.values(plots)) if (p) p.destroy();
   const h = dash.hello;
   const limit = h.curve && h.curve.limit;
   plots = {
@@ -345,9 +363,6 @@ function makePlots() {
       { label: "Q", scale: "q", side: 1, size: 60, grid: { show: false } }] }),
     curve: curvePlot(),
   };
-  window.addEventListener("resize", () => {
-    for (const p of Object.values(plots)) if (p) p.setSize({ width: width(), height: p.height });
-  });
   dirty = true;
 }
 
@@ -366,8 +381,6 @@ function curvePlot() {
     return p.beyond_margin || (next && next.beyond_margin) ? p.natural_frequency_hz : null;
   });
   dash.curve = { x, f: c.points.map((p) => p.natural_frequency_hz) };
-  const n = x.length;
-  const point = new Array(n).fill(null);
   const opts = {
     title: "tuning curve (model, from the image's device): f against bias",
     width: width(), height: 240,
@@ -377,12 +390,10 @@ function curvePlot() {
       { label: "bias, V", value: (u, v) => fmt(v, 5) },
       line("within the margin", C.blue, { width: 2 }),
       line("beyond the margin (refused)", C.blue, { dash: [3, 3] }),
-      line("now (commanded)", C.red, { width: 0, points: { show: true, size: 11, fill: C.red } }),
     ],
     hooks: { draw: [(u) => curveMarks(u, c)] },
   };
-  dash.curvePoint = point;
-  return new uPlot(opts, [x, inside, beyond, point], el);
+  return new uPlot(opts, [x, inside, beyond], el);
 }
 
 // The margin's highest bias and the tunable range as labelled lines (drawn on the canvas).
@@ -413,6 +424,16 @@ function curveMarks(u, c) {
   const [lo, hi] = c.tunable_range_hz;
   hline(lo, "tunable " + fmt(lo, 5) + " Hz");
   hline(hi, "tunable " + fmt(hi, 5) + " Hz");
+  // The operating point: the voltage commanded now, on the curve, exactly where it is.
+  const f = dash.now == null ? null : fAt(dash.now);
+  if (f != null) {
+    const px = u.valToPos(dash.now, "x", true), py = u.valToPos(f, "y", true);
+    ctx.fillStyle = C.red; ctx.setLineDash([]);
+    ctx.beginPath(); ctx.arc(px, py, 6 * devicePixelRatio, 0, 2 * Math.PI); ctx.fill();
+    ctx.textAlign = "left";
+    ctx.fillText("now " + fmt(dash.now, 5) + " V, " + fmt(f, 5) + " Hz", px + 9 * devicePixelRatio,
+      py + 16 * devicePixelRatio);
+  }
   ctx.restore();
 }
 
@@ -446,15 +467,9 @@ function draw() {
     !seen.track && "f and Q (not tracking)"].filter(Boolean);
   $("unmeasured").textContent = missing.length ? "not plotted, nothing received: " + missing.join(", ") : "";
   if (plots.curve && dash.curve) {
-    const volts = dash.last ? dash.last[dash.columns.volts] : dash.status && dash.status.fields.volts;
-    const point = dash.curvePoint.fill(null);
-    if (volts != null) {
-      const { x } = dash.curve;
-      const i = Math.min(x.length - 1, lowerBound(x, volts));
-      const f = fAt(volts);
-      if (f != null) { point[i] = f; }
-    }
-    plots.curve.setData([dash.curve.x, plots.curve.data[1], plots.curve.data[2], point]);
+    // The operating point, drawn by the curve's hook at the voltage commanded now.
+    dash.now = dash.last ? dash.last[dash.columns.volts] : dash.status && dash.status.fields.volts;
+    plots.curve.redraw(false, false);
   }
   dash.drawMs = performance.now() - t0;
   dash.redraws += 1;
@@ -474,6 +489,9 @@ function frame(now) {
 }
 
 window.addEventListener("error", (e) => dash.errors.push(String(e.message)));
+window.addEventListener("resize", () => {
+  if (plots) for (const p of Object.values(plots)) if (p) p.setSize({ width: width(), height: p.height });
+});
 bind();
 connect();
 requestAnimationFrame(frame);

@@ -323,7 +323,7 @@ pub fn console(args: &ConsoleArgs, json: bool) -> Result<ConsoleReport, String> 
     }
     left_by_interrupt |= interrupted.load(Ordering::Relaxed);
     if echo && !report.closed_by_board {
-        eprintln!("{}", leaving(&mut session, left_by_interrupt));
+        eprintln!("{}", leaving(&mut |r| session.ask(r), left_by_interrupt));
     }
     Ok(report)
 }
@@ -507,9 +507,12 @@ fn typed(interrupted: Arc<AtomicBool>) -> impl Iterator<Item = String> {
 
 /// What the console says as it leaves: what the board is still doing (it keeps its own
 /// rules: leaving changes nothing).
-pub(crate) fn leaving(session: &mut Session, interrupted: bool) -> String {
+pub(crate) fn leaving(
+    ask: &mut dyn FnMut(&str) -> Result<String, String>,
+    interrupted: bool,
+) -> String {
     let how = if interrupted { "Ctrl-C: " } else { "" };
-    let Ok(line) = session.ask("status") else {
+    let Ok(line) = ask("status") else {
         return format!("{how}leaving; the board did not answer `status`");
     };
     let field = |key| {

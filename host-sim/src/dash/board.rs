@@ -30,6 +30,10 @@ const BATCH: Duration = Duration::from_millis(20);
 const STARTUP_WAIT: Duration = Duration::from_secs(2);
 /// The points of the tuning curve drawn.
 const CURVE_POINTS: usize = 200;
+/// The board's own lines kept for a page that opens later.
+const NOTICES_KEPT: usize = 200;
+/// The most records a recording keeps (16 min at 1 kHz): past them it stops, said.
+const RECORDING_MAX: usize = 1_000_000;
 /// The most fault entries read back for the page.
 const FAULTS_SHOWN: usize = 8;
 
@@ -138,16 +142,51 @@ struct Recording {
     from: Counts,
 }
 
+/// One request for the board, and where its reply goes.
+struct Job {
+    request: String,
+    reply: mpsc::Sender<Result<String, String>>,
+}
+
+/// The board's command port: one thread asks every request in the order they came (the
+/// pages' and the poll's): a STOP clicked after a start reaches the board after it.
+struct Port(mpsc::Sender<Job>);
+
+impl Port {
+    fn start(mut session: Session) -> Self {
+        let (tx, rx) = mpsc::channel::<Job>();
+        std::thread::spawn(move || {
+            for job in rx {
+                let _ = job.reply.send(session.ask(&job.request));
+            }
+        });
+        Port(tx)
+    }
+
+    /// Ask `request` after every request before it; its reply.
+    fn ask(&self, request: &str) -> Result<String, String> {
+        let (tx, rx) = mpsc::channel();
+        let job = Job {
+            request: request.to_string(),
+            reply: tx,
+        };
+        let gone = || "the board closed the connection".to_string();
+        self.0.send(job).map_err(|_| gone())?;
+        rx.recv().map_err(|_| gone())?
+    }
+}
+
 /// Everything the dashboard's threads share.
 pub struct Shared {
-    session: Mutex<Session>,
+    port: Port,
     hub: Hub,
     /// What a page is told first: the board, its device's curve, its settings.
     hello: Mutex<Value>,
     log: Mutex<VecDeque<Value>>,
     status: Mutex<Value>,
     faults: Mutex<Value>,
-    notices: Mutex<Vec<String>>,
+    /// The newest `NOTICES_KEPT` lines the board said on its own.
+    notices: Mutex<VecDeque<String>>,
     counts: Mutex<Counts>,
     recording: Mutex<Option<Recording>>,
     last_recording: Mutex<Option<Vec<u8>>>,
@@ -167,12 +206,17 @@ impl Shared {
     pub fn connect(args: &DashArgs) -> Result<Arc<Self>, String> {
         let notices = Arc::new(Mutex::new(Vec::<String>::new()));
         let early = notices.clone();
-        // Notices before the pages' hub exists are kept; later ones go to the pages too.
-        let hub_slot: Arc<Mutex<Option<Arc<Shared>>>> = Arc::new(Mutex::new(None));
+        // Notices before the pages' hub exists are kept; later ones go to the pages too. The
+        // slot is locked before the early list, here and below (one order: no deadlock); it
+        // holds the shared state weakly (the reader thread does not keep it alive).
+        let hub_slot: Arc<Mutex<Option<std::sync::Weak<Shared>>>> = Arc::new(Mutex::new(None));
         let later = hub_slot.clone();
-        let mut session = Session::open(&args.board, move |line| match lock(&later).as_ref() {
-            Some(shared) => shared.notice(line),
-            None => lock(&early).push(line),
+        let mut session = Session::open(&args.board, move |line| {
+            let slot = lock(&later);
+            match slot.as_ref().and_then(std::sync::Weak::upgrade) {
+                Some(shared) => shared.notice(line),
+                None => lock(&early).push(line),
+            }
         })?;
         let end = Instant::now() + STARTUP_WAIT;
         while Instant::now() < end && lock(&notices).is_empty() {
@@ -180,14 +224,16 @@ impl Shared {
         }
         // A clean line first: a half line an earlier connection left is refused, not glued.
         session.clean_line()?;
+        // The early notices moved and the slot filled at once: none lost between.
+        let mut slot = lock(&hub_slot);
         let shared = Arc::new(Shared {
-            session: Mutex::new(session),
+            port: Port::start(session),
             hub: Hub::default(),
             hello: Mutex::new(Value::Null),
             log: Mutex::new(VecDeque::new()),
             status: Mutex::new(Value::Null),
             faults: Mutex::new(Value::Null),
-            notices: Mutex::new(lock(&notices).clone()),
+            notices: Mutex::new(lock(&notices).iter().cloned().collect()),
             counts: Mutex::new(Counts::default()),
             recording: Mutex::new(None),
             last_recording: Mutex::new(None),
@@ -199,7 +245,8 @@ impl Shared {
             stream_reply: Mutex::new(None),
             tick_hz: Mutex::new(f64::NAN),
         });
-        *lock(&hub_slot) = Some(shared.clone());
+        *slot = Some(Arc::downgrade(&shared));
+        drop(slot);
         shared.learn(&args.board.describe())?;
         Ok(shared)
     }
@@ -221,7 +268,7 @@ impl Shared {
         if let Some(reply) = Reply::parse(&get) {
             for (key, value) in reply.pairs() {
                 // Not logged: twenty lines of help would bury the operator's requests.
-                let help = lock(&self.session).ask(&format!("help {key}"))?;
+                let help = self.port.ask(&format!("help {key}"))?;
                 let help = Reply::parse(&help)
                     .and_then(|r| match r {
                         Reply::Ok(text) => Some(text.to_string()),
@@ -267,7 +314,7 @@ impl Shared {
     /// A request to the board and its reply, logged and told to every page.
     fn exchange(&self, request: &str, origin: &str) -> Result<(String, f64), String> {
         let started = Instant::now();
-        let reply = lock(&self.session).ask(request);
+        let reply = self.port.ask(request);
         let ms = started.elapsed().as_secs_f64() * 1e3;
         let line = match reply {
             Ok(line) => line,
@@ -302,8 +349,9 @@ impl Shared {
     /// reset (the board's rate starts at off).
     pub fn command(&self, request: &str) -> Result<Value, String> {
         let request = request.trim_end_matches(['\r', '\n']);
-        if request.is_empty() || request.len() > 200 {
-            return Err("a request is one line of 1 to 200 characters".into());
+        let most = de_resonator::board::protocol::MAX_LINE;
+        if request.is_empty() || request.len() > most {
+            return Err(format!("a request is one line of 1 to {most} characters"));
         }
         if !request.bytes().all(|b| (0x20..0x7f).contains(&b)) {
             return Err(
@@ -318,6 +366,9 @@ impl Shared {
         let verb = request.split_whitespace().next().unwrap_or("");
         if ok && matches!(verb, "set" | "reset" | "save" | "clear") {
             self.refresh_settings();
+        }
+        if ok && verb == "faults" {
+            read_faults(self);
         }
         if ok && verb == "reset" && self.stream.is_some() {
             std::thread::sleep(Duration::from_millis(300));
@@ -365,22 +416,30 @@ impl Shared {
     /// A line the board said on its own: kept, and told to the pages.
     fn notice(&self, line: String) {
         let entry = json!({"line": line, "at": now_ms()});
-        lock(&self.notices).push(line);
+        let mut notices = lock(&self.notices);
+        if notices.len() == NOTICES_KEPT {
+            notices.pop_front();
+        }
+        notices.push_back(line);
+        drop(notices);
         self.hub.publish("notice", &entry, 0);
     }
 
     /// A new page: its queue, and what it is told first.
     pub fn subscribe(&self) -> (Value, Receiver<Arc<str>>) {
         let (tx, rx) = mpsc::sync_channel(PAGE_QUEUE);
+        // No event is published while the page's first view is taken and its queue added:
+        // none falls between the two.
+        let mut pages = lock(&self.hub.pages);
         let mut hello = lock(&self.hello).clone();
         hello["log"] = Value::from(lock(&self.log).iter().cloned().collect::<Vec<_>>());
-        hello["notices"] = Value::from(lock(&self.notices).clone());
+        hello["notices"] = Value::from(lock(&self.notices).iter().cloned().collect::<Vec<_>>());
         hello["status"] = lock(&self.status).clone();
         hello["faults"] = lock(&self.faults).clone();
         hello["link"] = self.link();
         hello["stream_reply"] = Value::from(lock(&self.stream_reply).clone());
         hello["recording"] = Value::from(lock(&self.recording).is_some());
-        lock(&self.hub.pages).push(tx);
+        pages.push(tx);
         (hello, rx)
     }
 
@@ -405,20 +464,34 @@ impl Shared {
                     .into(),
             );
         }
-        if lock(&self.recording).is_some() {
-            return Err("a recording is already under way".into());
+        {
+            // Taken at once: a second start finds this one.
+            let mut slot = lock(&self.recording);
+            if slot.is_some() {
+                return Err("a recording is already under way".into());
+            }
+            *slot = Some(Recording {
+                header: Vec::new(),
+                records: Vec::new(),
+                from: *lock(&self.counts),
+            });
         }
+        // What runs, asked as the records come (as `console --record` asks it first).
         let mut header = Vec::new();
         for request in ["info", "get", "status"] {
-            header.push(format!("{request}: {}", self.ask_own(request)?));
+            match self.ask_own(request) {
+                Ok(line) => header.push(format!("{request}: {line}")),
+                Err(why) => {
+                    *lock(&self.recording) = None;
+                    return Err(why);
+                }
+            }
         }
         let stream = lock(&self.stream_reply).clone().unwrap_or_default();
         header.push(format!("{}: {stream}", self.stream_request));
-        *lock(&self.recording) = Some(Recording {
-            header,
-            records: Vec::new(),
-            from: *lock(&self.counts),
-        });
+        if let Some(recording) = lock(&self.recording).as_mut() {
+            recording.header = header;
+        }
         self.hub.publish("recording", &json!({"on": true}), 0);
         Ok(json!({"recording": true}))
     }
@@ -446,6 +519,7 @@ impl Shared {
         *lock(&self.last_recording) = Some(csv);
         let said = json!({
             "on": false,
+            "full": recording.records.len() >= RECORDING_MAX,
             "records": recording.records.len(),
             "lost": counts.lost,
             "bad_frames": counts.bad_frames,
@@ -549,7 +623,7 @@ impl Workers {
         if shared.stopped().is_some() {
             return "the board went away".into();
         }
-        crate::cmd::console::leaving(&mut lock(&shared.session), false)
+        crate::cmd::console::leaving(&mut |r| shared.port.ask(r), false)
     }
 }
 
@@ -558,7 +632,7 @@ fn poll(shared: &Shared, every: Duration) {
     let mut last_fault: Option<String> = None;
     let mut polls = 0u64;
     while !shared.stop.load(Ordering::Relaxed) && shared.stopped().is_none() {
-        let line = lock(&shared.session).ask("status");
+        let line = shared.port.ask("status");
         match line {
             Ok(line) => {
                 let status = json!({"line": line, "fields": fields(&line), "at": now_ms()});
@@ -589,7 +663,7 @@ fn poll(shared: &Shared, every: Duration) {
 
 /// `faults`, and each entry it lists (the newest few): told to the pages.
 fn read_faults(shared: &Shared) {
-    let Ok(summary) = lock(&shared.session).ask("faults") else {
+    let Ok(summary) = shared.port.ask("faults") else {
         return;
     };
     // `ok faults=N | n cause t=… | …`: the entries' numbers.
@@ -599,8 +673,9 @@ fn read_faults(shared: &Shared) {
         .filter_map(|part| part.split_whitespace().next()?.parse().ok())
         .collect();
     let mut entries = Vec::new();
-    for n in numbers.iter().rev().take(FAULTS_SHOWN) {
-        if let Ok(line) = lock(&shared.session).ask(&format!("faults {n}")) {
+    // `faults` lists the newest first.
+    for n in numbers.iter().take(FAULTS_SHOWN) {
+        if let Ok(line) = shared.port.ask(&format!("faults {n}")) {
             entries.push(json!({"line": line, "fields": fields(&line)}));
         }
     }
@@ -615,10 +690,15 @@ fn read_stream(shared: &Shared, port: Box<dyn std::io::Read + Send>) {
     let mut last = Instant::now();
     let result = telemetry::read(port, &shared.stop, |new, receiver| {
         pending.extend(new.iter().map(Row::of));
+        // The counts and the recording's rows under one lock: a recording's counts are its
+        // rows'.
+        let mut recording = lock(&shared.recording);
         *lock(&shared.counts) = Counts::of(receiver);
-        if let Some(recording) = lock(&shared.recording).as_mut() {
-            recording.records.extend_from_slice(new);
+        if let Some(r) = recording.as_mut() {
+            let room = RECORDING_MAX.saturating_sub(r.records.len());
+            r.records.extend_from_slice(&new[..new.len().min(room)]);
         }
+        drop(recording);
         if !pending.is_empty() && last.elapsed() >= BATCH {
             let n = pending.len() as u64;
             // f32 written as f32 (7449.8784, not 7449.87841796875).

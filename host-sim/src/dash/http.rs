@@ -44,8 +44,63 @@ const ASSETS: [(&str, &str, &[u8]); 6] = [
     ),
 ];
 
-/// The longest request body taken (a command line is at most 200 bytes).
+/// The longest request body taken (a command line is far shorter).
 const MAX_BODY: u64 = 4096;
+
+/// The header every request that acts must carry: a page of another site cannot send it
+/// without the browser asking this server first (a CORS preflight it never allows), so a
+/// site open in the operator's browser cannot `start` the board.
+pub const ACT_HEADER: &str = "X-Dash-Request";
+
+/// Which requests the server takes: those addressed to it by a name it is served as (a site
+/// that points its own name at 127.0.0.1, DNS rebinding, is refused), from its own page.
+pub struct Guard {
+    /// `Host` values taken (`None`: served beyond loopback, where any name may reach it).
+    pub hosts: Option<Vec<String>>,
+}
+
+impl Guard {
+    /// For a server at `address`: on loopback, only its loopback names.
+    pub fn for_address(address: std::net::SocketAddr) -> Self {
+        let port = address.port();
+        let hosts = address.ip().is_loopback().then(|| {
+            vec![
+                format!("127.0.0.1:{port}"),
+                format!("localhost:{port}"),
+                format!("[::1]:{port}"),
+            ]
+        });
+        Guard { hosts }
+    }
+
+    /// Why `request` is refused, if it is.
+    fn refuses(&self, request: &Request, acts: bool) -> Option<String> {
+        let header = |name: &'static str| {
+            request
+                .headers()
+                .iter()
+                .find(|h| h.field.equiv(name))
+                .map(|h| h.value.as_str().to_string())
+        };
+        let host = header("Host").unwrap_or_default();
+        if let Some(hosts) = &self.hosts {
+            if !hosts.iter().any(|h| h.eq_ignore_ascii_case(&host)) {
+                return Some(format!("not served as `{host}`: open {}", hosts[0]));
+            }
+        }
+        if let Some(origin) = header("Origin") {
+            if origin != format!("http://{host}") {
+                return Some(format!("a page of {origin} may not use this one"));
+            }
+        }
+        if acts && header(ACT_HEADER).is_none() {
+            return Some(format!(
+                "a request that acts carries {ACT_HEADER} (the page's own)"
+            ));
+        }
+        None
+    }
+}
 
 fn header(name: &str, value: &str) -> Header {
     Header::from_bytes(name.as_bytes(), value.as_bytes()).expect("a valid header")
@@ -60,9 +115,13 @@ fn json_response(status: u16, value: &Value) -> Response<std::io::Cursor<Vec<u8>
 
 /// Answer one request from a page (on its own thread: the events' stream lasts the page's
 /// life).
-pub fn handle(mut request: Request, shared: &Arc<Shared>) {
+pub fn handle(mut request: Request, shared: &Arc<Shared>, guard: &Guard) {
     let path = request.url().split('?').next().unwrap_or("").to_string();
     let method = request.method().clone();
+    if let Some(why) = guard.refuses(&request, method == Method::Post) {
+        let _ = request.respond(json_response(403, &json!({ "error": why })));
+        return;
+    }
     let response = match (method, path.as_str()) {
         (Method::Get, "/api/events") => return events(request, shared),
         (Method::Get, "/api/state") => json_response(200, &shared.state()),

@@ -128,6 +128,8 @@ pub fn dash(args: &DashArgs, json: bool) -> Result<DashReport, String> {
     let _ = signal_hook::flag::register(signal_hook::consts::SIGINT, interrupted.clone());
     let _ = signal_hook::flag::register(signal_hook::consts::SIGTERM, interrupted.clone());
     let workers = board::start(&shared, args)?;
+    let address = server.server_addr().to_ip().unwrap_or(args.listen);
+    let guard = Arc::new(http::Guard::for_address(address));
     // The address on stdout, alone on its line: a script (or a person) opens it.
     if json {
         eprintln!("dash: open {url}");
@@ -144,20 +146,28 @@ pub fn dash(args: &DashArgs, json: bool) -> Result<DashReport, String> {
     let end = args
         .seconds
         .map(|s| std::time::Instant::now() + Duration::from_secs_f64(s));
+    let mut failed = None;
     while !interrupted.load(Ordering::Relaxed)
         && end.is_none_or(|end| std::time::Instant::now() < end)
         && shared.stopped().is_none()
     {
         match server.recv_timeout(Duration::from_millis(100)) {
             Ok(Some(request)) => {
-                let shared = shared.clone();
-                std::thread::spawn(move || http::handle(request, &shared));
+                let (shared, guard) = (shared.clone(), guard.clone());
+                std::thread::spawn(move || http::handle(request, &shared, &guard));
             }
             Ok(None) => {}
-            Err(e) => return Err(format!("the page's server failed: {e}")),
+            Err(e) => {
+                failed = Some(format!("the page's server failed: {e}"));
+                break;
+            }
         }
     }
+    // The stream stopped and the board's state said, however the loop ended.
     let leaving = workers.finish(&shared);
+    if let Some(why) = failed {
+        return Err(format!("{why}; {leaving}"));
+    }
     let counts = shared.counts();
     Ok(DashReport {
         url,
