@@ -428,6 +428,35 @@ fn one_connection_controls_the_board_and_a_new_one_hears_the_state_now() {
     );
 }
 
+/// Issue 46, 2: a new connection starts from a clean line. A connection that leaves with
+/// `start` half sent (no line end) switches nothing on; the next console's requests are
+/// answered as sent, never glued to it (on a chip's one UART, the console refuses the half
+/// line first: `scripts/firmware_e2e.py`, "one port, one line").
+#[test]
+fn a_half_line_left_behind_runs_nothing_and_glues_to_nothing() {
+    use std::io::Write;
+    use std::os::unix::net::UnixStream;
+    let board = Served::start(None, "5", "half-line");
+    assert!(board.replies(&["stop"])[0].starts_with("ok stop"));
+    board.wait_for("at rest", |s| s.contains(" output=off "));
+    let mut a = UnixStream::connect(&board.connection[1]).unwrap();
+    a.write_all(b"start").unwrap();
+    drop(a);
+    let (report, ok) = board.console(&["status", "get target_hz"]);
+    assert!(ok, "{report}");
+    let replies: Vec<&str> = report["exchanges"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e["reply"].as_str().unwrap())
+        .collect();
+    assert!(
+        replies[0].starts_with("ok phase=") && replies[0].contains(" output=off "),
+        "the half `start` ran: {replies:?}"
+    );
+    assert!(replies[1].starts_with("ok target_hz="), "{replies:?}");
+}
+
 /// Issue 46, 2: a new connection to a faulted board hears the fault now (not `# ready`).
 #[test]
 fn a_new_connection_to_a_faulted_board_hears_the_fault() {

@@ -142,6 +142,9 @@ def test_ctrl_c_stops_a_long_simulation_cleanly():
     script = textwrap.dedent("""
         import os, signal, threading, time
         import de_resonator as dr
+        # Python's own Ctrl-C handler, whatever this process inherited (a job started in the
+        # background by a shell inherits SIGINT ignored, and Python then installs none).
+        signal.signal(signal.SIGINT, signal.default_int_handler)
         threading.Timer(1.0, lambda: os.kill(os.getpid(), signal.SIGINT)).start()
         started = time.monotonic()
         try:
