@@ -65,7 +65,13 @@ if [ "$check" = 0 ]; then
 fi
 # The comparison: each committed figure against the one made now.
 words() { grep -o '<text[^>]*>[^<]*' "$1" | sed 's/<text[^>]*>//'; }
-names() { words "$1" | grep -Ev '^[-+0-9.,eE×·^ ]*$'; }
+# The words but numbers (tick labels: 0.5, 2e3, 10⁻³), read as UTF-8 whatever the locale.
+names() {
+    python3 -c 'import re, sys
+for t in re.findall(r"<text[^>]*>([^<]*)", open(sys.argv[1], encoding="utf-8").read()):
+    if not re.fullmatch(r"[-+0-9.,eE×·^ ⁰¹²³⁴⁵⁶⁷⁸⁹⁻]*", t):
+        print(t)' "$1"
+}
 drifted=0
 for made in "$out"/*.svg; do
     name=$(basename "$made")
