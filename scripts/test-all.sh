@@ -123,28 +123,37 @@ python3 scripts/terminal_test.py serve "$PWD/target/debug/host-sim"
 step "the live page: host-sim dash in headless Chromium (selenium) against host-sim serve"
 python3 scripts/dash_test.py serve "$PWD/target/debug/host-sim"
 
-step "Python: pip install ./python (maturin), pytest python/tests, the examples' figures"
-# The package and what its tests and examples use (numpy, SciPy, matplotlib, Dask), into the
-# interpreter CI runs; the tests compare against the CLI the step above built.
-python3 -m pip install --quiet --disable-pip-version-check "./python[test]"
-HOST_SIM="$PWD/target/debug/host-sim" python3 -m pytest -q python/tests
-python3 python/examples/figures.py --out out/python
-python3 python/examples/monte_carlo.py --devices 5000 --workers 2 --plot out/python/monte-carlo.svg
-
-step "docs/plots/: every figure the docs show is what its command makes now (scripts/plots.sh --check)"
-HOST_SIM="$PWD/target/debug/host-sim" scripts/plots.sh --check
-
 step "the core's tests without its optional trim feature (as the firmware builds it)"
 cargo test --locked -q -p de-resonator --no-default-features -- --skip fuzz_the_controller
 
 step "fuzz test: the f32 controller on random devices, settings, tables and sensors"
 FUZZ_TICKS=3000000 cargo test --locked -q -p de-resonator --test fuzz -- --nocapture
 
-step "cargo-fuzz: the table parser, the controller's boot and images and requests under libFuzzer (20 s each)"
+step "cargo-fuzz: the table parser, the controller's boot and images and requests under libFuzzer (20 s each), the Python package building beside it"
 cargo fmt --manifest-path fuzz/Cargo.toml -- --check
+# The Python package (its release build) builds while libFuzzer runs, which takes one core:
+# awaited in the Python step, its log shown if it fails. The package and what its tests and
+# examples use (numpy, SciPy, matplotlib, Dask), into the interpreter CI runs.
+pip_log=target/pip-install.log
+python3 -m pip install --quiet --disable-pip-version-check "./python[test]" >"$pip_log" 2>&1 &
+pip_pid=$!
 # 20 s each keeps the test command within 20 minutes from a fresh clone; the long campaigns
 # are BENCHMARKS.md's (FUZZ_SECONDS=… scripts/fuzz.sh).
 FUZZ_SECONDS=20 scripts/fuzz.sh
+
+step "Python: pip install ./python (maturin, built beside libFuzzer), pytest python/tests, the examples' figures"
+if ! wait "$pip_pid"; then
+    cat "$pip_log" >&2
+    echo "test-all.sh: pip install ./python failed (above; $pip_log)" >&2
+    exit 1
+fi
+# The tests compare against the CLI the test step built.
+HOST_SIM="$PWD/target/debug/host-sim" python3 -m pytest -q python/tests
+python3 python/examples/figures.py --out out/python
+python3 python/examples/monte_carlo.py --devices 5000 --workers 2 --plot out/python/monte-carlo.svg
+
+step "docs/plots/: every figure the docs show is what its command makes now (scripts/plots.sh --check)"
+HOST_SIM="$PWD/target/debug/host-sim" scripts/plots.sh --check
 
 step "firmware under QEMU: the reference run and the on-target checks against expected logs"
 # host-sim as `cargo test` built it for its CLI tests (the test profile, optimised): no
