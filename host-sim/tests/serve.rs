@@ -442,14 +442,7 @@ fn a_half_line_left_behind_runs_nothing_and_glues_to_nothing() {
     let mut a = UnixStream::connect(&board.connection[1]).unwrap();
     a.write_all(b"start").unwrap();
     drop(a);
-    let (report, ok) = board.console(&["status", "get target_hz"]);
-    assert!(ok, "{report}");
-    let replies: Vec<&str> = report["exchanges"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|e| e["reply"].as_str().unwrap())
-        .collect();
+    let replies = board.replies(&["status", "get target_hz"]);
     assert!(
         replies[0].starts_with("ok phase=") && replies[0].contains(" output=off "),
         "the half `start` ran: {replies:?}"

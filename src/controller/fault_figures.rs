@@ -908,33 +908,8 @@ mod tests {
     /// entry as another fault (the names written out here, not taken from the code).
     #[test]
     fn the_positions_flash_holds_keep_their_order() {
-        let settings: Vec<&str> = Setting::ALL.iter().map(|s| s.key()).collect();
-        assert_eq!(
-            settings,
-            [
-                "target_hz",
-                "margin",
-                "slew_volts_per_second",
-                "tick_hz",
-                "settle_seconds",
-                "ac_volts",
-                "ac_hz",
-                "check_seconds",
-                "agreement",
-                "amplifier_tolerance_volts",
-                "stuck_samples",
-                "trim_tolerance",
-                "trim_window_seconds",
-                "trim_pulse_volts",
-                "trim_probe_fraction",
-                "trim_every_seconds",
-                "leakage_floor_ohms",
-                "leakage_fall_per_second",
-                "track_seconds",
-                "probe_volts",
-                "probe_hz",
-            ]
-        );
+        // `Setting::ALL`'s order is pinned where the settings are (tests/controller.rs,
+        // `every_setting_by_its_key`).
         let fields: Vec<&str> = Field::ALL.iter().map(|f| f.key()).collect();
         assert_eq!(
             fields,
