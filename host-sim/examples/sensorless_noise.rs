@@ -10,7 +10,7 @@
 
 use std::path::Path;
 
-use host_sim::plot::{svg, Panel, Series, Style, RED};
+use host_sim::plot::{svg, Panel, Series, Style, COLOURS};
 use host_sim::scene;
 
 fn main() -> Result<(), String> {
@@ -67,7 +67,7 @@ fn main() -> Result<(), String> {
     println!(
         "noise A rms/sample   tuned   worst |error|   faulted   plant crossed   λ from C: rms error   mean σ"
     );
-    let (mut worst, mut faults) = (Vec::new(), Vec::new());
+    let (mut worst, mut none_tuned, mut faults) = (Vec::new(), Vec::new(), Vec::new());
     let (mut stretch_error, mut stretch_sigma) = (Vec::new(), Vec::new());
     for &noise in &levels {
         let at: Vec<_> = results.iter().filter(|r| r.0 == noise).collect();
@@ -90,9 +90,13 @@ fn main() -> Result<(), String> {
         }
         if w.is_finite() {
             worst.push((noise, w));
+        } else {
+            none_tuned.push((noise, 0.0));
         }
         faults.push((noise, (at.len() - tuned.len()) as f64 / at.len() as f64));
     }
+    // One x range for the three stacked panels, so a noise level is at one place on each.
+    let span = levels.first().zip(levels.last()).map(|(a, b)| (*a, *b));
     let panels = [
         Panel {
             title: "λ from C (probe ±20 V, 500 Hz): error against the plant".into(),
@@ -110,13 +114,15 @@ fn main() -> Result<(), String> {
                     name: "standard error reported".into(),
                     points: stretch_sigma,
                     style: Style {
-                        colour: Some(RED),
+                        colour: Some(COLOURS[1]),
+                        dashed: true,
                         ..Style::default()
                     },
                     ..Series::default()
                 },
             ],
             guides: vec![(stated, "scene's noise".into())],
+            x_span: span,
             ..Panel::default()
         },
         Panel {
@@ -125,12 +131,25 @@ fn main() -> Result<(), String> {
             y_label: "worst |f − target| / target of the tuned runs".into(),
             log_x: true,
             log_y: true,
-            series: vec![Series {
-                name: format!("{seeds} seeds a level"),
-                points: worst,
-                ..Series::default()
-            }],
+            series: vec![
+                Series {
+                    name: format!("{seeds} seeds a level"),
+                    points: worst,
+                    ..Series::default()
+                },
+                Series {
+                    name: "none tuned: every run faulted".into(),
+                    points: none_tuned,
+                    style: Style {
+                        colour: Some(COLOURS[6]),
+                        on_axis: true,
+                        ..Style::default()
+                    },
+                    ..Series::default()
+                },
+            ],
             guides: vec![(stated, "scene's noise".into())],
+            x_span: span,
             levels: vec![(5e-3, "0.5%".into())],
             ..Panel::default()
         },
@@ -143,12 +162,13 @@ fn main() -> Result<(), String> {
                 name: "faulted".into(),
                 points: faults,
                 style: Style {
-                    colour: Some(RED),
+                    colour: Some(COLOURS[6]),
                     ..Style::default()
                 },
                 ..Series::default()
             }],
             guides: vec![(stated, "scene's noise".into())],
+            x_span: span,
             ..Panel::default()
         },
     ];

@@ -52,6 +52,11 @@ pub struct Panel {
     /// Vertical dashed lines at these x, each with a label: written along the top where the
     /// labels fit, otherwise a colour per distinct label and the labels in the legend.
     pub guides: Vec<(f64, String)>,
+    /// The x axis spans at least this range (panels that share one: stacked, compared).
+    pub x_span: Option<(f64, f64)>,
+    /// The guides' distinct labels in the order they take `GUIDE_COLOURS` (empty: their
+    /// order in `guides`); a zoom keeps its whole panel's, so a guide keeps its colour.
+    pub guide_order: Vec<String>,
     /// Horizontal lines at these y (limits, caps), each with a label, in red: written beside
     /// its own line where that cannot be read as another's, otherwise in the legend with a
     /// dash pattern each.
@@ -244,17 +249,54 @@ impl Rect {
     }
 }
 
-/// Labels put where they overprint no other: each takes the first of its candidate places
-/// that lies inside the area and clear of everything taken.
+/// Whether the segment from a to b passes through the box (Liang and Barsky's clipping: the
+/// part of the segment inside each pair of the box's edges, intersected).
+fn crosses(r: &Rect, (ax, ay): (f64, f64), (bx, by): (f64, f64)) -> bool {
+    let (mut t0, mut t1) = (0.0_f64, 1.0_f64);
+    for (p, q) in [
+        (ax - bx, ax - r.0),
+        (bx - ax, r.2 - ax),
+        (ay - by, ay - r.1),
+        (by - ay, r.3 - ay),
+    ] {
+        if p == 0.0 {
+            if q < 0.0 {
+                return false;
+            }
+        } else {
+            let t = q / p;
+            if p < 0.0 {
+                t0 = t0.max(t);
+            } else {
+                t1 = t1.min(t);
+            }
+            if t0 > t1 {
+                return false;
+            }
+        }
+    }
+    true
+}
+
+/// Labels put where they overprint no other and no line: each takes the first of its
+/// candidate places that lies inside the area, clear of every box taken and of every
+/// line drawn (the series' traces, the levels').
 #[derive(Clone)]
 struct Placer {
     area: Rect,
     taken: Vec<Rect>,
+    /// Polylines in px that a label must not cross.
+    lines: Vec<Vec<(f64, f64)>>,
 }
 
 impl Placer {
     fn fits(&self, r: &Rect) -> bool {
-        r.inside(&self.area) && !self.taken.iter().any(|t| t.overlaps(r))
+        r.inside(&self.area)
+            && !self.taken.iter().any(|t| t.overlaps(r))
+            && !self.lines.iter().any(|l| {
+                l.windows(2).any(|w| crosses(r, w[0], w[1]))
+                    || l.len() == 1 && crosses(r, l[0], l[0])
+            })
     }
 
     fn place(
@@ -331,6 +373,8 @@ impl Panel {
                 .filter(|g| inside(g.0))
                 .cloned()
                 .collect(),
+            guide_order: self.guide_kinds(),
+            x_span: Some((from, to)),
             levels: Vec::new(),
             markers: self
                 .markers
@@ -342,6 +386,17 @@ impl Panel {
             width: Some(ZOOM_WIDTH),
             ..self.clone()
         }
+    }
+
+    /// The guides' distinct labels, in the order they take their colours.
+    fn guide_kinds(&self) -> Vec<String> {
+        let mut kinds = self.guide_order.clone();
+        for (_, label) in &self.guides {
+            if !kinds.contains(label) {
+                kinds.push(label.clone());
+            }
+        }
+        kinds
     }
 
     /// Draw the panel with its top left corner at (x0, y0); its width.
@@ -357,7 +412,8 @@ impl Panel {
                 .iter()
                 .flat_map(|s| s.points.iter())
                 .map(|p| p.0)
-                .chain(self.guides.iter().map(|g| g.0)),
+                .chain(self.guides.iter().map(|g| g.0))
+                .chain(self.x_span.into_iter().flat_map(|(a, b)| [a, b])),
             self.log_x,
         );
         let ys = Axis::new(
@@ -423,11 +479,49 @@ impl Panel {
             escape(&self.y_label)
         );
 
-        // Labels inside the plot, none over another: the markers' crosses first.
+        // Each series' points in px, thinned to what a pixel column shows (drawn below, and
+        // kept clear by the labels); none for points drawn on the axis.
+        let traces: Vec<Vec<(f64, f64)>> = self
+            .series
+            .iter()
+            .map(|series| {
+                if series.style.on_axis {
+                    return Vec::new();
+                }
+                envelope(
+                    series
+                        .points
+                        .iter()
+                        .filter_map(|&(x, y)| Some((px(x)?, py(y)?))),
+                    (MAX_POINTS_PER_PIXEL * w) as usize,
+                )
+            })
+            .collect();
+        // Labels inside the plot, over no other and across no trace: the markers' crosses
+        // first.
         let mut placer = Placer {
             area: Rect(left + 1.0, top + 1.0, right - 1.0, bottom - 1.0),
             taken: Vec::new(),
+            lines: Vec::new(),
         };
+        for (series, trace) in self.series.iter().zip(&traces) {
+            if series.style.dots_only {
+                placer.taken.extend(
+                    trace
+                        .iter()
+                        .map(|&(x, y)| Rect(x - 3.0, y - 3.0, x + 3.0, y + 3.0)),
+                );
+            } else {
+                placer.lines.push(trace.clone());
+            }
+            if series.style.on_axis {
+                for x in series.points.iter().filter_map(|p| px(p.0)) {
+                    placer
+                        .taken
+                        .push(Rect(x - 5.0, bottom - 8.0, x + 5.0, bottom));
+                }
+            }
+        }
         let crosses: Vec<(f64, f64, &Marker)> = self
             .markers
             .iter()
@@ -497,6 +591,10 @@ impl Panel {
                 text(&mut labels, at, RED, label);
             }
         }
+        // The series' labels, placed next, cross no level's line either.
+        placer
+            .lines
+            .extend(lines.iter().map(|&(y, _)| vec![(left, y), (right, y)]));
         let mut back = String::new();
         for (k, &(y, label)) in lines.iter().enumerate() {
             let (colour, dash) = if levels_inline {
@@ -526,18 +624,48 @@ impl Panel {
                 .filter_map(|&(x, y)| Some((px(x)?, py(y)?)))
                 .collect();
             let step = (along.len() / 24).max(1);
-            let candidates = along.iter().step_by(step).flat_map(|&(x, y)| {
+            // Beside a point of the line; failing that, a little off it with a leader line
+            // to the point (where the lines crowd).
+            let beside = |(x, y): (f64, f64), gap: f64| {
                 [
-                    (x + 5.0, y + 4.0, Anchor::Start),
-                    (x - 5.0, y - 5.0, Anchor::End),
-                    (x + 5.0, y - 5.0, Anchor::Start),
-                    (x - 5.0, y + 13.0, Anchor::End),
-                    (x + 5.0, y + 13.0, Anchor::Start),
+                    (x + gap, y + 4.0, Anchor::Start),
+                    (x - gap, y + 4.0, Anchor::End),
+                    (x - gap, y - gap, Anchor::End),
+                    (x + gap, y - gap, Anchor::Start),
+                    (x - gap, y + 8.0 + gap, Anchor::End),
+                    (x + gap, y + 8.0 + gap, Anchor::Start),
                 ]
+                .map(|c| ((x, y), c))
+            };
+            let candidates = [5.0, 16.0, 28.0, 44.0, 64.0].into_iter().flat_map(|gap| {
+                along
+                    .iter()
+                    .step_by(step)
+                    .flat_map(move |&p| beside(p, gap))
             });
-            match placer.place(&series.label, candidates, |_| true) {
-                Some(at) => text(&mut labels, at, colour, &series.label),
-                None => legend.push((None, format!("{} (no room on the plot)", series.label))),
+            let mut from = None;
+            let found = placer.place(
+                &series.label,
+                candidates.map(|(p, c)| {
+                    from = Some(p);
+                    c
+                }),
+                |_| true,
+            );
+            match (found, from) {
+                (Some(at), Some((x, y))) => {
+                    let r = Rect::of_text(at.0, at.1, &series.label, FONT, at.2);
+                    if !r.overlaps(&Rect(x - 6.0, y - 6.0, x + 6.0, y + 6.0)) {
+                        // The leader: from the point to the nearest point of the box.
+                        let (cx, cy) = (x.clamp(r.0, r.2), y.clamp(r.1, r.3));
+                        let _ = writeln!(
+                            labels,
+                            r#"<line x1="{x}" y1="{y}" x2="{cx}" y2="{cy}" stroke="{colour}" stroke-width="0.8"/>"#
+                        );
+                    }
+                    text(&mut labels, at, colour, &series.label)
+                }
+                _ => legend.push((None, format!("{} (no room on the plot)", series.label))),
             }
         }
 
@@ -565,36 +693,36 @@ impl Panel {
                 None => break,
             }
         }
+        // A colour per distinct label, the same inline or in the legend.
+        let kinds = self.guide_kinds();
+        let colour_of = |label: &String| {
+            GUIDE_COLOURS[kinds.iter().position(|k| k == label).unwrap_or(0) % GUIDE_COLOURS.len()]
+        };
         let guides_inline = inline.len() == guides.len();
         if guides_inline {
             for (at, label) in inline {
-                text(&mut labels, at, "#555", label);
+                text(&mut labels, at, colour_of(label), label);
             }
         }
-        let mut kinds: Vec<&String> = Vec::new();
         for &(x, label) in &guides {
-            let colour = if guides_inline {
-                "#888"
-            } else {
-                if !kinds.contains(&label) {
-                    kinds.push(label);
-                }
-                GUIDE_COLOURS[kinds.iter().position(|k| *k == label).unwrap_or(0) % 7]
-            };
             let _ = writeln!(
                 back,
-                r#"<line x1="{x}" y1="{top}" x2="{x}" y2="{bottom}" stroke="{colour}" stroke-dasharray="4 3"/>"#,
+                r#"<line x1="{x}" y1="{top}" x2="{x}" y2="{bottom}" stroke="{}" stroke-dasharray="4 3"/>"#,
+                colour_of(label)
             );
         }
-        for (k, kind) in kinds.iter().enumerate() {
-            let n = guides.iter().filter(|g| g.1 == *kind).count();
+        for kind in &kinds {
+            let n = guides.iter().filter(|g| g.1 == kind).count();
+            if guides_inline || n == 0 {
+                continue;
+            }
             let times = if n > 1 {
                 format!(" (×{n})")
             } else {
                 String::new()
             };
             legend.push((
-                Some(Key::Line(GUIDE_COLOURS[k % 7], Some("4 3"))),
+                Some(Key::Line(colour_of(kind), Some("4 3"))),
                 format!("{kind}{times}"),
             ));
         }
@@ -614,13 +742,7 @@ impl Panel {
                 }
                 continue;
             }
-            let dots: Vec<(f64, f64)> = envelope(
-                series
-                    .points
-                    .iter()
-                    .filter_map(|&(x, y)| Some((px(x)?, py(y)?))),
-                (MAX_POINTS_PER_PIXEL * w) as usize,
-            );
+            let dots = &traces[k];
             if !series.style.dots_only {
                 let path: Vec<String> =
                     dots.iter().map(|(x, y)| format!("{x:.1},{y:.1}")).collect();
@@ -634,7 +756,7 @@ impl Panel {
                 );
             }
             if dots.len() <= 40 || series.style.dots_only {
-                for (x, y) in &dots {
+                for (x, y) in dots {
                     let _ = writeln!(
                         out,
                         r#"<circle cx="{x:.1}" cy="{y:.1}" r="2.5" fill="{colour}"/>"#
@@ -998,5 +1120,149 @@ mod tests {
         assert_ne!(dashes[0], dashes[1]);
         assert_eq!(doc.matches(">cap<").count(), 1);
         assert_eq!(doc.matches(">limit<").count(), 1);
+    }
+
+    #[test]
+    fn a_segment_crosses_a_box_only_through_it() {
+        let r = Rect(10.0, 10.0, 20.0, 20.0);
+        assert!(crosses(&r, (0.0, 15.0), (30.0, 15.0)));
+        assert!(crosses(&r, (15.0, 15.0), (15.0, 15.0)));
+        assert!(crosses(&r, (0.0, 0.0), (30.0, 30.0)));
+        assert!(!crosses(&r, (0.0, 25.0), (30.0, 25.0)));
+        assert!(!crosses(&r, (0.0, 12.0), (9.0, 30.0)));
+        assert!(!crosses(&r, (21.0, 0.0), (21.0, 30.0)));
+    }
+
+    /// The numbers of an attribute in an SVG line.
+    fn attribute(line: &str, name: &str) -> Option<String> {
+        let at = line.find(&format!(" {name}=\""))? + name.len() + 3;
+        Some(line[at..].split('"').next()?.to_string())
+    }
+
+    /// Every label drawn on the plot (the halo'd texts but the legend's, which starts right
+    /// of the plot) against every line drawn: the traces' polylines and the levels', read
+    /// back from the SVG.
+    fn labels_and_lines(doc: &str, plot_right: f64) -> (Vec<Rect>, Vec<Vec<(f64, f64)>>) {
+        let mut boxes = Vec::new();
+        let mut lines = Vec::new();
+        for line in doc.lines() {
+            let num = |n: &str| attribute(line, n).and_then(|v| v.parse::<f64>().ok());
+            if line.starts_with("<text") && line.contains("paint-order") {
+                let (Some(x), Some(y)) = (num("x"), num("y")) else {
+                    continue;
+                };
+                let anchor = match attribute(line, "text-anchor").as_deref() {
+                    Some("end") => Anchor::End,
+                    Some("middle") => Anchor::Middle,
+                    _ => Anchor::Start,
+                };
+                let words = line
+                    .split('>')
+                    .nth(1)
+                    .unwrap_or("")
+                    .split('<')
+                    .next()
+                    .unwrap_or("");
+                if x < plot_right {
+                    boxes.push(Rect::of_text(x, y, words, FONT, anchor));
+                }
+            } else if line.starts_with("<polyline") {
+                let points = attribute(line, "points").unwrap_or_default();
+                lines.push(
+                    points
+                        .split(' ')
+                        .filter_map(|p| {
+                            let (x, y) = p.split_once(',')?;
+                            Some((x.parse().ok()?, y.parse().ok()?))
+                        })
+                        .collect(),
+                );
+            } else if line.starts_with("<line") && line.contains("stroke-width=\"1.2\"") {
+                if let (Some(a), Some(b), Some(c), Some(d)) =
+                    (num("x1"), num("y1"), num("x2"), num("y2"))
+                {
+                    lines.push(vec![(a, b), (c, d)]);
+                }
+            }
+        }
+        (boxes, lines)
+    }
+
+    #[test]
+    fn no_label_crosses_a_line_or_another_label() {
+        // A family of crowded curves, each labelled, a level through them and markers on them.
+        let series: Vec<Series> = (0..12)
+            .map(|k| Series {
+                name: format!("curve {k}"),
+                points: (0..200)
+                    .map(|i| {
+                        let x = f64::from(i) / 20.0;
+                        (
+                            x,
+                            (x * (1.0 + 0.05 * f64::from(k))).sin() + 0.1 * f64::from(k),
+                        )
+                    })
+                    .collect(),
+                label: format!("k = {k}"),
+                ..Series::default()
+            })
+            .collect();
+        let panel = Panel {
+            series,
+            levels: vec![(1.2, "limit".into()), (-0.4, "floor".into())],
+            markers: vec![Marker {
+                x: 5.0,
+                y: 5f64.sin(),
+                label: "crossing at 5 s".into(),
+                colour: RED,
+            }],
+            ..Panel::default()
+        };
+        let doc = svg(&[panel]);
+        let (boxes, lines) = labels_and_lines(&doc, LEFT + WIDTH - LEFT - RIGHT);
+        assert!(!boxes.is_empty(), "some labels are on the plot");
+        for (k, b) in boxes.iter().enumerate() {
+            for l in &lines {
+                // A level's own label sits beside its line, not across it.
+                assert!(
+                    !l.windows(2).any(|w| crosses(b, w[0], w[1])),
+                    "label {k} at {b:?} crosses a line"
+                );
+            }
+            for (j, o) in boxes.iter().enumerate() {
+                assert!(j == k || !b.overlaps(o), "labels {k} and {j} overlap");
+            }
+        }
+    }
+
+    #[test]
+    fn a_zoom_keeps_its_guides_colours() {
+        let panel = Panel {
+            series: vec![Series {
+                name: "run".into(),
+                points: (0..100).map(|i| (f64::from(i), f64::from(i % 7))).collect(),
+                ..Series::default()
+            }],
+            guides: vec![
+                (10.0, "at bias".into()),
+                (50.0, "drive on".into()),
+                (90.0, "fault".into()),
+            ],
+            ..Panel::default()
+        };
+        // The guides' lines' colours, left to right.
+        let colours = |doc: &str| -> Vec<String> {
+            doc.lines()
+                .filter(|l| l.starts_with("<line") && l.contains("stroke-dasharray=\"4 3\""))
+                // Not the legend's keys, which are drawn thicker.
+                .filter(|l| !l.contains("stroke-width"))
+                .filter_map(|l| attribute(l, "stroke"))
+                .collect()
+        };
+        let whole = colours(&svg(std::slice::from_ref(&panel)));
+        let zoom = colours(&svg(&[panel.zoom(80.0, 99.0, "the end".into())]));
+        assert_eq!(whole.len(), 3);
+        assert!(whole[0] != whole[1] && whole[1] != whole[2] && whole[0] != whole[2]);
+        assert_eq!(zoom, [whole[2].clone()]);
     }
 }

@@ -88,7 +88,9 @@ fn texts(svg: &str) -> Vec<Text> {
         .collect()
 }
 
-/// No two texts' boxes overlap.
+/// No two texts' boxes overlap, and no label inside a plot's frame lies on a line drawn
+/// there: a trace (a polyline) or a level (a horizontal line 1.2 px wide), each walked in
+/// half-pixel steps.
 fn no_overlaps(name: &str, svg: &str) {
     let all = texts(svg);
     for (i, a) in all.iter().enumerate() {
@@ -96,6 +98,53 @@ fn no_overlaps(name: &str, svg: &str) {
             let overlap =
                 a.left < b.right && b.left < a.right && a.top < b.bottom && b.top < a.bottom;
             assert!(!overlap, "{name}: {:?} overlaps {:?}", a.content, b.content);
+        }
+    }
+    let frames: Vec<(f64, f64, f64, f64)> = svg
+        .lines()
+        .filter(|l| l.starts_with("<rect x=") && l.contains("fill=\"none\""))
+        .map(|l| {
+            let (x, y) = (num(l, "x"), num(l, "y"));
+            (x, y, x + num(l, "width"), y + num(l, "height"))
+        })
+        .collect();
+    let mut lines: Vec<Vec<(f64, f64)>> = Vec::new();
+    for l in svg.lines() {
+        if l.starts_with("<polyline") {
+            lines.push(
+                attr(l, "points")
+                    .unwrap_or("")
+                    .split_whitespace()
+                    .filter_map(|p| {
+                        let (x, y) = p.split_once(',')?;
+                        Some((x.parse().ok()?, y.parse().ok()?))
+                    })
+                    .collect(),
+            );
+        } else if l.starts_with("<line") && l.contains("stroke-width=\"1.2\"") {
+            lines.push(vec![
+                (num(l, "x1"), num(l, "y1")),
+                (num(l, "x2"), num(l, "y2")),
+            ]);
+        }
+    }
+    let inside_a_frame = |t: &Text| {
+        frames
+            .iter()
+            .any(|f| t.left >= f.0 && t.right <= f.2 && t.top >= f.1 && t.bottom <= f.3)
+    };
+    for t in all.iter().filter(|t| inside_a_frame(t)) {
+        for line in &lines {
+            for w in line.windows(2) {
+                let ((x0, y0), (x1, y1)) = (w[0], w[1]);
+                let steps = ((x1 - x0).hypot(y1 - y0) / 0.5).ceil().max(1.0) as usize;
+                let on = (0..=steps).any(|k| {
+                    let f = k as f64 / steps as f64;
+                    let (x, y) = (x0 + f * (x1 - x0), y0 + f * (y1 - y0));
+                    x > t.left && x < t.right && y > t.top && y < t.bottom
+                });
+                assert!(!on, "{name}: the label {:?} lies on a line", t.content);
+            }
         }
     }
 }
@@ -184,7 +233,7 @@ fn each_family_curve_says_its_prestretch() {
     }
 }
 
-/// The run's plot: beside each whole-run panel, the last 5 periods of the drive (the default
+/// The run's plot: beside each whole-run panel, the last 5 periods of the drive ("at the end") (the default
 /// scene's AC of 40 Hz over 10 s: 9.875 to 10 s); the cap's and limit's labels and the events'
 /// labels distinct and clear of each other.
 #[test]
@@ -196,7 +245,7 @@ fn run_plot_has_a_zoom_of_the_last_periods() {
     let all = texts(&svg);
     let zooms: Vec<&Text> = all
         .iter()
-        .filter(|t| t.content.starts_with("last 5 periods"))
+        .filter(|t| t.content.starts_with("5 periods of 40 Hz at the end"))
         .collect();
     assert_eq!(zooms.len(), 2, "a zoom of the stretch and of the voltage");
     for zoom in zooms {
@@ -377,7 +426,8 @@ fn simulate_marks_the_crossing_where_the_curve_crosses_the_level() {
         .collect();
     let levels: Vec<f64> = svg
         .lines()
-        .filter(|l| l.starts_with("<line") && l.contains("#d62728"))
+        // The levels' lines (drawn 1.2 px wide, in one of the limits' reds).
+        .filter(|l| l.starts_with("<line") && l.contains("stroke-width=\"1.2\""))
         .filter(|l| num(l, "y1") == num(l, "y2"))
         .map(|l| num(l, "y1"))
         .collect();

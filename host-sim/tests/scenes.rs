@@ -21,6 +21,70 @@ fn run(file: &str) -> Run {
     s.run.run().unwrap()
 }
 
+/// docs/scenes.md's results table, the row of `file`, quotes each of `figures`: each test
+/// below that runs a shipped scene checks what the row says of it, so a documented figure
+/// that drifts fails here.
+fn documents(file: &str, figures: &[String]) {
+    let doc =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/scenes.md"))
+            .unwrap();
+    let row = doc
+        .lines()
+        .find(|l| l.starts_with(&format!("| `{file}` |")))
+        .unwrap_or_else(|| panic!("docs/scenes.md has no row for {file}"));
+    for figure in figures {
+        assert!(
+            row.contains(figure.as_str()),
+            "docs/scenes.md's row for {file} is `{row}`: the run gives {figure}"
+        );
+    }
+}
+
+/// A relative error as the table writes it: two significant figures, a minus sign (−).
+fn error_words(error: f64) -> String {
+    let text = format!("{error:.1e}");
+    match text.strip_prefix('-') {
+        Some(abs) => format!("−{abs}"),
+        None => text,
+    }
+}
+
+/// When the run's first fault came, as the table writes it ("at 3.098 s").
+fn fault_at(r: &Run) -> String {
+    let e = r
+        .events
+        .iter()
+        .find(|e| e.what.starts_with("fault"))
+        .unwrap_or_else(|| panic!("no fault: {:?}", r.events));
+    format!("at {:.3} s", e.seconds)
+}
+
+/// How many trims the run made ("2 trims").
+fn trims(r: &Run) -> String {
+    let n = r
+        .events
+        .iter()
+        .filter(|e| e.what.starts_with("trim"))
+        .count();
+    format!("{n} trims")
+}
+
+/// The μ the last trim estimated, kPa, and as it said it ("μ estimated 36.00 kPa").
+fn estimated(r: &Run) -> (f64, String) {
+    let last = r
+        .events
+        .iter()
+        .rev()
+        .find(|e| e.what.starts_with("trim"))
+        .unwrap_or_else(|| panic!("no trim: {:?}", r.events));
+    let kpa = last.what.split("estimated ").nth(1).unwrap_or("");
+    let kpa = kpa.split(' ').next().unwrap_or("");
+    let value = kpa
+        .parse()
+        .unwrap_or_else(|_| panic!("no estimate in {:?}", last.what));
+    (value, format!("μ estimated {kpa}"))
+}
+
 /// An ideal amplifier: the plant is the core's model exactly.
 fn elastic_reference() -> Plant {
     Plant {
@@ -94,6 +158,13 @@ fn reference_scene_tunes_within_a_tenth_of_a_percent() {
     assert!(error.abs() < 1e-3, "{error}");
     assert_eq!(r.plant_crossing, None);
     assert_eq!(r.ticks, 10_000);
+    documents(
+        "reference.toml",
+        &[
+            format!("{:.4} Hz", r.natural_frequency_hz),
+            format!("error {}", error_words(error)),
+        ],
+    );
     // The bias stays below the plant's own limit by about the 5% margin or more.
     let (_, limit) = r.limit.unwrap();
     assert!(r.bias_volts <= 0.95 * limit);
@@ -130,6 +201,7 @@ fn fault_scenes_end_at_zero_volts_and_safe() {
         );
         assert_eq!(r.final_command_volts, 0.0, "{file}");
         assert_eq!(r.plant_crossing, None, "{file}");
+        documents(file, &[fault_at(&r)]);
     }
 }
 
@@ -181,22 +253,11 @@ fn mismatch_scenes_trim_within_half_a_percent() {
         let error = (r.natural_frequency_hz - target) / target;
         assert!(error.abs() < 5e-3, "{file}: {error}");
         assert_eq!(r.plant_crossing, None, "{file}");
-        let estimates: Vec<&str> = r
-            .events
-            .iter()
-            .filter(|e| e.what.starts_with("trim"))
-            .map(|e| e.what.as_str())
-            .collect();
-        assert!(estimates.len() >= 2, "{file}: {estimates:?}");
-        let last = estimates.last().unwrap();
-        let kpa: f64 = last
-            .split("estimated ")
-            .nth(1)
-            .and_then(|x| x.split(' ').next())
-            .unwrap()
-            .parse()
-            .unwrap();
-        assert!((kpa * 1e3 / mu - 1.0).abs() < 1e-3, "{file}: {last}");
+        let trimmed = r.events.iter().filter(|e| e.what.starts_with("trim"));
+        assert!(trimmed.count() >= 2, "{file}: {:?}", r.events);
+        let (kpa, said) = estimated(&r);
+        assert!((kpa * 1e3 / mu - 1.0).abs() < 1e-3, "{file}: {said}");
+        documents(file, &[trims(&r), error_words(error), said]);
     }
 }
 
@@ -253,6 +314,10 @@ fn viscoelastic_scene_trims_within_half_a_percent() {
     assert!(error.abs() < 5e-3, "{error}");
     assert_eq!(r.plant_crossing, None);
     assert!(r.events.iter().any(|e| e.what.contains("paused")));
+    documents(
+        "viscoelastic-vhb.toml",
+        &[trims(&r), format!("error {} at 10 s", error_words(error))],
+    );
 }
 
 /// Resonance tracking (issue 15): the VHB plant creeps for 60 s (its 6.6 s and 61 s
@@ -284,6 +349,14 @@ fn tracking_holds_a_creeping_plant_within_a_tenth_of_a_percent() {
     assert!(
         end.quality_factor > 10.0 && end.quality_factor < 30.0,
         "{end:?}"
+    );
+    let error = r.natural_frequency_hz / 47.0 - 1.0;
+    documents(
+        "tracking-vhb.toml",
+        &[
+            format!("error {} at 60 s", error_words(error)),
+            format!("Q measured {:.1} at the end", end.quality_factor),
+        ],
     );
 }
 
@@ -320,16 +393,17 @@ fn sensorless_scenes_trim_on_the_current_within_half_a_percent() {
         let error = (r.natural_frequency_hz - target) / target;
         assert!(error.abs() < 5e-3, "{file}: {error}");
         assert_eq!(r.plant_crossing, None, "{file}");
-        let last = r
-            .events
-            .iter()
-            .rev()
-            .find(|e| e.what.starts_with("trim"))
-            .unwrap();
-        let kpa: f64 = last.what.split("estimated ").nth(1).unwrap()[..5]
-            .parse()
-            .unwrap();
-        assert!((kpa * 1e3 / mu - 1.0).abs() < 1e-3, "{file}: {}", last.what);
+        let (kpa, said) = estimated(&r);
+        assert!((kpa * 1e3 / mu - 1.0).abs() < 1e-3, "{file}: {said}");
+        documents(
+            file,
+            &[
+                trims(&r),
+                format!("error {}", error_words(error)),
+                said,
+                format!("λ from C in {} windows", r.sensed.len()),
+            ],
+        );
         // The stretch from C under the probe (a window every 0.1 s, but while the trim
         // measures): inside the interval the monitor checks, PROBE_SIGMAS standard errors
         // wide, in every window; within 0.5% of the plant's mean stretch once driving.
@@ -370,6 +444,14 @@ fn sensorless_vhb_trims_a_creeping_plant_and_reads_its_stretch() {
         let error = w.stretch - w.plant_stretch;
         assert!(error.abs() <= f64::from(PROBE_SIGMAS) * w.sigma, "{w:?}");
     }
+    documents(
+        file,
+        &[
+            trims(&r),
+            format!("error {} at 10 s", error_words(error)),
+            format!("λ from C in {} windows", r.sensed.len()),
+        ],
+    );
 }
 
 /// Where self-sensing stops: at 30 and 100 times the monitor's noise the ring is lost in it;
@@ -463,6 +545,20 @@ fn the_leakage_watch_faults_before_breakdown() {
         zero_from < breakdown_at,
         "0 V from {zero_from} s, breakdown at {breakdown_at} s"
     );
+    let Some(Fault::Leakage { ohms, .. }) = r.fault else {
+        unreachable!()
+    };
+    documents(
+        "leakage-ramp.toml",
+        &[
+            format!("(at {breakdown_at:.2} s)"),
+            format!(
+                "`Leakage` ({:.2} GΩ) {}",
+                f64::from(ohms) / 1e9,
+                fault_at(&r)
+            ),
+        ],
+    );
     // The watch off: the same plant breaks down at t_b (within a tick).
     let mut s = scene::load(&path).unwrap();
     s.run.history = false;
@@ -473,6 +569,10 @@ fn the_leakage_watch_faults_before_breakdown() {
     assert!(
         (at - breakdown_at).abs() <= 1.5e-3,
         "{at} vs {breakdown_at}"
+    );
+    documents(
+        "leakage-ramp.toml",
+        &[format!("the plant breaks down at {at:.3} s")],
     );
     // No floor, the rate of fall only (the resistance falls 10^0.4 = 2.5 times a second;
     // 1.5 per second of R_previous/R − 1 allowed would pass it, 0.5 not): a fault of its
@@ -685,6 +785,14 @@ fn an_operator_retargets_stops_and_starts_mid_run() {
     assert_eq!(r.target_hz, 45.0);
     let error = r.natural_frequency_hz / 45.0 - 1.0;
     assert!(error.abs() < 1e-3, "{error}");
+    documents(
+        "operator-commands.toml",
+        &[format!(
+            "{:.4} Hz at the end, error {}",
+            r.natural_frequency_hz,
+            error_words(error)
+        )],
+    );
     // At rest (0 V, the output off) from the stop's ramp end until the start.
     let rested = r
         .events
@@ -699,6 +807,10 @@ fn an_operator_retargets_stops_and_starts_mid_run() {
     {
         assert!(h.membrane_volts.abs() < 1.0 && !h.enable, "{h:?}");
     }
+    documents(
+        "operator-commands.toml",
+        &[format!("from {rested:.3} s to the start")],
+    );
     // Driven again after the start: the AC on once more.
     assert!(
         r.events

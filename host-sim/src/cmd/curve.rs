@@ -384,16 +384,38 @@ fn plot(device: &DeviceInfo, curves: &[Curve], family: bool) -> Panel {
                     colour: Some(colour),
                     ..Style::default()
                 },
-                // In a family, the group's first and last curves say which λ1p they are (the
-                // colour says the λ2p; the legend the range between): more would pile up.
-                label: if family && (k == 0 || k + 1 == members.len()) {
-                    format!("λ1p {}", short(c.prestretch_1))
-                } else {
-                    String::new()
-                },
+                label: String::new(),
             });
         }
         if family {
+            // The edge's two ends say which λ1p they are (the colour says the λ2p, the legend
+            // the range between): along the curves, where they crowd, labels would pile up.
+            let limits: Vec<(f64, &Curve)> = members
+                .iter()
+                .filter_map(|c| Some((c.limit.as_ref()?.volts, *c)))
+                .collect();
+            let ends = match limits.len() {
+                0 => &limits[..],
+                1 => &limits[..1],
+                n => &[limits[0], limits[n - 1]][..],
+            };
+            for end in ends {
+                let at = end
+                    .1
+                    .limit
+                    .as_ref()
+                    .map(|l| (l.volts, l.natural_frequency_hz));
+                panel.series.push(Series {
+                    points: at.into_iter().collect(),
+                    style: Style {
+                        colour: Some(colour),
+                        dots_only: true,
+                        ..Style::default()
+                    },
+                    label: format!("λ1p {}", short(end.1.prestretch_1)),
+                    ..Series::default()
+                });
+            }
             panel.series.push(Series {
                 name: format!("λ2p {}: the safe region's edge (limits)", short(l2)),
                 points: members
@@ -416,7 +438,7 @@ fn plot(device: &DeviceInfo, curves: &[Curve], family: bool) -> Panel {
                 panel.markers.push(Marker {
                     x: v,
                     y: t.target_hz,
-                    label: format!("target {} Hz", sig(t.target_hz)),
+                    label: format!("target {} Hz", short(t.target_hz)),
                     colour: crate::plot::COLOURS[2],
                 });
             }
@@ -427,18 +449,22 @@ fn plot(device: &DeviceInfo, curves: &[Curve], family: bool) -> Panel {
             panel.markers.push(Marker {
                 x: l.volts,
                 y: l.natural_frequency_hz,
-                label: format!("limit ({}) {} V", l.mode, sig(l.volts)),
+                label: format!("limit ({}) {} V", l.mode, short(l.volts)),
                 colour: RED,
             });
         }
         if let Some(max) = c.max_bias_volts {
-            panel.guides.push((max, format!("max bias {} V", sig(max))));
+            panel
+                .guides
+                .push((max, format!("max bias {} V", short(max))));
         }
         if let Some([low, high]) = c.tunable_range_hz {
             panel
                 .levels
-                .push((low, format!("tunable range {} Hz", sig(low))));
-            panel.levels.push((high, format!("{} Hz", sig(high))));
+                .push((low, format!("tunable range from {} Hz", short(low))));
+            panel
+                .levels
+                .push((high, format!("tunable range to {} Hz", short(high))));
         }
     }
     panel

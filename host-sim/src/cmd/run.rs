@@ -7,12 +7,12 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 use serde::Serialize;
 
-use super::{finite, prepare_dir, sig, write_file, Crossing, DeviceInfo, Report};
+use super::{finite, prepare_dir, short, sig, write_file, Crossing, DeviceInfo, Report};
 use crate::engine::firmware::Qemu;
 use crate::engine::hil::{Run, Sample};
 use crate::plot::{svg, Marker, Panel, Series, RED};
 use crate::scene::{self, Scene};
-use de_resonator::{Decimal, Setting};
+use de_resonator::{Decimal, EventKind, Setting};
 
 #[derive(Args, Debug, Default)]
 pub struct RunArgs {
@@ -489,7 +489,7 @@ fn files(dir: &Path, scene: &Scene, run: &Run) -> Result<Vec<String>, String> {
 /// The run's panels: the stretch (the plant's crossing marked) and the voltage on the
 /// membrane with the controller's cap and the plant's own limit; the controller's events as
 /// guides (the first clause of each). Each beside its last `ZOOM_PERIODS` periods of the
-/// drive, which the whole run draws as a solid band.
+/// drive (before the fault, if one came), which the whole run draws as a solid band.
 fn plot(scene: &Scene, run: &Run) -> Vec<Panel> {
     let series = |name: &str, pick: fn(&Sample) -> f64| Series {
         name: name.into(),
@@ -517,7 +517,7 @@ fn plot(scene: &Scene, run: &Run) -> Vec<Panel> {
                 Some(Marker {
                     x: t,
                     y: pick(&at),
-                    label: format!("{} at {} s", mode.name(), sig(t)),
+                    label: format!("{} at {} s", mode.name(), short(t)),
                     colour: RED,
                 })
             })
@@ -566,8 +566,19 @@ fn plot(scene: &Scene, run: &Run) -> Vec<Panel> {
     let hz = [f64::from(scene.run.settings.ac_hz), run.target_hz]
         .into_iter()
         .find(|hz| hz.is_finite() && *hz > 0.0);
-    let end = run.history.last().map_or(0.0, |h| h.seconds);
+    // The run's last periods, or after a fault (the drive off) the last before it.
+    let fault_seconds = run
+        .events
+        .iter()
+        .find(|e| matches!(e.kind, EventKind::Fault | EventKind::BusFault))
+        .map(|e| e.seconds);
+    let end = fault_seconds.unwrap_or(run.history.last().map_or(0.0, |h| h.seconds));
     let from = hz.map(|hz| end - ZOOM_PERIODS / hz);
+    let which = if fault_seconds.is_some() {
+        "before the fault"
+    } else {
+        "at the end"
+    };
     let mut panels = Vec::new();
     for panel in whole {
         let zoom = match (hz, from) {
@@ -575,7 +586,7 @@ fn plot(scene: &Scene, run: &Run) -> Vec<Panel> {
                 from,
                 end,
                 format!(
-                    "last {ZOOM_PERIODS} periods of {} Hz: {} to {} s",
+                    "{ZOOM_PERIODS} periods of {} Hz {which}: {} to {} s",
                     crate::text::short(hz),
                     crate::text::short(from),
                     crate::text::short(end)

@@ -8,7 +8,7 @@ use clap::Args;
 use de_resonator::{Device, DeviceParams};
 use serde::Serialize;
 
-use super::{prepare_file, sig, write_path, Crossing, DeviceArgs, DeviceInfo, Report};
+use super::{prepare_file, short, sig, write_path, Crossing, DeviceArgs, DeviceInfo, Report};
 use crate::engine::simulate::{self, Choice, OpenLoop, Solver, Start, Tolerance};
 use crate::plot::{svg, Marker, Panel, Series, RED};
 
@@ -404,7 +404,7 @@ fn plot(
         markers.push(Marker {
             x: t,
             y: stretch,
-            label: format!("{} at {} s", mode.name(), sig(t)),
+            label: format!("{} at {} s", mode.name(), short(t)),
             colour: RED,
         });
     }
@@ -414,7 +414,7 @@ fn plot(
         format!("{} V AC at {} Hz", sig(scene.ac_volts), sig(scene.drive_hz))
     };
     Panel {
-        title: format!("{}: {} V, {ac}", device.title(), sig(scene.bias_volts)),
+        title: format!("{}: {} V, {ac}", device.title(), short(scene.bias_volts)),
         x_label: "time, s".into(),
         y_label: "stretch λ".into(),
         series: vec![Series {

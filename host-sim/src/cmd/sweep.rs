@@ -386,11 +386,11 @@ fn plot(
     Panel {
         title: format!(
             "{}: {} V + {} V AC, Q {}, f0 {} Hz",
-            device.source,
-            sig(s.bias_volts),
-            sig(s.ac_volts),
+            device.title(),
+            short(s.bias_volts),
+            short(s.ac_volts),
             short(quality),
-            sig(f0)
+            short(f0)
         ),
         x_label: "drive frequency, Hz".into(),
         y_label: "amplitude (stretch)".into(),
