@@ -24,6 +24,52 @@ pub struct Style {
     /// Points with no value (stopped runs): open triangles along the x axis at their x, their
     /// y ignored, so they never read as data.
     pub on_axis: bool,
+    /// The shape of its points, where they are drawn: a second cue beside the colour.
+    pub mark: Mark,
+}
+
+/// A point's shape.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Mark {
+    #[default]
+    Circle,
+    Square,
+    Diamond,
+}
+
+impl Mark {
+    /// Every shape, for a caller that gives one per group.
+    pub const ALL: [Mark; 3] = [Mark::Circle, Mark::Square, Mark::Diamond];
+
+    /// The shape at (x, y), about 2r across, filled.
+    fn draw(self, out: &mut String, x: f64, y: f64, r: f64, colour: &str) {
+        let _ = match self {
+            Mark::Circle => writeln!(
+                out,
+                r#"<circle cx="{x:.1}" cy="{y:.1}" r="{r}" fill="{colour}"/>"#
+            ),
+            Mark::Square => writeln!(
+                out,
+                r#"<rect x="{:.1}" y="{:.1}" width="{:.1}" height="{:.1}" fill="{colour}"/>"#,
+                x - 0.9 * r,
+                y - 0.9 * r,
+                1.8 * r,
+                1.8 * r
+            ),
+            Mark::Diamond => writeln!(
+                out,
+                r#"<path d="M{:.1} {:.1} L{:.1} {:.1} L{:.1} {:.1} L{:.1} {:.1} Z" fill="{colour}"/>"#,
+                x,
+                y - 1.3 * r,
+                x + 1.3 * r,
+                y,
+                x,
+                y + 1.3 * r,
+                x - 1.3 * r,
+                y
+            ),
+        };
+    }
 }
 
 /// A point to point at: a crossing, a target.
@@ -327,8 +373,9 @@ fn text(out: &mut String, (x, y, anchor): (f64, f64, Anchor), colour: &str, labe
 
 /// What a legend row shows left of its text.
 enum Key {
-    Line(&'static str, Option<&'static str>),
-    Dot(&'static str),
+    /// A line, dashed or not, with its points' mark where it draws them.
+    Line(&'static str, Option<&'static str>, Option<Mark>),
+    Dot(&'static str, Mark),
     Triangle(&'static str),
 }
 
@@ -607,7 +654,7 @@ impl Panel {
                 r#"<line x1="{left}" y1="{y}" x2="{right}" y2="{y}" stroke="{colour}" stroke-width="1.2" stroke-dasharray="{dash}"/>"#,
             );
             if !levels_inline {
-                legend.push((Some(Key::Line(colour, Some(dash))), label.clone()));
+                legend.push((Some(Key::Line(colour, Some(dash), None)), label.clone()));
             }
         }
 
@@ -722,7 +769,7 @@ impl Panel {
                 String::new()
             };
             legend.push((
-                Some(Key::Line(colour_of(kind), Some("4 3"))),
+                Some(Key::Line(colour_of(kind), Some("4 3"), None)),
                 format!("{kind}{times}"),
             ));
         }
@@ -755,19 +802,17 @@ impl Panel {
                     path.join(" ")
                 );
             }
-            if dots.len() <= 40 || series.style.dots_only {
-                for (x, y) in dots {
-                    let _ = writeln!(
-                        out,
-                        r#"<circle cx="{x:.1}" cy="{y:.1}" r="2.5" fill="{colour}"/>"#
-                    );
+            let marked = dots.len() <= 40 || series.style.dots_only;
+            if marked {
+                for &(x, y) in dots {
+                    series.style.mark.draw(out, x, y, 2.5, colour);
                 }
             }
             if !series.name.is_empty() {
                 let key = if series.style.dots_only {
-                    Key::Dot(colour)
+                    Key::Dot(colour, series.style.mark)
                 } else {
-                    Key::Line(colour, dash)
+                    Key::Line(colour, dash, marked.then_some(series.style.mark))
                 };
                 named.push((Some(key), series.name.clone()));
             }
@@ -803,7 +848,7 @@ impl Panel {
                 None => lx,
             };
             match key {
-                Some(Key::Line(colour, dash)) => {
+                Some(Key::Line(colour, dash, mark)) => {
                     let dash = dash
                         .map(|d| format!(r#" stroke-dasharray="{d}""#))
                         .unwrap_or_default();
@@ -814,15 +859,11 @@ impl Panel {
                         lx + 18.0,
                         ly - 4.0,
                     );
+                    if let Some(mark) = mark {
+                        mark.draw(out, lx + 9.0, ly - 4.0, 3.0, colour);
+                    }
                 }
-                Some(Key::Dot(colour)) => {
-                    let _ = writeln!(
-                        out,
-                        r#"<circle cx="{}" cy="{}" r="3" fill="{colour}"/>"#,
-                        lx + 9.0,
-                        ly - 4.0
-                    );
-                }
+                Some(Key::Dot(colour, mark)) => mark.draw(out, lx + 9.0, ly - 4.0, 3.0, colour),
                 Some(Key::Triangle(colour)) => triangle(out, lx + 9.0, ly, colour),
                 None => {}
             }
@@ -1264,5 +1305,34 @@ mod tests {
         assert_eq!(whole.len(), 3);
         assert!(whole[0] != whole[1] && whole[1] != whole[2] && whole[0] != whole[2]);
         assert_eq!(zoom, [whole[2].clone()]);
+    }
+
+    #[test]
+    fn each_series_mark_is_drawn_at_its_points_and_in_its_legend_key() {
+        let series = |name: &str, mark| Series {
+            name: name.into(),
+            points: vec![(1.0, 1.0), (2.0, 2.0), (3.0, 1.5)],
+            style: Style {
+                mark,
+                ..Style::default()
+            },
+            ..Series::default()
+        };
+        let doc = svg(&[Panel {
+            series: vec![
+                series("circles", Mark::Circle),
+                series("squares", Mark::Square),
+                series("diamonds", Mark::Diamond),
+            ],
+            ..Panel::default()
+        }]);
+        // Three points and a legend key each.
+        assert_eq!(doc.matches("<circle").count(), 4);
+        assert_eq!(
+            doc.matches("<rect x=").count(),
+            1 + 4,
+            "the frame and the squares"
+        );
+        assert_eq!(doc.matches(" Z\" fill=").count(), 4);
     }
 }

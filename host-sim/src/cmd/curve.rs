@@ -13,7 +13,7 @@ use serde::Serialize;
 use super::{
     prepare_dir, short, sig, write_csv_and_plot, DeviceArgs, DeviceInfo, MarginArgs, Report,
 };
-use crate::plot::{Marker, Panel, Series, Style, COLOURS, RED};
+use crate::plot::{Mark, Marker, Panel, Series, Style, COLOURS, RED};
 
 /// The most curves in a family, and the most points a curve.
 pub const MAX_CURVES: usize = 400;
@@ -352,6 +352,8 @@ fn plot(device: &DeviceInfo, curves: &[Curve], family: bool) -> Panel {
         // The palette without its red, which is the limits'.
         let palette: Vec<&str> = COLOURS.iter().copied().filter(|c| *c != RED).collect();
         let colour = palette[g % palette.len()];
+        // The group's second cue beside its colour: its edge's mark.
+        let mark = Mark::ALL[g % Mark::ALL.len()];
         let members: Vec<&Curve> = curves.iter().filter(|c| c.prestretch_2 == l2).collect();
         let ones: Vec<String> = members.iter().map(|c| short(c.prestretch_1)).collect();
         for (k, c) in members.iter().enumerate() {
@@ -410,6 +412,7 @@ fn plot(device: &DeviceInfo, curves: &[Curve], family: bool) -> Panel {
                     style: Style {
                         colour: Some(colour),
                         dots_only: true,
+                        mark,
                         ..Style::default()
                     },
                     label: format!("λ1p {}", short(end.1.prestretch_1)),
@@ -426,6 +429,7 @@ fn plot(device: &DeviceInfo, curves: &[Curve], family: bool) -> Panel {
                 style: Style {
                     colour: Some(colour),
                     dashed: true,
+                    mark,
                     ..Style::default()
                 },
                 label: String::new(),

@@ -9,7 +9,7 @@ use serde::Serialize;
 
 use super::{prepare_dir, write_csv_and_plot, DeviceArgs, DeviceInfo, Report};
 use crate::engine::simulate::Choice;
-use crate::plot::{Marker, Panel, Series, Style, COLOURS};
+use crate::plot::{Mark, Marker, Panel, Series, Style, COLOURS};
 use crate::study::precision::{reference, rows, studies, Row, ToleranceRow};
 
 #[derive(Args, Debug)]
@@ -195,7 +195,10 @@ fn panel(scene: &str, rows: &[Row]) -> Panel {
         if !bases.contains(&base) {
             bases.push(base);
         }
-        let colour = COLOURS[bases.iter().position(|b| *b == base).unwrap_or(0) % COLOURS.len()];
+        // A method: a colour and a mark; its f32 build dashed.
+        let which = bases.iter().position(|b| *b == base).unwrap_or(0);
+        let colour = COLOURS[which % COLOURS.len()];
+        let mark = Mark::ALL[which % Mark::ALL.len()];
         let (Some(time), Some(error)) = (r.run_seconds_per_simulated_second, r.max_error) else {
             panel.notes.push(format!(
                 "{} at {}/period: {}",
@@ -211,6 +214,7 @@ fn panel(scene: &str, rows: &[Row]) -> Panel {
                 style: Style {
                     colour: Some(colour),
                     dashed: f32_,
+                    mark,
                     ..Style::default()
                 },
                 label: String::new(),
