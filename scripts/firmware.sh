@@ -98,6 +98,13 @@ printf 'start\nwait phase=holding 60\nstatus\nstop\n' >target/qemu-script.txt
 scripts/qemu.sh -- --script target/qemu-script.txt | tee target/qemu-script.log
 grep -q '^# ready .*power_up=wait' target/qemu-script.log
 grep -q '^ok phase=holding target_hz=44 ' target/qemu-script.log
+# RAM with the stack within 32 KB in this run too: the stack's high-water mark the board
+# reports, on top of the build's static RAM.
+stack=$(grep -o 'stack_bytes=[0-9]*' target/qemu-script.log | tail -1 | cut -d= -f2)
+static=$(size -A firmware/target/thumbv7em-none-eabihf/release/firmware |
+    awk '$1 == ".data" || $1 == ".bss" || $1 == ".uninit" { n += $2 } END { print n }')
+echo "scripts/qemu.sh's run: RAM ${static} B static + ${stack:-?} B stack (budget 32,768 B)"
+[ -n "$stack" ] && [ $((static + stack)) -le 32768 ] || { echo "over the 32 KB RAM budget" >&2; exit 1; }
 sleep 0.5
 if pgrep -f "unix:$PWD/target/qemu/fw.sock" | grep -q .; then echo "scripts/qemu.sh left QEMU running" >&2; exit 1; fi
 
