@@ -530,8 +530,9 @@ def main():
         "crc": good[:-1] + bytes([good[-1] ^ 0xFF]),
         "version": reseal(good, v=(4, struct.pack("<H", 2))),  # the layout before the noise
         "amplifier": reseal(good, a=(76, struct.pack("<H", 12))),
-        # margin (ALL[1]) = 1.5: the settings from byte 156 (src/image.rs, layout 3)
-        "settings": reseal(good, s=(160, struct.pack("<f", 1.5))),
+        # margin (id 1) = 1.5: the settings from byte 156 by id, 8 bytes each, the value 4
+        # bytes in (src/image.rs, layout 4)
+        "settings": reseal(good, s=(168, struct.pack("<f", 1.5))),
     }
     words = {"empty": "no configuration image", "crc": "CRC", "version": "version",
              "amplifier": "DAC", "settings": "margin"}
@@ -555,6 +556,25 @@ def main():
               and target.startswith("err 5 "), f"{name}: status says why, target gets err 5")
         check(all(f[0] == 0x01 and f[1:] == (0, 0) for f in frames) and "high" not in enable,
               f"{name}: only power-down frames ({len(frames)}), enable never high")
+
+    print("== an image of the layout before (3: the settings by place) boots as its layout 4 twin")
+    good = open(ref, "rb").read()
+    count = struct.unpack_from("<H", good, 6)[0]
+    entries = [struct.unpack_from("<HHf", good, 156 + 8 * k) for k in range(count)]
+    check([e[0] for e in entries] == list(range(count)), f"layout 4 keeps ids 0..{count}")
+    by_place = b"".join(struct.pack("<f", e[2]) for e in entries)
+    old = bytearray(good[:156] + by_place + good[156 + 8 * count:])
+    old[4:6] = struct.pack("<H", 3)
+    old[8:12] = struct.pack("<I", len(old))
+    old_path = os.path.join(WORK, "layout-3.img")
+    open(old_path, "wb").write(reseal(bytes(old)))
+    banners = []
+    for name, path in (("layout-4", ref), ("layout-3", old_path)):
+        fw = Firmware(name, path, trace=False)
+        banners.append(fw.banner)
+        fw.stop()
+    check(banners[0].startswith("# ready ") and banners[1] == banners[0],
+          f"layout 3 boots as layout 4: {banners}")
 
     print("== tick rate: SysTick's reload from the setting, and against TIM2's virtual time")
     # The reload register (SysTick RVR, in the MMIO trace) is what sets the rate on silicon:

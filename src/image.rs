@@ -7,34 +7,43 @@
 //! | offset | size | what |
 //! |---|---|---|
 //! | 0 | 4 | magic `DERI` |
-//! | 4 | 2 | version, u16 = 3 |
-//! | 6 | 2 | S, the number of settings, u16 = 21 (an image with another S is refused) |
+//! | 4 | 2 | version, u16 = 4 |
+//! | 6 | 2 | S, the number of settings it holds, u16 (21 now) |
 //! | 8 | 4 | L, the image's length in bytes with its CRC, u32 |
 //! | 12 | 52 | the 13 device parameters in `DeviceParams` order (`jlim` 0 = neo-Hookean) |
 //! | 64 | 14 | the amplifier: DAC reference V, gain V/V, rail V, DAC bits u16 (16) |
 //! | 78 | 2 | at power-up, u16: 0 = wait for `start` with the output off, 1 = drive ([`PowerUp`]) |
 //! | 80 | 4 | the front end's scans a second (`acquire::FrontEnd`) |
 //! | 84 | 3 · 24 | per channel in `Channel::ALL` order: ADC input u8 (0xFF = not fitted), 3 zero bytes, zero code, per count, plausible low, plausible high, RMS noise a conversion in codes (0: not declared) |
-//! | 156 | 4·S | the default settings in `Setting::ALL` order (0 = off for those that can be) |
-//! | 156 + 4·S | L − 160 − 4·S | the tuning table (`table`'s layout, with its own CRC) |
+//! | 156 | 8·S | the default settings, each by its stable id (`Setting::id`): id u16, two zero bytes, value (0 = off for those that can be) |
+//! | 156 + 8·S | L − 160 − 8·S | the tuning table (`table`'s layout, with its own CRC) |
 //! | L − 4 | 4 | CRC-32 (IEEE 802.3) of every byte before it, u32 |
 //!
 //! `Image::parse` checks the frame (magic, version, length, CRC), the amplifier and the front
 //! end (at the settings' tick rate); the device, the settings and the table are the
-//! controller's boot checks, as for any input.
+//! controller's boot checks, as for any input. A setting the image does not hold (made
+//! before it was added) takes its default (`Image::defaulted` says which); one this code does
+//! not know (made for a newer firmware) refuses the image by name. Layout 3 (until
+//! 2026-12-05) kept 4·S bytes of settings by place, which was their id: read as such.
 
 use core::fmt;
 
 use crate::acquire::{ChannelSpec, FrontEnd, FrontEndError, InputNoise, MAX_INPUT};
+use crate::controller::{Held, Setting, SettingSet, Settings};
 use crate::device::DeviceParams;
 use crate::drive::{Amplifier, CodeError};
 use crate::table::{crc32, f32_at, u16_at, u32_at, Table, TableError};
-use crate::{Setting, Settings};
 
 /// The first four bytes of an image.
 pub const MAGIC: [u8; 4] = *b"DERI";
-/// The layout version this code reads and writes.
-pub const VERSION: u16 = 3;
+/// The layout version this code writes (it reads 3 too).
+pub const VERSION: u16 = 4;
+/// The previous layout, still read: settings by place.
+const VERSION_BY_PLACE: u16 = 3;
+/// Bytes a setting takes (layout 4): id, two zero bytes, value.
+const SETTING_BYTES: usize = 8;
+/// The most settings an image this code reads may hold.
+const MAX_SETTINGS: usize = 64;
 /// The DAC this code drives (the DAC8551): its resolution.
 pub const DAC_BITS: u16 = 16;
 /// Where the front end starts, and its bytes a channel.
@@ -45,8 +54,8 @@ const NOT_FITTED: u8 = 0xFF;
 /// Bytes before the settings.
 const SETTINGS_AT: usize = FRONT_END_AT + 4 + 3 * CHANNEL_BYTES;
 const SETTINGS: usize = Setting::ALL.len();
-/// Bytes before the table.
-pub const HEADER_BYTES: usize = SETTINGS_AT + 4 * SETTINGS;
+/// Bytes before the table, in an image this code writes.
+pub const HEADER_BYTES: usize = SETTINGS_AT + SETTING_BYTES * SETTINGS;
 
 /// The length in bytes of an image holding a table of `table_bytes` bytes.
 pub const fn image_bytes(table_bytes: usize) -> usize {
@@ -118,8 +127,10 @@ pub enum ImageError {
     BadMagic,
     /// A layout version this code does not read.
     UnsupportedVersion { version: u16 },
-    /// Holds a number of settings this version does not have.
+    /// Holds more settings than any layout has room for.
     SettingsCount { count: u16 },
+    /// Holds a setting this firmware does not know (made for a newer one).
+    UnknownSetting { id: u16 },
     /// Its length is shorter than its parts or longer than the room it is in.
     WrongLength { stated: u32, room: usize },
     /// The stored CRC does not match the bytes: corrupted or cut short.
@@ -148,12 +159,22 @@ impl fmt::Display for ImageError {
             ),
             ImageError::TooShort { bytes } => write!(f, "image of {bytes} bytes is too short"),
             ImageError::BadMagic => write!(f, "not a configuration image (no DERI magic)"),
-            ImageError::UnsupportedVersion { version } => {
-                write!(f, "image layout version {version}, expected {VERSION}")
-            }
+            ImageError::UnsupportedVersion { version } => write!(
+                f,
+                "image layout version {version}, this firmware reads {VERSION_BY_PLACE} and \
+                 {VERSION} (make the image again with this firmware's `host-sim image`)"
+            ),
             ImageError::SettingsCount { count } => {
-                write!(f, "image holds {count} settings, expected {SETTINGS}")
+                write!(
+                    f,
+                    "image holds {count} settings, at most {MAX_SETTINGS} read"
+                )
             }
+            ImageError::UnknownSetting { id } => write!(
+                f,
+                "image holds setting id {id}, which this firmware does not know (made for a \
+                 newer one): make the image again with this firmware's `host-sim image`"
+            ),
             ImageError::WrongLength { stated, room } => write!(
                 f,
                 "image length {stated} bytes is impossible (room for {room})"
@@ -190,6 +211,8 @@ pub struct Image<'a> {
     /// The board's analog inputs (checked at the settings' tick rate).
     pub front_end: FrontEnd,
     pub settings: Settings,
+    /// The settings it does not hold (made before they were added), at their defaults.
+    pub defaulted: SettingSet,
     /// Whether the board drives once its boot checks pass, or waits for `start`.
     pub power_up: PowerUp,
     /// The table's bytes, for `Controller::start` (which parses and checks them).
@@ -201,7 +224,7 @@ pub struct Image<'a> {
 impl<'a> Image<'a> {
     /// Read an image from the start of `room` (a flash sector: the image may be shorter).
     pub fn parse(room: &'a [u8]) -> Result<Self, ImageError> {
-        let Some(head) = room.get(..HEADER_BYTES + 4) else {
+        let Some(head) = room.get(..SETTINGS_AT + 4) else {
             return Err(ImageError::TooShort { bytes: room.len() });
         };
         if let Some(&byte) = head.first() {
@@ -213,17 +236,20 @@ impl<'a> Image<'a> {
             return Err(ImageError::BadMagic);
         }
         let version = u16_at(room, 4);
-        if version != VERSION {
-            return Err(ImageError::UnsupportedVersion { version });
-        }
+        let each = match version {
+            VERSION => SETTING_BYTES,
+            VERSION_BY_PLACE => 4,
+            _ => return Err(ImageError::UnsupportedVersion { version }),
+        };
         let count = u16_at(room, 6);
-        if usize::from(count) != SETTINGS {
+        if usize::from(count) > MAX_SETTINGS {
             return Err(ImageError::SettingsCount { count });
         }
+        let table_at = SETTINGS_AT + each * usize::from(count);
         let stated = u32_at(room, 8);
         let length = stated as usize;
         let body = length.wrapping_sub(4);
-        let (Some(bytes), true) = (room.get(..length), length >= image_bytes(0)) else {
+        let (Some(bytes), true) = (room.get(..length), length >= table_at + 4) else {
             return Err(ImageError::WrongLength {
                 stated,
                 room: room.len(),
@@ -248,10 +274,20 @@ impl<'a> Image<'a> {
         let power_up = u16_at(bytes, 78);
         let power_up =
             PowerUp::from_number(power_up).ok_or(ImageError::PowerUp { value: power_up })?;
-        let mut settings = Settings::for_target(0.0);
-        for (k, setting) in Setting::ALL.into_iter().enumerate() {
-            settings.set(setting, f32_at(bytes, SETTINGS_AT + 4 * k));
+        let mut held = Held::NONE;
+        for k in 0..usize::from(count) {
+            let at = SETTINGS_AT + each * k;
+            let (id, value) = match version {
+                VERSION_BY_PLACE => (k as u16, f32_at(bytes, at)),
+                _ => (u16_at(bytes, at), f32_at(bytes, at + 4)),
+            };
+            let setting = u8::try_from(id)
+                .ok()
+                .and_then(Setting::from_id)
+                .ok_or(ImageError::UnknownSetting { id })?;
+            held = held.with(setting, value);
         }
+        let (settings, defaulted) = held.onto(Settings::for_target(0.0));
         let mut front_end = FrontEnd {
             scan_hz: f32_at(bytes, FRONT_END_AT),
             channels: [None; 3],
@@ -273,13 +309,14 @@ impl<'a> Image<'a> {
         if tick_hz > 0.0 && tick_hz.is_finite() {
             front_end.check(tick_hz).map_err(ImageError::FrontEnd)?;
         }
-        let table = bytes.get(HEADER_BYTES..body).unwrap_or(&[]);
+        let table = bytes.get(table_at..body).unwrap_or(&[]);
         Table::parse(table).map_err(ImageError::Table)?;
         Ok(Self {
             params: DeviceParams::from_values(values),
             amplifier,
             front_end,
             settings,
+            defaulted,
             power_up,
             table,
             crc: stored,
@@ -340,11 +377,11 @@ impl<'a> Image<'a> {
                     .into_iter()
                     .chain(numbers.into_iter().flat_map(f32::to_le_bytes))
             }))
-            .chain(
-                Setting::ALL
-                    .into_iter()
-                    .flat_map(|s| settings.get(s).to_le_bytes()),
-            );
+            .chain(Setting::ALL.into_iter().flat_map(|s| {
+                let id = u16::from(s.id()).to_le_bytes();
+                let value = settings.get(s).to_le_bytes();
+                [id[0], id[1], 0, 0, value[0], value[1], value[2], value[3]]
+            }));
         let head = MAGIC
             .into_iter()
             .chain(VERSION.to_le_bytes())

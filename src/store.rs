@@ -11,10 +11,13 @@
 //! (a 64 KB goal of the time, since withdrawn: the code has 256 KB, sectors 0–5); this store
 //! costs about 1 KB (BENCHMARKS.md).
 //!
-//! The blob is versioned: version (u16), the number of settings (u16), then each setting as
-//! f32 in `Setting::ALL` order (0 = off where it can be). A blob of another version is
-//! refused by name, never read as this one. Whether the settings are in range is the
-//! controller's boot check, as for any settings.
+//! The blob is versioned: version (u16), the number of settings (u16), then each setting by
+//! its stable id (`Setting::id`): id (u16), two zero bytes, value (f32; 0 = off where it can
+//! be). A firmware that adds a setting reads an older blob with every value it holds, the
+//! new one at the image's value (the board says which); a blob holding a setting this
+//! firmware does not know (saved by a newer one) is refused by name. Version 1 (until
+//! 2026-12-05) kept the settings by place, which was their id: read as such. Whether the
+//! settings are in range is the controller's boot check, as for any settings.
 
 use core::fmt;
 use core::ops::Range;
@@ -23,18 +26,25 @@ use embedded_storage_async::nor_flash::{
     ErrorType, MultiwriteNorFlash, NorFlash, NorFlashError, NorFlashErrorKind, ReadNorFlash,
 };
 
-use crate::controller::{Setting, Settings};
+use crate::controller::{Held, Setting, Settings};
 use crate::table::{crc32, f32_at, newer, u16_at, u32_at};
 
-/// The blob's layout version this code reads and writes.
-pub const BLOB_VERSION: u16 = 1;
+/// The blob's layout version this code writes (it reads 1 too).
+pub const BLOB_VERSION: u16 = 2;
 const COUNT: usize = Setting::ALL.len();
+/// Bytes a setting takes in a blob: id, two zero bytes, value.
+const ENTRY_BYTES: usize = 8;
 /// The blob's length in bytes.
-pub const BLOB_BYTES: usize = 4 + 4 * COUNT;
+pub const BLOB_BYTES: usize = 4 + ENTRY_BYTES * COUNT;
+/// The most settings a blob this code reads may hold (a newer firmware's, refused by name
+/// if it holds one unknown here): the ids a `SettingSet` has room for.
+const MAX_HELD: usize = 32;
 /// A record's first bytes.
 const MAGIC: [u8; 4] = *b"DERS";
 /// A record: magic, sequence number (u32), blob, CRC-32 of all before it (u32).
 const RECORD_BYTES: usize = 8 + BLOB_BYTES + 4;
+/// The longest record read: a blob of `MAX_HELD` settings.
+const MAX_RECORD_BYTES: usize = 8 + 4 + ENTRY_BYTES * MAX_HELD + 4;
 /// Where the CRC starts in a record.
 const CRC_AT: usize = RECORD_BYTES - 4;
 
@@ -46,9 +56,12 @@ pub enum StoreError {
     Flash(FlashKind),
     /// The range is not two slots of whole pages, each room for a record.
     Range,
-    /// The newest record holds a blob of another layout version (or length): refused, never
-    /// read as this one.
+    /// The newest record holds a blob of a layout version this code does not read (or of
+    /// a wrong length): refused, never read as this one.
     Version { version: u16, count: u16 },
+    /// The newest record holds a setting this firmware does not know (saved by a newer
+    /// one): refused, so that nothing it asked for is silently dropped.
+    UnknownSetting { id: u16 },
     /// The fault log's half is full and its next entry needs the other erased, which is not
     /// done while running on a chip (an erase stalls it past its watchdog): at the next boot.
     LogFull,
@@ -91,7 +104,12 @@ impl fmt::Display for StoreError {
             StoreError::Version { version, count } => write!(
                 f,
                 "saved settings of layout version {version} ({count} settings): this firmware \
-                 reads version {BLOB_VERSION} ({COUNT}); ignored"
+                 reads versions 1 and {BLOB_VERSION}; ignored"
+            ),
+            StoreError::UnknownSetting { id } => write!(
+                f,
+                "saved settings hold setting id {id}, which this firmware does not know (saved \
+                 by a newer one); ignored: `save` again to keep this firmware's"
             ),
         }
     }
@@ -101,33 +119,60 @@ pub(crate) fn flash_error<E: NorFlashError>(e: E) -> StoreError {
     StoreError::Flash(e.kind().into())
 }
 
-/// The settings as a blob.
+/// The settings as a blob, each by its id.
 pub fn encode(settings: &Settings) -> [u8; BLOB_BYTES] {
     let mut blob = [0u8; BLOB_BYTES];
     let head = BLOB_VERSION
         .to_le_bytes()
         .into_iter()
         .chain((COUNT as u16).to_le_bytes());
-    let values = Setting::ALL
-        .into_iter()
-        .flat_map(|s| settings.get(s).to_le_bytes());
-    for (slot, byte) in blob.iter_mut().zip(head.chain(values)) {
+    let entries = Setting::ALL.into_iter().flat_map(|s| {
+        let (id, value) = (
+            u16::from(s.id()).to_le_bytes(),
+            settings.get(s).to_le_bytes(),
+        );
+        [id[0], id[1], 0, 0, value[0], value[1], value[2], value[3]]
+    });
+    for (slot, byte) in blob.iter_mut().zip(head.chain(entries)) {
         *slot = byte;
     }
     blob
 }
 
-/// A blob as settings (this version only).
-pub fn decode(blob: &[u8]) -> Result<Settings, StoreError> {
+/// The blob's length from its first four bytes (version and count); `None` for a version
+/// this code does not read or a count beyond `MAX_HELD`.
+fn blob_len(version: u16, count: u16) -> Option<usize> {
+    let count = usize::from(count);
+    match version {
+        _ if count > MAX_HELD => None,
+        1 => Some(4 + 4 * count),
+        BLOB_VERSION => Some(4 + ENTRY_BYTES * count),
+        _ => None,
+    }
+}
+
+/// A blob's settings, by id (version 2) or by place (version 1, whose places were the ids).
+pub fn decode(blob: &[u8]) -> Result<Held, StoreError> {
     let (version, count) = (u16_at(blob, 0), u16_at(blob, 2));
-    if version != BLOB_VERSION || usize::from(count) != COUNT || blob.len() != BLOB_BYTES {
+    if blob_len(version, count) != Some(blob.len()) {
         return Err(StoreError::Version { version, count });
     }
-    let mut settings = Settings::for_target(0.0);
-    for (k, setting) in Setting::ALL.into_iter().enumerate() {
-        settings.set(setting, f32_at(blob, 4 + 4 * k));
+    let mut held = Held::NONE;
+    for k in 0..usize::from(count) {
+        let (id, value) = match version {
+            1 => (k as u16, f32_at(blob, 4 + 4 * k)),
+            _ => (
+                u16_at(blob, 4 + ENTRY_BYTES * k),
+                f32_at(blob, 4 + ENTRY_BYTES * k + 4),
+            ),
+        };
+        let setting = u8::try_from(id)
+            .ok()
+            .and_then(Setting::from_id)
+            .ok_or(StoreError::UnknownSetting { id })?;
+        held = held.with(setting, value);
     }
-    Ok(settings)
+    Ok(held)
 }
 
 /// `range` as two halves of whole flash pages: their starts and their length in bytes (the
@@ -157,35 +202,48 @@ fn slots<F: NorFlash>(range: &Range<u32>) -> Result<[u32; 2], StoreError> {
     Ok(starts)
 }
 
-/// The valid record in a slot: its sequence number and blob.
+/// The valid record in a slot, read into `record`: its sequence number and its blob's
+/// length (any version's, up to `MAX_HELD` settings: its version is `decode`'s to read or
+/// refuse; the blob at `record[8..8 + length]`).
 async fn read_slot<F: NorFlash>(
     flash: &mut F,
     at: u32,
-) -> Result<Option<(u32, [u8; BLOB_BYTES])>, StoreError> {
-    let mut record = [0u8; RECORD_BYTES];
-    flash.read(at, &mut record).await.map_err(flash_error)?;
-    let body = record.get(..CRC_AT).unwrap_or(&[]);
-    if body.get(..4) != Some(&MAGIC[..]) || crc32(body) != u32_at(&record, CRC_AT) {
+    record: &mut [u8; MAX_RECORD_BYTES],
+) -> Result<Option<(u32, usize)>, StoreError> {
+    flash
+        .read(at, record.get_mut(..12).unwrap_or(&mut []))
+        .await
+        .map_err(flash_error)?;
+    if record.get(..4) != Some(&MAGIC[..]) {
         return Ok(None);
     }
-    let mut blob = [0u8; BLOB_BYTES];
-    if let Some(src) = record.get(8..CRC_AT) {
-        blob.copy_from_slice(src);
+    // A version or count this code cannot size: read at this version's length, so that an
+    // intact record is refused by name (`decode`) rather than skipped.
+    let len = blob_len(u16_at(record, 8), u16_at(record, 10)).unwrap_or(BLOB_BYTES);
+    let crc_at = 8 + len;
+    let Some(whole) = record.get_mut(..crc_at + 4) else {
+        return Ok(None);
+    };
+    flash.read(at, whole).await.map_err(flash_error)?;
+    let body = record.get(..crc_at).unwrap_or(&[]);
+    if crc32(body) != u32_at(record, crc_at) {
+        return Ok(None);
     }
-    Ok(Some((u32_at(&record, 4), blob)))
+    Ok(Some((u32_at(record, 4), len)))
 }
 
-/// The newest valid record and the slot it is in.
+/// The slot of the newest valid record and its sequence number.
 async fn newest<F: NorFlash>(
     flash: &mut F,
     range: &Range<u32>,
-) -> Result<Option<(usize, u32, [u8; BLOB_BYTES])>, StoreError> {
+) -> Result<Option<(usize, u32)>, StoreError> {
     let starts = slots::<F>(range)?;
-    let mut best: Option<(usize, u32, [u8; BLOB_BYTES])> = None;
+    let mut record = [0u8; MAX_RECORD_BYTES];
+    let mut best: Option<(usize, u32)> = None;
     for (slot, &at) in starts.iter().enumerate() {
-        if let Some((sequence, blob)) = read_slot(flash, at).await? {
-            if best.is_none_or(|(_, s, _)| newer(sequence, s)) {
-                best = Some((slot, sequence, blob));
+        if let Some((sequence, _)) = read_slot(flash, at, &mut record).await? {
+            if best.is_none_or(|(_, s)| newer(sequence, s)) {
+                best = Some((slot, sequence));
             }
         }
     }
@@ -209,7 +267,7 @@ pub async fn save_blob<F: NorFlash>(
 ) -> Result<(), StoreError> {
     let starts = slots::<F>(&range)?;
     let (slot, sequence) = match newest(&mut flash, &range).await? {
-        Some((slot, sequence, _)) => (1 - slot, sequence.wrapping_add(1)),
+        Some((slot, sequence)) => (1 - slot, sequence.wrapping_add(1)),
         None => (0, 1),
     };
     let at = starts.get(slot).copied().ok_or(StoreError::Range)?;
@@ -247,11 +305,19 @@ pub async fn save_blob<F: NorFlash>(
 pub async fn load<F: NorFlash>(
     mut flash: F,
     range: Range<u32>,
-) -> Result<Option<Settings>, StoreError> {
-    newest(&mut flash, &range)
-        .await?
-        .map(|(_, _, blob)| decode(&blob))
-        .transpose()
+) -> Result<Option<Held>, StoreError> {
+    let Some((slot, _)) = newest(&mut flash, &range).await? else {
+        return Ok(None);
+    };
+    let at = slots::<F>(&range)?
+        .get(slot)
+        .copied()
+        .ok_or(StoreError::Range)?;
+    let mut record = [0u8; MAX_RECORD_BYTES];
+    match read_slot(&mut flash, at, &mut record).await? {
+        Some((_, len)) => decode(record.get(8..8 + len).unwrap_or(&[])).map(Some),
+        None => Ok(None),
+    }
 }
 
 /// Erase both slots (a user's reset of the saved settings).
@@ -280,7 +346,7 @@ pub struct FlashKeeper<F> {
 impl<F: NorFlash> crate::board::Keeper for FlashKeeper<F> {
     type Error = StoreError;
 
-    fn load(&mut self) -> Result<Option<Settings>, StoreError> {
+    fn load(&mut self) -> Result<Option<Held>, StoreError> {
         block_on(load(&mut self.flash, self.range.clone()))
             .unwrap_or(Err(StoreError::Flash(FlashKind::Other)))
     }

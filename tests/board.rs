@@ -8,7 +8,9 @@ mod common;
 use de_resonator::acquire::FrontEnd;
 use de_resonator::board::port::Extras;
 use de_resonator::board::{tick, Board, Keeper, Line, NoKeeper, ReplyLine, ResetCause, Then};
+use de_resonator::controller::Held;
 use de_resonator::image::{self, AmplifierSpec, Image, PowerUp, DAC_BITS};
+use de_resonator::Setting;
 use de_resonator::{Controller, Dac8551, Inputs, OutputStage, Settings, REFERENCE_DEVICE};
 
 /// 0..10 kV: a 2.5 V reference, gain 4000 (as `common::amplifier`).
@@ -59,20 +61,27 @@ fn line(text: &str) -> Line {
     Line::Text(heapless::Vec::from_slice(text.as_bytes()).unwrap())
 }
 
-/// Settings kept in memory, as a flash would keep them; `broken` fails every read.
+/// Settings kept in memory, as a flash would keep them; `broken` fails every read;
+/// `lacking` is a setting the saved ones do not hold (saved before it was added).
 #[derive(Default)]
 struct Memory {
     saved: Option<Settings>,
     broken: bool,
+    lacking: Option<Setting>,
 }
 
 impl Keeper for &mut Memory {
     type Error = &'static str;
-    fn load(&mut self) -> Result<Option<Settings>, Self::Error> {
+    fn load(&mut self) -> Result<Option<Held>, Self::Error> {
         if self.broken {
             return Err("the settings' flash does not read");
         }
-        Ok(self.saved)
+        Ok(self.saved.map(|saved| {
+            Setting::ALL
+                .into_iter()
+                .filter(|s| Some(*s) != self.lacking)
+                .fold(Held::NONE, |held, s| held.with(s, saved.get(s)))
+        }))
     }
     fn save(&mut self, settings: &Settings) -> Result<(), Self::Error> {
         self.saved = Some(*settings);
@@ -219,6 +228,39 @@ fn saved_settings_boot_or_fall_back_to_the_image() {
     let b = Bench::boot(&bytes, Some(&mut memory), None);
     assert!(b.notice.contains(" settings=image "), "{}", b.notice);
     assert!(b.warning.unwrap().contains("does not read"));
+}
+
+/// Saved settings from an earlier firmware, which lack a setting added since: they boot with
+/// every value they hold, the new setting at the image's value, and the warning names it.
+#[test]
+fn saved_settings_lacking_a_new_setting_boot_and_say_it() {
+    let image = Settings {
+        slew_volts_per_second: 5_000.0,
+        ..Settings::for_target(44.0)
+    };
+    let bytes = image_with(&image);
+    let mut memory = Memory {
+        saved: Some(Settings {
+            slew_volts_per_second: 2_000.0,
+            settle_seconds: 0.4,
+            ..Settings::for_target(45.0)
+        }),
+        lacking: Setting::from_key("slew_volts_per_second"),
+        ..Memory::default()
+    };
+    let mut b = Bench::boot(&bytes, Some(&mut memory), None);
+    assert!(b.notice.contains(" settings=saved "), "{}", b.notice);
+    assert_eq!(field(&b.notice, "target_hz"), 45.0);
+    let warning = b.warning.clone().unwrap();
+    assert!(
+        warning.contains("earlier firmware") && warning.ends_with(": slew_volts_per_second"),
+        "{warning}"
+    );
+    assert_eq!(
+        b.ask("get slew_volts_per_second"),
+        "ok slew_volts_per_second=5000"
+    );
+    assert_eq!(b.ask("get settle_seconds"), "ok settle_seconds=0.4");
 }
 
 /// After a watchdog reset the board boots refused, whatever the image: nothing is driven

@@ -198,8 +198,59 @@ fn ticks_ramp_at_the_slew_rate_hold_then_drive_and_never_exceed_the_limit() {
     );
 }
 
+/// docs/settings.md, the settings' reference, is what their declarations say (each one's
+/// id, key, unit, default, rule and doc): written from them with `UPDATE_DOCS=1 cargo test
+/// --test controller settings_reference`, and compared with them in every other run.
+#[test]
+fn the_settings_reference_is_the_declarations() {
+    use std::fmt::Write;
+    let mut doc = String::from(
+        "# Settings\n\n\
+         What the controller is asked to do, and how: each setting by its key, as `get`, `set` \
+         and `help` on the command port, a scene's `[controller]` table, a settings file for \
+         `host-sim image --settings` and the Python package take it. A saved blob and an image \
+         keep each by its id, which never changes: a firmware update keeps every saved setting \
+         it knows, and gives the ones added since their image's values, or their defaults, \
+         saying which. 0 turns off a setting that can be off.\n\n\
+         This file is written from the declarations in `src/controller/settings.rs` \
+         (`tests/controller.rs` checks it).\n\n\
+         | id | key | unit | default | rule | what |\n|---|---|---|---|---|---|\n",
+    );
+    for setting in Setting::ALL {
+        let default = setting.default_value();
+        let default = if default == 0.0 && setting.rule().contains("off") {
+            "off".to_string()
+        } else {
+            format!("{default}")
+        };
+        let what: Vec<&str> = setting.doc().collect();
+        let _ = writeln!(
+            doc,
+            "| {} | `{}` | {} | {} | {} | {} |",
+            setting.id(),
+            setting.key(),
+            setting.unit(),
+            default,
+            setting.rule(),
+            what.join(" ").replace('|', "\\|")
+        );
+    }
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/settings.md");
+    if std::env::var_os("UPDATE_DOCS").is_some() {
+        std::fs::write(&path, &doc).unwrap();
+    }
+    let kept = std::fs::read_to_string(&path).unwrap_or_default();
+    assert!(
+        kept == doc,
+        "docs/settings.md is not what the declarations say: UPDATE_DOCS=1 cargo test --test \
+         controller settings_reference writes it"
+    );
+}
+
 /// The settings' one list: every key is the `Settings` field's name, found again by
-/// `from_key`; `set` then `get` gives the value back; 0 turns off what can be off.
+/// `from_key`; its stable id (what a saved blob and an image keep it by) is its place in
+/// this hand-written list, so two declarations swapped, or an id changed, fail here; `set`
+/// then `get` gives the value back; 0 turns off what can be off.
 #[test]
 fn every_setting_by_its_key() {
     let keys = [
@@ -226,6 +277,12 @@ fn every_setting_by_its_key() {
         "probe_hz",
     ];
     assert_eq!(Setting::ALL.map(Setting::key), keys);
+    for (id, key) in keys.iter().enumerate() {
+        let setting = Setting::from_key(key).unwrap();
+        assert_eq!(usize::from(setting.id()), id, "{key}");
+        assert_eq!(Setting::from_id(id as u8), Some(setting));
+    }
+    assert_eq!(Setting::from_id(keys.len() as u8), None);
     let mut s = Settings::for_target(44.0);
     for (k, setting) in Setting::ALL.into_iter().enumerate() {
         assert_eq!(Setting::from_key(setting.key()), Some(setting));

@@ -116,7 +116,9 @@ fn the_saved_settings_of_2026_12_05_load_with_every_value() {
     let loaded = block_on(store::load(RamFlash::new(&mut flash), range))
         .unwrap()
         .expect("a record");
-    assert_every_value(RECORD, &loaded);
+    let (settings, new) = loaded.onto(Settings::for_target(0.0));
+    assert_every_value(RECORD, &settings);
+    assert!(new.is_empty(), "every setting of the day saved: {new:?}");
 }
 
 /// The image of 2026-12-05 parses with every value: the device, the amplifier, the power-up
@@ -130,4 +132,5 @@ fn the_image_of_2026_12_05_parses_with_every_value() {
     assert_eq!(image.power_up, PowerUp::Wait);
     assert_eq!(image.front_end, FrontEnd::NONE);
     assert_every_value(IMAGE, &image.settings);
+    assert!(image.defaulted.is_empty(), "{:?}", image.defaulted);
 }

@@ -466,9 +466,9 @@ fn every_wrong_image_is_refused_with_its_reason() {
         bad[at] ^= 0x10;
         assert!(Image::parse(&bad).is_err(), "bit flip at {at} accepted");
     }
-    // Cut short: the stated length runs past the room (a header's worth or more left), or
-    // not even a header and a CRC.
-    for cut in [good.len() - 1, 300, image::HEADER_BYTES + 4] {
+    // Cut short: the stated length runs past the room (the settings' count or more left),
+    // or not even the header before the settings and a CRC (160 bytes).
+    for cut in [good.len() - 1, 300, image::HEADER_BYTES + 3, 160] {
         assert!(
             matches!(
                 Image::parse(&good[..cut]),
@@ -478,10 +478,8 @@ fn every_wrong_image_is_refused_with_its_reason() {
         );
     }
     assert_eq!(
-        Image::parse(&good[..image::HEADER_BYTES + 3]).unwrap_err(),
-        ImageError::TooShort {
-            bytes: image::HEADER_BYTES + 3
-        }
+        Image::parse(&good[..159]).unwrap_err(),
+        ImageError::TooShort { bytes: 159 }
     );
     // Erased flash is empty only when all of the header is: anything else is not an image.
     let mut stranger = vec![0xFFu8; 4096];
@@ -525,8 +523,10 @@ fn every_wrong_image_is_refused_with_its_reason() {
     reseal(&mut rail);
     assert!(matches!(Image::parse(&rail), Err(ImageError::Amplifier(_))));
     // A setting out of range passes the frame and is the boot's to refuse, by name.
+    // (The margin, id 1, is the second entry: its id at 164, its value at 168.)
     let mut margin = good.clone();
-    margin[160..164].copy_from_slice(&1.5f32.to_le_bytes());
+    assert_eq!(margin[164..166], 1u16.to_le_bytes());
+    margin[168..172].copy_from_slice(&1.5f32.to_le_bytes());
     reseal(&mut margin);
     let read = Image::parse(&margin).unwrap();
     let a = read.amplifier.amplifier().unwrap();
@@ -544,6 +544,48 @@ fn every_wrong_image_is_refused_with_its_reason() {
     );
 }
 
+/// Settings by id in an image: one made before a setting was added (here, one lacking
+/// `settle_seconds`) parses with every value it holds and that one at its default, and says
+/// which; one holding a setting this firmware does not know (made for a newer one) is
+/// refused by name, saying what to do.
+#[test]
+fn an_older_image_defaults_the_new_setting_and_a_newer_one_is_refused() {
+    let settings = Settings {
+        settle_seconds: 0.4,
+        ac_volts: 30.0,
+        ac_hz: 44.0,
+        ..Settings::for_target(44.5)
+    };
+    let mut good = made_image(&settings);
+    let length = u32::from_le_bytes(good[8..12].try_into().unwrap()) as usize;
+    good.truncate(length);
+    let lacking = de_resonator::Setting::from_key("settle_seconds").unwrap();
+    // The entry of `settle_seconds` (8 bytes from 156, by id) taken out.
+    let at = 156 + 8 * usize::from(lacking.id());
+    assert_eq!(good[at..at + 2], u16::from(lacking.id()).to_le_bytes());
+    let mut older = good.clone();
+    older.drain(at..at + 8);
+    older[6..8].copy_from_slice(&20u16.to_le_bytes());
+    older[8..12].copy_from_slice(&((length - 8) as u32).to_le_bytes());
+    reseal(&mut older);
+    let read = Image::parse(&older).unwrap();
+    assert_eq!(
+        read.settings,
+        Settings {
+            settle_seconds: Settings::DEFAULTS.settle_seconds,
+            ..settings
+        }
+    );
+    assert_eq!(read.defaulted.iter().collect::<Vec<_>>(), [lacking]);
+    // An entry of an id no setting has, in the place of `settle_seconds`'s.
+    let mut newer = good.clone();
+    newer[at..at + 2].copy_from_slice(&77u16.to_le_bytes());
+    reseal(&mut newer);
+    let refused = Image::parse(&newer).unwrap_err();
+    assert_eq!(refused, ImageError::UnknownSetting { id: 77 });
+    assert!(refused.to_string().contains("host-sim image"), "{refused}");
+}
+
 /// Image errors and refusals read as sentences that name their cause.
 #[test]
 fn image_errors_and_refusals_say_why() {
@@ -554,8 +596,8 @@ fn image_errors_and_refusals_say_why() {
         ),
         (ImageError::BadMagic.to_string(), "DERI"),
         (
-            ImageError::UnsupportedVersion { version: 3 }.to_string(),
-            "version 3",
+            ImageError::UnsupportedVersion { version: 2 }.to_string(),
+            "version 2",
         ),
         (ImageError::DacBits { bits: 12 }.to_string(), "12-bit DAC"),
         (

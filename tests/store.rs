@@ -4,8 +4,9 @@
 //! is refused by name.
 #![cfg(feature = "storage")]
 
+use de_resonator::controller::Held;
 use de_resonator::store::{self, RamFlash, RamFlashWords, StoreError, BLOB_BYTES, RAM_PAGE_BYTES};
-use de_resonator::Settings;
+use de_resonator::{Setting, Settings};
 use embedded_storage_async::nor_flash::ReadNorFlash;
 use futures::executor::block_on;
 
@@ -41,8 +42,10 @@ fn save(
     block_on(store::save(&mut flash, RANGE, settings))
 }
 
+/// The settings saved, onto the defaults (every test's blob holds every setting).
 fn load(bytes: &mut [u8]) -> Result<Option<Settings>, StoreError> {
     block_on(store::load(RamFlash::new(bytes), RANGE))
+        .map(|held| held.map(|h| h.onto(Settings::for_target(0.0)).0))
 }
 
 /// Bytes a save changes (written or erased), counted by a budget that never runs out.
@@ -118,27 +121,76 @@ fn a_corrupted_item_is_skipped() {
     assert_eq!(load(&mut bytes), Ok(Some(nth(1))));
 }
 
-/// A blob from another layout version: refused with its version, never read as settings.
+/// A blob of a layout version this code does not read: refused with its version, never read
+/// as settings.
 #[test]
 fn a_blob_of_another_version_is_refused() {
     let mut bytes = erased();
     let mut old = store::encode(&nth(3));
-    old[0..2].copy_from_slice(&0u16.to_le_bytes());
+    old[0..2].copy_from_slice(&7u16.to_le_bytes());
     block_on(store::save_blob(RamFlash::new(&mut bytes), RANGE, &old)).unwrap();
     let refused = load(&mut bytes);
     assert_eq!(
         refused,
         Err(StoreError::Version {
-            version: 0,
+            version: 7,
             count: 21
         })
     );
     let message = refused.unwrap_err().to_string();
     assert!(
-        message.contains("version 0") && message.contains("ignored"),
+        message.contains("version 7") && message.contains("ignored"),
         "{message}"
     );
-    assert_eq!(store::decode(&store::encode(&nth(4))), Ok(nth(4)));
+    let again = store::decode(&store::encode(&nth(4))).unwrap();
+    assert_eq!(again.onto(Settings::for_target(0.0)).0, nth(4));
+}
+
+/// Settings by id: a blob written before a setting was added (here, one lacking
+/// `trim_pulse_volts`, as a firmware without it wrote them) keeps every value it holds and
+/// takes the base's for the one it lacks, saying which; a blob holding a setting this
+/// firmware does not know (a newer one's) is refused by name; entries in any order read the
+/// same.
+#[test]
+fn an_older_blob_keeps_its_values_and_a_newer_one_is_refused() {
+    let saved = nth(9);
+    let blob = store::encode(&saved);
+    let entries: Vec<[u8; 8]> = blob[4..].chunks(8).map(|c| c.try_into().unwrap()).collect();
+    let lacking = Setting::from_key("trim_pulse_volts").unwrap();
+    let older: Vec<u8> = 2u16
+        .to_le_bytes()
+        .into_iter()
+        .chain(20u16.to_le_bytes())
+        .chain(
+            entries
+                .iter()
+                .rev()
+                .filter(|e| u16::from_le_bytes([e[0], e[1]]) != u16::from(lacking.id()))
+                .flatten()
+                .copied(),
+        )
+        .collect();
+    let base = Settings {
+        trim_pulse_volts: 123.0,
+        ..Settings::for_target(30.0)
+    };
+    let (settings, new) = store::decode(&older).unwrap().onto(base);
+    assert_eq!(
+        settings,
+        Settings {
+            trim_pulse_volts: 123.0,
+            ..saved
+        }
+    );
+    assert_eq!(new.iter().collect::<Vec<_>>(), [lacking]);
+    // One more entry, of an id no setting has: refused by name.
+    let mut newer = blob.to_vec();
+    newer[2..4].copy_from_slice(&22u16.to_le_bytes());
+    newer.extend([200, 0, 0, 0, 0, 0, 128, 63]);
+    assert_eq!(
+        store::decode(&newer),
+        Err(StoreError::UnknownSetting { id: 200 })
+    );
 }
 
 /// A range of garbage (a stranger's bytes, RAM at power-up) holds no settings; a save
@@ -173,15 +225,20 @@ fn a_range_that_is_not_two_slots_is_refused() {
     }
 }
 
-/// The blob's documented layout: version, count, then the 21 settings as f32 (88 bytes); a
-/// blob of this version with another count is refused.
+/// The blob's documented layout: version 2, count, then each of the 21 settings as its id
+/// (u16), two zero bytes and its value (f32): 172 bytes; a blob whose count does not match
+/// its length is refused.
 #[test]
 fn the_blob_is_the_documented_one() {
-    assert_eq!(BLOB_BYTES, 2 + 2 + 4 * de_resonator::Setting::ALL.len());
-    assert_eq!(BLOB_BYTES, 88);
+    assert_eq!(BLOB_BYTES, 2 + 2 + 8 * de_resonator::Setting::ALL.len());
+    assert_eq!(BLOB_BYTES, 172);
     let blob = store::encode(&nth(7));
-    assert_eq!(u16::from_le_bytes([blob[0], blob[1]]), store::BLOB_VERSION);
+    assert_eq!(u16::from_le_bytes([blob[0], blob[1]]), 2);
     assert_eq!(u16::from_le_bytes([blob[2], blob[3]]), 21);
+    for (k, entry) in blob[4..].chunks(8).enumerate() {
+        assert_eq!(u16::from_le_bytes([entry[0], entry[1]]), k as u16);
+        assert_eq!(&entry[2..4], [0, 0]);
+    }
     let mut short = blob;
     short[2] = 15;
     assert_eq!(
@@ -208,7 +265,7 @@ fn saves_stay_inside_their_range() {
         block_on(store::save(&mut flash, range.clone(), &nth(n))).unwrap();
         assert_eq!(
             block_on(store::load(&mut flash, range.clone())),
-            Ok(Some(nth(n)))
+            Ok(Some(Held::all(&nth(n))))
         );
         let outside = bytes[..RAM_PAGE_BYTES]
             .iter()
@@ -246,7 +303,7 @@ fn every_word_size_is_written_whole_and_survives_a_cut() {
             block_on(store::save(&mut flash, RANGE, &nth(n))).unwrap();
             assert_eq!(
                 block_on(store::load(&mut flash, RANGE)),
-                Ok(Some(nth(n))),
+                Ok(Some(Held::all(&nth(n)))),
                 "{WORD}"
             );
         }
@@ -258,7 +315,7 @@ fn every_word_size_is_written_whole_and_survives_a_cut() {
             flash.fail_after = None;
             let read = block_on(store::load(&mut flash, RANGE));
             assert!(
-                read == Ok(Some(nth(3))) || read == Ok(Some(nth(9))),
+                read == Ok(Some(Held::all(&nth(3)))) || read == Ok(Some(Held::all(&nth(9)))),
                 "{WORD} cut {cut}"
             );
         }

@@ -24,7 +24,7 @@ use core::fmt::{self, Write as _};
 
 use heapless::String;
 
-use crate::controller::{Boot, Controller, Settings};
+use crate::controller::{Boot, Controller, Held, Settings};
 use crate::drive::Amplifier;
 use crate::fault_log::Entry;
 use crate::image::{Image, ImageError, PowerUp};
@@ -59,8 +59,8 @@ impl ResetCause {
 /// survives a reset under QEMU, memory in host-sim's virtual board).
 pub trait Keeper {
     type Error: fmt::Display;
-    /// The settings saved last, if any.
-    fn load(&mut self) -> Result<Option<Settings>, Self::Error>;
+    /// The settings saved last, if any (an older firmware's lack the settings added since).
+    fn load(&mut self) -> Result<Option<Held>, Self::Error>;
     fn save(&mut self, settings: &Settings) -> Result<(), Self::Error>;
     /// Whether a flash erase stalls the chip (past its watchdog): `save` and `faults clear`
     /// then wait for the output at rest at 0 V.
@@ -93,7 +93,7 @@ pub struct NoKeeper;
 
 impl Keeper for NoKeeper {
     type Error = &'static str;
-    fn load(&mut self) -> Result<Option<Settings>, Self::Error> {
+    fn load(&mut self) -> Result<Option<Held>, Self::Error> {
         Ok(None)
     }
     fn save(&mut self, _: &Settings) -> Result<(), Self::Error> {
@@ -167,9 +167,21 @@ impl<'a, K: Keeper> Board<'a, K> {
         board.idle_settings = image.0.settings;
         let mut source = "image";
         let mut warning = ReplyLine::new();
+        if !image.0.defaulted.is_empty() {
+            let _ = write!(
+                warning,
+                "image from an earlier host-sim; new since, at their defaults:"
+            );
+            for setting in image.0.defaulted.iter() {
+                let _ = write!(warning, " {}", setting.key());
+            }
+        }
         let saved = match board.keeper.as_mut().map(Keeper::load) {
             Some(Ok(saved)) => saved,
             Some(Err(e)) => {
+                if !warning.is_empty() {
+                    let _ = write!(warning, "; ");
+                }
                 let _ = write!(warning, "{e}: the image's settings used");
                 None
             }
@@ -177,12 +189,29 @@ impl<'a, K: Keeper> Board<'a, K> {
         };
         let mut booted = None;
         if let Some(saved) = saved {
+            // Settings added since they were saved (by an older firmware) take the image's.
+            let (saved, new) = saved.onto(image.0.settings);
             match board.start(slot, image, saved) {
                 Ok(bias) => {
                     source = "saved";
                     booted = Some(bias);
+                    if !new.is_empty() {
+                        if !warning.is_empty() {
+                            let _ = write!(warning, "; ");
+                        }
+                        let _ = write!(
+                            warning,
+                            "saved settings from an earlier firmware; new since, at the image's values:"
+                        );
+                        for setting in new.iter() {
+                            let _ = write!(warning, " {}", setting.key());
+                        }
+                    }
                 }
                 Err(fault) => {
+                    if !warning.is_empty() {
+                        let _ = write!(warning, "; ");
+                    }
                     let _ = write!(
                         warning,
                         "saved settings refused ({fault}): the image's used"

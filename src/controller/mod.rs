@@ -49,7 +49,7 @@ pub use fault::{
 };
 pub use fault_figures::Figures;
 pub use plan::{Plan, MAX_PLAN_TICKS};
-pub use settings::{Setting, Settings, F32_GUARD, MAX_TRIMS, TRIM_SECANT_STEP};
+pub use settings::{Held, Setting, SettingSet, Settings, F32_GUARD, MAX_TRIMS, TRIM_SECANT_STEP};
 #[cfg(feature = "trim")]
 pub use trim::{NextRing, TrimDone, TrimJob, TrimResult};
 pub use watch::{Inputs, AMPLIFIER_TICKS, LEAKAGE_WINDOW_SECONDS};

@@ -5,73 +5,164 @@ use super::fault::Fault;
 use crate::estimate::ring::MAX_WINDOW;
 use crate::tuning::TuneError;
 
-/// What the controller is asked to do, and how.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Settings {
+/// The settings, declared once: each with its stable id, its field (whose name is its key),
+/// its type, its default, its unit, the rule its checks hold it to and its doc. From this
+/// come `Settings` and its defaults, `Setting` with `ALL`, `key`, `unit`, `rule` and the doc,
+/// `get` and `set`, and through them a saved blob's and an image's layout (by id) and the
+/// settings reference (docs/settings.md, checked against it). An id is never reused or
+/// changed: a new setting takes the next one, at the end.
+macro_rules! declare_settings {
+    ($(
+        $(#[doc = $doc:literal])+
+        $id:literal $variant:ident $field:ident: $ty:ty = $default:expr, $unit:literal,
+        $rule:literal;
+    )+) => {
+        /// What the controller is asked to do, and how.
+        #[derive(Clone, Copy, Debug, PartialEq)]
+        #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+        pub struct Settings {
+            $($(#[doc = $doc])+ pub $field: $ty,)+
+        }
+
+        /// A setting: the one list that settings files, messages, a command port, a saved
+        /// blob and an image take theirs from (its number its stable id).
+        #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+        #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+        #[repr(u8)]
+        pub enum Setting {
+            $($(#[doc = $doc])+ $variant = $id,)+
+        }
+
+        impl Settings {
+            /// Every setting at its default; the target 0 (none: `for_target` gives one).
+            pub const DEFAULTS: Settings = Settings {
+                $($field: $default,)+
+            };
+
+            /// One setting's value; a setting that is off (`None`) reads 0, as settings
+            /// files write it.
+            pub fn get(&self, setting: Setting) -> f32 {
+                match setting {
+                    $(Setting::$variant => Slot::read(&self.$field),)+
+                }
+            }
+
+            /// Set one setting; 0 turns off one that can be off (`stuck_samples` is rounded
+            /// down, saturating).
+            pub fn set(&mut self, setting: Setting, value: f32) {
+                match setting {
+                    $(Setting::$variant => Slot::write(&mut self.$field, value),)+
+                }
+            }
+        }
+
+        impl Setting {
+            /// Every setting, by id (the ids run 0, 1, 2, … in this order).
+            pub const ALL: [Setting; [$(Setting::$variant),+].len()] = [$(Setting::$variant),+];
+
+            /// The setting's key, as in `Settings` and a scene's `[controller]` table.
+            pub fn key(self) -> &'static str {
+                match self {
+                    $(Setting::$variant => stringify!($field),)+
+                }
+            }
+
+            /// The unit its value is in (the key's suffix says it too).
+            pub fn unit(self) -> &'static str {
+                match self {
+                    $(Setting::$variant => $unit,)+
+                }
+            }
+
+            /// What the checks ask of it, said when they refuse it.
+            pub fn rule(self) -> &'static str {
+                match self {
+                    $(Setting::$variant => $rule,)+
+                }
+            }
+
+            fn doc_lines(self) -> &'static [&'static str] {
+                match self {
+                    $(Setting::$variant => &[$($doc),+],)+
+                }
+            }
+        }
+    };
+}
+
+declare_settings! {
     /// The natural frequency to tune to, Hz.
-    pub target_hz: f32,
+    0 TargetHz target_hz: f32 = 0.0, "Hz", "a frequency in the device's tunable range";
     /// Voltage margin: every commanded voltage stays at most (1 − margin)·Φlimit.
-    pub margin: f32,
+    1 Margin margin: f32 = 0.05, "fraction", "in [0, 1)";
     /// Bias ramp rate, V/s.
-    pub slew_volts_per_second: f32,
+    2 SlewVoltsPerSecond slew_volts_per_second: f32 = 10_000.0, "V/s", "> 0";
     /// The controller's fixed rate, Hz.
-    pub tick_hz: f32,
+    3 TickHz tick_hz: f32 = 1_000.0, "Hz",
+        "> 0, and fast enough for the model to step the device stably in substeps";
     /// Hold at the bias before the AC drive starts, s.
-    pub settle_seconds: f32,
+    4 SettleSeconds settle_seconds: f32 = 0.25, "s", ">= 0";
     /// AC drive amplitude, V (0: none).
-    pub ac_volts: f32,
+    5 AcVolts ac_volts: f32 = 0.0, "V",
+        ">= 0, the AC (and the probe) about the bias within [0 V, the cap in force]";
     /// AC drive frequency, Hz.
-    pub ac_hz: f32,
+    6 AcHz ac_hz: f32 = 0.0, "Hz", "below half the tick rate, and > 0 where ac_volts is";
     /// How long the model follows the AC drive after it starts, s.
-    pub check_seconds: f32,
+    7 CheckSeconds check_seconds: f32 = 0.5, "s", ">= 0";
     /// Largest relative difference allowed between the natural frequency at the table's bias
     /// and at the direct solve's (the two biases differ by the table's interpolation).
-    pub agreement: f32,
+    8 Agreement agreement: f32 = 1e-4, "fraction", "> 0";
     /// Largest difference between the amplifier's monitored output and the last command,
     /// V, for more than `AMPLIFIER_TICKS` ticks in a row (a saturated or failed amplifier).
-    pub amplifier_tolerance_volts: f32,
+    9 AmplifierToleranceVolts amplifier_tolerance_volts: f32 = 200.0, "V", "> 0";
     /// Bit-identical sensor samples in a row that mean a stuck sensor (`None`: no such
     /// check; a real sensor's noise never repeats that long).
-    pub stuck_samples: Option<u32>,
+    10 StuckSamples stuck_samples: Option<u32> = Some(100), "samples", ">= 1 or off";
     /// Closed-loop trim: the relative frequency error to reach (`None`: no trim). Needs the
     /// stretch sensor or the amplifier's current monitor (`Inputs`), and the `cross_check`
     /// stage (the model is re-solved on the chip).
-    pub trim_tolerance: Option<f32>,
+    11 TrimTolerance trim_tolerance: Option<f32> = None, "fraction",
+        "> 0 or off, in a build with the trim";
     /// The ring measured after each pulse, s: at least `MIN_WINDOW_PERIODS` target periods, and
     /// averaged into at most `MAX_WINDOW` samples, at least `MIN_SAMPLES_PER_PERIOD` a period.
-    pub trim_window_seconds: f32,
+    12 TrimWindowSeconds trim_window_seconds: f32 = 0.5, "s",
+        "at least 4 target periods long, and once its ticks are averaged into 512 \
+         samples, at least 8 samples per target period (at most 64 periods)";
     /// The pulse's drop below the bias, V, for half a period of the target.
-    pub trim_pulse_volts: f32,
+    13 TrimPulseVolts trim_pulse_volts: f32 = 200.0, "V", ">= 0";
     /// The first bias the trim measures at, as a fraction of the nominal cap at most: a
     /// plant softer than the model by a factor r has its limit √r lower, so a fraction p
     /// covers plants down to r = p².
-    pub trim_probe_fraction: f32,
+    14 TrimProbeFraction trim_probe_fraction: f32 = 0.5, "fraction", "in (0, 1]";
     /// Trim again after this long of AC drive, s (`None`: once): for a plant that drifts,
     /// as a viscoelastic membrane creeps. The AC pauses while the ring is measured.
-    pub trim_every_seconds: Option<f32>,
+    15 TrimEverySeconds trim_every_seconds: Option<f32> = None, "s", "> 0 or off";
     /// The leakage watch (model.md §8): the membrane's leakage resistance, from the DC part
     /// of the amplifier's current against the voltage over each `LEAKAGE_WINDOW_SECONDS` at
     /// a steady bias, must stay above this, Ω (`None`: no watch). A falling leakage
     /// resistance is a precursor of breakdown. Needs the current monitor.
-    pub leakage_floor_ohms: Option<f32>,
+    16 LeakageFloorOhms leakage_floor_ohms: Option<f32> = None, "ohm", "> 0 or off";
     /// The leakage watch's second test: from one window to the next, the leakage resistance
     /// may fall by at most this fraction a second, where the fall stands out of the current's
     /// scatter (`None`: no such test). A fast fall comes before breakdown, far above a floor.
-    pub leakage_fall_per_second: Option<f32>,
-    /// Resonance tracking while driving (feature `track`, `crate::estimate::lockin`): the drive follows
-    /// the resonance measured in the stretch with this time constant, s, and the bias is
-    /// retuned to the target within `trim_tolerance` without pausing the drive (`None`: off).
-    /// Needs the stretch sensor and a trim; not with `trim_every_seconds`.
-    pub track_seconds: Option<f32>,
-    /// The stretch from the capacitance (feature `probe`, `crate::estimate::capacitance`): a square probe of
-    /// this amplitude, V, rides on the bias (`None`: off). The current monitor's lock-in on
-    /// it gives λ with its uncertainty, checked against model.md §6 widened by it. Off while
-    /// the trim measures a ring.
-    pub probe_volts: Option<f32>,
+    17 LeakageFallPerSecond leakage_fall_per_second: Option<f32> = None, "1/s", "> 0 or off";
+    /// Resonance tracking while driving (feature `track`, `crate::estimate::lockin`): the
+    /// drive follows the resonance measured in the stretch with this time constant, s, and
+    /// the bias is retuned to the target within `trim_tolerance` without pausing the drive
+    /// (`None`: off). Needs the stretch sensor and a trim; not with `trim_every_seconds`.
+    18 TrackSeconds track_seconds: Option<f32> = None, "s",
+        "> 0 or off; with the track build, a trim, ac_volts > 0 and no trim_every_seconds";
+    /// The stretch from the capacitance (feature `probe`, `crate::estimate::capacitance`): a
+    /// square probe of this amplitude, V, rides on the bias (`None`: off). The current
+    /// monitor's lock-in on it gives λ with its uncertainty, checked against model.md §6
+    /// widened by it. Off while the trim measures a ring.
+    19 ProbeVolts probe_volts: Option<f32> = None, "V",
+        "> 0 or off, in a build with the probe; the probe and the AC about the bias \
+         within [0 V, the cap in force]";
     /// The probe's frequency, Hz: half the tick rate over a whole number (its sign flips
     /// every so many ticks).
-    pub probe_hz: f32,
+    20 ProbeHz probe_hz: f32 = 500.0, "Hz",
+        "at least 4x target_hz, a whole number of ticks per half period";
 }
 
 /// The f32 solve's allowance: the cap is (1 − margin)·(1 − F32_GUARD)·Φlimit in f32, so it
@@ -126,96 +217,12 @@ impl Settings {
     /// Defaults for a target: 5% margin, 10 kV/s, 1 kHz, 0.25 s hold, no AC, 0.5 s of
     /// model after the AC starts, table and solve within 1e-4 in frequency, the amplifier
     /// within 200 V of its command, 100 equal sensor samples in a row a stuck sensor; no
-    /// probe (its frequency, once on, 500 Hz).
+    /// probe (its frequency, once on, 500 Hz): `DEFAULTS` but the target.
     pub const fn for_target(target_hz: f32) -> Self {
         Self {
             target_hz,
-            margin: 0.05,
-            slew_volts_per_second: 10_000.0,
-            tick_hz: 1_000.0,
-            settle_seconds: 0.25,
-            ac_volts: 0.0,
-            ac_hz: 0.0,
-            check_seconds: 0.5,
-            agreement: 1e-4,
-            amplifier_tolerance_volts: 200.0,
-            stuck_samples: Some(100),
-            trim_tolerance: None,
-            trim_window_seconds: 0.5,
-            trim_pulse_volts: 200.0,
-            trim_probe_fraction: 0.5,
-            trim_every_seconds: None,
-            leakage_floor_ohms: None,
-            leakage_fall_per_second: None,
-            track_seconds: None,
-            probe_volts: None,
-            probe_hz: 500.0,
+            ..Self::DEFAULTS
         }
-    }
-
-    /// One setting's value; a setting that is off (`None`) reads 0, as settings files
-    /// write it.
-    pub fn get(&self, setting: Setting) -> f32 {
-        match setting {
-            Setting::StuckSamples => self.stuck_samples.map_or(0.0, |n| n as f32),
-            Setting::TrimTolerance => self.trim_tolerance.unwrap_or(0.0),
-            Setting::TrimEverySeconds => self.trim_every_seconds.unwrap_or(0.0),
-            Setting::LeakageFloorOhms => self.leakage_floor_ohms.unwrap_or(0.0),
-            Setting::LeakageFallPerSecond => self.leakage_fall_per_second.unwrap_or(0.0),
-            Setting::TrackSeconds => self.track_seconds.unwrap_or(0.0),
-            Setting::ProbeVolts => self.probe_volts.unwrap_or(0.0),
-            other => {
-                let mut copy = *self;
-                copy.slot_mut(other).map_or(f32::NAN, |value| *value)
-            }
-        }
-    }
-
-    /// Set one setting; 0 turns off one that can be off (`stuck_samples` is rounded
-    /// down, saturating).
-    pub fn set(&mut self, setting: Setting, value: f32) {
-        let on = (value != 0.0).then_some(value);
-        match setting {
-            Setting::StuckSamples => self.stuck_samples = on.map(|n| n as u32),
-            Setting::TrimTolerance => self.trim_tolerance = on,
-            Setting::TrimEverySeconds => self.trim_every_seconds = on,
-            Setting::LeakageFloorOhms => self.leakage_floor_ohms = on,
-            Setting::LeakageFallPerSecond => self.leakage_fall_per_second = on,
-            Setting::TrackSeconds => self.track_seconds = on,
-            Setting::ProbeVolts => self.probe_volts = on,
-            other => {
-                if let Some(slot) = self.slot_mut(other) {
-                    *slot = value;
-                }
-            }
-        }
-    }
-
-    fn slot_mut(&mut self, setting: Setting) -> Option<&mut f32> {
-        Some(match setting {
-            Setting::TargetHz => &mut self.target_hz,
-            Setting::Margin => &mut self.margin,
-            Setting::SlewVoltsPerSecond => &mut self.slew_volts_per_second,
-            Setting::TickHz => &mut self.tick_hz,
-            Setting::SettleSeconds => &mut self.settle_seconds,
-            Setting::AcVolts => &mut self.ac_volts,
-            Setting::AcHz => &mut self.ac_hz,
-            Setting::CheckSeconds => &mut self.check_seconds,
-            Setting::Agreement => &mut self.agreement,
-            Setting::AmplifierToleranceVolts => &mut self.amplifier_tolerance_volts,
-
-            Setting::TrimWindowSeconds => &mut self.trim_window_seconds,
-            Setting::TrimPulseVolts => &mut self.trim_pulse_volts,
-            Setting::TrimProbeFraction => &mut self.trim_probe_fraction,
-            Setting::ProbeHz => &mut self.probe_hz,
-            Setting::StuckSamples
-            | Setting::TrimTolerance
-            | Setting::TrimEverySeconds
-            | Setting::LeakageFloorOhms
-            | Setting::LeakageFallPerSecond
-            | Setting::TrackSeconds
-            | Setting::ProbeVolts => return None,
-        })
     }
 
     /// Every setting in its range (the trim's only with the `trim` feature): a `Setting`
@@ -331,156 +338,151 @@ impl Settings {
     }
 }
 
-/// A setting: the one list that settings files, messages and a command port take theirs from.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Setting {
-    TargetHz,
-    Margin,
-    SlewVoltsPerSecond,
-    TickHz,
-    SettleSeconds,
-    AcVolts,
-    AcHz,
-    CheckSeconds,
-    Agreement,
-    AmplifierToleranceVolts,
-    TrimTolerance,
-    TrimWindowSeconds,
-    TrimPulseVolts,
-    TrimProbeFraction,
-    TrimEverySeconds,
-    StuckSamples,
-    LeakageFloorOhms,
-    LeakageFallPerSecond,
-    TrackSeconds,
-    ProbeVolts,
-    ProbeHz,
-}
-
 impl Setting {
-    /// Every setting, in `Settings` order.
-    pub const ALL: [Setting; 21] = [
-        Setting::TargetHz,
-        Setting::Margin,
-        Setting::SlewVoltsPerSecond,
-        Setting::TickHz,
-        Setting::SettleSeconds,
-        Setting::AcVolts,
-        Setting::AcHz,
-        Setting::CheckSeconds,
-        Setting::Agreement,
-        Setting::AmplifierToleranceVolts,
-        Setting::StuckSamples,
-        Setting::TrimTolerance,
-        Setting::TrimWindowSeconds,
-        Setting::TrimPulseVolts,
-        Setting::TrimProbeFraction,
-        Setting::TrimEverySeconds,
-        Setting::LeakageFloorOhms,
-        Setting::LeakageFallPerSecond,
-        Setting::TrackSeconds,
-        Setting::ProbeVolts,
-        Setting::ProbeHz,
-    ];
+    /// Whether it counts something: a fraction is refused, never rounded.
+    pub fn whole(self) -> bool {
+        matches!(self, Setting::StuckSamples)
+    }
 
     /// The setting with this key.
     pub fn from_key(key: &str) -> Option<Setting> {
         Setting::ALL.into_iter().find(|s| s.key() == key)
     }
 
-    /// The setting's key, as in `Settings` and a scene's `[controller]` table.
-    pub fn key(self) -> &'static str {
-        match self {
-            Setting::TargetHz => "target_hz",
-            Setting::Margin => "margin",
-            Setting::StuckSamples => "stuck_samples",
-            Setting::SlewVoltsPerSecond => "slew_volts_per_second",
-            Setting::TickHz => "tick_hz",
-            Setting::SettleSeconds => "settle_seconds",
-            Setting::AcVolts => "ac_volts",
-            Setting::AcHz => "ac_hz",
-            Setting::CheckSeconds => "check_seconds",
-            Setting::Agreement => "agreement",
-            Setting::AmplifierToleranceVolts => "amplifier_tolerance_volts",
-            Setting::TrimTolerance => "trim_tolerance",
-            Setting::TrimWindowSeconds => "trim_window_seconds",
-            Setting::TrimPulseVolts => "trim_pulse_volts",
-            Setting::TrimProbeFraction => "trim_probe_fraction",
-            Setting::TrimEverySeconds => "trim_every_seconds",
-            Setting::LeakageFloorOhms => "leakage_floor_ohms",
-            Setting::LeakageFallPerSecond => "leakage_fall_per_second",
-            Setting::TrackSeconds => "track_seconds",
-            Setting::ProbeVolts => "probe_volts",
-            Setting::ProbeHz => "probe_hz",
-        }
+    /// The setting with this stable id.
+    pub fn from_id(id: u8) -> Option<Setting> {
+        Setting::ALL.into_iter().find(|s| s.id() == id)
+    }
+
+    /// Its stable id: what a saved blob and an image keep it by, never reused.
+    pub const fn id(self) -> u8 {
+        self as u8
+    }
+
+    /// Its default (`Settings::DEFAULTS`; 0 for one off by default).
+    pub fn default_value(self) -> f32 {
+        Settings::DEFAULTS.get(self)
+    }
+
+    /// Its doc comment, line by line.
+    pub fn doc(self) -> impl Iterator<Item = &'static str> {
+        self.doc_lines().iter().map(|l| l.trim())
     }
 }
 
-impl Setting {
-    /// The unit its value is in (the key's suffix says it too).
-    pub fn unit(self) -> &'static str {
-        match self {
-            Setting::TargetHz | Setting::AcHz | Setting::TickHz | Setting::ProbeHz => "Hz",
-            Setting::AcVolts
-            | Setting::ProbeVolts
-            | Setting::TrimPulseVolts
-            | Setting::AmplifierToleranceVolts => "V",
-            Setting::SlewVoltsPerSecond => "V/s",
-            Setting::SettleSeconds
-            | Setting::CheckSeconds
-            | Setting::TrimWindowSeconds
-            | Setting::TrimEverySeconds
-            | Setting::TrackSeconds => "s",
-            Setting::LeakageFloorOhms => "ohm",
-            Setting::LeakageFallPerSecond => "1/s",
-            Setting::StuckSamples => "samples",
-            Setting::Margin
-            | Setting::Agreement
-            | Setting::TrimTolerance
-            | Setting::TrimProbeFraction => "fraction",
-        }
+/// Some settings (by id): which a saved blob or an image holds, or lacks.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SettingSet(u32);
+
+// Room for every id in a set's word.
+const _: () = assert!(Setting::ALL.len() <= 32);
+
+impl SettingSet {
+    /// None.
+    pub const EMPTY: SettingSet = SettingSet(0);
+
+    /// This set with `setting` in it.
+    pub fn with(self, setting: Setting) -> Self {
+        SettingSet(self.0 | 1 << setting.id())
     }
 
-    /// Whether it counts something: a fraction is refused, never rounded.
-    pub fn whole(self) -> bool {
-        matches!(self, Setting::StuckSamples)
+    pub fn contains(self, setting: Setting) -> bool {
+        self.0 & 1 << setting.id() != 0
     }
 
-    /// What the checks ask of it, said when they refuse it.
-    pub fn rule(self) -> &'static str {
-        match self {
-            Setting::TargetHz => "a frequency in the device's tunable range",
-            Setting::Margin => "in [0, 1)",
-            Setting::SlewVoltsPerSecond => "> 0",
-            Setting::TickHz => {
-                "> 0, and fast enough for the model to step the device stably in substeps"
-            }
-            Setting::SettleSeconds | Setting::CheckSeconds => ">= 0",
-            Setting::AcVolts => {
-                ">= 0, the AC (and the probe) about the bias within [0 V, the cap in force]"
-            }
-            Setting::AcHz => "below half the tick rate, and > 0 where ac_volts is",
-            Setting::Agreement | Setting::AmplifierToleranceVolts => "> 0",
-            Setting::TrimTolerance => "> 0 or off, in a build with the trim",
-            Setting::TrimWindowSeconds => {
-                "at least 4 target periods long, and once its ticks are averaged into 512 \
-                 samples, at least 8 samples per target period (at most 64 periods)"
-            }
-            Setting::TrimPulseVolts => ">= 0",
-            Setting::TrimProbeFraction => "in (0, 1]",
-            Setting::TrimEverySeconds => "> 0 or off",
-            Setting::StuckSamples => ">= 1 or off",
-            Setting::LeakageFloorOhms | Setting::LeakageFallPerSecond => "> 0 or off",
-            Setting::TrackSeconds => {
-                "> 0 or off; with the track build, a trim, ac_volts > 0 and no trim_every_seconds"
-            }
-            Setting::ProbeVolts => {
-                "> 0 or off, in a build with the probe; the probe and the AC about the bias \
-                 within [0 V, the cap in force]"
-            }
-            Setting::ProbeHz => "at least 4x target_hz, a whole number of ticks per half period",
+    pub fn is_empty(self) -> bool {
+        self.0 == 0
+    }
+
+    /// Every setting not in this set.
+    pub fn others(self) -> Self {
+        Setting::ALL
+            .into_iter()
+            .filter(|s| !self.contains(*s))
+            .fold(SettingSet::EMPTY, SettingSet::with)
+    }
+
+    /// Its settings, by id.
+    pub fn iter(self) -> impl Iterator<Item = Setting> {
+        Setting::ALL.into_iter().filter(move |s| self.contains(*s))
+    }
+}
+
+/// Settings as a saved blob or an image held them: the value of each setting it holds (an
+/// older one lacks the settings added since).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Held {
+    values: [f32; Setting::ALL.len()],
+    held: SettingSet,
+}
+
+impl Held {
+    /// Nothing held yet.
+    pub const NONE: Held = Held {
+        values: [0.0; Setting::ALL.len()],
+        held: SettingSet::EMPTY,
+    };
+
+    /// Every setting of `settings`.
+    pub fn all(settings: &Settings) -> Self {
+        Setting::ALL
+            .into_iter()
+            .fold(Held::NONE, |h, s| h.with(s, settings.get(s)))
+    }
+
+    /// This with `setting` held at `value`.
+    pub fn with(mut self, setting: Setting, value: f32) -> Self {
+        if let Some(slot) = self.values.get_mut(usize::from(setting.id())) {
+            *slot = value;
         }
+        self.held = self.held.with(setting);
+        self
+    }
+
+    /// The settings held, the others `base`'s; and which those others were.
+    pub fn onto(&self, base: Settings) -> (Settings, SettingSet) {
+        let mut settings = base;
+        for setting in self.held.iter() {
+            if let Some(&value) = self.values.get(usize::from(setting.id())) {
+                settings.set(setting, value);
+            }
+        }
+        (settings, self.held.others())
+    }
+}
+
+/// How a setting's value is held: a number, or one that can be off (`None`), read and
+/// written as 0 (a count rounded down, saturating).
+trait Slot {
+    fn read(&self) -> f32;
+    fn write(&mut self, value: f32);
+}
+
+impl Slot for f32 {
+    fn read(&self) -> f32 {
+        *self
+    }
+    fn write(&mut self, value: f32) {
+        *self = value;
+    }
+}
+
+impl Slot for Option<f32> {
+    fn read(&self) -> f32 {
+        self.unwrap_or(0.0)
+    }
+    fn write(&mut self, value: f32) {
+        *self = (value != 0.0).then_some(value);
+    }
+}
+
+impl Slot for Option<u32> {
+    fn read(&self) -> f32 {
+        self.map_or(0.0, |n| n as f32)
+    }
+    fn write(&mut self, value: f32) {
+        *self = (value != 0.0).then_some(value as u32);
     }
 }
 
