@@ -44,12 +44,11 @@ use heapless::String;
 #[cfg(feature = "storage")]
 use heapless::Vec;
 
+#[cfg(feature = "storage")]
+use crate::bytes::{crc32, f32_at, newer, u32_at, Put};
 use crate::controller::{Fault, Figures};
 #[cfg(feature = "storage")]
 use crate::store::{flash_error, StoreError};
-use crate::table::newer;
-#[cfg(feature = "storage")]
-use crate::table::{crc32, f32_at, u32_at, Put};
 
 /// The newest entries the log keeps, at least.
 pub const KEPT: usize = 32;

@@ -29,10 +29,11 @@
 use core::fmt;
 
 use crate::acquire::{ChannelSpec, FrontEnd, FrontEndError, InputNoise, MAX_INPUT};
+use crate::bytes::{crc32, f32_at, u16_at, u32_at};
 use crate::controller::{Held, Setting, SettingSet, Settings};
 use crate::device::DeviceParams;
 use crate::drive::{Amplifier, CodeError};
-use crate::table::{crc32, f32_at, u16_at, u32_at, Table, TableError};
+use crate::table::{Table, TableError};
 
 /// The first four bytes of an image.
 pub const MAGIC: [u8; 4] = *b"DERI";

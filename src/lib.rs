@@ -23,6 +23,7 @@
 
 pub mod acquire;
 pub mod board;
+pub mod bytes;
 pub mod controller;
 pub mod drive;
 pub mod estimate;

@@ -26,8 +26,8 @@ use embedded_storage_async::nor_flash::{
     ErrorType, MultiwriteNorFlash, NorFlash, NorFlashError, NorFlashErrorKind, ReadNorFlash,
 };
 
+use crate::bytes::{crc32, f32_at, newer, u16_at, u32_at};
 use crate::controller::{Held, Setting, Settings};
-use crate::table::{crc32, f32_at, newer, u16_at, u32_at};
 
 /// The blob's layout version this code writes (it reads 1 too).
 pub const BLOB_VERSION: u16 = 2;
@@ -326,80 +326,6 @@ pub async fn erase<F: NorFlash>(mut flash: F, range: Range<u32>) -> Result<(), S
         .erase(range.start, range.end)
         .await
         .map_err(flash_error)
-}
-
-/// A flash and the ranges of it the settings and the fault log use, as the board keeps them
-/// ([`crate::board::Keeper`]): each call run to its end at once, for a flash that never waits
-/// (RAM, or the STM32F4's flash controller, which blocks in each call).
-pub struct FlashKeeper<F> {
-    pub flash: F,
-    pub range: Range<u32>,
-    /// The fault log's (`crate::fault_log`; `None`: none kept).
-    pub log: Option<Range<u32>>,
-    /// Whether an erase stalls the chip (its code runs from this flash bank, for longer than
-    /// the watchdog waits): the log then erases only at boot (`Keeper::prepare_faults`), never
-    /// while running, and `save` and `faults clear` wait for rest at 0 V. The chip, and the
-    /// firmware's QEMU stand-in that stalls as the chip does: `true`; host-sim's RAM: `false`.
-    pub erase_stalls: bool,
-}
-
-impl<F: NorFlash> crate::board::Keeper for FlashKeeper<F> {
-    type Error = StoreError;
-
-    fn load(&mut self) -> Result<Option<Held>, StoreError> {
-        block_on(load(&mut self.flash, self.range.clone()))
-            .unwrap_or(Err(StoreError::Flash(FlashKind::Other)))
-    }
-
-    fn save(&mut self, settings: &Settings) -> Result<(), StoreError> {
-        block_on(save(&mut self.flash, self.range.clone(), settings))
-            .unwrap_or(Err(StoreError::Flash(FlashKind::Other)))
-    }
-
-    fn log(&mut self, entry: &crate::fault_log::Entry) -> Option<Result<u32, StoreError>> {
-        let range = self.log.clone()?;
-        let may_erase = !self.erase_stalls;
-        Some(
-            block_on(crate::fault_log::append(
-                &mut self.flash,
-                range,
-                entry,
-                may_erase,
-            ))
-            .unwrap_or(Err(StoreError::Flash(FlashKind::Other))),
-        )
-    }
-
-    fn erase_stalls(&self) -> bool {
-        self.erase_stalls
-    }
-
-    fn prepare_faults(&mut self) -> Option<Result<bool, StoreError>> {
-        let range = self.log.clone()?;
-        Some(
-            block_on(crate::fault_log::prepare(&mut self.flash, range))
-                .unwrap_or(Err(StoreError::Flash(FlashKind::Other))),
-        )
-    }
-
-    fn each_fault(
-        &mut self,
-        each: &mut dyn FnMut(crate::fault_log::Entry),
-    ) -> Option<Result<(), StoreError>> {
-        let range = self.log.clone()?;
-        Some(
-            block_on(crate::fault_log::each(&mut self.flash, range, each))
-                .unwrap_or(Err(StoreError::Flash(FlashKind::Other))),
-        )
-    }
-
-    fn clear_faults(&mut self) -> Option<Result<(), StoreError>> {
-        let range = self.log.clone()?;
-        Some(
-            block_on(crate::fault_log::clear(&mut self.flash, range))
-                .unwrap_or(Err(StoreError::Flash(FlashKind::Other))),
-        )
-    }
 }
 
 /// Run a future whose flash never waits to its end, without an executor (a boot cannot

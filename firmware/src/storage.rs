@@ -9,7 +9,7 @@
 //! window around it. QEMU's stand-in stalls as long, interrupts masked, so its watchdog
 //! stand-in bites there as the IWDG would without the lengthened window.
 
-use de_resonator::store::FlashKeeper;
+use de_resonator::board::FlashKeeper;
 
 /// The settings' RAM pages under QEMU (two slots of a page).
 pub const SETTINGS_PAGES: usize = 2;

@@ -3,7 +3,7 @@
 //! controller that starts never commands below 0 V or above its cap, whatever it measures.
 #![no_main]
 
-use de_resonator::table::crc32;
+use de_resonator::bytes::crc32;
 use de_resonator::{Amplifier, Controller, Inputs, Settings, REFERENCE_DEVICE};
 use libfuzzer_sys::fuzz_target;
 

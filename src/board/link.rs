@@ -24,11 +24,11 @@ use core::fmt::{self, Write as _};
 use embedded_hal::digital::OutputPin;
 use embedded_hal::spi::{Operation, SpiDevice};
 
+use crate::bytes::{crc32, f32_at, u16_at, u32_at, Put};
 use crate::controller::{phase_byte, phase_of_byte};
 use crate::controller::{Boot, Controller, Event, EventKind, Phase, EVENT_VALUES};
 use crate::drive::PowerMode;
 use crate::model::failure::FailureMode;
-use crate::table::{crc32, f32_at, u16_at, u32_at, Put};
 
 /// A frame's first two bytes.
 pub const MAGIC: [u8; 2] = *b"DL";

@@ -12,6 +12,8 @@
 //! a boot) runs outside the lock while the tick preempts it.
 
 pub mod faults;
+#[cfg(feature = "storage")]
+mod flash_keeper;
 pub mod link;
 pub mod port;
 pub mod protocol;
@@ -31,6 +33,8 @@ use crate::image::{Image, ImageError, PowerUp};
 use crate::numerics::decimal::Decimal;
 use crate::safety::FailureMode;
 
+#[cfg(feature = "storage")]
+pub use flash_keeper::FlashKeeper;
 pub use port::{Echo, Line, Lines, Pushed, ReplyLine, Shared, Then, REPLY_END, TERMINAL_REPLY_END};
 
 /// Why the firmware restarted, as it recorded it before the reset.

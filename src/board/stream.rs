@@ -39,8 +39,8 @@
 use core::fmt;
 
 use crate::acquire::Inputs;
+use crate::bytes::{crc32, f32_at, u16_at, u32_at, Put};
 use crate::controller::{phase_byte, phase_of_byte, Controller, Fault, Phase};
-use crate::table::{crc32, f32_at, u16_at, u32_at, Put};
 
 /// The record layout's version (byte 0).
 pub const VERSION: u8 = 1;

@@ -5,7 +5,7 @@ use core::fmt;
 
 use crate::numerics::decimal::Decimal;
 
-use super::settings::Setting;
+use super::settings::{Setting, SettingError};
 use crate::acquire::InputError;
 use crate::device::ParamError;
 use crate::drive::{CodeError, DacCode};
@@ -289,6 +289,15 @@ pub const FAULT_KEYS: [&str; 24] = [
     "drive_swing",
     "near_limit",
 ];
+
+impl From<SettingError> for Fault {
+    fn from(refused: SettingError) -> Self {
+        match refused {
+            SettingError::Setting { setting, value } => Fault::Setting { setting, value },
+            SettingError::Margin { margin } => Fault::Tune(TuneError::InvalidMargin { margin }),
+        }
+    }
+}
 
 impl Fault {
     /// The fault's kind as a number from 1, in the order of `FAULT_KEYS` (0: no fault, in a

@@ -1,9 +1,7 @@
 //! What the controller is asked to do (`Settings`), and the checks every setting passes
 //! before anything is driven.
 
-use super::fault::Fault;
 use crate::estimate::ring::MAX_WINDOW;
-use crate::tuning::TuneError;
 
 /// The settings, declared once: each with its stable id, its field (whose name is its key),
 /// its type, its default, its unit, the rule its checks hold it to and its doc. From this
@@ -165,6 +163,14 @@ declare_settings! {
         "at least 4x target_hz, a whole number of ticks per half period";
 }
 
+/// A setting its checks refuse: which, with the value found (the controller's
+/// `Fault::Setting`); a margin out of range is the tuner's error (`Fault::Tune`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SettingError {
+    Setting { setting: Setting, value: f32 },
+    Margin { margin: f32 },
+}
+
 /// The f32 solve's allowance: the cap is (1 − margin)·(1 − F32_GUARD)·Φlimit in f32, so it
 /// stays below (1 − margin)·Φlimit in f64. The f32 limit was within 6.7e-7 of the f64 limit
 /// of the same parameters on 28,726 random devices (`tests/safety.rs` holds it to 1e-6).
@@ -186,13 +192,13 @@ pub const TRIM_SECANT_STEP: f32 = 0.1;
 
 impl Settings {
     /// The probe's half period in ticks: `tick_hz`/(2·`probe_hz`), which must be a whole
-    /// number (within 1e-4) of at least 1; else a `Setting` fault naming `probe_hz`.
-    pub(super) fn probe_half_ticks(&self) -> Result<u32, Fault> {
+    /// number (within 1e-4) of at least 1; else an error naming `probe_hz`.
+    pub(super) fn probe_half_ticks(&self) -> Result<u32, SettingError> {
         let hz = self.probe_hz;
         let half = self.tick_hz / (2.0 * hz);
         let whole = libm::roundf(half);
         if !(hz > 0.0 && whole >= 1.0 && (half - whole).abs() <= 1e-4 * whole && whole < 1e6) {
-            return Err(Fault::Setting {
+            return Err(SettingError::Setting {
                 setting: Setting::ProbeHz,
                 value: hz,
             });
@@ -225,9 +231,9 @@ impl Settings {
         }
     }
 
-    /// Every setting in its range (the trim's only with the `trim` feature): a `Setting`
-    /// fault naming the first that is not, or `Tune` for the margin.
-    pub(super) fn check(&self) -> Result<(), Fault> {
+    /// Every setting in its range (the trim's only with the `trim` feature): the first that
+    /// is not, with its value, or the margin.
+    pub(super) fn check(&self) -> Result<(), SettingError> {
         let tick_hz = positive(Setting::TickHz, self.tick_hz)?;
         positive(Setting::SlewVoltsPerSecond, self.slew_volts_per_second)?;
         non_negative(Setting::SettleSeconds, self.settle_seconds)?;
@@ -243,14 +249,14 @@ impl Settings {
             positive(Setting::TrimTolerance, trim)?;
             if !cfg!(feature = "trim") {
                 // Built without the trim: asking for it is an error, not a silent no.
-                return Err(Fault::Setting {
+                return Err(SettingError::Setting {
                     setting: Setting::TrimTolerance,
                     value: trim,
                 });
             }
         }
         if self.stuck_samples == Some(0) {
-            return Err(Fault::Setting {
+            return Err(SettingError::Setting {
                 setting: Setting::StuckSamples,
                 value: 0.0,
             });
@@ -268,7 +274,7 @@ impl Settings {
                 && periods >= crate::estimate::ring::MIN_WINDOW_PERIODS)
         {
             let window = self.trim_window_seconds;
-            return Err(Fault::Setting {
+            return Err(SettingError::Setting {
                 setting: Setting::TrimWindowSeconds,
                 value: window,
             });
@@ -291,7 +297,7 @@ impl Settings {
                 || self.trim_every_seconds.is_some()
                 || !(self.ac_volts > 0.0)
             {
-                return Err(Fault::Setting {
+                return Err(SettingError::Setting {
                     setting: Setting::TrackSeconds,
                     value: seconds,
                 });
@@ -300,7 +306,7 @@ impl Settings {
         if let Some(volts) = self.probe_volts {
             positive(Setting::ProbeVolts, volts)?;
             if !cfg!(feature = "probe") {
-                return Err(Fault::Setting {
+                return Err(SettingError::Setting {
                     setting: Setting::ProbeVolts,
                     value: volts,
                 });
@@ -309,7 +315,7 @@ impl Settings {
             // Well above the resonance: the motion the probe drives stays small against the
             // AC's (it is not in the edges' charge, `crate::estimate::capacitance`, but moves λ).
             if !(self.probe_hz >= PROBE_ABOVE_TARGET * self.target_hz) {
-                return Err(Fault::Setting {
+                return Err(SettingError::Setting {
                     setting: Setting::ProbeHz,
                     value: self.probe_hz,
                 });
@@ -317,22 +323,22 @@ impl Settings {
         }
         let probe = positive(Setting::TrimProbeFraction, self.trim_probe_fraction)?;
         if !(probe <= 1.0) {
-            return Err(Fault::Setting {
+            return Err(SettingError::Setting {
                 setting: Setting::TrimProbeFraction,
                 value: probe,
             });
         }
         // Below Nyquist; and AC volts without a frequency would drive nothing, silently.
         if !(ac_hz < 0.5 * tick_hz) || (self.ac_volts > 0.0 && ac_hz == 0.0) {
-            return Err(Fault::Setting {
+            return Err(SettingError::Setting {
                 setting: Setting::AcHz,
                 value: ac_hz,
             });
         }
         if !(self.margin >= 0.0 && self.margin < 1.0) {
-            return Err(Fault::Tune(TuneError::InvalidMargin {
+            return Err(SettingError::Margin {
                 margin: self.margin,
-            }));
+            });
         }
         Ok(())
     }
@@ -486,18 +492,18 @@ impl Slot for Option<u32> {
     }
 }
 
-fn positive(setting: Setting, value: f32) -> Result<f32, Fault> {
+fn positive(setting: Setting, value: f32) -> Result<f32, SettingError> {
     if value.is_finite() && value > 0.0 {
         Ok(value)
     } else {
-        Err(Fault::Setting { setting, value })
+        Err(SettingError::Setting { setting, value })
     }
 }
 
-fn non_negative(setting: Setting, value: f32) -> Result<f32, Fault> {
+fn non_negative(setting: Setting, value: f32) -> Result<f32, SettingError> {
     if value.is_finite() && value >= 0.0 {
         Ok(value)
     } else {
-        Err(Fault::Setting { setting, value })
+        Err(SettingError::Setting { setting, value })
     }
 }

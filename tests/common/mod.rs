@@ -207,7 +207,7 @@ pub fn random_device(rng: &mut Rng) -> DeviceParams<f64> {
 /// every byte before it), so the edit reaches the checks after the CRC.
 pub fn reseal(bytes: &mut [u8]) {
     let body = bytes.len() - 4;
-    let crc = de_resonator::table::crc32(&bytes[..body]);
+    let crc = de_resonator::bytes::crc32(&bytes[..body]);
     bytes[body..].copy_from_slice(&crc.to_le_bytes());
 }
 

@@ -44,7 +44,7 @@ mod app {
     use de_resonator::board::stream::{Record, Telemetry, FRAME_BYTES};
     use de_resonator::board::watchdog::CheckIn;
     use de_resonator::board::{self as logic, Line, Lines, ReplyLine, Then};
-    use de_resonator::store::FlashKeeper;
+    use de_resonator::board::FlashKeeper;
     #[cfg(not(feature = "link"))]
     use de_resonator::Decimal;
     use de_resonator::{Controller, Dac8551, Event, Fault, Inputs, OutputStage};
@@ -710,7 +710,7 @@ mod app {
             // Room in the queue again: a paused receiver resumes.
             rtic::pend(stm32f4xx_hal::pac::Interrupt::USART2);
             // A fault the tick left, into the log (the flash's own policy: no erase while
-            // running on the chip, `store::FlashKeeper::erase_stalls`).
+            // running on the chip, `board::FlashKeeper::erase_stalls`).
             if let Some(logged) = cx.shared.logged.lock(Option::take) {
                 let logic = &mut *cx.local.logic;
                 let tick_hz = cx.shared.controller.lock(|c| logic.tick_hz(c));

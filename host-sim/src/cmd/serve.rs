@@ -16,10 +16,11 @@ use clap::Args;
 use de_resonator::board::port::Extras;
 use de_resonator::board::protocol::NOTICE;
 use de_resonator::board::stream::{self, Record, Telemetry};
+use de_resonator::board::FlashKeeper;
 use de_resonator::board::{self, Board, Keeper, Line, Lines, ReplyLine, ResetCause, Then};
 use de_resonator::controller::Held;
 use de_resonator::fault_log::Entry;
-use de_resonator::store::{self, FlashKeeper, RamFlash, StoreError, RAM_PAGE_BYTES};
+use de_resonator::store::{self, RamFlash, StoreError, RAM_PAGE_BYTES};
 use de_resonator::{Controller, Dac8551, Event, Image, Inputs, OutputStage, Settings};
 use serde::Serialize;
 

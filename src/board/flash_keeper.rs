@@ -1,0 +1,78 @@
+//! The board's keeper on a flash (`Keeper`): the saved settings (`store`) and the fault log
+//! (`fault_log`) in their ranges of one flash, each call run to its end at once. Here, above
+//! both, so that neither persistence layer knows the board.
+
+use core::ops::Range;
+
+use embedded_storage_async::nor_flash::NorFlash;
+
+use super::Keeper;
+use crate::controller::{Held, Settings};
+use crate::fault_log::{self, Entry};
+use crate::store::{block_on, load, save, FlashKind, StoreError};
+
+/// A flash and the ranges of it the settings and the fault log use, as the board keeps them
+/// ([`Keeper`]): each call run to its end at once, for a flash that never waits
+/// (RAM, or the STM32F4's flash controller, which blocks in each call).
+pub struct FlashKeeper<F> {
+    pub flash: F,
+    pub range: Range<u32>,
+    /// The fault log's (`crate::fault_log`; `None`: none kept).
+    pub log: Option<Range<u32>>,
+    /// Whether an erase stalls the chip (its code runs from this flash bank, for longer than
+    /// the watchdog waits): the log then erases only at boot (`Keeper::prepare_faults`), never
+    /// while running, and `save` and `faults clear` wait for rest at 0 V. The chip, and the
+    /// firmware's QEMU stand-in that stalls as the chip does: `true`; host-sim's RAM: `false`.
+    pub erase_stalls: bool,
+}
+
+impl<F: NorFlash> Keeper for FlashKeeper<F> {
+    type Error = StoreError;
+
+    fn load(&mut self) -> Result<Option<Held>, StoreError> {
+        block_on(load(&mut self.flash, self.range.clone()))
+            .unwrap_or(Err(StoreError::Flash(FlashKind::Other)))
+    }
+
+    fn save(&mut self, settings: &Settings) -> Result<(), StoreError> {
+        block_on(save(&mut self.flash, self.range.clone(), settings))
+            .unwrap_or(Err(StoreError::Flash(FlashKind::Other)))
+    }
+
+    fn log(&mut self, entry: &Entry) -> Option<Result<u32, StoreError>> {
+        let range = self.log.clone()?;
+        let may_erase = !self.erase_stalls;
+        Some(
+            block_on(fault_log::append(&mut self.flash, range, entry, may_erase))
+                .unwrap_or(Err(StoreError::Flash(FlashKind::Other))),
+        )
+    }
+
+    fn erase_stalls(&self) -> bool {
+        self.erase_stalls
+    }
+
+    fn prepare_faults(&mut self) -> Option<Result<bool, StoreError>> {
+        let range = self.log.clone()?;
+        Some(
+            block_on(fault_log::prepare(&mut self.flash, range))
+                .unwrap_or(Err(StoreError::Flash(FlashKind::Other))),
+        )
+    }
+
+    fn each_fault(&mut self, each: &mut dyn FnMut(Entry)) -> Option<Result<(), StoreError>> {
+        let range = self.log.clone()?;
+        Some(
+            block_on(fault_log::each(&mut self.flash, range, each))
+                .unwrap_or(Err(StoreError::Flash(FlashKind::Other))),
+        )
+    }
+
+    fn clear_faults(&mut self) -> Option<Result<(), StoreError>> {
+        let range = self.log.clone()?;
+        Some(
+            block_on(fault_log::clear(&mut self.flash, range))
+                .unwrap_or(Err(StoreError::Flash(FlashKind::Other))),
+        )
+    }
+}
