@@ -31,8 +31,8 @@ use core::fmt;
 use crate::acquire::{ChannelSpec, FrontEnd, FrontEndError, InputNoise, MAX_INPUT};
 use crate::bytes::{crc32, f32_at, u16_at, u32_at};
 use crate::controller::{Held, Setting, SettingSet, Settings};
-use crate::device::DeviceParams;
 use crate::drive::{Amplifier, CodeError};
+use crate::model::device::DeviceParams;
 use crate::table::{Table, TableError};
 
 /// The first four bytes of an image.

@@ -36,9 +36,6 @@ pub mod store;
 pub mod table;
 pub mod tuning;
 
-// The model's modules at the crate's root too, as every caller names them.
-pub use model::{device, material, safety, statics, swing};
-
 pub use board::stage::{OutputStage, StageError};
 pub use controller::{
     Boot, Controller, Event, EventKind, Fault, FaultStage, Inputs, Output, Phase, Plan, Refusal,
@@ -46,15 +43,15 @@ pub use controller::{
 };
 #[cfg(feature = "trim")]
 pub use controller::{NextRing, TrimDone, TrimJob, TrimResult};
-pub use device::{Device, DeviceParams, Field, ParamError, Problem, REFERENCE_DEVICE};
 pub use drive::{Amplifier, CodeError, Dac8551, DacCode, DacError, PowerMode};
 pub use estimate::ring::TrimError;
 pub use image::{AmplifierSpec, Image, ImageError, PowerUp};
+pub use model::device::{Device, DeviceParams, Field, ParamError, Problem, REFERENCE_DEVICE};
+pub use model::motion::{Drive, Integrator, Method, State, StepError};
+pub use model::safety::{Crossing, FailureMode, Limit, Margins, Monitor};
+pub use model::statics::Equilibrium;
+pub use model::swing::{AcDrive, Ramp, Resonance, Swing, SwingError};
 pub use numerics::decimal::Decimal;
-pub use numerics::integration::{Drive, Integrator, Method, State, StepError};
 pub use numerics::real::Real;
-pub use safety::{Crossing, FailureMode, Limit, Margins, Monitor};
-pub use statics::Equilibrium;
-pub use swing::{AcDrive, Ramp, Resonance, Swing, SwingError};
 pub use table::{Table, TableError};
 pub use tuning::{TunableRange, TuneError, Tuner, DEFAULT_MARGIN};

@@ -25,9 +25,9 @@ use core::fmt;
 use crate::bytes::{crc32, f32_at, u16_at, u32_at};
 use crate::numerics::decimal::Decimal;
 
-use crate::device::{Device, DeviceParams, Field};
+use crate::model::device::{Device, DeviceParams, Field};
+use crate::model::statics::Equilibrium;
 use crate::numerics::real::Real;
-use crate::statics::Equilibrium;
 
 /// The first four bytes of a table.
 pub const MAGIC: [u8; 4] = *b"DERT";

@@ -9,11 +9,11 @@ use core::fmt;
 
 use crate::numerics::decimal::Decimal;
 
-use crate::device::Device;
+use crate::model::device::Device;
+use crate::model::safety::Limit;
+use crate::model::statics::Equilibrium;
 use crate::numerics::real::Real;
 use crate::numerics::roots::{argmax, bisect};
-use crate::safety::Limit;
-use crate::statics::Equilibrium;
 
 /// The voltage margin used unless another is asked for: bias ≤ (1 − 0.05)·Φlimit.
 pub const DEFAULT_MARGIN: f64 = 0.05;

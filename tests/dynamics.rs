@@ -4,7 +4,7 @@
 mod common;
 
 use common::*;
-use de_resonator::numerics::integration::max_stable_step_seconds;
+use de_resonator::model::motion::max_stable_step_seconds;
 use de_resonator::{
     Device, DeviceParams, Drive, FailureMode, Integrator, Method, Monitor, State, StepError, Tuner,
     REFERENCE_DEVICE,

@@ -4,7 +4,7 @@
 mod common;
 
 use common::*;
-use de_resonator::material::Gent;
+use de_resonator::model::material::Gent;
 use de_resonator::{Device, DeviceParams, FailureMode, Limit, Tuner, REFERENCE_DEVICE};
 
 fn limit_of(p: DeviceParams<f64>) -> Limit<f64> {
@@ -324,7 +324,7 @@ fn f32_limits_agree_with_f64_also_just_past_the_prestretch() {
 /// safety minimum propagates NaN (the ordinary `min` does not).
 #[test]
 fn a_nan_part_fails_its_margin_in_either_position() {
-    use de_resonator::material::Hessian;
+    use de_resonator::model::material::Hessian;
     use de_resonator::{Margins, Real};
     for (a, b) in [(f64::NAN, 1.0), (1.0, f64::NAN), (f64::NAN, f64::NAN)] {
         assert!(a.min_margin(b).is_nan());

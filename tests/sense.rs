@@ -5,8 +5,8 @@
 mod common;
 
 use common::Rng;
-use de_resonator::device::Device;
 use de_resonator::estimate::capacitance::{ProbeLockIn, SensedStretch};
+use de_resonator::model::device::Device;
 use de_resonator::REFERENCE_DEVICE;
 
 /// C(λ) of the reference device, F: ε0·εr·(L1A·λ)·(L2·λ2p)/(H/(λ·λ2p)) over λ (plate area
@@ -137,7 +137,7 @@ fn the_standard_error_is_the_noise_the_arithmetic_predicts() {
 mod controller {
     use super::{capacitance, gaussian};
     use crate::common::{made_table, Rng};
-    use de_resonator::device::Device;
+    use de_resonator::model::device::Device;
     use de_resonator::{
         Amplifier, Controller, Event, FailureMode, Fault, Inputs, Settings, REFERENCE_DEVICE,
     };

@@ -131,9 +131,9 @@ fn plant_checks_the_active_membranes_tension_and_the_model_domain() {
     let p = REFERENCE_DEVICE;
     let mut y = plant.at_rest();
     y[0] = 0.8;
-    let m = de_resonator::material::Gent::with_jlim(120.0);
+    let m = de_resonator::model::material::Gent::with_jlim(120.0);
     let tension = p.shear_modulus * m.stress_1(0.8, 2.0);
-    let eps = p.relative_permittivity * de_resonator::device::VACUUM_PERMITTIVITY;
+    let eps = p.relative_permittivity * de_resonator::model::device::VACUUM_PERMITTIVITY;
     // ε(Φ/H)²·λ·λ2p² = s1(λ) at Φ0.
     let zero_volts = (tension / (eps * 0.8 * 4.0)).sqrt() * p.thickness;
     assert_eq!(

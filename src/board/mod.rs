@@ -30,8 +30,8 @@ use crate::controller::{Boot, Controller, Held, Settings};
 use crate::drive::Amplifier;
 use crate::fault_log::Entry;
 use crate::image::{Image, ImageError, PowerUp};
+use crate::model::safety::FailureMode;
 use crate::numerics::decimal::Decimal;
-use crate::safety::FailureMode;
 
 #[cfg(feature = "storage")]
 pub use flash_keeper::FlashKeeper;

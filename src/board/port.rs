@@ -12,7 +12,7 @@ use crate::board::protocol::{
 };
 use crate::board::stream;
 use crate::controller::{Controller, Phase, Refusal, Setting, Settings};
-use crate::device::Field;
+use crate::model::device::Field;
 use crate::numerics::decimal::Decimal;
 
 /// One request as received: its bytes, or why it has none.
@@ -664,7 +664,7 @@ fn replace_at_rest(controller: &mut impl Shared, next: Option<Controller>) -> bo
 /// The status line of a controller, under an amplifier whose top is `top_volts`.
 fn status(
     c: &Controller,
-    limit: Option<crate::safety::FailureMode>,
+    limit: Option<crate::model::safety::FailureMode>,
     top_volts: f32,
     extras: &Extras,
 ) -> Status {

@@ -13,8 +13,8 @@
 use core::fmt;
 
 use crate::controller::{Fault, Inputs, Phase, Setting};
+use crate::model::safety::FailureMode;
 use crate::numerics::decimal::{scale10, Decimal};
-use crate::safety::FailureMode;
 
 /// What starts a line the firmware says on its own (not a reply).
 pub const NOTICE: &str = "# ";

@@ -7,12 +7,12 @@ use crate::numerics::decimal::Decimal;
 
 use super::settings::{Setting, SettingError};
 use crate::acquire::InputError;
-use crate::device::ParamError;
 use crate::drive::{CodeError, DacCode};
 use crate::estimate::ring::TrimError;
-use crate::numerics::integration::StepError;
-use crate::safety::FailureMode;
-use crate::swing::SwingError;
+use crate::model::device::ParamError;
+use crate::model::motion::StepError;
+use crate::model::safety::FailureMode;
+use crate::model::swing::SwingError;
 use crate::table::TableError;
 use crate::tuning::TuneError;
 

@@ -13,12 +13,12 @@
 //! read as another fault.
 
 use crate::acquire::{Channel, InputError, Stall};
-use crate::device::{Field, ParamError, Problem, SCALES};
 use crate::drive::CodeError;
 use crate::estimate::ring::{NoiseFrom, RingInput, TrimError};
-use crate::numerics::integration::{Drive, Method, StepError};
-use crate::safety::FailureMode;
-use crate::swing::{Resonance, SwingError};
+use crate::model::device::{Field, ParamError, Problem, SCALES};
+use crate::model::motion::{Drive, Method, StepError};
+use crate::model::safety::FailureMode;
+use crate::model::swing::{Resonance, SwingError};
 use crate::table::TableError;
 use crate::tuning::TuneError;
 

@@ -55,10 +55,10 @@ pub use trim::{NextRing, TrimDone, TrimJob, TrimResult};
 pub use watch::{Inputs, AMPLIFIER_TICKS, LEAKAGE_WINDOW_SECONDS};
 
 use crate::acquire::{InputError, InputNoise};
-use crate::device::Device;
 use crate::drive::{Amplifier, DacCode};
 #[cfg(feature = "trim")]
 use crate::estimate::ring::RingInput;
+use crate::model::device::Device;
 use gate::gate;
 use watch::{Leakage, LeakageLimits, Ring, Watch};
 

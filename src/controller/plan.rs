@@ -4,10 +4,10 @@
 
 use super::fault::Fault;
 use super::settings::{Setting, Settings};
-use crate::device::Device;
-use crate::numerics::integration::{Drive, Integrator, Method, State, StepError};
+use crate::model::device::Device;
+use crate::model::motion::{Drive, Integrator, Method, State, StepError};
+use crate::model::safety::Monitor;
 use crate::numerics::real::sin_cos_turns;
-use crate::safety::Monitor;
 
 /// The longest plan, in ticks (about 18 hours at 1 kHz before the AC starts).
 pub const MAX_PLAN_TICKS: f32 = 6.4e7;

@@ -6,8 +6,8 @@
 use super::fault::Fault;
 use super::watch::Inputs;
 use super::Controller;
-use crate::device::Device;
 use crate::estimate::capacitance::{ProbeLockIn, SensedStretch};
+use crate::model::device::Device;
 
 /// The lock-in's memory between ticks.
 #[derive(Clone, Copy, Debug, Default)]
@@ -134,7 +134,7 @@ mod tests {
     use std::vec;
 
     use super::*;
-    use crate::device::REFERENCE_DEVICE;
+    use crate::model::device::REFERENCE_DEVICE;
     use crate::{table, Amplifier, Settings, Tuner};
 
     /// The reference device's controller with the probe on (its table as `host-sim lut`

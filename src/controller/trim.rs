@@ -8,12 +8,12 @@
 use super::fault::Fault;
 use super::settings::{guarded, Settings, MAX_TRIMS, TRIM_SECANT_STEP};
 use crate::acquire::InputNoise;
-use crate::device::{Device, DeviceParams};
 use crate::estimate::ring::{
     estimate_shear_modulus, high_passed, model_hz, ring_frequency_hz, ring_share, ring_span,
     NoiseFrom, RingFit, RingGain, RingInput, TrimError, MAX_WINDOW, TIMING_ERROR_TIMES_RESOLUTION,
 };
-use crate::swing::{AcDrive, Ramp, Resonance, SwingError};
+use crate::model::device::{Device, DeviceParams};
+use crate::model::swing::{AcDrive, Ramp, Resonance, SwingError};
 use crate::tuning::{TuneError, Tuner};
 
 /// The relative frequency error at which the trim before a tracked drive hands over to the
@@ -686,7 +686,7 @@ impl TrimJob {
 #[allow(clippy::panic)] // a test fails by panicking
 mod tests {
     use super::*;
-    use crate::device::REFERENCE_DEVICE;
+    use crate::model::device::REFERENCE_DEVICE;
 
     /// A job for the reference device measured at `bias_volts`, its window a clean ring at
     /// `ring_hz` (500 ticks at 1 kHz), with a previous measurement `previous`.

@@ -4,8 +4,8 @@
 
 use super::fault::Fault;
 pub use crate::acquire::Inputs;
-use crate::device::Device;
-use crate::safety::{FailureMode, Monitor, StretchBand};
+use crate::model::device::Device;
+use crate::model::safety::{FailureMode, Monitor, StretchBand};
 
 /// Ticks in a row the amplifier may be off its command before it is a fault (its bandwidth
 /// and slew limit lag a step by a tick or two).

@@ -18,7 +18,7 @@
 //! the flashed ε, L1A, L2, λ2p or H (λ scales as C1^−½). The estimate is the window's mean
 //! stretch; an AC drive's swing within the window widens it through the blocks' scatter.
 
-use crate::device::Device;
+use crate::model::device::Device;
 
 /// How long a window of blocks lasts at least, s: the estimate's rate.
 pub const PROBE_WINDOW_SECONDS: f32 = 0.1;
@@ -207,7 +207,7 @@ mod tests {
     use std::vec::Vec;
 
     use super::*;
-    use crate::device::REFERENCE_DEVICE;
+    use crate::model::device::REFERENCE_DEVICE;
 
     /// The reference device as the firmware holds it.
     fn device() -> Device<f32> {

@@ -6,9 +6,9 @@ use core::fmt;
 
 use crate::numerics::decimal::Decimal;
 
-use crate::device::{Device, DeviceParams};
+use crate::model::device::{Device, DeviceParams};
+use crate::model::safety::Limit;
 use crate::numerics::roots::bisect;
-use crate::safety::Limit;
 
 /// Most samples a measurement window may hold (0.5 s at 1 kHz; 2 KB of the controller). At
 /// a faster tick each sample is the mean of a stride of ticks (`Settings::trim_window`).

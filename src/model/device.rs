@@ -4,7 +4,7 @@
 use core::fmt;
 
 use super::failure::FailureMode;
-use crate::material::Gent;
+use crate::model::material::Gent;
 use crate::numerics::real::Real;
 
 /// Vacuum permittivity ε0 in F/m (CODATA 2018).

@@ -1,11 +1,11 @@
 //! The safe region: the six failure checks of model.md §6 and the limit of the loading branch.
 
 pub use super::failure::FailureMode;
-use crate::device::Device;
-use crate::material::{Gent, Hessian};
+use crate::model::device::Device;
+use crate::model::material::{Gent, Hessian};
+use crate::model::statics::Equilibrium;
 use crate::numerics::real::Real;
 use crate::numerics::roots::bisect;
-use crate::statics::Equilibrium;
 
 /// How far a state is from each failure: each value is positive exactly when its check holds.
 /// Dimensionless (stresses over μ, fields over √(μ/ε)).
@@ -204,7 +204,7 @@ impl<T: Real> Device<T> {
     /// check reads): then the two share `stretch_terms`.
     pub fn differs_only_in_modulus(&self, other: &Device<T>) -> bool {
         let (mine, theirs) = (self.params(), other.params());
-        crate::device::DeviceParams {
+        crate::model::device::DeviceParams {
             shear_modulus: mine.shear_modulus,
             damping: mine.damping,
             ..*theirs

@@ -4,7 +4,7 @@
 //! Φ(λ) = H·√((s1(λ) − s1(λB))/(ε·λ·λ2p²)). These are the raw physics, defined beyond the
 //! safe region too; `safety` decides where they may be used.
 
-use crate::device::Device;
+use crate::model::device::Device;
 use crate::numerics::real::Real;
 use crate::numerics::roots::root;
 

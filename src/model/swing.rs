@@ -22,10 +22,10 @@
 
 use core::fmt;
 
-use crate::device::Device;
+use crate::model::device::Device;
+use crate::model::safety::FailureMode;
 use crate::numerics::decimal::Decimal;
 use crate::numerics::real::Real;
-use crate::safety::FailureMode;
 
 /// Stretches across the swing's box at which the checks run (the ends and between).
 const BOX_POINTS: usize = 9;

@@ -2,7 +2,7 @@
 //! scaling, no shared code with the core beyond the parameter struct.
 #![allow(dead_code)]
 
-use de_resonator::device::VACUUM_PERMITTIVITY;
+use de_resonator::model::device::VACUUM_PERMITTIVITY;
 use de_resonator::DeviceParams;
 
 /// The Gent limit as a number (∞ for neo-Hookean).

@@ -6,7 +6,7 @@ use core::fmt;
 
 use crate::numerics::decimal::Decimal;
 
-use crate::device::Device;
+use crate::model::device::Device;
 use crate::numerics::real::Real;
 
 /// The voltage Φ(τ) = Φ̄dc + Φ̄ac·sin(Ω̄τ), dimensionless (Φ̄ = (Φ/H)·√(ε/μ), Ω̄ = Ω·T0).
