@@ -44,8 +44,9 @@ use heapless::String;
 #[cfg(feature = "storage")]
 use heapless::Vec;
 
+use crate::bytes::newer;
 #[cfg(feature = "storage")]
-use crate::bytes::{crc32, f32_at, newer, u32_at, Put};
+use crate::bytes::{crc32, f32_at, u32_at, Put};
 use crate::controller::{Fault, Figures};
 #[cfg(feature = "storage")]
 use crate::store::{flash_error, StoreError};

@@ -7,6 +7,8 @@
 
 use super::fault::Fault;
 use super::settings::{guarded, Settings, MAX_TRIMS, TRIM_SECANT_STEP};
+use super::watch::Ring;
+use super::{Controller, Event, State};
 use crate::acquire::InputNoise;
 use crate::estimate::ring::{
     estimate_shear_modulus, high_passed, model_hz, ring_frequency_hz, ring_share, ring_span,
@@ -679,6 +681,293 @@ impl TrimJob {
             resolution,
             device,
         })
+    }
+}
+
+/// The trim as the controller runs it: handing out the window's job, taking its result, and
+/// the tick's steps of a trim (measure, record, pause, retune, apply).
+impl Controller {
+    /// The trim's job for the window just measured, once (`None` otherwise): run
+    /// `TrimJob::solve` outside the tick (a low-priority task) and give its result to
+    /// `trim_done`; the bias holds meanwhile.
+    pub fn trim_job(&mut self) -> Option<TrimJob> {
+        if !self.job_wanted() || self.trim.handed_out {
+            return None;
+        }
+        self.trim.handed_out = true;
+        let (bias, cap) = (self.plan.bias_volts, self.max_volts);
+        Some(TrimJob::new(
+            &self.trim,
+            self.settings,
+            (bias, cap),
+            self.inputs,
+        ))
+    }
+
+    /// Whether a job waits to be handed out (`trim_job`): the window's solve, or tracking's
+    /// slope while driving. What a firmware's tick asks before it wakes its work task.
+    pub fn job_pending(&self) -> bool {
+        self.job_wanted() && !self.trim.handed_out
+    }
+
+    /// Whether a job is wanted now: a measured window's solve, or tracking's slope.
+    fn job_wanted(&self) -> bool {
+        let tracking =
+            matches!(self.state, State::Driving { .. }) && self.trim.tracked_hz.is_some();
+        self.state == State::Solving || tracking
+    }
+
+    /// The result of the job handed out: the next tick applies it. A result of a job no
+    /// longer wanted (late, or stale: the controller moved on), or a second result, is
+    /// dropped.
+    pub fn trim_done(&mut self, done: TrimDone) {
+        let current = self.trim.handed_out && done.job == self.trim.job;
+        if self.job_wanted() && current && self.trim.result.is_none() {
+            // The estimate's comparison with the device flashed here, outside the tick.
+            self.trim.result_shares_terms = match &done.result {
+                TrimResult::Retune { device, .. } => {
+                    // Into the spare slot, here (outside the tick): the tick that applies it
+                    // turns to it.
+                    let spare = 1 - self.estimate_at.min(1);
+                    if let Some(slot) = self.estimates.get_mut(spare) {
+                        *slot = Some(*device);
+                    }
+                    device.differs_only_in_modulus(&self.flashed)
+                }
+                _ => false,
+            };
+            self.trim.result = Some(done.result);
+        }
+    }
+
+    /// Pulse now; measure the ring from the pulse's end. Not where the ring it would leave is
+    /// too weak against the noise heard in the hold (or declared): that is said first.
+    pub(super) fn start_measuring(&mut self, k: u32) -> Result<(), Fault> {
+        let s = self.settings;
+        if let Some(error) = self
+            .trim
+            .unresolvable(&s, self.plan.bias_volts, self.inputs)
+        {
+            return Err(Fault::Trim(error));
+        }
+        let pulse = pulse_ticks(&s);
+        let from = k.saturating_add(1);
+        self.plan.pulse_ticks = (from, from.saturating_add(pulse));
+        self.plan.pulse_volts = s.trim_pulse_volts;
+        // No clearing (512 stores): every tick of the window writes its slot.
+        self.trim.window_from = from.saturating_add(pulse);
+        self.trim.sum = 0.0;
+        self.trim.origin = f32::NAN;
+        self.trim.last = f32::NAN;
+        self.trim.from_charge = false;
+        // The probe's charge would swamp the ring's: off until the trim is applied.
+        self.plan.probe_volts = 0.0;
+        self.trim.drop_job();
+        self.state = State::Measuring;
+        Ok(())
+    }
+
+    /// Record this tick's sample; at the window's end, hand the solve out and bring the probe
+    /// back (`Plan::probe_back`: a fault if it no longer fits). The ring is timed in its
+    /// input's running sum: the current's is the charge (Q = C(λ)·Φ at a constant bias,
+    /// model.md §8, so it follows λ), the stretch's carries its ring a quarter period on; the
+    /// sum turns the input's noise into a slow wander, which the crossings' fit averages out,
+    /// where the input's own crossings would multiply (`estimate::ring::RingFit`). From the
+    /// current, the window's first tenth of a target period is skipped (NaN): the step back from the
+    /// pulse charges the membrane then (C·dΦ/dt, far above the ring's Φ·C'·dλ/dt).
+    pub(super) fn record(&mut self, k: u32, ring: Ring) -> Result<(), Fault> {
+        let s = &self.settings;
+        let (stride, len) = s.trim_window();
+        let Some(at) = k.checked_sub(self.trim.window_from) else {
+            return Ok(());
+        };
+        let settling = (0.1 * s.tick_hz / s.target_hz) as u32 + 1;
+        // The window's input is its first sample's: a tick without a stretch sample in a
+        // stretch window carries the last one (the sum goes on), and one input never mixes
+        // into the other's sum.
+        let stretch_window = !self.trim.origin.is_nan();
+        let sample = match ring {
+            Ring::Stretch(stretch) if stretch.is_finite() && !self.trim.from_charge => {
+                if !stretch_window {
+                    self.trim.origin = stretch;
+                }
+                self.trim.last = stretch;
+                self.trim.sum += stretch - self.trim.origin;
+                self.trim.sum
+            }
+            Ring::Current(amps) if at >= settling && !stretch_window => {
+                self.trim.from_charge = true;
+                self.trim.sum += amps;
+                self.trim.sum
+            }
+            _ if stretch_window => {
+                self.trim.sum += self.trim.last - self.trim.origin;
+                self.trim.sum
+            }
+            Ring::Stretch(_) | Ring::Current(_) | Ring::Nothing => f32::NAN,
+        };
+        // The sum at each stride's last tick: its steps sum a stride of the input's ticks.
+        if let Some(slot) = self.trim.window.get_mut((at / stride) as usize) {
+            *slot = sample;
+        }
+        if at.saturating_add(1) >= stride.saturating_mul(len as u32) {
+            self.state = State::Solving;
+            self.plan
+                .probe_back(s.probe_volts.unwrap_or(0.0), self.max_volts)?;
+        }
+        Ok(())
+    }
+
+    /// Pause the AC and trim again from the bias held (the old secant pair is stale: the
+    /// plant has drifted since).
+    pub(super) fn pause_for_trim(&mut self, k: u32) {
+        self.trim.drop_job();
+        // The bias held where the ramp is now (a tracked drive's last move may not be done):
+        // the retune after the window ramps on from it.
+        let here = self.plan.ramp_volts(k);
+        self.plan.start_tick = k;
+        self.plan.start_volts = here;
+        self.plan.bias_volts = here;
+        self.plan.ac_tick = None;
+        self.trim.tuned = true;
+        self.trim.count = 0;
+        self.trim.previous = None;
+        self.hold_from(k, true);
+    }
+
+    /// A `Retune`'s new plan at tick `k`: from `bias_volts` to `next_bias_volts` under the
+    /// lower of its cap and the cap in force, checked; the estimate taken from the result
+    /// (still waiting in `trim.result`). `(f, μ, the next ring)` the trim's memory.
+    fn retune(
+        &mut self,
+        k: u32,
+        bias_volts: f32,
+        next_bias_volts: f32,
+        max_volts: f32,
+        (measured_hz, shear_modulus, ring): (f32, f32, NextRing),
+    ) -> Result<(), Fault> {
+        self.trim.params.shear_modulus = shear_modulus;
+        self.trim.count = self.trim.count.saturating_add(1);
+        self.trim.ring = ring;
+        self.trim.previous = Some((bias_volts * bias_volts, measured_hz));
+        // The new plan built in place (the tick's budget: a plan is large), the fields it
+        // changes restored if a check refuses it.
+        let plan = &mut self.plan;
+        let before = (
+            plan.start_tick,
+            plan.start_volts,
+            plan.bias_volts,
+            plan.pulse_ticks,
+            plan.probe_volts,
+        );
+        // From the bias held since the ramp reached it (a window is measured only at the
+        // bias: `State::Holding` follows the ramp's end), at the slew rate.
+        plan.start_tick = k.saturating_add(1);
+        plan.start_volts = bias_volts;
+        plan.bias_volts = next_bias_volts;
+        plan.pulse_ticks = (0, 0);
+        let bound = max_volts.min(self.max_volts);
+        plan.start_under(bound, self.last_volts);
+        let checked = plan.check_range(next_bias_volts, bound).and_then(|()| {
+            plan.probe_off_above(bound);
+            self.amplifier
+                .code(next_bias_volts + plan.swing_volts())
+                .map(|_| ())
+                .map_err(Fault::Amplifier)
+        });
+        if let Err(fault) = checked {
+            (
+                plan.start_tick,
+                plan.start_volts,
+                plan.bias_volts,
+                plan.pulse_ticks,
+                plan.probe_volts,
+            ) = before;
+            return Err(fault);
+        }
+        self.take_estimate_cap(max_volts);
+        self.take_estimate();
+        self.trim.tuned = true;
+        self.state = State::Ramping { then_measure: true };
+        Ok(())
+    }
+
+    /// Apply the trim's result at tick `k`, once it has come back.
+    pub(super) fn apply_trim(&mut self, k: u32) -> Result<Option<Event>, Fault> {
+        // Read in place (a `Retune` holds a device, large: copied once, into the estimate).
+        let Some(result) = &self.trim.result else {
+            return Ok(None);
+        };
+        let bias_volts = self.plan.bias_volts;
+        let result = match *result {
+            TrimResult::Retune {
+                measured_hz,
+                shear_modulus,
+                bias_volts: next_bias_volts,
+                max_volts,
+                ring,
+                resolution,
+                ..
+            } => {
+                let applied = self.retune(
+                    k,
+                    bias_volts,
+                    next_bias_volts,
+                    max_volts,
+                    (measured_hz, shear_modulus, ring),
+                );
+                self.trim.result = None;
+                applied?;
+                return Ok(Some(Event::Trimmed {
+                    bias_volts,
+                    measured_hz,
+                    shear_modulus,
+                    next_bias_volts,
+                    resolution,
+                }));
+            }
+            _ => self.trim.result.take(),
+        };
+        let Some(result) = result else {
+            return Ok(None);
+        };
+        match result {
+            TrimResult::Converged {
+                measured_hz,
+                shear_modulus,
+                resolution,
+            } => {
+                self.trim.params.shear_modulus = shear_modulus;
+                self.trim.count = self.trim.count.saturating_add(1);
+                // The AC from phase 0, as the swing's check has it switched on.
+                self.plan.ac_tick = Some(k.saturating_add(1));
+                self.plan.ac_phase_start = 0;
+                self.state = State::Holding {
+                    until: k,
+                    then_measure: false,
+                };
+                Ok(Some(Event::Trimmed {
+                    bias_volts,
+                    measured_hz,
+                    shear_modulus,
+                    next_bias_volts: bias_volts,
+                    resolution,
+                }))
+            }
+            // Taken above.
+            TrimResult::Retune { .. } => Ok(None),
+            TrimResult::AboveCeiling {
+                shear_modulus,
+                needed_volts,
+                max_volts,
+                ..
+            } => {
+                self.trim.params.shear_modulus = shear_modulus;
+                self.take_estimate_cap(max_volts);
+                Ok(Some(self.hold(k, needed_volts)))
+            }
+            TrimResult::Failed(fault) => Err(fault),
+        }
     }
 }
 
