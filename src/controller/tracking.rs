@@ -230,11 +230,12 @@ impl Controller {
                 needed_volts,
                 max_volts,
                 ..
-            } => {
-                self.trim.params.shear_modulus = shear_modulus;
-                self.take_estimate_cap(max_volts);
-                Ok(Some(self.hold(k, needed_volts)))
-            }
+            } => Ok(Some(self.hold_below_ceiling(
+                k,
+                shear_modulus,
+                needed_volts,
+                max_volts,
+            ))),
             TrimResult::Failed(fault) => Err(fault),
         }
     }

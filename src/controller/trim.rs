@@ -892,6 +892,20 @@ impl Controller {
         Ok(())
     }
 
+    /// A result that needs more than the cap in force: the estimate's μ and cap taken, the
+    /// bias held where it is, and said (`Event::AboveCeiling`).
+    pub(super) fn hold_below_ceiling(
+        &mut self,
+        k: u32,
+        shear_modulus: f32,
+        needed_volts: f32,
+        max_volts: f32,
+    ) -> Event {
+        self.trim.params.shear_modulus = shear_modulus;
+        self.take_estimate_cap(max_volts);
+        self.hold(k, needed_volts)
+    }
+
     /// Apply the trim's result at tick `k`, once it has come back.
     pub(super) fn apply_trim(&mut self, k: u32) -> Result<Option<Event>, Fault> {
         // Read in place (a `Retune` holds a device, large: copied once, into the estimate).
@@ -961,11 +975,12 @@ impl Controller {
                 needed_volts,
                 max_volts,
                 ..
-            } => {
-                self.trim.params.shear_modulus = shear_modulus;
-                self.take_estimate_cap(max_volts);
-                Ok(Some(self.hold(k, needed_volts)))
-            }
+            } => Ok(Some(self.hold_below_ceiling(
+                k,
+                shear_modulus,
+                needed_volts,
+                max_volts,
+            ))),
             TrimResult::Failed(fault) => Err(fault),
         }
     }
