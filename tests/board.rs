@@ -263,6 +263,51 @@ fn saved_settings_lacking_a_new_setting_boot_and_say_it() {
     assert_eq!(b.ask("get settle_seconds"), "ok settle_seconds=0.4");
 }
 
+/// The image's front end is checked at the tick rate the board boots with, not only the
+/// image's own: saved settings at a rate its scans do not divide (10 kHz over 3 kHz) refuse
+/// the boot, for good, as the firmware did on its own before; at the image's rate it boots.
+#[test]
+fn a_front_end_the_booted_tick_rate_cannot_run_refuses_the_boot() {
+    use de_resonator::acquire::ChannelSpec;
+    let table = common::reference_table();
+    let current = ChannelSpec {
+        input: 0,
+        zero_code: 2047.5,
+        per_count: 1e-7,
+        low: -1e-4,
+        high: 1e-4,
+        noise_codes: 1.0,
+    };
+    let front_end = FrontEnd {
+        scan_hz: 10_000.0,
+        channels: [Some(current), None, None],
+    };
+    let mut bytes = vec![0; image::image_bytes(table.len())];
+    Image::write(
+        &mut bytes,
+        &REFERENCE_DEVICE.cast(),
+        &spec(),
+        &front_end,
+        &Settings::for_target(44.0),
+        PowerUp::Drive,
+        &table,
+    )
+    .unwrap();
+    let b = Bench::boot(&bytes, None::<NoKeeper>, None);
+    assert!(b.notice.starts_with("ready "), "{}", b.notice);
+    let mut memory = Memory {
+        saved: Some(Settings {
+            tick_hz: 3000.0,
+            ..Settings::for_target(44.0)
+        }),
+        ..Memory::default()
+    };
+    let mut b = Bench::boot(&bytes, Some(&mut memory), None);
+    assert!(b.notice.starts_with("refused "), "{}", b.notice);
+    assert!(b.notice.contains("3000"), "{}", b.notice);
+    assert!(b.ask("clear").starts_with("err 5 "), "for good");
+}
+
 /// After a watchdog reset the board boots refused, whatever the image: nothing is driven
 /// until `clear`, which runs every check and re-arms with the output off at 0 V, and then
 /// `start`, which ramps to the image's bias (the settings asked for meanwhile).

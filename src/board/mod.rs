@@ -230,6 +230,14 @@ impl<'a, K: Keeper> Board<'a, K> {
             Some(bias) => Ok(bias),
             None => board.start(slot, image, image.0.settings),
         };
+        // The image's front end at the tick rate booted with (the image checked it at its
+        // own; saved settings may hold another): one the board cannot run refuses, for good.
+        if booted.is_ok() {
+            if let Err(e) = image.0.front_end.check(board.tick_hz(slot)) {
+                board.refuse(slot, &e, &mut started.notice);
+                return (board, started);
+            }
+        }
         match booted {
             Err(fault) => board.refuse_boot(slot, &fault, &mut started.notice),
             Ok(_) if cause == Some(ResetCause::Watchdog) => board.refuse_boot(

@@ -222,9 +222,10 @@ mod app {
             let _ = writeln!(tx, "{NOTICE}warning: {warning}");
         }
         let tick_hz = logic.tick_hz(controller);
-        // The image's front end at the tick rate booted with (the image checked it at its
-        // own): the acquisition started before the tick (the tick's reader gives the first
-        // buffers a few ticks). A front end the board cannot run refuses, for good.
+        // The image's front end at the tick rate booted with: `Board::boot` has refused one
+        // the board cannot run (its image then gone: none here), so this gives the scans a
+        // tick; the acquisition started before the tick (the tick's reader gives the first
+        // buffers a few ticks).
         let front_end = logic.image().map_or(FrontEnd::NONE, |i| i.front_end);
         let scans_per_tick = match front_end.check(tick_hz) {
             Ok(scans) => scans,
