@@ -282,7 +282,7 @@ fn run_plot_has_a_zoom_of_the_last_periods() {
         .filter(|l| l.starts_with("<line") && l.contains("stroke-width=\"1.2\""))
         .filter_map(|l| attr(l, "stroke-dasharray"))
         .collect();
-    assert!(svg.contains("controller's cap") && svg.contains("plant's limit"));
+    assert!(svg.contains("controller's cap") && svg.contains("static limit (emi)"));
     let mut distinct = dashes.clone();
     distinct.sort();
     distinct.dedup();

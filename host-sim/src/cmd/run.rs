@@ -538,7 +538,7 @@ fn plot(scene: &Scene, run: &Run) -> Vec<Panel> {
         }
     }
     if let Some((mode, volts)) = run.limit {
-        levels.push((volts, format!("plant's limit ({})", mode.name())));
+        levels.push((volts, format!("static limit ({})", mode.name())));
     }
     let whole = [
         Panel {
