@@ -41,9 +41,8 @@ fn integrator(method: Method) -> Option<Integrator<f32>> {
     };
     // One step of the method itself: 0.9 of the guard's largest stable step (no substeps).
     let range = dev.model_range();
-    let step =
-        de_resonator::model::motion::max_stable_step_seconds(&dev, &drive, method, range)
-            .map_or(1e-3, |h| 0.9 * h);
+    let step = de_resonator::model::motion::max_stable_step_seconds(&dev, &drive, method, range)
+        .map_or(1e-3, |h| 0.9 * h);
     Integrator::new(dev, drive, method, step, range, start, false).ok()
 }
 

@@ -43,8 +43,8 @@ mod app {
     use de_resonator::board::protocol::NOTICE;
     use de_resonator::board::stream::{Record, Telemetry, FRAME_BYTES};
     use de_resonator::board::watchdog::CheckIn;
-    use de_resonator::board::{self as logic, Line, Lines, ReplyLine, Then};
     use de_resonator::board::FlashKeeper;
+    use de_resonator::board::{self as logic, Line, Lines, ReplyLine, Then};
     #[cfg(not(feature = "link"))]
     use de_resonator::Decimal;
     use de_resonator::{Controller, Dac8551, Event, Fault, Inputs, OutputStage};
