@@ -5,8 +5,10 @@
 
 mod common;
 
+use common::refused_with;
 use de_resonator::acquire::FrontEnd;
 use de_resonator::board::port::Extras;
+use de_resonator::board::protocol::ErrorCode;
 use de_resonator::board::{tick, Board, Keeper, Line, NoKeeper, ReplyLine, ResetCause, Then};
 use de_resonator::controller::Held;
 use de_resonator::image::{self, AmplifierSpec, Image, PowerUp, DAC_BITS};
@@ -305,7 +307,10 @@ fn a_front_end_the_booted_tick_rate_cannot_run_refuses_the_boot() {
     let mut b = Bench::boot(&bytes, Some(&mut memory), None);
     assert!(b.notice.starts_with("refused "), "{}", b.notice);
     assert!(b.notice.contains("3000"), "{}", b.notice);
-    assert!(b.ask("clear").starts_with("err 5 "), "for good");
+    assert!(
+        b.ask("clear").starts_with(&refused_with(ErrorCode::Config)),
+        "for good"
+    );
 }
 
 /// After a watchdog reset the board boots refused, whatever the image: nothing is driven
@@ -806,7 +811,10 @@ fn replies_say_why() {
     );
     let typo = b.ask("set ac_volt 100");
     assert!(
-        typo.starts_with("err 1 unknown setting; did you mean `ac_volts`?"),
+        typo.starts_with(&format!(
+            "{}unknown setting; did you mean `ac_volts`?",
+            refused_with(ErrorCode::Syntax)
+        )),
         "{typo}"
     );
     b.run(30_000, Inputs::NONE);

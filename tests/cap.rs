@@ -8,16 +8,11 @@ mod common;
 
 #[cfg(feature = "trim")]
 use common::Plant;
-use common::{assert_way_down, made_table};
+use common::{amplifier, assert_way_down, made_table};
 use de_resonator::{
     Amplifier, Controller, DacCode, Device, DeviceParams, Event, Inputs, Phase, Settings, Tuner,
     REFERENCE_DEVICE,
 };
-
-/// 0..10 kV over the full scale: a 2.5 V reference and an amplifier gain of 4000.
-fn amplifier() -> Amplifier {
-    Amplifier::new(2.5, 4000.0).unwrap()
-}
 
 /// One DAC step of `amplifier()`, V.
 fn lsb_volts() -> f32 {

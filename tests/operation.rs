@@ -5,25 +5,15 @@
 
 mod common;
 
-use common::reseal;
+use common::{amplifier, reference_table, reseal};
 
 use de_resonator::acquire::{FrontEnd, FrontEndError};
 use de_resonator::board::protocol::{self, Command, Reply};
 use de_resonator::image::{self, AmplifierSpec, Image, ImageError, PowerUp, DAC_BITS};
 use de_resonator::table::TableError;
 use de_resonator::{
-    Amplifier, Controller, Device, Fault, Inputs, Phase, Refusal, Settings, TuneError, Tuner,
-    REFERENCE_DEVICE,
+    Controller, Device, Fault, Inputs, Phase, Refusal, Settings, TuneError, Tuner, REFERENCE_DEVICE,
 };
-
-/// The reference device's table as `host-sim lut` makes it (64 points, f64 model).
-fn reference_table() -> Vec<u8> {
-    common::made_table(REFERENCE_DEVICE, 0.05, 64)
-}
-
-fn amplifier() -> Amplifier {
-    Amplifier::new(2.5, 4000.0).unwrap()
-}
 
 fn started(settings: Settings) -> Controller {
     let (c, _) = Controller::start(

@@ -138,9 +138,7 @@ mod controller {
     use super::{capacitance, gaussian};
     use crate::common::{made_table, Rng};
     use de_resonator::model::device::Device;
-    use de_resonator::{
-        Amplifier, Controller, Event, FailureMode, Fault, Inputs, Settings, REFERENCE_DEVICE,
-    };
+    use de_resonator::{Controller, Event, FailureMode, Fault, Inputs, Settings, REFERENCE_DEVICE};
 
     /// The reference controller with the probe on, its current from a membrane written out
     /// here at `stretch(bias)` (the ramp's voltage: the membrane does not follow the probe, far
@@ -156,7 +154,7 @@ mod controller {
             ..Settings::for_target(44.0)
         };
         let table = made_table(REFERENCE_DEVICE, 0.05, 64);
-        let amplifier = Amplifier::new(2.5, 4000.0).unwrap();
+        let amplifier = crate::common::amplifier();
         let (mut c, _) =
             Controller::start(REFERENCE_DEVICE.cast(), &table, amplifier, settings).unwrap();
         let mut rng = Rng(7);

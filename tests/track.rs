@@ -121,7 +121,7 @@ fn flashed() -> de_resonator::DeviceParams<f64> {
 /// The same, the drive started at `ac_hz`, the tracker's constant `track_seconds`.
 #[cfg(feature = "track")]
 fn tracked_from(ac_hz: f32, track_seconds: f32) -> (de_resonator::Controller, Vec<u8>) {
-    use de_resonator::{Amplifier, Controller, Settings};
+    use de_resonator::{Controller, Settings};
     let settings = Settings {
         ac_volts: 30.0,
         ac_hz,
@@ -130,7 +130,7 @@ fn tracked_from(ac_hz: f32, track_seconds: f32) -> (de_resonator::Controller, Ve
         ..Settings::for_target(45.5)
     };
     let table = common::made_table(flashed(), 0.05, 64);
-    let amplifier = Amplifier::new(2.5, 4000.0).unwrap();
+    let amplifier = common::amplifier();
     let (c, _) = Controller::start(flashed().cast(), &table, amplifier, settings).unwrap();
     (c, table)
 }
@@ -584,9 +584,9 @@ const NEAR_CAP_AC_VOLTS: f32 = 20.0;
 /// controller, the cap and the target.
 #[cfg(feature = "track")]
 fn near_the_cap(headroom_volts: f32) -> (de_resonator::Controller, f32, f32) {
-    use de_resonator::{Amplifier, Controller, Settings, REFERENCE_DEVICE};
+    use de_resonator::{Controller, Settings, REFERENCE_DEVICE};
     let table = common::made_table(flashed(), 0.05, 64);
-    let amplifier = Amplifier::new(2.5, 4000.0).unwrap();
+    let amplifier = common::amplifier();
     let start = |target_hz: f32| {
         let settings = Settings {
             ac_volts: NEAR_CAP_AC_VOLTS,
@@ -771,7 +771,7 @@ fn a_softer_estimate_while_tracking_brings_the_plan_down_to_its_cap() {
 #[cfg(feature = "track")]
 #[test]
 fn a_tracked_bias_never_moves_faster_than_the_slew() {
-    use de_resonator::{Amplifier, Controller, DeviceParams, Inputs, Settings, REFERENCE_DEVICE};
+    use de_resonator::{Controller, DeviceParams, Inputs, Settings, REFERENCE_DEVICE};
     let settings = Settings {
         ac_volts: 30.0,
         ac_hz: 45.5,
@@ -781,7 +781,7 @@ fn a_tracked_bias_never_moves_faster_than_the_slew() {
         ..Settings::for_target(45.5)
     };
     let table = common::made_table(flashed(), 0.05, 64);
-    let amplifier = Amplifier::new(2.5, 4000.0).unwrap();
+    let amplifier = common::amplifier();
     let (mut c, _) = Controller::start(flashed().cast(), &table, amplifier, settings).unwrap();
     let plant = common::with_quality_factor(REFERENCE_DEVICE, 50.0);
     let stiff = DeviceParams {

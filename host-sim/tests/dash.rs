@@ -5,6 +5,9 @@
 
 mod common;
 
+use common::refused_with;
+use de_resonator::board::protocol::ErrorCode;
+
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::TcpStream;
 use std::process::{Child, Stdio};
@@ -173,7 +176,10 @@ fn the_page_talks_to_the_board_only_in_its_protocol() {
     let reply: Value = serde_json::from_str(&body).unwrap();
     assert_eq!(reply["ok"], false, "{body}");
     assert!(
-        reply["reply"].as_str().unwrap().starts_with("err 2 "),
+        reply["reply"]
+            .as_str()
+            .unwrap()
+            .starts_with(&refused_with(ErrorCode::Refused)),
         "{body}"
     );
 

@@ -5,6 +5,9 @@
 
 mod common;
 
+use common::refused_with;
+use de_resonator::board::protocol::ErrorCode;
+
 use common::{number, Served};
 use serde_json::Value;
 
@@ -75,13 +78,25 @@ fn the_virtual_board_answers_every_request_as_the_firmware() {
         "get target_hz",
     ]);
     // Out of range: refused by the checks (code 2), the plan in force kept.
-    assert!(replies[0].starts_with("err 2 "), "{}", replies[0]);
+    assert!(
+        replies[0].starts_with(&refused_with(ErrorCode::Refused)),
+        "{}",
+        replies[0]
+    );
     assert!(
         replies[1].starts_with("ok target_hz=45 ") && replies[1].ends_with("ac_volts=20 ac_hz=41")
     );
     assert_eq!(replies[2], "ok ac_volts=20");
-    assert!(replies[3].starts_with("err 2 tick_hz"), "{}", replies[3]);
-    assert!(replies[4].starts_with("err 1 "), "{}", replies[4]);
+    assert!(
+        replies[3].starts_with(&format!("{}tick_hz", refused_with(ErrorCode::Refused))),
+        "{}",
+        replies[3]
+    );
+    assert!(
+        replies[4].starts_with(&refused_with(ErrorCode::Syntax)),
+        "{}",
+        replies[4]
+    );
     assert_eq!(replies[5], "ok target_hz=45");
     board.wait_for("settled after the AC", settled);
     let replies = board.replies(&["set margin 0.1", "save", "reset"]);
@@ -89,12 +104,18 @@ fn the_virtual_board_answers_every_request_as_the_firmware() {
     // A save and a reset under the bias are refused, as on the chip (whose flash erase
     // stalls it): at 0 V only.
     assert!(
-        replies[1].starts_with("err 7 `save` erases flash"),
+        replies[1].starts_with(&format!(
+            "{}`save` erases flash",
+            refused_with(ErrorCode::State)
+        )),
         "{}",
         replies[1]
     );
     assert!(
-        replies[2].starts_with("err 7 reset at 0 V only"),
+        replies[2].starts_with(&format!(
+            "{}reset at 0 V only",
+            refused_with(ErrorCode::State)
+        )),
         "{}",
         replies[2]
     );
@@ -141,8 +162,16 @@ fn a_fault_latches_on_the_virtual_board_until_clear() {
     assert!(faulted.contains("phase=faulted"), "{faulted}");
     assert!(faulted.contains("fault=stretch sensor stuck"), "{faulted}");
     let replies = board.replies(&["target 45", "trim"]);
-    assert!(replies[0].starts_with("err 4 faulted"), "{}", replies[0]);
-    assert!(replies[1].starts_with("err 4 "), "{}", replies[1]);
+    assert!(
+        replies[0].starts_with(&format!("{}faulted", refused_with(ErrorCode::Faulted))),
+        "{}",
+        replies[0]
+    );
+    assert!(
+        replies[1].starts_with(&refused_with(ErrorCode::Faulted)),
+        "{}",
+        replies[1]
+    );
     board.wait_for("at 0 V", |s| number(s, "volts") == 0.0);
     let cleared = board.replies(&["clear", "status"]);
     assert!(
@@ -211,7 +240,11 @@ fn a_fault_is_in_the_log_after_a_reset_with_its_data() {
         one.contains(&format!(" stretch={stuck_at} ")),
         "the stretch sample that stuck: {one}"
     );
-    assert!(replies[3].starts_with("err 2 no fault 2"), "{}", replies[3]);
+    assert!(
+        replies[3].starts_with(&format!("{}no fault 2", refused_with(ErrorCode::Refused))),
+        "{}",
+        replies[3]
+    );
     let cleared = board.replies(&["faults clear", "faults"]);
     assert_eq!(cleared, ["ok faults cleared", "ok faults=0"]);
 }
@@ -401,7 +434,10 @@ fn one_connection_controls_the_board_and_a_new_one_hears_the_state_now() {
     b.write_all(b"stop\nstatus\nfaults clear\n").unwrap();
     let refused = b_lines.next().unwrap();
     assert!(
-        refused.starts_with("err 8 another connection controls the board"),
+        refused.starts_with(&format!(
+            "{}another connection controls the board",
+            refused_with(ErrorCode::NotInControl)
+        )),
         "{refused}"
     );
     let status = b_lines.next().unwrap();
@@ -416,7 +452,10 @@ fn one_connection_controls_the_board_and_a_new_one_hears_the_state_now() {
         "B's stop did not end A's drive: {status}"
     );
     assert!(
-        b_lines.next().unwrap().starts_with("err 8 "),
+        b_lines
+            .next()
+            .unwrap()
+            .starts_with(&refused_with(ErrorCode::NotInControl)),
         "faults clear changes the log"
     );
     a.write_all(b"status\n").unwrap();

@@ -4,6 +4,7 @@
 //! the equation of motion, with the plant's own damping and viscous branches), never on the
 //! core's prediction.
 
+use de_resonator::board::protocol::ErrorCode;
 use de_resonator::{AcDrive, Device, DeviceParams, Phase, Ramp, Settings, Tuner};
 
 use host_sim::engine::hil::Run;
@@ -19,8 +20,10 @@ fn an_ac_at_the_resonance_of_an_undamped_device_is_refused_and_the_plant_stays_s
     assert_eq!(run.plant_crossing, None, "{:?}", run.fault_words);
     let reply = &run.commands[0].reply;
     assert!(
-        reply.starts_with("err 2 drive refused: the swing has no bound in the model: harmonic")
-            && reply.contains("give the device's damping")
+        reply.starts_with(&format!(
+            "err {} drive refused: the swing has no bound in the model: harmonic",
+            ErrorCode::Refused
+        )) && reply.contains("give the device's damping")
             && reply.contains("largest AC that fits is 0 V"),
         "{reply}"
     );

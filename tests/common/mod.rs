@@ -368,3 +368,8 @@ impl embedded_hal::digital::OutputPin for &Pin {
         Ok(())
     }
 }
+
+/// The start of a reply refused with `code` (`err <n> `): the tests name codes, not numbers.
+pub fn refused_with(code: de_resonator::board::protocol::ErrorCode) -> String {
+    format!("err {code} ")
+}

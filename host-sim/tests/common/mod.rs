@@ -240,3 +240,8 @@ pub fn tunable_device(
     let timed = (20.0..100.0).contains(&f0) && (20.0..100.0).contains(&f1);
     (timed && top.volts <= 9000.0).then_some((params, f0, f1))
 }
+
+/// The start of a reply refused with `code` (`err <n> `): the tests name codes, not numbers.
+pub fn refused_with(code: de_resonator::board::protocol::ErrorCode) -> String {
+    format!("err {code} ")
+}
