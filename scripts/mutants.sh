@@ -12,7 +12,7 @@ fi
 files=("$@")
 if [ "${#files[@]}" = 0 ]; then
     files=(src/model/safety.rs src/tuning.rs src/table.rs src/drive.rs src/board/stage.rs
-        src/controller/*.rs src/image.rs src/store.rs src/board/protocol.rs)
+        src/controller/*.rs src/image.rs src/store.rs src/wire/protocol.rs)
 fi
 export FUZZ_TICKS=200000 PROPTEST_RNG_SEED=1
 for file in "${files[@]}"; do

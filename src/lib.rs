@@ -35,6 +35,7 @@ pub mod numerics;
 pub mod store;
 pub mod table;
 pub mod tuning;
+pub mod wire;
 
 pub use board::stage::{OutputStage, StageError};
 pub use controller::{

@@ -8,10 +8,10 @@ mod common;
 use common::refused_with;
 use de_resonator::acquire::FrontEnd;
 use de_resonator::board::port::Extras;
-use de_resonator::board::protocol::ErrorCode;
 use de_resonator::board::{tick, Board, Keeper, Line, NoKeeper, ReplyLine, ResetCause, Then};
 use de_resonator::controller::Held;
 use de_resonator::image::{self, AmplifierSpec, Image, PowerUp, DAC_BITS};
+use de_resonator::wire::protocol::ErrorCode;
 use de_resonator::Setting;
 use de_resonator::{Controller, Dac8551, Inputs, OutputStage, Settings, REFERENCE_DEVICE};
 
@@ -999,8 +999,8 @@ fn a_save_on_a_chip_waits_for_rest() {
 /// fresh prompt; an overlong line is one `TooLong` at its end, whatever ends it.
 #[test]
 fn lines_end_at_a_line_feed_a_carriage_return_or_both() {
-    use de_resonator::board::protocol::MAX_LINE;
     use de_resonator::board::Lines;
+    use de_resonator::wire::protocol::MAX_LINE;
     let lines_of = |bytes: &[u8]| {
         let mut lines = Lines::default();
         bytes
@@ -1049,8 +1049,8 @@ fn lines_end_at_a_line_feed_a_carriage_return_or_both() {
 /// program (LF or CRLF, no edits) sees not one byte more than before.
 #[test]
 fn a_terminal_gets_echo_and_editing_and_a_program_gets_neither() {
-    use de_resonator::board::protocol::MAX_LINE;
     use de_resonator::board::{Echo, Lines, REPLY_END, TERMINAL_REPLY_END};
+    use de_resonator::wire::protocol::MAX_LINE;
     let typed = |lines: &mut Lines, bytes: &[u8]| {
         let mut echoed = Vec::new();
         let mut got = Vec::new();

@@ -1,7 +1,7 @@
-//! The link's frames (`board::link`): what one side writes the other reads back, a corrupted
+//! The link's frames (`wire::link`): what one side writes the other reads back, a corrupted
 //! or cut frame is refused with its reason, and no bytes panic the parser.
 
-use de_resonator::board::link::{
+use de_resonator::wire::link::{
     self, Booted, Kind, LinkError, Observed, HEADER, MAX_FRAME, MAX_PAYLOAD,
 };
 use de_resonator::{Event, EventKind, FailureMode, Fault, Phase};

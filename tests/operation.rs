@@ -8,9 +8,9 @@ mod common;
 use common::{amplifier, reference_table, reseal};
 
 use de_resonator::acquire::{FrontEnd, FrontEndError};
-use de_resonator::board::protocol::{self, Command, Reply};
 use de_resonator::image::{self, AmplifierSpec, Image, ImageError, PowerUp, DAC_BITS};
 use de_resonator::table::TableError;
+use de_resonator::wire::protocol::{self, Command, Reply};
 use de_resonator::{
     Controller, Device, Fault, Inputs, Phase, Refusal, Settings, TuneError, Tuner, REFERENCE_DEVICE,
 };
@@ -638,7 +638,7 @@ fn the_protocol_covers_what_help_says() {
     assert!(protocol::HELP.contains("stream <Hz>"));
     assert!(protocol::HELP.contains("faults [<n> | clear]"));
     assert!(!protocol::HELP.contains('\n'), "one reply line");
-    use de_resonator::board::protocol::FaultsAsk;
+    use de_resonator::wire::protocol::FaultsAsk;
     for (line, ask) in [
         (&b"faults"[..], FaultsAsk::List),
         (b"faults clear", FaultsAsk::Clear),
@@ -669,7 +669,7 @@ fn the_protocol_covers_what_help_says() {
 /// suggests the nearest command or setting.
 #[test]
 fn help_knows_every_command_and_suggests_for_a_typo() {
-    use de_resonator::board::protocol::{ParseError, Topic, COMMANDS};
+    use de_resonator::wire::protocol::{ParseError, Topic, COMMANDS};
     for (k, (name, said)) in COMMANDS.iter().enumerate() {
         let asked = format!("help {name}");
         assert_eq!(
@@ -732,8 +732,8 @@ fn help_knows_every_command_and_suggests_for_a_typo() {
 /// A unit after a number is its own unit or named in the error; a count refuses a fraction.
 #[test]
 fn units_after_numbers_are_taken_or_named_and_counts_are_whole() {
-    use de_resonator::board::protocol::ParseError;
     use de_resonator::controller::Setting;
+    use de_resonator::wire::protocol::ParseError;
     let target = Ok(Command::Target { hz: 33.5 });
     for line in [
         "target 33.5",

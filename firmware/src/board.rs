@@ -36,15 +36,15 @@ pub type StageSpi = DacSpi;
 #[cfg(not(feature = "link"))]
 pub type StagePin = EnablePin;
 #[cfg(feature = "link")]
-pub type StageSpi = de_resonator::board::link::Tap<crate::link::Breakable<DacSpi>>;
+pub type StageSpi = de_resonator::wire::link::Tap<crate::link::Breakable<DacSpi>>;
 #[cfg(feature = "link")]
-pub type StagePin = de_resonator::board::link::Tap<EnablePin>;
+pub type StagePin = de_resonator::wire::link::Tap<EnablePin>;
 
 /// The DAC bus and the enable line as the output stage takes them.
 pub fn stage_wires(dac: DacSpi, enable: EnablePin) -> (StageSpi, StagePin) {
     #[cfg(feature = "link")]
     {
-        use de_resonator::board::link::Tap;
+        use de_resonator::wire::link::Tap;
         (Tap::new(crate::link::Breakable(dac)), Tap::new(enable))
     }
     #[cfg(not(feature = "link"))]

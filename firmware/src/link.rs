@@ -1,5 +1,5 @@
 //! The link build (under QEMU only): host-sim's plant in, the tick's output out, in the
-//! core's frames (`de_resonator::board::link`). The frames go through two files QEMU's
+//! core's frames (`de_resonator::wire::link`). The frames go through two files QEMU's
 //! semihosting opens on the host, in its working folder (`samples`, `output`: host-sim's
 //! pipes), a frame in two reads (its header, then the rest); a byte on USART3 rings each
 //! tick's samples in. QEMU's USART takes a byte a main-loop turn (50 to 130 µs,
@@ -45,7 +45,7 @@ mod transport {
 
     use super::{LINK_FRAME, LINK_GONE, LINK_OPEN};
     use de_resonator::acquire::{Block, FrontEnd};
-    use de_resonator::board::link::{self, Kind, BUS_FAILS, HEADER, MAX_FRAME, MAX_PAYLOAD};
+    use de_resonator::wire::link::{self, Kind, BUS_FAILS, HEADER, MAX_FRAME, MAX_PAYLOAD};
     use embedded_hal::spi::{Error as _, ErrorKind, ErrorType, Operation, SpiDevice};
     use embedded_hal_nb::serial::Read as _;
     use semihosting::fs::File;

@@ -1,11 +1,11 @@
 //! The telemetry stream's port: USART1's TX (PA9) at `BAUD`, a line of its own so the command
-//! port stays a line protocol. The records (the core's `board::stream`) are taken and framed
+//! port stays a line protocol. The records (the core's `wire::stream`) are taken and framed
 //! in the idle loop, outside the tick; a frame goes out on silicon by DMA (DMA2 stream 7,
 //! channel 4) from one of two buffers while the other is filled, and under QEMU (which
 //! emulates no DMA) straight into the data register, which QEMU's USART takes at once.
 
 #[cfg(not(feature = "qemu"))]
-use de_resonator::board::stream::FRAME_BYTES;
+use de_resonator::wire::stream::FRAME_BYTES;
 use stm32f4xx_hal::pac::USART1;
 use stm32f4xx_hal::serial::Tx;
 

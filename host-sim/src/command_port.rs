@@ -8,7 +8,7 @@ use std::sync::mpsc::{self, Receiver, RecvTimeoutError};
 use std::time::Duration;
 
 use clap::Args;
-use de_resonator::board::protocol::{Reply, NOTICE};
+use de_resonator::wire::protocol::{Reply, NOTICE};
 use serde_json::{Map, Value};
 
 use crate::telemetry::Source;

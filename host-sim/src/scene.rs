@@ -11,7 +11,7 @@ use serde::Deserialize;
 use crate::engine::hil::{Analog, CurrentMonitor, Loop, Scripted, Sensor};
 use crate::engine::plant::{AmplifierModel, Branch, Leakage, Plant, MAX_BRANCHES};
 use crate::engine::simulate::{Solver, Tolerance};
-use de_resonator::board::protocol::MAX_LINE;
+use de_resonator::wire::protocol::MAX_LINE;
 
 /// The reference scene, built in: the main job.
 pub const REFERENCE: &str = include_str!("../../scenes/reference.toml");

@@ -1,5 +1,5 @@
 //! The telemetry stream's receiving end: a thread reading the board's stream port (a serial
-//! port, a TCP or a Unix socket) into records (`de_resonator::board::stream::Receiver`), for
+//! port, a TCP or a Unix socket) into records (`de_resonator::wire::stream::Receiver`), for
 //! `console --record` and a firmware-in-the-loop `run --record`.
 
 use std::io::Read;
@@ -9,7 +9,7 @@ use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::Duration;
 
-use de_resonator::board::stream::{Receiver, Record};
+use de_resonator::wire::stream::{Receiver, Record};
 
 /// Where the stream comes from: a serial port (the board's stream UART), a TCP or a Unix
 /// socket (QEMU's chardev, `serve --stream-tcp/--stream-unix`).

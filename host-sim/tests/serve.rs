@@ -6,7 +6,7 @@
 mod common;
 
 use common::refused_with;
-use de_resonator::board::protocol::ErrorCode;
+use de_resonator::wire::protocol::ErrorCode;
 
 use common::{number, Served};
 use serde_json::Value;

@@ -4,7 +4,7 @@
 //! the equation of motion, with the plant's own damping and viscous branches), never on the
 //! core's prediction.
 
-use de_resonator::board::protocol::ErrorCode;
+use de_resonator::wire::protocol::ErrorCode;
 use de_resonator::{AcDrive, Device, DeviceParams, Phase, Ramp, Settings, Tuner};
 
 use host_sim::engine::hil::Run;

@@ -8,10 +8,10 @@ use core::fmt::Write as _;
 use super::{Board, Keeper, ResetCause, Shared};
 use crate::acquire::Inputs;
 use crate::board::port::ReplyLine;
-use crate::board::protocol::{ErrorCode, FaultsAsk};
 use crate::controller::Fault;
 use crate::fault_log::{keep_newest, Cause, Entry, KEPT};
 use crate::numerics::decimal::Decimal;
+use crate::wire::protocol::{ErrorCode, FaultsAsk};
 
 impl<K: Keeper> Board<'_, K> {
     /// Log a reset the boot found; `None` without a log.

@@ -1,7 +1,7 @@
 //! The board: everything the firmware decides, without its hardware, so the host tests it and
 //! host-sim's virtual board (`host-sim serve`) runs it. It boots from an image and the saved
 //! settings (the fallback, the watchdog's refusal: [`Board::boot`]), answers the command port
-//! ([`port`], in the line [`protocol`] the host shares), turns a tick's output into what the
+//! ([`port`], in the line [`crate::wire::protocol`] the host shares), turns a tick's output into what the
 //! output stage ([`stage`]) does ([`tick`]: the one enable policy), runs the tick's background job ([`tick::run_job`]) and feeds the watchdog
 //! only while the low-priority tasks check in ([`watchdog`]). What only hardware
 //! has comes in behind [`Keeper`] (where `save` keeps the settings) and as arguments (the
@@ -14,11 +14,8 @@
 pub mod faults;
 #[cfg(feature = "storage")]
 mod flash_keeper;
-pub mod link;
 pub mod port;
-pub mod protocol;
 pub mod stage;
-pub mod stream;
 pub mod tick;
 pub mod watchdog;
 
@@ -125,7 +122,7 @@ pub struct Board<'a, K> {
 }
 
 /// What the boot says on the command port before any request: the start-up line (after
-/// [`crate::board::protocol::NOTICE`]: `ready …` or `refused …`), and a warning, if any.
+/// [`crate::wire::protocol::NOTICE`]: `ready …` or `refused …`), and a warning, if any.
 #[derive(Clone, Debug, Default)]
 pub struct Started {
     pub notice: ReplyLine,

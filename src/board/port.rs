@@ -1,19 +1,19 @@
 //! The command port's board side: bytes into request lines ([`Lines`]), and the reply to each
 //! request ([`Board::serve`]). The protocol itself (parse, replies, status) is
-//! [`crate::board::protocol`].
+//! [`crate::wire::protocol`].
 
 use core::fmt::Write as _;
 
 use heapless::{String, Vec};
 
 use super::{Board, Keeper};
-use crate::board::protocol::{
-    self, Command, ErrorCode, MaxBy, ParseError, Refused, Status, Topic, MAX_LINE,
-};
-use crate::board::stream;
 use crate::controller::{Controller, Phase, Refusal, Setting, Settings};
 use crate::model::device::Field;
 use crate::numerics::decimal::Decimal;
+use crate::wire::protocol::{
+    self, Command, ErrorCode, MaxBy, ParseError, Refused, Status, Topic, MAX_LINE,
+};
+use crate::wire::stream;
 
 /// One request as received: its bytes, or why it has none.
 #[derive(Clone, Debug, PartialEq, Eq)]

@@ -370,6 +370,6 @@ impl embedded_hal::digital::OutputPin for &Pin {
 }
 
 /// The start of a reply refused with `code` (`err <n> `): the tests name codes, not numbers.
-pub fn refused_with(code: de_resonator::board::protocol::ErrorCode) -> String {
+pub fn refused_with(code: de_resonator::wire::protocol::ErrorCode) -> String {
     format!("err {code} ")
 }

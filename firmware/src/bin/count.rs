@@ -11,8 +11,8 @@ use core::hint::black_box;
 use cortex_m::peripheral::syst::SystClkSource;
 use cortex_m::peripheral::SYST;
 use de_resonator::acquire::{Block, Channel, ChannelSpec, FrontEnd, Reader};
-use de_resonator::board::stream::{Record, Telemetry, FRAME_BYTES};
 use de_resonator::board::tick;
+use de_resonator::wire::stream::{Record, Telemetry, FRAME_BYTES};
 use de_resonator::{
     Controller, Dac8551, Device, Drive, Inputs, Integrator, Method, OutputStage, State, Table,
     Tuner, REFERENCE_DEVICE,

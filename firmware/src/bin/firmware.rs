@@ -37,14 +37,14 @@ mod app {
     use rtic::mutex_prelude::*;
 
     use de_resonator::acquire::{Block, FrontEnd, Reader, BUFFER_CODES};
-    #[cfg(feature = "link")]
-    use de_resonator::board::link::{Booted, Kind, Observed};
     use de_resonator::board::port::Extras;
-    use de_resonator::board::protocol::NOTICE;
-    use de_resonator::board::stream::{Record, Telemetry, FRAME_BYTES};
     use de_resonator::board::watchdog::CheckIn;
     use de_resonator::board::FlashKeeper;
     use de_resonator::board::{self as logic, Line, Lines, ReplyLine, Then};
+    #[cfg(feature = "link")]
+    use de_resonator::wire::link::{Booted, Kind, Observed};
+    use de_resonator::wire::protocol::NOTICE;
+    use de_resonator::wire::stream::{Record, Telemetry, FRAME_BYTES};
     #[cfg(not(feature = "link"))]
     use de_resonator::Decimal;
     use de_resonator::{Controller, Dac8551, Event, Fault, Inputs, OutputStage};

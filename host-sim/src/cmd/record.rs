@@ -1,10 +1,10 @@
-//! The board's telemetry stream (`de_resonator::board::stream`) written to CSV with a header
+//! The board's telemetry stream (`de_resonator::wire::stream`) written to CSV with a header
 //! that names what ran (`console --record`, `run --record`); records lost on the way counted
 //! from the sequence's gaps and said, never filled in; and drawn (`--plot`).
 
 use std::path::Path;
 
-use de_resonator::board::stream::{Receiver, Record, VERSION};
+use de_resonator::wire::stream::{Receiver, Record, VERSION};
 use de_resonator::Fault;
 use serde::Serialize;
 

@@ -14,13 +14,13 @@ use std::time::{Duration, Instant};
 
 use clap::Args;
 use de_resonator::board::port::Extras;
-use de_resonator::board::protocol::NOTICE;
-use de_resonator::board::stream::{self, Record, Telemetry};
 use de_resonator::board::FlashKeeper;
 use de_resonator::board::{self, Board, Keeper, Line, Lines, ReplyLine, ResetCause, Then};
 use de_resonator::controller::Held;
 use de_resonator::fault_log::Entry;
 use de_resonator::store::{self, RamFlash, StoreError, RAM_PAGE_BYTES};
+use de_resonator::wire::protocol::NOTICE;
+use de_resonator::wire::stream::{self, Record, Telemetry};
 use de_resonator::{Controller, Dac8551, Event, Image, Inputs, OutputStage, Settings};
 use serde::Serialize;
 
@@ -197,7 +197,7 @@ struct Client {
 
 /// What a connection that does not control the board may ask: what changes nothing.
 fn read_only(line: &Line) -> bool {
-    use de_resonator::board::protocol::{self, Command, FaultsAsk};
+    use de_resonator::wire::protocol::{self, Command, FaultsAsk};
     match line {
         Line::Text(bytes) => match protocol::parse(bytes) {
             Ok(Command::Help(_) | Command::Status | Command::Info | Command::Get(_)) => true,
@@ -568,7 +568,7 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
                 report.requests += 1;
                 let mut reply = ReplyLine::new();
                 if !clients[i].controls && !read_only(&line) {
-                    let code = de_resonator::board::protocol::ErrorCode::NotInControl;
+                    let code = de_resonator::wire::protocol::ErrorCode::NotInControl;
                     clients[i].say(&format!(
                         "err {code} another connection controls the board: this one reads \
                          (status, info, get, help, faults) until that one leaves"

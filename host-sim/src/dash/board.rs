@@ -9,8 +9,8 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
-use de_resonator::board::protocol::Reply;
-use de_resonator::board::stream::{Record, VERSION};
+use de_resonator::wire::protocol::Reply;
+use de_resonator::wire::stream::{Record, VERSION};
 use de_resonator::Fault;
 use serde::Serialize;
 use serde_json::{json, Value};
@@ -349,7 +349,7 @@ impl Shared {
     /// reset (the board's rate starts at off).
     pub fn command(&self, request: &str) -> Result<Value, String> {
         let request = request.trim_end_matches(['\r', '\n']);
-        let most = de_resonator::board::protocol::MAX_LINE;
+        let most = de_resonator::wire::protocol::MAX_LINE;
         if request.is_empty() || request.len() > most {
             return Err(format!("a request is one line of 1 to {most} characters"));
         }

@@ -1,7 +1,7 @@
 //! The firmware in the loop: the firmware's link build (`firmware --features link`) under
 //! QEMU, its image made from the scene, as the board of a loop (`hil::LoopBoard`). Each tick
 //! the plant's ADC codes go out and the tick's output comes back, in the core's frames
-//! (`de_resonator::board::link`), through two pipes the firmware opens by semihosting
+//! (`de_resonator::wire::link`), through two pipes the firmware opens by semihosting
 //! (`samples`, `output`), a byte on its USART3 ringing each tick in; its command port
 //! (USART2) is connected. QEMU is stopped when the board is dropped.
 
@@ -15,9 +15,9 @@ use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
 use de_resonator::acquire::InputError;
-use de_resonator::board::link::{self, Booted, Kind, Observed, HEADER, MAX_FRAME};
-use de_resonator::board::protocol::NOTICE;
-use de_resonator::board::stream::{Receiver, Record};
+use de_resonator::wire::link::{self, Booted, Kind, Observed, HEADER, MAX_FRAME};
+use de_resonator::wire::protocol::NOTICE;
+use de_resonator::wire::stream::{Receiver, Record};
 use de_resonator::Inputs;
 
 use crate::engine::hil::{LoopBoard, Samples, Wires};

@@ -8,11 +8,11 @@ use std::convert::Infallible;
 use std::time::Instant;
 
 use de_resonator::acquire::{Block, Channel, FrontEnd, InputError, Reader, Stall};
-use de_resonator::board::link::{self, Booted, Observed, Words};
 use de_resonator::board::port::Extras;
-use de_resonator::board::stream::{self, Receiver, Record, Telemetry};
 use de_resonator::board::{Line, Lines, NoKeeper, ReplyLine, Then};
 use de_resonator::image::{AmplifierSpec, Image, PowerUp, DAC_BITS};
+use de_resonator::wire::link::{self, Booted, Observed, Words};
+use de_resonator::wire::stream::{self, Receiver, Record, Telemetry};
 use de_resonator::{
     Amplifier, Controller, Dac8551, DeviceParams, Event, EventKind, FailureMode, Fault, Inputs,
     OutputStage, Phase, Settings, BUS_FAULT_SAID, FAULT_SAID,
@@ -1005,7 +1005,7 @@ impl Loop {
 
 /// The board a loop runs against the plant: the core's, on the host ([`CoreBoard`]), or the
 /// firmware's link build under QEMU (`engine::firmware`). Both give the same record of a tick
-/// (`board::link`'s `Observed`), from which the run is kept.
+/// (`wire::link`'s `Observed`), from which the run is kept.
 pub trait LoopBoard {
     /// What the boot found, and the refusal's words.
     fn booted(&mut self) -> (Booted, Option<String>);

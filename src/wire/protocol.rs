@@ -152,7 +152,7 @@ pub enum Command {
     Save,
     /// Restart the firmware, at rest at 0 V only (`stop` first); the boot checks run again.
     Reset,
-    /// Send the telemetry stream's records (`board::stream`) on the stream port at this
+    /// Send the telemetry stream's records (`wire::stream`) on the stream port at this
     /// rate, Hz (`None`: `stream off`, stop sending).
     Stream(Option<f32>),
     /// The fault log: the newest entries, one whole, or emptied.
