@@ -65,7 +65,11 @@ fn no_module_of_the_core_imports_one_that_imports_it_back() {
     let mut uses: BTreeMap<Vec<String>, BTreeSet<Vec<String>>> = BTreeMap::new();
     for (module, file) in &files {
         let text = std::fs::read_to_string(file).unwrap();
-        let text = text.split("#[cfg(test)]\nmod tests").next().unwrap_or("");
+        // Its tests left out: from the `#[cfg(test)]` before `mod tests`.
+        let text = match text.find("\nmod tests {") {
+            Some(at) => &text[..text[..at].rfind("#[cfg(test)]").unwrap_or(at)],
+            None => text.as_str(),
+        };
         // Code only: a doc comment naming a module imports nothing.
         let text: String = text
             .lines()

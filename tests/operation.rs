@@ -10,7 +10,8 @@ use common::{amplifier, reference_table, reseal};
 use de_resonator::acquire::{FrontEnd, FrontEndError};
 use de_resonator::image::{self, AmplifierSpec, Image, ImageError, PowerUp, DAC_BITS};
 use de_resonator::table::TableError;
-use de_resonator::wire::protocol::{self, Command, Reply};
+use de_resonator::wire::protocol::{self, Command};
+use de_resonator::wire::reply::Reply;
 use de_resonator::{
     Controller, Device, Fault, Inputs, Phase, Refusal, Settings, TuneError, Tuner, REFERENCE_DEVICE,
 };

@@ -8,7 +8,8 @@ use std::sync::mpsc::{self, Receiver, RecvTimeoutError};
 use std::time::Duration;
 
 use clap::Args;
-use de_resonator::wire::protocol::{Reply, NOTICE};
+use de_resonator::wire::protocol::NOTICE;
+use de_resonator::wire::reply::Reply;
 use serde_json::{Map, Value};
 
 use crate::telemetry::Source;

@@ -16,7 +16,7 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use clap::Args;
-use de_resonator::wire::protocol::Reply;
+use de_resonator::wire::reply::Reply;
 use serde::Serialize;
 use serde_json::{Map, Value};
 

@@ -9,7 +9,7 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
-use de_resonator::wire::protocol::Reply;
+use de_resonator::wire::reply::Reply;
 use de_resonator::wire::stream::{Record, VERSION};
 use de_resonator::Fault;
 use serde::Serialize;
