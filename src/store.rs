@@ -15,7 +15,9 @@
 //! its stable id (`Setting::id`): id (u16), two zero bytes, value (f32; 0 = off where it can
 //! be). A firmware that adds a setting reads an older blob with every value it holds, the
 //! new one at the image's value (the board says which); a blob holding a setting this
-//! firmware does not know (saved by a newer one) is refused by name. Version 1 (until
+//! firmware does not know (saved by a newer one) is refused by name, as is one of a version
+//! it does not read that has this version's length; one of another length cannot be told
+//! from a record torn by a power cut, and is passed over as one is. Version 1 (until
 //! 2026-12-05) kept the settings by place, which was their id: read as such. Whether the
 //! settings are in range is the controller's boot check, as for any settings.
 
@@ -109,7 +111,7 @@ impl fmt::Display for StoreError {
             StoreError::UnknownSetting { id } => write!(
                 f,
                 "saved settings hold setting id {id}, which this firmware does not know (saved \
-                 by a newer one); ignored: `save` again to keep this firmware's"
+                 by a newer firmware); ignored: `save` again to keep this firmware's"
             ),
         }
     }
@@ -196,7 +198,8 @@ pub(crate) fn halves<F: NorFlash>(range: &Range<u32>) -> Result<([u32; 2], usize
 /// The two slots' first offsets, checked against the flash's pages.
 fn slots<F: NorFlash>(range: &Range<u32>) -> Result<[u32; 2], StoreError> {
     let (starts, half) = halves::<F>(range)?;
-    if half < RECORD_BYTES.next_multiple_of(F::WRITE_SIZE.max(1)) {
+    // Room for the longest record read (`read_slot` reads up to it), not only this one's.
+    if half < MAX_RECORD_BYTES.next_multiple_of(F::WRITE_SIZE.max(1)) {
         return Err(StoreError::Range);
     }
     Ok(starts)
@@ -217,8 +220,10 @@ async fn read_slot<F: NorFlash>(
     if record.get(..4) != Some(&MAGIC[..]) {
         return Ok(None);
     }
-    // A version or count this code cannot size: read at this version's length, so that an
-    // intact record is refused by name (`decode`) rather than skipped.
+    // A version or count this code cannot size (a newer firmware's layout): its CRC is
+    // checked at this version's length, so a record of that length is refused by name
+    // (`decode`); one of another length cannot be told from a torn one and is passed over,
+    // as a save cut by a power cut is (the other slot's settings, or the image's, boot).
     let len = blob_len(u16_at(record, 8), u16_at(record, 10)).unwrap_or(BLOB_BYTES);
     let crc_at = 8 + len;
     let Some(whole) = record.get_mut(..crc_at + 4) else {

@@ -23,7 +23,7 @@ use core::fmt::{self, Write as _};
 
 use heapless::String;
 
-use crate::controller::{Boot, Controller, Held, Settings};
+use crate::controller::{Boot, Controller, Held, SettingSet, Settings};
 use crate::drive::Amplifier;
 use crate::fault_log::Entry;
 use crate::image::{Image, ImageError, PowerUp};
@@ -102,6 +102,40 @@ impl Keeper for NoKeeper {
     }
 }
 
+/// Why saved settings were not booted (the image's then are).
+enum SavedRefused {
+    Fault(crate::controller::Fault),
+    FrontEnd(crate::acquire::FrontEndError),
+}
+
+impl fmt::Display for SavedRefused {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            SavedRefused::Fault(fault) => write!(f, "{fault}"),
+            SavedRefused::FrontEnd(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+/// A clause of the boot's warning line, after a `; `.
+fn clause(line: &mut ReplyLine, what: fmt::Arguments) {
+    if !line.is_empty() {
+        let _ = write!(line, "; ");
+    }
+    let _ = line.write_fmt(what);
+}
+
+/// A clause naming `settings` after `what` (none: not said).
+fn clause_naming(line: &mut ReplyLine, what: &str, settings: SettingSet) {
+    if settings.is_empty() {
+        return;
+    }
+    clause(line, format_args!("{what}"));
+    for setting in settings.iter() {
+        let _ = write!(line, " {}", setting.key());
+    }
+}
+
 /// Why the board drives nothing, one line (room for the longest refusal with its figures:
 /// a ring too weak to time, about 330 bytes).
 pub type Reason = String<384>;
@@ -168,58 +202,55 @@ impl<'a, K: Keeper> Board<'a, K> {
         board.idle_settings = image.0.settings;
         let mut source = "image";
         let mut warning = ReplyLine::new();
-        if !image.0.defaulted.is_empty() {
-            let _ = write!(
-                warning,
-                "image from an earlier host-sim; new since, at their defaults:"
-            );
-            for setting in image.0.defaulted.iter() {
-                let _ = write!(warning, " {}", setting.key());
-            }
-        }
         let saved = match board.keeper.as_mut().map(Keeper::load) {
             Some(Ok(saved)) => saved,
             Some(Err(e)) => {
-                if !warning.is_empty() {
-                    let _ = write!(warning, "; ");
-                }
-                let _ = write!(warning, "{e}: the image's settings used");
+                clause(&mut warning, format_args!("{e}: the image's settings used"));
                 None
             }
             None => None,
         };
         let mut booted = None;
+        // The settings the image lacks (made before they were added), at their defaults
+        // unless saved settings give them.
+        let mut defaulted = image.0.defaulted;
         if let Some(saved) = saved {
             // Settings added since they were saved (by an older firmware) take the image's.
-            let (saved, new) = saved.onto(image.0.settings);
-            match board.start(slot, image, saved) {
+            let (settings, new) = saved.onto(image.0.settings);
+            // Checked as at any boot, and the image's front end at their tick rate (the image
+            // checked it at its own).
+            let started = board
+                .start(slot, image, settings)
+                .map_err(SavedRefused::Fault)
+                .and_then(|bias| match image.0.front_end.check(settings.tick_hz) {
+                    Ok(_) => Ok(bias),
+                    Err(e) => {
+                        *slot = None;
+                        Err(SavedRefused::FrontEnd(e))
+                    }
+                });
+            match started {
                 Ok(bias) => {
                     source = "saved";
                     booted = Some(bias);
-                    if !new.is_empty() {
-                        if !warning.is_empty() {
-                            let _ = write!(warning, "; ");
-                        }
-                        let _ = write!(
-                            warning,
-                            "saved settings from an earlier firmware; new since, at the image's values:"
-                        );
-                        for setting in new.iter() {
-                            let _ = write!(warning, " {}", setting.key());
-                        }
-                    }
-                }
-                Err(fault) => {
-                    if !warning.is_empty() {
-                        let _ = write!(warning, "; ");
-                    }
-                    let _ = write!(
-                        warning,
-                        "saved settings refused ({fault}): the image's used"
+                    defaulted = defaulted.and(new);
+                    clause_naming(
+                        &mut warning,
+                        "saved settings from an earlier firmware; new since, at the image's values:",
+                        new,
                     );
                 }
+                Err(why) => clause(
+                    &mut warning,
+                    format_args!("saved settings refused ({why}): the image's used"),
+                ),
             }
         }
+        clause_naming(
+            &mut warning,
+            "image from an earlier host-sim; new since, at their defaults:",
+            defaulted,
+        );
         if !warning.is_empty() {
             started.warning = Some(warning);
         }
@@ -227,8 +258,9 @@ impl<'a, K: Keeper> Board<'a, K> {
             Some(bias) => Ok(bias),
             None => board.start(slot, image, image.0.settings),
         };
-        // The image's front end at the tick rate booted with (the image checked it at its
-        // own; saved settings may hold another): one the board cannot run refuses, for good.
+        // The image's front end at the tick rate booted with (saved settings at a rate it
+        // cannot run fell back above; the image checked its own): one the board cannot run
+        // refuses, for good.
         if booted.is_ok() {
             if let Err(e) = image.0.front_end.check(board.tick_hz(slot)) {
                 board.refuse(slot, &e, &mut started.notice);

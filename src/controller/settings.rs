@@ -382,7 +382,13 @@ impl Setting {
 pub struct SettingSet(u32);
 
 // Room for every id in a set's word.
-const _: () = assert!(Setting::ALL.len() <= 32);
+const _: () = {
+    let mut rest: &[Setting] = &Setting::ALL;
+    while let [first, more @ ..] = rest {
+        assert!((*first as u8) < 32, "a setting's id past its set's word");
+        rest = more;
+    }
+};
 
 impl SettingSet {
     /// None.
@@ -399,6 +405,11 @@ impl SettingSet {
 
     pub fn is_empty(self) -> bool {
         self.0 == 0
+    }
+
+    /// The settings in both.
+    pub fn and(self, other: Self) -> Self {
+        SettingSet(self.0 & other.0)
     }
 
     /// Every setting not in this set.
