@@ -5,9 +5,9 @@
 //! it parses is finite.
 #![no_main]
 
+use de_resonator::image::Image;
 use de_resonator::wire::protocol::{self, Command};
 use de_resonator::wire::stream::{Receiver, Record};
-use de_resonator::image::Image;
 use de_resonator::Controller;
 use libfuzzer_sys::fuzz_target;
 

@@ -2,8 +2,11 @@
 //! host-sim's virtual board (`host-sim serve`) runs it. It boots from an image and the saved
 //! settings (the fallback, the watchdog's refusal: [`Board::boot`]), answers the command port
 //! ([`port`], in the line [`crate::wire::protocol`] the host shares), turns a tick's output into what the
-//! output stage ([`stage`]) does ([`tick`]: the one enable policy), runs the tick's background job ([`tick::run_job`]) and feeds the watchdog
-//! only while the low-priority tasks check in ([`watchdog`]). What only hardware
+//! output stage ([`stage`]) does ([`tick`]: the one enable policy), runs the tick's background
+//! job ([`tick::run_job`]), does the work around a tick and a request that every caller shares
+//! ([`runner`]: the tick's count, a fault's entry, the stream's record, what a reply sets off,
+//! the start-up lines) and feeds the watchdog only while the low-priority tasks check in
+//! ([`watchdog`]). What only hardware
 //! has comes in behind [`Keeper`] (where `save` keeps the settings) and as arguments (the
 //! reset's cause, the clock).
 //!
@@ -15,6 +18,7 @@ pub mod faults;
 #[cfg(feature = "storage")]
 mod flash_keeper;
 pub mod port;
+pub mod runner;
 pub mod stage;
 pub mod tick;
 pub mod watchdog;

@@ -320,6 +320,20 @@ impl Telemetry {
         self.sequence = self.sequence.wrapping_add(1);
         Some(sequence)
     }
+
+    /// The record of board tick `tick`, if one is due ([`Telemetry::due`]): the state the
+    /// tick left (`enabled`: the amplifier on; the controller, if one runs; its readings).
+    /// The firmware's idle loop, `serve` and the core in the loop all take it here.
+    pub fn record(
+        &mut self,
+        tick: u32,
+        enabled: bool,
+        controller: Option<&Controller>,
+        readings: &Inputs,
+    ) -> Option<Record> {
+        let sequence = self.due(tick)?;
+        Some(Record::of((sequence, tick), enabled, controller, readings))
+    }
 }
 
 /// A receiver's bytes into records: frames split at zeros, decoded and checked; the

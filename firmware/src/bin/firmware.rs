@@ -38,16 +38,16 @@ mod app {
 
     use de_resonator::acquire::{Block, FrontEnd, Reader, BUFFER_CODES};
     use de_resonator::board::port::Extras;
+    use de_resonator::board::runner::{self, Follow, Logged, Ticker};
     use de_resonator::board::watchdog::CheckIn;
     use de_resonator::board::FlashKeeper;
-    use de_resonator::board::{self as logic, Line, Lines, ReplyLine, Then};
+    use de_resonator::board::{self as logic, Line, Lines, ReplyLine};
     #[cfg(feature = "link")]
     use de_resonator::wire::link::{Booted, Kind, Observed};
-    use de_resonator::wire::protocol::NOTICE;
-    use de_resonator::wire::stream::{Record, Telemetry, FRAME_BYTES};
+    use de_resonator::wire::stream::{Telemetry, FRAME_BYTES};
     #[cfg(not(feature = "link"))]
     use de_resonator::Decimal;
-    use de_resonator::{Controller, Dac8551, Event, Fault, Inputs, OutputStage};
+    use de_resonator::{Controller, Dac8551, Event, Inputs, OutputStage};
     use de_resonator_firmware::analog::Acquisition;
     #[cfg(not(feature = "qemu"))]
     use de_resonator_firmware::analog::Parts;
@@ -115,15 +115,6 @@ mod app {
         /// Echo bytes are waiting (`echo_in`): send them.
         Echo,
         Log,
-    }
-
-    /// A fault as the tick saw it latch: when, at the voltage sent before it, on what readings.
-    #[derive(Clone, Copy)]
-    pub struct Logged {
-        fault: Fault,
-        tick: u32,
-        volts: f32,
-        readings: Inputs,
     }
 
     /// What the tick leaves for the tasks below it.
@@ -205,22 +196,18 @@ mod app {
             defmt::warn!("clock: {}; running on the 16 MHz HSI", e);
         }
         let cause = runtime::take_reset_cause();
-        if let Some(cause) = cause {
-            let _ = writeln!(tx, "{NOTICE}reset: {}", cause.name());
-        }
         let controller = cx.local.slot.write(None);
-        let (mut logic, started) = logic::Board::boot(
+        let (mut logic, mut started) = logic::Board::boot(
             controller,
             config::image(),
             storage::open(board.flash),
             cause,
         );
-        let mut notice = started.notice;
-        if let Some(warning) = started.warning {
-            #[cfg(feature = "defmt")]
+        #[cfg(feature = "defmt")]
+        if let Some(warning) = &started.warning {
             defmt::warn!("{=str}", warning.as_str());
-            let _ = writeln!(tx, "{NOTICE}warning: {warning}");
         }
+        let notice = &mut started.notice;
         let tick_hz = logic.tick_hz(controller);
         // The image's front end at the tick rate booted with: `Board::boot` has refused one
         // the board cannot run (its image then gone: none here), so this gives the scans a
@@ -230,7 +217,7 @@ mod app {
         let scans_per_tick = match front_end.check(tick_hz) {
             Ok(scans) => scans,
             Err(e) => {
-                logic.refuse(controller, &e, &mut notice);
+                logic.refuse(controller, &e, notice);
                 0
             }
         };
@@ -239,7 +226,7 @@ mod app {
         if let Err(e) =
             front_end.check_adc_clock(de_resonator_firmware::analog::adc_clock_hz(&board.rcc))
         {
-            logic.refuse(controller, &e, &mut notice);
+            logic.refuse(controller, &e, notice);
         }
         #[cfg(not(feature = "qemu"))]
         let acquisition = {
@@ -253,11 +240,7 @@ mod app {
             };
             let started = Acquisition::start(parts, &mut board.rcc, &front_end, scans_per_tick);
             if started.is_none() && scans_per_tick > 0 {
-                logic.refuse(
-                    controller,
-                    &"the ADC's acquisition did not start",
-                    &mut notice,
-                );
+                logic.refuse(controller, &"the ADC's acquisition did not start", notice);
             }
             started
         };
@@ -287,7 +270,7 @@ mod app {
             logic.refuse(
                 controller,
                 &format_args!("tick_hz = {why} is beyond SysTick's reach"),
-                &mut notice,
+                notice,
             );
         }
         #[cfg(feature = "defmt")]
@@ -296,7 +279,7 @@ mod app {
         } else {
             defmt::error!("{=str}", notice.as_str());
         }
-        let _ = writeln!(tx, "{NOTICE}{notice}");
+        let _ = started.write_banner(cause, &mut tx, "\n");
         #[cfg(feature = "link")]
         let (link_in, link_out) = {
             let link_in = LinkIn::open(board.link, front_end);
@@ -390,7 +373,7 @@ mod app {
             // after each tick's job: `link_reply`).
             #[cfg(not(feature = "link"))]
             stream(
-                (&mut cx.shared.latest, &mut cx.shared.telemetry),
+                (&mut cx.shared.telemetry, &mut cx.shared.latest),
                 (&mut cx.shared.controller, &mut cx.shared.output_off),
                 &mut cx.shared.stream_port,
                 cx.local.frame,
@@ -407,9 +390,9 @@ mod app {
     /// locks of what the tick left (its state after its last run, whole; none before the first
     /// tick), then framed outside them and sent on the stream's port, if the board has one.
     fn stream(
-        (latest, telemetry): (
-            &mut impl rtic::Mutex<T = Latest>,
+        (telemetry, latest): (
             &mut impl rtic::Mutex<T = Telemetry>,
+            &mut impl rtic::Mutex<T = Latest>,
         ),
         (controller, output_off): (
             &mut impl rtic::Mutex<T = &'static mut Option<Controller>>,
@@ -418,17 +401,11 @@ mod app {
         port: &mut impl rtic::Mutex<T = Option<StreamPort>>,
         frame: &mut [u8; FRAME_BYTES],
     ) {
-        let Some(last) = latest.lock(|l| l.ticks.checked_sub(1)) else {
-            return;
-        };
-        let Some(sequence) = telemetry.lock(|t| t.due(last)) else {
-            return;
-        };
-        // Under one lock with the tick's state; a tick that ran between the two locks makes
-        // this record's sequence number a gap, not a record of another tick.
-        let record = (latest, controller, output_off).lock(|latest, c, off| {
-            (latest.ticks.wrapping_sub(1) == last)
-                .then(|| Record::of((sequence, last), !*off, c.as_ref(), &latest.readings))
+        // Under one lock with the tick's state (the tick's own is the highest: a short wait
+        // for it when a record is due, none of its work).
+        let record = (telemetry, latest, controller, output_off).lock(|t, latest, c, off| {
+            let last = latest.ticks.checked_sub(1)?;
+            t.record(last, !*off, c.as_ref(), &latest.readings)
         });
         let Some(record) = record else {
             return;
@@ -442,7 +419,7 @@ mod app {
     }
 
     /// One controller tick: its code to the DAC, the enable line held, the events logged.
-    #[task(binds = SysTick, priority = 3, shared = [controller, tick_cycles_max, last_tick_us, output_off, checked_in, block, latest, logged], local = [stage, sensor, reader, dog, check_in, hang_after_ticks, to_log, driven_ticks: u32 = 0, next_tick: u32 = 0, sent_volts: f32 = 0.0, #[cfg(feature = "link")] to_reply])]
+    #[task(binds = SysTick, priority = 3, shared = [controller, tick_cycles_max, last_tick_us, output_off, checked_in, block, latest, logged], local = [stage, sensor, reader, dog, check_in, hang_after_ticks, to_log, driven_ticks: u32 = 0, ticker: Ticker = Ticker::new(), #[cfg(feature = "link")] to_reply])]
     fn tick(mut cx: tick::Context) {
         #[cfg(feature = "qemu")]
         cx.shared
@@ -452,25 +429,25 @@ mod app {
         let sensor = cx.local.sensor;
         let mut block = cx.shared.block.lock(Block::take);
         sensor.fill(&mut block);
-        let inputs = cx.local.reader.inputs(&block);
-        // A block refused reads as none (status then shows no stale reading beside the fault).
-        let readings = inputs.unwrap_or(Inputs::NONE);
-        let tick = *cx.local.next_tick;
-        *cx.local.next_tick = tick.wrapping_add(1);
+        // The core's board tick (`count` counts this call): the block through the front end,
+        // the controller's output through the stage, a fault's entry.
+        let done = cx.local.ticker.tick_block(
+            cx.local.reader,
+            &block,
+            &mut Locked(&mut cx.shared.controller),
+            stage,
+        );
+        let ticked = done.ticked;
+        if let Some(t) = ticked {
+            sensor.commanded(t.output.volts);
+        }
         let stalls_recovered = cx.local.reader.recovered();
         cx.shared.latest.lock(|l| {
             *l = Latest {
-                ticks: tick.wrapping_add(1),
-                readings,
+                ticks: done.tick.wrapping_add(1),
+                readings: done.readings,
                 stalls_recovered,
             }
-        });
-        let ticked = cx.shared.controller.lock(|c| {
-            let ticked = logic::tick::drive(c, stage, inputs);
-            if let Some(t) = ticked {
-                sensor.commanded(t.output.volts);
-            }
-            ticked
         });
         let running = ticked.is_some();
         // QEMU's test switch only: no cost on silicon's tick.
@@ -517,22 +494,12 @@ mod app {
             }
             if let Some(event) = t.output.event {
                 log(event, t.ticks);
-                // Into the fault log, written by the command task, with the voltage sent
-                // before the fault.
-                if let Event::Fault(fault) = event {
-                    let volts = *cx.local.sent_volts;
-                    cx.shared.logged.lock(|l| {
-                        *l = Some(Logged {
-                            fault,
-                            tick,
-                            volts,
-                            readings,
-                        })
-                    });
-                    let _ = cx.local.to_log.try_send(Work::Log);
-                }
             }
-            *cx.local.sent_volts = t.output.volts;
+        }
+        // A fault into the fault log, written by the command task (flash work).
+        if let Some(logged) = done.logged() {
+            cx.shared.logged.lock(|l| *l = Some(logged));
+            let _ = cx.local.to_log.try_send(Work::Log);
         }
         let off = stage.is_safe();
         cx.shared.output_off.lock(|o| *o = off);
@@ -572,7 +539,7 @@ mod app {
             // The stream's record after the tick and its job, as host-sim's loop takes the
             // core's: the same tick whatever host-sim's pace.
             stream(
-                (&mut cx.shared.latest, &mut cx.shared.telemetry),
+                (&mut cx.shared.telemetry, &mut cx.shared.latest),
                 (&mut cx.shared.controller, &mut cx.shared.output_off),
                 &mut cx.shared.stream_port,
                 cx.local.frame,
@@ -715,8 +682,7 @@ mod app {
             if let Some(logged) = cx.shared.logged.lock(Option::take) {
                 let logic = &mut *cx.local.logic;
                 let tick_hz = cx.shared.controller.lock(|c| logic.tick_hz(c));
-                let at = (logged.tick, logged.tick as f32 / tick_hz);
-                let done = logic.log_fault(&logged.fault, at, logged.volts, &logged.readings);
+                let done = logic.log(&logged, tick_hz);
                 #[cfg(feature = "defmt")]
                 if let Some(Err(e)) = done {
                     defmt::error!("the fault log: {}", e);
@@ -757,10 +723,7 @@ mod app {
                 .logic
                 .serve(&line, &mut controller, &extras, &mut reply);
             let _ = write!(cx.local.tx, "{reply}{end}");
-            if let Then::Stream(every) = then {
-                cx.shared.telemetry.lock(|t| t.set(every));
-            }
-            if then == Then::Reset {
+            if cx.shared.telemetry.lock(|t| runner::follow(then, t)) == Follow::Reset {
                 // The board took the controller out of its slot: the tick turns the output
                 // off; then the restart.
                 cx.shared.output_off.lock(|o| *o = false);

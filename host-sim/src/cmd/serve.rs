@@ -14,14 +14,15 @@ use std::time::{Duration, Instant};
 
 use clap::Args;
 use de_resonator::board::port::Extras;
+use de_resonator::board::runner::{self, Follow, Ticker};
 use de_resonator::board::FlashKeeper;
-use de_resonator::board::{self, Board, Keeper, Line, Lines, ReplyLine, ResetCause, Then};
+use de_resonator::board::{self, Board, Keeper, Line, Lines, ReplyLine, ResetCause};
 use de_resonator::controller::Held;
 use de_resonator::fault_log::Entry;
 use de_resonator::store::{self, RamFlash, StoreError, RAM_PAGE_BYTES};
 use de_resonator::wire::protocol::NOTICE;
-use de_resonator::wire::stream::{self, Record, Telemetry};
-use de_resonator::{Controller, Dac8551, Event, Image, Inputs, OutputStage, Settings};
+use de_resonator::wire::stream::{self, Telemetry};
+use de_resonator::{Controller, Dac8551, Image, Inputs, OutputStage, Settings};
 use serde::Serialize;
 
 use super::{sig, Report};
@@ -462,7 +463,7 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
     };
     let mut stream_clients: Vec<Client> = Vec::new();
     let mut telemetry = Telemetry::default();
-    let mut boot_tick: u64 = 0;
+    let mut ticker = Ticker::new();
     let mut frame = [0u8; stream::FRAME_BYTES];
     eprintln!(
         "serving scene {} on {at} at {}; the command port's protocol (`help`)",
@@ -479,14 +480,9 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
     let mut slot: Option<Controller> = None;
     let boot = |slot: &mut Option<Controller>, keeper, cause| {
         let (board, started) = Board::boot(slot, Image::parse(&bytes), keeper, cause);
-        let mut said = Vec::new();
-        if let Some(cause) = cause {
-            said.push(format!("{NOTICE}reset: {}", cause.name()));
-        }
-        if let Some(w) = started.warning {
-            said.push(format!("{NOTICE}warning: {w}"));
-        }
-        said.push(format!("{NOTICE}{}", started.notice));
+        let mut banner = String::new();
+        let _ = started.write_banner(cause, &mut banner, "\n");
+        let said: Vec<String> = banner.lines().map(str::to_string).collect();
         (board, said)
     };
     let (mut logic, mut banner) = boot(&mut slot, Some(&mut flash), None);
@@ -510,8 +506,6 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
     let started = Instant::now();
     let mut next_poll = started;
     let mut k: u64 = 0;
-    // The voltage the last tick sent (a fault's entry says the one before its tick).
-    let mut sent_volts = 0.0f32;
     while ticks_limit.is_none_or(|n| k < n) {
         let now = Instant::now();
         let due = match args.speed {
@@ -578,17 +572,13 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
                 asked_since_boot = true;
                 let then = logic.serve(&line, &mut &mut slot, &extras, &mut reply);
                 clients[i].say(&reply);
-                if let Then::Stream(every) = then {
-                    telemetry.set(every);
-                }
-                if then == Then::Reset {
-                    // A restart stops the stream and starts its count again, as on a board.
-                    telemetry = Telemetry::default();
-                    // The board's ticks count from its boot, as the firmware's do.
-                    boot_tick = k;
+                // A restart stops the stream (its count starts again, as on a board).
+                if runner::follow(then, &mut telemetry) == Follow::Reset {
                     // The slot is empty: the output off at once (as the firmware's next tick
-                    // does), then the boot, the settings' flash kept.
+                    // does), then the boot, the settings' flash kept; the board's ticks count
+                    // from its boot, as the firmware's do.
                     let _ = board::tick::drive(&mut slot, &mut stage, Ok(Inputs::NONE));
+                    ticker = Ticker::new();
                     let keeper = logic.into_keeper();
                     (logic, banner) = boot(&mut slot, keeper, Some(ResetCause::Asked));
                     asked_since_boot = false;
@@ -609,36 +599,27 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
             }
         }
         let t = k as f64 * tick_seconds;
-        let stepped = lp.step(k, &mut bench, &mut slot, &mut stage, &wires)?;
-        // The board's tick since its boot (the stream's and the fault log's).
-        let tick = (k - boot_tick) as u32;
-        if let Some(sequence) = telemetry.due(tick) {
-            let record = Record::of(
-                (sequence, tick),
-                !stage.is_safe(),
-                slot.as_ref(),
-                &stepped.inputs,
-            );
+        let done = lp
+            .step(k, &mut bench, &mut ticker, &mut slot, &mut stage, &wires)?
+            .done;
+        if let Some(record) =
+            telemetry.record(done.tick, !stage.is_safe(), slot.as_ref(), &done.readings)
+        {
             let n = record.frame(&mut frame);
             for client in &mut stream_clients {
                 client.send(&frame[..n]);
             }
         }
-        if let Some(ticked) = stepped.ticked {
-            if let Some(event) = ticked.output.event {
-                let line = format!("{} s: {event}", sig(t));
-                eprintln!("{line}");
-                report.events.push(line);
+        if let Some(event) = done.event() {
+            let line = format!("{} s: {event}", sig(t));
+            eprintln!("{line}");
+            report.events.push(line);
+        }
+        // A fault into the log, as the firmware's command task writes it after the tick.
+        if let Some(logged) = done.logged() {
+            if let Some(Err(e)) = logic.log(&logged, lp.settings.tick_hz) {
+                eprintln!("{} s: the fault log: {e}", sig(t));
             }
-            // A fault into the log, as the firmware's command task writes it after the tick,
-            // with the voltage sent before it.
-            if let Some(Event::Fault(fault)) = ticked.output.event {
-                let at = (tick, (tick as f64 * tick_seconds) as f32);
-                if let Some(Err(e)) = logic.log_fault(&fault, at, sent_volts, &stepped.inputs) {
-                    eprintln!("{} s: the fault log: {e}", sig(t));
-                }
-            }
-            sent_volts = ticked.output.volts;
         }
         if report.plant_crossing.is_none() {
             if let Some((mode, at)) = bench.crossing {

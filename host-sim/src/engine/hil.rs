@@ -9,7 +9,8 @@ use std::time::Instant;
 
 use de_resonator::acquire::{Block, Channel, FrontEnd, InputError, Reader, Stall};
 use de_resonator::board::port::Extras;
-use de_resonator::board::{Line, Lines, NoKeeper, ReplyLine, Then};
+use de_resonator::board::runner::{self, AfterTick, Follow, Ticker};
+use de_resonator::board::{Line, Lines, NoKeeper, ReplyLine};
 use de_resonator::image::{AmplifierSpec, Image, PowerUp, DAC_BITS};
 use de_resonator::wire::link::{self, Booted, Observed, Words};
 use de_resonator::wire::stream::{self, Receiver, Record, Telemetry};
@@ -186,14 +187,32 @@ pub struct Wires {
 /// What a tick of `Loop::step` did.
 #[derive(Clone, Copy, Debug)]
 pub struct Stepped {
-    /// The board's tick, when a controller runs.
-    pub ticked: Option<board::tick::Ticked>,
+    /// The board's tick: its number since boot, what it read and did, a fault's entry.
+    pub done: AfterTick,
     /// The plant's stretch at the tick's start.
     pub start_stretch: f64,
     /// The membrane's voltage at the tick's end, V.
     pub volts: f64,
-    /// What the board's acquisition read at the tick, in units (none when it failed).
-    pub inputs: Inputs,
+}
+
+/// The core's board tick in host-sim's loops (`Loop::step` for `serve`, [`CoreBoard`] for
+/// `run`): the firmware's tick ([`Ticker::tick`]), then its background job at once, as the
+/// firmware's low-priority task runs it before the next tick (the next tick applies it).
+pub fn core_tick(
+    ticker: &mut Ticker,
+    slot: &mut Option<Controller>,
+    stage: &mut OutputStage<&SimulatedDac, &EnableLine>,
+    inputs: Result<Inputs, InputError>,
+) -> AfterTick {
+    let done = *ticker.tick(inputs, &mut &mut *slot, stage);
+    if done.ticked.is_some_and(|t| t.job_wanted) {
+        board::tick::run_job(|f| {
+            if let Some(c) = slot.as_mut() {
+                f(c);
+            }
+        });
+    }
+    done
 }
 
 /// The plant's side of a loop between ticks: its state, the solver's next step, the
@@ -692,6 +711,7 @@ impl Loop {
         &self,
         k: u64,
         bench: &mut Bench,
+        ticker: &mut Ticker,
         slot: &mut Option<Controller>,
         stage: &mut OutputStage<&SimulatedDac, &EnableLine>,
         wires: &Wires,
@@ -704,22 +724,13 @@ impl Loop {
             }
             None => Ok(Inputs::NONE),
         };
-        let read = inputs.as_ref().map_or(Inputs::NONE, |i| *i);
-        let ticked = board::tick::drive(slot, stage, inputs);
-        if ticked.is_some_and(|t| t.job_wanted) {
-            board::tick::run_job(|f| {
-                if let Some(c) = slot.as_mut() {
-                    f(c);
-                }
-            });
-        }
+        let done = core_tick(ticker, slot, stage, inputs);
         let start_stretch = bench.y[0];
         let volts = self.advance(bench, k, self.amplifier_input(wires))?;
         Ok(Stepped {
-            ticked,
+            done,
             start_stretch,
             volts,
-            inputs: read,
         })
     }
 
@@ -1040,6 +1051,7 @@ pub struct CoreBoard<'w> {
     /// `status`, as the firmware counts them.
     stalls_recovered: u32,
     stage: OutputStage<&'w SimulatedDac, &'w EnableLine>,
+    ticker: Ticker,
     booted: Booted,
     refusal: Option<String>,
     fault: Option<Fault>,
@@ -1066,6 +1078,7 @@ impl<'w> CoreBoard<'w> {
             readings: Inputs::NONE,
             stalls_recovered: 0,
             stage,
+            ticker: Ticker::new(),
             booted,
             refusal,
             fault: None,
@@ -1084,32 +1097,23 @@ impl LoopBoard for CoreBoard<'_> {
 
     fn tick(
         &mut self,
-        k: u64,
+        _: u64,
         inputs: Result<Inputs, InputError>,
         samples: Samples,
         _: &[u16],
     ) -> Result<(Observed, String), String> {
-        self.readings = inputs.unwrap_or(Inputs::NONE);
         if let (Samples::Codes { stall: Some(_) }, Ok(_)) = (samples, &inputs) {
             self.stalls_recovered += 1;
         }
-        let ticked = board::tick::drive(&mut self.slot, &mut self.stage, inputs);
-        if ticked.is_some_and(|t| t.job_wanted) {
-            let slot = &mut self.slot;
-            board::tick::run_job(|f| {
-                if let Some(c) = slot.as_mut() {
-                    f(c);
-                }
-            });
-        }
+        let done = core_tick(&mut self.ticker, &mut self.slot, &mut self.stage, inputs);
+        self.readings = done.readings;
         // The stream's record after the tick and its job, as the firmware's idle loop takes it.
-        if let Some(sequence) = self.telemetry.due(k as u32) {
-            let record = Record::of(
-                (sequence, k as u32),
-                !self.stage.is_safe(),
-                self.slot.as_ref(),
-                &self.readings,
-            );
+        if let Some(record) = self.telemetry.record(
+            done.tick,
+            !self.stage.is_safe(),
+            self.slot.as_ref(),
+            &self.readings,
+        ) {
             let mut frame = [0u8; stream::FRAME_BYTES];
             let n = record.frame(&mut frame);
             for &byte in &frame[..n] {
@@ -1118,7 +1122,7 @@ impl LoopBoard for CoreBoard<'_> {
                 }
             }
         }
-        let event = ticked.and_then(|t| t.output.event);
+        let event = done.event();
         self.fault = match event {
             Some(Event::Fault(fault)) => Some(fault),
             _ => None,
@@ -1151,10 +1155,7 @@ impl LoopBoard for CoreBoard<'_> {
         let then = self
             .logic
             .serve(&parsed, &mut &mut self.slot, &extras, &mut reply);
-        if let Then::Stream(every) = then {
-            self.telemetry.set(every);
-        }
-        if then == Then::Reset {
+        if runner::follow(then, &mut self.telemetry) == Follow::Reset {
             return Err(format!(
                 "`{line}`: a scene cannot script a reset (the run would start again)"
             ));
