@@ -53,8 +53,9 @@ step "the tick's budget: whole trim cycles (stretch; current only with λ from C
 QEMU_ICOUNT=1 cargo run --locked --release -q --bin count >../target/count-trim.log 2>&1 ||
     { cat ../target/count-trim.log; echo "count (trim, track) failed" >&2; exit 1; }
 grep -E "trim|track|telemetry" ../target/count-trim.log
-# The board's whole tick (the ADC block through the image's front end, the controller, the
-# DAC frame) within the 1,500 instruction budget, every capability on: the trim on the
+# The board's whole tick, the call the firmware's tick task makes (`Ticker::tick_block`: the
+# ADC block through the image's front end, the controller, the DAC frame, a fault's entry)
+# within the 1,500 instruction budget, every capability on: the trim on the
 # stretch, the trim on the current only, the trim then the tracked drive, and the tracked
 # drive's 3,000 ticks (BENCHMARKS.md).
 board() { sed -n "s/^.*board tick with $1[^:]*: \([0-9]*\) instructions.*/\1/p" ../target/count-trim.log; }

@@ -20,7 +20,7 @@ fn a_faults_entry_says_the_voltage_sent_before_it_at_the_tick_since_boot() {
     let mut ticker = Ticker::new();
     let mut sent = Vec::new();
     for k in 0..50 {
-        let done = ticker.tick(Ok(Inputs::NONE), &mut &mut slot, &mut stage);
+        let done = ticker.tick(Ok(Inputs::NONE), &mut slot, &mut stage);
         assert_eq!(done.tick, k, "the ticks counted from boot");
         assert!(done.logged().is_none() && !matches!(done.event(), Some(Event::Fault(_))));
         sent.push(done.ticked.expect("a controller runs").output.volts);
@@ -31,7 +31,7 @@ fn a_faults_entry_says_the_voltage_sent_before_it_at_the_tick_since_boot() {
         "ramping up: {before} V"
     );
     // A stretch sensor that reads NaN trips at once.
-    let done = ticker.tick(Ok(Inputs::stretch(f32::NAN)), &mut &mut slot, &mut stage);
+    let done = ticker.tick(Ok(Inputs::stretch(f32::NAN)), &mut slot, &mut stage);
     let logged = done.logged().expect("the fault's entry");
     // (Compared as written: the fault carries the NaN it read.)
     assert!(
@@ -51,7 +51,7 @@ fn a_faults_entry_says_the_voltage_sent_before_it_at_the_tick_since_boot() {
             Err(de_resonator::acquire::InputError::NoSamples {
                 channel: de_resonator::acquire::Channel::Stretch,
             }),
-            &mut &mut slot,
+            &mut slot,
             &mut stage,
         );
         assert!(done.logged().is_none());
@@ -67,7 +67,7 @@ fn with_no_controller_a_tick_enters_nothing() {
     let (bus, pin) = (common::Bus::default(), common::Pin::default());
     let mut stage = OutputStage::new(Dac8551::new(&bus), &pin);
     let mut ticker = Ticker::new();
-    let done = ticker.tick(Ok(Inputs::stretch(f32::NAN)), &mut &mut slot, &mut stage);
+    let done = ticker.tick(Ok(Inputs::stretch(f32::NAN)), &mut slot, &mut stage);
     assert!(done.ticked.is_none() && done.logged().is_none());
     assert!(stage.is_safe() && !pin.high.get());
     assert_eq!(ticker.ticks(), 1);

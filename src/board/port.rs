@@ -524,7 +524,7 @@ impl<K: Keeper> Board<'_, K> {
                 // 0 V while the amplifier still slews down (its monitor's fault, found on
                 // `host-sim serve`'s plant). The controller leaves its slot under the same
                 // lock as the check: nothing moves between them.
-                if !replace_at_rest(controller, None) {
+                if !replace_at_rest(controller, &mut None) {
                     err(
                         out,
                         ErrorCode::State,
@@ -623,7 +623,7 @@ impl<K: Keeper> Board<'_, K> {
                 if let Some(c) = fresh.as_mut() {
                     c.stop();
                 }
-                if !replace_at_rest(controller, fresh) {
+                if !replace_at_rest(controller, &mut fresh) {
                     err(
                         out,
                         ErrorCode::Busy,
@@ -650,12 +650,13 @@ fn at_zero(controller: &mut impl Shared) -> bool {
 }
 
 /// Put `next` in the slot if the output is at rest, the check and the swap under one lock
-/// (nothing moves between them); whether it did.
-fn replace_at_rest(controller: &mut impl Shared, next: Option<Controller>) -> bool {
+/// (nothing moves between them); whether it did. Swapped in place (the old one left in
+/// `next`): a controller (3 KB) moved by value is a copy on the stack.
+fn replace_at_rest(controller: &mut impl Shared, next: &mut Option<Controller>) -> bool {
     controller.with(|c| {
         let rest = c.as_ref().is_none_or(Controller::at_rest);
         if rest {
-            *c = next;
+            core::mem::swap(c, next);
         }
         rest
     })

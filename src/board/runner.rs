@@ -1,20 +1,20 @@
 //! The work around a tick and a request, without I/O: the board tick's count since boot, a
 //! fault's entry with the voltage sent before it ([`Ticker`]), what a reply sets off
 //! ([`follow`]) and the start-up lines ([`Started::write_banner`]). The firmware's tasks,
-//! host-sim's virtual board (`serve`) and the core in host-sim's loop all call these and only
-//! move bytes, so the three cannot drift (`count` still counts the tick in its parts).
+//! host-sim's virtual board (`serve`), the core in host-sim's loop and `count` all call these
+//! and only move bytes, so the four cannot drift.
 
 use core::fmt;
 
 use embedded_hal::digital::OutputPin;
 use embedded_hal::spi::SpiDevice;
 
-use super::port::{Shared, Then};
+use super::port::Then;
 use super::stage::OutputStage;
 use super::tick::{self, Ticked};
 use super::{Board, Keeper, ResetCause, Started};
 use crate::acquire::{Block, InputError, Inputs, Reader};
-use crate::controller::{Event, Fault};
+use crate::controller::{Controller, Event, Fault};
 use crate::wire::protocol::NOTICE;
 use crate::wire::stream::Telemetry;
 
@@ -96,26 +96,25 @@ impl Ticker {
     }
 
     /// The board's tick on a block of the ADC's samples: the block through the front end
-    /// (`acquire`), then [`Ticker::tick`]: the firmware's tick.
+    /// (`acquire`), then [`Ticker::tick`]: the firmware's tick, as `count` counts it.
     pub fn tick_block<SPI: SpiDevice, EN: OutputPin>(
         &mut self,
         reader: &mut Reader,
         block: &Block,
-        controller: &mut impl Shared,
+        slot: &mut Option<Controller>,
         stage: &mut OutputStage<SPI, EN>,
     ) -> &AfterTick {
         let inputs = reader.inputs(block);
-        self.tick(inputs, controller, stage)
+        self.tick(inputs, slot, stage)
     }
 
-    /// The board's tick on `inputs`: the controller's output through the stage under its
-    /// lock ([`tick::drive`], the one enable policy), the count, and the voltage sent before
-    /// it (a fault's entry: [`AfterTick::logged`]).
-    #[inline]
+    /// The board's tick on `inputs`: the controller in `slot` (the caller holds its lock)
+    /// through the stage ([`tick::drive`], the one enable policy), the count, and the voltage
+    /// sent before it (a fault's entry: [`AfterTick::logged`]).
     pub fn tick<SPI: SpiDevice, EN: OutputPin>(
         &mut self,
         inputs: Result<Inputs, InputError>,
-        controller: &mut impl Shared,
+        slot: &mut Option<Controller>,
         stage: &mut OutputStage<SPI, EN>,
     ) -> &AfterTick {
         let last = &mut self.last;
@@ -126,7 +125,7 @@ impl Ticker {
             Err(_) => Inputs::NONE,
         };
         last.volts_before = self.sent_volts;
-        last.ticked = controller.with(|c| tick::drive(c, stage, inputs));
+        last.ticked = tick::drive(slot, stage, inputs);
         if let Some(t) = &last.ticked {
             self.sent_volts = t.output.volts;
         }

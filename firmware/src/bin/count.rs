@@ -11,8 +11,9 @@ use core::hint::black_box;
 use cortex_m::peripheral::syst::SystClkSource;
 use cortex_m::peripheral::SYST;
 use de_resonator::acquire::{Block, Channel, ChannelSpec, FrontEnd, Reader};
+use de_resonator::board::runner::Ticker;
 use de_resonator::board::tick;
-use de_resonator::wire::stream::{Record, Telemetry, FRAME_BYTES};
+use de_resonator::wire::stream::{Telemetry, FRAME_BYTES};
 use de_resonator::{
     Controller, Dac8551, Device, Drive, Inputs, Integrator, Method, OutputStage, State, Table,
     Tuner, REFERENCE_DEVICE,
@@ -367,9 +368,9 @@ fn other_blocks(reader: &Reader, fe: &FrontEnd, readings: [f32; 3], k: u32) -> u
 /// A whole trim cycle (ramp to the probe bias, hold, pulse, ring, solve, retune, ... to the AC
 /// drive), the reference device itself the plant (f32 RK4 between ticks, not counted) read
 /// through the board's front end (its block of ADC codes made between ticks, as the DMA's
-/// task does): the worst of the controller's tick (the budget's figure), of the board's
-/// (the block through the front end, the controller's tick, the DAC frame), and the solve
-/// (outside the tick) apart. With `track_seconds`, on for `track_ticks` of tracked drive
+/// task does): the worst of the board's tick (the budget's figure: the call the firmware's
+/// tick task makes, `Ticker::tick_block`), the stream's record, and the solve (outside the
+/// tick) apart. With `track_seconds`, on for `track_ticks` of tracked drive
 /// (the plant damped to Q = 30, as a driven resonance needs), counting the tracked ticks'
 /// worst too.
 fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
@@ -394,7 +395,8 @@ fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
     let Ok((c, _)) = Controller::start(told, TABLE, amp, s) else {
         exit(1)
     };
-    let mut c = c;
+    let mut slot = Some(c);
+    let mut ticker = Ticker::new();
     let mut bus = RecordingBus::new(None);
     let mut enable = EnableLine::default();
     let mut stage = OutputStage::new(Dac8551::new(&mut bus), &mut enable);
@@ -422,56 +424,58 @@ fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
         exit(1)
     };
     let (mut worst, mut worst_phase, mut solves, mut solve_most) = (0, Phase::Ramping, 0, 0);
-    let (mut worst_front_end, mut worst_frame, mut worst_board) = (0, 0, 0);
+    let mut worst_front_end = 0;
     let (mut worst_record, mut worst_framing) = (0, 0);
     let mut telemetry = Telemetry::default();
     telemetry.set(Some(1));
     let mut frame = [0u8; FRAME_BYTES];
-    let (mut tracked, mut worst_tracked, mut worst_tracked_board) = (0u32, 0, 0);
+    let (mut tracked, mut worst_tracked) = (0u32, 0);
     let (mut charge, mut amps, mut volts) = (0.0f32, 0.0f32, 0.0f32);
     for k in 0..40_000 {
-        let phase = c.phase();
-        let stretch = plant.state().stretch;
-        let block = block_of(&fe, [amps, volts, stretch], scans, k);
-        // The board's tick in its parts (`board::tick::drive`'s order): the block through the
-        // front end, the controller's tick, the DAC frame.
-        let mut inputs = Ok(Inputs::NONE);
-        let n_front_end = count(1, || inputs = reader.inputs(black_box(&block)));
-        let Ok(inputs) = inputs else {
-            defmt::error!("the counted board's block: {}", inputs);
+        let Some(phase) = slot.as_ref().map(Controller::phase) else {
             exit(1)
         };
-        let n_front_end = n_front_end.max(other_blocks(&reader, &fe, [amps, volts, stretch], k));
-        let mut out = None;
-        let n = count(1, || out = Some(c.tick(black_box(inputs))));
-        let Some(mut sent) = out else { exit(1) };
-        let n_frame = count(1, || stage.send(&mut c, black_box(&mut sent)));
+        let stretch = plant.state().stretch;
+        let block = block_of(&fe, [amps, volts, stretch], scans, k);
+        // The front end on this block (a copy of the reader), and on the same tick's block
+        // short of a buffer or stalled: what those would add to the board's tick.
+        let (mut copy, mut read) = (reader, Ok(Inputs::NONE));
+        let n_whole = count(1, || read = copy.inputs(black_box(&block)));
+        if let Err(e) = read {
+            defmt::error!("the counted board's block: {}", e);
+            exit(1)
+        }
+        let n_other = other_blocks(&reader, &fe, [amps, volts, stretch], k);
+        // The board's tick as the firmware's tick task calls it.
+        let n_tick = count(1, || {
+            black_box(ticker.tick_block(&mut reader, black_box(&block), &mut slot, &mut stage));
+        });
+        let done = *ticker.last();
+        let Some(sent) = done.ticked else { exit(1) };
+        let n = n_tick + n_other.saturating_sub(n_whole);
+        worst_front_end = worst_front_end.max(n_whole.max(n_other));
         // The telemetry stream at the tick rate, as the idle loop takes it after the tick:
         // the record under the locks (a latency for a tick that comes meanwhile, not the
         // tick's work), then its frame outside them.
-        if let Some(sequence) = telemetry.due(k) {
-            let mut record = None;
-            let n_record = count(1, || {
-                record = Some(Record::of((sequence, k), true, Some(&c), &inputs));
-            });
-            let Some(record) = record else { exit(1) };
+        let mut record = None;
+        let n_record = count(1, || {
+            record = telemetry.record(done.tick, true, slot.as_ref(), &done.readings);
+        });
+        if let Some(record) = record {
             let n_framing = count(1, || {
                 black_box(record.frame(&mut frame));
             });
             worst_record = worst_record.max(n_record);
             worst_framing = worst_framing.max(n_framing);
         }
-        worst_front_end = worst_front_end.max(n_front_end);
-        worst_frame = worst_frame.max(n_frame);
-        worst_board = worst_board.max(n_front_end + n + n_frame);
         if n > worst {
             (worst, worst_phase) = (n, phase);
         }
         if phase == Phase::Driving && track_seconds.is_some() {
             tracked += 1;
             worst_tracked = worst_tracked.max(n);
-            worst_tracked_board = worst_tracked_board.max(n_front_end + n + n_frame);
         }
+        let Some(c) = slot.as_mut() else { exit(1) };
         if let Some(job) = c.trim_job() {
             if solves == 0 && sensing == Sensing::Stretch && track_seconds.is_none() {
                 let _ = deepest("the trim's solve (the work task)", || job.solve());
@@ -484,7 +488,7 @@ fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
                 c.trim_done(result);
             }
         }
-        volts = sent.volts;
+        volts = sent.output.volts;
         if plant.set_drive(Drive::constant(&dev, volts)).is_err() || plant.step().is_err() {
             exit(1)
         }
@@ -498,6 +502,7 @@ fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
             break;
         }
     }
+    let Some(c) = slot.as_ref() else { exit(1) };
     if c.phase() != Phase::Driving {
         if let Some(fault) = c.latched_fault() {
             defmt::error!("fault: {}", fault);
@@ -511,17 +516,11 @@ fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
         (Sensing::Current, _) => "sensorless trim (the current only, and λ from C under the probe)",
     };
     defmt::info!(
-        "controller tick with {=str}, worst over a whole trim cycle: {=u32} instructions ({})",
+        "board tick with {=str}, worst over the cycle: {=u32} instructions ({}; the firmware's own call, `Ticker::tick_block`: the block through the front end, the controller, the DAC frame, a fault's entry; each tick's worst over its block whole, short of a buffer or stalled, the front end at most {=u32})",
         what,
         worst,
-        worst_phase
-    );
-    defmt::info!(
-        "board tick with {=str}, worst over the cycle: {=u32} instructions (the block through the front end at most {=u32}, whole, short of a buffer or stalled, the DAC frame at most {=u32})",
-        what,
-        worst_board,
-        worst_front_end,
-        worst_frame
+        worst_phase,
+        worst_front_end
     );
     defmt::info!(
         "the telemetry stream at every tick with {=str}, in the idle loop: the record under the locks at most {=u32} instructions, its frame (CRC-32, COBS) at most {=u32}",
@@ -549,16 +548,11 @@ fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
         let hz = c.tracked().map_or(f32::NAN, |l| l.natural_hz);
         let q = c.tracked().map_or(f32::NAN, |l| l.quality_factor);
         defmt::info!(
-            "controller tick with tracking, worst over {=u32} tracked ticks: {=u32} instructions (f {=f32} Hz, Q {=f32})",
+            "board tick with tracking, worst over {=u32} tracked ticks: {=u32} instructions (f {=f32} Hz, Q {=f32})",
             tracked,
             worst_tracked,
             hz,
             q
-        );
-        defmt::info!(
-            "board tick with tracking, worst over {=u32} tracked ticks: {=u32} instructions",
-            tracked,
-            worst_tracked_board
         );
     }
 }

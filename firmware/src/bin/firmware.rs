@@ -431,17 +431,16 @@ mod app {
         sensor.fill(&mut block);
         // The core's board tick (`count` counts this call): the block through the front end,
         // the controller's output through the stage, a fault's entry.
-        let done = cx.local.ticker.tick_block(
-            cx.local.reader,
-            &block,
-            &mut Locked(&mut cx.shared.controller),
-            stage,
-        );
+        let (ticker, reader) = (cx.local.ticker, cx.local.reader);
+        cx.shared.controller.lock(|c| {
+            ticker.tick_block(reader, &block, c, stage);
+        });
+        let done = ticker.last();
         let ticked = done.ticked;
         if let Some(t) = ticked {
             sensor.commanded(t.output.volts);
         }
-        let stalls_recovered = cx.local.reader.recovered();
+        let stalls_recovered = reader.recovered();
         cx.shared.latest.lock(|l| {
             *l = Latest {
                 ticks: done.tick.wrapping_add(1),

@@ -204,7 +204,7 @@ pub fn core_tick(
     stage: &mut OutputStage<&SimulatedDac, &EnableLine>,
     inputs: Result<Inputs, InputError>,
 ) -> AfterTick {
-    let done = *ticker.tick(inputs, &mut &mut *slot, stage);
+    let done = *ticker.tick(inputs, slot, stage);
     if done.ticked.is_some_and(|t| t.job_wanted) {
         board::tick::run_job(|f| {
             if let Some(c) = slot.as_mut() {
