@@ -261,34 +261,70 @@ pub enum FaultStage {
     Running,
 }
 
-/// Each fault's key, in `Fault`'s order: `Fault::number` − 1 indexes it (the telemetry
-/// record and the fault log carry the number, a reader shows the key).
-pub const FAULT_KEYS: [&str; 24] = [
-    "device",
-    "setting",
-    "swing",
-    "table",
-    "tune",
-    "disagree",
-    "above_safe",
-    "plan_crosses",
-    "plan_failed",
-    "amplifier",
-    "gate",
-    "sensor",
-    "sensor_implausible",
-    "sensor_stuck",
-    "leakage",
-    "leakage_falling",
-    "track_lost",
-    "amplifier_disagrees",
-    "limit",
-    "bus",
-    "input",
-    "trim",
-    "drive_swing",
-    "near_limit",
-];
+/// Each fault's stable number (from 1: 0 is no fault, in a record) and key, declared once:
+/// `Fault::number`, `Fault::key_of` and `FAULT_KEYS` all come from this list. The numbers are
+/// what the telemetry record and the fault log keep: a new fault takes the next one, none is
+/// ever renumbered (the const check below fails on a gap or a swap).
+macro_rules! declare_fault_kinds {
+    ($($variant:pat => $number:literal $key:literal,)*) => {
+        /// Each fault's key, in the order of its number: `Fault::number` − 1 indexes it (the
+        /// telemetry record and the fault log carry the number, a reader shows the key).
+        pub const FAULT_KEYS: [&str; [$($number),*].len()] = [$($key),*];
+
+        // The numbers run 1, 2, 3, … in the list's order.
+        const _: () = {
+            let numbers: &[u8] = &[$($number),*];
+            let mut rest = numbers;
+            let mut next = 1;
+            while let [first, more @ ..] = rest {
+                assert!(*first == next, "fault numbers out of order");
+                next += 1;
+                rest = more;
+            }
+        };
+
+        impl Fault {
+            /// The fault's kind as a number from 1 (0: no fault, in a record).
+            pub fn number(&self) -> u8 {
+                match self {
+                    $($variant => $number,)*
+                }
+            }
+
+            /// The key of fault number `number` (`Fault::number`), if one has it.
+            pub fn key_of(number: u8) -> Option<&'static str> {
+                FAULT_KEYS.get(usize::from(number).checked_sub(1)?).copied()
+            }
+        }
+    };
+}
+
+declare_fault_kinds! {
+    Fault::Device(_) => 1 "device",
+    Fault::Setting { .. } => 2 "setting",
+    Fault::Swing { .. } => 3 "swing",
+    Fault::Table(_) => 4 "table",
+    Fault::Tune(_) => 5 "tune",
+    Fault::Disagree { .. } => 6 "disagree",
+    Fault::AboveSafe { .. } => 7 "above_safe",
+    Fault::PlanCrosses { .. } => 8 "plan_crosses",
+    Fault::PlanFailed(_) => 9 "plan_failed",
+    Fault::Amplifier(_) => 10 "amplifier",
+    Fault::Gate { .. } => 11 "gate",
+    Fault::Sensor { .. } => 12 "sensor",
+    Fault::SensorImplausible { .. } => 13 "sensor_implausible",
+    Fault::SensorStuck { .. } => 14 "sensor_stuck",
+    Fault::Leakage { .. } => 15 "leakage",
+    Fault::LeakageFalling { .. } => 16 "leakage_falling",
+    Fault::TrackLost { .. } => 17 "track_lost",
+    Fault::AmplifierDisagrees { .. } => 18 "amplifier_disagrees",
+    Fault::Limit { .. } => 19 "limit",
+    Fault::Bus => 20 "bus",
+    Fault::Input(_) => 21 "input",
+    Fault::Trim(_) => 22 "trim",
+    Fault::DriveSwing(_) => 23 "drive_swing",
+    Fault::NearLimit { .. } => 24 "near_limit",
+}
 
 impl From<SettingError> for Fault {
     fn from(refused: SettingError) -> Self {
@@ -300,42 +336,6 @@ impl From<SettingError> for Fault {
 }
 
 impl Fault {
-    /// The fault's kind as a number from 1, in the order of `FAULT_KEYS` (0: no fault, in a
-    /// record).
-    pub fn number(&self) -> u8 {
-        match self {
-            Fault::Device(_) => 1,
-            Fault::Setting { .. } => 2,
-            Fault::Swing { .. } => 3,
-            Fault::Table(_) => 4,
-            Fault::Tune(_) => 5,
-            Fault::Disagree { .. } => 6,
-            Fault::AboveSafe { .. } => 7,
-            Fault::PlanCrosses { .. } => 8,
-            Fault::PlanFailed(_) => 9,
-            Fault::Amplifier(_) => 10,
-            Fault::Gate { .. } => 11,
-            Fault::Sensor { .. } => 12,
-            Fault::SensorImplausible { .. } => 13,
-            Fault::SensorStuck { .. } => 14,
-            Fault::Leakage { .. } => 15,
-            Fault::LeakageFalling { .. } => 16,
-            Fault::TrackLost { .. } => 17,
-            Fault::AmplifierDisagrees { .. } => 18,
-            Fault::Limit { .. } => 19,
-            Fault::Bus => 20,
-            Fault::Input(_) => 21,
-            Fault::Trim(_) => 22,
-            Fault::DriveSwing(_) => 23,
-            Fault::NearLimit { .. } => 24,
-        }
-    }
-
-    /// The key of fault number `number` (`Fault::number`), if one has it.
-    pub fn key_of(number: u8) -> Option<&'static str> {
-        FAULT_KEYS.get(usize::from(number).checked_sub(1)?).copied()
-    }
-
     /// Whether this is a boot refusal or a trip while running. A trim's retune runs the boot's
     /// checks again while running: its `Setting`, `Tune`, `Device` and `AboveSafe` faults are
     /// boot-kind refusals that stop a running drive.

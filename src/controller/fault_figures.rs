@@ -629,7 +629,8 @@ fn swing_back(t: &mut Take) -> Option<SwingError<f32>> {
 #[cfg(test)]
 mod tests {
     extern crate std;
-    use std::string::ToString;
+    use std::format;
+    use std::string::{String, ToString};
     use std::vec;
     use std::vec::Vec;
 
@@ -880,6 +881,28 @@ mod tests {
             .map(Fault::DriveSwing),
         );
         all
+    }
+
+    /// Each fault's key is its variant's name in snake case (read from `Debug`): two keys
+    /// swapped in the declaration fail here (their numbers' order fails at compile time).
+    #[test]
+    fn each_faults_key_is_its_variants_name() {
+        for fault in every_fault() {
+            let debug = format!("{fault:?}");
+            let name: String = debug.chars().take_while(|c| c.is_alphanumeric()).collect();
+            let mut snake = String::new();
+            for (k, c) in name.chars().enumerate() {
+                if c.is_uppercase() && k > 0 {
+                    snake.push('_');
+                }
+                snake.push(c.to_ascii_lowercase());
+            }
+            assert_eq!(
+                Fault::key_of(fault.number()),
+                Some(snake.as_str()),
+                "{debug}"
+            );
+        }
     }
 
     #[test]
