@@ -1142,3 +1142,64 @@ fn a_terminal_gets_echo_and_editing_and_a_program_gets_neither() {
     assert_eq!(got, [line(""), line("")]);
     assert!(echoed.is_empty());
 }
+
+/// A keeper with a fault log in memory (its entries as written).
+#[derive(Default)]
+struct Entries(Vec<de_resonator::fault_log::Entry>);
+
+impl Keeper for &mut Entries {
+    type Error = &'static str;
+    fn load(&mut self) -> Result<Option<Held>, Self::Error> {
+        Ok(None)
+    }
+    fn save(&mut self, _: &Settings) -> Result<(), Self::Error> {
+        Err("no settings storage")
+    }
+    fn log(&mut self, entry: &de_resonator::fault_log::Entry) -> Option<Result<u32, Self::Error>> {
+        self.0.push(entry.clone());
+        Some(Ok(self.0.len() as u32))
+    }
+}
+
+/// The board's runner end to end: a fault the tick saw latch goes into the fault log at its
+/// board tick, its time since boot at the tick rate in force, the voltage sent before it and
+/// the readings that tripped it.
+#[test]
+fn a_fault_the_tick_saw_is_logged_at_its_tick_and_time() {
+    use de_resonator::board::runner::Ticker;
+    let settings = Settings {
+        tick_hz: 4000.0,
+        ..Settings::for_target(44.0)
+    };
+    let bytes = image_with(&settings);
+    let mut entries = Entries::default();
+    let mut b = Bench::boot(&bytes, Some(&mut entries), None);
+    assert!(b.notice.starts_with("ready "), "{}", b.notice);
+    let (bus, pin) = (common::Bus::default(), common::Pin::default());
+    let mut stage = OutputStage::new(Dac8551::new(&bus), &pin);
+    let mut ticker = Ticker::new();
+    let mut before = 0.0;
+    for _ in 0..40 {
+        before = ticker
+            .tick(Ok(Inputs::NONE), &mut b.slot, &mut stage)
+            .ticked
+            .unwrap()
+            .output
+            .volts;
+    }
+    let nan = Inputs::stretch(f32::NAN);
+    let logged = ticker
+        .tick(Ok(nan), &mut b.slot, &mut stage)
+        .logged()
+        .expect("a fault");
+    let tick_hz = b.board.tick_hz(&b.slot);
+    assert_eq!(tick_hz, 4000.0);
+    assert_eq!(b.board.log(&logged, tick_hz), Some(Ok(1)));
+    drop(b);
+    let entry = &entries.0[0];
+    assert_eq!(entry.tick, 40);
+    assert_eq!(entry.seconds, 0.01, "40 ticks at 4 kHz");
+    assert_eq!(entry.volts, before);
+    assert!(before > 0.0);
+    assert!(entry.stretch.is_some_and(f32::is_nan));
+}

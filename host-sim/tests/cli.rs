@@ -1289,3 +1289,58 @@ fn image_refuses_a_trim_its_declared_noise_cannot_resolve() {
     assert_eq!(written.status.code(), Some(0), "{written:?}");
     let _ = std::fs::remove_file(out);
 }
+
+/// `image --check` on an image made before a setting was added (here, one whose
+/// `settle_seconds` entry is taken out, as an older host-sim wrote it) names the setting the
+/// board boots at its default, in words and in `--json`'s `defaulted`; today's image names
+/// none.
+#[test]
+fn image_check_names_the_settings_an_older_image_lacks() {
+    let dir = std::env::temp_dir().join(format!("host-sim-defaulted-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("today.img");
+    let out = host_sim(&[
+        "image",
+        "--target-hz",
+        "44",
+        "--out",
+        path.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let today = json(&["--json", "image", "--check", path.to_str().unwrap()]);
+    assert_eq!(today["defaulted"], serde_json::json!([]), "{today}");
+    // Layout 4 (docs/firmware.md): settings by id from byte 156, 8 bytes each; the count at
+    // 6, the length at 8, the CRC-32 last.
+    let mut bytes = std::fs::read(&path).unwrap();
+    let length = u32::from_le_bytes(bytes[8..12].try_into().unwrap()) as usize;
+    bytes.truncate(length);
+    let lacking = de_resonator::Setting::from_key("settle_seconds").unwrap();
+    let at = 156 + 8 * usize::from(lacking.id());
+    assert_eq!(bytes[at..at + 2], u16::from(lacking.id()).to_le_bytes());
+    bytes.drain(at..at + 8);
+    let count = u16::from_le_bytes(bytes[6..8].try_into().unwrap()) - 1;
+    bytes[6..8].copy_from_slice(&count.to_le_bytes());
+    bytes[8..12].copy_from_slice(&((length - 8) as u32).to_le_bytes());
+    let body = bytes.len() - 4;
+    let crc = de_resonator::bytes::crc32(&bytes[..body]);
+    bytes[body..].copy_from_slice(&crc.to_le_bytes());
+    let older = dir.join("older.img");
+    std::fs::write(&older, &bytes).unwrap();
+    let read = json(&["--json", "image", "--check", older.to_str().unwrap()]);
+    assert_eq!(
+        read["defaulted"],
+        serde_json::json!(["settle_seconds"]),
+        "{read}"
+    );
+    let text =
+        String::from_utf8(host_sim(&["image", "--check", older.to_str().unwrap()]).stdout).unwrap();
+    assert!(
+        text.contains("boots them at their defaults): settle_seconds"),
+        "{text}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

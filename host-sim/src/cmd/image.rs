@@ -139,6 +139,9 @@ pub struct ImageReport {
     /// The board's analog inputs (empty: none fitted, open loop).
     pub front_end: Option<FrontEndSummary>,
     pub settings: Vec<Entry>,
+    /// The settings the image does not hold (made by a host-sim before they were added): the
+    /// board boots them at their defaults, and says so.
+    pub defaulted: Vec<&'static str>,
     pub table: Option<TableSummary>,
     pub verdict: Verdict,
     #[serde(skip)]
@@ -262,6 +265,14 @@ impl fmt::Display for ImageReport {
         }
         if !self.settings.is_empty() {
             writeln!(f, "settings        {}", list(&self.settings))?;
+        }
+        if !self.defaulted.is_empty() {
+            writeln!(
+                f,
+                "not in the image (made before they were added; the board boots them at their \
+                 defaults): {}",
+                self.defaulted.join(" ")
+            )?;
         }
         if let Some(t) = &self.table {
             writeln!(
@@ -492,6 +503,7 @@ pub fn describe(bytes: &[u8], file: String) -> Result<ImageReport, String> {
             power_up: None,
             front_end: None,
             settings: Vec::new(),
+            defaulted: Vec::new(),
             table: Some(summary(&parsed, bytes.len())),
             verdict: refuse(
                 "a bare table: flash an image (`host-sim image`) holding it with its settings"
@@ -512,6 +524,7 @@ pub fn describe(bytes: &[u8], file: String) -> Result<ImageReport, String> {
                 power_up: None,
                 front_end: None,
                 settings: Vec::new(),
+                defaulted: Vec::new(),
                 table: None,
                 verdict: refuse(e.to_string()),
                 written: false,
@@ -566,6 +579,7 @@ pub fn describe(bytes: &[u8], file: String) -> Result<ImageReport, String> {
                 value: Some(parsed.settings.get(s)),
             })
             .collect(),
+        defaulted: parsed.defaulted.iter().map(Setting::key).collect(),
         table: Some(summary(&table, parsed.table.len())),
         verdict,
         written: false,
