@@ -596,7 +596,33 @@ impl Panel {
             let clear = |r: &Rect| !level_ys.iter().any(|l| *l >= r.1 && *l <= r.3);
             if let Some(at) = placer.place(&m.label, candidates, clear) {
                 text(&mut labels, at, m.colour, &m.label);
-            } else if !m.label.is_empty() {
+                continue;
+            }
+            if m.label.is_empty() {
+                continue;
+            }
+            // Where the marks crowd: a little off, with a leader line to the cross.
+            let far = [16.0, 28.0, 44.0, 64.0].into_iter().flat_map(|gap| {
+                [
+                    (x + gap, y + 4.0, Anchor::Start),
+                    (x - gap, y + 4.0, Anchor::End),
+                    (x - gap, y - gap, Anchor::End),
+                    (x + gap, y - gap, Anchor::Start),
+                    (x - gap, y + 8.0 + gap, Anchor::End),
+                    (x + gap, y + 8.0 + gap, Anchor::Start),
+                ]
+            });
+            if let Some(at) = placer.place(&m.label, far, clear) {
+                let r = Rect::of_text(at.0, at.1, &m.label, FONT, at.2);
+                let (cx, cy) = (x.clamp(r.0, r.2), y.clamp(r.1, r.3));
+                let _ = writeln!(
+                    labels,
+                    r#"<line x1="{x}" y1="{y}" x2="{cx}" y2="{cy}" stroke="{}" stroke-width="0.8"/>"#,
+                    m.colour
+                );
+                placer.lines.push(vec![(*x, *y), (cx, cy)]);
+                text(&mut labels, at, m.colour, &m.label);
+            } else {
                 legend.push((None, format!("× {}", m.label)));
             }
         }
