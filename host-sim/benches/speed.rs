@@ -11,7 +11,7 @@ use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
 use de_resonator::{Device, Drive, Integrator, Method, Real, State, REFERENCE_DEVICE};
-use host_sim::engine::simulate::{solve, Solver, Tolerance};
+use host_sim::engine::solver::{solve, Solver, Tolerance};
 
 const BIAS_VOLTS: f64 = 6000.0;
 const AC_VOLTS: f64 = 600.0;

@@ -37,7 +37,7 @@ fn main() -> Result<(), String> {
         .iter()
         .flat_map(|&n| (1..=seeds).map(move |seed| (n, seed)))
         .collect();
-    let results = host_sim::work::map("noise", &jobs, |&(noise, seed)| {
+    let results = host_sim::progress::map("noise", &jobs, |&(noise, seed)| {
         let mut s = base.clone();
         s.run.history = false;
         s.run.seed = seed;

@@ -2,8 +2,7 @@
 //! benchmarks. The [`engine`]s (the plant simulator, the closed loop with the core's board,
 //! the reference solvers) apart from the [`study`]s built on them and the commands with their
 //! typed reports ([`cmd`]); the files a user writes ([`scene`], [`device_file`],
-//! [`settings_file`]), what is written for people ([`plot`], [`text`], [`work`]'s
-//! progress), and the board's telemetry stream received ([`telemetry`]).
+//! [`settings_file`]), what is written for people ([`plot`], [`text`], [`progress`]), and the board's telemetry stream received ([`telemetry`]).
 
 // Checks are written `!(x > 0)` on purpose: NaN must fail them (as in the core).
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -15,9 +14,9 @@ pub mod device_file;
 pub mod engine;
 pub mod lut;
 pub mod plot;
+pub mod progress;
 pub mod scene;
 pub mod settings_file;
 pub mod study;
 pub mod telemetry;
 pub mod text;
-pub mod work;

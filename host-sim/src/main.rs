@@ -87,7 +87,7 @@ enum Command {
     /// to 512 steps a period against the reference (DOP853, 1e-12), on three scenes (a small
     /// oscillation about a tuned bias, a large parametric drive, a bias near the limit). Writes
     /// work-precision.csv and work-precision.svg (log-log) into --out; prints a table.
-    Report(cmd::precision::PrecisionArgs),
+    Report(cmd::report::PrecisionArgs),
     /// Frequency response under parametric drive: peaks and crossings.
     ///
     /// Frequency response under parametric drive Φ = bias + ac·sin(2π·f·t) (model.md §7): one
@@ -151,7 +151,7 @@ fn main() -> ExitCode {
         Command::Simulate(args) => cmd::simulate::simulate(&args).map(|r| emit(&r, json)),
         Command::Stress(args) => cmd::stress::stress(&args).map(|r| emit(&r, json)),
         Command::Lut(args) => cmd::lut::lut(&args).map(|r| emit(&r, json)),
-        Command::Report(args) => cmd::precision::precision(&args).map(|r| emit(&r, json)),
+        Command::Report(args) => cmd::report::precision(&args).map(|r| emit(&r, json)),
         Command::Sweep(args) => cmd::sweep::sweep(&args).map(|r| emit(&r, json)),
         Command::Image(args) => cmd::image::image(&args).map(|r| emit(&r, json)),
         Command::Console(args) => cmd::console::console(&args, json).map(|r| emit(&r, json)),

@@ -8,9 +8,9 @@ use de_resonator::acquire::Stall;
 use de_resonator::DeviceParams;
 use serde::Deserialize;
 
-use crate::engine::hil::{Analog, CurrentMonitor, Loop, Scripted, Sensor};
+use crate::engine::closed_loop::{Analog, CurrentMonitor, Loop, Scripted, Sensor};
 use crate::engine::plant::{AmplifierModel, Branch, Leakage, Plant, MAX_BRANCHES};
-use crate::engine::simulate::{Solver, Tolerance};
+use crate::engine::solver::{Solver, Tolerance};
 use de_resonator::wire::protocol::MAX_LINE;
 
 /// The reference scene, built in: the main job.

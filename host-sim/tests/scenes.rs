@@ -6,7 +6,7 @@ use std::path::Path;
 use de_resonator::acquire::{InputError, Stall};
 use de_resonator::estimate::capacitance::PROBE_SIGMAS;
 use de_resonator::{Device, DeviceParams, FailureMode, Fault, Tuner, REFERENCE_DEVICE};
-use host_sim::engine::hil::Run;
+use host_sim::engine::closed_loop::Run;
 use host_sim::engine::plant::{AmplifierModel, Leakage, Plant};
 use host_sim::scene;
 

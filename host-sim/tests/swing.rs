@@ -7,7 +7,7 @@
 use de_resonator::wire::protocol::ErrorCode;
 use de_resonator::{AcDrive, Device, DeviceParams, Phase, Ramp, Settings, Tuner};
 
-use host_sim::engine::hil::Run;
+use host_sim::engine::closed_loop::Run;
 use host_sim::scene;
 
 /// The VHB-like membrane (μ 60 kPa, 0.5 mm, 3 × 3, no damping given): tuned to

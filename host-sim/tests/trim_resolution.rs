@@ -5,7 +5,7 @@
 
 use de_resonator::estimate::ring::TIMING_ERROR_TIMES_RESOLUTION;
 use de_resonator::{EventKind, Fault, TrimError};
-use host_sim::engine::hil::Run;
+use host_sim::engine::closed_loop::Run;
 use host_sim::scene;
 
 mod common;

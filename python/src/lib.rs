@@ -17,8 +17,8 @@ use host_sim::cmd::safe::Region;
 use host_sim::cmd::simulate::Asked;
 use host_sim::cmd::sweep::SweepArgs;
 use host_sim::cmd::{DeviceArgs, DeviceInfo};
-use host_sim::engine::simulate::{self as engine, Choice, Start};
-use host_sim::{device_file, scene, work};
+use host_sim::engine::solver::{self as engine, Choice, Start};
+use host_sim::{device_file, progress, scene};
 use numpy::ndarray::{Array2, ArrayD};
 use numpy::{AllowTypeChange, IntoPyArray, PyArrayLikeDyn, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyKeyError, PyRuntimeError, PyValueError};
@@ -32,7 +32,7 @@ fn value_error(why: impl std::fmt::Display) -> PyErr {
 }
 
 /// `job` on a thread of its own with the GIL released, the caller's thread waiting for it and
-/// for Ctrl-C: a `KeyboardInterrupt` raises the job's stop flag (`work::stopped`, read by
+/// for Ctrl-C: a `KeyboardInterrupt` raises the job's stop flag (`progress::stopped`, read by
 /// the long loops) and is raised once the job has stopped. The job's error is a
 /// `ValueError` with its message.
 fn stoppable<R: Send>(
@@ -44,7 +44,7 @@ fn stoppable<R: Send>(
         let (done, mut finished) = mpsc::channel();
         let flag = stop.clone();
         let worker = scope.spawn(move || {
-            let out = work::stoppable(flag, job);
+            let out = progress::stoppable(flag, job);
             let _ = done.send(());
             out
         });
@@ -94,7 +94,7 @@ fn map_array<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let shape = values.shape().to_vec();
     let input: Vec<f64> = values.as_array().iter().copied().collect();
-    let out = stoppable(py, || work::each(&input, |&x| f(x)))?;
+    let out = stoppable(py, || progress::each(&input, |&x| f(x)))?;
     if shape.is_empty() {
         return Ok(out[0].into_pyobject(py)?.into_any());
     }
@@ -371,7 +371,7 @@ impl Device_ {
         let targets: Vec<f64> = targets_hz.as_array().iter().copied().collect();
         let tuner = self.tuner();
         let tuned = stoppable(py, || {
-            work::each(&targets, |&hz| {
+            progress::each(&targets, |&hz| {
                 tuner.tune(hz, margin).map_err(|e| e.to_string())
             })
         })?;
@@ -584,7 +584,7 @@ fn curves<'py>(
         )));
     }
     let made: Vec<Curve> = stoppable(py, || {
-        work::each(&devices, |p| one_curve(*p, margin, target_hz, points))
+        progress::each(&devices, |p| one_curve(*p, margin, target_hz, points))
     })?;
     made.iter()
         .map(|c| {
@@ -781,7 +781,7 @@ fn run_scene<'py>(py: Python<'py>, scene: &Bound<'py, PyAny>) -> PyResult<Bound<
     let out = result(py, &report)?;
     let history = PyDict::new(py);
     let h = &run.history;
-    let column = |f: &dyn Fn(&host_sim::engine::hil::Sample) -> f64| {
+    let column = |f: &dyn Fn(&host_sim::engine::closed_loop::Sample) -> f64| {
         h.iter().map(f).collect::<Vec<f64>>().into_pyarray(py)
     };
     history.set_item("time_seconds", column(&|s| s.seconds))?;

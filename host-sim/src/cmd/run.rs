@@ -8,8 +8,8 @@ use clap::Args;
 use serde::Serialize;
 
 use super::{finite, prepare_dir, short, sig, write_file, Crossing, DeviceInfo, Report};
+use crate::engine::closed_loop::{Run, Sample};
 use crate::engine::firmware::Qemu;
-use crate::engine::hil::{Run, Sample};
 use crate::plot::{svg, Marker, Panel, Series, RED};
 use crate::scene::{self, Scene};
 use de_resonator::{Decimal, EventKind, Setting};

@@ -541,7 +541,7 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
                 let faulted = slot.as_ref().is_some_and(|c| c.latched_fault().is_some());
                 if asked_since_boot || faulted {
                     let mut now = ReplyLine::new();
-                    let status = crate::engine::hil::command_line("status")?;
+                    let status = crate::engine::closed_loop::command_line("status")?;
                     logic.serve(&status, &mut &mut slot, &extras, &mut now);
                     client.say(&format!("{NOTICE}now {}", now.trim_start_matches("ok ")));
                 } else {

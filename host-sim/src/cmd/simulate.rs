@@ -9,7 +9,7 @@ use de_resonator::{Device, DeviceParams};
 use serde::Serialize;
 
 use super::{prepare_file, short, sig, write_path, Crossing, DeviceArgs, DeviceInfo, Report};
-use crate::engine::simulate::{self, Choice, OpenLoop, Solver, Start, Tolerance};
+use crate::engine::solver::{self, Choice, OpenLoop, Solver, Start, Tolerance};
 use crate::plot::{svg, Marker, Panel, Series, RED};
 
 #[derive(Args, Debug)]
@@ -303,7 +303,7 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
     for path in [&args.csv, &args.plot].into_iter().flatten() {
         prepare_file(path)?;
     }
-    let out = simulate::simulate(&scene, args.method, step).map_err(|e| e.to_string())?;
+    let out = solver::simulate(&scene, args.method, step).map_err(|e| e.to_string())?;
     let volts_at =
         |t: f64| args.bias_volts + args.ac_volts * (std::f64::consts::TAU * ac_hz * t).sin();
     let mut files = Vec::new();
@@ -370,7 +370,7 @@ fn plot(
     device: &DeviceInfo,
     checked: &Device<f64>,
     scene: &OpenLoop,
-    out: &simulate::Outcome,
+    out: &solver::Outcome,
     method: &str,
 ) -> Panel {
     let limit = de_resonator::Limit::of(checked);

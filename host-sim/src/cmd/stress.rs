@@ -7,7 +7,7 @@ use clap::Args;
 use serde::Serialize;
 
 use super::{DeviceArgs, DeviceInfo, Report};
-use crate::study::stress::{self, CaseReport, Summary, Verdict, PERIODS, STEPS_PER_PERIOD};
+use crate::study::stiff_cases::{self, CaseReport, Summary, Verdict, PERIODS, STEPS_PER_PERIOD};
 
 #[derive(Args, Debug)]
 pub struct StressArgs {
@@ -89,7 +89,7 @@ impl Report for StressReport {
 pub fn stress(args: &StressArgs) -> Result<StressReport, String> {
     let (params, device) = args.device.params()?;
     de_resonator::Device::new(params).map_err(|e| format!("{device}: {e}"))?;
-    let (cases, summary) = stress::run(params);
+    let (cases, summary) = stiff_cases::run(params);
     Ok(StressReport {
         device,
         periods: PERIODS,

@@ -10,7 +10,7 @@ use serde::Serialize;
 
 use super::{prepare_dir, short, sig, write_csv_and_plot, DeviceArgs, DeviceInfo, Report};
 use crate::plot::{Panel, Series, Style, GREY, RED};
-use crate::study::sweep::{self, Sweep};
+use crate::study::frequency_response::{self, Sweep};
 
 /// The default bias and AC amplitude, as fractions of the device's limit voltage: a drive
 /// that means the same on every device (6000 V and 2000 V on the reference device).
@@ -251,8 +251,9 @@ pub fn measure(
         periods: args.periods,
         steps_per_period: args.steps_per_period,
     };
-    let (_, _, natural_hz) = sweep::operating_point(&s).map_err(|e| format!("{device}: {e}"))?;
-    sweep::drive_frequencies(&s, natural_hz)?;
+    let (_, _, natural_hz) =
+        frequency_response::operating_point(&s).map_err(|e| format!("{device}: {e}"))?;
+    frequency_response::drive_frequencies(&s, natural_hz)?;
     // RK4 steps of the whole sweep: each point runs `periods` of f0 at `steps_per_period`
     // of the faster of drive and f0.
     let faster = (0.5 * (s.ratios.0 + s.ratios.1)).max(1.0);
@@ -271,7 +272,7 @@ pub fn measure(
         params.damping = params.effective_mass() * std::f64::consts::TAU * natural_hz / quality;
         s.params = params;
     }
-    let response = sweep::run(&s)?;
+    let response = frequency_response::run(&s)?;
     let f0 = response.natural_frequency_hz;
     let points: Vec<Point> = response
         .points

@@ -11,7 +11,7 @@ use differential_equations::prelude::*;
 use crate::engine::erk::Start;
 use crate::engine::events::{self, Hermite, Jet};
 use crate::engine::lift::{Lift, Local};
-use crate::engine::simulate::{Solver, Span, Tolerance};
+use crate::engine::solver::{Solver, Span, Tolerance};
 
 /// Most viscoelastic branches a plant may have.
 pub const MAX_BRANCHES: usize = 3;

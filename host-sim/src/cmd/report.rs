@@ -8,9 +8,9 @@ use clap::Args;
 use serde::Serialize;
 
 use super::{prepare_dir, write_csv_and_plot, DeviceArgs, DeviceInfo, Report};
-use crate::engine::simulate::Choice;
+use crate::engine::solver::Choice;
 use crate::plot::{Mark, Marker, Panel, Series, Style, COLOURS};
-use crate::study::precision::{reference, rows, studies, Row, ToleranceRow};
+use crate::study::work_precision::{reference, rows, studies, Row, ToleranceRow};
 
 #[derive(Args, Debug)]
 pub struct PrecisionArgs {
@@ -126,13 +126,13 @@ pub fn precision(args: &PrecisionArgs) -> Result<PrecisionReport, String> {
     // The folder made ready before the work (minutes of it), as every command does.
     prepare_dir(&args.out)?;
     let studies = studies(params).map_err(|e| format!("{name}: {e}"))?;
-    let references = crate::work::map("reference", &studies, reference)
+    let references = crate::progress::map("reference", &studies, reference)
         .into_iter()
         .collect::<Result<Vec<_>, _>>()
         .map_err(|e| format!("{name}: {e}"))?;
     // Timed runs one at a time: run times measured side by side must not share the cores.
     let methods = Choice::core();
-    let bar = crate::work::bar("timing", studies.len() * methods.len());
+    let bar = crate::progress::bar("timing", studies.len() * methods.len());
     let mut all: Vec<Row> = Vec::new();
     for (study, reference) in studies.iter().zip(&references) {
         for &choice in &methods {

@@ -63,7 +63,7 @@ pub struct Response {
 pub fn run(sweep: &Sweep) -> Result<Response, String> {
     let (device, start, natural_hz) = operating_point(sweep)?;
     let drives = drive_frequencies(sweep, natural_hz)?;
-    let points = crate::work::map("sweep", &drives, |&hz| {
+    let points = crate::progress::map("sweep", &drives, |&hz| {
         respond(sweep, &device, start, natural_hz, hz)
     })
     .into_iter()
@@ -241,7 +241,7 @@ mod tests {
     #[test]
     fn amplitudes_are_the_extremes_between_steps() {
         use crate::engine::events::Watch;
-        use crate::engine::simulate::{Motion, Solver, Tolerance};
+        use crate::engine::solver::{Motion, Solver, Tolerance};
         use de_resonator::REFERENCE_DEVICE;
         let device = Device::new(REFERENCE_DEVICE).unwrap();
         let sweep = Sweep {

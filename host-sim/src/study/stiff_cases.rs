@@ -9,7 +9,7 @@
 use de_resonator::{Device, DeviceParams, Tuner};
 use serde::Serialize;
 
-use crate::engine::simulate::{simulate, Choice, OpenLoop, RunError, Start};
+use crate::engine::solver::{simulate, Choice, OpenLoop, RunError, Start};
 
 /// A named extreme case: a device, a drive, and how it starts.
 struct Case {
@@ -189,7 +189,7 @@ pub struct Summary {
 
 /// Every case on `base`, in parallel, with a progress bar.
 pub fn run(base: DeviceParams<f64>) -> (Vec<CaseReport>, Summary) {
-    let cases = crate::work::map("stress", &cases(base), |case| {
+    let cases = crate::progress::map("stress", &cases(base), |case| {
         run_case(case).unwrap_or_else(|problem| CaseReport {
             case: case.name,
             what: case.what,

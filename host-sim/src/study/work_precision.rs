@@ -12,7 +12,7 @@ use std::time::Instant;
 
 use de_resonator::{Device, DeviceParams, Tuner, DEFAULT_MARGIN};
 
-use crate::engine::simulate::{
+use crate::engine::solver::{
     simulate, Choice, OpenLoop, Outcome, RunError, Solver, Start, Tolerance,
 };
 
@@ -154,7 +154,7 @@ pub fn reference(study: &Study) -> Result<Reference, String> {
     let end = study.scene.duration_seconds * scale;
     let at = |tolerance| {
         let tolerance = Tolerance::both(tolerance);
-        crate::engine::simulate::solve(Solver::Dop853, &device, drive, start, end, grid, tolerance)
+        crate::engine::solver::solve(Solver::Dop853, &device, drive, start, end, grid, tolerance)
     };
     let tighter = at(1e-13)?;
     let mut tolerances = Vec::new();
@@ -180,7 +180,7 @@ pub fn reference(study: &Study) -> Result<Reference, String> {
     // The reference's own: one solve whatever its output times, so its run at 1e-12 is this.
     let floor = tolerances
         .iter()
-        .find(|t| t.tolerance == crate::engine::simulate::REFERENCE_TOLERANCE)
+        .find(|t| t.tolerance == crate::engine::solver::REFERENCE_TOLERANCE)
         .map_or(f64::NAN, |t| t.max_error);
     Ok(Reference {
         outcome,

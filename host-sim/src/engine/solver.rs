@@ -1,6 +1,7 @@
-//! `host-sim simulate`: integrate the resonator from rest with a core fixed-step method (f32
-//! or f64, the code the firmware runs) or the reference (adaptive DOP853, f64), under the
-//! dynamic safety monitor.
+//! The solvers: integrate the resonator from rest with a core fixed-step method (f32 or f64,
+//! the code the firmware runs) or a reference (adaptive DOP853, Radau, BDF; f64), under the
+//! dynamic safety monitor. `host-sim simulate` (`cmd::simulate`), the plant, the closed loop
+//! and the studies run on it.
 
 use std::cell::Cell;
 use std::time::Instant;
@@ -413,8 +414,8 @@ fn core<T: Real>(
     monitor.observe(&device, 0, T::of(start), it.bias_dimless_squared());
     let mut last = it.state();
     for k in 1..=steps {
-        if k % 4096 == 0 && crate::work::stopped() {
-            return Err(RunError::Failed(crate::work::INTERRUPTED.into()));
+        if k % 4096 == 0 && crate::progress::stopped() {
+            return Err(RunError::Failed(crate::progress::INTERRUPTED.into()));
         }
         if let Err(e) = it.step() {
             // Past the guarded range the model is no longer trusted: stop, say why.
@@ -538,8 +539,8 @@ impl<const N: usize> Solout<f64, [f64; N]> for Samples<'_, N> {
     where
         I: Interpolation<f64, [f64; N]> + ?Sized,
     {
-        if crate::work::stopped() {
-            self.failed = Some(crate::work::INTERRUPTED.into());
+        if crate::progress::stopped() {
+            self.failed = Some(crate::progress::INTERRUPTED.into());
             return ControlFlag::Terminate;
         }
         if let Some(hook) = self.on_step.as_mut().filter(|_| t_curr > t_prev) {
