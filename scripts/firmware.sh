@@ -2,7 +2,8 @@
 # The firmware under QEMU (netduinoplus2, STM32F405): lint every build, measure flash and RAM
 # per feature set, count the tick's budget with the trim on, run the on-target checks against
 # their expected log (RTIC's way), and run the product end to end: the command port, the DAC
-# frames from QEMU's trace, a second device's image, bad images, the tick rate; then every
+# frames from QEMU's trace, a second device's image, bad images, the tick rate; the same
+# requests to the virtual board (host-sim serve) and the firmware, reply for reply; then every
 # shipped scene with the firmware in the loop (its link build), tick for tick against the core.
 # Usage: scripts/firmware.sh [--bless]   (--bless rewrites the expected log)
 # HOST_SIM=path: the host-sim binary to use (default: build the release one).
@@ -92,6 +93,9 @@ cp "$elf" ../target/firmware-trim.elf
 cargo build --locked --release -q --bin firmware
 python3 ../scripts/firmware_e2e.py "$PWD/$elf" "$host_sim" "$PWD/../target/e2e" \
     "$PWD/../target/firmware-trim.elf"
+
+step "the virtual board against the firmware: one script of requests to host-sim serve and to QEMU, every reply compared field by field"
+python3 ../scripts/differential.py "$PWD/$elf" "$host_sim"
 
 step "the one command from the root: scripts/qemu.sh (an image, QEMU, a console script; QEMU gone after)"
 cd ..

@@ -1,0 +1,618 @@
+#!/usr/bin/env python3
+"""The virtual board against the firmware: one script of requests, two boards, every reply
+compared field by field.
+
+`host-sim serve` (the core's board on the host, against a scene's plant) and the firmware under
+QEMU (netduinoplus2, the default QEMU build) boot the same image bytes: the scene below, written
+into a temp dir, is served, and `host-sim image --scene` of it is flashed (`info`'s image_crc is
+checked on both against the flashed file's). Both get the same script over their command port
+(a Unix socket each), in every phase both can reach: ramping, holding, driving, stopped at rest,
+at rest after a `reset` (the output off at 0 V, as at a power-up that waits), ramping after
+`start`; and, on a second pair, refused (settings the boot checks refuse), then at rest after
+`clear`, ramping, driving the image's own AC, ramping down. Bad input in every phase. (serve
+boots a scene's image, which drives at power-up: no image that waits can be served, so the
+output off at 0 V at a boot is reached by `reset` and `clear`, which boot the board that way
+whatever the image's power-up.)
+
+Each reply is read as fields: `ok` or `err <code>`, each `key=value`, the free text (numbers in
+it apart, `text#1`, `text#2`, …); the boot's and the reset's `# …` lines the same way. Every
+field must be equal but those in EXCLUDED (the board's own figures, and what depends on when a
+request lands), each with its reason. Prints a table of what was compared and every
+difference; exit status 1 on any difference, or if a section of the script left the phase it
+was written for (then the boards were not compared where meant).
+
+Faulted: not reached. With no front end (the default QEMU build reads no ADC; a scene's plant
+read through one would not match its empty block) nothing latches a fault while running: every
+runtime fault needs an input (a sensor, the current or amplifier monitor, the trim, tracking),
+the DAC bus fault is injected by host-sim's link only, and QEMU's `sensor-fails` switch needs
+the `model-sensor` build. A refused boot (`err 5`) is compared instead, and `faults`, `faults 1`
+and `faults clear` are asked in every phase on an empty log.
+
+Usage: scripts/differential.py [--keep] [ELF [HOST_SIM]]
+  ELF       the firmware's QEMU build (default firmware/target/thumbv7em-none-eabihf/release/
+            firmware: `cd firmware && cargo build --release --bin firmware`)
+  HOST_SIM  host-sim (default $HOST_SIM, else target/debug/host-sim: `cargo build -p host-sim`)
+The temp dir (scenes, images, sockets, logs, each board's transcript) is removed when the
+boards agree (unless --keep), kept otherwise.
+"""
+
+import os
+import re
+import shutil
+import signal
+import socket
+import struct
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+import zlib
+
+KEEP = "--keep" in sys.argv[1:]
+sys.argv = [a for a in sys.argv if a != "--keep"]
+ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
+RUNNER = os.path.join(ROOT, "firmware", "qemu-run.sh")
+ELF = os.path.abspath(sys.argv[1] if len(sys.argv) > 1 else
+                      os.path.join(ROOT, "firmware/target/thumbv7em-none-eabihf/release/firmware"))
+HOST_SIM = os.path.abspath(sys.argv[2] if len(sys.argv) > 2 else
+                           os.environ.get("HOST_SIM") or os.path.join(ROOT, "target/debug/host-sim"))
+
+# The board both run: the reference device, the default amplifier (2.5 V DAC reference, gain
+# 4000, no rail below full scale), no front end and no sensors (the QEMU build reads none), the
+# settings' defaults but a slower ramp (5 kV/s: 1.5 s to the 7,450 V bias, room for a batch of
+# requests while ramping). A scene's image drives at power-up.
+SCENE = """
+name = "differential"
+description = "the reference device at 44 Hz, no front end: serve against the firmware"
+duration_seconds = 10.0
+
+[amplifier]
+dac_reference_volts = 2.5
+gain = 4000.0
+
+[controller]
+target_hz = 44.0
+slew_volts_per_second = 5000.0
+"""
+# The second pair: the image's settings have AC (100 V at 40 Hz) but at 600 Hz, above half the
+# tick rate: the boot refuses them (a sound image: `set` and `clear` stay open). `image --scene`
+# writes no image the firmware would refuse: the flashed one is the scene's at 40 Hz with
+# ac_hz's value set to 600 and its CRC made again, and `info`'s image_crc says it is the
+# bytes serve boots.
+REFUSED_AC_HZ = 600.0
+REFUSED_SCENE = SCENE.replace('"differential"', '"differential-refused"').replace(
+    "slew_volts_per_second = 5000.0", "slew_volts_per_second = 5000.0\nac_volts = 100.0\nac_hz = {ac_hz}")
+AC_HZ_ID = 6  # ac_hz's id (docs/settings.md)
+SETTINGS_AT = 156  # the image's settings, by id, 8 bytes each from here (src/image.rs, layout 4)
+
+# Asked in every section: what reads, bad input, the stream on and off.
+COMMON = """status
+info
+get
+get margin
+get margn
+help
+help target
+help ac_hz
+help margn
+faults
+faults 1
+frobnicate
+target
+target 4.4.4
+target 44 kHz
+stream 100
+stream off
+stream 0
+stream 5000"""
+# What needs the output at rest at 0 V, or changes nothing here: asked where it is refused.
+WRONG_STATE = """save
+reset
+faults clear
+clear"""
+# Checked as a new plan and refused: out of range, above the cap, at the resonance of a device
+# told no damping, a typo'd key, a fraction for a count, a rate fixed at power-up.
+REFUSED_PLANS = """target 47
+ac 1e6 40
+ac 100 44
+set margin 1.5
+set margin 0.5
+set margn 0.1
+set stuck_samples 1.5
+set tick_hz 500
+trim"""
+
+# `== kind: what` starts a section (kind: the phase it is written for, checked by the status
+# at its start and end: ramping, holding, driving, rest, refused); `wait key=value[|value] [S]`
+# asks `status` until it holds (its last reply compared); `@COMMON`, `@WRONG_STATE`,
+# `@REFUSED_PLANS` expand. After a new boot (`clear`, `reset`) the script waits for
+# `phase=holding` before its next `status`: asked before the boot's first tick, both boards say
+# `phase=ramping` (output off, 0 V), and whether a request lands before that tick is timing.
+SCRIPT = """
+== ramping: power-up (the scene's image drives at once)
+status
+== holding: at the bias
+wait phase=holding
+@COMMON
+@WRONG_STATE
+@REFUSED_PLANS
+start
+wait phase=holding
+target 44
+wait phase=holding
+set slew_volts_per_second 5000
+wait phase=holding
+status
+ac 100 40
+== driving: after `ac 100 40`
+wait phase=driving
+@COMMON
+@WRONG_STATE
+@REFUSED_PLANS
+start
+wait phase=driving
+ac 100 40
+wait phase=driving
+status
+stop
+== ramping: down after `stop`
+@COMMON
+@WRONG_STATE
+status
+== rest: stopped at 0 V
+wait volts=0
+@COMMON
+trim
+stop
+clear
+wait phase=holding
+set slew_volts_per_second 5000
+save
+faults clear
+reset
+== rest: after `reset` (the output off at 0 V, as at a power-up that waits)
+wait phase=holding
+@COMMON
+@REFUSED_PLANS
+get slew_volts_per_second
+start
+== ramping: just after `start`
+@COMMON
+@WRONG_STATE
+target 44
+ac 100 40
+start
+set slew_volts_per_second 5000
+trim
+status
+stop
+== ramping: down after `stop` while ramping up
+status
+== rest: stopped at 0 V from the ramp
+wait volts=0
+status
+"""
+
+REFUSED_SCRIPT = """
+== refused: the image's settings refused at boot
+@COMMON
+@WRONG_STATE
+trim
+start
+target 44
+ac 100 40
+stop
+set margn 0.1
+set ac_hz 1000
+set ac_hz 40
+status
+clear
+== rest: after `clear` (the output off at 0 V until `start`)
+wait phase=holding
+@COMMON
+@REFUSED_PLANS
+get ac_hz
+start
+== ramping: just after `start`, to the image's AC
+@COMMON
+@WRONG_STATE
+start
+status
+== driving: the image's settings' AC
+wait phase=driving
+@COMMON
+@WRONG_STATE
+@REFUSED_PLANS
+status
+stop
+== ramping: down after `stop`
+@COMMON
+start
+status
+== rest: stopped at 0 V
+wait volts=0
+status
+"""
+
+# What is not compared: the board's own figures, and what depends on when a request lands.
+# (field, the sections' kinds it holds for (None: all), the requests (None: all), why)
+# `firmware=` is compared: both name the core's crate and version. No input is fitted, so no
+# reading (`current_amps`, `amplifier_volts`, `stretch`) is in a reply to leave out.
+MOVING = ("ramping", "driving")
+EXCLUDED = [
+    ("tick_cycles_max", None, None,
+     "the worst tick in CPU cycles: silicon only (absent under QEMU and on serve)"),
+    ("stack_bytes", None, None,
+     "the firmware's stack high-water mark; serve runs on the host's stack (says 0)"),
+    ("clock_us", None, None,
+     "each board's own clock: QEMU's TIM2 from its start, serve's simulated time"),
+    ("ticks", None, None,
+     "ticks since boot when the request lands: the boards start and answer at other moments"),
+    ("volts", MOVING, None,
+     "the output where it is when the request lands, while it ramps or drives the AC"),
+    ("text#1", MOVING, ("stop",),
+     "`stop: ramp from <V> V`: the same moving output, where the ramp down starts"),
+]
+
+
+class Board:
+    """One board's command port as a line stream; the replies of a script, with the time each
+    section took."""
+
+    def __init__(self, name, path, proc):
+        self.name, self.proc = name, proc
+        self.s = socket.socket(socket.AF_UNIX)
+        for _ in range(400):
+            try:
+                self.s.connect(path)
+                break
+            except OSError:
+                if proc.poll() is not None:
+                    raise OSError(f"exited before serving {path}")
+                time.sleep(0.05)
+        else:
+            raise OSError(f"nothing listens at {path}")
+        self.s.settimeout(30)
+        self.f = self.s.makefile("rwb", buffering=0)
+        # The start-up lines, up to the one that says the boot's verdict.
+        self.banner = [self.line()]
+        while not re.match(r"# (ready|refused)", self.banner[-1]):
+            self.banner.append(self.line())
+
+    def line(self):
+        raw = self.f.readline()
+        if not raw:
+            raise EOFError(f"{self.name} closed the command port")
+        return raw.decode(errors="replace").rstrip("\r\n")
+
+    def ask(self, request):
+        """The lines a request gets: `# …` lines before its reply, the reply, and after a
+        `reset` the new boot's lines up to its verdict."""
+        self.f.write(request.encode() + b"\n")
+        lines = [self.line()]
+        while lines[-1].startswith("# "):
+            lines.append(self.line())
+        if request == "reset" and lines[-1].startswith("ok"):
+            lines.append(self.line())
+            while not re.match(r"# (ready|refused)", lines[-1]):
+                lines.append(self.line())
+        return lines
+
+    def wait(self, condition, seconds):
+        """`status` until its field holds one of the values; the last reply (None: never)."""
+        key, values = condition.split("=", 1)
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            reply = self.ask("status")[-1]
+            if fields_of(reply).get(key) in values.split("|"):
+                return reply
+            time.sleep(0.05)
+        return None
+
+    def run(self, sections):
+        """Each section's exchanges: (request, lines); a wait's, its last status."""
+        self.out, self.seconds = [], []
+        for _, requests in sections:
+            began, done = time.monotonic(), []
+            for request in requests:
+                if request.startswith("wait "):
+                    words = request.split()
+                    reply = self.wait(words[1], float(words[2]) if len(words) > 2 else 30.0)
+                    done.append((request, [reply if reply else f"(never: {request})"]))
+                else:
+                    done.append((request, self.ask(request)))
+            self.out.append(done)
+            self.seconds.append(time.monotonic() - began)
+
+
+def fields_of(line):
+    """A line's `key=value` pairs only (`fault=` and `words=` take the rest of the line)."""
+    return dict(f for f in parse(line) if not f[0].startswith(("text", "reply")))
+
+
+NUMBER = re.compile(r"(?<![\w.#])[-+]?\d+(?:\.\d+)?(?:e[-+]?\d+)?(?![\w])")
+
+
+def parse(line):
+    """A line the board said, as fields: `reply` (`ok`, `err <code>` or `#`), each `key=value`
+    (`fault=` and `words=` take the rest of the line: their sentence), and the free text with
+    its numbers apart (`text` with each number `#`, then `text#1`, `text#2`, …)."""
+    if line.startswith("err "):
+        code, _, rest = line[4:].partition(" ")
+        head = f"err {code}"
+    elif line.startswith("ok"):
+        head, rest = "ok", line[3:]
+    elif line.startswith("# "):
+        head, rest = "#", line[2:]
+    else:
+        head, rest = "(not a reply)", line
+    out, words = [("reply", head)], []
+    while rest:
+        m = re.match(r"([a-z_][a-z0-9_.]*)=", rest)
+        if m and m.group(1) in ("fault", "words"):
+            out.append((m.group(1), rest[m.end():]))
+            break
+        token, _, rest = rest.partition(" ")
+        if m:
+            out.append((m.group(1), token[m.end():]))
+        elif token:
+            words.append(token)
+    if words:
+        text = " ".join(words)
+        numbers = NUMBER.findall(text)
+        out.append(("text", NUMBER.sub("#", text)))
+        out += [(f"text#{k}", n) for k, n in enumerate(numbers, 1)]
+    return out
+
+
+def excluded(field, kind, request):
+    """The reason a field is not compared here, or None."""
+    for name, kinds, requests, why in EXCLUDED:
+        if field == name and (kinds is None or kind in kinds) and \
+                (requests is None or request in requests):
+            return why
+    return None
+
+
+def expand(script):
+    """The script's sections: (kind, label), requests."""
+    macros = {"@COMMON": COMMON, "@WRONG_STATE": WRONG_STATE, "@REFUSED_PLANS": REFUSED_PLANS}
+    sections = []
+    for raw in script.strip().splitlines():
+        line = raw.strip()
+        if line.startswith("== "):
+            kind, _, label = line[3:].partition(": ")
+            sections.append(((kind, label), []))
+        elif line in macros:
+            sections[-1][1].extend(macros[line].splitlines())
+        elif line:
+            sections[-1][1].append(line)
+    return sections
+
+
+def host_sim(*args):
+    done = subprocess.run([HOST_SIM, *args], capture_output=True, text=True)
+    if done.returncode != 0:
+        sys.exit(f"host-sim {' '.join(args)}: {done.stderr.strip()}")
+    return done.stdout
+
+
+def stop_group(proc):
+    """SIGTERM the process group this script started (serve; the QEMU runner with QEMU and its
+    log decoder) and wait for its leader."""
+    try:
+        os.killpg(proc.pid, signal.SIGTERM)
+    except ProcessLookupError:
+        pass
+    try:
+        proc.wait(timeout=10)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+
+
+def pair(work, name, scene_text, image_bytes, sections):
+    """Serve the scene and run QEMU with the image, the script to both at once; each board's
+    start-up lines and exchanges."""
+    scene = os.path.join(work, f"{name}.toml")
+    image = os.path.join(work, f"{name}.img")
+    with open(scene, "w") as f:
+        f.write(scene_text)
+    with open(image, "wb") as f:
+        f.write(image_bytes)
+    sock = {k: os.path.join(work, f"{name}-{k}.sock") for k in ("serve", "serve-stream", "fw",
+                                                                  "fw-stream")}
+    serve = subprocess.Popen([HOST_SIM, "serve", scene, "--unix", sock["serve"], "--stream-unix",
+                              sock["serve-stream"]], stdout=subprocess.DEVNULL,
+                             stderr=open(os.path.join(work, f"{name}-serve.log"), "w"),
+                             start_new_session=True)
+    env = dict(os.environ, QEMU_IMAGE=image, QEMU_TIMEOUT="150",
+               QEMU_SERIAL1=f"unix:{sock['fw']},server=on,wait=on",
+               QEMU_SERIAL0=f"unix:{sock['fw-stream']},server=on,wait=off")
+    env.pop("QEMU_EXTRA", None)
+    env.pop("QEMU_ICOUNT", None)
+    qemu = subprocess.Popen([RUNNER, ELF], env=env,
+                            stdout=open(os.path.join(work, f"{name}-firmware.log"), "w"),
+                            stderr=subprocess.STDOUT, start_new_session=True)
+    # Both connected at once: each boot's ramp starts as its board comes up (QEMU's at the
+    # connection, after its boot checks; serve's after its own), the start-up lines read,
+    # then the script.
+    boards, errors = {}, []
+
+    def run(who, path, proc):
+        try:
+            boards[who] = Board(who, path, proc)
+            boards[who].run(sections)
+        except (EOFError, OSError) as e:
+            errors.append(f"{who}: {e}")
+    try:
+        threads = [threading.Thread(target=run, args=a) for a in
+                   (("serve", sock["serve"], serve), ("firmware", sock["fw"], qemu))]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+    finally:
+        stop_group(qemu)
+        stop_group(serve)
+    boards = [boards[who] for who in ("serve", "firmware") if who in boards]
+    for board in boards:
+        with open(os.path.join(work, f"{name}-{board.name}.txt"), "w") as f:
+            f.write("\n".join(board.banner) + "\n")
+            for (section, _), done in zip(sections, getattr(board, "out", [])):
+                f.write(f"== {section[0]}: {section[1]}\n")
+                for request, lines in done:
+                    f.write(f"> {request}\n" + "".join(f"< {line}\n" for line in lines))
+    if errors:
+        sys.exit(f"{name}: {'; '.join(errors)} (logs in {work})")
+    return boards
+
+
+def compare(sections, serve, firmware, pair_name):
+    """Rows of the table (one per request and section) and the differences, field by field."""
+    rows, diffs, counts, phase_problems = [], [], {"compared": 0, "excluded": 0}, []
+    exchanges = [[("(start-up lines)", serve.banner)], *serve.out]
+    theirs = [[("(start-up lines)", firmware.banner)], *firmware.out]
+    kinds = [("start-up", "")] + [s[0] for s in sections]
+    for col, ((kind, label), ours, fws) in enumerate(zip(kinds, exchanges, theirs)):
+        statuses = {"serve": [], "firmware": []}
+        for (request, a), (_, b) in zip(ours, fws):
+            for who, lines in (("serve", a), ("firmware", b)):
+                if request == "status" or request.startswith("wait "):
+                    statuses[who].append(fields_of(lines[-1]))
+            different = []
+            if len(a) != len(b):
+                different.append(("lines", f"{len(a)} lines", f"{len(b)} lines"))
+            for k, (la, lb) in enumerate(zip(a, b)):
+                fa, fb = dict(parse(la)), dict(parse(lb))
+                prefix = f"line {k + 1}: " if max(len(a), len(b)) > 1 else ""
+                for field in list(dict.fromkeys([*fa, *fb])):
+                    if excluded(field, kind, request):
+                        counts["excluded"] += 1
+                        continue
+                    counts["compared"] += 1
+                    if fa.get(field) != fb.get(field):
+                        different.append((prefix + field, fa.get(field, "(absent)"),
+                                          fb.get(field, "(absent)")))
+            rows.append((col, request, not different))
+            for field, x, y in different:
+                diffs.append((pair_name, f"{kind}: {label}".rstrip(": "), request, field, x, y,
+                              a, b))
+        # The section was asked in the phase it was written for (first and last status).
+        want = {"rest": ("holding", "0", "off"), "refused": ("refused", "0", "off")}
+        for who, seen in statuses.items():
+            for s in (seen[:1] + seen[-1:]) if seen else []:
+                phase = s.get("phase")
+                if kind in want:
+                    ok = (phase, s.get("volts"), s.get("output")) == want[kind]
+                else:
+                    ok = kind in ("start-up",) or phase == kind
+                if not ok:
+                    phase_problems.append(f"{pair_name}, {kind}: {label}: {who}'s status says "
+                                          f"phase={phase} volts={s.get('volts')} "
+                                          f"output={s.get('output')}")
+    return rows, diffs, counts, phase_problems
+
+
+def table(pairs):
+    """Requests down, sections across: `=` every compared field equal, `X` a difference."""
+    for name, sections, rows in pairs:
+        columns = [("start-up", "")] + [s[0] for s in sections]
+        print(f"\n{name}: sections")
+        for i, (kind, label) in enumerate(columns):
+            print(f"  {i:>2}  {kind:<9} {label}")
+        cells, order = {}, []
+        for col, request, same in rows:
+            if request not in order:
+                order.append(request)
+            if cells.get((request, col)) != "X":
+                cells[(request, col)] = "=" if same else "X"
+        width = max(len(r) for r in order)
+        print(f"  {'request':<{width}}  " + " ".join(f"{i:>2}" for i in range(len(columns))))
+        for request in order:
+            print(f"  {request:<{width}}  " + " ".join(
+                f"{cells.get((request, i), '.'):>2}" for i in range(len(columns))))
+
+
+def main():
+    for path, how in ((ELF, "cd firmware && cargo build --release --bin firmware"),
+                      (HOST_SIM, "cargo build -p host-sim")):
+        if not os.path.exists(path):
+            sys.exit(f"differential: no {path} ({how})")
+    began = time.monotonic()
+    work = tempfile.mkdtemp(prefix="differential-")
+
+    # The images: the scene's own bytes (what serve boots); the refused one made from its
+    # twin at 40 Hz (`image --scene` writes no refused image), ac_hz set, the CRC again.
+    with open(os.path.join(work, "good.toml"), "w") as f:
+        f.write(SCENE)
+    host_sim("image", "--scene", os.path.join(work, "good.toml"), "--out",
+             os.path.join(work, "good.img"))
+    good = open(os.path.join(work, "good.img"), "rb").read()
+    with open(os.path.join(work, "twin.toml"), "w") as f:
+        f.write(REFUSED_SCENE.format(ac_hz=40.0))
+    host_sim("image", "--scene", os.path.join(work, "twin.toml"), "--out",
+             os.path.join(work, "twin.img"))
+    body = bytearray(open(os.path.join(work, "twin.img"), "rb").read()[:-4])
+    at = SETTINGS_AT + 8 * AC_HZ_ID
+    assert struct.unpack_from("<H", body, at)[0] == AC_HZ_ID, "the image's layout moved"
+    struct.pack_into("<f", body, at + 4, REFUSED_AC_HZ)
+    refused = bytes(body) + struct.pack("<I", zlib.crc32(body))
+
+    pairs, all_diffs, problems = [], [], []
+    totals = {"compared": 0, "excluded": 0, "exchanges": 0}
+    for name, scene, image, script in (
+            ("drives", SCENE, good, SCRIPT),
+            ("refused", REFUSED_SCENE.format(ac_hz=REFUSED_AC_HZ), refused, REFUSED_SCRIPT)):
+        sections = expand(script)
+        serve, firmware = pair(work, name, scene, image, sections)
+        rows, diffs, counts, phase_problems = compare(sections, serve, firmware, name)
+        pairs.append((name, sections, rows))
+        all_diffs += diffs
+        problems += phase_problems
+        totals["compared"] += counts["compared"]
+        totals["excluded"] += counts["excluded"]
+        totals["exchanges"] += len(rows)
+        # The same bytes booted: image_crc on both the flashed file's.
+        crc = f"0x{zlib.crc32(image[:-4]):08x}"
+        for board in (serve, firmware):
+            said = [fields_of(lines[-1]).get("image_crc")
+                    for section in board.out for request, lines in section if request == "info"]
+            if not said or any(c != crc for c in said):
+                problems.append(f"{name}: {board.name}'s info says image_crc {set(said)}, the "
+                                f"flashed image's CRC is {crc}")
+        times = ", ".join(f"{(s[0][0])} {a:.1f}/{b:.1f} s"
+                          for s, a, b in zip(sections, serve.seconds, firmware.seconds))
+        print(f"{name}: serve/firmware seconds a section: {times}")
+
+    table(pairs)
+    print("\nnot compared (EXCLUDED):")
+    for field, kinds, requests, why in EXCLUDED:
+        where = "everywhere" if kinds is None else "while " + " or ".join(kinds)
+        if requests:
+            where += f", in {', '.join(requests)}'s reply"
+        print(f"  {field:<16} {where}: {why}")
+    print(f"\n{totals['exchanges']} exchanges, {totals['compared']} fields compared, "
+          f"{totals['excluded']} excluded, {len(all_diffs)} differences, "
+          f"{time.monotonic() - began:.1f} s")
+    for name, where, request, field, x, y, a, b in all_diffs:
+        print(f"\nDIFFERENCE ({name}) {where}: `{request}`: {field}\n"
+              f"  serve:    {x}\n  firmware: {y}")
+        for who, lines in (("serve", a), ("firmware", b)):
+            for line in lines:
+                print(f"  {who + ':':<9} | {line}")
+    for p in problems:
+        print(f"PROBLEM: {p}")
+    if all_diffs or problems:
+        print(f"\nthe boards differ: transcripts, logs, scenes and images kept in {work}")
+        sys.exit(1)
+    if KEEP:
+        print(f"transcripts, logs, scenes and images kept in {work}")
+    else:
+        shutil.rmtree(work, ignore_errors=True)
+    print("serve and the firmware agree on every compared field")
+
+
+if __name__ == "__main__":
+    main()
