@@ -354,3 +354,53 @@ fn the_ram_flash_refuses_misaligned_writes_and_erases() {
     assert_eq!(kind(block_on(flash.erase(0, 512))), not_aligned);
     assert_eq!(kind(block_on(flash.erase(0, 1024))), Ok(()));
 }
+
+/// A record as a firmware writes it in the first slot: magic, sequence number, blob, CRC-32
+/// of all before it (docs/firmware.md), over erased flash.
+fn record_in_first_slot(blob: &[u8]) -> Vec<u8> {
+    let mut record: Vec<u8> = b"DERS"
+        .iter()
+        .copied()
+        .chain(1u32.to_le_bytes())
+        .chain(blob.iter().copied())
+        .collect();
+    let crc = de_resonator::bytes::crc32(&record);
+    record.extend(crc.to_le_bytes());
+    let mut bytes = erased();
+    bytes[..record.len()].copy_from_slice(&record);
+    bytes
+}
+
+/// A newer firmware's blob of as many settings as a set has room for (32: a `SettingSet` is
+/// a 32-bit word) reads back from flash whole and is refused by its first unknown id, saying
+/// so; a record longer than that is passed over as no record (the image's settings boot), as
+/// a torn one is.
+#[test]
+fn a_blob_of_thirty_two_settings_is_read_whole_and_one_of_thirty_three_is_not() {
+    let mut newer = store::encode(&nth(5)).to_vec();
+    let known = Setting::ALL.len();
+    for id in known..32 {
+        newer.extend([id as u8, 0, 0, 0, 0, 0, 128, 63]);
+    }
+    newer[2..4].copy_from_slice(&32u16.to_le_bytes());
+    let mut bytes = record_in_first_slot(&newer);
+    assert_eq!(
+        load(&mut bytes),
+        Err(StoreError::UnknownSetting { id: known as u16 })
+    );
+    // Today's, written the same way: read whole.
+    let mut bytes = record_in_first_slot(&store::encode(&nth(6)));
+    assert_eq!(load(&mut bytes), Ok(Some(nth(6))));
+    newer.extend([32, 0, 0, 0, 0, 0, 128, 63]);
+    newer[2..4].copy_from_slice(&33u16.to_le_bytes());
+    let mut bytes = record_in_first_slot(&newer);
+    assert_eq!(load(&mut bytes), Ok(None));
+    // The same 33 as a blob handed to `decode`: refused, its version and count said.
+    assert_eq!(
+        store::decode(&newer),
+        Err(StoreError::Version {
+            version: 2,
+            count: 33
+        })
+    );
+}
