@@ -49,7 +49,7 @@ use crate::bytes::newer;
 use crate::bytes::{crc32, f32_at, u32_at, Put};
 use crate::controller::{Fault, Figures};
 #[cfg(feature = "storage")]
-use crate::store::{flash_error, StoreError};
+use crate::store::StoreError;
 
 /// The newest entries the log keeps, at least.
 pub const KEPT: usize = 32;
@@ -314,7 +314,7 @@ pub fn keep_newest<T>(kept: &mut [Option<T>], sequence: impl Fn(&T) -> u32, item
 /// The two halves' starts and the slots a half holds, each room for `KEPT` entries.
 #[cfg(feature = "storage")]
 fn halves<F: NorFlash>(range: &Range<u32>) -> Result<([u32; 2], usize), StoreError> {
-    let (starts, half) = crate::store::halves::<F>(range)?;
+    let (starts, half) = crate::flash::halves::<F>(range).ok_or(StoreError::Range)?;
     let slots = half / ENTRY_BYTES.next_multiple_of(F::WRITE_SIZE.max(1));
     if slots < KEPT {
         return Err(StoreError::Range);
@@ -355,7 +355,7 @@ async fn scan<F: NorFlash>(
             flash
                 .read(slot_at::<F>(start, k), &mut bytes)
                 .await
-                .map_err(flash_error)?;
+                .map_err(StoreError::flash)?;
             if bytes.iter().all(|&b| b == 0xFF) {
                 continue;
             }
@@ -423,7 +423,7 @@ pub async fn append<F: NorFlash>(
         *slot = byte;
     }
     let head = padded.get(..body_len).ok_or(StoreError::Range)?;
-    flash.write(at, head).await.map_err(flash_error)?;
+    flash.write(at, head).await.map_err(StoreError::flash)?;
     for (slot, &byte) in padded.iter_mut().zip(&bytes).skip(CRC_AT) {
         *slot = byte;
     }
@@ -433,7 +433,7 @@ pub async fn append<F: NorFlash>(
     flash
         .write(at + body_len as u32, tail)
         .await
-        .map_err(flash_error)?;
+        .map_err(StoreError::flash)?;
     Ok(sequence)
 }
 
@@ -450,7 +450,7 @@ async fn erase_half<F: NorFlash>(
     flash
         .erase(start, start + (second - first))
         .await
-        .map_err(flash_error)
+        .map_err(StoreError::flash)
 }
 
 /// At boot, while a stall harms nothing (nothing driven, no watchdog yet): erase the other
@@ -516,5 +516,5 @@ pub async fn clear<F: NorFlash>(mut flash: F, range: Range<u32>) -> Result<(), S
     flash
         .erase(range.start, range.end)
         .await
-        .map_err(flash_error)
+        .map_err(StoreError::flash)
 }

@@ -28,6 +28,8 @@ pub mod controller;
 pub mod drive;
 pub mod estimate;
 pub mod fault_log;
+#[cfg(feature = "storage")]
+pub mod flash;
 pub mod image;
 pub mod model;
 pub mod numerics;

@@ -2,9 +2,10 @@
 //! flash pages, holding one record each: a magic, a sequence number, the settings blob and a
 //! CRC-32. `save` erases the slot that does not hold the newest valid record and writes the
 //! next sequence number there, the CRC last; `load` takes the newest valid record. A power cut
-//! anywhere in a save leaves the other slot, the last good settings, as it was. Generic over
-//! embedded-storage's async `NorFlash`: the STM32F4's flash controller on the chip,
-//! `RamFlash` in QEMU and in tests (which can fail or tear a write at any byte).
+//! anywhere in a save leaves the other slot, the last good settings, as it was. On the flash
+//! layer ([`crate::flash`]): embedded-storage's async `NorFlash`, the STM32F4's flash
+//! controller on the chip, `RamFlash` in QEMU and in tests (which can fail or tear a write at
+//! any byte).
 //!
 //! sequential-storage (a map, each write a new item) was built and measured first: it passed
 //! the same power-cut tests, and took 5,976 B more of the firmware's flash than this store
@@ -24,12 +25,11 @@
 use core::fmt;
 use core::ops::Range;
 
-use embedded_storage_async::nor_flash::{
-    ErrorType, MultiwriteNorFlash, NorFlash, NorFlashError, NorFlashErrorKind, ReadNorFlash,
-};
+use embedded_storage_async::nor_flash::{NorFlash, NorFlashError};
 
 use crate::bytes::{crc32, f32_at, newer, u16_at, u32_at};
 use crate::controller::{Held, Setting, Settings};
+use crate::flash::{halves, FlashKind};
 
 /// The blob's layout version this code writes (it reads 1 too).
 pub const BLOB_VERSION: u16 = 2;
@@ -69,25 +69,6 @@ pub enum StoreError {
     LogFull,
 }
 
-/// How a flash operation failed (embedded-storage's kinds).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum FlashKind {
-    NotAligned,
-    OutOfBounds,
-    Other,
-}
-
-impl From<NorFlashErrorKind> for FlashKind {
-    fn from(kind: NorFlashErrorKind) -> Self {
-        match kind {
-            NorFlashErrorKind::NotAligned => FlashKind::NotAligned,
-            NorFlashErrorKind::OutOfBounds => FlashKind::OutOfBounds,
-            _ => FlashKind::Other,
-        }
-    }
-}
-
 impl fmt::Display for StoreError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
@@ -117,8 +98,11 @@ impl fmt::Display for StoreError {
     }
 }
 
-pub(crate) fn flash_error<E: NorFlashError>(e: E) -> StoreError {
-    StoreError::Flash(e.kind().into())
+impl StoreError {
+    /// The flash's own failure, by its kind.
+    pub fn flash<E: NorFlashError>(e: E) -> Self {
+        StoreError::Flash(e.kind().into())
+    }
 }
 
 /// The settings as a blob, each by its id.
@@ -177,27 +161,9 @@ pub fn decode(blob: &[u8]) -> Result<Held, StoreError> {
     Ok(held)
 }
 
-/// `range` as two halves of whole flash pages: their starts and their length in bytes (the
-/// settings' two slots; the fault log's two halves).
-pub(crate) fn halves<F: NorFlash>(range: &Range<u32>) -> Result<([u32; 2], usize), StoreError> {
-    let len = range
-        .end
-        .checked_sub(range.start)
-        .ok_or(StoreError::Range)? as usize;
-    let half = len / 2;
-    let page = F::ERASE_SIZE.max(1);
-    let whole = len.is_multiple_of(2)
-        && half.is_multiple_of(page)
-        && (range.start as usize).is_multiple_of(page);
-    if !whole {
-        return Err(StoreError::Range);
-    }
-    Ok(([range.start, range.start + half as u32], half))
-}
-
 /// The two slots' first offsets, checked against the flash's pages.
 fn slots<F: NorFlash>(range: &Range<u32>) -> Result<[u32; 2], StoreError> {
-    let (starts, half) = halves::<F>(range)?;
+    let (starts, half) = halves::<F>(range).ok_or(StoreError::Range)?;
     // Room for the longest record read (`read_slot` reads up to it), not only this one's.
     if half < MAX_RECORD_BYTES.next_multiple_of(F::WRITE_SIZE.max(1)) {
         return Err(StoreError::Range);
@@ -216,7 +182,7 @@ async fn read_slot<F: NorFlash>(
     flash
         .read(at, record.get_mut(..12).unwrap_or(&mut []))
         .await
-        .map_err(flash_error)?;
+        .map_err(StoreError::flash)?;
     if record.get(..4) != Some(&MAGIC[..]) {
         return Ok(None);
     }
@@ -229,7 +195,7 @@ async fn read_slot<F: NorFlash>(
     let Some(whole) = record.get_mut(..crc_at + 4) else {
         return Ok(None);
     };
-    flash.read(at, whole).await.map_err(flash_error)?;
+    flash.read(at, whole).await.map_err(StoreError::flash)?;
     let body = record.get(..crc_at).unwrap_or(&[]);
     if crc32(body) != u32_at(record, crc_at) {
         return Ok(None);
@@ -277,7 +243,10 @@ pub async fn save_blob<F: NorFlash>(
     };
     let at = starts.get(slot).copied().ok_or(StoreError::Range)?;
     let half = (range.end - range.start) / 2;
-    flash.erase(at, at + half).await.map_err(flash_error)?;
+    flash
+        .erase(at, at + half)
+        .await
+        .map_err(StoreError::flash)?;
     // The body, then the CRC in a write of its own: a cut anywhere leaves a CRC that does
     // not match (the erased 0xFF…, or a part of it).
     let word = F::WRITE_SIZE.max(1);
@@ -295,7 +264,7 @@ pub async fn save_blob<F: NorFlash>(
     let (Some(head), true) = (record.get(..body_len), body_len + tail_len <= record.len()) else {
         return Err(StoreError::Range);
     };
-    flash.write(at, head).await.map_err(flash_error)?;
+    flash.write(at, head).await.map_err(StoreError::flash)?;
     for (slot, byte) in record.iter_mut().skip(CRC_AT).zip(crc.to_le_bytes()) {
         *slot = byte;
     }
@@ -303,7 +272,7 @@ pub async fn save_blob<F: NorFlash>(
     flash
         .write(at + body_len as u32, tail)
         .await
-        .map_err(flash_error)
+        .map_err(StoreError::flash)
 }
 
 /// The newest settings saved (`None`: none yet, or none that reads).
@@ -330,138 +299,5 @@ pub async fn erase<F: NorFlash>(mut flash: F, range: Range<u32>) -> Result<(), S
     flash
         .erase(range.start, range.end)
         .await
-        .map_err(flash_error)
+        .map_err(StoreError::flash)
 }
-
-/// Run a future whose flash never waits to its end, without an executor (a boot cannot
-/// await). `None` if it still waits after a few polls.
-pub fn block_on<T>(future: impl core::future::Future<Output = T>) -> Option<T> {
-    use core::task::{Context, Poll, Waker};
-    let mut future = core::pin::pin!(future);
-    let mut cx = Context::from_waker(Waker::noop());
-    // A future over a blocking flash is ready at its first poll; a few more are allowed.
-    for _ in 0..4 {
-        if let Poll::Ready(out) = future.as_mut().poll(&mut cx) {
-            return Some(out);
-        }
-    }
-    None
-}
-
-/// A NOR flash in RAM: erased bytes read 0xFF, a write can only clear bits, writes are whole
-/// `WORD`-byte words and erases whole pages (else `NotAligned`, as real flash refuses). For
-/// QEMU (whose flash controller is not emulated) and tests: `fail_after` bytes written from
-/// now, the next write or erase fails there, having done the bytes before it (a torn write:
-/// a power cut).
-pub struct RamFlashWords<'a, const WORD: usize> {
-    bytes: &'a mut [u8],
-    /// Bytes a write or erase may still change before it fails (`None`: never).
-    pub fail_after: Option<usize>,
-}
-
-/// The RAM flash of 4-byte words the firmware's QEMU build uses.
-pub type RamFlash<'a> = RamFlashWords<'a, RAM_WORD_BYTES>;
-
-/// Page and word of `RamFlash`.
-pub const RAM_PAGE_BYTES: usize = 1024;
-pub const RAM_WORD_BYTES: usize = 4;
-
-/// A `RamFlash` write or erase that failed (on purpose, or out of range).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct RamFlashError(NorFlashErrorKind);
-
-impl NorFlashError for RamFlashError {
-    fn kind(&self) -> NorFlashErrorKind {
-        self.0
-    }
-}
-
-impl<'a, const WORD: usize> RamFlashWords<'a, WORD> {
-    /// Over `bytes` as they are (a whole number of pages; erased or not).
-    pub fn new(bytes: &'a mut [u8]) -> Self {
-        Self {
-            bytes,
-            fail_after: None,
-        }
-    }
-
-    /// The bytes, for a test that looks at them or corrupts them.
-    pub fn bytes(&mut self) -> &mut [u8] {
-        self.bytes
-    }
-
-    /// One byte changed by a write or erase, unless the budget is spent.
-    fn spend(&mut self) -> Result<(), RamFlashError> {
-        match self.fail_after {
-            Some(0) => Err(RamFlashError(NorFlashErrorKind::Other)),
-            Some(n) => {
-                self.fail_after = Some(n - 1);
-                Ok(())
-            }
-            None => Ok(()),
-        }
-    }
-
-    fn span(&mut self, offset: u32, len: usize) -> Result<&mut [u8], RamFlashError> {
-        let from = offset as usize;
-        self.bytes
-            .get_mut(from..from.saturating_add(len))
-            .ok_or(RamFlashError(NorFlashErrorKind::OutOfBounds))
-    }
-}
-
-impl<const WORD: usize> ErrorType for RamFlashWords<'_, WORD> {
-    type Error = RamFlashError;
-}
-
-impl<const WORD: usize> ReadNorFlash for RamFlashWords<'_, WORD> {
-    const READ_SIZE: usize = 1;
-
-    async fn read(&mut self, offset: u32, out: &mut [u8]) -> Result<(), Self::Error> {
-        let span = self.span(offset, out.len())?;
-        out.copy_from_slice(span);
-        Ok(())
-    }
-
-    fn capacity(&self) -> usize {
-        self.bytes.len()
-    }
-}
-
-impl<const WORD: usize> NorFlash for RamFlashWords<'_, WORD> {
-    const WRITE_SIZE: usize = WORD;
-    const ERASE_SIZE: usize = RAM_PAGE_BYTES;
-
-    async fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
-        let len = (to as usize).saturating_sub(from as usize);
-        let page = RAM_PAGE_BYTES;
-        if !((from as usize).is_multiple_of(page) && len.is_multiple_of(page)) {
-            return Err(RamFlashError(NorFlashErrorKind::NotAligned));
-        }
-        self.span(from, len)?;
-        for at in from as usize..to as usize {
-            self.spend()?;
-            if let Some(b) = self.bytes.get_mut(at) {
-                *b = 0xFF;
-            }
-        }
-        Ok(())
-    }
-
-    async fn write(&mut self, offset: u32, data: &[u8]) -> Result<(), Self::Error> {
-        let word = WORD.max(1);
-        if !((offset as usize).is_multiple_of(word) && data.len().is_multiple_of(word)) {
-            return Err(RamFlashError(NorFlashErrorKind::NotAligned));
-        }
-        self.span(offset, data.len())?;
-        for (k, &byte) in data.iter().enumerate() {
-            self.spend()?;
-            if let Some(b) = self.bytes.get_mut(offset as usize + k) {
-                *b &= byte;
-            }
-        }
-        Ok(())
-    }
-}
-
-impl<const WORD: usize> MultiwriteNorFlash for RamFlashWords<'_, WORD> {}

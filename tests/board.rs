@@ -854,7 +854,7 @@ fn replies_say_why() {
 fn the_fault_log_lists_the_newest_first_across_resets() {
     use de_resonator::board::FlashKeeper;
     use de_resonator::fault_log::KEPT;
-    use de_resonator::store::{RamFlash, RAM_PAGE_BYTES};
+    use de_resonator::flash::{RamFlash, RAM_PAGE_BYTES};
     use de_resonator::Fault;
 
     let image = image_with(&Settings::for_target(44.0));
@@ -973,7 +973,7 @@ fn the_fault_log_lists_the_newest_first_across_resets() {
 #[test]
 fn a_save_on_a_chip_waits_for_rest() {
     use de_resonator::board::FlashKeeper;
-    use de_resonator::store::{RamFlash, RAM_PAGE_BYTES};
+    use de_resonator::flash::{RamFlash, RAM_PAGE_BYTES};
 
     let image = image_with(&Settings::for_target(44.0));
     for stalls in [true, false] {

@@ -5,7 +5,8 @@
 #![cfg(feature = "storage")]
 
 use de_resonator::fault_log::{self, Cause, Entry, KEPT};
-use de_resonator::store::{RamFlash, StoreError, RAM_PAGE_BYTES};
+use de_resonator::flash::{RamFlash, RAM_PAGE_BYTES};
+use de_resonator::store::StoreError;
 use de_resonator::{FailureMode, Fault};
 use futures::executor::block_on;
 

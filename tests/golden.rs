@@ -11,8 +11,9 @@ mod common;
 use std::path::PathBuf;
 
 use de_resonator::acquire::FrontEnd;
+use de_resonator::flash::{RamFlash, RAM_PAGE_BYTES};
 use de_resonator::image::{self, AmplifierSpec, Image, PowerUp, DAC_BITS};
-use de_resonator::store::{self, RamFlash, RAM_PAGE_BYTES};
+use de_resonator::store;
 use de_resonator::{Setting, Settings, REFERENCE_DEVICE};
 use futures::executor::block_on;
 

@@ -5,7 +5,8 @@
 #![cfg(feature = "storage")]
 
 use de_resonator::controller::Held;
-use de_resonator::store::{self, RamFlash, RamFlashWords, StoreError, BLOB_BYTES, RAM_PAGE_BYTES};
+use de_resonator::flash::{self, RamFlash, RamFlashWords, RAM_PAGE_BYTES};
+use de_resonator::store::{self, StoreError, BLOB_BYTES};
 use de_resonator::{Setting, Settings};
 use embedded_storage_async::nor_flash::ReadNorFlash;
 use futures::executor::block_on;
@@ -278,16 +279,16 @@ fn saves_stay_inside_their_range() {
     let mut flash = RamFlash::new(&mut bytes);
     assert_eq!(
         block_on(store::save(&mut flash, 4 * page..8 * page, &nth(1))),
-        Err(StoreError::Flash(store::FlashKind::OutOfBounds))
+        Err(StoreError::Flash(flash::FlashKind::OutOfBounds))
     );
     use embedded_storage_async::nor_flash::NorFlashErrorKind as Kind;
     assert_eq!(
-        store::FlashKind::from(Kind::NotAligned),
-        store::FlashKind::NotAligned
+        flash::FlashKind::from(Kind::NotAligned),
+        flash::FlashKind::NotAligned
     );
     assert_eq!(
-        store::FlashKind::from(Kind::OutOfBounds),
-        store::FlashKind::OutOfBounds
+        flash::FlashKind::from(Kind::OutOfBounds),
+        flash::FlashKind::OutOfBounds
     );
 }
 
@@ -345,7 +346,7 @@ fn the_ram_flash_refuses_misaligned_writes_and_erases() {
     use embedded_storage_async::nor_flash::{NorFlash, NorFlashError, NorFlashErrorKind};
     let mut bytes = erased();
     let mut flash = RamFlash::new(&mut bytes);
-    let kind = |r: Result<(), store::RamFlashError>| r.map_err(|e| e.kind());
+    let kind = |r: Result<(), flash::RamFlashError>| r.map_err(|e| e.kind());
     let not_aligned = Err(NorFlashErrorKind::NotAligned);
     assert_eq!(kind(block_on(flash.write(1, &[0; 4]))), not_aligned);
     assert_eq!(kind(block_on(flash.write(4, &[0; 3]))), not_aligned);

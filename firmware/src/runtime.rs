@@ -197,7 +197,7 @@ pub fn storage_ram() -> Option<&'static mut [u8]> {
     use core::sync::atomic::{AtomicBool, Ordering};
 
     const BYTES: usize = (crate::storage::SETTINGS_PAGES + crate::storage::LOG_PAGES)
-        * de_resonator::store::RAM_PAGE_BYTES;
+        * de_resonator::flash::RAM_PAGE_BYTES;
     #[link_section = ".uninit.SETTINGS"]
     static mut RAM: MaybeUninit<[u8; BYTES]> = MaybeUninit::uninit();
     static TAKEN: AtomicBool = AtomicBool::new(false);

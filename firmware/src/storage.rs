@@ -29,10 +29,10 @@ pub fn open(controller: stm32f4xx_hal::pac::FLASH) -> Option<FlashKeeper<Setting
     {
         let _ = controller;
         let ram = crate::runtime::storage_ram()?;
-        let settings = (SETTINGS_PAGES * de_resonator::store::RAM_PAGE_BYTES) as u32;
+        let settings = (SETTINGS_PAGES * de_resonator::flash::RAM_PAGE_BYTES) as u32;
         let len = ram.len() as u32;
         Some(FlashKeeper {
-            flash: SlowRam(de_resonator::store::RamFlash::new(ram)),
+            flash: SlowRam(de_resonator::flash::RamFlash::new(ram)),
             range: 0..settings,
             log: Some(settings..len),
             // As the chip: the stand-in's erase stalls.
@@ -68,11 +68,11 @@ pub fn open(controller: stm32f4xx_hal::pac::FLASH) -> Option<FlashKeeper<Setting
 /// stall), through `watchdog::through_stall` as on the chip (not in the link build, whose
 /// tick host-sim paces).
 #[cfg(feature = "qemu")]
-pub struct SlowRam(pub de_resonator::store::RamFlash<'static>);
+pub struct SlowRam(pub de_resonator::flash::RamFlash<'static>);
 
 #[cfg(feature = "qemu")]
 mod slow_ram {
-    use de_resonator::store::RamFlash;
+    use de_resonator::flash::RamFlash;
     use embedded_storage_async::nor_flash::{ErrorType, NorFlash, ReadNorFlash};
 
     use super::SlowRam;

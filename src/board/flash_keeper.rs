@@ -9,7 +9,8 @@ use embedded_storage_async::nor_flash::NorFlash;
 use super::Keeper;
 use crate::controller::{Held, Settings};
 use crate::fault_log::{self, Entry};
-use crate::store::{block_on, load, save, FlashKind, StoreError};
+use crate::flash::{block_on, FlashKind};
+use crate::store::{load, save, StoreError};
 
 /// A flash and the ranges of it the settings and the fault log use, as the board keeps them
 /// ([`Keeper`]): each call run to its end at once, for a flash that never waits

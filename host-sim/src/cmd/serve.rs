@@ -19,7 +19,8 @@ use de_resonator::board::FlashKeeper;
 use de_resonator::board::{self, Board, Keeper, Line, Lines, ReplyLine, ResetCause};
 use de_resonator::controller::Held;
 use de_resonator::fault_log::Entry;
-use de_resonator::store::{self, RamFlash, StoreError, RAM_PAGE_BYTES};
+use de_resonator::flash::{RamFlash, RAM_PAGE_BYTES};
+use de_resonator::store::StoreError;
 use de_resonator::wire::protocol::NOTICE;
 use de_resonator::wire::stream::{self, Telemetry};
 use de_resonator::{Controller, Dac8551, Image, Inputs, OutputStage, Settings};
@@ -173,7 +174,7 @@ impl Flash {
         let settings = (SETTINGS_PAGES * RAM_PAGE_BYTES) as u32;
         let len = self.0.len() as u32;
         FlashKeeper {
-            flash: store::RamFlash::new(&mut self.0),
+            flash: RamFlash::new(&mut self.0),
             range: 0..settings,
             log: Some(settings..len),
             erase_stalls: ERASE_STALLS,
