@@ -836,10 +836,12 @@ fn fuzz_the_controller() {
         "the plant crossed a limit, first: {:?}",
         tally.first_crossing
     );
-    // Most cases with a clean table must start, or the ticks check little.
+    // Cases with a clean table must mostly start, or the ticks check little. About half do
+    // (the random settings' own refusals: 1,456 of 2,909 in CI's 3·10⁶ ticks, 106 of 225 in
+    // 2·10⁵): at least a third, so the check does not sit on the rate itself.
     let clean = tally.tables.get("clean").copied().unwrap_or_default();
     assert!(
-        2 * tally.started > clean,
+        3 * tally.started > clean,
         "too few started: {} of {clean}",
         tally.started
     );
