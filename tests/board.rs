@@ -1203,3 +1203,78 @@ fn a_fault_the_tick_saw_is_logged_at_its_tick_and_time() {
     assert!(before > 0.0);
     assert!(entry.stretch.is_some_and(f32::is_nan));
 }
+
+/// The board's keeper on a flash (`FlashKeeper`, as on the chip: an erase stalls it): `save`
+/// at rest boots from then on (`settings=saved`); a fault log whose halves are full takes no
+/// entry while running (no erase under the output), and the next boot erases the older half
+/// so that the run's faults are kept again.
+#[cfg(feature = "storage")]
+#[test]
+fn the_flash_keeper_saves_and_erases_the_log_only_at_boot() {
+    use de_resonator::board::FlashKeeper;
+    use de_resonator::fault_log::{ENTRY_BYTES, KEPT};
+    use de_resonator::flash::{RamFlash, RAM_PAGE_BYTES};
+    use de_resonator::store::StoreError;
+    use de_resonator::Fault;
+
+    let image = image_with(&Settings::for_target(44.0));
+    // Two settings pages, then a log of two halves each room for `KEPT` entries.
+    let log_pages = 2 * (KEPT * ENTRY_BYTES).div_ceil(RAM_PAGE_BYTES);
+    let mut bytes = vec![0xFFu8; (2 + log_pages) * RAM_PAGE_BYTES];
+    fn keeper(bytes: &mut [u8]) -> FlashKeeper<RamFlash<'_>> {
+        let len = bytes.len() as u32;
+        FlashKeeper {
+            flash: RamFlash::new(bytes),
+            range: 0..(2 * RAM_PAGE_BYTES) as u32,
+            log: Some((2 * RAM_PAGE_BYTES) as u32..len),
+            erase_stalls: true,
+        }
+    }
+    {
+        let mut bench = Bench::boot(&image, Some(keeper(&mut bytes)), None);
+        assert!(
+            bench.notice.contains(" settings=image "),
+            "{}",
+            bench.notice
+        );
+        assert!(bench.ask("stop").starts_with("ok stop"));
+        bench.run(3000, Inputs::NONE);
+        let set = bench.ask("set slew_volts_per_second 5000");
+        assert!(set.starts_with("ok "), "{set}");
+        assert!(bench.ask("save").starts_with("ok save"), "at rest");
+        // Both halves full, then one more: refused while running, nothing erased.
+        let fault = Fault::Sensor { value: 1.0 };
+        let mut refused = None;
+        for n in 0..(2 * KEPT as u32 + 1) {
+            match bench.board.log_fault(&fault, (n, 0.0), 0.0, &Inputs::NONE) {
+                Some(Ok(_)) => {}
+                other => {
+                    refused = Some((n, other));
+                    break;
+                }
+            }
+        }
+        let (n, said) = refused.expect("a full log refuses while running");
+        assert_eq!(said, Some(Err(StoreError::LogFull)), "entry {n}");
+        assert!(
+            n as usize >= KEPT,
+            "at least a half's worth kept first: {n}"
+        );
+    }
+    // The next boot: the saved settings, and room in the log again.
+    let mut bench = Bench::boot(&image, Some(keeper(&mut bytes)), None);
+    assert!(
+        bench.notice.contains(" settings=saved "),
+        "{}",
+        bench.notice
+    );
+    assert_eq!(
+        bench.ask("get slew_volts_per_second"),
+        "ok slew_volts_per_second=5000"
+    );
+    let fault = Fault::Sensor { value: 2.0 };
+    assert!(matches!(
+        bench.board.log_fault(&fault, (1, 0.0), 0.0, &Inputs::NONE),
+        Some(Ok(_))
+    ));
+}
