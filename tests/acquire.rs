@@ -864,3 +864,37 @@ fn the_repeat_windows_edge_and_two_stalls_in_a_block() {
         })
     );
 }
+
+/// The input errors read as sentences naming what failed: the stall's cause, the channel and
+/// its reading's unit (what an operator sees in `status` and the fault log).
+#[test]
+fn input_errors_name_the_stall_the_channel_and_its_unit() {
+    use de_resonator::acquire::{Channel, InputError, Stall};
+    let stalled = InputError::Stalled {
+        stall: Stall::Overrun,
+        recovered: 2,
+    }
+    .to_string();
+    assert!(stalled.contains("(an ADC overrun)"), "{stalled}");
+    let dma = InputError::Stalled {
+        stall: Stall::TransferError,
+        recovered: 1,
+    }
+    .to_string();
+    assert!(dma.contains("(a DMA transfer error)"), "{dma}");
+    for (channel, reading) in [
+        (Channel::Current, "reads 0.5 A,"),
+        (Channel::Amplifier, "reads 0.5 V,"),
+        (Channel::Stretch, "reads 0.5 (stretch),"),
+    ] {
+        let said = InputError::Implausible {
+            channel,
+            reading: 0.5,
+            low: 1.0,
+            high: 2.0,
+        }
+        .to_string();
+        assert!(said.contains(reading), "{said}");
+        assert!(said.starts_with(channel.name()), "{said}");
+    }
+}
