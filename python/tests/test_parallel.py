@@ -1,4 +1,5 @@
-"""Long calls release the GIL (two threads beat one), and the Dask example maps a study over
+"""Long calls release the GIL (a Python thread runs while one works: checked by what it does,
+not by a speed-up a loaded machine would not show), and the Dask example maps a study over
 worker processes with the same numbers as a plain loop."""
 
 import pathlib
@@ -12,33 +13,6 @@ import de_resonator as dr
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "examples"))
 import monte_carlo  # noqa: E402
-
-
-def timed(job):
-    started = time.perf_counter()
-    job()
-    return time.perf_counter() - started
-
-
-def test_two_threads_tune_a_batch_faster_than_one():
-    """tune_many copies its input and releases the GIL: two halves on two threads take less
-    time than the whole on one (a lock held throughout would make them take as long)."""
-    device = dr.Device.reference()
-    low, high = device.safe().tunable_range_hz
-    targets = np.linspace(low, high, 40000)
-    halves = np.array_split(targets, 2)
-    device.tune_many(targets[:100])  # warm
-
-    def two():
-        threads = [threading.Thread(target=device.tune_many, args=(h,)) for h in halves]
-        for t in threads:
-            t.start()
-        for t in threads:
-            t.join()
-
-    one = min(timed(lambda: device.tune_many(targets)) for _ in range(5))
-    both = min(timed(two) for _ in range(5))
-    assert both < 0.8 * one, (one, both)
 
 
 def test_python_runs_while_a_call_works():
