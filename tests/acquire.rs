@@ -898,3 +898,124 @@ fn input_errors_name_the_stall_the_channel_and_its_unit() {
         assert!(said.starts_with(channel.name()), "{said}");
     }
 }
+
+/// A tick's noise as the trim weighs it (`ChannelSpec::tick_noise`) is what the mean of
+/// `scans` conversions scatters by: measured here on simulated conversions (Gaussian noise of
+/// `noise_codes`, then the ADC's rounding, at a true value anywhere between two codes), in
+/// the reading's unit. Where the noise dithers the rounding (half a code or more) both
+/// average over the scans; with no noise the rounding is the same at every scan.
+#[test]
+fn a_ticks_noise_is_what_the_mean_of_its_scans_scatters_by() {
+    let mut rng = Rng(23);
+    for noise_codes in [0.0f32, 1.0, 3.0] {
+        for scans in [1u32, 4, 10] {
+            let spec = ChannelSpec {
+                input: 11,
+                zero_code: 100.0,
+                per_count: 2.6,
+                low: -100.0,
+                high: 10_000.0,
+                noise_codes,
+            };
+            let ticks = 40_000;
+            let mut squares = 0.0;
+            for _ in 0..ticks {
+                let truth = 1000.0 + rng.unit();
+                let mut sum = 0.0;
+                for _ in 0..scans {
+                    sum += (truth + f64::from(noise_codes) * normal(&mut rng)).round();
+                }
+                let error = sum / f64::from(scans) - truth;
+                squares += error * error;
+            }
+            let measured = 2.6 * (squares / f64::from(ticks)).sqrt();
+            let said = f64::from(spec.tick_noise(scans));
+            assert!(
+                (said / measured - 1.0).abs() < 0.03,
+                "noise {noise_codes} codes, {scans} scans: said {said}, measured {measured}"
+            );
+        }
+    }
+}
+
+/// In a stall's grace (the tick after the stall's own) a channel with no sample reads
+/// nothing, and a reading the fast path refused is named as the checked path names it.
+#[test]
+fn in_a_stalls_grace_a_channel_with_no_sample_reads_nothing() {
+    use de_resonator::acquire::{Reader, Stall};
+    let fe = front_end(1e-3);
+    let scans = fe.check(TICK_HZ as f32).unwrap();
+    let whole = |current: Option<u16>, amplifier: u16, stretch: u16| {
+        let mut b = Block::EMPTY;
+        for _ in 0..scans {
+            if let Some(code) = current {
+                b.add(Channel::Current, code);
+            }
+            b.add(Channel::Amplifier, amplifier);
+            b.add(Channel::Stretch, stretch);
+        }
+        b
+    };
+    let mut reader = Reader::new(fe, scans);
+    assert!(reader.inputs(&whole(Some(2047), 1000, 2000)).is_ok());
+    let mut stalled = Block::EMPTY;
+    stalled.stalled(Stall::Overrun);
+    assert_eq!(reader.inputs(&stalled), Ok(Inputs::NONE));
+    // The grace tick: no current sample, the rest read.
+    let read = reader.inputs(&whole(None, 1000, 2000)).unwrap();
+    assert_eq!(read.current_amps, None);
+    assert!(read.amplifier_volts.is_some() && read.stretch.is_some());
+    // The same, the amplifier's monitor beyond its plausible range: that one named.
+    let mut reader = Reader::new(fe, scans);
+    assert!(reader.inputs(&whole(Some(2047), 1000, 2000)).is_ok());
+    assert_eq!(reader.inputs(&stalled), Ok(Inputs::NONE));
+    let refused = reader.inputs(&whole(None, 4000, 2000));
+    assert!(
+        matches!(
+            refused,
+            Err(InputError::Implausible {
+                channel: Channel::Amplifier,
+                ..
+            })
+        ),
+        "{refused:?}"
+    );
+    // After the grace an empty channel is a fault again.
+    assert_eq!(
+        reader.inputs(&whole(None, 1000, 2000)),
+        Err(InputError::NoSamples {
+            channel: Channel::Current
+        })
+    );
+}
+
+/// A channel's spec at its edges: infinite noise refused, input 15 (the board has it)
+/// accepted, a range reaching within the rail margin of full scale refused, an empty range
+/// (low = high) refused.
+#[test]
+fn a_channels_spec_is_checked_at_its_edges() {
+    let good = front_end(1e-3);
+    let with = |change: &dyn Fn(&mut ChannelSpec)| {
+        let mut fe = good;
+        if let Some(spec) = fe.channels[1].as_mut() {
+            change(spec);
+        }
+        fe.check(TICK_HZ as f32)
+    };
+    assert!(with(&|_| {}).is_ok());
+    assert!(matches!(
+        with(&|s| s.noise_codes = f32::INFINITY),
+        Err(FrontEndError::Noise { .. })
+    ));
+    assert!(with(&|s| s.input = 15).is_ok(), "input 15 is on the board");
+    // The top of the range 10 codes below full scale: inside the rail's margin of 16.
+    let top = |s: &ChannelSpec| (f32::from(FULL_SCALE_CODE) - 10.0 - s.zero_code) * s.per_count;
+    assert!(matches!(
+        with(&|s| s.high = top(s)),
+        Err(FrontEndError::Range { .. })
+    ));
+    assert!(matches!(
+        with(&|s| s.low = s.high),
+        Err(FrontEndError::Range { .. })
+    ));
+}
