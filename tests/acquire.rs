@@ -1019,3 +1019,15 @@ fn a_channels_spec_is_checked_at_its_edges() {
         Err(FrontEndError::Range { .. })
     ));
 }
+
+/// The tick takes the block the DMA's task filled and leaves an empty one for the next tick.
+#[test]
+fn the_tick_takes_the_block_and_leaves_an_empty_one() {
+    let mut b = Block::EMPTY;
+    b.add(Channel::Current, 2047);
+    b.add(Channel::Stretch, 1000);
+    let taken = b.take();
+    assert_eq!(taken.samples(Channel::Current), 1);
+    assert_eq!(taken.samples(Channel::Stretch), 1);
+    assert_eq!(b, Block::EMPTY);
+}
