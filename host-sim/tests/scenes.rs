@@ -33,12 +33,18 @@ fn documents(file: &str, figures: &[String]) {
         .find(|l| l.starts_with(&format!("| `{file}` |")))
         .unwrap_or_else(|| panic!("docs/scenes.md has no row for {file}"));
     // A figure as its own word: "2 trims" is not found in "12 trims".
+    // As a figure of its own: no digit, point or sign before it, no digit after it.
     let quoted = |figure: &str| {
         row.match_indices(figure).any(|(at, _)| {
-            !row[..at]
+            let before = row[..at]
                 .chars()
                 .next_back()
-                .is_some_and(|c| c.is_ascii_digit() || c == '.' || c == '−' || c == '-')
+                .is_some_and(|c| c.is_ascii_digit() || c == '.' || c == '−' || c == '-');
+            let after = row[at + figure.len()..]
+                .chars()
+                .next()
+                .is_some_and(|c| c.is_ascii_digit());
+            !before && !after
         })
     };
     for figure in figures {

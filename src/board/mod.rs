@@ -4,7 +4,7 @@
 //! ([`port`], in the line [`crate::wire::protocol`] the host shares), turns a tick's output into what the
 //! output stage ([`stage`]) does ([`tick`]: the one enable policy), runs the tick's background
 //! job ([`tick::run_job`]), does the work around a tick and a request that every caller shares
-//! ([`runner`]: the tick's count, a fault's entry, the stream's record, what a reply sets off,
+//! ([`runner`]: the tick's count, a fault's entry, what a reply sets off,
 //! the start-up lines) and feeds the watchdog only while the low-priority tasks check in
 //! ([`watchdog`]). What only hardware
 //! has comes in behind [`Keeper`] (where `save` keeps the settings) and as arguments (the

@@ -1,6 +1,6 @@
 //! The work around a tick and a request, without I/O: the board tick's count since boot, a
 //! fault's entry with the voltage sent before it ([`Ticker`]), what a reply sets off
-//! ([`follow`]) and the start-up lines ([`Started::write_banner`]). The firmware's tasks,
+//! ([`follow`]) and the start-up lines ([`write_reset`], [`Started::write_banner`]). The firmware's tasks,
 //! host-sim's virtual board (`serve`), the core in host-sim's loop and `count` all call these
 //! and only move bytes, so the four cannot drift.
 
@@ -169,19 +169,17 @@ pub fn follow(then: Then, telemetry: &mut Telemetry) -> Follow {
     }
 }
 
+/// The first start-up line after a reset, said before the boot's checks run (a boot that
+/// stalls leaves its cause said): `reset: <cause>` after [`NOTICE`], ended by `end`.
+pub fn write_reset(cause: ResetCause, out: &mut impl fmt::Write, end: &str) -> fmt::Result {
+    write!(out, "{NOTICE}reset: {}{end}", cause.name())
+}
+
 impl Started {
-    /// The start-up lines the command port hears before any request, each after
-    /// [`NOTICE`] and ended by `end`: the reset's cause (if one), the warning (if one), the
-    /// notice (`ready …` or `refused …`).
-    pub fn write_banner(
-        &self,
-        cause: Option<ResetCause>,
-        out: &mut impl fmt::Write,
-        end: &str,
-    ) -> fmt::Result {
-        if let Some(cause) = cause {
-            write!(out, "{NOTICE}reset: {}{end}", cause.name())?;
-        }
+    /// The start-up lines the command port hears after the boot, before any request, each
+    /// after [`NOTICE`] and ended by `end`: the warning (if one), the notice (`ready …` or
+    /// `refused …`). After [`write_reset`]'s line, if a reset came first.
+    pub fn write_banner(&self, out: &mut impl fmt::Write, end: &str) -> fmt::Result {
         if let Some(warning) = &self.warning {
             write!(out, "{NOTICE}warning: {warning}{end}")?;
         }

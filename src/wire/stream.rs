@@ -323,7 +323,8 @@ impl Telemetry {
 
     /// The record of board tick `tick`, if one is due ([`Telemetry::due`]): the state the
     /// tick left (`enabled`: the amplifier on; the controller, if one runs; its readings).
-    /// The firmware's idle loop, `serve`, the core in the loop and `count` all take it here.
+    /// The firmware's idle loop (its link build's `link_reply`), `serve`, the core in the loop
+    /// and `count` all take it here.
     pub fn record(
         &mut self,
         tick: u32,

@@ -1,5 +1,5 @@
 //! The oracle: an independent, plain-SI restatement of model.md §§2–4 (no dimensionless
-//! scaling, no code shared with the core beyond the parameter struct), and checks written
+//! scaling, no code shared with the core beyond the parameter struct and ε0), and checks written
 //! from the model's rules (the way down at the slew rate). What a test asserts against.
 
 use de_resonator::model::device::VACUUM_PERMITTIVITY;

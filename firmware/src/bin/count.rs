@@ -516,7 +516,7 @@ fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
         (Sensing::Current, _) => "sensorless trim (the current only, and λ from C under the probe)",
     };
     defmt::info!(
-        "board tick with {=str}, worst over the cycle: {=u32} instructions ({}; the firmware's own call, `Ticker::tick_block`: the block through the front end, the controller, the DAC frame, a fault's entry; each tick's worst over its block whole, short of a buffer or stalled, the front end at most {=u32})",
+        "board tick with {=str}, worst over the cycle: {=u32} instructions ({}; the call the firmware's tick task makes, `Ticker::tick_block`, over the stand-in bus and pin: the block through the front end, the controller, the DAC frame, a fault's entry; each tick's worst over its block whole, short of a buffer or stalled, the front end at most {=u32})",
         what,
         worst,
         worst_phase,

@@ -196,6 +196,9 @@ mod app {
             defmt::warn!("clock: {}; running on the 16 MHz HSI", e);
         }
         let cause = runtime::take_reset_cause();
+        if let Some(cause) = cause {
+            let _ = runner::write_reset(cause, &mut tx, "\n");
+        }
         let controller = cx.local.slot.write(None);
         let (mut logic, mut started) = logic::Board::boot(
             controller,
@@ -279,7 +282,7 @@ mod app {
         } else {
             defmt::error!("{=str}", notice.as_str());
         }
-        let _ = started.write_banner(cause, &mut tx, "\n");
+        let _ = started.write_banner(&mut tx, "\n");
         #[cfg(feature = "link")]
         let (link_in, link_out) = {
             let link_in = LinkIn::open(board.link, front_end);
@@ -401,8 +404,8 @@ mod app {
         port: &mut impl rtic::Mutex<T = Option<StreamPort>>,
         frame: &mut [u8; FRAME_BYTES],
     ) {
-        // Under one lock with the tick's state (the tick's own is the highest: a short wait
-        // for it when a record is due, none of its work).
+        // Under one lock with the tick's state, every pass (the tick's own is the highest: a
+        // short wait for it, at most the record's, none of its work).
         let record = (telemetry, latest, controller, output_off).lock(|t, latest, c, off| {
             let last = latest.ticks.checked_sub(1)?;
             t.record(last, !*off, c.as_ref(), &latest.readings)

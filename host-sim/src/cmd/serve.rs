@@ -482,7 +482,10 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
     let boot = |slot: &mut Option<Controller>, keeper, cause| {
         let (board, started) = Board::boot(slot, Image::parse(&bytes), keeper, cause);
         let mut banner = String::new();
-        let _ = started.write_banner(cause, &mut banner, "\n");
+        if let Some(cause) = cause {
+            let _ = runner::write_reset(cause, &mut banner, "\n");
+        }
+        let _ = started.write_banner(&mut banner, "\n");
         let said: Vec<String> = banner.lines().map(str::to_string).collect();
         (board, said)
     };
@@ -616,9 +619,10 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
             eprintln!("{line}");
             report.events.push(line);
         }
-        // A fault into the log, as the firmware's command task writes it after the tick.
+        // A fault into the log, as the firmware's command task writes it after the tick, at
+        // the tick rate the board runs at.
         if let Some(logged) = done.logged() {
-            if let Some(Err(e)) = logic.log(&logged, lp.settings.tick_hz) {
+            if let Some(Err(e)) = logic.log(&logged, logic.tick_hz(&slot)) {
                 eprintln!("{} s: the fault log: {e}", sig(t));
             }
         }
