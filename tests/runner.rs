@@ -85,7 +85,15 @@ fn a_reply_sets_off_the_stream_and_the_reset() {
     assert!(record(&mut t, 0).is_none(), "off at boot");
     assert_eq!(follow(Then::Reply, &mut t), Follow::Nothing);
     assert_eq!(follow(Then::Stream(Some(10)), &mut t), Follow::Nothing);
-    let ticks: Vec<u32> = (5..40).filter(|&k| record(&mut t, k).is_some()).collect();
+    // `is_due` (the firmware's look before it takes the tick's locks) says what `record` does.
+    let ticks: Vec<u32> = (5..40)
+        .filter(|&k| {
+            let due = t.is_due(k);
+            let taken = record(&mut t, k).is_some();
+            assert_eq!(due, taken, "tick {k}");
+            taken
+        })
+        .collect();
     assert_eq!(
         ticks,
         [5, 15, 25, 35],

@@ -302,23 +302,30 @@ impl Telemetry {
     /// the ones it missed counted in the sequence.
     pub fn due(&mut self, tick: u32) -> Option<u32> {
         let every = self.every_ticks?;
-        let late = match self.next_tick {
-            None => 0,
-            Some(next) => {
-                let late = tick.wrapping_sub(next);
-                // Before it (a wrapped difference above half the range).
-                if late >= 1 << 31 {
-                    return None;
-                }
-                late
-            }
-        };
+        let late = self.late(tick)?;
         let missed = late / every;
         self.next_tick = Some(tick.wrapping_add(every - late % every));
         self.sequence = self.sequence.wrapping_add(missed);
         let sequence = self.sequence;
         self.sequence = self.sequence.wrapping_add(1);
         Some(sequence)
+    }
+
+    /// Ticks past the next record at board tick `tick` (`None`: off, or before it).
+    fn late(&self, tick: u32) -> Option<u32> {
+        self.every_ticks?;
+        match self.next_tick {
+            None => Some(0),
+            // Before it: a wrapped difference above half the range.
+            Some(next) => Some(tick.wrapping_sub(next)).filter(|late| *late < 1 << 31),
+        }
+    }
+
+    /// Whether a record is due at board tick `tick`, the schedule left as it is: a caller
+    /// that must take the tick's locks for the record asks this first, under the stream's
+    /// own lock (the firmware's idle loop: the tick never waits for a pass with none due).
+    pub fn is_due(&self, tick: u32) -> bool {
+        self.late(tick).is_some()
     }
 
     /// The record of board tick `tick`, if one is due ([`Telemetry::due`]): the state the

@@ -404,8 +404,15 @@ mod app {
         port: &mut impl rtic::Mutex<T = Option<StreamPort>>,
         frame: &mut [u8; FRAME_BYTES],
     ) {
-        // Under one lock with the tick's state, every pass (the tick's own is the highest: a
-        // short wait for it, at most the record's, none of its work).
+        // Whether one is due, under the stream's own lock (below the tick's: the tick never
+        // waits for a pass with none due); then the record under one lock with the tick's
+        // state (a short wait for the tick, the record's, none of its work).
+        let Some(last) = latest.lock(|l| l.ticks.checked_sub(1)) else {
+            return;
+        };
+        if !telemetry.lock(|t| t.is_due(last)) {
+            return;
+        }
         let record = (telemetry, latest, controller, output_off).lock(|t, latest, c, off| {
             let last = latest.ticks.checked_sub(1)?;
             t.record(last, !*off, c.as_ref(), &latest.readings)
