@@ -852,24 +852,18 @@ fn replies_say_why() {
 #[cfg(feature = "storage")]
 #[test]
 fn the_fault_log_lists_the_newest_first_across_resets() {
-    use de_resonator::board::FlashKeeper;
     use de_resonator::fault_log::KEPT;
-    use de_resonator::flash::{RamFlash, RAM_PAGE_BYTES};
+    use de_resonator::flash::RAM_PAGE_BYTES;
     use de_resonator::Fault;
 
     let image = image_with(&Settings::for_target(44.0));
     let mut bytes = vec![0xFFu8; 6 * RAM_PAGE_BYTES];
-    fn keeper(bytes: &mut [u8]) -> FlashKeeper<RamFlash<'_>> {
-        let len = bytes.len() as u32;
-        FlashKeeper {
-            flash: RamFlash::new(bytes),
-            range: 0..(2 * RAM_PAGE_BYTES) as u32,
-            log: Some((2 * RAM_PAGE_BYTES) as u32..len),
-            erase_stalls: false,
-        }
-    }
     {
-        let mut bench = Bench::boot(&image, Some(keeper(&mut bytes)), Some(ResetCause::Watchdog));
+        let mut bench = Bench::boot(
+            &image,
+            Some(flash_keeper(&mut bytes, false)),
+            Some(ResetCause::Watchdog),
+        );
         assert_eq!(bench.ask("faults"), "ok faults=1 | 1 watchdog t=0");
         for n in 0..40u32 {
             let fault = Fault::Sensor { value: n as f32 };
@@ -881,7 +875,11 @@ fn the_fault_log_lists_the_newest_first_across_resets() {
         }
     }
     // A reset: a new board on the same flash.
-    let mut bench = Bench::boot(&image, Some(keeper(&mut bytes)), Some(ResetCause::Asked));
+    let mut bench = Bench::boot(
+        &image,
+        Some(flash_keeper(&mut bytes, false)),
+        Some(ResetCause::Asked),
+    );
     let list = bench.ask("faults");
     let expected: String = (2..=41u32)
         .rev()
@@ -931,7 +929,7 @@ fn the_fault_log_lists_the_newest_first_across_resets() {
     // Clearing erases flash (a stall on a chip): at rest at 0 V only. A board that drives at
     // power-up, ramping:
     drop(bench);
-    let mut bench = Bench::boot(&image, Some(keeper(&mut bytes)), None);
+    let mut bench = Bench::boot(&image, Some(flash_keeper(&mut bytes, false)), None);
     bench.run(10, Inputs::NONE);
     assert_eq!(code(&bench.ask("faults clear")), Some(7), "while ramping");
     assert!(bench.ask("stop").starts_with("ok stop"));
@@ -1211,9 +1209,8 @@ fn a_fault_the_tick_saw_is_logged_at_its_tick_and_time() {
 #[cfg(feature = "storage")]
 #[test]
 fn the_flash_keeper_saves_and_erases_the_log_only_at_boot() {
-    use de_resonator::board::FlashKeeper;
     use de_resonator::fault_log::{ENTRY_BYTES, KEPT};
-    use de_resonator::flash::{RamFlash, RAM_PAGE_BYTES};
+    use de_resonator::flash::RAM_PAGE_BYTES;
     use de_resonator::store::StoreError;
     use de_resonator::Fault;
 
@@ -1221,17 +1218,8 @@ fn the_flash_keeper_saves_and_erases_the_log_only_at_boot() {
     // Two settings pages, then a log of two halves each room for `KEPT` entries.
     let log_pages = 2 * (KEPT * ENTRY_BYTES).div_ceil(RAM_PAGE_BYTES);
     let mut bytes = vec![0xFFu8; (2 + log_pages) * RAM_PAGE_BYTES];
-    fn keeper(bytes: &mut [u8]) -> FlashKeeper<RamFlash<'_>> {
-        let len = bytes.len() as u32;
-        FlashKeeper {
-            flash: RamFlash::new(bytes),
-            range: 0..(2 * RAM_PAGE_BYTES) as u32,
-            log: Some((2 * RAM_PAGE_BYTES) as u32..len),
-            erase_stalls: true,
-        }
-    }
     {
-        let mut bench = Bench::boot(&image, Some(keeper(&mut bytes)), None);
+        let mut bench = Bench::boot(&image, Some(flash_keeper(&mut bytes, true)), None);
         assert!(
             bench.notice.contains(" settings=image "),
             "{}",
@@ -1262,7 +1250,7 @@ fn the_flash_keeper_saves_and_erases_the_log_only_at_boot() {
         );
     }
     // The next boot: the saved settings, and room in the log again.
-    let mut bench = Bench::boot(&image, Some(keeper(&mut bytes)), None);
+    let mut bench = Bench::boot(&image, Some(flash_keeper(&mut bytes, true)), None);
     assert!(
         bench.notice.contains(" settings=saved "),
         "{}",
@@ -1277,4 +1265,21 @@ fn the_flash_keeper_saves_and_erases_the_log_only_at_boot() {
         bench.board.log_fault(&fault, (1, 0.0), 0.0, &Inputs::NONE),
         Some(Ok(_))
     ));
+}
+
+/// The board's keeper on `bytes` of RAM flash: the settings in the first two pages, the fault
+/// log in the rest; `erase_stalls` as on the chip (`true`) or host-sim's RAM (`false`).
+#[cfg(feature = "storage")]
+fn flash_keeper(
+    bytes: &mut [u8],
+    erase_stalls: bool,
+) -> de_resonator::board::FlashKeeper<de_resonator::flash::RamFlash<'_>> {
+    use de_resonator::flash::{RamFlash, RAM_PAGE_BYTES};
+    let len = bytes.len() as u32;
+    de_resonator::board::FlashKeeper {
+        flash: RamFlash::new(bytes),
+        range: 0..(2 * RAM_PAGE_BYTES) as u32,
+        log: Some((2 * RAM_PAGE_BYTES) as u32..len),
+        erase_stalls,
+    }
 }

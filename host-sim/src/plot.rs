@@ -361,6 +361,40 @@ impl Placer {
     }
 }
 
+/// Six places a label may take around a point, `gap` pixels off it: beside, above, below.
+fn around((x, y): (f64, f64), gap: f64) -> [(f64, f64, Anchor); 6] {
+    [
+        (x + gap, y + 4.0, Anchor::Start),
+        (x - gap, y + 4.0, Anchor::End),
+        (x - gap, y - gap, Anchor::End),
+        (x + gap, y - gap, Anchor::Start),
+        (x - gap, y + 8.0 + gap, Anchor::End),
+        (x + gap, y + 8.0 + gap, Anchor::Start),
+    ]
+}
+
+/// A leader line from `(x, y)` to the nearest point of the label placed `at`, where the label
+/// does not touch the point; the labels placed after it keep off it too.
+fn leader(
+    out: &mut String,
+    placer: &mut Placer,
+    (x, y): (f64, f64),
+    at: (f64, f64, Anchor),
+    label: &str,
+    colour: &str,
+) {
+    let r = Rect::of_text(at.0, at.1, label, FONT, at.2);
+    if r.overlaps(&Rect(x - 6.0, y - 6.0, x + 6.0, y + 6.0)) {
+        return;
+    }
+    let (cx, cy) = (x.clamp(r.0, r.2), y.clamp(r.1, r.3));
+    let _ = writeln!(
+        out,
+        r#"<line x1="{x}" y1="{y}" x2="{cx}" y2="{cy}" stroke="{colour}" stroke-width="0.8"/>"#
+    );
+    placer.lines.push(vec![(x, y), (cx, cy)]);
+}
+
 /// A label, on a white halo so that lines under it do not strike it through.
 fn text(out: &mut String, (x, y, anchor): (f64, f64, Anchor), colour: &str, label: &str) {
     let _ = writeln!(
@@ -602,25 +636,11 @@ impl Panel {
                 continue;
             }
             // Where the marks crowd: a little off, with a leader line to the cross.
-            let far = [16.0, 28.0, 44.0, 64.0].into_iter().flat_map(|gap| {
-                [
-                    (x + gap, y + 4.0, Anchor::Start),
-                    (x - gap, y + 4.0, Anchor::End),
-                    (x - gap, y - gap, Anchor::End),
-                    (x + gap, y - gap, Anchor::Start),
-                    (x - gap, y + 8.0 + gap, Anchor::End),
-                    (x + gap, y + 8.0 + gap, Anchor::Start),
-                ]
-            });
+            let far = [16.0, 28.0, 44.0, 64.0]
+                .into_iter()
+                .flat_map(|gap| around((*x, *y), gap));
             if let Some(at) = placer.place(&m.label, far, clear) {
-                let r = Rect::of_text(at.0, at.1, &m.label, FONT, at.2);
-                let (cx, cy) = (x.clamp(r.0, r.2), y.clamp(r.1, r.3));
-                let _ = writeln!(
-                    labels,
-                    r#"<line x1="{x}" y1="{y}" x2="{cx}" y2="{cy}" stroke="{}" stroke-width="0.8"/>"#,
-                    m.colour
-                );
-                placer.lines.push(vec![(*x, *y), (cx, cy)]);
+                leader(&mut labels, &mut placer, (*x, *y), at, &m.label, m.colour);
                 text(&mut labels, at, m.colour, &m.label);
             } else {
                 legend.push((None, format!("× {}", m.label)));
@@ -701,17 +721,7 @@ impl Panel {
             let step = (along.len() / 24).max(1);
             // Beside a point of the line; failing that, a little off it with a leader line
             // to the point (where the lines crowd).
-            let beside = |(x, y): (f64, f64), gap: f64| {
-                [
-                    (x + gap, y + 4.0, Anchor::Start),
-                    (x - gap, y + 4.0, Anchor::End),
-                    (x - gap, y - gap, Anchor::End),
-                    (x + gap, y - gap, Anchor::Start),
-                    (x - gap, y + 8.0 + gap, Anchor::End),
-                    (x + gap, y + 8.0 + gap, Anchor::Start),
-                ]
-                .map(|c| ((x, y), c))
-            };
+            let beside = |p: (f64, f64), gap: f64| around(p, gap).map(|c| (p, c));
             let candidates = [5.0, 16.0, 28.0, 44.0, 64.0].into_iter().flat_map(|gap| {
                 along
                     .iter()
@@ -728,18 +738,8 @@ impl Panel {
                 |_| true,
             );
             match (found, from) {
-                (Some(at), Some((x, y))) => {
-                    let r = Rect::of_text(at.0, at.1, &series.label, FONT, at.2);
-                    if !r.overlaps(&Rect(x - 6.0, y - 6.0, x + 6.0, y + 6.0)) {
-                        // The leader: from the point to the nearest point of the box.
-                        let (cx, cy) = (x.clamp(r.0, r.2), y.clamp(r.1, r.3));
-                        let _ = writeln!(
-                            labels,
-                            r#"<line x1="{x}" y1="{y}" x2="{cx}" y2="{cy}" stroke="{colour}" stroke-width="0.8"/>"#
-                        );
-                        // The labels placed after it keep off it too.
-                        placer.lines.push(vec![(x, y), (cx, cy)]);
-                    }
+                (Some(at), Some(point)) => {
+                    leader(&mut labels, &mut placer, point, at, &series.label, colour);
                     text(&mut labels, at, colour, &series.label)
                 }
                 _ => legend.push((None, format!("{} (no room on the plot)", series.label))),
