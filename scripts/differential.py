@@ -8,25 +8,28 @@ into a temp dir, is served, and `host-sim image --scene` of it is flashed (`info
 checked on both against the flashed file's). Both get the same script over their command port
 (a Unix socket each), in every phase both can reach: ramping, holding, driving, stopped at rest,
 at rest after a `reset` (the output off at 0 V, as at a power-up that waits), ramping after
-`start`; and, on a second pair, refused (settings the boot checks refuse), then at rest after
-`clear`, ramping, driving the image's own AC, ramping down. Bad input in every phase. (serve
-boots a scene's image, which drives at power-up: no image that waits can be served, so the
-output off at 0 V at a boot is reached by `reset` and `clear`, which boot the board that way
-whatever the image's power-up.)
+`start`; on a second pair, refused (settings the boot checks refuse), then at rest after
+`clear`, ramping, driving the image's own AC, ramping down; on a third, faulted: the DAC's
+bus broken 2 s after power-up (serve: the scene's `[faults] dac_bus_fails_after_seconds`;
+the firmware: QEMU's `dac-bus-fails` switch, the same tick), latched at 0 V, `clear` refused
+until the time a descent would take is over, then at rest, and faulted again at `start`'s
+first frame, and again after `reset`. Bad input in every phase. (serve boots a scene's image, which drives at
+power-up: no image that waits can be served, so the output off at 0 V at a boot is reached
+by `reset` and `clear`, which boot the board that way whatever the image's power-up.)
 
-Each reply is read as fields: `ok` or `err <code>`, each `key=value`, the free text (numbers in
-it apart, `text#1`, `text#2`, …); the boot's and the reset's `# …` lines the same way. Every
-field must be equal but those in EXCLUDED (the board's own figures, and what depends on when a
-request lands), each with its reason. Prints a table of what was compared and every
-difference; exit status 1 on any difference, or if a section of the script left the phase it
-was written for (then the boards were not compared where meant).
+Each reply is read as fields: `ok` or `err <code>`, each `key=value` (a key said again
+numbered: `t`, `t#2`, …), the free text (numbers in it apart, `text#1`, `text#2`, …); the
+boot's and the reset's `# …` lines the same way. Every field must be equal but those in
+EXCLUDED (the board's own figures, and what depends on when a request lands), each with its
+reason. Prints a table of what was compared and every difference; exit status 1 on any
+difference, or if a section of the script left the phase it was written for (then the boards
+were not compared where meant).
 
-Faulted: not reached. With no front end (the default QEMU build reads no ADC; a scene's plant
-read through one would not match its empty block) nothing latches a fault while running: every
-runtime fault needs an input (a sensor, the current or amplifier monitor, the trim, tracking),
-the DAC bus fault is injected by host-sim's link only, and QEMU's `sensor-fails` switch needs
-the `model-sensor` build. A refused boot (`err 5`) is compared instead, and `faults`, `faults 1`
-and `faults clear` are asked in every phase on an empty log.
+The broken bus stays broken through `reset` on both (the firmware keeps the switch's break in
+RAM a reset keeps, as a broken wire would stay broken). The other runtime
+faults need an input (a sensor, the current or amplifier monitor, the trim, tracking), and
+the default QEMU build reads none; they are the end-to-end test's (`sensor-fails`) and the
+firmware-in-the-loop's.
 
 Usage: scripts/differential.py [--keep] [ELF [HOST_SIM]]
   ELF       the firmware's QEMU build (default firmware/target/thumbv7em-none-eabihf/release/
@@ -83,6 +86,14 @@ slew_volts_per_second = 5000.0
 REFUSED_AC_HZ = 600.0
 REFUSED_SCENE = SCENE.replace('"differential"', '"differential-refused"').replace(
     "slew_volts_per_second = 5000.0", "slew_volts_per_second = 5000.0\nac_volts = 100.0\nac_hz = {ac_hz}")
+# The third pair: the scene's board with its DAC bus broken 2 s after power-up (serve: the
+# scene's `[faults]`; the firmware: QEMU's `dac-bus-fails` switch, 2 s of ticks), after the
+# ramp to the bias (1.5 s): a runtime fault latched at 0 V.
+BUS_FAILS_SECONDS = 2.0
+FAULTED_SCENE = SCENE + f"""
+[faults]
+dac_bus_fails_after_seconds = {BUS_FAILS_SECONDS}
+"""
 AC_HZ_ID = 6  # ac_hz's id (docs/settings.md)
 SETTINGS_AT = 156  # the image's settings, by id, 8 bytes each from here (src/image.rs, layout 4)
 
@@ -235,11 +246,62 @@ wait volts=0
 status
 """
 
+FAULTED_SCRIPT = """
+== faulted: the DAC's bus broken while holding (0 V at once, latched)
+wait phase=faulted
+@COMMON
+@REFUSED_PLANS
+start
+stop
+target 44
+ac 100 40
+trim
+set slew_volts_per_second 5000
+save
+faults clear
+status
+clear
+== faulted: the descent's time over (the output off)
+wait output=off
+@COMMON
+save
+faults 2
+clear
+== rest: after `clear`, the bus still broken
+wait phase=holding
+@COMMON
+start
+== faulted: again at `start`, the bus still broken
+wait phase=faulted
+status
+faults
+faults 2
+stop
+status
+reset
+== rest: after `reset`, the bus still broken (a wire stays broken through the chip's reset)
+wait phase=holding
+status
+faults
+start
+== faulted: at `start` after the reset
+wait phase=faulted
+status
+faults
+faults 3
+"""
+
 # What is not compared: the board's own figures, and what depends on when a request lands.
 # (field, the sections' kinds it holds for (None: all), the requests (None: all), why)
 # `firmware=` is compared: both name the core's crate and version. No input is fitted, so no
 # reading (`current_amps`, `amplifier_volts`, `stretch`) is in a reply to leave out.
 MOVING = ("ramping", "driving")
+# The faulted pair's last sections: their faults (the dead bus at `start`'s first DAC frame)
+# logged at the tick the request landed.
+AFTER_START = ("faulted: again at `start`, the bus still broken",
+               "rest: after `reset`, the bus still broken (a wire stays broken through the chip's "
+               "reset)",
+               "faulted: at `start` after the reset")
 EXCLUDED = [
     ("tick_cycles_max", None, None,
      "the worst tick in CPU cycles: silicon only (absent under QEMU and on serve)"),
@@ -253,6 +315,11 @@ EXCLUDED = [
      "the output where it is when the request lands, while it ramps or drives the AC"),
     ("text#1", MOVING, ("stop",),
      "`stop: ramp from <V> V`: the same moving output, where the ramp down starts"),
+    ("t", AFTER_START, ("faults",),
+     "the tick of a fault at `start`'s first write, when the request lands"),
+    ("t#2", AFTER_START[2:], ("faults",), "the same, the one before it"),
+    ("tick", AFTER_START, ("faults 2", "faults 3"), "the same faults' ticks"),
+    ("seconds", AFTER_START, ("faults 2", "faults 3"), "the same faults' times"),
 ]
 
 
@@ -337,7 +404,8 @@ NUMBER = re.compile(r"(?<![\w.#])[-+]?\d+(?:\.\d+)?(?:e[-+]?\d+)?(?![\w])")
 def parse(line):
     """A line the board said, as fields: `reply` (`ok`, `err <code>` or `#`), each `key=value`
     (`fault=` and `words=` take the rest of the line: their sentence), and the free text with
-    its numbers apart (`text` with each number `#`, then `text#1`, `text#2`, …)."""
+    its numbers apart (`text` with each number `#`, then `text#1`, `text#2`, …). A key said
+    again is numbered: `t`, `t#2`, …."""
     if line.startswith("err "):
         code, _, rest = line[4:].partition(" ")
         head = f"err {code}"
@@ -347,7 +415,7 @@ def parse(line):
         head, rest = "#", line[2:]
     else:
         head, rest = "(not a reply)", line
-    out, words = [("reply", head)], []
+    out, words, seen = [("reply", head)], [], {}
     while rest:
         m = re.match(r"([a-z_][a-z0-9_.]*)=", rest)
         if m and m.group(1) in ("fault", "words"):
@@ -355,7 +423,10 @@ def parse(line):
             break
         token, _, rest = rest.partition(" ")
         if m:
-            out.append((m.group(1), token[m.end():]))
+            # A key said again (each entry's `t=` in `faults`' list): `t`, `t#2`, ….
+            key = m.group(1)
+            seen[key] = seen.get(key, 0) + 1
+            out.append((key if seen[key] == 1 else f"{key}#{seen[key]}", token[m.end():]))
         elif token:
             words.append(token)
     if words:
@@ -366,10 +437,11 @@ def parse(line):
     return out
 
 
-def excluded(field, kind, request):
-    """The reason a field is not compared here, or None."""
+def excluded(field, kind, section, request):
+    """The reason a field is not compared here (in a section of this kind, `kind: label`),
+    or None."""
     for name, kinds, requests, why in EXCLUDED:
-        if field == name and (kinds is None or kind in kinds) and \
+        if field == name and (kinds is None or kind in kinds or section in kinds) and \
                 (requests is None or request in requests):
             return why
     return None
@@ -412,7 +484,7 @@ def stop_group(proc):
         proc.wait()
 
 
-def pair(work, name, scene_text, image_bytes, sections):
+def pair(work, name, scene_text, image_bytes, sections, qemu_args=None):
     """Serve the scene and run QEMU with the image, the script to both at once; each board's
     start-up lines and exchanges."""
     scene = os.path.join(work, f"{name}.toml")
@@ -431,6 +503,9 @@ def pair(work, name, scene_text, image_bytes, sections):
                QEMU_SERIAL1=f"unix:{sock['fw']},server=on,wait=on",
                QEMU_SERIAL0=f"unix:{sock['fw-stream']},server=on,wait=off")
     env.pop("QEMU_EXTRA", None)
+    env.pop("QEMU_ARGS", None)
+    if qemu_args:
+        env["QEMU_ARGS"] = qemu_args
     env.pop("QEMU_ICOUNT", None)
     qemu = subprocess.Popen([RUNNER, ELF], env=env,
                             stdout=open(os.path.join(work, f"{name}-firmware.log"), "w"),
@@ -488,7 +563,7 @@ def compare(sections, serve, firmware, pair_name):
                 fa, fb = dict(parse(la)), dict(parse(lb))
                 prefix = f"line {k + 1}: " if max(len(a), len(b)) > 1 else ""
                 for field in list(dict.fromkeys([*fa, *fb])):
-                    if excluded(field, kind, request):
+                    if excluded(field, kind, f"{kind}: {label}", request):
                         counts["excluded"] += 1
                         continue
                     counts["compared"] += 1
@@ -562,11 +637,13 @@ def main():
 
     pairs, all_diffs, problems = [], [], []
     totals = {"compared": 0, "excluded": 0, "exchanges": 0}
-    for name, scene, image, script in (
-            ("drives", SCENE, good, SCRIPT),
-            ("refused", REFUSED_SCENE.format(ac_hz=REFUSED_AC_HZ), refused, REFUSED_SCRIPT)):
+    for name, scene, image, script, qemu_args in (
+            ("drives", SCENE, good, SCRIPT, None),
+            ("refused", REFUSED_SCENE.format(ac_hz=REFUSED_AC_HZ), refused, REFUSED_SCRIPT,
+             None),
+            ("faulted", FAULTED_SCENE, good, FAULTED_SCRIPT, "dac-bus-fails")):
         sections = expand(script)
-        serve, firmware = pair(work, name, scene, image, sections)
+        serve, firmware = pair(work, name, scene, image, sections, qemu_args)
         rows, diffs, counts, phase_problems = compare(sections, serve, firmware, name)
         pairs.append((name, sections, rows))
         all_diffs += diffs
@@ -590,6 +667,8 @@ def main():
     print("\nnot compared (EXCLUDED):")
     for field, kinds, requests, why in EXCLUDED:
         where = "everywhere" if kinds is None else "while " + " or ".join(kinds)
+        if kinds and ": " in kinds[0]:
+            where = "in " + ", ".join(f"`{k.split(' (')[0]}`" for k in kinds)
         if requests:
             where += f", in {', '.join(requests)}'s reply"
         print(f"  {field:<16} {where}: {why}")

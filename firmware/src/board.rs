@@ -29,14 +29,16 @@ pub type DacSpi =
     ExclusiveDevice<Spi<SPI1>, Pin<'A', 4, Output<PushPull>>, embedded_hal_bus::spi::NoDelay>;
 /// The amplifier-enable line.
 pub type EnablePin = Pin<'B', 0, Output<PushPull>>;
-/// The output stage's DAC bus and enable line: as wired, or (the link build) tapped, so the
-/// link reports what was last written.
-#[cfg(not(feature = "link"))]
+/// The output stage's DAC bus and enable line: as wired (silicon); under QEMU breakable by a
+/// test (`Breakable`), and in the link build tapped, so the link reports what was last written.
+#[cfg(not(feature = "qemu"))]
 pub type StageSpi = DacSpi;
+#[cfg(all(feature = "qemu", not(feature = "link")))]
+pub type StageSpi = Breakable<DacSpi>;
 #[cfg(not(feature = "link"))]
 pub type StagePin = EnablePin;
 #[cfg(feature = "link")]
-pub type StageSpi = de_resonator::wire::link::Tap<crate::link::Breakable<DacSpi>>;
+pub type StageSpi = de_resonator::wire::link::Tap<Breakable<DacSpi>>;
 #[cfg(feature = "link")]
 pub type StagePin = de_resonator::wire::link::Tap<EnablePin>;
 
@@ -45,11 +47,50 @@ pub fn stage_wires(dac: DacSpi, enable: EnablePin) -> (StageSpi, StagePin) {
     #[cfg(feature = "link")]
     {
         use de_resonator::wire::link::Tap;
-        (Tap::new(crate::link::Breakable(dac)), Tap::new(enable))
+        (Tap::new(Breakable(dac)), Tap::new(enable))
     }
-    #[cfg(not(feature = "link"))]
+    #[cfg(all(feature = "qemu", not(feature = "link")))]
+    {
+        (Breakable(dac), enable)
+    }
+    #[cfg(not(feature = "qemu"))]
     {
         (dac, enable)
+    }
+}
+
+#[cfg(feature = "qemu")]
+pub use breakable::{break_dac_bus, Breakable};
+
+/// A DAC bus a QEMU test can break (QEMU's SPI never fails): from `break_dac_bus` on, every
+/// transaction fails, as a broken wire's would on silicon, through resets (the record in
+/// `runtime::broken_bus`). Broken by host-sim's link (a scene's failing bus) or by QEMU's
+/// `dac-bus-fails` switch.
+#[cfg(feature = "qemu")]
+mod breakable {
+    use embedded_hal::spi::{Error as _, ErrorKind, ErrorType, Operation, SpiDevice};
+
+    use crate::runtime::broken_bus;
+
+    /// The DAC's bus fails from now on, until power-up.
+    pub fn break_dac_bus() {
+        broken_bus::set();
+    }
+
+    /// The board's DAC bus, failing once broken.
+    pub struct Breakable<S>(pub S);
+
+    impl<S: SpiDevice> ErrorType for Breakable<S> {
+        type Error = ErrorKind;
+    }
+
+    impl<S: SpiDevice> SpiDevice for Breakable<S> {
+        fn transaction(&mut self, operations: &mut [Operation<'_, u8>]) -> Result<(), ErrorKind> {
+            if broken_bus::is_set() {
+                return Err(ErrorKind::Other);
+            }
+            self.0.transaction(operations).map_err(|e| e.kind())
+        }
     }
 }
 
@@ -300,7 +341,8 @@ pub fn cycles_into_tick() -> u32 {
 }
 
 /// Whether QEMU was started with the semihosting argument `word` (`busy-idle`,
-/// `sensor-fails`): test switches of QEMU runs, never on silicon.
+/// `sensor-fails`, `tick-hangs`, `dac-bus-fails`): test switches of QEMU runs, never on
+/// silicon.
 pub fn asked(word: &str) -> bool {
     #[cfg(feature = "qemu")]
     {

@@ -10,7 +10,7 @@
 use de_resonator::Event;
 
 #[cfg(feature = "link")]
-pub use transport::{Breakable, LinkIn, LinkOut};
+pub use transport::{LinkIn, LinkOut};
 
 /// What a tick hands the link's reply task: the DAC frame last written (its code, and
 /// whether it powered the DAC), the enable line, the controller's event, and whether a job
@@ -41,12 +41,9 @@ pub enum LinkOut {}
 
 #[cfg(feature = "link")]
 mod transport {
-    use core::sync::atomic::{AtomicBool, Ordering};
-
     use super::{LINK_FRAME, LINK_GONE, LINK_OPEN};
     use de_resonator::acquire::{Block, FrontEnd};
     use de_resonator::wire::link::{self, Kind, BUS_FAILS, HEADER, MAX_FRAME, MAX_PAYLOAD};
-    use embedded_hal::spi::{Error as _, ErrorKind, ErrorType, Operation, SpiDevice};
     use embedded_hal_nb::serial::Read as _;
     use semihosting::fs::File;
     use semihosting::io::{Read as _, Write as _};
@@ -89,7 +86,7 @@ mod transport {
                     Err(code) => crate::runtime::exit(code),
                 };
                 if header.flags & BUS_FAILS != 0 {
-                    BUS_FAILED.store(true, Ordering::Relaxed);
+                    crate::board::break_dac_bus();
                 }
                 let mut count = 0;
                 for (slot, code) in self.codes.iter_mut().zip(link::codes(payload)) {
@@ -174,26 +171,6 @@ mod transport {
             {
                 crate::runtime::exit(LINK_GONE)
             }
-        }
-    }
-
-    /// Set by host-sim's `BUS_FAILS`: the DAC's bus fails from then on.
-    static BUS_FAILED: AtomicBool = AtomicBool::new(false);
-
-    /// The DAC's bus as the link build drives it: the board's, until host-sim breaks it (a scene's
-    /// failing bus; QEMU's SPI never fails).
-    pub struct Breakable<S>(pub S);
-
-    impl<S: SpiDevice> ErrorType for Breakable<S> {
-        type Error = ErrorKind;
-    }
-
-    impl<S: SpiDevice> SpiDevice for Breakable<S> {
-        fn transaction(&mut self, operations: &mut [Operation<'_, u8>]) -> Result<(), ErrorKind> {
-            if BUS_FAILED.load(Ordering::Relaxed) {
-                return Err(ErrorKind::Other);
-            }
-            self.0.transaction(operations).map_err(|e| e.kind())
         }
     }
 }

@@ -52,6 +52,29 @@ pub fn take_reset_cause() -> Option<ResetCause> {
     }
 }
 
+/// QEMU's broken DAC bus (`board::Breakable`), kept through a reset as a broken wire is: a
+/// word of `.uninit` RAM (zeros at QEMU's power-up; QEMU's `sys_reset` keeps it).
+#[cfg(feature = "qemu")]
+pub mod broken_bus {
+    const BROKEN: u32 = 0xB0_5B_AD_0B;
+
+    #[link_section = ".uninit.BUS_BROKEN"]
+    static mut WORD: core::mem::MaybeUninit<u32> = core::mem::MaybeUninit::uninit();
+
+    /// The bus fails from now on, through resets, until power-up.
+    pub fn set() {
+        // SAFETY: a plain store into RAM only this module touches.
+        unsafe { core::ptr::write_volatile(core::ptr::addr_of_mut!(WORD).cast::<u32>(), BROKEN) }
+    }
+
+    /// Whether it is broken.
+    pub fn is_set() -> bool {
+        // SAFETY: reads RAM only this module touches; any bit pattern is a valid u32, and only
+        // the check word says broken.
+        unsafe { core::ptr::read_volatile(core::ptr::addr_of!(WORD).cast::<u32>()) == BROKEN }
+    }
+}
+
 /// End the run with a status (QEMU's exit status under semihosting); on a chip, stop at a
 /// breakpoint.
 pub fn exit(code: i32) -> ! {

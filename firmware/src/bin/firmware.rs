@@ -153,6 +153,10 @@ mod app {
         /// QEMU's test of a stuck tick (semihosting argument `tick-hangs`): the tick hangs
         /// after this many ticks of driving.
         hang_after_ticks: Option<u32>,
+        /// QEMU's test of a broken DAC bus (semihosting argument `dac-bus-fails`): the bus
+        /// fails from this tick since power-up on (as a scene's `dac_bus_fails_after_seconds`
+        /// breaks `host-sim serve`'s).
+        bus_fails_at_tick: Option<u32>,
         dog: Dog,
         /// The low-priority tasks' check-ins, counted in ticks (when the dog is fed).
         check_in: CheckIn,
@@ -347,6 +351,7 @@ mod app {
                 logic,
                 busy_idle: board::asked("busy-idle"),
                 hang_after_ticks: board::asked("tick-hangs").then_some(2 * tick_hz as u32),
+                bus_fails_at_tick: board::asked("dac-bus-fails").then_some(2 * tick_hz as u32),
                 dog: Dog::new(board.iwdg, &board.dbgmcu),
                 check_in: CheckIn::new(tick_hz),
                 #[cfg(feature = "link")]
@@ -429,7 +434,7 @@ mod app {
     }
 
     /// One controller tick: its code to the DAC, the enable line held, the events logged.
-    #[task(binds = SysTick, priority = 3, shared = [controller, tick_cycles_max, last_tick_us, output_off, checked_in, block, latest, logged], local = [stage, sensor, reader, dog, check_in, hang_after_ticks, to_log, driven_ticks: u32 = 0, ticker: Ticker = Ticker::new(), #[cfg(feature = "link")] to_reply])]
+    #[task(binds = SysTick, priority = 3, shared = [controller, tick_cycles_max, last_tick_us, output_off, checked_in, block, latest, logged], local = [stage, sensor, reader, dog, check_in, hang_after_ticks, bus_fails_at_tick, to_log, driven_ticks: u32 = 0, power_up_ticks: u32 = 0, ticker: Ticker = Ticker::new(), #[cfg(feature = "link")] to_reply])]
     fn tick(mut cx: tick::Context) {
         #[cfg(feature = "qemu")]
         cx.shared
@@ -439,6 +444,15 @@ mod app {
         let sensor = cx.local.sensor;
         let mut block = cx.shared.block.lock(Block::take);
         sensor.fill(&mut block);
+        // QEMU's test switch only: the DAC's bus broken before this tick's frame.
+        #[cfg(feature = "qemu")]
+        {
+            let ticks = cx.local.power_up_ticks;
+            if cx.local.bus_fails_at_tick.is_some_and(|n| *ticks >= n) {
+                board::break_dac_bus();
+            }
+            *ticks = ticks.wrapping_add(1);
+        }
         // The core's board tick (`count` counts this call): the block through the front end,
         // the controller's output through the stage, a fault's entry.
         let (ticker, reader) = (cx.local.ticker, cx.local.reader);
