@@ -8,7 +8,10 @@ mod common;
 use common::refused_with;
 use de_resonator::acquire::FrontEnd;
 use de_resonator::board::port::Extras;
-use de_resonator::board::{tick, Board, Keeper, Line, NoKeeper, ReplyLine, ResetCause, Then};
+use de_resonator::board::{
+    tick, Board, FaultKeeper, Keeper, Line, NoKeeper, NoLog, ReplyLine, ResetCause, SettingsKeeper,
+    Then,
+};
 use de_resonator::controller::Held;
 use de_resonator::image::{self, AmplifierSpec, Image, PowerUp, DAC_BITS};
 use de_resonator::wire::protocol::ErrorCode;
@@ -73,6 +76,16 @@ struct Memory {
 }
 
 impl Keeper for &mut Memory {
+    type Log<'a>
+        = NoLog
+    where
+        Self: 'a;
+    fn fault_log(&mut self) -> Option<NoLog> {
+        None
+    }
+}
+
+impl SettingsKeeper for &mut Memory {
     type Error = &'static str;
     fn load(&mut self) -> Result<Option<Held>, Self::Error> {
         if self.broken {
@@ -1145,7 +1158,7 @@ fn a_terminal_gets_echo_and_editing_and_a_program_gets_neither() {
 #[derive(Default)]
 struct Entries(Vec<de_resonator::fault_log::Entry>);
 
-impl Keeper for &mut Entries {
+impl SettingsKeeper for &mut Entries {
     type Error = &'static str;
     fn load(&mut self) -> Result<Option<Held>, Self::Error> {
         Ok(None)
@@ -1153,9 +1166,40 @@ impl Keeper for &mut Entries {
     fn save(&mut self, _: &Settings) -> Result<(), Self::Error> {
         Err("no settings storage")
     }
-    fn log(&mut self, entry: &de_resonator::fault_log::Entry) -> Option<Result<u32, Self::Error>> {
+}
+
+impl Keeper for &mut Entries {
+    type Log<'a>
+        = EntriesLog<'a>
+    where
+        Self: 'a;
+    fn fault_log(&mut self) -> Option<EntriesLog<'_>> {
+        Some(EntriesLog(&mut self.0))
+    }
+}
+
+/// Its fault log, borrowed.
+struct EntriesLog<'a>(&'a mut Vec<de_resonator::fault_log::Entry>);
+
+impl FaultKeeper for EntriesLog<'_> {
+    type Error = &'static str;
+    fn log(&mut self, entry: &de_resonator::fault_log::Entry) -> Result<u32, Self::Error> {
         self.0.push(entry.clone());
-        Some(Ok(self.0.len() as u32))
+        Ok(self.0.len() as u32)
+    }
+    fn prepare(&mut self) -> Result<bool, Self::Error> {
+        Ok(false)
+    }
+    fn each(
+        &mut self,
+        each: &mut dyn FnMut(de_resonator::fault_log::Entry),
+    ) -> Result<(), Self::Error> {
+        self.0.iter().cloned().for_each(each);
+        Ok(())
+    }
+    fn clear(&mut self) -> Result<(), Self::Error> {
+        self.0.clear();
+        Ok(())
     }
 }
 

@@ -5,7 +5,7 @@
 
 use core::fmt::Write as _;
 
-use super::{Board, Keeper, ResetCause, Shared};
+use super::{Board, FaultKeeper, Keeper, ResetCause, Shared};
 use crate::acquire::Inputs;
 use crate::board::port::ReplyLine;
 use crate::controller::Fault;
@@ -21,7 +21,12 @@ impl<K: Keeper> Board<'_, K> {
             ResetCause::BrownOut => Cause::BrownOut,
             ResetCause::Asked => return None,
         };
-        self.keeper.as_mut()?.log(&Entry::of_reset(cause))
+        Some(
+            self.keeper
+                .as_mut()?
+                .fault_log()?
+                .log(&Entry::of_reset(cause)),
+        )
     }
 
     /// Log `fault`, latched at board tick `tick` (`seconds` since boot) with `volts` sent
@@ -39,7 +44,7 @@ impl<K: Keeper> Board<'_, K> {
             stretch: inputs.stretch,
             ..Entry::of_fault(fault, tick, seconds, volts)
         };
-        self.keeper.as_mut()?.log(&entry)
+        Some(self.keeper.as_mut()?.fault_log()?.log(&entry))
     }
 
     /// `faults`, `faults <n>`, `faults clear` (at rest at 0 V only: it erases flash, which
@@ -58,58 +63,49 @@ impl<K: Keeper> Board<'_, K> {
                  (`stop` first)",
             );
         }
-        let Some(keeper) = self.keeper.as_mut() else {
+        let Some(mut log) = self.keeper.as_mut().and_then(Keeper::fault_log) else {
             return super::port::err(out, ErrorCode::Unsupported, "no fault log on this board");
         };
         let done = match ask {
-            FaultsAsk::Clear => keeper.clear_faults().map(|r| {
-                r.map(|()| {
-                    let _ = write!(out, "ok faults cleared");
-                })
+            FaultsAsk::Clear => log.clear().map(|()| {
+                let _ = write!(out, "ok faults cleared");
             }),
             FaultsAsk::One(n) => {
                 let mut found = None;
-                let done = keeper.each_fault(&mut |e| {
+                let done = log.each(&mut |e| {
                     if e.sequence == n {
                         found = Some(e);
                     }
                 });
-                done.map(|r| {
-                    r.map(|()| match found {
-                        Some(e) => one(&e, out),
-                        None => super::port::err(
-                            out,
-                            ErrorCode::Refused,
-                            format_args!("no fault {n} in the log (`faults` lists them)"),
-                        ),
-                    })
+                done.map(|()| match found {
+                    Some(e) => one(&e, out),
+                    None => super::port::err(
+                        out,
+                        ErrorCode::Refused,
+                        format_args!("no fault {n} in the log (`faults` lists them)"),
+                    ),
                 })
             }
             FaultsAsk::List => {
                 // The newest KEPT, newest first (no sort: flash for the firmware).
                 let mut kept: [Option<(u32, Cause, u32)>; KEPT] = [None; KEPT];
-                let done = keeper.each_fault(&mut |e| {
-                    keep_newest(&mut kept, |k| k.0, (e.sequence, e.cause, e.tick))
-                });
-                done.map(|r| {
-                    r.map(|()| {
-                        let _ = write!(out, "ok faults={}", kept.iter().flatten().count());
-                        for (sequence, cause, tick) in kept.iter().flatten() {
-                            // The line's room: the rest said as such, never cut mid-entry.
-                            if out.capacity() - out.len() < ITEM_BYTES + MORE.len() {
-                                let _ = out.push_str(MORE);
-                                break;
-                            }
-                            let _ = write!(out, " | {sequence} {} t={tick}", cause.key());
+                let done = log
+                    .each(&mut |e| keep_newest(&mut kept, |k| k.0, (e.sequence, e.cause, e.tick)));
+                done.map(|()| {
+                    let _ = write!(out, "ok faults={}", kept.iter().flatten().count());
+                    for (sequence, cause, tick) in kept.iter().flatten() {
+                        // The line's room: the rest said as such, never cut mid-entry.
+                        if out.capacity() - out.len() < ITEM_BYTES + MORE.len() {
+                            let _ = out.push_str(MORE);
+                            break;
                         }
-                    })
+                        let _ = write!(out, " | {sequence} {} t={tick}", cause.key());
+                    }
                 })
             }
         };
-        match done {
-            Some(Ok(())) => {}
-            Some(Err(e)) => super::port::err(out, ErrorCode::Refused, e),
-            None => super::port::err(out, ErrorCode::Unsupported, "no fault log on this board"),
+        if let Err(e) = done {
+            super::port::err(out, ErrorCode::Refused, e);
         }
     }
 }

@@ -1,12 +1,12 @@
 //! The board's keeper on a flash (`Keeper`): the saved settings (`store`) and the fault log
-//! (`fault_log`) in their ranges of one flash, each call run to its end at once. Here, above
-//! both, so that neither persistence layer knows the board.
+//! (`fault_log`, through [`FlashLog`]) in their ranges of one flash, each call run to its end
+//! at once. Here, above both, so that neither persistence layer knows the board.
 
 use core::ops::Range;
 
 use embedded_storage_async::nor_flash::NorFlash;
 
-use super::Keeper;
+use super::{FaultKeeper, Keeper, SettingsKeeper};
 use crate::controller::{Held, Settings};
 use crate::fault_log::{self, Entry};
 use crate::flash::{block_on, FlashKind};
@@ -21,13 +21,13 @@ pub struct FlashKeeper<F> {
     /// The fault log's (`crate::fault_log`; `None`: none kept).
     pub log: Option<Range<u32>>,
     /// Whether an erase stalls the chip (its code runs from this flash bank, for longer than
-    /// the watchdog waits): the log then erases only at boot (`Keeper::prepare_faults`), never
+    /// the watchdog waits): the log then erases only at boot (`FaultKeeper::prepare`), never
     /// while running, and `save` and `faults clear` wait for rest at 0 V. The chip, and the
     /// firmware's QEMU stand-in that stalls as the chip does: `true`; host-sim's RAM: `false`.
     pub erase_stalls: bool,
 }
 
-impl<F: NorFlash> Keeper for FlashKeeper<F> {
+impl<F: NorFlash> SettingsKeeper for FlashKeeper<F> {
     type Error = StoreError;
 
     fn load(&mut self) -> Result<Option<Held>, StoreError> {
@@ -39,41 +39,62 @@ impl<F: NorFlash> Keeper for FlashKeeper<F> {
         block_on(save(&mut self.flash, self.range.clone(), settings))
             .unwrap_or(Err(StoreError::Flash(FlashKind::Other)))
     }
+}
 
-    fn log(&mut self, entry: &Entry) -> Option<Result<u32, StoreError>> {
-        let range = self.log.clone()?;
-        let may_erase = !self.erase_stalls;
-        Some(
-            block_on(fault_log::append(&mut self.flash, range, entry, may_erase))
-                .unwrap_or(Err(StoreError::Flash(FlashKind::Other))),
-        )
-    }
+impl<F: NorFlash> Keeper for FlashKeeper<F> {
+    type Log<'a>
+        = FlashLog<'a, F>
+    where
+        F: 'a;
 
     fn erase_stalls(&self) -> bool {
         self.erase_stalls
     }
 
-    fn prepare_faults(&mut self) -> Option<Result<bool, StoreError>> {
-        let range = self.log.clone()?;
-        Some(
-            block_on(fault_log::prepare(&mut self.flash, range))
-                .unwrap_or(Err(StoreError::Flash(FlashKind::Other))),
-        )
+    fn fault_log(&mut self) -> Option<FlashLog<'_, F>> {
+        Some(FlashLog {
+            range: self.log.clone()?,
+            may_erase: !self.erase_stalls,
+            flash: &mut self.flash,
+        })
+    }
+}
+
+/// The fault log's range of a [`FlashKeeper`]'s flash, borrowed from it.
+pub struct FlashLog<'a, F> {
+    flash: &'a mut F,
+    range: Range<u32>,
+    /// Whether an entry may erase a full page (never where an erase stalls the chip: the log
+    /// then erases at boot only, in `prepare`).
+    may_erase: bool,
+}
+
+impl<F: NorFlash> FaultKeeper for FlashLog<'_, F> {
+    type Error = StoreError;
+
+    fn log(&mut self, entry: &Entry) -> Result<u32, StoreError> {
+        let range = self.range.clone();
+        block_on(fault_log::append(
+            &mut *self.flash,
+            range,
+            entry,
+            self.may_erase,
+        ))
+        .unwrap_or(Err(StoreError::Flash(FlashKind::Other)))
     }
 
-    fn each_fault(&mut self, each: &mut dyn FnMut(Entry)) -> Option<Result<(), StoreError>> {
-        let range = self.log.clone()?;
-        Some(
-            block_on(fault_log::each(&mut self.flash, range, each))
-                .unwrap_or(Err(StoreError::Flash(FlashKind::Other))),
-        )
+    fn prepare(&mut self) -> Result<bool, StoreError> {
+        block_on(fault_log::prepare(&mut *self.flash, self.range.clone()))
+            .unwrap_or(Err(StoreError::Flash(FlashKind::Other)))
     }
 
-    fn clear_faults(&mut self) -> Option<Result<(), StoreError>> {
-        let range = self.log.clone()?;
-        Some(
-            block_on(fault_log::clear(&mut self.flash, range))
-                .unwrap_or(Err(StoreError::Flash(FlashKind::Other))),
-        )
+    fn each(&mut self, each: &mut dyn FnMut(Entry)) -> Result<(), StoreError> {
+        block_on(fault_log::each(&mut *self.flash, self.range.clone(), each))
+            .unwrap_or(Err(StoreError::Flash(FlashKind::Other)))
+    }
+
+    fn clear(&mut self) -> Result<(), StoreError> {
+        block_on(fault_log::clear(&mut *self.flash, self.range.clone()))
+            .unwrap_or(Err(StoreError::Flash(FlashKind::Other)))
     }
 }

@@ -7,8 +7,8 @@
 //! ([`runner`]: the tick's count, a fault's entry, what a reply sets off,
 //! the start-up lines) and feeds the watchdog only while the low-priority tasks check in
 //! ([`watchdog`]). What only hardware
-//! has comes in behind [`Keeper`] (where `save` keeps the settings) and as arguments (the
-//! reset's cause, the clock).
+//! has comes in behind [`Keeper`] (where `save` keeps the settings and the fault log is
+//! kept: [`keeper`]) and as arguments (the reset's cause, the clock).
 //!
 //! The controller's slot is not in [`Board`]: the tick owns it under a lock the command task
 //! takes only briefly ([`port::Shared`]), so the long work of a request (a new plan's checks,
@@ -17,6 +17,7 @@
 pub mod faults;
 #[cfg(feature = "storage")]
 mod flash_keeper;
+pub mod keeper;
 pub mod port;
 pub mod runner;
 pub mod stage;
@@ -27,15 +28,15 @@ use core::fmt::{self, Write as _};
 
 use heapless::String;
 
-use crate::controller::{Boot, Controller, Held, SettingSet, Settings};
+use crate::controller::{Boot, Controller, SettingSet, Settings};
 use crate::drive::Amplifier;
-use crate::fault_log::Entry;
 use crate::image::{Image, ImageError, PowerUp};
 use crate::model::safety::FailureMode;
 use crate::numerics::decimal::Decimal;
 
 #[cfg(feature = "storage")]
-pub use flash_keeper::FlashKeeper;
+pub use flash_keeper::{FlashKeeper, FlashLog};
+pub use keeper::{FaultKeeper, Keeper, NoKeeper, NoLog, SettingsKeeper};
 pub use port::{Echo, Line, Lines, Pushed, ReplyLine, Shared, Then, REPLY_END, TERMINAL_REPLY_END};
 
 /// Why the firmware restarted, as it recorded it before the reset.
@@ -57,52 +58,6 @@ impl ResetCause {
             ResetCause::Watchdog => "watchdog",
             ResetCause::BrownOut => "brown_out",
         }
-    }
-}
-
-/// Where `save` keeps the settings across a reset or a power cut (flash on the chip, RAM that
-/// survives a reset under QEMU, memory in host-sim's virtual board).
-pub trait Keeper {
-    type Error: fmt::Display;
-    /// The settings saved last, if any (an older firmware's lack the settings added since).
-    fn load(&mut self) -> Result<Option<Held>, Self::Error>;
-    fn save(&mut self, settings: &Settings) -> Result<(), Self::Error>;
-    /// Whether a flash erase stalls the chip (past its watchdog): `save` and `faults clear`
-    /// then wait for the output at rest at 0 V.
-    fn erase_stalls(&self) -> bool {
-        false
-    }
-    /// Append `entry` to the fault log beside the settings (its sequence number); `None`: no
-    /// fault log here.
-    fn log(&mut self, _entry: &Entry) -> Option<Result<u32, Self::Error>> {
-        None
-    }
-    /// At boot, before anything is driven: make the fault log ready for a run's entries
-    /// (an erase, if one is due; whether it erased); `None`: no fault log here.
-    fn prepare_faults(&mut self) -> Option<Result<bool, Self::Error>> {
-        None
-    }
-    /// Every entry of the fault log, in flash order; `None`: no fault log here.
-    fn each_fault(&mut self, _each: &mut dyn FnMut(Entry)) -> Option<Result<(), Self::Error>> {
-        None
-    }
-    /// Empty the fault log; `None`: no fault log here.
-    fn clear_faults(&mut self) -> Option<Result<(), Self::Error>> {
-        None
-    }
-}
-
-/// No settings storage: `save` answers that it is unsupported.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct NoKeeper;
-
-impl Keeper for NoKeeper {
-    type Error = &'static str;
-    fn load(&mut self) -> Result<Option<Held>, Self::Error> {
-        Ok(None)
-    }
-    fn save(&mut self, _: &Settings) -> Result<(), Self::Error> {
-        Err("no settings storage")
     }
 }
 
@@ -188,8 +143,8 @@ impl<'a, K: Keeper> Board<'a, K> {
         };
         // The fault log ready for the run (a stall here harms nothing); a reset the board did
         // not ask for is its first entry.
-        if let Some(keeper) = board.keeper.as_mut() {
-            let _ = keeper.prepare_faults();
+        if let Some(mut log) = board.keeper.as_mut().and_then(Keeper::fault_log) {
+            let _ = log.prepare();
         }
         if let Some(cause @ (ResetCause::Watchdog | ResetCause::BrownOut)) = cause {
             let _ = board.log_reset(cause);
@@ -206,7 +161,7 @@ impl<'a, K: Keeper> Board<'a, K> {
         board.idle_settings = image.0.settings;
         let mut source = "image";
         let mut warning = ReplyLine::new();
-        let saved = match board.keeper.as_mut().map(Keeper::load) {
+        let saved = match board.keeper.as_mut().map(SettingsKeeper::load) {
             Some(Ok(saved)) => saved,
             Some(Err(e)) => {
                 clause(&mut warning, format_args!("{e}: the image's settings used"));

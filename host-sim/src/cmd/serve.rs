@@ -16,14 +16,11 @@ use clap::Args;
 use de_resonator::board::port::Extras;
 use de_resonator::board::runner::{self, Follow, Ticker};
 use de_resonator::board::FlashKeeper;
-use de_resonator::board::{self, Board, Keeper, Line, Lines, ReplyLine, ResetCause};
-use de_resonator::controller::Held;
-use de_resonator::fault_log::Entry;
+use de_resonator::board::{self, Board, Line, Lines, ReplyLine, ResetCause};
 use de_resonator::flash::{RamFlash, RAM_PAGE_BYTES};
-use de_resonator::store::StoreError;
 use de_resonator::wire::protocol::NOTICE;
 use de_resonator::wire::stream::{self, Telemetry};
-use de_resonator::{Controller, Dac8551, Image, Inputs, OutputStage, Settings};
+use de_resonator::{Controller, Dac8551, Image, Inputs, OutputStage};
 use serde::Serialize;
 
 use super::{sig, Report};
@@ -139,31 +136,6 @@ const LOG_PAGES: usize = 4;
 /// and `faults clear` wait for rest at 0 V and the log erases at boot only, so a script that
 /// passes here passes on silicon.
 const ERASE_STALLS: bool = true;
-
-impl Keeper for &mut Flash {
-    type Error = StoreError;
-    fn erase_stalls(&self) -> bool {
-        ERASE_STALLS
-    }
-    fn load(&mut self) -> Result<Option<Held>, StoreError> {
-        self.keeper().load()
-    }
-    fn save(&mut self, settings: &Settings) -> Result<(), StoreError> {
-        self.keeper().save(settings)
-    }
-    fn log(&mut self, entry: &Entry) -> Option<Result<u32, StoreError>> {
-        self.keeper().log(entry)
-    }
-    fn prepare_faults(&mut self) -> Option<Result<bool, StoreError>> {
-        self.keeper().prepare_faults()
-    }
-    fn each_fault(&mut self, each: &mut dyn FnMut(Entry)) -> Option<Result<(), StoreError>> {
-        self.keeper().each_fault(each)
-    }
-    fn clear_faults(&mut self) -> Option<Result<(), StoreError>> {
-        self.keeper().clear_faults()
-    }
-}
 
 impl Flash {
     fn new() -> Self {
@@ -489,7 +461,7 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
         let said: Vec<String> = banner.lines().map(str::to_string).collect();
         (board, said)
     };
-    let (mut logic, mut banner) = boot(&mut slot, Some(&mut flash), None);
+    let (mut logic, mut banner) = boot(&mut slot, Some(flash.keeper()), None);
     // A request served since the last boot: the start-up line no longer says the state.
     let mut asked_since_boot = false;
     for line in &banner {
