@@ -8,14 +8,15 @@ into a temp dir, is served, and `host-sim image --scene` of it is flashed (`info
 checked on both against the flashed file's). Both get the same script over their command port
 (a Unix socket each), in every phase both can reach: ramping, holding, driving, stopped at rest,
 at rest after a `reset` (the output off at 0 V, as at a power-up that waits), ramping after
-`start`; on a second pair, refused (settings the boot checks refuse), then at rest after
-`clear`, ramping, driving the image's own AC, ramping down; on a third, faulted: the DAC's
+`start`; on a second pair, the same board from an image that waits at power-up (`serve
+--power-up wait`), at rest from the boot, then ramping after `target`, holding, driving,
+down, ramping after `start`, down; on a
+third, refused (settings the boot checks refuse), then at rest after `clear`, ramping,
+driving the image's own AC, ramping down; on a fourth, faulted: the DAC's
 bus broken 2 s after power-up (serve: the scene's `[faults] dac_bus_fails_after_seconds`;
 the firmware: QEMU's `dac-bus-fails` switch, the same tick), latched at 0 V, `clear` refused
 until the time a descent would take is over, then at rest, and faulted again at `start`'s
-first frame, and again after `reset`. Bad input in every phase. (serve boots a scene's image, which drives at
-power-up: no image that waits can be served, so the output off at 0 V at a boot is reached
-by `reset` and `clear`, which boot the board that way whatever the image's power-up.)
+first frame, and again after `reset`. Bad input in every phase.
 
 Each reply is read as fields: `ok` or `err <code>`, each `key=value` (a key said again
 numbered: `t`, `t#2`, …), the free text (numbers in it apart, `text#1`, `text#2`, …); the
@@ -135,9 +136,9 @@ set tick_hz 500
 trim"""
 
 # `== kind: what` starts a section (kind: the phase it is written for, checked by the status
-# at its start and end: ramping, holding, driving, rest, refused); `wait key=value[|value] [S]`
-# asks `status` until it holds (its last reply compared); `@COMMON`, `@WRONG_STATE`,
-# `@REFUSED_PLANS` expand. After a new boot (`clear`, `reset`) the script waits for
+# at its start and end: ramping, holding, driving, rest, refused, faulted);
+# `wait key=value[|value] … [S]` asks `status` until each holds (its last reply compared);
+# `@COMMON`, `@WRONG_STATE`, `@REFUSED_PLANS` expand. After a new boot (`clear`, `reset`) the script waits for
 # `phase=holding` before its next `status`: asked before the boot's first tick, both boards say
 # `phase=ramping` (output off, 0 V), and whether a request lands before that tick is timing.
 SCRIPT = """
@@ -172,7 +173,7 @@ stop
 @WRONG_STATE
 status
 == rest: stopped at 0 V
-wait volts=0
+wait phase=holding volts=0
 @COMMON
 trim
 stop
@@ -201,7 +202,46 @@ stop
 == ramping: down after `stop` while ramping up
 status
 == rest: stopped at 0 V from the ramp
-wait volts=0
+wait phase=holding volts=0
+status
+"""
+
+# The second pair: the same scene's image that waits at power-up (`image --scene --power-up
+# wait`, `serve --power-up wait`), as `host-sim image`'s default board.
+WAITS_SCRIPT = """
+== rest: power-up with an image that waits (the output off at 0 V until `start`)
+wait phase=holding
+@COMMON
+@REFUSED_PLANS
+stop
+trim
+set slew_volts_per_second 5000
+save
+faults clear
+clear
+wait phase=holding
+status
+target 44
+== ramping: after `target 44` (it switches the output on, as its help says)
+@COMMON
+status
+== holding: at the bias
+wait phase=holding
+status
+ac 100 40
+== driving: after `ac 100 40`
+wait phase=driving
+status
+stop
+== rest: stopped at 0 V
+wait phase=holding volts=0
+status
+start
+== ramping: after `start`
+status
+stop
+== rest: stopped at 0 V from the ramp
+wait phase=holding volts=0
 status
 """
 
@@ -242,7 +282,7 @@ stop
 start
 status
 == rest: stopped at 0 V
-wait volts=0
+wait phase=holding volts=0
 status
 """
 
@@ -366,13 +406,15 @@ class Board:
                 lines.append(self.line())
         return lines
 
-    def wait(self, condition, seconds):
-        """`status` until its field holds one of the values; the last reply (None: never)."""
-        key, values = condition.split("=", 1)
+    def wait(self, conditions, seconds):
+        """`status` until each `key=value[|value]` holds; the last reply (None: never)."""
+        wanted = [(key, values.split("|")) for key, _, values in
+                  (c.partition("=") for c in conditions)]
         end = time.monotonic() + seconds
         while time.monotonic() < end:
             reply = self.ask("status")[-1]
-            if fields_of(reply).get(key) in values.split("|"):
+            fields = fields_of(reply)
+            if all(fields.get(key) in values for key, values in wanted):
                 return reply
             time.sleep(0.05)
         return None
@@ -384,8 +426,10 @@ class Board:
             began, done = time.monotonic(), []
             for request in requests:
                 if request.startswith("wait "):
-                    words = request.split()
-                    reply = self.wait(words[1], float(words[2]) if len(words) > 2 else 30.0)
+                    words = request.split()[1:]
+                    seconds = [float(w) for w in words if "=" not in w]
+                    reply = self.wait([w for w in words if "=" in w],
+                                      seconds[0] if seconds else 30.0)
                     done.append((request, [reply if reply else f"(never: {request})"]))
                 else:
                     done.append((request, self.ask(request)))
@@ -484,7 +528,7 @@ def stop_group(proc):
         proc.wait()
 
 
-def pair(work, name, scene_text, image_bytes, sections, qemu_args=None):
+def pair(work, name, scene_text, image_bytes, sections, qemu_args=None, power_up="drive"):
     """Serve the scene and run QEMU with the image, the script to both at once; each board's
     start-up lines and exchanges."""
     scene = os.path.join(work, f"{name}.toml")
@@ -496,7 +540,8 @@ def pair(work, name, scene_text, image_bytes, sections, qemu_args=None):
     sock = {k: os.path.join(work, f"{name}-{k}.sock") for k in ("serve", "serve-stream", "fw",
                                                                   "fw-stream")}
     serve = subprocess.Popen([HOST_SIM, "serve", scene, "--unix", sock["serve"], "--stream-unix",
-                              sock["serve-stream"]], stdout=subprocess.DEVNULL,
+                              sock["serve-stream"], "--power-up", power_up],
+                             stdout=subprocess.DEVNULL,
                              stderr=open(os.path.join(work, f"{name}-serve.log"), "w"),
                              start_new_session=True)
     env = dict(os.environ, QEMU_IMAGE=image, QEMU_TIMEOUT="150",
@@ -625,6 +670,9 @@ def main():
     host_sim("image", "--scene", os.path.join(work, "good.toml"), "--out",
              os.path.join(work, "good.img"))
     good = open(os.path.join(work, "good.img"), "rb").read()
+    host_sim("image", "--scene", os.path.join(work, "good.toml"), "--power-up", "wait",
+             "--out", os.path.join(work, "waits.img"))
+    waits = open(os.path.join(work, "waits.img"), "rb").read()
     with open(os.path.join(work, "twin.toml"), "w") as f:
         f.write(REFUSED_SCENE.format(ac_hz=40.0))
     host_sim("image", "--scene", os.path.join(work, "twin.toml"), "--out",
@@ -637,13 +685,14 @@ def main():
 
     pairs, all_diffs, problems = [], [], []
     totals = {"compared": 0, "excluded": 0, "exchanges": 0}
-    for name, scene, image, script, qemu_args in (
-            ("drives", SCENE, good, SCRIPT, None),
+    for name, scene, image, script, qemu_args, power_up in (
+            ("drives", SCENE, good, SCRIPT, None, "drive"),
+            ("waits", SCENE, waits, WAITS_SCRIPT, None, "wait"),
             ("refused", REFUSED_SCENE.format(ac_hz=REFUSED_AC_HZ), refused, REFUSED_SCRIPT,
-             None),
-            ("faulted", FAULTED_SCENE, good, FAULTED_SCRIPT, "dac-bus-fails")):
+             None, "drive"),
+            ("faulted", FAULTED_SCENE, good, FAULTED_SCRIPT, "dac-bus-fails", "drive")):
         sections = expand(script)
-        serve, firmware = pair(work, name, scene, image, sections, qemu_args)
+        serve, firmware = pair(work, name, scene, image, sections, qemu_args, power_up)
         rows, diffs, counts, phase_problems = compare(sections, serve, firmware, name)
         pairs.append((name, sections, rows))
         all_diffs += diffs

@@ -1290,6 +1290,36 @@ fn image_refuses_a_trim_its_declared_noise_cannot_resolve() {
     let _ = std::fs::remove_file(out);
 }
 
+/// A scene's image drives at power-up, as `run` and `serve` boot it, unless `--power-up wait`
+/// says otherwise (never a flag taken and ignored); the two differ in nothing else that
+/// `--check` reads.
+#[test]
+fn a_scenes_image_takes_the_power_up_asked() {
+    let scene = DeviceFile::new(
+        "power-up-scene.toml",
+        include_str!("../../scenes/reference.toml"),
+    );
+    let dir = std::env::temp_dir().join(format!("host-sim-power-up-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut checked = Vec::new();
+    for asked in [None, Some("wait"), Some("drive")] {
+        let path = dir.join(format!("{}.img", asked.unwrap_or("default")));
+        let path = path.to_str().unwrap();
+        let mut args = vec!["image", "--scene", scene.path(), "--out", path];
+        args.extend(asked.map(|a| ["--power-up", a]).iter().flatten());
+        let out = host_sim(&args);
+        assert!(out.status.success(), "{out:?}");
+        let mut report = json(&["--json", "image", "--check", path]);
+        let power_up = report["power_up"].take();
+        assert_eq!(power_up, asked.unwrap_or("drive"), "{asked:?}");
+        report["file"].take();
+        checked.push(report);
+    }
+    assert_eq!(checked[0], checked[1]);
+    assert_eq!(checked[0], checked[2]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// `image --check` on an image made before a setting was added (here, one whose
 /// `settle_seconds` entry is taken out, as an older host-sim wrote it) names the setting the
 /// board boots at its default, in words and in `--json`'s `defaulted`; today's image names

@@ -141,12 +141,13 @@ def image(
     dac_reference_volts: float = 2.5,
     gain: float = 4000.0,
     rail_volts: Optional[float] = None,
-    power_up: Literal["wait", "drive"] = "wait",
+    power_up: Optional[Literal["wait", "drive"]] = None,
     scene: Optional[Union[str, PathLike[str]]] = None,
     out: Optional[Union[str, PathLike[str]]] = None,
 ) -> Result:
     """The configuration image to flash: `data` (bytes) and what it holds (`verdict`, `table`,
-    `settings`, `amplifier`); ValueError if the firmware's boot would refuse it."""
+    `settings`, `amplifier`); ValueError if the firmware's boot would refuse it. `power_up`:
+    `wait` (the default) or `drive`; a `scene`'s image drives unless it says `wait`."""
 
 def check_image(image: Union[bytes, str, PathLike[str]]) -> Result:
     """What an image or a table holds, and whether the firmware's boot accepts it."""

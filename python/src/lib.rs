@@ -821,12 +821,13 @@ fn run_scene<'py>(py: Python<'py>, scene: &Bound<'py, PyAny>) -> PyResult<Bound<
 /// A configuration image to flash (`host-sim image`): for `device` (None: the reference) with
 /// `settings` (a settings file's path: the keys of a scene's [controller]), `target_hz` (Hz,
 /// over the settings'), the amplifier (`dac_reference_volts` V, `gain` V/V, `rail_volts` V)
-/// and `power_up` (`wait` for `start`, or `drive`); or a scene's image (`scene`: its path).
+/// and `power_up` (`wait` for `start`, the default, or `drive`); or a scene's image (`scene`:
+/// its path; it drives at power-up unless `power_up` is `wait`).
 /// A Result with `data` (the bytes) and `image --check --json`'s keys (`bytes`: their
 /// count); `out` writes them. An image
 /// the firmware's boot would refuse raises ValueError saying why.
 #[pyfunction]
-#[pyo3(signature = (device = None, *, settings = None, target_hz = None, dac_reference_volts = 2.5, gain = 4000.0, rail_volts = None, power_up = "wait", scene = None, out = None))]
+#[pyo3(signature = (device = None, *, settings = None, target_hz = None, dac_reference_volts = 2.5, gain = 4000.0, rail_volts = None, power_up = None, scene = None, out = None))]
 #[allow(clippy::too_many_arguments)]
 fn image<'py>(
     py: Python<'py>,
@@ -836,14 +837,15 @@ fn image<'py>(
     dac_reference_volts: f32,
     gain: f32,
     rail_volts: Option<f32>,
-    power_up: &str,
+    power_up: Option<&str>,
     scene: Option<std::path::PathBuf>,
     out: Option<std::path::PathBuf>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let power_up = match power_up {
-        "wait" => PowerUpArg::Wait,
-        "drive" => PowerUpArg::Drive,
-        other => {
+        None => None,
+        Some("wait") => Some(PowerUpArg::Wait),
+        Some("drive") => Some(PowerUpArg::Drive),
+        Some(other) => {
             return Err(value_error(format!(
                 "power_up `{other}`: `wait` or `drive`"
             )))

@@ -29,8 +29,8 @@ pub struct ImageArgs {
     #[arg(long, value_name = "FILE", conflicts_with_all = ["out", "settings", "target_hz"])]
     pub check: Option<PathBuf>,
     /// The image a scene's board boots from (`run`, `serve`: its device, amplifier, front
-    /// end and settings; it drives at power-up), to flash the same board under QEMU or on a
-    /// chip.
+    /// end and settings; it drives at power-up unless --power-up says `wait`, as `serve
+    /// --power-up wait` boots it), to flash the same board under QEMU or on a chip.
     #[arg(long, value_name = "SCENE.toml", conflicts_with_all = ["check", "settings", "target_hz", "device", "rail_volts"])]
     pub scene: Option<PathBuf>,
     #[command(flatten)]
@@ -68,14 +68,16 @@ pub struct ImageArgs {
     pub rail_volts: Option<f32>,
     /// What the board does once its boot checks pass: `wait` with the output off at 0 V
     /// for `start` (an HV supply's way), or `drive` at once (a bench run).
-    #[arg(long, value_name = "WHEN", value_enum, default_value_t = PowerUpArg::Wait)]
-    pub power_up: PowerUpArg,
+    ///
+    /// Default: `wait`; a --scene's image `drive`, as `run` and `serve` boot it.
+    #[arg(long, value_name = "WHEN", value_enum)]
+    pub power_up: Option<PowerUpArg>,
 }
 
-/// `--power-up`: the image's [`PowerUp`].
+/// `--power-up` (`image`, `serve`): the image's [`PowerUp`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum PowerUpArg {
-    /// The output off at 0 V until `start` (the default).
+    /// The output off at 0 V until `start`.
     Wait,
     /// Ramp to the bias at power-up.
     Drive,
@@ -403,7 +405,9 @@ pub fn amplifier_warnings(args: &ImageArgs) -> Vec<String> {
 pub fn build(args: &ImageArgs, file: String) -> Result<(Vec<u8>, ImageReport), String> {
     if let Some(path) = &args.scene {
         let scene = crate::scene::load(path)?;
-        let bytes = scene.run.image()?;
+        let bytes = scene
+            .run
+            .image(args.power_up.map_or(PowerUp::Drive, PowerUp::from))?;
         let report = describe(&bytes, file)?;
         if let Verdict::Refuses { reason } = &report.verdict {
             return Err(format!(
@@ -446,7 +450,7 @@ pub fn build(args: &ImageArgs, file: String) -> Result<(Vec<u8>, ImageReport), S
         &amplifier,
         &front_end,
         &settings,
-        args.power_up.into(),
+        args.power_up.map_or(PowerUp::Wait, PowerUp::from),
     )
     .map_err(|e| format!("{name}: {e}"))?;
     // Checked before writing: an image the firmware would refuse is not made.

@@ -12,6 +12,7 @@ use crate::engine::closed_loop::{Run, Sample};
 use crate::engine::firmware::Qemu;
 use crate::plot::{svg, Marker, Panel, Series, RED};
 use crate::scene::{self, Scene};
+use de_resonator::image::PowerUp;
 use de_resonator::{Decimal, EventKind, Setting};
 
 #[derive(Args, Debug, Default)]
@@ -357,7 +358,7 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<RunReport, String> {
                 ));
             }
             let wires = scene.run.wires();
-            let image = scene.run.image()?;
+            let image = scene.run.image(PowerUp::Drive)?;
             let mut board = Qemu::start(elf, &image, &std::env::temp_dir(), &wires)?;
             scene.run.run_on(&mut board, &wires)?
         }
@@ -368,7 +369,7 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<RunReport, String> {
             Some(elf) => format!("the firmware {} under QEMU (link build)", elf.display()),
             None => "the core's board on the host".to_string(),
         };
-        let image = scene.run.image()?;
+        let image = scene.run.image(PowerUp::Drive)?;
         let crc = image
             .get(image.len().saturating_sub(4)..)
             .map_or(0, |b| u32::from_le_bytes(b.try_into().unwrap_or([0; 4])));

@@ -23,6 +23,7 @@ use de_resonator::wire::stream::{self, Telemetry};
 use de_resonator::{Controller, Dac8551, Image, Inputs, OutputStage};
 use serde::Serialize;
 
+use super::image::PowerUpArg;
 use super::{sig, Report};
 use crate::scene;
 
@@ -55,6 +56,12 @@ pub struct ServeArgs {
     /// Simulated seconds per wall-clock second, or `max`: as fast as it computes.
     #[arg(long, value_name = "X|max", default_value = "1", value_parser = speed)]
     pub speed: Speed,
+    /// What the board does once its boot checks pass: `drive` the scene's plan at once (a
+    /// scene's image, as `run` boots it), or `wait` with the output off at 0 V for `start`,
+    /// as a board flashed with `host-sim image`'s default does (`image --scene S --power-up
+    /// wait` writes the same bytes).
+    #[arg(long, value_name = "WHEN", value_enum, default_value_t = PowerUpArg::Drive)]
+    pub power_up: PowerUpArg,
     /// Stop after this many simulated seconds, then print a report.
     ///
     /// Default: serve until interrupted.
@@ -414,7 +421,7 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
         }
     };
     // The image the scene's board boots from (`run`'s and the firmware's in the loop).
-    let bytes = lp.image()?;
+    let bytes = lp.image(args.power_up.into())?;
     let mut flash = Flash::new();
     let (listener, at) = if args.pty {
         let (pty, path) = Pty::open()?;

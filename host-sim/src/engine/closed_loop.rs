@@ -335,7 +335,7 @@ impl Loop {
     /// Run the loop for its duration, the core's board on the host.
     pub fn run(&self) -> Result<Run, String> {
         let wires = self.wires();
-        let image = self.image()?;
+        let image = self.image(PowerUp::Drive)?;
         let mut board = CoreBoard::boot(&image, &wires);
         self.run_on(&mut board, &wires)
     }
@@ -343,7 +343,7 @@ impl Loop {
     /// The image `host-sim image` writes for the scene: its device, its amplifier (the
     /// controller told of no rail below the DAC's top code: a saturating amplifier is the
     /// plant's, for the monitor to find), its front end and settings.
-    pub fn image(&self) -> Result<Vec<u8>, String> {
+    pub fn image(&self, power_up: PowerUp) -> Result<Vec<u8>, String> {
         let amplifier = self.amplifier()?;
         let spec = AmplifierSpec {
             dac_reference_volts: self.dac_reference_volts as f32,
@@ -352,13 +352,7 @@ impl Loop {
             dac_bits: DAC_BITS,
         };
         let front_end = self.analog.as_ref().map_or(FrontEnd::NONE, |a| a.front_end);
-        crate::lut::image(
-            self.nominal,
-            &spec,
-            &front_end,
-            &self.settings,
-            PowerUp::Drive,
-        )
+        crate::lut::image(self.nominal, &spec, &front_end, &self.settings, power_up)
     }
 
     /// Run the loop for its duration on `board` (the core's, or the firmware's under QEMU),
