@@ -612,6 +612,53 @@ fn the_scan_rate_leaves_every_tick_a_buffer_at_a_bounded_interrupt_rate() {
     }
 }
 
+/// A whole number of scans a tick, to 1e-4 of it (a crystal's ppm, not a different rate):
+/// 10.0005 scans a tick (5e-5 off) is 10; 10.002 (2e-4 off) is refused.
+#[test]
+fn the_scans_a_tick_are_whole_to_a_ten_thousandth() {
+    let mut fe = front_end(1e-3);
+    for (per_tick, scans) in [
+        (10.0, Ok(10)),
+        (10.0005, Ok(10)),
+        (9.9995, Ok(10)),
+        (10.002, Err(())),
+        (9.998, Err(())),
+    ] {
+        fe.scan_hz = per_tick * TICK_HZ as f32;
+        assert_eq!(fe.check(TICK_HZ as f32).map_err(|_| ()), scans, "{per_tick}");
+    }
+}
+
+/// The trim's input noise is each fitted channel's tick noise at the scans a tick: the
+/// stretch's and the current's (the HV monitor's is not the trim's), none where a channel is
+/// not fitted. Against the noise of a mean of `n` dithered conversions, q·√((σ² + 1/12)/n).
+#[test]
+fn the_trims_input_noise_is_the_stretch_and_current_channels() {
+    let mut fe = front_end(1e-3);
+    fe.channels[0] = fe.channels[0].map(|c| ChannelSpec {
+        noise_codes: 2.0,
+        ..c
+    });
+    fe.channels[2] = fe.channels[2].map(|c| ChannelSpec {
+        noise_codes: 1.0,
+        ..c
+    });
+    let (amps_per_count, stretch_per_count) = (
+        fe.channels[0].unwrap().per_count,
+        fe.channels[2].unwrap().per_count,
+    );
+    let n = 10.0f64;
+    let expect = |q: f32, sigma: f64| f64::from(q) * ((sigma * sigma + 1.0 / 12.0) / n).sqrt();
+    let noise = fe.input_noise(n as u32);
+    let (amps, stretch) = (noise.amps.unwrap(), noise.stretch.unwrap());
+    assert!((f64::from(amps) / expect(amps_per_count, 2.0) - 1.0).abs() < 1e-5);
+    assert!((f64::from(stretch) / expect(stretch_per_count, 1.0) - 1.0).abs() < 1e-5);
+    fe.channels[0] = None;
+    fe.channels[2] = None;
+    let none = fe.input_noise(10);
+    assert_eq!((none.amps, none.stretch), (None, None));
+}
+
 /// The code a reading gives (for stand-ins and studies): rounded, held within the ADC's
 /// range as the converter holds its input.
 #[test]
