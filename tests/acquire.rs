@@ -625,7 +625,11 @@ fn the_scans_a_tick_are_whole_to_a_ten_thousandth() {
         (9.998, Err(())),
     ] {
         fe.scan_hz = per_tick * TICK_HZ as f32;
-        assert_eq!(fe.check(TICK_HZ as f32).map_err(|_| ()), scans, "{per_tick}");
+        assert_eq!(
+            fe.check(TICK_HZ as f32).map_err(|_| ()),
+            scans,
+            "{per_tick}"
+        );
     }
 }
 

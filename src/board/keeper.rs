@@ -45,24 +45,25 @@ pub trait Keeper: SettingsKeeper {
     fn fault_log(&mut self) -> Option<Self::Log<'_>>;
 }
 
-/// No settings storage: `save` answers that it is unsupported; no fault log.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct NoKeeper;
+/// The keeper of a board that keeps nothing (`None::<NoKeeper>`: `save` then answers that
+/// the board has no settings storage, `faults` no fault log). There is no value of it.
+#[derive(Clone, Copy, Debug)]
+pub enum NoKeeper {}
 
 impl SettingsKeeper for NoKeeper {
     type Error = &'static str;
     fn load(&mut self) -> Result<Option<Held>, Self::Error> {
-        Ok(None)
+        match *self {}
     }
     fn save(&mut self, _: &Settings) -> Result<(), Self::Error> {
-        Err("no settings storage")
+        match *self {}
     }
 }
 
 impl Keeper for NoKeeper {
     type Log<'a> = NoLog;
     fn fault_log(&mut self) -> Option<NoLog> {
-        None
+        match *self {}
     }
 }
 
