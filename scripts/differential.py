@@ -79,7 +79,7 @@ gain = 4000.0
 target_hz = 44.0
 slew_volts_per_second = 5000.0
 """
-# The second pair: the image's settings have AC (100 V at 40 Hz) but at 600 Hz, above half the
+# The third pair: the image's settings have AC (100 V at 40 Hz) but at 600 Hz, above half the
 # tick rate: the boot refuses them (a sound image: `set` and `clear` stay open). `image --scene`
 # writes no image the firmware would refuse: the flashed one is the scene's at 40 Hz with
 # ac_hz's value set to 600 and its CRC made again, and `info`'s image_crc says it is the
@@ -87,14 +87,19 @@ slew_volts_per_second = 5000.0
 REFUSED_AC_HZ = 600.0
 REFUSED_SCENE = SCENE.replace('"differential"', '"differential-refused"').replace(
     "slew_volts_per_second = 5000.0", "slew_volts_per_second = 5000.0\nac_volts = 100.0\nac_hz = {ac_hz}")
-# The third pair: the scene's board with its DAC bus broken 2 s after power-up (serve: the
+# The fourth pair: the scene's board with its DAC bus broken 2 s after power-up (serve: the
 # scene's `[faults]`; the firmware: QEMU's `dac-bus-fails` switch, 2 s of ticks), after the
-# ramp to the bias (1.5 s): a runtime fault latched at 0 V.
+# ramp to the bias (1.5 s): a runtime fault latched at 0 V, its entry's `volts` the bias
+# (checked: the fault came while holding).
 BUS_FAILS_SECONDS = 2.0
 FAULTED_SCENE = SCENE + f"""
 [faults]
 dac_bus_fails_after_seconds = {BUS_FAILS_SECONDS}
 """
+# The fault each pair's faulted sections are for.
+FAULT_WORDS = {"faulted": "DAC bus error"}
+# One DAC step of the scene's amplifier (2.5 V reference, gain 4000, 16 bits), V.
+DAC_STEP_VOLTS = 2.5 * 4000.0 / 65536
 AC_HZ_ID = 6  # ac_hz's id (docs/settings.md)
 SETTINGS_AT = 156  # the image's settings, by id, 8 bytes each from here (src/image.rs, layout 4)
 
@@ -214,6 +219,7 @@ wait phase=holding
 @COMMON
 @REFUSED_PLANS
 stop
+wait phase=holding
 trim
 set slew_volts_per_second 5000
 save
@@ -289,6 +295,7 @@ status
 FAULTED_SCRIPT = """
 == faulted: the DAC's bus broken while holding (0 V at once, latched)
 wait phase=faulted
+clear
 @COMMON
 @REFUSED_PLANS
 start
@@ -300,7 +307,6 @@ set slew_volts_per_second 5000
 save
 faults clear
 status
-clear
 == faulted: the descent's time over (the output off)
 wait output=off
 @COMMON
@@ -312,7 +318,7 @@ wait phase=holding
 @COMMON
 start
 == faulted: again at `start`, the bus still broken
-wait phase=faulted
+wait phase=faulted 1
 status
 faults
 faults 2
@@ -325,7 +331,7 @@ status
 faults
 start
 == faulted: at `start` after the reset
-wait phase=faulted
+wait phase=faulted 1
 status
 faults
 faults 3
@@ -619,20 +625,42 @@ def compare(sections, serve, firmware, pair_name):
             for field, x, y in different:
                 diffs.append((pair_name, f"{kind}: {label}".rstrip(": "), request, field, x, y,
                               a, b))
-        # The section was asked in the phase it was written for (first and last status).
+        # The section was asked in the phase it was written for (first and last status; a
+        # faulted one for the pair's fault, at 0 V).
         want = {"rest": ("holding", "0", "off"), "refused": ("refused", "0", "off")}
         for who, seen in statuses.items():
+            if kind != "start-up" and not seen:
+                phase_problems.append(f"{pair_name}, {kind}: {label}: no status asked: its "
+                                      f"phase unchecked")
             for s in (seen[:1] + seen[-1:]) if seen else []:
                 phase = s.get("phase")
                 if kind in want:
                     ok = (phase, s.get("volts"), s.get("output")) == want[kind]
+                elif kind == "faulted":
+                    ok = (phase, s.get("volts"), s.get("fault")) == \
+                        ("faulted", "0", FAULT_WORDS.get(pair_name))
                 else:
                     ok = kind in ("start-up",) or phase == kind
                 if not ok:
                     phase_problems.append(f"{pair_name}, {kind}: {label}: {who}'s status says "
                                           f"phase={phase} volts={s.get('volts')} "
-                                          f"output={s.get('output')}")
+                                          f"output={s.get('output')} fault={s.get('fault')}")
     return rows, diffs, counts, phase_problems
+
+
+def fault_while_holding(*boards):
+    """The faulted pair's first fault came while holding the bias: its entry's `volts` (sent
+    before it) within a DAC step of the boot's `bias_volts`. Problems, if not."""
+    problems = []
+    for board in boards:
+        bias = float(fields_of(board.banner[-1]).get("bias_volts", "nan"))
+        said = [fields_of(lines[-1]) for section in board.out for request, lines in section
+                if request == "faults 1"]
+        volts = [float(f.get("volts", "nan")) for f in said]
+        if not volts or any(not abs(v - bias) <= DAC_STEP_VOLTS for v in volts):
+            problems.append(f"faulted: {board.name}'s first fault sent {volts} V before it, not "
+                            f"the bias {bias} V: the bus broke before the ramp was done")
+    return problems
 
 
 def table(pairs):
@@ -708,6 +736,8 @@ def main():
             if not said or any(c != crc for c in said):
                 problems.append(f"{name}: {board.name}'s info says image_crc {set(said)}, the "
                                 f"flashed image's CRC is {crc}")
+        if name == "faulted":
+            problems += fault_while_holding(serve, firmware)
         times = ", ".join(f"{(s[0][0])} {a:.1f}/{b:.1f} s"
                           for s, a, b in zip(sections, serve.seconds, firmware.seconds))
         print(f"{name}: serve/firmware seconds a section: {times}")

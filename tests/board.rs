@@ -1183,9 +1183,14 @@ struct EntriesLog<'a>(&'a mut Vec<de_resonator::fault_log::Entry>);
 
 impl FaultKeeper for EntriesLog<'_> {
     type Error = &'static str;
+    /// Numbered from 1, as the flash's log numbers its entries.
     fn log(&mut self, entry: &de_resonator::fault_log::Entry) -> Result<u32, Self::Error> {
-        self.0.push(entry.clone());
-        Ok(self.0.len() as u32)
+        let sequence = self.0.len() as u32 + 1;
+        self.0.push(de_resonator::fault_log::Entry {
+            sequence,
+            ..entry.clone()
+        });
+        Ok(sequence)
     }
     fn prepare(&mut self) -> Result<bool, Self::Error> {
         Ok(false)
@@ -1244,6 +1249,46 @@ fn a_fault_the_tick_saw_is_logged_at_its_tick_and_time() {
     assert_eq!(entry.volts, before);
     assert!(before > 0.0);
     assert!(entry.stretch.is_some_and(f32::is_nan));
+    // The next boot reads it through the command port: listed, whole, then cleared at rest.
+    let mut b = Bench::boot(&bytes, Some(&mut entries), None);
+    let listed = b.ask("faults");
+    assert!(
+        listed.starts_with("ok faults=1 | 1 ") && listed.ends_with(" t=40"),
+        "{listed}"
+    );
+    let one = b.ask("faults 1");
+    assert!(
+        one.starts_with("ok sequence=1 ") && one.contains(" tick=40 seconds=0.01 "),
+        "{one}"
+    );
+    assert!(b.ask("stop").starts_with("ok stop"));
+    b.run(100, Inputs::NONE);
+    assert_eq!(b.ask("faults clear"), "ok faults cleared");
+    assert_eq!(b.ask("faults"), "ok faults=0");
+    drop(b);
+    assert!(entries.0.is_empty());
+}
+
+/// A board that keeps its settings but no fault log: `save` keeps them, `faults` answers
+/// that there is no log (unsupported, not an empty one).
+#[test]
+fn a_board_without_a_fault_log_says_so() {
+    let bytes = image_with(&Settings::for_target(44.0));
+    let mut memory = Memory::default();
+    let mut b = Bench::boot(&bytes, Some(&mut memory), None);
+    assert!(b.ask("stop").starts_with("ok stop"));
+    b.run(3000, Inputs::NONE);
+    assert!(b.ask("save").starts_with("ok save"));
+    for request in ["faults", "faults 1", "faults clear"] {
+        let reply = b.ask(request);
+        assert_eq!(
+            reply,
+            format!("err {} no fault log on this board", ErrorCode::Unsupported),
+            "{request}"
+        );
+    }
+    drop(b);
+    assert!(memory.saved.is_some());
 }
 
 /// The board's keeper on a flash (`FlashKeeper`, as on the chip: an erase stalls it): `save`

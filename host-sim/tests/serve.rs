@@ -496,6 +496,34 @@ fn a_half_line_left_behind_runs_nothing_and_glues_to_nothing() {
 }
 
 /// Issue 46, 2: a new connection to a faulted board hears the fault now (not `# ready`).
+/// `serve --power-up wait` boots the scene's image as a board flashed with `image`'s default
+/// boots: the start-up line says the output is off, nothing is driven while it waits (1 s of
+/// simulated time), and `start` ramps to the bias of the f64 solve, then drives the scene's
+/// AC.
+#[test]
+fn a_board_that_waits_at_power_up_drives_only_after_start() {
+    let board = Served::with(None, "20", "waits", &["--power-up", "wait"]);
+    let (report, ok) = board.console(&["status"]);
+    assert!(ok, "{report}");
+    let ready = report["notices"][0].as_str().unwrap();
+    assert!(ready.contains(" power_up=wait output=off"), "{ready}");
+    let resting = board.wait_for("a second at rest", |s| {
+        s.contains("phase=holding") && number(s, "ticks") >= 1000.0
+    });
+    assert!(
+        resting.contains(" volts=0 ") && resting.contains(" output=off"),
+        "{resting}"
+    );
+    let (report, ok) = board.console(&["start"]);
+    assert!(ok, "{report}");
+    let driving = board.wait_for("the drive", |s| s.contains("phase=driving"));
+    assert!(
+        close(number(&driving, "bias_volts"), tuned_bias(44.0), 1e-4)
+            && driving.contains(" output=on"),
+        "{driving}"
+    );
+}
+
 #[test]
 fn a_new_connection_to_a_faulted_board_hears_the_fault() {
     let board = Served::start(

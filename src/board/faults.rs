@@ -14,6 +14,11 @@ use crate::numerics::decimal::Decimal;
 use crate::wire::protocol::{ErrorCode, FaultsAsk};
 
 impl<K: Keeper> Board<'_, K> {
+    /// The fault log, if the board keeps one.
+    pub(super) fn fault_log(&mut self) -> Option<K::Log<'_>> {
+        self.keeper.as_mut()?.fault_log()
+    }
+
     /// Log a reset the boot found; `None` without a log.
     pub(super) fn log_reset(&mut self, cause: ResetCause) -> Option<Result<u32, K::Error>> {
         let cause = match cause {
@@ -44,7 +49,7 @@ impl<K: Keeper> Board<'_, K> {
             stretch: inputs.stretch,
             ..Entry::of_fault(fault, tick, seconds, volts)
         };
-        Some(self.keeper.as_mut()?.fault_log()?.log(&entry))
+        Some(self.fault_log()?.log(&entry))
     }
 
     /// `faults`, `faults <n>`, `faults clear` (at rest at 0 V only: it erases flash, which
@@ -63,7 +68,7 @@ impl<K: Keeper> Board<'_, K> {
                  (`stop` first)",
             );
         }
-        let Some(mut log) = self.keeper.as_mut().and_then(Keeper::fault_log) else {
+        let Some(mut log) = self.fault_log() else {
             return super::port::err(out, ErrorCode::Unsupported, "no fault log on this board");
         };
         let done = match ask {

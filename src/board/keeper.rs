@@ -36,8 +36,9 @@ pub trait Keeper: SettingsKeeper {
     type Log<'a>: FaultKeeper<Error = Self::Error>
     where
         Self: 'a;
-    /// Whether a flash erase stalls the chip (past its watchdog): `save` and `faults clear`
-    /// then wait for the output at rest at 0 V.
+    /// Whether a flash erase stalls the chip (past its watchdog): `save` then waits for the
+    /// output at rest at 0 V, and the log erases at boot only (`faults clear` waits for rest
+    /// on every board).
     fn erase_stalls(&self) -> bool {
         false
     }

@@ -143,7 +143,7 @@ impl<'a, K: Keeper> Board<'a, K> {
         };
         // The fault log ready for the run (a stall here harms nothing); a reset the board did
         // not ask for is its first entry.
-        if let Some(mut log) = board.keeper.as_mut().and_then(Keeper::fault_log) {
+        if let Some(mut log) = board.fault_log() {
             let _ = log.prepare();
         }
         if let Some(cause @ (ResetCause::Watchdog | ResetCause::BrownOut)) = cause {

@@ -156,6 +156,7 @@ mod app {
         /// QEMU's test of a broken DAC bus (semihosting argument `dac-bus-fails`): the bus
         /// fails from this tick since power-up on (as a scene's `dac_bus_fails_after_seconds`
         /// breaks `host-sim serve`'s).
+        #[cfg(feature = "qemu")]
         bus_fails_at_tick: Option<u32>,
         dog: Dog,
         /// The low-priority tasks' check-ins, counted in ticks (when the dog is fed).
@@ -351,6 +352,7 @@ mod app {
                 logic,
                 busy_idle: board::asked("busy-idle"),
                 hang_after_ticks: board::asked("tick-hangs").then_some(2 * tick_hz as u32),
+                #[cfg(feature = "qemu")]
                 bus_fails_at_tick: board::asked("dac-bus-fails").then_some(2 * tick_hz as u32),
                 dog: Dog::new(board.iwdg, &board.dbgmcu),
                 check_in: CheckIn::new(tick_hz),
@@ -434,7 +436,7 @@ mod app {
     }
 
     /// One controller tick: its code to the DAC, the enable line held, the events logged.
-    #[task(binds = SysTick, priority = 3, shared = [controller, tick_cycles_max, last_tick_us, output_off, checked_in, block, latest, logged], local = [stage, sensor, reader, dog, check_in, hang_after_ticks, bus_fails_at_tick, to_log, driven_ticks: u32 = 0, power_up_ticks: u32 = 0, ticker: Ticker = Ticker::new(), #[cfg(feature = "link")] to_reply])]
+    #[task(binds = SysTick, priority = 3, shared = [controller, tick_cycles_max, last_tick_us, output_off, checked_in, block, latest, logged], local = [stage, sensor, reader, dog, check_in, hang_after_ticks, #[cfg(feature = "qemu")] bus_fails_at_tick, to_log, driven_ticks: u32 = 0, #[cfg(feature = "qemu")] power_up_ticks: u32 = 0, ticker: Ticker = Ticker::new(), #[cfg(feature = "link")] to_reply])]
     fn tick(mut cx: tick::Context) {
         #[cfg(feature = "qemu")]
         cx.shared

@@ -26,7 +26,7 @@ pub struct ImageArgs {
     pub out: Option<PathBuf>,
     /// Read FILE (an image or a table) back instead: what it holds, and whether the
     /// firmware's boot checks accept it (status 1 if not).
-    #[arg(long, value_name = "FILE", conflicts_with_all = ["out", "settings", "target_hz"])]
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["out", "settings", "target_hz", "power_up"])]
     pub check: Option<PathBuf>,
     /// The image a scene's board boots from (`run`, `serve`: its device, amplifier, front
     /// end and settings; it drives at power-up unless --power-up says `wait`, as `serve

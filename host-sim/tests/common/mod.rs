@@ -32,20 +32,26 @@ impl Served {
     /// Serve `scene` (`None`: the reference scene) at `speed` on a Unix socket named `name`,
     /// or on TCP (`name` = `tcp`, a port the system picks).
     pub fn start(scene: Option<&str>, speed: &str, name: &str) -> Self {
-        Self::serve(scene, speed, name, false)
+        Self::serve(scene, speed, name, false, &[])
     }
 
     /// As `start` (on a Unix socket), with the telemetry stream on a second one.
     pub fn streaming(scene: Option<&str>, speed: &str, name: &str) -> Self {
-        Self::serve(scene, speed, name, true)
+        Self::serve(scene, speed, name, true, &[])
     }
 
-    fn serve(scene: Option<&str>, speed: &str, name: &str, streaming: bool) -> Self {
+    /// As `start`, with more of serve's arguments.
+    pub fn with(scene: Option<&str>, speed: &str, name: &str, args: &[&str]) -> Self {
+        Self::serve(scene, speed, name, false, args)
+    }
+
+    fn serve(scene: Option<&str>, speed: &str, name: &str, streaming: bool, args: &[&str]) -> Self {
         let mut command = host_sim();
         command.arg("serve");
         if let Some(scene) = scene {
             command.arg(scene);
         }
+        command.args(args);
         let socket = scratch("serve").join(format!("{name}.sock"));
         let socket = socket.to_str().unwrap().to_string();
         let tcp = name == "tcp";
