@@ -80,3 +80,8 @@ def test_the_image_is_the_clis_and_its_check_accepts_it(host_sim, tmp_path):
         dr.image(power_up="later")
     scene = dr.image(scene=ROOT / "scenes" / "reference.toml")
     assert scene.verdict == dr.check_image(scene.data).verdict
+    # A scene's image drives at power-up, as run and serve boot it, unless asked to wait; a
+    # device's waits unless asked to drive.
+    assert (scene.power_up, made.power_up, dr.image().power_up) == ("drive", "drive", "wait")
+    waits = dr.image(scene=ROOT / "scenes" / "reference.toml", power_up="wait")
+    assert waits.power_up == "wait" and waits.data != scene.data
