@@ -10,7 +10,7 @@ mod common;
 use common::Plant;
 use common::{amplifier, assert_way_down, made_table};
 use de_resonator::{
-    Amplifier, Controller, DacCode, Device, DeviceParams, Event, Inputs, Phase, Settings, Tuner,
+    Controller, DacCode, Device, DeviceParams, Event, Inputs, Phase, Settings, Tuner,
     REFERENCE_DEVICE,
 };
 
@@ -311,7 +311,7 @@ fn a_retune_past_the_amplifier_is_refused_when_it_comes() {
         .unwrap()
         .volts as f32;
     let full_scale = needs + 10.0;
-    let amplifier = Amplifier::new(2.5, full_scale / 2.5).unwrap();
+    let amplifier = de_resonator::Amplifier::new(2.5, full_scale / 2.5).unwrap();
     let (mut c, _) =
         Controller::start(REFERENCE_DEVICE.cast(), &table, amplifier, settings).unwrap();
     let mut p = common::Plant::new(plant, 1000.0);
