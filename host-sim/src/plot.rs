@@ -981,9 +981,28 @@ pub fn svg(panels: &[Panel]) -> String {
             }
         }
     }
+    // Columns aligned across rows where the page allows (each as wide as its widest panel),
+    // so that panels stacked in a column (a zoom beside each plot) share their left edge.
+    let columns = rows.iter().map(Vec::len).max().unwrap_or(0);
+    let column_widths: Vec<f64> = (0..columns)
+        .map(|j| {
+            rows.iter()
+                .filter_map(|r| r.get(j))
+                .map(|&k| widths[k])
+                .fold(0.0, f64::max)
+        })
+        .collect();
+    let aligned = column_widths.iter().sum::<f64>() <= MAX_WIDTH;
+    let x0 = |row: &[usize], j: usize| -> f64 {
+        if aligned {
+            column_widths[..j].iter().sum()
+        } else {
+            row[..j].iter().map(|&k| widths[k]).sum()
+        }
+    };
     let total = rows
         .iter()
-        .map(|r| r.iter().map(|&k| widths[k]).sum::<f64>())
+        .map(|r| x0(r, r.len()))
         .fold(WIDTH, f64::max)
         .ceil();
     let height = HEIGHT * rows.len().max(1) as f64;
@@ -993,9 +1012,8 @@ pub fn svg(panels: &[Panel]) -> String {
 "#
     );
     for (r, row) in rows.iter().enumerate() {
-        let mut x0 = 0.0;
-        for &k in row {
-            x0 += panels[k].draw(&mut out, x0, HEIGHT * r as f64);
+        for (j, &k) in row.iter().enumerate() {
+            panels[k].draw(&mut out, x0(row, j), HEIGHT * r as f64);
         }
     }
     out.push_str("</svg>\n");
@@ -1115,6 +1133,52 @@ mod tests {
         assert!(doc.starts_with("<svg") && doc.ends_with("</svg>\n"));
         assert_eq!(doc.matches("<polyline").count(), 4);
         assert!(doc.contains("a &lt; b"));
+    }
+
+    /// Panels stacked in a column share their left edge whatever the legends beside the
+    /// panels before them (a plot with its zoom beside it, on two rows).
+    #[test]
+    fn a_columns_panels_share_their_left_edge() {
+        let named = |name: &str| Panel {
+            series: vec![
+                Series {
+                    name: name.into(),
+                    points: vec![(1.0, 1.0), (2.0, 4.0)],
+                    ..Series::default()
+                },
+                Series {
+                    name: "b".into(),
+                    points: vec![(1.0, 2.0), (2.0, 3.0)],
+                    ..Series::default()
+                },
+            ],
+            ..Panel::default()
+        };
+        let zoom = Panel {
+            series: vec![Series {
+                points: vec![(1.0, 1.0), (2.0, 4.0)],
+                ..Series::default()
+            }],
+            ..Panel::default()
+        };
+        let (short, long) = (named("a"), named("amplifier output"));
+        let doc = svg(&[short, zoom.clone(), long, zoom]);
+        // The plot frames' corners, in the order drawn: row 0's two, then row 1's.
+        let frames: Vec<(f64, f64)> = doc
+            .lines()
+            .filter(|l| l.starts_with("<rect x=") && l.contains(r##"stroke="#444""##))
+            .map(|l| {
+                let number = |key: &str| -> f64 {
+                    let rest = &l[l.find(key).unwrap() + key.len()..];
+                    rest[..rest.find('"').unwrap()].parse().unwrap()
+                };
+                (number(" x=\""), number(" y=\""))
+            })
+            .collect();
+        assert_eq!(frames.len(), 4, "{frames:?}");
+        assert!(frames[0].1 < frames[2].1, "two rows: {frames:?}");
+        assert_eq!(frames[0].0, frames[2].0, "{frames:?}");
+        assert_eq!(frames[1].0, frames[3].0, "{frames:?}");
     }
 
     /// A million-point oscillation is drawn as its envelope: the same extremes in each pixel
