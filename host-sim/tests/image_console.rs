@@ -74,14 +74,16 @@ fn an_image_needs_a_target_for_another_device_and_refuses_what_the_firmware_woul
     let out_path = scratch("stiff.img");
     let o = out_path.to_str().unwrap();
     let out = host_sim(&["image", "--device", d, "--out", o]);
-    assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("--target-hz"));
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{said}");
+    assert!(said.contains("--target-hz"), "{said}");
     // A target outside the device's range: the firmware would refuse, so nothing is written.
     let _ = std::fs::remove_file(&out_path);
     let out = host_sim(&["image", "--device", d, "--target-hz", "5", "--out", o]);
-    assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("would refuse"));
-    assert!(!out_path.exists());
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{said}");
+    assert!(said.contains("would refuse"), "{said}");
+    assert!(!out_path.exists(), "{} written: {said}", out_path.display());
 }
 
 #[test]
