@@ -1111,23 +1111,27 @@ mod tests {
         assert!(fine.ticks().iter().any(|(_, l)| l == "0.6"));
     }
 
+    /// A panel of two named lines.
+    fn two_series(first: &str, second: &str) -> Panel {
+        let line = |name: &str, points: Vec<(f64, f64)>| Series {
+            name: name.into(),
+            points,
+            ..Series::default()
+        };
+        Panel {
+            series: vec![
+                line(first, vec![(1.0, 1.0), (2.0, 4.0)]),
+                line(second, vec![(1.0, 2.0), (2.0, 3.0)]),
+            ],
+            ..Panel::default()
+        }
+    }
+
     #[test]
     fn svg_is_one_document_with_a_line_per_series() {
         let panel = Panel {
             title: "a < b".into(),
-            series: vec![
-                Series {
-                    name: "one".into(),
-                    points: vec![(1.0, 1.0), (2.0, 4.0)],
-                    ..Series::default()
-                },
-                Series {
-                    name: "two".into(),
-                    points: vec![(1.0, 2.0), (2.0, 3.0)],
-                    ..Series::default()
-                },
-            ],
-            ..Panel::default()
+            ..two_series("one", "two")
         };
         let doc = svg(&[panel.clone(), panel]);
         assert!(doc.starts_with("<svg") && doc.ends_with("</svg>\n"));
@@ -1139,21 +1143,6 @@ mod tests {
     /// panels before them (a plot with its zoom beside it, on two rows).
     #[test]
     fn a_columns_panels_share_their_left_edge() {
-        let named = |name: &str| Panel {
-            series: vec![
-                Series {
-                    name: name.into(),
-                    points: vec![(1.0, 1.0), (2.0, 4.0)],
-                    ..Series::default()
-                },
-                Series {
-                    name: "b".into(),
-                    points: vec![(1.0, 2.0), (2.0, 3.0)],
-                    ..Series::default()
-                },
-            ],
-            ..Panel::default()
-        };
         let zoom = Panel {
             series: vec![Series {
                 points: vec![(1.0, 1.0), (2.0, 4.0)],
@@ -1161,7 +1150,7 @@ mod tests {
             }],
             ..Panel::default()
         };
-        let (short, long) = (named("a"), named("amplifier output"));
+        let (short, long) = (two_series("a", "b"), two_series("amplifier output", "b"));
         let doc = svg(&[short, zoom.clone(), long, zoom]);
         // The plot frames' corners, in the order drawn: row 0's two, then row 1's.
         let frames: Vec<(f64, f64)> = doc

@@ -26,12 +26,7 @@ impl<K: Keeper> Board<'_, K> {
             ResetCause::BrownOut => Cause::BrownOut,
             ResetCause::Asked => return None,
         };
-        Some(
-            self.keeper
-                .as_mut()?
-                .fault_log()?
-                .log(&Entry::of_reset(cause)),
-        )
+        Some(self.fault_log()?.log(&Entry::of_reset(cause)))
     }
 
     /// Log `fault`, latched at board tick `tick` (`seconds` since boot) with `volts` sent

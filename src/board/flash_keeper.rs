@@ -31,13 +31,11 @@ impl<F: NorFlash> SettingsKeeper for FlashKeeper<F> {
     type Error = StoreError;
 
     fn load(&mut self) -> Result<Option<Held>, StoreError> {
-        block_on(load(&mut self.flash, self.range.clone()))
-            .unwrap_or(Err(StoreError::Flash(FlashKind::Other)))
+        at_once(load(&mut self.flash, self.range.clone()))
     }
 
     fn save(&mut self, settings: &Settings) -> Result<(), StoreError> {
-        block_on(save(&mut self.flash, self.range.clone(), settings))
-            .unwrap_or(Err(StoreError::Flash(FlashKind::Other)))
+        at_once(save(&mut self.flash, self.range.clone(), settings))
     }
 }
 
@@ -73,28 +71,26 @@ impl<F: NorFlash> FaultKeeper for FlashLog<'_, F> {
     type Error = StoreError;
 
     fn log(&mut self, entry: &Entry) -> Result<u32, StoreError> {
-        let range = self.range.clone();
-        block_on(fault_log::append(
-            &mut *self.flash,
-            range,
-            entry,
-            self.may_erase,
-        ))
-        .unwrap_or(Err(StoreError::Flash(FlashKind::Other)))
+        let (range, may_erase) = (self.range.clone(), self.may_erase);
+        at_once(fault_log::append(&mut *self.flash, range, entry, may_erase))
     }
 
     fn prepare(&mut self) -> Result<bool, StoreError> {
-        block_on(fault_log::prepare(&mut *self.flash, self.range.clone()))
-            .unwrap_or(Err(StoreError::Flash(FlashKind::Other)))
+        at_once(fault_log::prepare(&mut *self.flash, self.range.clone()))
     }
 
     fn each(&mut self, each: &mut dyn FnMut(Entry)) -> Result<(), StoreError> {
-        block_on(fault_log::each(&mut *self.flash, self.range.clone(), each))
-            .unwrap_or(Err(StoreError::Flash(FlashKind::Other)))
+        at_once(fault_log::each(&mut *self.flash, self.range.clone(), each))
     }
 
     fn clear(&mut self) -> Result<(), StoreError> {
-        block_on(fault_log::clear(&mut *self.flash, self.range.clone()))
-            .unwrap_or(Err(StoreError::Flash(FlashKind::Other)))
+        at_once(fault_log::clear(&mut *self.flash, self.range.clone()))
     }
+}
+
+/// A flash call run to its end at once; one that still waits is a flash error.
+fn at_once<T>(
+    call: impl core::future::Future<Output = Result<T, StoreError>>,
+) -> Result<T, StoreError> {
+    block_on(call).unwrap_or(Err(StoreError::Flash(FlashKind::Other)))
 }
