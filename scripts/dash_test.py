@@ -9,10 +9,17 @@
 `serve`: the reference scene, then a fault scene. Asserts: no console errors on load; the
 stream's sequence advances on the page, its gaps counted as the board's link counts them; a
 target in the tunable range moves the bias (read back over the port by a second client and
-on the page), and its reply within 100 ms of the click; one out of range shows the board's
-`err` verbatim; Stop brings the plotted voltage to 0 V and the output off; a fault scene
-shows the fault in words, in the fault log and its descent at the slew rate; `clear` then
-`start` ramps again; a recording made from the page has `console --record`'s columns.
+on the page), and its reply within 100 ms of the click; the setting's help then says the new
+target; one out of range shows the board's `err` verbatim; one tunable range in `safe`,
+`info`, the page and the board (its ends taken and refused); Stop brings the plotted voltage
+to 0 V and the output off; a fault scene shows the fault in words, in the fault log and its
+descent at the slew rate, with STOP, the output and the fault in view at 360, 800 and 1,400 px;
+`clear` then `start` ramps again; a recording made from the page has `console --record`'s
+columns. Then (issue 58): a dash served beyond loopback refuses forged requests (no token, a
+wrong one; 401) and the board never hears them, while its printed URL opens the page and drives
+the board; a second dash says it does not control the board, and its STOP stops it; when the
+first leaves, the second takes over and its plots move again; serve killed while driving: the
+bar says the board is lost (never its last voltage), and the page recovers when serve is back.
 `qemu`: the page against the firmware (scripts/qemu.sh --no-console): loads, shows live
 records and the board's status. Needs chromium, chromium-driver and selenium 4.51.0
 (scripts/test-all.sh installs them).
@@ -30,6 +37,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import urllib.error
 import urllib.request
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -95,15 +103,37 @@ def serve(host_sim, scene, speed="1"):
                      "--stream-tcp", f"127.0.0.1:{stream_port}"]
 
 
-def dash(host_sim, board, stream_hz=250):
-    """`host-sim dash` on the board: the process and the page's address."""
-    process = start([host_sim, "dash", *board, "--listen", "127.0.0.1:0",
+def dash(host_sim, board, stream_hz=250, listen="127.0.0.1:0"):
+    """`host-sim dash` on the board: the process and the page's URL (its token in it)."""
+    process = start([host_sim, "dash", *board, "--listen", listen,
                      "--stream-hz", str(stream_hz)])
     line = process.stdout.readline()
     if not line.startswith("dash: open "):
         process.kill()
         fail(f"dash printed no address: {line!r} {process.stderr.read()}")
     return process, line.split()[-1]
+
+
+def base(url):
+    """The page's address without its token: `http://host:port/`."""
+    return url.split("?")[0]
+
+
+def api(url, path, data=None, headers=None):
+    """A request of dash's API as a tool makes it (the token in `Authorization`): its JSON."""
+    token = url.split("token=")[1]
+    request = urllib.request.Request(base(url) + path, data=data, headers={
+        "Authorization": f"Token {token}", **(headers or {})})
+    return json.loads(urllib.request.urlopen(request, timeout=10).read())
+
+
+def http_code(url, path, data=None, headers=None):
+    """The status code of a request (no token unless `headers` carry one)."""
+    request = urllib.request.Request(url + path, data=data, headers=headers or {})
+    try:
+        return urllib.request.urlopen(request, timeout=10).status
+    except urllib.error.HTTPError as e:
+        return e.code
 
 
 def browser():
@@ -175,6 +205,15 @@ class Page:
     def status(self):
         return self.js("return dash.status && dash.status.fields") or {}
 
+    def text(self, element_id):
+        return self.d.find_element("id", element_id).text
+
+    def in_view(self, element_id):
+        """Whether the element is shown whole inside the viewport."""
+        return self.js(f"""const r = document.getElementById("{element_id}").getBoundingClientRect();
+            return r.width > 0 && r.height > 0 && r.left >= 0 && r.top >= 0 &&
+                   r.right <= window.innerWidth && r.bottom <= window.innerHeight;""")
+
 
 def port_status(host_sim, board):
     """`status` asked over the board's command port by a second client (read-only)."""
@@ -194,8 +233,9 @@ def fields_of(reply):
 def check_assets(url):
     """The vendored uPlot served as its README's hashes say."""
     listed = (UPLOT / "README.md").read_text()
+    token = url.split("token=")[1]
     for name in ("uPlot.iife.min.js", "uPlot.min.css"):
-        served = urllib.request.urlopen(url + name, timeout=10).read()
+        served = urllib.request.urlopen(f"{base(url)}{name}?token={token}", timeout=10).read()
         digest = hashlib.sha256(served).hexdigest()
         if digest not in listed:
             fail(f"{name} served with sha256 {digest}, not the one host-sim/assets/uplot/README.md lists")
@@ -221,7 +261,7 @@ def reference(host_sim, driver, screenshot=None):
             page = Page(driver, url)
             # The stream's sequence advances; gaps counted as the board's link counts them.
             page.loads_live("dash.lastSeq")
-            state = json.loads(urllib.request.urlopen(url + "api/state", timeout=10).read())
+            state = api(url, "api/state")
             gaps = page.js("return dash.gaps")
             if gaps != state["link"]["lost"]:
                 fail(f"the page counts {gaps} gaps where the link lost {state['link']['lost']}")
@@ -245,6 +285,12 @@ def reference(host_sim, driver, screenshot=None):
                 fail(f"the port reads bias {over_port} V, the reply said {bias} V")
             wait_until(lambda: abs(float(page.status().get("bias_volts", 0)) - bias) < 1e-3 * bias,
                        5, f"the page's status showing bias {bias} V")
+            # The setting's help says the target now in force, not the one before.
+            page.js("const s = document.getElementById('setting'); s.value = 'target_hz'; "
+                    "s.dispatchEvent(new Event('change'))")
+            wait_until(lambda: page.text("setting-help").endswith(f"now {target:g}"), 5,
+                       f"the setting's help saying target_hz now {target:g}: "
+                       f"{page.text('setting-help')!r}")
             # Out of range, once the ramp is done: the board's refusal, verbatim.
             wait_until(lambda: page.status().get("phase") in ("driving", "holding"), 30,
                        "the board at its new bias")
@@ -255,13 +301,16 @@ def reference(host_sim, driver, screenshot=None):
             if screenshot:
                 time.sleep(4.0)
                 driver.save_screenshot(str(screenshot))
+            one_range(host_sim, page)
             # A recording from the page: the columns `console --record` writes.
             page.click("record-start")
             time.sleep(1.5)
             page.click("record-stop")
             wait_until(lambda: page.d.find_element("id", "record-file").is_displayed(), 10,
                        "the recording's link")
-            text = urllib.request.urlopen(url + "api/recording.csv", timeout=10).read().decode()
+            request = urllib.request.Request(base(url) + "api/recording.csv", headers={
+                "Authorization": "Token " + url.split("token=")[1]})
+            text = urllib.request.urlopen(request, timeout=10).read().decode()
             rows = [l for l in text.splitlines() if not l.startswith("#")]
             if rows[0] != columns:
                 fail(f"the page's recording has columns {rows[0]!r}, console's {columns!r}")
@@ -278,6 +327,10 @@ def reference(host_sim, driver, screenshot=None):
             badge = page.d.find_element("id", "output").text
             if "off" not in badge:
                 fail(f"the page's badge says {badge!r} after Stop")
+            # The operating point's words under the curve, where no line's label covers them.
+            now = page.text("curve-now")
+            if not now.startswith("● now 0"):
+                fail(f"the curve's operating point says {now!r} at 0 V")
             errors = page.errors()
             if errors:
                 fail(f"console errors: {errors}")
@@ -305,8 +358,12 @@ def fault(host_sim, driver):
                                "a fault in the board's status")
             shown = wait_until(lambda: (lambda t: t if words in t else None)(
                 page.d.find_element("id", "fault").text), 5, "the fault in words on the page")
-            wait_until(lambda: "cause=" in page.d.find_element("id", "faults").text, 10,
-                       "the fault's entry in the page's fault log")
+            # The log in words: the entry's time and what happened, no protocol line.
+            logged = wait_until(lambda: (lambda t: t if words.split(":")[0] in t and " s (tick "
+                                         in t else None)(page.text("faults")), 10,
+                                "the fault's entry in words in the page's fault log")
+            if "ok faults=" in logged or "cause=" in logged:
+                fail(f"the fault log shows protocol lines: {logged!r}")
             wait_until(lambda: page.js("const v = dash.cols.volts; return v.length && v[v.length-1] === 0"),
                        10, "the plotted voltage at 0 V after the fault")
             # The descent as plotted: from the fault's record to 0 V, never up, and no
@@ -325,6 +382,7 @@ def fault(host_sim, driver):
                     fail(f"the plotted descent is faster than the slew: {v0} V to {v1} V in {t1 - t0} s")
             if end < 10:
                 fail(f"the descent from {down[0]} V is {end} records: not shown")
+            widths(page, words)
             # clear, then start: ramping again.
             reply, _ = page.reply_after(lambda: page.click("clear"))
             if not reply.startswith("ok "):
@@ -341,6 +399,211 @@ def fault(host_sim, driver):
                 fail(f"console errors: {errors}")
             print(f"dash_test (serve, fault): {shown!r}; the descent {down[0]:.0f} V to 0 V in "
                   f"{end} records, never up, within the slew; clear and start ramp again")
+        finally:
+            stop(dash_process)
+    finally:
+        stop(board_process)
+
+
+def one_range(host_sim, page):
+    """One tunable range: `safe`'s (the reference device, margin 0.05, as the scene's image),
+    the board's `info`, the page's words, and the board's own answer at each end (a target
+    just inside taken, one just outside refused)."""
+    out = subprocess.run([host_sim, "--json", "safe"], capture_output=True, text=True, check=True)
+    lo, hi = json.loads(out.stdout)["tunable_range_hz"]
+    info = fields_of(page.js("return dash.hello.info"))
+    board = float(info["tunable_low_hz"]), float(info["tunable_high_hz"])
+    for said, ours in zip(board, (lo, hi)):
+        if abs(said - ours) > 1e-6 * ours:
+            fail(f"`info` says the range {board}, `safe` {lo}..{hi}")
+    shown = page.text("range")
+    words = shown.split()
+    page_lo, page_hi = float(words[2]), float(words[4])
+    if not (lo <= page_lo < lo + 1e-4 and hi - 1e-4 < page_hi <= hi):
+        fail(f"the page shows {shown!r}, `safe` {lo}..{hi}")
+    # No AC (at the top end the bias is near 0 V, where an AC would swing below it).
+    for request, taken in ((f"target {lo - 1e-3}", False), (f"target {hi + 1e-3}", False),
+                           ("ac 0 40", True), (f"target {page_hi}", True),
+                           (f"target {page_lo}", True)):
+        wait_until(lambda: page.status().get("phase") in ("driving", "holding"), 30,
+                   "the board at its bias")
+        page.type("raw", request)
+        reply, _ = page.reply_after(lambda: page.click("raw-send"))
+        if reply.startswith("ok ") != taken:
+            fail(f"`{request}` (the range {page_lo}..{page_hi}) got {reply!r}")
+        time.sleep(0.6)  # the page's status polled past the reply
+    print(f"dash_test (serve, range): safe {lo:.6f}..{hi:.6f} Hz, info {board[0]}..{board[1]}, "
+          f"the page {page_lo}..{page_hi}: its ends taken by the board, 1 mHz beyond refused")
+
+
+def widths(page, words):
+    """STOP, the output and the latched fault in view at 360, 800 and 1,400 px, scrolled to the
+    page's end too, and nothing wider than the window."""
+    d = page.d
+    try:
+        for width in (360, 800, 1400):
+            d.execute_cdp_cmd("Emulation.setDeviceMetricsOverride", {
+                "width": width, "height": 800, "deviceScaleFactor": 1, "mobile": False})
+            for scroll in (0, 100000):
+                page.js(f"window.scrollTo(0, {scroll})")
+                time.sleep(0.3)
+                for element in ("stop", "output", "fault"):
+                    if not page.in_view(element):
+                        fail(f"#{element} out of view at {width} px (scrolled to {scroll})")
+                if words not in page.text("fault"):
+                    fail(f"the fault's words not in the bar at {width} px: {page.text('fault')!r}")
+                wide = page.js("return document.documentElement.scrollWidth")
+                if wide > width:
+                    fail(f"the page is {wide} px wide in a window of {width} px")
+            d.save_screenshot(str(ROOT / "target" / f"dash-{width}.png"))
+    finally:
+        d.execute_cdp_cmd("Emulation.clearDeviceMetricsOverride", {})
+        page.js("window.scrollTo(0, 0)")
+    print("dash_test (serve, widths): STOP, the output and the fault in view at 360, 800 and "
+          "1400 px, at the top and the end of the page")
+
+
+def forged(host_sim, driver):
+    """Served beyond loopback: requests without the token, or with another, refused (401) and
+    never heard by the board; the URL dash printed opens the page and switches it on."""
+    board_process, board = serve_waiting(host_sim)
+    try:
+        dash_process, url = dash(host_sim, board, listen="0.0.0.0:0")
+        try:
+            port = base(url).rsplit(":", 1)[1].strip("/")
+            if not url.startswith(f"http://127.0.0.1:{port}/?token="):
+                fail(f"dash served on 0.0.0.0 printed {url} to open")
+            # A forged request, as another machine would send it (its own Host and Origin;
+            # sent here over loopback only).
+            host = f"203.0.113.9:{port}"
+            forged_headers = {"Host": host, "Origin": f"http://{host}", "X-Dash-Request": "1"}
+            local = f"http://127.0.0.1:{port}/"
+            for headers, path, data in (
+                (forged_headers, "api/command", b"start"),
+                ({**forged_headers, "Authorization": "Token 0123456789abcdef0123456789abcdef"},
+                 "api/command", b"start"),
+                ({**forged_headers, "Cookie": f"dash_token_{port}=guess"}, "api/command", b"target 44"),
+                ({"Host": host}, "api/state", None),
+                ({"Host": host}, "api/events", None),
+                ({"Host": host}, "", None),
+            ):
+                code = http_code(local, path, data, headers)
+                if code not in (401, 403):
+                    fail(f"a forged request to /{path} got {code}, not 401/403")
+            time.sleep(1.0)
+            if api(url, "api/state")["link"]["requests"] != 0:
+                fail("a forged request reached the board")
+            said = port_status(host_sim, board)
+            if said["output"] != "off" or float(said["volts"]) != 0.0:
+                fail(f"the board moved after forged requests: {said}")
+            # The printed URL: the page, and the board switched on from it.
+            page = Page(driver, url)
+            page.loads_live("dash.lastSeq")
+            # Waiting for `start`: said as at rest, not as "holding … bias 0 V".
+            rest = wait_until(lambda: (lambda t: t if t.startswith("at rest, 0 V") else None)(
+                page.text("phase")), 5, f"the bar saying at rest: {page.text('phase')!r}")
+            reply, _ = page.reply_after(lambda: page.click("start"))
+            if not reply.startswith("ok "):
+                fail(f"start from the printed URL's page got {reply!r}")
+            wait_until(lambda: port_status(host_sim, board)["output"] == "on", 10,
+                       "the board's output on after the page's start")
+            page.click("stop")
+            print("dash_test (serve, beyond loopback): 6 forged requests refused (401/403), the "
+                  f"board never heard them; {rest!r}; the printed URL's page started the board")
+        finally:
+            stop(dash_process)
+    finally:
+        stop(board_process)
+
+
+def serve_waiting(host_sim):
+    """The reference scene's board waiting at power-up for `start` (the output off)."""
+    command_port, stream_port = free_port(), free_port()
+    process = start([host_sim, "serve", str(ROOT / "scenes" / "reference.toml"), "--tcp",
+                     f"127.0.0.1:{command_port}", "--stream-tcp", f"127.0.0.1:{stream_port}",
+                     "--power-up", "wait"])
+    wait_port(command_port)
+    return process, ["--tcp", f"127.0.0.1:{command_port}",
+                     "--stream-tcp", f"127.0.0.1:{stream_port}"]
+
+
+def two_dashes(host_sim, driver):
+    """A second dash on the board: it says it does not control the board (and who does), only
+    its STOP acts, and it stops the board; when the first leaves, it takes over and its plots
+    move again (the stream asked anew)."""
+    board_process, board = serve(host_sim, "reference.toml")
+    try:
+        first, _ = dash(host_sim, board)
+        second, url = dash(host_sim, board)
+        try:
+            page = Page(driver, url)
+            said = wait_until(lambda: (lambda t: t if "view only" in t else None)(
+                page.text("control")), 10, "the second page saying it does not control")
+            if not page.in_view("control"):
+                fail("the control's words are not in the bar")
+            for button in ("start", "target-send", "clear", "save"):
+                if page.d.find_element("id", button).is_enabled():
+                    fail(f"#{button} is enabled on a page that does not control the board")
+            wait_until(lambda: port_status(host_sim, board)["output"] == "on", 30,
+                       "the board driving")
+            reply, _ = page.reply_after(lambda: page.click("stop"))
+            if not reply.startswith("ok stop"):
+                fail(f"STOP from the page that does not control got {reply!r}")
+            wait_until(lambda: port_status(host_sim, board)["output"] == "off", 10,
+                       "the board's output off after the second page's STOP")
+            stop(first)
+            wait_until(lambda: page.js("return dash.control.controls"), 10,
+                       "the second page taking control as the first dash leaves")
+            time.sleep(0.5)
+            before = page.js("return dash.received")
+            time.sleep(1.5)
+            after = page.js("return dash.received")
+            if not after > before + 100:
+                fail(f"the plots stay frozen after taking control: {before} then {after} records")
+            if "no records" in page.text("conn"):
+                fail(f"the bar says {page.text('conn')!r}")
+            print(f"dash_test (serve, two dashes): {said!r}; its STOP stopped the board; it took "
+                  f"over as the first left, {after - before} records in 1.5 s")
+        finally:
+            stop(second)
+            stop(first)
+    finally:
+        stop(board_process)
+
+
+def lost(host_sim, driver):
+    """serve killed while driving: the bar says the board is lost and its state unknown (never
+    the last voltage), STOP says it cannot reach it; serve back on the same ports: the page
+    live again, the output as the board says it."""
+    command_port, stream_port = free_port(), free_port()
+    command = [host_sim, "serve", str(ROOT / "scenes" / "reference.toml"), "--tcp",
+               f"127.0.0.1:{command_port}", "--stream-tcp", f"127.0.0.1:{stream_port}"]
+    board = ["--tcp", f"127.0.0.1:{command_port}", "--stream-tcp", f"127.0.0.1:{stream_port}"]
+    board_process = start(command)
+    wait_port(command_port)
+    try:
+        dash_process, url = dash(host_sim, board)
+        try:
+            page = Page(driver, url)
+            wait_until(lambda: page.status().get("output") == "on", 30, "the board driving")
+            os.killpg(board_process.pid, signal.SIGKILL)
+            board_process.wait()
+            badge = wait_until(lambda: (lambda t: t if "lost" in t else None)(page.text("output")),
+                               10, "the bar saying the board is lost")
+            if "state unknown" not in badge or " V" in badge:
+                fail(f"the bar says {badge!r} with the board lost")
+            if page.text("phase") or "reconnecting" not in page.text("conn"):
+                fail(f"the bar still says {page.text('phase')!r} / {page.text('conn')!r}")
+            page.click("stop")
+            if "the board is lost" not in page.text("reply"):
+                fail(f"STOP with the board lost says {page.text('reply')!r}")
+            board_process = start(command)
+            wait_port(command_port)
+            wait_until(lambda: page.text("output").startswith("output ON"), 30,
+                       "the page live again once serve is back")
+            page.loads_live("dash.received")
+            print(f"dash_test (serve, lost): {badge!r} while serve was down, STOP said it cannot "
+                  f"reach the board; live again: {page.text('output')!r}")
         finally:
             stop(dash_process)
     finally:
@@ -394,7 +657,7 @@ def bench(host_sim, driver, out):
             redraws -= redraws0
             window = page.js("const t = dash.cols.t; return t.length ? t[t.length-1] - t[0] : 0")
             kept = page.js("return dash.cols.t.length")
-            state = json.loads(urllib.request.urlopen(url + "api/state", timeout=10).read())
+            state = api(url, "api/state")
             replies = []
             for _ in range(10):
                 page.type("raw", "status")
@@ -443,6 +706,9 @@ def main():
         if mode == "serve":
             reference(host_sim, driver)
             fault(host_sim, driver)
+            forged(host_sim, driver)
+            two_dashes(host_sim, driver)
+            lost(host_sim, driver)
         elif mode == "qemu":
             qemu(host_sim, driver)
         elif mode == "bench":

@@ -8,7 +8,10 @@ port on a pseudo-terminal, the screen read back with capture-pane.
 Types `status⏎`, then `stpo`, two backspaces, `op⏎` (a typo mended), then `help stop⏎`, and
 asserts what the screen shows: each answered, the typing echoed after a prompt, the mended
 line taken as `stop`; then Enter twice on an empty line (a fresh prompt each, no `err`)
-and `get tick_hz⏎`. Needs picocom and tmux (scripts/test-all.sh installs them).
+and `get tick_hz⏎`; `stauts⏎` answered with the command meant (`status`). On `serve`, the
+terminal closed and opened again hears the board's state at once (`# now phase=…`), and
+Ctrl-C on serve says what the board was doing as it ends. Needs picocom and tmux
+(scripts/test-all.sh installs them).
 """
 
 import os
@@ -102,17 +105,35 @@ def main():
             fail("a line was refused as not a request", shown)
         if ">\n>\n> get tick_hz" not in "\n".join(l.rstrip() for l in shown.splitlines()):
             fail("Enter on an empty line does not give a fresh prompt", shown)
+        # A typo of a command: the one meant named, as `help <typo>` names it.
+        type_keys("stauts", "Enter")
+        shown = wait_for("did you mean `status`?")
+        if mode == "serve":
+            # The terminal closed and opened again: the board's state said at once.
+            tmux("kill-session", "-t", SESSION)
+            time.sleep(0.5)
+            tmux("new-session", "-d", "-s", SESSION, "-x", "160", "-y", "40",
+                 f"picocom -q -b 115200 {path}")
+            wait_for("# now phase=")
+            # Ctrl-C on serve: what the board was doing, said as it ends.
+            os.killpg(process.pid, signal.SIGINT)
+            _, said = process.communicate(timeout=30)
+            if "interrupted at" not in said or "last status: phase=" not in said:
+                fail(f"Ctrl-C on serve did not say the board's state: {said[-400:]!r}")
         print(f"terminal_test ({mode}): picocom on {path}: status answered, a typo mended, "
-              "help stop answered, Enter on an empty line a fresh prompt")
+              "help stop answered, Enter on an empty line a fresh prompt, `stauts` answered "
+              "with `status`" + (", the state said on reconnecting and at Ctrl-C"
+                                 if mode == "serve" else ""))
         print(shown.rstrip())
         return 0
     finally:
         subprocess.run(["tmux", "kill-session", "-t", SESSION], capture_output=True)
-        try:
-            os.killpg(process.pid, signal.SIGTERM)
-        except ProcessLookupError:
-            pass
-        process.wait(timeout=30)
+        if process.poll() is None:
+            try:
+                os.killpg(process.pid, signal.SIGTERM)
+            except ProcessLookupError:
+                pass
+            process.wait(timeout=30)
 
 
 if __name__ == "__main__":

@@ -448,6 +448,15 @@ fn every_request_gets_its_reply() {
     assert_eq!(code(&b.ask("clear")), Some(7));
     assert_eq!(b.run(60_000, Inputs::NONE), 0.0);
     assert!(b.ask("status").contains("phase=holding"));
+    // At rest, a stop has nothing to ramp, and says so (not "from 0 V to 0 V").
+    assert_eq!(b.ask("stop"), "ok stop: at 0 V, the output off");
+    b.run(10, Inputs::NONE);
+    // A typo of a command is named, as `help <typo>` names it.
+    let typo = b.ask("stauts");
+    assert!(
+        code(&typo) == Some(1) && typo.contains("did you mean `status`?"),
+        "{typo}"
+    );
     assert_eq!(code(&b.ask("trim")), Some(2));
     let (reply, then) = b.ask_then(&line("reset"));
     assert_eq!(

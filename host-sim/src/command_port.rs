@@ -324,3 +324,72 @@ impl Session {
 pub fn gone(why: &str) -> bool {
     why.starts_with("the board closed") || why.starts_with("the connection failed")
 }
+
+/// Who may change the board when `serve` has several connections, said once for both
+/// sides: `serve` says these lines, a client (`dash`) reads them back. The oldest
+/// connection controls; the others read, and any of them may `stop` the board (an
+/// emergency stop, told to the one that controls). A board's one port has no such lines.
+pub mod control {
+    use de_resonator::wire::protocol::{ErrorCode, NOTICE};
+
+    /// What the connection that now controls the board is told.
+    pub const NOW_CONTROLS: &str = "# this connection now controls the board";
+    /// How the line to a connection that only reads begins.
+    const READS: &str = "# another connection controls the board (";
+    /// What a connection that reads may ask.
+    const MAY: &str = "this one reads (status, info, get, help, faults) and may `stop` the \
+                       board; it takes over when that one leaves";
+
+    /// The line a connection that reads hears as it connects.
+    pub fn reads_only(controller: &str) -> String {
+        format!("{READS}{controller}): {MAY}")
+    }
+
+    /// The reply to a request that would change the board, from a connection that reads.
+    pub fn not_in_control(controller: &str) -> String {
+        format!(
+            "err {} another connection controls the board ({controller}): {MAY}",
+            ErrorCode::NotInControl
+        )
+    }
+
+    /// What the controlling connection is told of a `stop` another connection gave.
+    pub fn stopped_by(who: &str, reply: &str) -> String {
+        format!(
+            "{NOTICE}stop from another connection ({who}): {}",
+            reply.trim_start_matches("ok stop: ")
+        )
+    }
+
+    /// Who controls the board, as a line of `serve`'s says it: `Some(None)` this connection,
+    /// `Some(Some(who))` another; `None`: the line says nothing of control.
+    pub fn of_line(line: &str) -> Option<Option<String>> {
+        if line == NOW_CONTROLS {
+            return Some(None);
+        }
+        let not_ours = format!(
+            "err {} another connection controls the board (",
+            ErrorCode::NotInControl
+        );
+        let rest = line
+            .strip_prefix(READS)
+            .or_else(|| line.strip_prefix(not_ours.as_str()))?;
+        let who = rest.split_once("): ").map_or(rest, |(who, _)| who);
+        Some(Some(who.to_string()))
+    }
+
+    #[cfg(test)]
+    mod tests {
+        use super::*;
+
+        #[test]
+        fn each_line_names_who_controls() {
+            let who = "tcp 127.0.0.1:50412";
+            assert_eq!(of_line(&reads_only(who)), Some(Some(who.to_string())));
+            assert_eq!(of_line(&not_in_control(who)), Some(Some(who.to_string())));
+            assert_eq!(of_line(NOW_CONTROLS), Some(None));
+            assert_eq!(of_line("# ready phase=holding"), None);
+            assert_eq!(of_line("ok stop: at 0 V, the output off"), None);
+        }
+    }
+}

@@ -16,9 +16,9 @@ use std::time::Duration;
 use common::{number, Served};
 use serde_json::Value;
 
-/// `dash --json` on a board: the process and the page's `host:port` (said on stderr; stdout
-/// carries the report).
-fn dash(board: &Served, extra: &[&str]) -> (Child, String) {
+/// `dash --json` on a board: the process, the page's `host:port` and its token (said on
+/// stderr; stdout carries the report).
+fn dash(board: &Served, extra: &[&str]) -> (Child, String, String) {
     let mut command = common::host_sim();
     command.arg("dash").args(&board.connection);
     if let Some(stream) = &board.stream {
@@ -40,26 +40,26 @@ fn dash(board: &Served, extra: &[&str]) -> (Child, String) {
         }
     }
     std::thread::spawn(move || for _ in stderr.lines() {});
-    let address = line
+    let (address, token) = line
         .trim()
         .strip_prefix("dash: open http://")
-        .unwrap_or_else(|| panic!("dash's first line: {line:?}"))
-        .trim_end_matches('/')
-        .to_string();
-    (child, address)
+        .and_then(|rest| rest.split_once("/?token="))
+        .unwrap_or_else(|| panic!("dash's first line: {line:?}"));
+    (child, address.to_string(), token.to_string())
 }
 
 /// One HTTP/1.0 request as the page sends it (a body in one piece, not chunked; a POST with
-/// the page's header): the status code and the body.
-fn http(address: &str, method: &str, path: &str, body: &str) -> (u16, String) {
+/// the page's header; the token as the page's cookie): the status code and the body.
+fn http(address: &str, token: &str, method: &str, path: &str, body: &str) -> (u16, String) {
     let act = if method == "POST" {
         "X-Dash-Request: 1\r\n"
     } else {
         ""
     };
+    let port = address.rsplit(':').next().unwrap();
     raw(
         address,
-        &format!("Host: {address}\r\n{act}"),
+        &format!("Host: {address}\r\nCookie: dash_token_{port}={token}\r\n{act}"),
         method,
         path,
         body,
@@ -87,10 +87,14 @@ fn raw(address: &str, headers: &str, method: &str, path: &str, body: &str) -> (u
 }
 
 /// The first event a page gets: `hello`'s data.
-fn hello(address: &str) -> Value {
+fn hello(address: &str, token: &str) -> Value {
     let mut s = TcpStream::connect(address).unwrap();
     s.set_read_timeout(Some(Duration::from_secs(20))).unwrap();
-    write!(s, "GET /api/events HTTP/1.1\r\nHost: {address}\r\n\r\n").unwrap();
+    write!(
+        s,
+        "GET /api/events HTTP/1.1\r\nHost: {address}\r\nAuthorization: Token {token}\r\n\r\n"
+    )
+    .unwrap();
     let reader = BufReader::new(s);
     let mut event = String::new();
     for line in reader.lines() {
@@ -108,17 +112,26 @@ fn hello(address: &str) -> Value {
 #[test]
 fn the_page_talks_to_the_board_only_in_its_protocol() {
     let board = Served::streaming(None, "5", "dash");
-    let (child, address) = dash(&board, &["--seconds", "20"]);
-    // The page and its vendored plotting library.
-    let (code, page) = http(&address, "GET", "/", "");
+    let (child, address, token) = dash(
+        &board,
+        &["--seconds", "20", "--allow-host", "proxy.example"],
+    );
+    // The page (its token from the URL kept as its cookie) and its vendored plotting library.
+    let (code, page) = raw(
+        &address,
+        &format!("Host: {address}\r\n"),
+        "GET",
+        &format!("/?token={token}"),
+        "",
+    );
     assert_eq!(code, 200);
     assert!(page.contains("id=\"stop\""), "a Stop on the page");
-    let (code, uplot) = http(&address, "GET", "/uPlot.iife.min.js", "");
+    let (code, uplot) = http(&address, &token, "GET", "/uPlot.iife.min.js", "");
     assert_eq!(code, 200);
     assert!(uplot.contains("uPlot"));
 
     // What a page opens with: the board's device, its curve and settings with their rules.
-    let first = hello(&address);
+    let first = hello(&address, &token);
     assert!(first["info"].as_str().unwrap().starts_with("ok firmware="));
     let range = first["curve"]["tunable_range_hz"].as_array().unwrap();
     let (low, high) = (range[0].as_f64().unwrap(), range[1].as_f64().unwrap());
@@ -131,33 +144,56 @@ fn the_page_talks_to_the_board_only_in_its_protocol() {
         .unwrap()
         .starts_with("margin (fraction)"));
 
-    // Only the page's own requests: another site's page (its Origin), a name pointed at this
-    // machine (DNS rebinding: its Host), or a request without the page's header cannot start
-    // the board; the board never hears them.
+    // Only the page's own requests: one without the token (or with another), another site's
+    // page (its Origin), a name pointed at this machine (DNS rebinding: its Host), or a
+    // request without the page's header cannot start the board; the board never hears them.
     let port = address.rsplit(':').next().unwrap();
-    for (headers, why) in [
-        (format!("Host: {address}\r\n"), "X-Dash-Request"),
+    let key = format!("Authorization: Token {token}\r\n");
+    for (headers, code_said, why) in [
         (
-            format!("Host: {address}\r\nX-Dash-Request: 1\r\nOrigin: http://evil.example\r\n"),
+            format!("Host: {address}\r\nX-Dash-Request: 1\r\n"),
+            401,
+            "no token",
+        ),
+        (
+            format!(
+                "Host: {address}\r\nX-Dash-Request: 1\r\nCookie: dash_token_{port}=0{token}\r\n"
+            ),
+            401,
+            "wrong token",
+        ),
+        (format!("Host: {address}\r\n{key}"), 403, "X-Dash-Request"),
+        (
+            format!("Host: {address}\r\n{key}X-Dash-Request: 1\r\nOrigin: http://evil.example\r\n"),
+            403,
             "may not use",
         ),
         (
-            format!("Host: evil.example:{port}\r\nX-Dash-Request: 1\r\n"),
+            format!("Host: evil.example:{port}\r\n{key}X-Dash-Request: 1\r\n"),
+            403,
             "not served as",
         ),
     ] {
         let (code, body) = raw(&address, &headers, "POST", "/api/command", "start");
-        assert_eq!(code, 403, "{headers}: {body}");
+        assert_eq!(code, code_said, "{headers}: {body}");
         assert!(body.contains(why), "{body}");
     }
     let (code, _) = raw(&address, "Host: evil.example\r\n", "GET", "/api/state", "");
     assert_eq!(code, 403, "a rebinding page reads nothing either");
+    // A name allowed (a TLS reverse proxy's), its page over https, with the token.
+    let proxied = format!("Host: proxy.example\r\nOrigin: https://proxy.example\r\n{key}");
+    let (code, body) = raw(&address, &proxied, "GET", "/api/state", "");
+    assert_eq!(code, 200, "{body}");
+    for path in ["/", "/api/state", "/api/events", "/dash.js"] {
+        let (code, _) = raw(&address, &format!("Host: {address}\r\n"), "GET", path, "");
+        assert_eq!(code, 401, "{path} read without the token");
+    }
 
     // One line at a time, verbatim: a line end inside is refused before the board.
-    let (code, body) = http(&address, "POST", "/api/command", "status\nstop");
+    let (code, body) = http(&address, &token, "POST", "/api/command", "status\nstop");
     assert_eq!(code, 400, "{body}");
     assert!(body.contains("one request a time"), "{body}");
-    let (code, body) = http(&address, "POST", "/api/command", "status");
+    let (code, body) = http(&address, &token, "POST", "/api/command", "status");
     assert_eq!(code, 200, "{body}");
     let reply: Value = serde_json::from_str(&body).unwrap();
     let line = reply["reply"].as_str().unwrap();
@@ -169,6 +205,7 @@ fn the_page_talks_to_the_board_only_in_its_protocol() {
     board.wait_for("at the bias", |s| s.contains("phase=driving"));
     let (_, body) = http(
         &address,
+        &token,
         "POST",
         "/api/command",
         &format!("target {}", high + 5.0),
@@ -184,14 +221,14 @@ fn the_page_talks_to_the_board_only_in_its_protocol() {
     );
 
     // A recording: refused while none runs, then the CSV with `console --record`'s header.
-    let (code, _) = http(&address, "POST", "/api/record/stop", "");
+    let (code, _) = http(&address, &token, "POST", "/api/record/stop", "");
     assert_eq!(code, 409);
-    let (code, _) = http(&address, "POST", "/api/record/start", "");
+    let (code, _) = http(&address, &token, "POST", "/api/record/start", "");
     assert_eq!(code, 200);
     std::thread::sleep(Duration::from_millis(500));
-    let (code, said) = http(&address, "POST", "/api/record/stop", "");
+    let (code, said) = http(&address, &token, "POST", "/api/record/stop", "");
     assert_eq!(code, 200, "{said}");
-    let (code, csv) = http(&address, "GET", "/api/recording.csv", "");
+    let (code, csv) = http(&address, &token, "GET", "/api/recording.csv", "");
     assert_eq!(code, 200);
     assert!(
         csv.starts_with("# de-resonator telemetry, record layout "),
@@ -201,7 +238,7 @@ fn the_page_talks_to_the_board_only_in_its_protocol() {
     assert!(csv.contains("\nsequence,tick,time_seconds,volts,"), "{csv}");
 
     // The board's state as dash leaves: said, not changed (the output still on).
-    let (code, _) = http(&address, "POST", "/api/command", "stop");
+    let (code, _) = http(&address, &token, "POST", "/api/command", "stop");
     assert_eq!(code, 200);
     let _ = std::process::Command::new("kill")
         .args(["-INT", &child.id().to_string()])
@@ -232,8 +269,16 @@ fn beyond_loopback_is_warned_of_and_bad_flags_refused() {
         .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(
-        stderr.contains("warning: serving the page on 0.0.0.0"),
+        stderr.contains("warning: serving the page on 0.0.0.0")
+            && stderr.contains("whoever holds its URL")
+            && stderr.contains("can switch the board's high voltage on"),
         "{stderr}"
+    );
+    // The URL to open is this machine's loopback one, its token in it (not 0.0.0.0).
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.starts_with("dash: open http://127.0.0.1:") && stdout.contains("/?token="),
+        "{stdout}"
     );
     assert!(out.status.success(), "{stderr}");
     let out = common::host_sim()

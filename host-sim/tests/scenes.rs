@@ -815,7 +815,7 @@ fn an_operator_retargets_stops_and_starts_mid_run() {
     let rested = r
         .events
         .iter()
-        .find(|e| e.seconds > 5.0 && e.what.starts_with("at bias, 0 V"))
+        .find(|e| e.seconds > 5.0 && e.what.starts_with("at rest, 0 V"))
         .unwrap()
         .seconds;
     for h in r

@@ -405,8 +405,8 @@ fn the_console_says_when_the_board_went_away() {
 }
 
 /// Issue 46, 2: one connection controls the board; another connected meanwhile reads (its
-/// requests that change the board get `err 3`), is told so on connecting, and takes over
-/// when the first leaves. A new connection to a faulted board hears the fault, not the
+/// requests that change the board get `err 8`, but for `stop`), is told so and by whom on
+/// connecting, and takes over when the first leaves. A new connection to a faulted board hears the fault, not the
 /// start-up line.
 #[test]
 fn one_connection_controls_the_board_and_a_new_one_hears_the_state_now() {
@@ -431,11 +431,11 @@ fn one_connection_controls_the_board_and_a_new_one_hears_the_state_now() {
         told.starts_with("# another connection controls the board"),
         "{told}"
     );
-    b.write_all(b"stop\nstatus\nfaults clear\n").unwrap();
+    b.write_all(b"start\nstatus\nfaults clear\n").unwrap();
     let refused = b_lines.next().unwrap();
     assert!(
         refused.starts_with(&format!(
-            "{}another connection controls the board",
+            "{}another connection controls the board (unix socket client 1)",
             refused_with(ErrorCode::NotInControl)
         )),
         "{refused}"
@@ -447,10 +447,7 @@ fn one_connection_controls_the_board_and_a_new_one_hears_the_state_now() {
             || status.starts_with("ok phase=holding"),
         "{status}"
     );
-    assert!(
-        status.contains(" output=on "),
-        "B's stop did not end A's drive: {status}"
-    );
+    assert!(status.contains(" output=on "), "{status}");
     assert!(
         b_lines
             .next()
@@ -458,18 +455,34 @@ fn one_connection_controls_the_board_and_a_new_one_hears_the_state_now() {
             .starts_with(&refused_with(ErrorCode::NotInControl)),
         "faults clear changes the log"
     );
+    // Issue 58: a stop is an emergency stop, taken from any connection; the one that
+    // controls is told who stopped the board.
+    b.write_all(b"stop\n").unwrap();
+    let stopped = b_lines.next().unwrap();
+    assert!(stopped.starts_with("ok stop: ramp from "), "{stopped}");
+    let told = a_lines.next().unwrap();
+    assert!(
+        told.starts_with("# stop from another connection (unix socket client 2): ramp from "),
+        "{told}"
+    );
     a.write_all(b"status\n").unwrap();
-    assert!(a_lines.next().unwrap().contains(" output=on "));
+    let status = a_lines.next().unwrap();
+    assert!(
+        (status.contains("phase=ramping ") || status.contains("phase=holding "))
+            && number(&status, "bias_volts") == 0.0,
+        "B's stop did not bring A's drive down: {status}"
+    );
     drop(a_lines);
     drop(a);
     assert_eq!(
         b_lines.next().unwrap(),
         "# this connection now controls the board"
     );
-    b.write_all(b"stop\n").unwrap();
+    b.write_all(b"start\n").unwrap();
+    let started = b_lines.next().unwrap();
     assert!(
-        b_lines.next().unwrap().starts_with("ok stop"),
-        "B controls now"
+        !started.starts_with(&refused_with(ErrorCode::NotInControl)),
+        "B controls now: {started}"
     );
 }
 

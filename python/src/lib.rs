@@ -13,7 +13,7 @@ use de_resonator::{Device, DeviceParams, Field, Limit, Tuner, REFERENCE_DEVICE};
 use host_sim::cmd::curve::{one_curve, Curve};
 use host_sim::cmd::image::{ImageArgs, PowerUpArg};
 use host_sim::cmd::lut::LutFormat;
-use host_sim::cmd::safe::Region;
+use host_sim::cmd::safe::{targets_margin, Region};
 use host_sim::cmd::simulate::Asked;
 use host_sim::cmd::sweep::SweepArgs;
 use host_sim::cmd::{DeviceArgs, DeviceInfo};
@@ -323,7 +323,7 @@ impl Device_ {
         let tuner = self.tuner();
         let region = Region::new(self.info(), &tuner, margin).map_err(value_error)?;
         let bias = tuner
-            .tune(target_hz, margin)
+            .tune(target_hz, targets_margin(margin))
             .map_err(|e| value_error(format!("{e} (margin {margin})")))?;
         result(
             py,
@@ -372,7 +372,9 @@ impl Device_ {
         let tuner = self.tuner();
         let tuned = stoppable(py, || {
             progress::each(&targets, |&hz| {
-                tuner.tune(hz, margin).map_err(|e| e.to_string())
+                tuner
+                    .tune(hz, targets_margin(margin))
+                    .map_err(|e| e.to_string())
             })
         })?;
         let column = |f: &dyn Fn(&de_resonator::Equilibrium<f64>) -> f64| -> PyResult<_> {

@@ -10,6 +10,7 @@ use super::{Board, Keeper};
 use crate::controller::{Controller, Phase, Refusal, Setting, Settings};
 use crate::model::device::Field;
 use crate::numerics::decimal::Decimal;
+use crate::table::Table;
 use crate::wire::protocol::{
     self, Command, ErrorCode, MaxBy, ParseError, Refused, Status, Topic, MAX_LINE,
 };
@@ -367,6 +368,17 @@ impl<K: Keeper> Board<'_, K> {
                     stream::VERSION,
                     if extras.stream_port { "yes" } else { "no" }
                 );
+                // The tunable range: the table's, the targets the board takes (at a margin
+                // set above the image's, the plan's check narrows it).
+                if let Some(table) = self.image().and_then(|i| Table::parse(i.table).ok()) {
+                    let (low, high) = table.range_hz();
+                    let _ = write!(
+                        out,
+                        " tunable_low_hz={} tunable_high_hz={}",
+                        Decimal(low),
+                        Decimal(high)
+                    );
+                }
                 // The device flashed, by its device-file keys (SI units; `jlim` 0: neo-Hookean).
                 if let Some(image) = self.image() {
                     for field in Field::ALL {
@@ -505,11 +517,15 @@ impl<K: Keeper> Board<'_, K> {
                         c.last_volts()
                     })
                 });
-                let _ = write!(
-                    out,
-                    "ok stop: ramp from {} V to 0 V",
-                    Decimal(from.unwrap_or(0.0))
-                );
+                match from {
+                    // Nothing to ramp: said as it is, not as a ramp from 0 V to 0 V.
+                    Some(volts) if volts != 0.0 => {
+                        let _ = write!(out, "ok stop: ramp from {} V to 0 V", Decimal(volts));
+                    }
+                    _ => {
+                        let _ = write!(out, "ok stop: at 0 V, the output off");
+                    }
+                }
             }
             Command::Trim => match controller.with(|c| c.as_mut().map(Controller::trim_now)) {
                 Some(Ok(())) => {

@@ -522,6 +522,9 @@ pub const BUS_FAULT_SAID: &str = "fault, amplifier disabled at once";
 impl fmt::Display for Event {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
+            // A ramp down to 0 V (`stop`, `clear`, a power-up that waits) ends at rest, not
+            // at a bias.
+            Event::AtBias { volts: 0.0 } => write!(f, "at rest, 0 V"),
             Event::AtBias { volts } => write!(f, "at bias, {volts} V"),
             Event::DriveOn => write!(f, "AC drive on"),
             Event::DriveOff => write!(f, "AC drive paused, to trim again"),

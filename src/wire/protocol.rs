@@ -227,7 +227,10 @@ pub enum ParseError {
     TooLong,
     /// Bytes that are not printable ASCII.
     NotText,
-    UnknownCommand,
+    /// No command has this name; the nearest one (its index in [`COMMANDS`]), if one is near.
+    UnknownCommand {
+        nearest: Option<u8>,
+    },
     /// No setting has this key; the nearest one, if one is near.
     UnknownSetting {
         nearest: Option<Setting>,
@@ -263,7 +266,13 @@ impl fmt::Display for ParseError {
             ParseError::Empty => write!(f, "empty line; try `help`"),
             ParseError::TooLong => write!(f, "line longer than {MAX_LINE} bytes, dropped"),
             ParseError::NotText => write!(f, "line holds bytes that are not printable ASCII"),
-            ParseError::UnknownCommand => write!(f, "unknown command; try `help`"),
+            ParseError::UnknownCommand { nearest } => {
+                write!(f, "unknown command")?;
+                if let Some(name) = nearest.and_then(|k| COMMANDS.get(usize::from(k))) {
+                    write!(f, "; did you mean `{}`?", name.0)?;
+                }
+                write!(f, " (`help` lists the commands)")
+            }
             ParseError::UnknownSetting { nearest } => {
                 write!(f, "unknown setting")?;
                 if let Some(s) = nearest {
@@ -318,7 +327,9 @@ pub fn parse(line: &[u8]) -> Result<Command, ParseError> {
     let name = words.next().ok_or(ParseError::Empty)?;
     // The commands are COMMANDS' (what `help` says): no command without its help.
     if !COMMANDS.iter().any(|c| c.0 == name) {
-        return Err(ParseError::UnknownCommand);
+        return Err(ParseError::UnknownCommand {
+            nearest: nearest_command(name).map(|(_, k)| k),
+        });
     }
     let mut args = Args { words, index: 0 };
     let command = match name {
@@ -366,7 +377,7 @@ pub fn parse(line: &[u8]) -> Result<Command, ParseError> {
                 Command::Faults(FaultsAsk::One(n as u32))
             }
         },
-        _ => return Err(ParseError::UnknownCommand),
+        _ => return Err(ParseError::UnknownCommand { nearest: None }),
     };
     if args.words.next().is_some() {
         return Err(ParseError::Extra);
@@ -442,13 +453,7 @@ impl<'a, I: Iterator<Item = &'a str>> Args<'a, I> {
         if let Some(s) = Setting::from_key(word) {
             return Ok(Some(Topic::Setting(s)));
         }
-        let command = COMMANDS
-            .iter()
-            .enumerate()
-            .map(|(k, c)| (edit_distance(word.as_bytes(), c.0.as_bytes()), k, c.0.len()))
-            .filter(|&(d, _, len)| d <= len.div_ceil(3))
-            .min_by_key(|&(d, _, _)| d)
-            .map(|(d, k, _)| (d, Topic::Command(k as u8)));
+        let command = nearest_command(word).map(|(d, k)| (d, Topic::Command(k)));
         let setting = nearest_setting(word).map(|s| {
             (
                 edit_distance(word.as_bytes(), s.key().as_bytes()),
@@ -489,6 +494,18 @@ fn looks_like_unit(word: &str) -> bool {
 /// A unit no one writes after the number (a fraction, a count): nothing after it is one.
 fn unit_free(unit: &str) -> bool {
     matches!(unit, "fraction" | "samples" | "")
+}
+
+/// The command whose name is nearest `word` (edit distance, case ignored) if it is within a
+/// third of the name's length (rounded up): its distance and index in [`COMMANDS`].
+fn nearest_command(word: &str) -> Option<(usize, u8)> {
+    COMMANDS
+        .iter()
+        .enumerate()
+        .map(|(k, c)| (edit_distance(word.as_bytes(), c.0.as_bytes()), k, c.0.len()))
+        .filter(|&(d, _, len)| d <= len.div_ceil(3))
+        .min_by_key(|&(d, _, _)| d)
+        .map(|(d, k, _)| (d, k as u8))
 }
 
 /// The setting whose key is nearest `word` (edit distance, case ignored) if it is within a
@@ -842,7 +859,23 @@ mod tests {
         assert_eq!(edit_distance(b"", b"abc"), 3);
         assert_eq!(edit_distance(b"flaw", b"lawn"), 2);
         assert_eq!(parse(b"start"), Ok(Command::Start));
-        assert_eq!(parse(b"launch"), Err(ParseError::UnknownCommand));
+        assert_eq!(
+            parse(b"launch"),
+            Err(ParseError::UnknownCommand { nearest: None })
+        );
+        // A mistyped command is named as `help <typo>` names it.
+        for (typo, meant) in [
+            ("stauts", "status"),
+            ("strat", "start"),
+            ("targte", "target"),
+        ] {
+            let nearest = COMMANDS.iter().position(|c| c.0 == meant).map(|k| k as u8);
+            assert_eq!(
+                parse(typo.as_bytes()),
+                Err(ParseError::UnknownCommand { nearest }),
+                "{typo}"
+            );
+        }
         assert_eq!(parse(b"target \xff44"), Err(ParseError::NotText));
         assert_eq!(parse(&[b'a'; MAX_LINE + 1]), Err(ParseError::TooLong));
         // Exactly MAX_LINE bytes is a line; tabs separate words as spaces do.

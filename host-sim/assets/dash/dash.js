@@ -15,8 +15,8 @@ const ACT = { "X-Dash-Request": "1" };
 const dash = window.dash = {
   hello: null, tickHz: NaN, columns: {}, received: 0, gaps: 0, restarts: 0, lastSeq: null,
   redraws: 0, fps: 0, drawMs: 0, lastReplyMs: NaN, lastReply: "", status: null, connected: false,
-  lastTick: null, tickBase: 0,
-  errors: [],
+  lastTick: null, tickBase: 0, board: { state: "up" }, control: { controls: true },
+  lastRecordAt: 0, errors: [],
 };
 
 // The records held, a column each (time in s from the board's tick).
@@ -53,8 +53,21 @@ async function send(line) {
   return text;
 }
 
+// The controls that change the board: off while another connection controls it (STOP stays:
+// any connection may stop the board).
+const ACTING = ["target-send", "ac-send", "start", "trim", "clear", "set-send", "save"];
+
 function bind() {
-  $("stop").onclick = () => send("stop");
+  $("stop").onclick = () => {
+    if (dash.board.state === "lost") {
+      // Said before a request that cannot reach the board.
+      $("reply").textContent = "> stop\nthe board is lost: dash cannot reach it to stop it " +
+        "(it goes on as last told, or its own faults act). Check the board and its power.";
+      $("reply").classList.add("err");
+      return;
+    }
+    send("stop");
+  };
   $("start").onclick = () => send("start");
   $("trim").onclick = () => send("trim");
   $("clear").onclick = () => send("clear");
@@ -102,11 +115,61 @@ function connect() {
   events.addEventListener("link", (e) => link(JSON.parse(e.data)));
   events.addEventListener("stream", (e) => streamSaid(JSON.parse(e.data)));
   events.addEventListener("recording", (e) => recordingSaid(JSON.parse(e.data)));
-  events.onopen = () => { dash.connected = true; $("conn").textContent = "live"; };
+  events.addEventListener("board", (e) => boardLink(JSON.parse(e.data)));
+  events.addEventListener("control", (e) => control(JSON.parse(e.data)));
+  events.onopen = () => { dash.connected = true; connView(); };
   events.onerror = () => {
+    // Nothing the page holds of the board is known to hold any more.
     dash.connected = false;
-    $("conn").textContent = "dash not reachable: the board goes on as it was told";
+    unknown("dash lost — state unknown");
+    connView();
   };
+}
+
+// The bar when nothing is known of the board: never its last voltage.
+function unknown(words) {
+  dash.status = null;
+  dash.last = null;
+  const out = $("output");
+  out.className = "badge lost";
+  out.textContent = words;
+  $("phase").textContent = "";
+  $("fault").textContent = "";
+  $("fault").classList.remove("active");
+}
+
+// The connection to the board, as dash tells it: up, silent, or lost (dash reconnecting).
+function boardLink(b) {
+  dash.board = b;
+  if (b.state === "lost") unknown("board lost — state unknown");
+  if (b.state === "silent") unknown("board not answering — state unknown");
+  connView();
+}
+
+// Who controls the board: this page's dash, or another connection (then only STOP acts).
+function control(c) {
+  dash.control = c;
+  const el = $("control");
+  el.hidden = c.controls;
+  el.textContent = c.controls ? "" : "view only: " + (c.controller || "another connection") +
+    " controls the board; this page takes over when it leaves. STOP still stops the board.";
+  for (const id of ACTING) $(id).disabled = !c.controls;
+}
+
+// The bar's word on the link: dash, the board, the stream.
+function connView() {
+  const b = dash.board;
+  let words;
+  if (!dash.connected) words = "dash not reachable: the page cannot see or stop the board";
+  else if (b.state === "lost") {
+    words = "reconnecting to the board (attempt " + b.attempt + ", every " + b.retry_seconds +
+      " s): " + b.why;
+  } else if (b.state === "silent") words = "the board does not answer: " + b.why;
+  else if (dash.hello && dash.hello.stream && performance.now() - dash.lastRecordAt > 2000) {
+    words = "live; no records for " + fmt((performance.now() - dash.lastRecordAt) / 1000, 2) +
+      " s (the stream: " + (dash.streamReply || "not asked") + ")";
+  } else words = "live";
+  $("conn").textContent = words;
 }
 
 function hello(h) {
@@ -134,10 +197,11 @@ function hello(h) {
   const ac = Object.fromEntries(h.settings.map((s) => [s.key, s.value]));
   if (ac.ac_volts !== undefined && !$("ac-volts").value) $("ac-volts").value = ac.ac_volts;
   if (ac.ac_hz !== undefined && !$("ac-hz").value) $("ac-hz").value = ac.ac_hz;
-  if (h.curve) {
-    const [lo, hi] = h.curve.tunable_range_hz;
-    $("range").textContent = "tunable range " + fmt(lo, 5) + " – " + fmt(hi, 5) +
-      " Hz (the device's curve under the margin " + h.curve.margin + "; the board decides)";
+  const range = tunableRange(h);
+  if (range) {
+    $("range").textContent = "tunable range " + inward(range[0], 1) + " – " + inward(range[1], -1) +
+      " Hz (" + (range.board ? "the board's table, as `info` says it" :
+        "the device's curve under the margin " + h.curve.margin) + ")";
   } else {
     $("range").textContent = "no tuning curve: " + (h.curve_problem || "the board names no device");
   }
@@ -145,7 +209,11 @@ function hello(h) {
   (h.log || []).forEach(logEntry);
   $("notices").innerHTML = "";
   (h.notices || []).forEach((line) => notice({ line }));
+  dash.board = h.board_link || { state: "up" };
   if (h.status && h.status.fields) status(h.status);
+  else unknown("output ?");
+  boardLink(dash.board);
+  control(h.control || { controls: true });
   if (h.faults && h.faults.summary) faults(h.faults);
   if (h.link) link(h.link);
   streamSaid({ reply: h.stream_reply });
@@ -153,7 +221,30 @@ function hello(h) {
   makePlots();
 }
 
+// The tunable range: the board's own (`info`'s, its table's), else the curve's.
+function tunableRange(h) {
+  const f = {};
+  for (const w of String(h.info || "").split(" ")) {
+    const [k, v] = w.split("=");
+    if (v !== undefined) f[k] = Number(v);
+  }
+  if (isFinite(f.tunable_low_hz) && isFinite(f.tunable_high_hz)) {
+    const r = [f.tunable_low_hz, f.tunable_high_hz];
+    r.board = true;
+    return r;
+  }
+  return h.curve ? h.curve.tunable_range_hz : null;
+}
+
+// A range's end rounded inward to 6 digits (up for the low end, down for the high): a target
+// typed as shown is one the board takes.
+function inward(x, up) {
+  const p = Math.pow(10, 5 - Math.floor(Math.log10(Math.abs(x))));
+  return String((up > 0 ? Math.ceil(x * p) : Math.floor(x * p)) / p);
+}
+
 function records(rows) {
+  dash.lastRecordAt = performance.now();
   const k = dash.columns;
   const tickHz = dash.tickHz;
   for (const r of rows) {
@@ -209,14 +300,21 @@ function lowerBound(a, x) {
 }
 
 function status(s) {
+  if (dash.board.state !== "up") return;
   dash.status = s;
   const f = s.fields || {};
   const out = $("output");
   const on = f.output === "on";
   out.className = "badge " + (f.output === undefined ? "unknown" : on ? "on" : "off");
   out.textContent = "output " + (f.output === undefined ? "?" : on ? "ON " + fmt(f.volts, 5) + " V" : "off 0 V");
-  $("phase").textContent = (f.phase || "?") + ", target " + fmt(f.target_hz, 4) + " Hz, bias " +
-    fmt(f.bias_volts, 5) + " V, cap " + fmt(f.max_volts, 5) + " V (" + (f.max_by || "?") + ")";
+  const cap = ", cap " + fmt(f.max_volts, 5) + " V (" + (f.max_by || "?") + ")";
+  // At rest (off at 0 V, nothing planned): said so, not "holding … bias 0 V".
+  const rest = !on && Number(f.volts) === 0 && Number(f.bias_volts) === 0 &&
+    (f.phase === "holding" || f.phase === "ramping");
+  $("phase").textContent = f.phase === "refused" ? "refused: the board runs nothing" : rest
+    ? "at rest, 0 V: start or target switches the high voltage on" + cap
+    : (f.phase || "?") + ", target " + fmt(f.target_hz, 4) + " Hz, bias " +
+      fmt(f.bias_volts, 5) + " V" + cap;
   const fault = $("fault");
   const words = f.fault && f.fault !== "none" ? String(s.line).split(" fault=")[1] : "";
   fault.textContent = words ? "FAULT: " + words : "no fault";
@@ -225,15 +323,25 @@ function status(s) {
   dirty = true;
 }
 
+// The fault log in words: how many, then each entry read back (`faults <n>`): when, what.
 function faults(f) {
   const list = $("faults");
   list.innerHTML = "";
+  const count = Number(String(f.summary).split(" ")[1].split("=")[1]);
   const head = document.createElement("li");
-  head.textContent = f.summary;
+  head.className = "head";
+  head.textContent = !isFinite(count) ? f.summary : count === 0 ? "no fault logged"
+    : count + (count === 1 ? " fault" : " faults") + " logged, the newest first" +
+      (count > (f.entries || []).length ? " (" + f.entries.length + " shown)" : "");
   list.appendChild(head);
   for (const e of f.entries || []) {
     const li = document.createElement("li");
-    li.textContent = e.line;
+    const x = e.fields || {};
+    const words = String(e.line).split(" words=")[1];
+    li.textContent = x.sequence === undefined ? e.line
+      : "#" + x.sequence + " at " + fmt(x.seconds, 6) + " s (tick " + x.tick + "), from " +
+        fmt(x.volts, 5) + " V: " + (words || x.cause);
+    li.title = e.line;
     list.appendChild(li);
   }
 }
@@ -286,6 +394,7 @@ function link(l) {
 
 function streamSaid(s) {
   dash.streamReply = s.reply;
+  dash.lastRecordAt = performance.now();
   const note = !dash.hello || !dash.hello.stream
     ? "no telemetry stream: start dash with --stream-port, --stream-tcp or --stream-unix"
     : s.reply && !s.reply.startsWith("ok") ? "the board's stream: " + s.reply : "";
@@ -424,16 +533,16 @@ function curveMarks(u, c) {
   const [lo, hi] = c.tunable_range_hz;
   hline(lo, "tunable " + fmt(lo, 5) + " Hz");
   hline(hi, "tunable " + fmt(hi, 5) + " Hz");
-  // The operating point: the voltage commanded now, on the curve, exactly where it is.
+  // The operating point: the voltage commanded now, on the curve, exactly where it is (its
+  // words under the plot, where no line's label can cover them).
   const f = dash.now == null ? null : fAt(dash.now);
   if (f != null) {
     const px = u.valToPos(dash.now, "x", true), py = u.valToPos(f, "y", true);
     ctx.fillStyle = C.red; ctx.setLineDash([]);
     ctx.beginPath(); ctx.arc(px, py, 6 * devicePixelRatio, 0, 2 * Math.PI); ctx.fill();
-    ctx.textAlign = "left";
-    ctx.fillText("now " + fmt(dash.now, 5) + " V, " + fmt(f, 5) + " Hz", px + 9 * devicePixelRatio,
-      py + 16 * devicePixelRatio);
   }
+  $("curve-now").textContent = f == null ? "" : "● now " + fmt(dash.now, 5) + " V, " + fmt(f, 5) +
+    " Hz on the model's curve";
   ctx.restore();
 }
 
@@ -487,6 +596,9 @@ function frame(now) {
   dash.fps = frames.length;
   requestAnimationFrame(frame);
 }
+
+// The stream's silence is said as it grows (a stream another connection stopped, a cable).
+setInterval(connView, 500);
 
 window.addEventListener("error", (e) => dash.errors.push(String(e.message)));
 window.addEventListener("resize", () => {

@@ -10,6 +10,7 @@ use clap::Args;
 use de_resonator::{Device, Field, Tuner};
 use serde::Serialize;
 
+use super::safe::targets_margin;
 use super::{
     prepare_dir, short, sig, write_csv_and_plot, DeviceArgs, DeviceInfo, MarginArgs, Report,
 };
@@ -286,7 +287,12 @@ pub fn one_curve(
     };
     let tuner = Tuner::new(device);
     let limit = *tuner.limit();
-    let range = match tuner.tunable_range(margin) {
+    let ranges = tuner.max_bias(margin).and_then(|max_bias| {
+        tuner
+            .tunable_range(targets_margin(margin))
+            .map(|range| (max_bias, range))
+    });
+    let (max_bias, range) = match ranges {
         Ok(r) => r,
         Err(e) => {
             curve.problem = Some(e.to_string());
@@ -304,7 +310,7 @@ pub fn one_curve(
                 bias_volts: at.volts,
                 natural_frequency_hz: at.natural_frequency_hz,
                 stretch: at.stretch,
-                beyond_margin: at.volts > range.max_bias.volts,
+                beyond_margin: at.volts > max_bias.volts,
             }
         })
         .collect();
@@ -314,9 +320,9 @@ pub fn one_curve(
         stretch: limit.at.stretch,
         natural_frequency_hz: limit.at.natural_frequency_hz,
     });
-    curve.max_bias_volts = Some(range.max_bias.volts);
+    curve.max_bias_volts = Some(max_bias.volts);
     curve.tunable_range_hz = Some([range.low_hz, range.high_hz]);
-    curve.target = target_hz.map(|hz| match tuner.tune(hz, margin) {
+    curve.target = target_hz.map(|hz| match tuner.tune(hz, targets_margin(margin)) {
         Ok(at) => Target {
             target_hz: hz,
             bias_volts: Some(at.volts),

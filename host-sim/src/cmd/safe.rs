@@ -4,7 +4,7 @@
 use std::fmt;
 
 use clap::Args;
-use de_resonator::{Equilibrium, Tuner};
+use de_resonator::{table, Equilibrium, Tuner};
 use serde::Serialize;
 
 use super::{short, sig, DeviceArgs, DeviceInfo, MarginArgs, Report};
@@ -39,6 +39,15 @@ pub struct LimitReport {
     description: &'static str,
 }
 
+/// The margin whose highest bias ends the tunable range, for the margin `margin`: the
+/// board's table stops [`table::HEADROOM`] below (1 − margin)·Φlimit (its f32 check of the
+/// limit must never refuse it), so the targets the board takes are the natural frequencies
+/// of the biases from 0 V to (1 − margin)(1 − HEADROOM)·Φlimit. One rule: `safe`, `tune`,
+/// `curve`, the live page, Python and the board's table (`info`'s `tunable_*_hz`) all use it.
+pub fn targets_margin(margin: f64) -> f64 {
+    table::table_margin(margin)
+}
+
 /// The safe region: what `safe` reports, and `tune` before its target.
 #[derive(Serialize, Debug)]
 pub struct Region {
@@ -56,7 +65,10 @@ pub struct Region {
 
 impl Region {
     pub fn new(device: DeviceInfo, tuner: &Tuner<f64>, margin: f64) -> Result<Self, String> {
-        let range = tuner.tunable_range(margin).map_err(|e| e.to_string())?;
+        let max_bias = tuner.max_bias(margin).map_err(|e| e.to_string())?;
+        let range = tuner
+            .tunable_range(targets_margin(margin))
+            .map_err(|e| e.to_string())?;
         let limit = tuner.limit();
         let zero = tuner.zero_bias();
         Ok(Self {
@@ -71,8 +83,8 @@ impl Region {
                 description: limit.mode.description(),
             },
             margin,
-            max_bias_volts: range.max_bias.volts,
-            max_bias_stretch: range.max_bias.stretch,
+            max_bias_volts: max_bias.volts,
+            max_bias_stretch: max_bias.stretch,
             tunable_range_hz: [range.low_hz, range.high_hz],
         })
     }
@@ -168,7 +180,7 @@ pub fn tune(args: &TuneArgs) -> Result<TuneReport, String> {
     let margin = args.margin.margin;
     let region = Region::new(name, &tuner, margin)?;
     let bias: Equilibrium<f64> = tuner
-        .tune(args.target_hz, margin)
+        .tune(args.target_hz, targets_margin(margin))
         .map_err(|e| format!("{e} (margin {margin})"))?;
     Ok(TuneReport {
         region,

@@ -25,6 +25,7 @@ use serde::Serialize;
 
 use super::image::PowerUpArg;
 use super::{sig, Report};
+use crate::command_port::control;
 use crate::scene;
 
 #[derive(Args, Debug)]
@@ -106,6 +107,8 @@ pub struct ServeReport {
     pub events: Vec<String>,
     /// The first check of the true plant that failed, and when: must stay `null`.
     pub plant_crossing: Option<super::Crossing>,
+    /// What the board was doing as the session ended (its `status`), and how it ended.
+    pub leaving: String,
 }
 
 impl fmt::Display for ServeReport {
@@ -161,27 +164,43 @@ impl Flash {
     }
 }
 
-trait Conn: Read + Write {}
-impl<T: Read + Write> Conn for T {}
+/// A client's connection: its bytes both ways, and whether a program opened it again since
+/// the last look (a pseudo-terminal that a terminal program closed and opened anew).
+trait Conn: Read + Write {
+    fn reopened(&mut self) -> bool {
+        false
+    }
+}
+impl Conn for std::net::TcpStream {}
+impl Conn for std::os::unix::net::UnixStream {}
 
 /// A connected client: its bytes into lines, its replies queued (nothing waits on a client
 /// that does not read).
 struct Client {
     stream: Box<dyn Conn>,
+    /// Who it is, as another connection is told (`tcp 127.0.0.1:50412`, `the pseudo-terminal`).
+    name: String,
     lines: Lines,
     out: Vec<u8>,
     gone: bool,
     /// The one connection whose requests may change the board (the oldest); the others
-    /// read (`read_only`).
+    /// read (`read_only`), and may `stop` it.
     controls: bool,
 }
 
-/// What a connection that does not control the board may ask: what changes nothing.
+/// What a connection that does not control the board may ask: what changes nothing, and
+/// `stop`, an emergency stop any connection may give (the controlling one is told).
 fn read_only(line: &Line) -> bool {
     use de_resonator::wire::protocol::{self, Command, FaultsAsk};
     match line {
         Line::Text(bytes) => match protocol::parse(bytes) {
-            Ok(Command::Help(_) | Command::Status | Command::Info | Command::Get(_)) => true,
+            Ok(
+                Command::Help(_)
+                | Command::Status
+                | Command::Info
+                | Command::Get(_)
+                | Command::Stop,
+            ) => true,
             Ok(Command::Faults(ask)) => ask != FaultsAsk::Clear,
             Ok(_) => false,
             // Not a request: the board's own `err 1` says why.
@@ -189,6 +208,12 @@ fn read_only(line: &Line) -> bool {
         },
         Line::TooLong | Line::Garbled => true,
     }
+}
+
+/// Whether `line` is a `stop`.
+fn is_stop(line: &Line) -> bool {
+    use de_resonator::wire::protocol::{self, Command};
+    matches!(line, Line::Text(bytes) if protocol::parse(bytes) == Ok(Command::Stop))
 }
 
 /// The controlling connection gone (found by its read): the oldest left takes over, and is
@@ -199,14 +224,18 @@ fn promote(clients: &mut [Client]) {
     }
     if let Some(next) = clients.iter_mut().find(|c| !c.gone) {
         next.controls = true;
-        next.say("# this connection now controls the board");
+        next.say(control::NOW_CONTROLS);
         next.flush();
     }
 }
 
-/// What a connection that does not control the board hears on connecting.
-const READS_ONLY: &str = "# another connection controls the board: this one reads (status, \
-                          info, get, help, faults); the rest get err 8 until that one leaves";
+/// Who controls the board now, by name.
+fn controller(clients: &[Client]) -> String {
+    clients
+        .iter()
+        .find(|c| c.controls && !c.gone)
+        .map_or_else(|| "none".to_string(), |c| c.name.clone())
+}
 
 /// Bytes read from one client at one poll, at most: a client that never stops sending
 /// cannot hold the board's ticks.
@@ -215,9 +244,10 @@ const READ_BYTES: usize = 4096;
 const QUEUED_BYTES: usize = 1 << 16;
 
 impl Client {
-    fn new(stream: Box<dyn Conn>) -> Self {
+    fn new(stream: Box<dyn Conn>, name: String) -> Self {
         Self {
             stream,
+            name,
             lines: Lines::default(),
             out: Vec::new(),
             gone: false,
@@ -292,7 +322,13 @@ enum Listener {
 
 /// A pseudo-terminal's master side, non-blocking: while no program has the terminal open,
 /// reads find nothing (not an end), and writes are kept by the terminal as far as it can.
-struct Pty(nix::pty::PtyMaster);
+struct Pty {
+    master: nix::pty::PtyMaster,
+    /// No program had the terminal open at the last read (EIO).
+    closed: bool,
+    /// A program opened it since (found by a read that was not EIO), not yet told.
+    reopened: bool,
+}
 
 impl Pty {
     /// A new pseudo-terminal in raw mode (no echo or line editing of its own: the board
@@ -310,30 +346,49 @@ impl Pty {
         let mut raw = tcgetattr(master.as_raw_fd()).map_err(failed)?;
         cfmakeraw(&mut raw);
         tcsetattr(master.as_raw_fd(), SetArg::TCSANOW, &raw).map_err(failed)?;
-        Ok((Pty(master), path))
+        let pty = Pty {
+            master,
+            closed: false,
+            reopened: false,
+        };
+        Ok((pty, path))
     }
 }
 
 impl Read for Pty {
     fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
-        match self.0.read(buf) {
+        match self.master.read(buf) {
             // EIO: no program has the terminal open now; one may later.
-            Err(e) if e.raw_os_error() == Some(libc::EIO) => Err(ErrorKind::WouldBlock.into()),
-            other => other,
+            Err(e) if e.raw_os_error() == Some(libc::EIO) => {
+                self.closed = true;
+                Err(ErrorKind::WouldBlock.into())
+            }
+            other => {
+                if std::mem::take(&mut self.closed) {
+                    self.reopened = true;
+                }
+                other
+            }
         }
+    }
+}
+
+impl Conn for Pty {
+    fn reopened(&mut self) -> bool {
+        std::mem::take(&mut self.reopened)
     }
 }
 
 impl Write for Pty {
     fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        match self.0.write(buf) {
+        match self.master.write(buf) {
             Err(e) if e.raw_os_error() == Some(libc::EIO) => Err(ErrorKind::WouldBlock.into()),
             other => other,
         }
     }
 
     fn flush(&mut self) -> std::io::Result<()> {
-        self.0.flush()
+        self.master.flush()
     }
 }
 
@@ -367,24 +422,27 @@ impl Listener {
         Ok((Listener::Unix(l, path), at))
     }
 
-    /// A client waiting to connect, if any.
-    fn accept(&self) -> Option<Box<dyn Conn>> {
+    /// A client waiting to connect, if any, as a [`Client`] named for the others.
+    fn accept(&self, count: usize) -> Option<Client> {
         match self {
             Listener::Tcp(l) => {
-                let (s, _) = l.accept().ok()?;
+                let (s, peer) = l.accept().ok()?;
                 s.set_nonblocking(true).ok()?;
                 let _ = s.set_nodelay(true);
-                Some(Box::new(s))
+                Some(Client::new(Box::new(s), format!("tcp {peer}")))
             }
             Listener::Unix(l, _) => {
                 let (s, _) = l.accept().ok()?;
                 s.set_nonblocking(true).ok()?;
-                Some(Box::new(s))
+                Some(Client::new(
+                    Box::new(s),
+                    format!("unix socket client {count}"),
+                ))
             }
             Listener::Pty(pty) => pty
                 .borrow_mut()
                 .take()
-                .map(|p| Box::new(p) as Box<dyn Conn>),
+                .map(|p| Client::new(Box::new(p), "the pseudo-terminal".into())),
         }
     }
 }
@@ -485,11 +543,19 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
         requests: 0,
         events: Vec::new(),
         plant_crossing: None,
+        leaving: String::new(),
     };
+    // Ctrl-C (or a SIGTERM) ends the session between two ticks, saying what the board did.
+    let interrupted = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        let _ = signal_hook::flag::register(signal, interrupted.clone());
+    }
     let started = Instant::now();
     let mut next_poll = started;
     let mut k: u64 = 0;
-    while ticks_limit.is_none_or(|n| k < n) {
+    while ticks_limit.is_none_or(|n| k < n)
+        && !interrupted.load(std::sync::atomic::Ordering::Relaxed)
+    {
         let now = Instant::now();
         let due = match args.speed {
             Speed::Max => None,
@@ -500,8 +566,8 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
         if now >= next_poll || due.is_some_and(|d| d > now) {
             next_poll = now + POLL;
             if let Some(streams) = &streams {
-                while let Some(stream) = streams.accept() {
-                    stream_clients.push(Client::new(stream));
+                while let Some(client) = streams.accept(stream_clients.len() + 1) {
+                    stream_clients.push(client);
                 }
             }
             // The clock the firmware's status reports (a u32 of µs, wrapping).
@@ -517,39 +583,60 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
                 queue.extend(lines.into_iter().map(|line| (i, line)));
             }
             promote(&mut clients);
-            // A new client hears the board's state now: the last boot's start-up line while
-            // it still says it (nothing asked since, no fault), else the status now.
-            while let Some(stream) = listener.accept() {
-                let mut client = Client::new(stream);
+            // A new client, or a terminal opened again on the pseudo-terminal, hears the
+            // board's state now: the last boot's start-up line while it still says it
+            // (nothing asked since, no fault), else the status now.
+            let reopened: Vec<usize> = (0..clients.len())
+                .filter(|&i| clients[i].stream.reopened())
+                .collect();
+            let mut joined = Vec::new();
+            while let Some(client) = listener.accept(report.clients + joined.len() + 1) {
+                joined.push(client);
+            }
+            if !reopened.is_empty() || !joined.is_empty() {
                 let faulted = slot.as_ref().is_some_and(|c| c.latched_fault().is_some());
-                if asked_since_boot || faulted {
+                let said = if asked_since_boot || faulted {
                     let mut now = ReplyLine::new();
                     let status = crate::engine::closed_loop::command_line("status")?;
                     logic.serve(&status, &mut &mut slot, &extras, &mut now);
-                    client.say(&format!("{NOTICE}now {}", now.trim_start_matches("ok ")));
+                    vec![format!("{NOTICE}now {}", now.trim_start_matches("ok "))]
                 } else {
-                    for line in &banner {
-                        client.say(line);
+                    banner.clone()
+                };
+                for i in reopened {
+                    said.iter().for_each(|line| clients[i].say(line));
+                }
+                for mut client in joined {
+                    said.iter().for_each(|line| client.say(line));
+                    // (A client that left since the last poll was found gone by its read.)
+                    client.controls = !clients.iter().any(|c| c.controls && !c.gone);
+                    if !client.controls {
+                        client.say(&control::reads_only(&controller(&clients)));
                     }
+                    clients.push(client);
+                    report.clients += 1;
                 }
-                // (A client that left since the last poll was found gone by its read.)
-                client.controls = !clients.iter().any(|c| c.controls && !c.gone);
-                if !client.controls {
-                    client.say(READS_ONLY);
-                }
-                clients.push(client);
-                report.clients += 1;
             }
             // In the order received; after a `reset`, the rest go to the board booted anew.
             for (i, line) in queue {
                 report.requests += 1;
                 let mut reply = ReplyLine::new();
                 if !clients[i].controls && !read_only(&line) {
-                    let code = de_resonator::wire::protocol::ErrorCode::NotInControl;
-                    clients[i].say(&format!(
-                        "err {code} another connection controls the board: this one reads \
-                         (status, info, get, help, faults) until that one leaves"
-                    ));
+                    let refused = control::not_in_control(&controller(&clients));
+                    clients[i].say(&refused);
+                    continue;
+                }
+                // An emergency stop from a connection that reads: the controlling one told.
+                if !clients[i].controls && is_stop(&line) {
+                    let mut stopped = ReplyLine::new();
+                    logic.serve(&line, &mut &mut slot, &extras, &mut stopped);
+                    let told = control::stopped_by(&clients[i].name, &stopped);
+                    clients
+                        .iter_mut()
+                        .filter(|c| c.controls)
+                        .for_each(|c| c.say(&told));
+                    clients[i].say(&stopped);
+                    asked_since_boot = true;
                     continue;
                 }
                 asked_since_boot = true;
@@ -614,6 +701,23 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
         }
         k += 1;
     }
+    let mut now = ReplyLine::new();
+    let status = crate::engine::closed_loop::command_line("status")?;
+    logic.serve(&status, &mut &mut slot, &Extras::default(), &mut now);
+    let how = if interrupted.load(std::sync::atomic::Ordering::Relaxed) {
+        "interrupted"
+    } else {
+        "its time over"
+    };
+    report.leaving = format!(
+        "{how} at {} s simulated; the board's last status: {}",
+        sig(k as f64 * tick_seconds),
+        now.trim_start_matches("ok ")
+    );
+    eprintln!(
+        "{}; the virtual board ends with this session (a real board goes on as it was told)",
+        report.leaving
+    );
     report.ticks = k;
     report.simulated_seconds = k as f64 * tick_seconds;
     report.wall_seconds = started.elapsed().as_secs_f64();

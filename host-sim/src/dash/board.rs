@@ -17,7 +17,7 @@ use serde_json::{json, Value};
 
 use super::DashArgs;
 use crate::cmd::record::{self, Counts};
-use crate::command_port::{fields, gone, Session};
+use crate::command_port::{control, fields, gone, Session};
 use crate::telemetry::{self, Source};
 
 /// Requests and replies kept for a page that opens later.
@@ -150,7 +150,11 @@ struct Job {
 
 /// The board's command port: one thread asks every request in the order they came (the
 /// pages' and the poll's): a STOP clicked after a start reaches the board after it.
+#[derive(Clone)]
 struct Port(mpsc::Sender<Job>);
+
+/// What a request is told while no connection to the board is open.
+const NOT_CONNECTED: &str = "the board is not connected (lost; dash reconnects)";
 
 impl Port {
     fn start(mut session: Session) -> Self {
@@ -176,22 +180,64 @@ impl Port {
     }
 }
 
+/// The connection to the board as the pages are told it (event `board`).
+#[derive(Clone, Debug, Serialize)]
+#[serde(tag = "state", rename_all = "snake_case")]
+enum Link {
+    /// Connected, the board answering.
+    Up,
+    /// Connected, but the last request went unanswered: its state is unknown.
+    Silent { why: String },
+    /// The connection is gone; dash tries again every `retry_seconds` (attempt `attempt`).
+    Lost {
+        why: String,
+        since_ms: u64,
+        attempt: u32,
+        retry_seconds: f64,
+    },
+}
+
+/// Who may change the board (event `control`): this dash's connection, or another one of
+/// `serve`'s (a board's one port is always this one's).
+#[derive(Clone, Debug, Serialize)]
+struct Control {
+    controls: bool,
+    /// The connection that controls, when it is another.
+    controller: Option<String>,
+}
+
+/// The longest wait between two attempts to reach a lost board.
+const RETRY_MAX: Duration = Duration::from_secs(4);
+/// The first wait after the board is lost.
+const RETRY_FIRST: Duration = Duration::from_millis(250);
+
 /// Everything the dashboard's threads share.
 pub struct Shared {
-    port: Port,
+    /// The board's command port while connected.
+    port: Mutex<Option<Port>>,
+    /// Where the board is, for reconnecting.
+    board: crate::command_port::PortArgs,
     hub: Hub,
     /// What a page is told first: the board, its device's curve, its settings.
     hello: Mutex<Value>,
     log: Mutex<VecDeque<Value>>,
     status: Mutex<Value>,
     faults: Mutex<Value>,
+    link_state: Mutex<Link>,
+    control: Mutex<Control>,
+    /// This dash took control: its stream is asked again (another connection's leaving
+    /// stopped it).
+    restart_stream: AtomicBool,
+    /// Lines the board said on its own over the present connection.
+    heard: AtomicU64,
     /// The newest `NOTICES_KEPT` lines the board said on its own.
     notices: Mutex<VecDeque<String>>,
     counts: Mutex<Counts>,
     recording: Mutex<Option<Recording>>,
     last_recording: Mutex<Option<Vec<u8>>>,
     requests: AtomicU64,
-    stopped: Mutex<Option<String>>,
+    /// Times the board was lost.
+    losses: AtomicU64,
     stop: AtomicBool,
     stream: Option<Source>,
     stream_request: String,
@@ -202,53 +248,74 @@ pub struct Shared {
 
 impl Shared {
     /// Connect to the board, wait for its start-up line (a board that starts as a client
-    /// connects says it first), and learn what it runs.
+    /// connects says it first), and learn what it runs. The first connection must succeed:
+    /// a wrong port is said at once, not retried.
     pub fn connect(args: &DashArgs) -> Result<Arc<Self>, String> {
-        let notices = Arc::new(Mutex::new(Vec::<String>::new()));
-        let early = notices.clone();
-        // Notices before the pages' hub exists are kept; later ones go to the pages too. The
-        // slot is locked before the early list, here and below (one order: no deadlock); it
-        // holds the shared state weakly (the reader thread does not keep it alive).
-        let hub_slot: Arc<Mutex<Option<std::sync::Weak<Shared>>>> = Arc::new(Mutex::new(None));
-        let later = hub_slot.clone();
-        let mut session = Session::open(&args.board, move |line| {
-            let slot = lock(&later);
-            match slot.as_ref().and_then(std::sync::Weak::upgrade) {
-                Some(shared) => shared.notice(line),
-                None => lock(&early).push(line),
-            }
-        })?;
-        let end = Instant::now() + STARTUP_WAIT;
-        while Instant::now() < end && lock(&notices).is_empty() {
-            std::thread::sleep(Duration::from_millis(20));
-        }
-        // A clean line first: a half line an earlier connection left is refused, not glued.
-        session.clean_line()?;
-        // The early notices moved and the slot filled at once: none lost between.
-        let mut slot = lock(&hub_slot);
         let shared = Arc::new(Shared {
-            port: Port::start(session),
+            port: Mutex::new(None),
+            board: args.board.clone(),
             hub: Hub::default(),
             hello: Mutex::new(Value::Null),
             log: Mutex::new(VecDeque::new()),
             status: Mutex::new(Value::Null),
             faults: Mutex::new(Value::Null),
-            notices: Mutex::new(lock(&notices).iter().cloned().collect()),
+            link_state: Mutex::new(Link::Up),
+            control: Mutex::new(Control {
+                controls: true,
+                controller: None,
+            }),
+            restart_stream: AtomicBool::new(false),
+            heard: AtomicU64::new(0),
+            notices: Mutex::new(VecDeque::new()),
             counts: Mutex::new(Counts::default()),
             recording: Mutex::new(None),
             last_recording: Mutex::new(None),
             requests: AtomicU64::new(0),
-            stopped: Mutex::new(None),
+            losses: AtomicU64::new(0),
             stop: AtomicBool::new(false),
             stream: args.stream.source(),
             stream_request: format!("stream {}", args.stream_hz),
             stream_reply: Mutex::new(None),
             tick_hz: Mutex::new(f64::NAN),
         });
-        *slot = Some(Arc::downgrade(&shared));
-        drop(slot);
-        shared.learn(&args.board.describe())?;
+        shared.open_board()?;
         Ok(shared)
+    }
+
+    /// Open the board's command port, wait for its start-up line, start from a clean line,
+    /// and learn what it runs (the hello made anew).
+    fn open_board(self: &Arc<Self>) -> Result<(), String> {
+        *lock(&self.control) = Control {
+            controls: true,
+            controller: None,
+        };
+        self.heard.store(0, Ordering::Relaxed);
+        // The reader thread holds the shared state weakly (it does not keep it alive).
+        let weak = Arc::downgrade(self);
+        let mut session = Session::open(&self.board, move |line| {
+            if let Some(shared) = weak.upgrade() {
+                shared.heard.fetch_add(1, Ordering::Relaxed);
+                shared.notice(line);
+            }
+        })?;
+        let end = Instant::now() + STARTUP_WAIT;
+        while Instant::now() < end && self.heard.load(Ordering::Relaxed) == 0 {
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        // A clean line first: a half line an earlier connection left is refused, not glued.
+        session.clean_line()?;
+        *lock(&self.port) = Some(Port::start(session));
+        *lock(&self.link_state) = Link::Up;
+        self.learn(&self.board.describe())
+    }
+
+    /// Ask the board, over the connection open now.
+    fn ask(&self, request: &str) -> Result<String, String> {
+        let port = lock(&self.port).clone();
+        match port {
+            Some(port) => port.ask(request),
+            None => Err(NOT_CONNECTED.into()),
+        }
     }
 
     /// Ask the board what it runs (`info`, `get`, `help` for each setting) and make the
@@ -268,7 +335,7 @@ impl Shared {
         if let Some(reply) = Reply::parse(&get) {
             for (key, value) in reply.pairs() {
                 // Not logged: twenty lines of help would bury the operator's requests.
-                let help = self.port.ask(&format!("help {key}"))?;
+                let help = self.ask(&format!("help {key}"))?;
                 let help = Reply::parse(&help)
                     .and_then(|r| match r {
                         Reply::Ok(text) => Some(text.to_string()),
@@ -314,17 +381,12 @@ impl Shared {
     /// A request to the board and its reply, logged and told to every page.
     fn exchange(&self, request: &str, origin: &str) -> Result<(String, f64), String> {
         let started = Instant::now();
-        let reply = self.port.ask(request);
+        let line = self.ask(request)?;
         let ms = started.elapsed().as_secs_f64() * 1e3;
-        let line = match reply {
-            Ok(line) => line,
-            Err(why) => {
-                if gone(&why) {
-                    *lock(&self.stopped) = Some(why.clone());
-                }
-                return Err(why);
-            }
-        };
+        // Refused as not in control: another connection took it (said by name).
+        if let Some(Some(who)) = control::of_line(&line) {
+            self.set_control(false, Some(who));
+        }
         let entry = json!({
             "origin": origin,
             "request": request,
@@ -364,7 +426,14 @@ impl Shared {
         let (line, ms) = self.exchange(request, "page")?;
         let ok = matches!(Reply::parse(&line), Some(Reply::Ok(_)));
         let verb = request.split_whitespace().next().unwrap_or("");
-        if ok && matches!(verb, "set" | "reset" | "save" | "clear") {
+        // What may change a setting in force (`target` its target, `ac` its drive): the
+        // settings read again, so the page never shows a value gone.
+        if ok
+            && matches!(
+                verb,
+                "set" | "reset" | "save" | "clear" | "target" | "ac" | "start" | "trim"
+            )
+        {
             self.refresh_settings();
         }
         if ok && verb == "faults" {
@@ -413,8 +482,40 @@ impl Shared {
         );
     }
 
+    /// Who controls the board now, told to the pages; taking control asks for the stream
+    /// again (the connection that left stopped it).
+    fn set_control(&self, controls: bool, controller: Option<String>) {
+        let control = Control {
+            controls,
+            controller,
+        };
+        let before = std::mem::replace(&mut *lock(&self.control), control.clone());
+        if controls && !before.controls {
+            self.restart_stream.store(true, Ordering::Relaxed);
+        }
+        self.hub.publish("control", &json!(control), 0);
+    }
+
+    /// The connection to the board, told to the pages.
+    fn set_link(&self, link: Link) {
+        *lock(&self.link_state) = link.clone();
+        self.hub.publish("board", &json!(link), 0);
+    }
+
+    /// A line of dash's own for the pages' "board said" list (marked as dash's).
+    fn dash_says(&self, what: &str) {
+        self.hub.publish(
+            "notice",
+            &json!({"line": format!("# dash: {what}"), "at": now_ms()}),
+            0,
+        );
+    }
+
     /// A line the board said on its own: kept, and told to the pages.
     fn notice(&self, line: String) {
+        if let Some(who) = control::of_line(&line) {
+            self.set_control(who.is_none(), who);
+        }
         let entry = json!({"line": line, "at": now_ms()});
         let mut notices = lock(&self.notices);
         if notices.len() == NOTICES_KEPT {
@@ -439,8 +540,17 @@ impl Shared {
         hello["link"] = self.link();
         hello["stream_reply"] = Value::from(lock(&self.stream_reply).clone());
         hello["recording"] = Value::from(lock(&self.recording).is_some());
+        hello["board_link"] = json!(*lock(&self.link_state));
+        hello["control"] = json!(*lock(&self.control));
         pages.push(tx);
         (hello, rx)
+    }
+
+    /// A page's hello as `subscribe` makes it, for the pages already open (after the board
+    /// came back: what it runs may have changed).
+    fn hello_again(&self) {
+        let (hello, _) = self.subscribe();
+        self.hub.publish("hello", &hello, 0);
     }
 
     /// The link's health: the stream's counts, what the pages could not take.
@@ -502,10 +612,11 @@ impl Shared {
             return Err("no recording is under way".into());
         };
         let now = *lock(&self.counts);
+        // (Counted again from 0 when the board came back: what the new stream counted.)
         let counts = Counts {
-            records: now.records - recording.from.records,
-            lost: now.lost - recording.from.lost,
-            bad_frames: now.bad_frames - recording.from.bad_frames,
+            records: now.records.saturating_sub(recording.from.records),
+            lost: now.lost.saturating_sub(recording.from.lost),
+            bad_frames: now.bad_frames.saturating_sub(recording.from.bad_frames),
         };
         let mut header = recording.header;
         header.extend(
@@ -547,17 +658,28 @@ impl Shared {
         self.hub.dropped.load(Ordering::Relaxed)
     }
 
-    /// Why the session ended, if the board went away.
+    /// Why the board is out of reach as dash ends, if it is.
     pub fn stopped(&self) -> Option<String> {
-        lock(&self.stopped).clone()
+        match &*lock(&self.link_state) {
+            Link::Lost { why, .. } => Some(why.clone()),
+            Link::Up | Link::Silent { .. } => None,
+        }
     }
 
-    /// A snapshot for tools and tests: the link, the last status.
+    /// Times the board was lost (and dash reconnected, or tried to).
+    pub fn losses(&self) -> u64 {
+        self.losses.load(Ordering::Relaxed)
+    }
+
+    /// A snapshot for tools and tests: the link, the last status, the board's connection,
+    /// who controls.
     pub fn state(&self) -> Value {
         json!({
             "link": self.link(),
             "status": lock(&self.status).clone(),
-            "stopped": self.stopped(),
+            "board": *lock(&self.link_state),
+            "control": *lock(&self.control),
+            "losses": self.losses(),
         })
     }
 }
@@ -589,52 +711,117 @@ fn tuning_curve(
     Ok(value)
 }
 
-/// The dashboard's threads: the status poll and the stream's reader.
+/// The dashboard's thread that keeps the board: polls it, reads its stream, and reconnects
+/// when it is lost.
 pub struct Workers {
-    threads: Vec<JoinHandle<()>>,
+    thread: JoinHandle<()>,
 }
 
-/// Start the stream (`stream <hz>`) and the threads that poll the status and read the
-/// stream.
+/// Start the stream (`stream <hz>`) and the thread that polls the status, reads the stream,
+/// and reconnects to a board lost. The first stream must open: a wrong path is said at once.
 pub fn start(shared: &Arc<Shared>, args: &DashArgs) -> Result<Workers, String> {
-    let mut threads = Vec::new();
-    if let Some(source) = shared.stream.clone() {
-        let port = source.open()?;
-        shared.ask_stream();
-        let s = shared.clone();
-        threads.push(std::thread::spawn(move || read_stream(&s, port)));
-    }
+    let first = shared.stream.as_ref().map(Source::open).transpose()?;
     let s = shared.clone();
     let every = Duration::from_secs_f64(args.poll_seconds);
-    threads.push(std::thread::spawn(move || poll(&s, every)));
-    Ok(Workers { threads })
+    let thread = std::thread::spawn(move || keep(&s, every, first));
+    Ok(Workers { thread })
 }
 
 impl Workers {
-    /// Stop the threads and the stream; what the board is still doing, in words.
+    /// Stop the thread and the stream; what the board is still doing, in words.
     pub fn finish(self, shared: &Shared) -> String {
         shared.stop.store(true, Ordering::Relaxed);
-        if shared.stream.is_some() && shared.stopped().is_none() {
+        let _ = self.thread.join();
+        if let Some(why) = shared.stopped() {
+            return format!("the board is out of reach ({why}): its state is unknown");
+        }
+        // The stream stopped only by the connection that controls (another's asks err 8).
+        if shared.stream.is_some() && lock(&shared.control).controls {
             let _ = shared.ask_own("stream off");
         }
-        for t in self.threads {
-            let _ = t.join();
+        crate::cmd::console::leaving(&mut |r| shared.ask(r), false)
+    }
+}
+
+/// The board kept while dash runs: each connection polled until it is lost, then opened
+/// again with a growing wait between attempts, the pages told at every change.
+fn keep(shared: &Arc<Shared>, every: Duration, first: Option<Box<dyn std::io::Read + Send>>) {
+    let mut stream = first;
+    while !shared.stop.load(Ordering::Relaxed) {
+        // The stream, read on its own thread for as long as this connection lasts.
+        let connection_stop = Arc::new(AtomicBool::new(false));
+        let reader = shared.stream.as_ref().and_then(|source| {
+            let port = match stream.take().map_or_else(|| source.open(), Ok) {
+                Ok(port) => port,
+                Err(why) => {
+                    shared.dash_says(&why);
+                    return None;
+                }
+            };
+            let (s, stop) = (Arc::clone(shared), connection_stop.clone());
+            Some(std::thread::spawn(move || read_stream(&s, port, &stop)))
+        });
+        if reader.is_some() && lock(&shared.control).controls {
+            shared.ask_stream();
         }
-        if shared.stopped().is_some() {
-            return "the board went away".into();
+        let why = poll(shared, every);
+        connection_stop.store(true, Ordering::Relaxed);
+        if let Some(reader) = reader {
+            let _ = reader.join();
         }
-        crate::cmd::console::leaving(&mut |r| shared.port.ask(r), false)
+        let Some(why) = why else { return };
+        // Lost: nothing the page shows of the board holds any more.
+        *lock(&shared.port) = None;
+        *lock(&shared.status) = Value::Null;
+        shared.losses.fetch_add(1, Ordering::Relaxed);
+        let since_ms = now_ms();
+        let mut wait = RETRY_FIRST;
+        let mut attempt = 0;
+        let mut last = why;
+        loop {
+            attempt += 1;
+            shared.set_link(Link::Lost {
+                why: last.clone(),
+                since_ms,
+                attempt,
+                retry_seconds: wait.as_secs_f64(),
+            });
+            let until = Instant::now() + wait;
+            while Instant::now() < until {
+                if shared.stop.load(Ordering::Relaxed) {
+                    return;
+                }
+                std::thread::sleep(Duration::from_millis(50));
+            }
+            match shared.open_board() {
+                Ok(()) => break,
+                Err(why) => {
+                    *lock(&shared.port) = None;
+                    last = why;
+                    wait = (wait * 2).min(RETRY_MAX);
+                }
+            }
+        }
+        shared.dash_says(&format!("the board is back after {attempt} attempts"));
+        shared.set_link(Link::Up);
+        shared.hello_again();
     }
 }
 
 /// Ask `status` every `every`, and the fault log when the fault changes: told to the pages.
-fn poll(shared: &Shared, every: Duration) {
+/// Returns why the board was lost, or `None` when dash stops.
+fn poll(shared: &Shared, every: Duration) -> Option<String> {
     let mut last_fault: Option<String> = None;
     let mut polls = 0u64;
-    while !shared.stop.load(Ordering::Relaxed) && shared.stopped().is_none() {
-        let line = shared.port.ask("status");
-        match line {
+    while !shared.stop.load(Ordering::Relaxed) {
+        if shared.restart_stream.swap(false, Ordering::Relaxed) && shared.stream.is_some() {
+            shared.ask_stream();
+        }
+        match shared.ask("status") {
             Ok(line) => {
+                if !matches!(*lock(&shared.link_state), Link::Up) {
+                    shared.set_link(Link::Up);
+                }
                 let status = json!({"line": line, "fields": fields(&line), "at": now_ms()});
                 *lock(&shared.status) = status.clone();
                 shared.hub.publish("status", &status, 0);
@@ -648,22 +835,24 @@ fn poll(shared: &Shared, every: Duration) {
                     last_fault = fault;
                 }
             }
-            Err(why) if gone(&why) => {
-                *lock(&shared.stopped) = Some(why);
-                return;
+            Err(why) if gone(&why) || why == NOT_CONNECTED => return Some(why),
+            // Unanswered: the board's state is unknown until it answers again.
+            Err(why) => {
+                *lock(&shared.status) = Value::Null;
+                shared.set_link(Link::Silent { why });
             }
-            Err(_) => {}
         }
         polls += 1;
         let link = shared.link();
         shared.hub.publish("link", &link, 0);
         std::thread::sleep(every);
     }
+    None
 }
 
 /// `faults`, and each entry it lists (the newest few): told to the pages.
 fn read_faults(shared: &Shared) {
-    let Ok(summary) = shared.port.ask("faults") else {
+    let Ok(summary) = shared.ask("faults") else {
         return;
     };
     // `ok faults=N | n cause t=… | …`: the entries' numbers.
@@ -675,7 +864,7 @@ fn read_faults(shared: &Shared) {
     let mut entries = Vec::new();
     // `faults` lists the newest first.
     for n in numbers.iter().take(FAULTS_SHOWN) {
-        if let Ok(line) = shared.port.ask(&format!("faults {n}")) {
+        if let Ok(line) = shared.ask(&format!("faults {n}")) {
             entries.push(json!({"line": line, "fields": fields(&line)}));
         }
     }
@@ -685,10 +874,10 @@ fn read_faults(shared: &Shared) {
 }
 
 /// Read the stream into batches for the pages (and the recording).
-fn read_stream(shared: &Shared, port: Box<dyn std::io::Read + Send>) {
+fn read_stream(shared: &Shared, port: Box<dyn std::io::Read + Send>, stop: &AtomicBool) {
     let mut pending: Vec<Row> = Vec::new();
     let mut last = Instant::now();
-    let result = telemetry::read(port, &shared.stop, |new, receiver| {
+    let result = telemetry::read(port, stop, |new, receiver| {
         pending.extend(new.iter().map(Row::of));
         // The counts and the recording's rows under one lock: a recording's counts are its
         // rows'.
@@ -709,10 +898,6 @@ fn read_stream(shared: &Shared, port: Box<dyn std::io::Read + Send>) {
         }
     });
     if let Err(why) = result {
-        shared.hub.publish(
-            "notice",
-            &json!({"line": format!("# dash: {why}"), "at": now_ms()}),
-            0,
-        );
+        shared.dash_says(&why);
     }
 }

@@ -41,6 +41,11 @@ pub struct DashArgs {
     /// default: the page drives high voltage, so anything else is warned of.
     #[arg(long, value_name = "HOST:PORT", default_value = "127.0.0.1:8080")]
     pub listen: SocketAddr,
+    /// A name the page is also served as, HOST or HOST:PORT, as a TLS reverse proxy in front
+    /// passes it (`Host`); repeatable. On loopback, only 127.0.0.1, localhost and [::1] are
+    /// taken otherwise (a site that points its name at this machine is refused).
+    #[arg(long, value_name = "HOST")]
+    pub allow_host: Vec<String>,
     /// How often the page's status is asked of the board (`status`), s.
     #[arg(
         long,
@@ -66,7 +71,9 @@ pub struct DashReport {
     pub dropped_to_pages: u64,
     /// What the board is doing as the dashboard leaves (it keeps its own rules).
     pub leaving: String,
-    /// Why the session ended early (the board went away).
+    /// Times the board was lost while dash ran (dash reconnects, with growing waits).
+    pub board_lost: u64,
+    /// Why the board was out of reach as dash ended, if it was.
     pub stopped: Option<String>,
 }
 
@@ -93,6 +100,50 @@ impl Report for DashReport {
     }
 }
 
+/// The page's URLs, its token in each: the address served, or (served on every address) the
+/// loopback one first, then the machine's own addresses, as others would open it.
+fn urls(address: SocketAddr, token: &str) -> Vec<String> {
+    let port = address.port();
+    let url = |ip: std::net::IpAddr| match ip {
+        std::net::IpAddr::V4(ip) => format!("http://{ip}:{port}/?token={token}"),
+        std::net::IpAddr::V6(ip) => format!("http://[{ip}]:{port}/?token={token}"),
+    };
+    if !address.ip().is_unspecified() {
+        return vec![url(address.ip())];
+    }
+    let v6 = address.is_ipv6();
+    let loopback = if v6 {
+        std::net::Ipv6Addr::LOCALHOST.into()
+    } else {
+        std::net::Ipv4Addr::LOCALHOST.into()
+    };
+    let mut urls = vec![url(loopback)];
+    if let Ok(interfaces) = nix::ifaddrs::getifaddrs() {
+        for interface in interfaces {
+            let Some(storage) = interface.address else {
+                continue;
+            };
+            let ip: Option<std::net::IpAddr> =
+                match (storage.as_sockaddr_in(), storage.as_sockaddr_in6()) {
+                    (Some(v4), _) => Some(std::net::Ipv4Addr::from(v4.ip()).into()),
+                    (_, Some(six)) if v6 => Some(six.ip().into()),
+                    _ => None,
+                };
+            // Link-local IPv6 needs its interface named: left out.
+            if let Some(ip) = ip.filter(|ip| {
+                !ip.is_loopback()
+                    && !matches!(ip, std::net::IpAddr::V6(six) if six.segments()[0] & 0xffc0 == 0xfe80)
+            }) {
+                let u = url(ip);
+                if !urls.contains(&u) {
+                    urls.push(u);
+                }
+            }
+        }
+    }
+    urls
+}
+
 /// Serve the page until Ctrl-C (or `--seconds`), then say what the board is still doing.
 /// With `json`, the page's address goes to stderr (stdout carries the report alone).
 pub fn dash(args: &DashArgs, json: bool) -> Result<DashReport, String> {
@@ -109,27 +160,28 @@ pub fn dash(args: &DashArgs, json: bool) -> Result<DashReport, String> {
             "--seconds {s}: must be a positive number of seconds"
         ));
     }
-    if !args.listen.ip().is_loopback() {
-        eprintln!(
-            "warning: serving the page on {}, beyond this machine: anyone who reaches it can \
-             drive the board's high voltage (the default is 127.0.0.1)",
-            args.listen
-        );
-    }
+    let token = http::new_token()?;
     let server = tiny_http::Server::http(args.listen)
         .map_err(|e| format!("cannot listen on {}: {e}", args.listen))?;
-    let url = match server.server_addr().to_ip() {
-        Some(address) => format!("http://{address}/"),
-        None => format!("http://{}/", args.listen),
-    };
+    let address = server.server_addr().to_ip().unwrap_or(args.listen);
+    let urls = urls(address, &token);
+    let url = urls[0].clone();
+    if !address.ip().is_loopback() {
+        eprintln!(
+            "warning: serving the page on {address}, beyond this machine: whoever holds its URL \
+             (the token in it) can switch the board's high voltage on. Give it only to those \
+             who may operate the board; over plain HTTP anyone on the network's path can read \
+             it: put TLS in front (docs/host-sim.md, \"The live page beyond this machine\"). \
+             The default, 127.0.0.1, serves this machine alone"
+        );
+    }
     eprintln!("connecting to the board at {}...", args.board.describe());
     let shared = board::Shared::connect(args)?;
     let interrupted = Arc::new(AtomicBool::new(false));
     let _ = signal_hook::flag::register(signal_hook::consts::SIGINT, interrupted.clone());
     let _ = signal_hook::flag::register(signal_hook::consts::SIGTERM, interrupted.clone());
     let workers = board::start(&shared, args)?;
-    let address = server.server_addr().to_ip().unwrap_or(args.listen);
-    let guard = Arc::new(http::Guard::for_address(address));
+    let guard = Arc::new(http::Guard::for_address(address, token, &args.allow_host));
     // The address on stdout, alone on its line: a script (or a person) opens it.
     if json {
         eprintln!("dash: open {url}");
@@ -138,9 +190,12 @@ pub fn dash(args: &DashArgs, json: bool) -> Result<DashReport, String> {
         let mut out = std::io::stdout().lock();
         let _ = writeln!(out, "dash: open {url}").and_then(|()| out.flush());
     }
+    for other in &urls[1..] {
+        eprintln!("dash: also at {other}");
+    }
     eprintln!(
-        "serving the page at {url} for the board at {}; Ctrl-C leaves (the board keeps its own \
-         rules and state)",
+        "serving the page at {url} for the board at {}; the URL carries the page's token (a \
+         new one at every start). Ctrl-C leaves (the board keeps its own rules and state)",
         args.board.describe()
     );
     let end = args
@@ -149,7 +204,6 @@ pub fn dash(args: &DashArgs, json: bool) -> Result<DashReport, String> {
     let mut failed = None;
     while !interrupted.load(Ordering::Relaxed)
         && end.is_none_or(|end| std::time::Instant::now() < end)
-        && shared.stopped().is_none()
     {
         match server.recv_timeout(Duration::from_millis(100)) {
             Ok(Some(request)) => {
@@ -177,6 +231,7 @@ pub fn dash(args: &DashArgs, json: bool) -> Result<DashReport, String> {
         bad_frames: counts.bad_frames,
         dropped_to_pages: shared.dropped(),
         leaving,
+        board_lost: shared.losses(),
         stopped: shared.stopped(),
     })
 }
