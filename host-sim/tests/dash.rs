@@ -149,6 +149,12 @@ fn the_page_talks_to_the_board_only_in_its_protocol() {
     // request without the page's header cannot start the board; the board never hears them.
     let port = address.rsplit(':').next().unwrap();
     let key = format!("Authorization: Token {token}\r\n");
+    // Another token of the same length, its last digit changed.
+    let wrong = format!(
+        "{}{}",
+        &token[..token.len() - 1],
+        if token.ends_with('0') { '1' } else { '0' }
+    );
     for (headers, code_said, why) in [
         (
             format!("Host: {address}\r\nX-Dash-Request: 1\r\n"),
@@ -157,7 +163,7 @@ fn the_page_talks_to_the_board_only_in_its_protocol() {
         ),
         (
             format!(
-                "Host: {address}\r\nX-Dash-Request: 1\r\nCookie: dash_token_{port}=0{token}\r\n"
+                "Host: {address}\r\nX-Dash-Request: 1\r\nCookie: dash_token_{port}={wrong}\r\n"
             ),
             401,
             "wrong token",
@@ -289,4 +295,59 @@ fn beyond_loopback_is_warned_of_and_bad_flags_refused() {
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("--stream-hz"));
+}
+
+/// Issue 58: a board lost is said as lost, its status gone (never the last one), and dash
+/// stays up and connects again when the board is back (on the same sockets).
+#[test]
+fn a_lost_board_is_said_lost_and_found_again() {
+    let mut board = Served::streaming(None, "5", "dash-lost");
+    let (child, address, token) = dash(&board, &["--seconds", "60", "--poll-seconds", "0.1"]);
+    let state = || {
+        let (code, body) = http(&address, &token, "GET", "/api/state", "");
+        assert_eq!(code, 200, "{body}");
+        serde_json::from_str::<Value>(&body).unwrap()
+    };
+    let until = |what: &str, done: &dyn Fn(&Value) -> bool| {
+        let end = std::time::Instant::now() + Duration::from_secs(30);
+        loop {
+            let now = state();
+            if done(&now) {
+                return now;
+            }
+            assert!(std::time::Instant::now() < end, "{what}: {now}");
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    };
+    until("the board's status", &|s| {
+        s["status"]["fields"]["output"] == "on"
+    });
+    board.kill();
+    let lost = until("the board said lost", &|s| s["board"]["state"] == "lost");
+    assert!(
+        lost["status"].is_null(),
+        "a lost board's last status kept: {lost}"
+    );
+    assert_eq!(lost["losses"], 1, "{lost}");
+    // The page's requests are refused with why, not sent into the void.
+    let (code, body) = http(&address, &token, "POST", "/api/command", "stop");
+    assert_eq!(code, 503, "{body}");
+    assert!(body.contains("not connected"), "{body}");
+    let _board = Served::streaming(None, "5", "dash-lost");
+    let back = until("the board found again", &|s| {
+        s["board"]["state"] == "up" && s["status"]["fields"]["output"] == "on"
+    });
+    assert_eq!(back["losses"], 1, "{back}");
+    // Its stream read again: the records counted on from the first connection's.
+    let before = lost["link"]["records"].as_u64().unwrap();
+    until("the stream read again", &|s| {
+        s["link"]["records"].as_u64().unwrap() > before + 10
+    });
+    let _ = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status();
+    let out = child.wait_with_output().unwrap();
+    let report: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(report["board_lost"], 1, "{report}");
+    assert!(report["stopped"].is_null(), "{report}");
 }

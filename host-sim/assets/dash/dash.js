@@ -58,15 +58,14 @@ async function send(line) {
 const ACTING = ["target-send", "ac-send", "start", "trim", "clear", "set-send", "save"];
 
 function bind() {
-  $("stop").onclick = () => {
-    if (dash.board.state === "lost") {
-      // Said before a request that cannot reach the board.
-      $("reply").textContent = "> stop\nthe board is lost: dash cannot reach it to stop it " +
-        "(it goes on as last told, or its own faults act). Check the board and its power.";
-      $("reply").classList.add("err");
-      return;
+  // An emergency stop is always sent; if the board is out of reach, the page says what
+  // that means.
+  $("stop").onclick = async () => {
+    const reply = await send("stop");
+    if (!reply.startsWith("ok") && dash.board.state !== "up") {
+      $("reply").textContent += "\nthe board is lost: dash cannot reach it to stop it (it goes " +
+        "on as last told, or its own faults act). Check the board and its power.";
     }
-    send("stop");
   };
   $("start").onclick = () => send("start");
   $("trim").onclick = () => send("trim");
@@ -117,6 +116,7 @@ function connect() {
   events.addEventListener("recording", (e) => recordingSaid(JSON.parse(e.data)));
   events.addEventListener("board", (e) => boardLink(JSON.parse(e.data)));
   events.addEventListener("control", (e) => control(JSON.parse(e.data)));
+  events.addEventListener("curve", (e) => curveSaid(JSON.parse(e.data)));
   events.onopen = () => { dash.connected = true; connView(); };
   events.onerror = () => {
     // Nothing the page holds of the board is known to hold any more.
@@ -130,6 +130,8 @@ function connect() {
 function unknown(words) {
   dash.status = null;
   dash.last = null;
+  dirty = true;
+  $("curve-now").textContent = "";
   const out = $("output");
   out.className = "badge lost";
   out.textContent = words;
@@ -160,7 +162,10 @@ function control(c) {
 function connView() {
   const b = dash.board;
   let words;
-  if (!dash.connected) words = "dash not reachable: the page cannot see or stop the board";
+  if (!dash.connected) {
+    words = "dash not reachable (restarted? open the new URL it printed): the page cannot see " +
+      "or stop the board";
+  }
   else if (b.state === "lost") {
     words = "reconnecting to the board (attempt " + b.attempt + ", every " + b.retry_seconds +
       " s): " + b.why;
@@ -197,14 +202,7 @@ function hello(h) {
   const ac = Object.fromEntries(h.settings.map((s) => [s.key, s.value]));
   if (ac.ac_volts !== undefined && !$("ac-volts").value) $("ac-volts").value = ac.ac_volts;
   if (ac.ac_hz !== undefined && !$("ac-hz").value) $("ac-hz").value = ac.ac_hz;
-  const range = tunableRange(h);
-  if (range) {
-    $("range").textContent = "tunable range " + inward(range[0], 1) + " – " + inward(range[1], -1) +
-      " Hz (" + (range.board ? "the board's table, as `info` says it" :
-        "the device's curve under the margin " + h.curve.margin) + ")";
-  } else {
-    $("range").textContent = "no tuning curve: " + (h.curve_problem || "the board names no device");
-  }
+  showRange(h);
   $("log").tBodies[0].innerHTML = "";
   (h.log || []).forEach(logEntry);
   $("notices").innerHTML = "";
@@ -221,19 +219,41 @@ function hello(h) {
   makePlots();
 }
 
-// The tunable range: the board's own (`info`'s, its table's), else the curve's.
+// The tunable range: the board's own (`info`'s, its table's), narrowed by the curve's under
+// the margin in force (a margin set above the image's narrows what the board takes).
 function tunableRange(h) {
   const f = {};
   for (const w of String(h.info || "").split(" ")) {
     const [k, v] = w.split("=");
     if (v !== undefined) f[k] = Number(v);
   }
-  if (isFinite(f.tunable_low_hz) && isFinite(f.tunable_high_hz)) {
-    const r = [f.tunable_low_hz, f.tunable_high_hz];
-    r.board = true;
-    return r;
+  const curve = h.curve ? h.curve.tunable_range_hz : null;
+  if (!(isFinite(f.tunable_low_hz) && isFinite(f.tunable_high_hz))) return curve;
+  const r = curve ? [Math.max(f.tunable_low_hz, curve[0]), Math.min(f.tunable_high_hz, curve[1])]
+    : [f.tunable_low_hz, f.tunable_high_hz];
+  r.board = true;
+  return r;
+}
+
+function showRange(h) {
+  const range = tunableRange(h);
+  if (range) {
+    $("range").textContent = "tunable range " + inward(range[0], 1) + " – " + inward(range[1], -1) +
+      " Hz (" + (range.board ? "the board's table, as `info` says it, under the margin " :
+        "the device's curve under the margin ") + (h.curve ? h.curve.margin : "?") + ")";
+  } else {
+    $("range").textContent = "no tuning curve: " + (h.curve_problem || "the board names no device");
   }
-  return h.curve ? h.curve.tunable_range_hz : null;
+}
+
+// A new margin: the curve's highest bias and the tunable range again.
+function curveSaid(c) {
+  dash.hello.curve = c.curve;
+  dash.hello.curve_problem = c.curve_problem;
+  showRange(dash.hello);
+  if (plots && plots.curve) plots.curve.destroy();
+  if (plots) plots.curve = curvePlot();
+  dirty = true;
 }
 
 // A range's end rounded inward to 6 digits (up for the low end, down for the high): a target
@@ -327,7 +347,7 @@ function status(s) {
 function faults(f) {
   const list = $("faults");
   list.innerHTML = "";
-  const count = Number(String(f.summary).split(" ")[1].split("=")[1]);
+  const count = Number((String(f.summary).match(/^ok faults=(\d+)/) || [])[1]);
   const head = document.createElement("li");
   head.className = "head";
   head.textContent = !isFinite(count) ? f.summary : count === 0 ? "no fault logged"
@@ -604,6 +624,8 @@ window.addEventListener("error", (e) => dash.errors.push(String(e.message)));
 window.addEventListener("resize", () => {
   if (plots) for (const p of Object.values(plots)) if (p) p.setSize({ width: width(), height: p.height });
 });
+// The token out of the address bar (and so of the history); the page's cookie keeps it.
+if (location.search.includes("token=")) history.replaceState(null, "", location.pathname);
 bind();
 connect();
 requestAnimationFrame(frame);

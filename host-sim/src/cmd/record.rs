@@ -92,6 +92,15 @@ impl Counts {
             bad_frames: receiver.bad_frames,
         }
     }
+
+    /// These counts after `before`'s (a stream read again over a new connection).
+    pub fn after(self, before: Counts) -> Self {
+        Counts {
+            records: before.records + self.records,
+            lost: before.lost + self.lost,
+            bad_frames: before.bad_frames + self.bad_frames,
+        }
+    }
 }
 
 /// The recording as CSV: `#` header lines (`header`, then the counts), then the rows.

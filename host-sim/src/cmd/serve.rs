@@ -545,9 +545,11 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
         plant_crossing: None,
         leaving: String::new(),
     };
-    // Ctrl-C (or a SIGTERM) ends the session between two ticks, saying what the board did.
+    // Ctrl-C (or a SIGTERM) ends the session between two ticks, saying what the board did;
+    // a second one ends the process at once.
     let interrupted = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        let _ = signal_hook::flag::register_conditional_shutdown(signal, 1, interrupted.clone());
         let _ = signal_hook::flag::register(signal, interrupted.clone());
     }
     let started = Instant::now();
@@ -626,22 +628,17 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
                     clients[i].say(&refused);
                     continue;
                 }
+                asked_since_boot = true;
+                let then = logic.serve(&line, &mut &mut slot, &extras, &mut reply);
+                clients[i].say(&reply);
                 // An emergency stop from a connection that reads: the controlling one told.
                 if !clients[i].controls && is_stop(&line) {
-                    let mut stopped = ReplyLine::new();
-                    logic.serve(&line, &mut &mut slot, &extras, &mut stopped);
-                    let told = control::stopped_by(&clients[i].name, &stopped);
+                    let told = control::stopped_by(&clients[i].name, &reply);
                     clients
                         .iter_mut()
                         .filter(|c| c.controls)
                         .for_each(|c| c.say(&told));
-                    clients[i].say(&stopped);
-                    asked_since_boot = true;
-                    continue;
                 }
-                asked_since_boot = true;
-                let then = logic.serve(&line, &mut &mut slot, &extras, &mut reply);
-                clients[i].say(&reply);
                 // A restart stops the stream (its count starts again, as on a board).
                 if runner::follow(then, &mut telemetry) == Follow::Reset {
                     // The slot is empty: the output off at once (as the firmware's next tick

@@ -154,7 +154,7 @@ struct Job {
 struct Port(mpsc::Sender<Job>);
 
 /// What a request is told while no connection to the board is open.
-const NOT_CONNECTED: &str = "the board is not connected (lost; dash reconnects)";
+pub const NOT_CONNECTED: &str = "the board is not connected (lost; dash reconnects)";
 
 impl Port {
     fn start(mut session: Session) -> Self {
@@ -230,6 +230,9 @@ pub struct Shared {
     restart_stream: AtomicBool,
     /// Lines the board said on its own over the present connection.
     heard: AtomicU64,
+    /// Which connection is the present one: a line an earlier one's reader still hands on
+    /// is dropped.
+    generation: AtomicU64,
     /// The newest `NOTICES_KEPT` lines the board said on its own.
     notices: Mutex<VecDeque<String>>,
     counts: Mutex<Counts>,
@@ -266,6 +269,7 @@ impl Shared {
             }),
             restart_stream: AtomicBool::new(false),
             heard: AtomicU64::new(0),
+            generation: AtomicU64::new(0),
             notices: Mutex::new(VecDeque::new()),
             counts: Mutex::new(Counts::default()),
             recording: Mutex::new(None),
@@ -290,12 +294,15 @@ impl Shared {
             controller: None,
         };
         self.heard.store(0, Ordering::Relaxed);
+        let generation = self.generation.fetch_add(1, Ordering::Relaxed) + 1;
         // The reader thread holds the shared state weakly (it does not keep it alive).
         let weak = Arc::downgrade(self);
         let mut session = Session::open(&self.board, move |line| {
             if let Some(shared) = weak.upgrade() {
-                shared.heard.fetch_add(1, Ordering::Relaxed);
-                shared.notice(line);
+                if shared.generation.load(Ordering::Relaxed) == generation {
+                    shared.heard.fetch_add(1, Ordering::Relaxed);
+                    shared.notice(line);
+                }
             }
         })?;
         let end = Instant::now() + STARTUP_WAIT;
@@ -305,7 +312,6 @@ impl Shared {
         // A clean line first: a half line an earlier connection left is refused, not glued.
         session.clean_line()?;
         *lock(&self.port) = Some(Port::start(session));
-        *lock(&self.link_state) = Link::Up;
         self.learn(&self.board.describe())
     }
 
@@ -457,16 +463,32 @@ impl Shared {
             .map(|(k, v)| (k.to_string(), Value::from(v)))
             .collect();
         let mut hello = lock(&self.hello);
+        let mut margin_moved = false;
         if let Some(settings) = hello.get_mut("settings").and_then(Value::as_array_mut) {
             for s in settings {
                 let value = s["key"].as_str().and_then(|k| values.get(k)).cloned();
                 if let Some(value) = value {
+                    margin_moved |= s["key"] == "margin" && s["value"] != value;
                     s["value"] = value;
                 }
             }
         }
+        // A new margin moves the curve's highest bias and the tunable range.
+        let curve = margin_moved.then(|| {
+            let info = fields(hello["info"].as_str().unwrap_or(""));
+            let (curve, problem) = match tuning_curve(&info, &fields(&get)) {
+                Ok(curve) => (curve, Value::Null),
+                Err(why) => (Value::Null, Value::from(why)),
+            };
+            hello["curve"] = curve.clone();
+            hello["curve_problem"] = problem.clone();
+            json!({"curve": curve, "curve_problem": problem})
+        });
         drop(hello);
         self.hub.publish("settings", &Value::Object(values), 0);
+        if let Some(curve) = curve {
+            self.hub.publish("curve", &curve, 0);
+        }
     }
 
     /// `stream <hz>`: the board's stream started (its reply kept for the pages).
@@ -532,6 +554,13 @@ impl Shared {
         // No event is published while the page's first view is taken and its queue added:
         // none falls between the two.
         let mut pages = lock(&self.hub.pages);
+        let hello = self.hello_now();
+        pages.push(tx);
+        (hello, rx)
+    }
+
+    /// What a page is told first: the board, and everything as it stands now.
+    fn hello_now(&self) -> Value {
         let mut hello = lock(&self.hello).clone();
         hello["log"] = Value::from(lock(&self.log).iter().cloned().collect::<Vec<_>>());
         hello["notices"] = Value::from(lock(&self.notices).iter().cloned().collect::<Vec<_>>());
@@ -542,15 +571,13 @@ impl Shared {
         hello["recording"] = Value::from(lock(&self.recording).is_some());
         hello["board_link"] = json!(*lock(&self.link_state));
         hello["control"] = json!(*lock(&self.control));
-        pages.push(tx);
-        (hello, rx)
+        hello
     }
 
-    /// A page's hello as `subscribe` makes it, for the pages already open (after the board
-    /// came back: what it runs may have changed).
+    /// The hello again, for the pages already open (after the board came back: what it runs
+    /// may have changed).
     fn hello_again(&self) {
-        let (hello, _) = self.subscribe();
-        self.hub.publish("hello", &hello, 0);
+        self.hub.publish("hello", &self.hello_now(), 0);
     }
 
     /// The link's health: the stream's counts, what the pages could not take.
@@ -612,11 +639,10 @@ impl Shared {
             return Err("no recording is under way".into());
         };
         let now = *lock(&self.counts);
-        // (Counted again from 0 when the board came back: what the new stream counted.)
         let counts = Counts {
-            records: now.records.saturating_sub(recording.from.records),
-            lost: now.lost.saturating_sub(recording.from.lost),
-            bad_frames: now.bad_frames.saturating_sub(recording.from.bad_frames),
+            records: now.records - recording.from.records,
+            lost: now.lost - recording.from.lost,
+            bad_frames: now.bad_frames - recording.from.bad_frames,
         };
         let mut header = recording.header;
         header.extend(
@@ -746,33 +772,20 @@ impl Workers {
 /// The board kept while dash runs: each connection polled until it is lost, then opened
 /// again with a growing wait between attempts, the pages told at every change.
 fn keep(shared: &Arc<Shared>, every: Duration, first: Option<Box<dyn std::io::Read + Send>>) {
-    let mut stream = first;
+    let mut stream = Stream {
+        first,
+        reader: None,
+        tried: None,
+    };
     while !shared.stop.load(Ordering::Relaxed) {
-        // The stream, read on its own thread for as long as this connection lasts.
-        let connection_stop = Arc::new(AtomicBool::new(false));
-        let reader = shared.stream.as_ref().and_then(|source| {
-            let port = match stream.take().map_or_else(|| source.open(), Ok) {
-                Ok(port) => port,
-                Err(why) => {
-                    shared.dash_says(&why);
-                    return None;
-                }
-            };
-            let (s, stop) = (Arc::clone(shared), connection_stop.clone());
-            Some(std::thread::spawn(move || read_stream(&s, port, &stop)))
-        });
-        if reader.is_some() && lock(&shared.control).controls {
-            shared.ask_stream();
-        }
-        let why = poll(shared, every);
-        connection_stop.store(true, Ordering::Relaxed);
-        if let Some(reader) = reader {
-            let _ = reader.join();
-        }
+        let why = poll(shared, every, &mut stream);
+        stream.close();
         let Some(why) = why else { return };
-        // Lost: nothing the page shows of the board holds any more.
+        // Lost: nothing the page shows of the board holds any more (who controls included).
         *lock(&shared.port) = None;
         *lock(&shared.status) = Value::Null;
+        *lock(&shared.faults) = Value::Null;
+        shared.set_control(true, None);
         shared.losses.fetch_add(1, Ordering::Relaxed);
         let since_ms = now_ms();
         let mut wait = RETRY_FIRST;
@@ -808,12 +821,65 @@ fn keep(shared: &Arc<Shared>, every: Duration, first: Option<Box<dyn std::io::Re
     }
 }
 
-/// Ask `status` every `every`, and the fault log when the fault changes: told to the pages.
-/// Returns why the board was lost, or `None` when dash stops.
-fn poll(shared: &Shared, every: Duration) -> Option<String> {
+/// The telemetry stream's reader: a thread while the stream is open, opened again (every
+/// `STREAM_RETRY`) when it ends or could not open.
+struct Stream {
+    /// The stream opened as dash started, for the first connection.
+    first: Option<Box<dyn std::io::Read + Send>>,
+    reader: Option<(JoinHandle<()>, Arc<AtomicBool>)>,
+    /// When it was last opened or tried.
+    tried: Option<Instant>,
+}
+
+/// How long after a stream ended, or could not open, it is tried again.
+const STREAM_RETRY: Duration = Duration::from_millis(500);
+
+impl Stream {
+    /// The stream read if it is not (dash's own, or after `STREAM_RETRY`), and asked for
+    /// (`stream <hz>`) when this dash controls the board.
+    fn keep_open(&mut self, shared: &Arc<Shared>) {
+        let Some(source) = shared.stream.as_ref() else {
+            return;
+        };
+        if self.reader.as_ref().is_some_and(|(r, _)| !r.is_finished()) {
+            return;
+        }
+        if self.first.is_none() && self.tried.is_some_and(|t| t.elapsed() < STREAM_RETRY) {
+            return;
+        }
+        self.close();
+        self.tried = Some(Instant::now());
+        let port = match self.first.take().map_or_else(|| source.open(), Ok) {
+            Ok(port) => port,
+            Err(why) => return shared.dash_says(&why),
+        };
+        let stop = Arc::new(AtomicBool::new(false));
+        let (s, stopping) = (Arc::clone(shared), stop.clone());
+        // The counts go on from the streams read before (over the connections before).
+        let before = *lock(&shared.counts);
+        let reader = std::thread::spawn(move || read_stream(&s, port, &stopping, before));
+        self.reader = Some((reader, stop));
+        if lock(&shared.control).controls {
+            shared.ask_stream();
+        }
+    }
+
+    /// The reader stopped and awaited.
+    fn close(&mut self) {
+        if let Some((reader, stop)) = self.reader.take() {
+            stop.store(true, Ordering::Relaxed);
+            let _ = reader.join();
+        }
+    }
+}
+
+/// Ask `status` every `every`, and the fault log when the fault changes: told to the pages;
+/// the stream kept open. Returns why the board was lost, or `None` when dash stops.
+fn poll(shared: &Arc<Shared>, every: Duration, stream: &mut Stream) -> Option<String> {
     let mut last_fault: Option<String> = None;
     let mut polls = 0u64;
     while !shared.stop.load(Ordering::Relaxed) {
+        stream.keep_open(shared);
         if shared.restart_stream.swap(false, Ordering::Relaxed) && shared.stream.is_some() {
             shared.ask_stream();
         }
@@ -874,7 +940,12 @@ fn read_faults(shared: &Shared) {
 }
 
 /// Read the stream into batches for the pages (and the recording).
-fn read_stream(shared: &Shared, port: Box<dyn std::io::Read + Send>, stop: &AtomicBool) {
+fn read_stream(
+    shared: &Shared,
+    port: Box<dyn std::io::Read + Send>,
+    stop: &AtomicBool,
+    before: Counts,
+) {
     let mut pending: Vec<Row> = Vec::new();
     let mut last = Instant::now();
     let result = telemetry::read(port, stop, |new, receiver| {
@@ -882,7 +953,7 @@ fn read_stream(shared: &Shared, port: Box<dyn std::io::Read + Send>, stop: &Atom
         // The counts and the recording's rows under one lock: a recording's counts are its
         // rows'.
         let mut recording = lock(&shared.recording);
-        *lock(&shared.counts) = Counts::of(receiver);
+        *lock(&shared.counts) = Counts::of(receiver).after(before);
         if let Some(r) = recording.as_mut() {
             let room = RECORDING_MAX.saturating_sub(r.records.len());
             r.records.extend_from_slice(&new[..new.len().min(room)]);

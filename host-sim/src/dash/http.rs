@@ -79,6 +79,7 @@ impl Guard {
         let port = address.port();
         let hosts = address.ip().is_loopback().then(|| {
             let mut hosts = vec![
+                address.to_string(),
                 format!("127.0.0.1:{port}"),
                 format!("localhost:{port}"),
                 format!("[::1]:{port}"),
@@ -234,6 +235,10 @@ pub fn handle(mut request: Request, shared: &Arc<Shared>, guard: &Guard) {
                 .and_then(|_| shared.command(&body))
             {
                 Ok(reply) => json_response(200, &reply),
+                // The board out of reach: the request could not be sent (dash reconnects).
+                Err(why) if why == super::board::NOT_CONNECTED => {
+                    json_response(503, &json!({"error": why}))
+                }
                 Err(why) => json_response(400, &json!({"error": why})),
             }
         }

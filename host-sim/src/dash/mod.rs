@@ -1,5 +1,6 @@
-//! `dash`: a live page for the board, served by host-sim on loopback. The page talks to the
-//! board only through this server, and the server only through the board's command port
+//! `dash`: a live page for the board, served by host-sim (on loopback by default), every
+//! request with the token its URL carries. The page talks to the board only through this
+//! server, and the server only through the board's command port
 //! (one request a time, the protocol's own lines, replies verbatim) and its telemetry stream:
 //! nothing the page does goes around the board's checks.
 //!
@@ -90,7 +91,11 @@ impl fmt::Display for DashReport {
             self.bad_frames,
             self.dropped_to_pages,
             self.leaving
-        )
+        )?;
+        if self.board_lost > 0 {
+            write!(f, "\nthe board was lost {} times", self.board_lost)?;
+        }
+        Ok(())
     }
 }
 
@@ -178,8 +183,11 @@ pub fn dash(args: &DashArgs, json: bool) -> Result<DashReport, String> {
     eprintln!("connecting to the board at {}...", args.board.describe());
     let shared = board::Shared::connect(args)?;
     let interrupted = Arc::new(AtomicBool::new(false));
-    let _ = signal_hook::flag::register(signal_hook::consts::SIGINT, interrupted.clone());
-    let _ = signal_hook::flag::register(signal_hook::consts::SIGTERM, interrupted.clone());
+    // A second Ctrl-C ends the process at once.
+    for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        let _ = signal_hook::flag::register_conditional_shutdown(signal, 1, interrupted.clone());
+        let _ = signal_hook::flag::register(signal, interrupted.clone());
+    }
     let workers = board::start(&shared, args)?;
     let guard = Arc::new(http::Guard::for_address(address, token, &args.allow_host));
     // The address on stdout, alone on its line: a script (or a person) opens it.
