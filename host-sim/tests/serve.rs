@@ -597,3 +597,35 @@ fn ctrl_c_cancels_a_wait_and_leaving_says_the_output_is_on() {
     );
     assert!(err.contains("leaving with the output ON"), "{err}");
 }
+
+/// Issue 58: a board that waits at power-up is said at rest (not "at bias, 0 V"), and the
+/// session's end says what the board was doing (its last status).
+#[test]
+fn a_waiting_board_is_said_at_rest_and_its_end_says_its_state() {
+    let socket = common::scratch("serve").join("at-rest.sock");
+    let out = common::host_sim()
+        .args(["--json", "serve", "--unix"])
+        .arg(&socket)
+        .args(["--power-up", "wait", "--seconds", "1", "--speed", "max"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let events = report["events"].as_array().unwrap();
+    assert_eq!(events.len(), 1, "{report}");
+    assert!(
+        events[0].as_str().unwrap().ends_with("s: at rest, 0 V"),
+        "{report}"
+    );
+    let leaving = report["leaving"].as_str().unwrap();
+    assert!(
+        leaving.starts_with("its time over at 1")
+            && leaving.contains("phase=holding")
+            && leaving.contains(" output=off"),
+        "{leaving}"
+    );
+}
