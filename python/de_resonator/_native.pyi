@@ -1,7 +1,7 @@
 """Type stubs of de_resonator._native (the Rust extension). Units are SI, named in keys."""
 
 from os import PathLike
-from typing import Any, Literal, Optional, Sequence, Union
+from typing import Any, Literal, Optional, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -23,13 +23,14 @@ Method = Literal[
 class Device:
     """A dielectric elastomer resonator (docs/model.md). Keywords: the device file's keys in
     SI units; absent keys take the reference device's values, an absent `jlim` makes it
-    neo-Hookean. ValueError with the model's reason if it refuses a value."""
+    neo-Hookean (`jlim=None` says so). ValueError with the model's reason if it refuses a
+    value; TypeError for a value that is no number (a bool included)."""
 
     def __init__(
         self,
         *,
         shear_modulus: float = ...,
-        jlim: float = ...,
+        jlim: Optional[float] = ...,
         relative_permittivity: float = ...,
         density: float = ...,
         breakdown_field: float = ...,
@@ -47,7 +48,8 @@ class Device:
         """The reference device of docs/model.md §9."""
     @staticmethod
     def from_file(path: Union[str, PathLike[str]]) -> Device:
-        """A device file (TOML, SI units), as `host-sim --device FILE` reads it."""
+        """A device file (TOML, SI units), as `host-sim --device FILE` reads it
+        (FileNotFoundError if it is not there)."""
     @staticmethod
     def from_toml(text: str) -> Device:
         """A device file's text."""
@@ -66,7 +68,8 @@ class Device:
         """The smallest bias for `target_hz`: `bias_volts` (V), `stretch`,
         `natural_frequency_hz` (Hz) and the safe region. ValueError out of reach."""
     def frequency(self, bias_volts: ArrayLike) -> Union[float, npt.NDArray[np.float64]]:
-        """The natural frequency (Hz) at each bias (V); NaN where none holds it."""
+        """The natural frequency (Hz) at each bias (V, an int or float dtype); NaN where no
+        equilibrium holds it (below 0 V, or past the limit)."""
     def tune_many(self, targets_hz: ArrayLike, margin: float = 0.05) -> Result:
         """`tune` for each target: arrays `bias_volts` (V), `stretch`,
         `natural_frequency_hz` (Hz) with NaN where out of reach, `ok` (bool), and `reason`
@@ -79,8 +82,8 @@ class Device:
         `target`, `problem`."""
     def family(
         self,
-        prestretch_1: Optional[Sequence[float]] = None,
-        prestretch_2: Optional[Sequence[float]] = None,
+        prestretch_1: Optional[ArrayLike] = None,
+        prestretch_2: Optional[ArrayLike] = None,
         points: int = 200,
         margin: float = 0.05,
         target_hz: Optional[float] = None,
@@ -128,7 +131,7 @@ def simulate(
     1/s, `volts` V, `status` 0 or 1, `message`, `success`, `t_events`, `y_events`, `limit`,
     `min_stretch`, `max_stretch`, `nfev`)."""
 
-def run_scene(scene: str) -> Result:
+def run_scene(scene: Union[str, PathLike[str]]) -> Result:
     """A scene (a file's path, or its TOML text) as `host-sim run` runs it: the report
     (`run --json`'s keys) and `history` (per tick: `time_seconds` s, `dac_code`, `dac_on`,
     `enable`, `phase`, `stretch`, `membrane_volts` V, `current_amps` A)."""

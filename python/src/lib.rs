@@ -21,14 +21,28 @@ use host_sim::engine::solver::{self as engine, Choice, Start};
 use host_sim::{device_file, progress, scene};
 use numpy::ndarray::{Array2, ArrayD};
 use numpy::{AllowTypeChange, IntoPyArray, PyArrayLikeDyn, PyUntypedArrayMethods};
-use pyo3::exceptions::{PyKeyError, PyRuntimeError, PyValueError};
+use pyo3::exceptions::{
+    PyFileNotFoundError, PyKeyError, PyOSError, PyPermissionError, PyRuntimeError, PyTypeError,
+    PyValueError,
+};
 use pyo3::prelude::*;
-use pyo3::types::{PyBytes, PyDict, PyList};
+use pyo3::types::{PyBool, PyBytes, PyDict, PyList};
 use serde::Serialize;
 
 /// A value error with the core's (or host-sim's) message.
 fn value_error(why: impl std::fmt::Display) -> PyErr {
     PyValueError::new_err(why.to_string())
+}
+
+/// A file that cannot be read, as Python's own `open` says it: FileNotFoundError for a file
+/// that is not there, PermissionError, else OSError; the path named.
+fn read_error(path: &Path, e: &std::io::Error) -> PyErr {
+    let why = format!("cannot read {}: {e}", path.display());
+    match e.kind() {
+        std::io::ErrorKind::NotFound => PyFileNotFoundError::new_err(why),
+        std::io::ErrorKind::PermissionDenied => PyPermissionError::new_err(why),
+        _ => PyOSError::new_err(why),
+    }
 }
 
 /// `job` on a thread of its own with the GIL released, the caller's thread waiting for it and
@@ -85,15 +99,38 @@ fn wrap<'py>(py: Python<'py>, dict: Bound<'py, PyAny>) -> PyResult<Bound<'py, Py
     py.import("de_resonator")?.getattr("Result")?.call1((dict,))
 }
 
-/// Values as an array of any shape, from anything numpy takes (any numeric dtype: coerced to
-/// float64 and copied), `f` applied to each with the GIL released; a 0-d input gives a float.
+/// Numbers as an array of any shape, from anything numpy takes as an int or float dtype
+/// (coerced to float64 and copied): its shape and values. Strings, bools and objects are
+/// refused with a TypeError naming `name`, as `tune("43")` refuses a string.
+fn numbers_of(name: &str, values: &Bound<'_, PyAny>) -> PyResult<(Vec<usize>, Vec<f64>)> {
+    let array = values
+        .py()
+        .import("numpy")?
+        .call_method1("asarray", (values,))?;
+    let dtype = array.getattr("dtype")?;
+    let kind: String = dtype.getattr("kind")?.extract()?;
+    if !matches!(kind.as_str(), "i" | "u" | "f") {
+        return Err(PyTypeError::new_err(format!(
+            "{name} must be numbers (an int or float dtype), not {} of dtype {dtype}",
+            values.get_type().name()?
+        )));
+    }
+    let array: PyArrayLikeDyn<'_, f64, AllowTypeChange> = array.extract()?;
+    Ok((
+        array.shape().to_vec(),
+        array.as_array().iter().copied().collect(),
+    ))
+}
+
+/// Numbers as an array of any shape (`numbers_of`), `f` applied to each with the GIL
+/// released; a 0-d input gives a float.
 fn map_array<'py>(
     py: Python<'py>,
-    values: PyArrayLikeDyn<'py, f64, AllowTypeChange>,
+    name: &str,
+    values: &Bound<'py, PyAny>,
     f: impl Fn(f64) -> f64 + Send + Sync,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let shape = values.shape().to_vec();
-    let input: Vec<f64> = values.as_array().iter().copied().collect();
+    let (shape, input) = numbers_of(name, values)?;
     let out = stoppable(py, || progress::each(&input, |&x| f(x)))?;
     if shape.is_empty() {
         return Ok(out[0].into_pyobject(py)?.into_any());
@@ -167,8 +204,15 @@ fn from_keys(keys: &Bound<'_, PyDict>, quiet: bool) -> PyResult<Device_> {
                 continue;
             }
         }
-        let number: f64 = value.extract().map_err(|_| {
-            value_error(format!(
+        // A bool is an int to Python, but no device's value: `shear_modulus=True` is a
+        // slip, not 1 Pa.
+        let number: Option<f64> = if value.is_instance_of::<PyBool>() {
+            None
+        } else {
+            value.extract().ok()
+        };
+        let number = number.ok_or_else(|| {
+            PyTypeError::new_err(format!(
                 "`{key}` must be a number (SI units), not {value:?}"
             ))
         })?;
@@ -220,8 +264,7 @@ impl Device_ {
     /// A device file (TOML, SI units, flat keys), as `host-sim --device FILE` reads it.
     #[staticmethod]
     fn from_file(py: Python<'_>, path: std::path::PathBuf) -> PyResult<Self> {
-        let text = std::fs::read_to_string(&path)
-            .map_err(|e| value_error(format!("cannot read {}: {e}", path.display())))?;
+        let text = std::fs::read_to_string(&path).map_err(|e| read_error(&path, &e))?;
         let source = path.display().to_string();
         let (params, notes) =
             device_file::parse_noting(&text).map_err(|e| value_error(format!("{source}: {e}")))?;
@@ -343,13 +386,17 @@ impl Device_ {
     fn frequency<'py>(
         &self,
         py: Python<'py>,
-        bias_volts: PyArrayLikeDyn<'py, f64, AllowTypeChange>,
+        bias_volts: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyAny>> {
         let device = self.device();
         let limit = Limit::of(&device);
-        map_array(py, bias_volts, |volts| {
+        map_array(py, "bias_volts", bias_volts, |volts| {
+            // On the loading branch from 0 V to the limit only: past it no equilibrium holds
+            // (model.md §6), whatever stretch the branch's solve would find.
             match limit.stretch_for_bias(&device, volts) {
-                Some(stretch) if volts >= 0.0 => device.natural_frequency_hz(stretch),
+                Some(stretch) if volts >= 0.0 && volts <= limit.at.volts => {
+                    device.natural_frequency_hz(stretch)
+                }
                 _ => f64::NAN,
             }
         })
@@ -363,12 +410,11 @@ impl Device_ {
     fn tune_many<'py>(
         &self,
         py: Python<'py>,
-        targets_hz: PyArrayLikeDyn<'py, f64, AllowTypeChange>,
+        targets_hz: &Bound<'py, PyAny>,
         margin: f64,
     ) -> PyResult<Bound<'py, PyAny>> {
         let margin = Self::margin(margin)?;
-        let shape = targets_hz.shape().to_vec();
-        let targets: Vec<f64> = targets_hz.as_array().iter().copied().collect();
+        let (shape, targets) = numbers_of("targets_hz", targets_hz)?;
         let tuner = self.tuner();
         let tuned = stoppable(py, || {
             progress::each(&targets, |&hz| {
@@ -440,8 +486,8 @@ impl Device_ {
         margin: f64,
         target_hz: Option<f64>,
     ) -> PyResult<Bound<'py, PyList>> {
-        let ones = numbers(prestretch_1, self.params.prestretch_1)?;
-        let twos = numbers(prestretch_2, self.params.prestretch_2)?;
+        let ones = numbers("prestretch_1", prestretch_1, self.params.prestretch_1)?;
+        let twos = numbers("prestretch_2", prestretch_2, self.params.prestretch_2)?;
         let mut devices = Vec::new();
         for &l1 in &ones {
             for &l2 in &twos {
@@ -549,16 +595,12 @@ impl Device_ {
     }
 }
 
-/// A number or a sequence of numbers as a list (`None`: the default alone).
-fn numbers(given: Option<&Bound<'_, PyAny>>, default: f64) -> PyResult<Vec<f64>> {
+/// A number, a sequence or an array of numbers as a list, flattened (`numbers_of`; `None`:
+/// the default alone).
+fn numbers(name: &str, given: Option<&Bound<'_, PyAny>>, default: f64) -> PyResult<Vec<f64>> {
     match given {
         None => Ok(vec![default]),
-        Some(one) => match one.extract::<f64>() {
-            Ok(x) => Ok(vec![x]),
-            Err(_) => one
-                .extract::<Vec<f64>>()
-                .map_err(|_| value_error(format!("{one}: give a number or a sequence of numbers"))),
-        },
+        Some(values) => numbers_of(name, values).map(|(_, values)| values),
     }
 }
 
@@ -769,6 +811,9 @@ fn run_scene<'py>(py: Python<'py>, scene: &Bound<'py, PyAny>) -> PyResult<Bound<
         }
         _ => {
             let path: std::path::PathBuf = scene.extract()?;
+            if let Err(e) = std::fs::metadata(&path) {
+                return Err(read_error(&path, &e));
+            }
             scene::load(&path).map_err(value_error)?
         }
     };
@@ -853,6 +898,12 @@ fn image<'py>(
             )))
         }
     };
+    // A file named that is not there: said as Python's `open` says it.
+    for path in settings.iter().chain(scene.iter()) {
+        if let Err(e) = std::fs::metadata(path) {
+            return Err(read_error(path, &e));
+        }
+    }
     let args = ImageArgs {
         out: None,
         check: None,
@@ -891,8 +942,7 @@ fn check_image<'py>(py: Python<'py>, image: &Bound<'py, PyAny>) -> PyResult<Boun
         Ok(bytes) => (bytes.as_bytes().to_vec(), "(bytes)".to_string()),
         Err(_) => {
             let path: std::path::PathBuf = image.extract()?;
-            let bytes = std::fs::read(&path)
-                .map_err(|e| value_error(format!("cannot read {}: {e}", path.display())))?;
+            let bytes = std::fs::read(&path).map_err(|e| read_error(&path, &e))?;
             (bytes, path.display().to_string())
         }
     };

@@ -54,7 +54,7 @@ def test_a_wrong_value_raises_value_error_with_the_models_reason():
         dr.Device(thickness=-1e-3)
     with pytest.raises(ValueError, match="unknown field `thicknes`.*`thickness`"):
         dr.Device(thicknes=1e-3)
-    with pytest.raises(ValueError, match="must be a number"):
+    with pytest.raises(TypeError, match="must be a number"):
         dr.Device(thickness="thin")
     with pytest.raises(ValueError, match="margin 1.5"):
         dr.Device().safe(margin=1.5)

@@ -41,7 +41,7 @@ def test_a_scene_from_its_text_and_its_errors():
     assert short != text
     ours = dr.run_scene(short)
     assert ours.simulated_seconds == 0.5
-    with pytest.raises(ValueError, match="cannot read scene"):
+    with pytest.raises(FileNotFoundError, match="no-such-scene.toml"):
         dr.run_scene("no-such-scene.toml")
     with pytest.raises(ValueError, match="unknown field"):
         dr.run_scene("name = 'x'\nnonsense = 1\n")

@@ -59,6 +59,9 @@ pub struct Response {
     pub peaks: Vec<Peak>,
 }
 
+/// Steps between two looks at the caller's stop flag (a few microseconds of work each).
+const STOP_CHECK_STEPS: u64 = 1024;
+
 /// Run the sweep over all cores, with a progress bar.
 pub fn run(sweep: &Sweep) -> Result<Response, String> {
     let (device, start, natural_hz) = operating_point(sweep)?;
@@ -144,6 +147,10 @@ pub fn respond(
     let mut last = state;
     let mut stopped = None;
     for k in 1..=steps {
+        // Ctrl-C within a point, not after the sweep (a point may be thousands of periods).
+        if k % STOP_CHECK_STEPS == 0 && crate::progress::stopped() {
+            return Err(crate::progress::INTERRUPTED.to_string());
+        }
         match it.step() {
             Ok(s) => {
                 monitor.observe(device, k, s.stretch, it.bias_dimless_squared());

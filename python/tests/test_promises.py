@@ -1,0 +1,105 @@
+"""The package's promises (issue 62, 7), a test each: what docs/python.md and the stubs say
+holds: frequencies only on the loading branch, numbers that are numbers, missing files said
+as Python says them, and stubs that take what the docs pass."""
+
+import ast
+import pathlib
+
+import numpy as np
+import pytest
+
+import de_resonator as dr
+from conftest import ROOT, random_devices
+from model import Model
+
+STUBS = pathlib.Path(dr.__file__).with_name("_native.pyi")
+
+
+def test_no_frequency_past_the_limit():
+    # The reference device's limit is EMI at 9,854.73 V (docs/model.md §9): at 9,900 V no
+    # equilibrium holds, so NaN, as docs/python.md says (it was 42.71 Hz).
+    device = dr.Device.reference()
+    assert np.isnan(device.frequency(9900.0))
+    below = 9800.0
+    m = Model(device.to_dict())
+    lam = m.stretch_for_bias(below, device.safe(margin=0.0).limit["stretch"])
+    assert device.frequency(below) == pytest.approx(m.frequency_hz(lam), rel=1e-8)
+    for device in [device, *random_devices(6, 7)]:
+        limit = device.safe(margin=0.0).limit["volts"]
+        out = device.frequency(np.array([limit * (1 - 1e-6), limit * (1 + 1e-6), 2 * limit]))
+        assert np.isfinite(out[0]) and np.isnan(out[1:]).all(), (limit, out)
+
+
+def test_a_value_that_is_no_number_raises_type_error():
+    # A bool is an int to Python, but `shear_modulus=True` is a slip, not 1 Pa.
+    for value in (True, False, "thin", [45e3]):
+        with pytest.raises(TypeError, match="`shear_modulus` must be a number"):
+            dr.Device(shear_modulus=value, jlim=120)
+    # A string is refused alike by the call for one target and by the call for many.
+    device = dr.Device.reference()
+    with pytest.raises(TypeError):
+        device.tune("43")
+    for call, arg in ((device.tune_many, ["43"]), (device.tune_many, [True]),
+                      (device.frequency, "100"), (device.frequency, [np.bool_(True)])):
+        with pytest.raises(TypeError, match="must be numbers"):
+            call(arg)
+    with pytest.raises(TypeError, match="prestretch_1 must be numbers"):
+        device.family(prestretch_1=["2.0"])
+    # Numbers of any int or float dtype still are.
+    assert device.tune_many(np.array([44], dtype=np.int16)).ok.all()
+
+
+def test_a_missing_file_raises_file_not_found_error(tmp_path):
+    missing = tmp_path / "no-such-file.toml"
+    for call in (lambda: dr.Device.from_file(missing),
+                 lambda: dr.run_scene(missing),
+                 lambda: dr.run_scene(str(missing)),
+                 lambda: dr.check_image(missing),
+                 lambda: dr.image(settings=missing, target_hz=44.0)):
+        with pytest.raises(FileNotFoundError, match="no-such-file.toml"):
+            call()
+
+
+def test_the_stubs_take_what_the_docs_pass(tmp_path):
+    tree = ast.parse(STUBS.read_text())
+    annotations = {}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.FunctionDef):
+            for arg in node.args.args + node.args.kwonlyargs:
+                if arg.annotation is not None:
+                    annotations[(node.name, arg.arg)] = ast.unparse(arg.annotation)
+    # `jlim=None` (neo-Hookean), a Path for a scene, numpy arrays for a family.
+    assert annotations[("__init__", "jlim")] == "Optional[float]"
+    assert "PathLike" in annotations[("run_scene", "scene")]
+    assert annotations[("family", "prestretch_1")] == "Optional[ArrayLike]"
+    assert annotations[("family", "prestretch_2")] == "Optional[ArrayLike]"
+    # And the calls themselves.
+    assert dr.Device(shear_modulus=60e3, jlim=None).material == "neo_hookean"
+    assert len(dr.Device().family(prestretch_1=np.linspace(2.0, 2.5, 3))) == 3
+    text = (ROOT / "scenes" / "reference.toml").read_text()
+    scene = tmp_path / "short.toml"
+    scene.write_text(text.replace("duration_seconds = 10.0", "duration_seconds = 0.2"))
+    assert dr.run_scene(scene).simulated_seconds == 0.2
+
+
+def test_ctrl_c_stops_a_sweep_within_a_point():
+    """docs/python.md: Ctrl-C stops a long call within a point. Measured against the same
+    sweep's own run time on this machine (no fixed seconds): interrupted at a tenth of it,
+    the KeyboardInterrupt comes before half of it (issue 62 saw it only near the end)."""
+    import _thread
+    import threading
+    import time
+
+    device = dr.Device.reference()
+    sweep = dict(points=160, periods=4000)
+    t0 = time.perf_counter()
+    device.sweep(**sweep)
+    whole = time.perf_counter() - t0
+    timer = threading.Timer(0.1 * whole, _thread.interrupt_main)
+    t0 = time.perf_counter()
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        device.sweep(**sweep)
+    stopped = time.perf_counter() - t0
+    timer.join()
+    assert stopped < 0.5 * whole, (stopped, whole)
