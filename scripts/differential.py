@@ -361,6 +361,10 @@ EXCLUDED = [
      "the output where it is when the request lands, while it ramps or drives the AC"),
     ("text#1", MOVING, ("stop",),
      "`stop: ramp from <V> V`: the same moving output, where the ramp down starts"),
+    ("text", MOVING, ("stop",),
+     "`stop`'s words: a ramp down from where the output is, or none from 0 V (a ramp not yet "
+     "begun when the request lands)"),
+    ("text#2", MOVING, ("stop",), "the same: a ramp's end, 0 V, said only with a ramp"),
     ("t", AFTER_START, ("faults",),
      "the tick of a fault at `start`'s first write, when the request lands"),
     ("t#2", AFTER_START[2:], ("faults",), "the same, the one before it"),

@@ -764,6 +764,17 @@ fn simulate<'py>(
                 vec![stretch, rate],
             )
         }
+        // A step left the range the method was checked for before any crossing: the
+        // trajectory to there, failed, as SciPy's solvers say a failed step.
+        (None, _) if out.stopped.is_some() => (
+            -1,
+            format!(
+                "the method stopped: {}",
+                out.stopped.as_deref().unwrap_or("")
+            ),
+            vec![],
+            vec![],
+        ),
         (None, _) => (
             0,
             "the end of the interval was reached; no limit crossed".to_string(),
@@ -774,7 +785,7 @@ fn simulate<'py>(
     let events = t_events.len();
     dict.set_item("status", status)?;
     dict.set_item("message", message)?;
-    dict.set_item("success", true)?;
+    dict.set_item("success", status >= 0)?;
     dict.set_item("limit", out.first_limit.map(|(mode, _)| mode.name()))?;
     dict.set_item("t_events", PyList::new(py, [t_events.into_pyarray(py)])?)?;
     let y_events = Array2::from_shape_vec((events, 2), y_events).map_err(value_error)?;

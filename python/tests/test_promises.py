@@ -103,3 +103,39 @@ def test_ctrl_c_stops_a_sweep_within_a_point():
     stopped = time.perf_counter() - t0
     timer.join()
     assert stopped < 0.5 * whole, (stopped, whole)
+
+
+def test_a_fixed_step_method_that_leaves_its_range_returns_the_trajectory(host_sim, tmp_path):
+    """A core method whose step leaves the range it was checked for (a large AC at the
+    resonance, 16 steps a period, on a device of conftest's draw where the monitor sees no
+    crossing first) returns the samples to there with status −1, as SciPy's solvers return a
+    failed step, stop_at_limit or not; the CLI reports it with exit 1, not 2 (bad input). The
+    samples are those of the same run asked to end just there."""
+    import json
+    import subprocess
+
+    device = random_devices(1, 3)[0]
+    limit = device.safe(margin=0.0).limit["volts"]
+    bias, ac = 0.5 * limit, 0.45 * limit
+    f0 = float(device.frequency(bias))
+    asked = dict(ac_volts=ac, ac_hz=f0, method="rk4-f32", step_seconds=1 / (16 * f0))
+    for stop_at_limit in (True, False):
+        run = dr.simulate(device, bias, duration_seconds=30 / f0, stop_at_limit=stop_at_limit,
+                          **asked)
+        assert run.status == -1 and run.success is False and run.limit is None, run.message
+        assert "left the range the step was checked for" in run.stopped
+        assert run.message == "the method stopped: " + run.stopped
+        assert 1 < len(run.t) and run.t[-1] < 30 / f0
+    shorter = dr.simulate(device, bias, duration_seconds=run.t[-1], **asked)
+    assert shorter.status == 0 and len(shorter.t) == len(run.t)
+    assert np.array_equal(shorter.y, run.y)
+    keys = tmp_path / "device.toml"
+    keys.write_text("".join(f"{k} = {v!r}\n" for k, v in device.to_dict().items()))
+    out = subprocess.run(
+        [host_sim, "--json", "simulate", "--device", str(keys),
+         "--bias-volts", repr(bias), "--ac-volts", repr(ac),
+         "--ac-hz", repr(f0), "--duration-seconds", repr(30 / f0), "--method", "rk4-f32",
+         "--step-seconds", repr(1 / (16 * f0))], capture_output=True, text=True)
+    assert out.returncode == 1, out.stderr
+    report = json.loads(out.stdout)
+    assert report["stopped"] == run.stopped and report["steps"] == len(run.t) - 1

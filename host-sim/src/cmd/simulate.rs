@@ -148,6 +148,9 @@ pub struct SimulateReport {
     pub max_stretch: f64,
     /// The first check the trajectory failed, and when.
     pub first_limit: Option<Crossing>,
+    /// Why the run ended before its duration (a core method's step left the range it was
+    /// checked for): the samples up to there are the report's.
+    pub stopped: Option<String>,
     pub run_seconds: f64,
     /// What `--csv` and `--plot` wrote.
     pub files: Vec<String>,
@@ -170,7 +173,7 @@ impl fmt::Display for SimulateReport {
              method          {}{}{}, step {} s, {} steps in {} ms\n\
              final           stretch {}, velocity {} 1/s\n\
              stretch range   {} .. {}\n\
-             first limit     {limit}{}",
+             first limit     {limit}{}{}",
             self.device,
             self.method,
             self.solver_note
@@ -188,6 +191,9 @@ impl fmt::Display for SimulateReport {
             sig(self.end.velocity),
             sig(self.min_stretch),
             sig(self.max_stretch),
+            self.stopped
+                .as_ref()
+                .map_or(String::new(), |why| format!("\nstopped         {why}")),
             self.files
                 .iter()
                 .map(|f| format!("\nwrote           {f}"))
@@ -201,15 +207,24 @@ impl Report for SimulateReport {
         self.files.iter().any(|f| f == "-")
     }
 
-    /// Done, but the trajectory crossed a limit (exit status 1).
+    /// Done, but the trajectory crossed a limit, or the method stopped before the end
+    /// (exit status 1: a result, not bad input).
     fn failure(&self) -> Option<String> {
-        self.first_limit.map(|c| {
+        let crossed = self.first_limit.map(|c| {
             format!(
                 "the trajectory crossed {} at {} s",
                 c.mode,
                 sig(c.time_seconds)
             )
-        })
+        });
+        let stopped = self
+            .stopped
+            .as_ref()
+            .map(|why| format!("the method stopped before the end: {why}"));
+        match (crossed, stopped) {
+            (Some(c), Some(s)) => Some(format!("{c}; {s}")),
+            (c, s) => c.or(s),
+        }
     }
 }
 
@@ -356,6 +371,7 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
         min_stretch: out.min_stretch,
         max_stretch: out.max_stretch,
         first_limit: Crossing::with_state(out.first_limit, out.first_limit_state),
+        stopped: out.stopped.clone(),
         run_seconds: out.run_seconds,
         files,
         trajectory: args.trajectory.then_some(rows).flatten(),

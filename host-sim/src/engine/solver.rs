@@ -210,7 +210,8 @@ pub struct Outcome {
     pub samples: Vec<f64>,
     /// dλ/dt at the same times, 1/s.
     pub velocities: Vec<f64>,
-    /// Why the run ended before its duration (after a crossing the monitor reported).
+    /// Why the run ended before its duration: a core method's step left the range it was
+    /// checked for (after a crossing the monitor reported, or before any).
     pub stopped: Option<String>,
     pub run_seconds: f64,
     /// The sample spacing: the step asked for, shortened so that a whole number of them ends
@@ -418,10 +419,8 @@ fn core<T: Real>(
             return Err(RunError::Failed(crate::progress::INTERRUPTED.into()));
         }
         if let Err(e) = it.step() {
-            // Past the guarded range the model is no longer trusted: stop, say why.
-            if monitor.first_crossing().is_none() {
-                return Err(RunError::Failed(e.to_string()));
-            }
+            // Past the guarded range the model is no longer trusted: stop there and say why,
+            // the samples so far kept (as SciPy's solvers return them when a step fails).
             stopped = Some(e.to_string());
             break;
         }

@@ -251,6 +251,9 @@ fn run_case(case: &Case) -> Result<CaseReport, String> {
             let (verdict, error, caught) = match simulate(&scene, choice, period / per_period) {
                 Err(RunError::Refused(_)) => (Verdict::Refused, None, None),
                 Err(RunError::Failed(_)) => (Verdict::Stopped, None, None),
+                Ok(out) if out.stopped.is_some() && out.first_limit.is_none() => {
+                    (Verdict::Stopped, None, None)
+                }
                 Ok(out) if out.stopped.is_some() => (
                     Verdict::StoppedAfterCrossing,
                     None,

@@ -286,6 +286,11 @@ pub fn rows(study: &Study, reference: &Reference, choice: Choice) -> Vec<Row> {
             spent += took;
             fastest = fastest.min(took);
             match result {
+                // Left the model's range before any crossing: no error to measure.
+                Ok(out) if out.stopped.is_some() && out.first_limit.is_none() => {
+                    row.status = "stopped";
+                    break;
+                }
                 Ok(out) => last = Some(out),
                 Err(RunError::Refused(_)) => {
                     row.status = "refused";
