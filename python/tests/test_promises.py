@@ -139,3 +139,21 @@ def test_a_fixed_step_method_that_leaves_its_range_returns_the_trajectory(host_s
     assert out.returncode == 1, out.stderr
     report = json.loads(out.stdout)
     assert report["stopped"] == run.stopped and report["steps"] == len(run.t) - 1
+
+
+def test_a_scene_keeps_its_caveat_and_measures_no_error_after_a_fault():
+    """run_scene (and run --json) carry the report's caveat: a branch faster than 10 periods
+    of the target (read here from the scene's own TOML) makes the frozen-network frequency
+    not hold; and a faulted run has no frequency error (the output is at 0 V after it)."""
+    import tomllib
+
+    path = ROOT / "scenes" / "stiff-relaxation.toml"
+    scene = tomllib.loads(path.read_text())
+    target = scene["controller"]["target_hz"]
+    fast = [b for b in scene["plant"]["branches"] if b["relaxation_seconds"] * target < 10]
+    report = dr.run_scene(path)
+    assert len(report.caveats) == len(fast) == 1
+    assert "does not hold" in report.caveats[0]
+    faulted = dr.run_scene(ROOT / "scenes" / "fault-sensor-stuck.toml")
+    assert faulted.fault is not None
+    assert faulted.natural_frequency_hz is None and faulted.relative_error is None

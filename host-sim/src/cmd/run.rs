@@ -161,8 +161,12 @@ pub struct RunReport {
     pub nominal_bias_volts: Option<f32>,
     pub refused: Option<String>,
     pub fault: Option<String>,
+    /// The plant's natural frequency at the final bias; `None` where a fault or a refusal
+    /// ended the drive (nothing tuned to measure: not the frequency at 0 V after it).
     pub natural_frequency_hz: Option<f64>,
     pub relative_error: Option<f64>,
+    /// Where the figures do not hold (the text's `note` lines).
+    pub caveats: Vec<String>,
     pub limit: Option<LimitReport>,
     pub plant_crossing: Option<Crossing>,
     #[serde(skip)]
@@ -177,10 +181,6 @@ pub struct RunReport {
     pub commands: Vec<CommandReport>,
     pub run_seconds: f64,
     pub files: Vec<String>,
-    /// Branches faster than 10 periods of the target (the frozen-network frequency does not
-    /// hold for them), s.
-    #[serde(skip)]
-    fast_branches: Vec<f64>,
 }
 
 impl fmt::Display for RunReport {
@@ -241,14 +241,8 @@ impl fmt::Display for RunReport {
                 }
             }
         }
-        // The frequency freezes the networks over a period: say when a branch is faster.
-        for seconds in &self.fast_branches {
-            writeln!(
-                f,
-                "note            a branch relaxes in {} s, under 10 periods: the natural \
-                 frequency above (networks frozen) does not hold for it",
-                sig(*seconds)
-            )?;
+        for caveat in &self.caveats {
+            writeln!(f, "note            {caveat}")?;
         }
         match (self.plant_crossing, self.plant_crossing_description) {
             (Some(c), Some(what)) => writeln!(
@@ -395,7 +389,10 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<RunReport, String> {
 pub fn report(scene: &Scene, run: &Run, files: Vec<String>) -> RunReport {
     // The target in force at the end (a scene's command may have changed it).
     let target = run.target_hz;
-    let hz = run.natural_frequency_hz;
+    // Measured only where the drive ran to the end (after a fault the output is at 0 V).
+    let hz = Some(run.natural_frequency_hz)
+        .filter(|_| run.fault_words.is_none() && run.refused.is_none())
+        .and_then(finite);
     RunReport {
         scene: scene.name.clone(),
         description: scene.description.clone(),
@@ -408,8 +405,24 @@ pub fn report(scene: &Scene, run: &Run, files: Vec<String>) -> RunReport {
         nominal_bias_volts: run.boot.filter(|b| b.driving).map(|b| b.bias_volts),
         refused: run.refused.clone(),
         fault: run.fault_words.clone(),
-        natural_frequency_hz: finite(hz),
-        relative_error: finite((hz - target) / target),
+        natural_frequency_hz: hz,
+        relative_error: hz.and_then(|hz| finite((hz - target) / target)),
+        // The frequency freezes the networks over a period: said where a branch is faster.
+        caveats: scene
+            .run
+            .plant
+            .branches
+            .iter()
+            .map(|b| b.relaxation_seconds)
+            .filter(|&s| s * target < 10.0)
+            .map(|s| {
+                format!(
+                    "a branch relaxes in {} s, under 10 periods: the natural frequency above \
+                     (networks frozen) does not hold for it",
+                    sig(s)
+                )
+            })
+            .collect(),
         limit: run.limit.map(|(mode, volts)| LimitReport {
             mode: mode.name(),
             volts,
@@ -445,14 +458,6 @@ pub fn report(scene: &Scene, run: &Run, files: Vec<String>) -> RunReport {
             .collect(),
         run_seconds: run.run_seconds,
         files,
-        fast_branches: scene
-            .run
-            .plant
-            .branches
-            .iter()
-            .map(|b| b.relaxation_seconds)
-            .filter(|&s| s * target < 10.0)
-            .collect(),
     }
 }
 
