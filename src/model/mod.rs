@@ -6,8 +6,10 @@
 
 pub mod device;
 pub mod failure;
+pub mod guaranteed;
 pub mod material;
 pub mod motion;
 pub mod safety;
 pub mod statics;
 pub mod swing;
+pub mod tolerance;

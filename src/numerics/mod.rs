@@ -3,5 +3,7 @@
 //! formatting ([`decimal`]). Pure numbers: nothing here knows the device.
 
 pub mod decimal;
+pub mod gradient;
+pub mod interval;
 pub mod real;
 pub mod roots;
