@@ -1,9 +1,13 @@
 //! Device files: TOML, SI units, flat keys named as the fields of `DeviceParams`; every key
 //! optional, defaulting to the reference device of model.md §9. Unknown keys are an error.
+//! An optional `[tolerance]` table gives the batch (model.md §10): each key a device key,
+//! its value a relative ± fraction (`shear_modulus = 0.10`) or an absolute range
+//! `[low, high]` in SI units (`breakdown_field = [35e6, 200e6]`).
 
 use std::collections::BTreeMap;
 use std::path::Path;
 
+use de_resonator::model::tolerance::{DeviceBox, Spread};
 use de_resonator::{DeviceParams, Field, REFERENCE_DEVICE};
 use toml::Spanned;
 
@@ -56,6 +60,17 @@ pub fn text(params: &DeviceParams<f64>) -> String {
 
 /// [`parse`], and what the file left out or holds that no real membrane has.
 pub fn parse_noting(text: &str) -> Result<(DeviceParams<f64>, Notes), String> {
+    parse_box_noting(text).map(|(b, notes)| (b.nominal, notes))
+}
+
+/// The device and its `[tolerance]` table: the batch of devices the file declares (the
+/// nominal device alone without one).
+pub fn parse_box(text: &str) -> Result<DeviceBox, String> {
+    parse_box_noting(text).map(|(b, _)| b)
+}
+
+/// [`parse_box`], and what the file left out or holds that no real membrane has.
+pub fn parse_box_noting(text: &str) -> Result<(DeviceBox, Notes), String> {
     let line_of = |at: usize| text.get(..at).unwrap_or(text).matches('\n').count() + 1;
     let file: BTreeMap<Spanned<String>, Spanned<toml::Value>> =
         toml::from_str(text).map_err(|e| {
@@ -65,8 +80,10 @@ pub fn parse_noting(text: &str) -> Result<(DeviceParams<f64>, Notes), String> {
                 None => message,
             }
         })?;
+    let tolerance = file.iter().find(|(key, _)| key.get_ref() == TOLERANCE);
     let given: Vec<Entry> = file
         .iter()
+        .filter(|(key, _)| key.get_ref() != TOLERANCE)
         .map(|(key, value)| {
             let number = match value.get_ref() {
                 toml::Value::Float(x) => Ok(*x),
@@ -80,7 +97,72 @@ pub fn parse_noting(text: &str) -> Result<(DeviceParams<f64>, Notes), String> {
             )
         })
         .collect();
-    build(&given)
+    let (nominal, notes) = build(&given)?;
+    let b = match tolerance {
+        None => DeviceBox::exact(nominal),
+        Some((key, value)) => {
+            let toml::Value::Table(table) = value.get_ref() else {
+                return Err(format!(
+                    "line {}: `{TOLERANCE}` is a table: [{TOLERANCE}] and then a line a key",
+                    line_of(key.span().start)
+                ));
+            };
+            let spreads: Vec<(String, Result<Spread, String>)> = table
+                .iter()
+                .map(|(k, v)| (k.clone(), spread_of(v)))
+                .collect();
+            let at = format!("line {}: ", line_of(value.span().start));
+            with_tolerances(nominal, &spreads).map_err(|e| format!("{at}{e}"))?
+        }
+    };
+    Ok((b, notes))
+}
+
+/// The `[tolerance]` table's name in device files and scenes' `[device]`.
+pub const TOLERANCE: &str = "tolerance";
+
+/// A tolerance's TOML value: a number is a relative ± fraction, `[low, high]` a range.
+fn spread_of(value: &toml::Value) -> Result<Spread, String> {
+    let number = |v: &toml::Value| match v {
+        toml::Value::Float(x) => Some(*x),
+        toml::Value::Integer(n) => Some(*n as f64),
+        _ => None,
+    };
+    if let Some(x) = number(value) {
+        return Ok(Spread::Relative(x));
+    }
+    if let toml::Value::Array(ends) = value {
+        if let [low, high] = ends.as_slice() {
+            if let (Some(low), Some(high)) = (number(low), number(high)) {
+                return Ok(Spread::Range { low, high });
+            }
+        }
+    }
+    Err(format!(
+        "a tolerance is a fraction (0.1 for ±10%) or a range [low, high], not a {}",
+        value.type_str()
+    ))
+}
+
+/// The batch about `nominal` with each `(key, spread)`: keys are device keys, each once.
+pub fn with_tolerances(
+    nominal: DeviceParams<f64>,
+    spreads: &[(String, Result<Spread, String>)],
+) -> Result<DeviceBox, String> {
+    let mut b = DeviceBox::exact(nominal);
+    for (key, spread) in spreads {
+        let field = Field::from_key(key).ok_or_else(|| {
+            format!("[{TOLERANCE}]: unknown field `{key}`, expected a device key")
+        })?;
+        let spread = spread
+            .clone()
+            .map_err(|e| format!("[{TOLERANCE}] `{key}`: {e}"))?;
+        b = b
+            .with(field, spread)
+            .map_err(|e| format!("[{TOLERANCE}]: {e}"))?;
+    }
+    b.check().map_err(|e| format!("[{TOLERANCE}]: {e}"))?;
+    Ok(b)
 }
 
 /// A key, its value (or the TOML type it has instead of a number) and its line.
@@ -172,14 +254,19 @@ fn build(entries: &[Entry]) -> Result<(DeviceParams<f64>, Notes), String> {
 /// real membrane has is warned of (for a device the model accepts: a refused one is said
 /// by its refusal).
 pub fn load(path: &Path) -> Result<DeviceParams<f64>, String> {
+    load_box(path).map(|b| b.nominal)
+}
+
+/// [`load`] with the file's `[tolerance]` table: the batch it declares.
+pub fn load_box(path: &Path) -> Result<DeviceBox, String> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| format!("cannot read device file {}: {e}", path.display()))?;
-    let (params, notes) =
-        parse_noting(&text).map_err(|e| format!("device file {}: {e}", path.display()))?;
+    let (b, notes) =
+        parse_box_noting(&text).map_err(|e| format!("device file {}: {e}", path.display()))?;
     let name = path.display();
     // A device the model refuses is said by its refusal alone (one line).
-    if de_resonator::Device::new(params).is_err() {
-        return Ok(params);
+    if de_resonator::Device::new(b.nominal).is_err() {
+        return Ok(b);
     }
     if !notes.defaulted.is_empty() {
         let keys: Vec<&str> = notes.defaulted.iter().map(|f| f.key()).collect();
@@ -194,7 +281,7 @@ pub fn load(path: &Path) -> Result<DeviceParams<f64>, String> {
     for warning in &notes.implausible {
         eprintln!("warning: device file {name}: {warning}");
     }
-    Ok(params)
+    Ok(b)
 }
 
 #[cfg(test)]
@@ -293,5 +380,48 @@ mod tests {
     #[test]
     fn nested_tables_are_not_device_keys() {
         assert!(parse("[device]\nthickness = 1e-3\n").is_err());
+    }
+
+    /// A `[tolerance]` table: fractions and ranges, as the box's ends.
+    #[test]
+    fn the_tolerance_table_is_the_batch() {
+        let b = parse_box(
+            "jlim = 120\n[tolerance]\nshear_modulus = 0.1\nbreakdown_field = [35e6, 200e6]\n",
+        )
+        .unwrap();
+        assert_eq!(b.nominal.shear_modulus, 45e3);
+        assert_eq!(b.low.shear_modulus, 40.5e3);
+        assert!((b.high.shear_modulus - 49.5e3).abs() < 1e-9);
+        assert_eq!(
+            (b.low.breakdown_field, b.high.breakdown_field),
+            (35e6, 200e6)
+        );
+        assert_eq!(b.low.thickness, b.high.thickness);
+        // No table: the nominal device alone, as before.
+        assert!(parse_box("jlim = 120\n").unwrap().is_exact());
+    }
+
+    /// Each way a tolerance is wrong, said with its line and key.
+    #[test]
+    fn bad_tolerances_are_refused_with_their_line() {
+        for (text, says) in [
+            (
+                "[tolerance]\nshear_modulos = 0.1\n",
+                "unknown field `shear_modulos`",
+            ),
+            ("[tolerance]\nshear_modulus = 1.5\n", "fraction in [0, 1)"),
+            ("[tolerance]\nshear_modulus = \"ten\"\n", "not a string"),
+            ("[tolerance]\nbreakdown_field = [2e8, 1e8]\n", "low ≤ high"),
+            (
+                "[tolerance]\nbreakdown_field = [1e6, 2e6]\n",
+                "does not hold the device's own",
+            ),
+            ("[tolerance]\njlim = 0.1\n", "neo-Hookean"),
+            ("tolerance = 0.1\n", "is a table"),
+        ] {
+            let e = parse_box(text).unwrap_err();
+            assert!(e.contains(says), "{text}: {e}");
+            assert!(e.starts_with("line "), "{text}: {e}");
+        }
     }
 }

@@ -260,6 +260,15 @@ pub fn parse(text: &str) -> Result<Scene, String> {
     let nominal = if file.device.is_empty() {
         de_resonator::REFERENCE_DEVICE
     } else {
+        if file.device.contains_key(crate::device_file::TOLERANCE) {
+            // The board's cap from a batch's guaranteed limit is not wired yet (issue 59):
+            // a tolerance here would be read and then not kept, so it is refused.
+            return Err(format!(
+                "[device.{}]: a scene runs one plant on the nominal device; \
+                 `host-sim safe --device FILE` gives a batch's guaranteed limit",
+                crate::device_file::TOLERANCE
+            ));
+        }
         let text = toml::to_string(&file.device).map_err(|e| e.to_string())?;
         crate::device_file::parse(&text).map_err(|e| format!("[device]: {e}"))?
     };

@@ -140,6 +140,89 @@ fn device_file_changes_the_device() {
 }
 
 /// Exit status 2, one line on stderr with the range, nothing on stdout.
+/// A device file with tolerances (model.md §10): `safe` gives the guaranteed limit, which no
+/// corner device's own `safe` (a device file each, no tolerances) lies below, and which the
+/// lowest corner's lies within 3% of; `tune` gives the band, which holds the nominal
+/// device's frequency. The same file without the table answers as before, with no `guaranteed`.
+#[test]
+fn a_batch_has_a_guaranteed_limit_and_band() {
+    let nominal = "jlim = 120\nprestretch_1 = 2.0\nprestretch_2 = 2.0\n";
+    let batch = DeviceFile::new(
+        "batch.toml",
+        &format!(
+            "{nominal}[tolerance]\nshear_modulus = 0.1\nthickness = 0.05\n\
+             prestretch_1 = 0.02\nbreakdown_field = [35e6, 200e6]\n"
+        ),
+    );
+    let v = json(&["safe", "--device", batch.path(), "--json"]);
+    let g = &v["guaranteed"];
+    let guaranteed = g["limit"]["volts"].as_f64().unwrap();
+    assert_eq!(g["limit"]["at"].as_object().unwrap().len(), 4);
+    let mut lowest = f64::INFINITY;
+    for corner in 0..16 {
+        let pick =
+            |bit: u32, low: f64, high: f64| if corner & (1 << bit) == 0 { low } else { high };
+        let text = format!(
+            "jlim = 120\nprestretch_2 = 2.0\nshear_modulus = {}\nthickness = {}\n\
+             prestretch_1 = {}\nbreakdown_field = {}\n",
+            pick(0, 40.5e3, 49.5e3),
+            pick(1, 0.95e-3, 1.05e-3),
+            pick(2, 1.96, 2.04),
+            pick(3, 35e6, 200e6)
+        );
+        let file = DeviceFile::new(&format!("corner{corner}.toml"), &text);
+        let c = json(&["safe", "--device", file.path(), "--json"]);
+        let volts = c["limit"]["volts"].as_f64().unwrap();
+        assert!(
+            volts >= guaranteed,
+            "corner {corner}: {volts} V < {guaranteed} V"
+        );
+        lowest = lowest.min(volts);
+    }
+    assert!(guaranteed >= 0.97 * lowest, "{guaranteed} vs {lowest}");
+    let cap = g["max_bias_volts"].as_f64().unwrap();
+    assert!((cap - 0.95 * guaranteed).abs() <= 1e-9 * cap);
+
+    let t = json(&[
+        "tune",
+        "--device",
+        batch.path(),
+        "--target-hz",
+        "45",
+        "--json",
+    ]);
+    let bias = t["bias_volts"].as_f64().unwrap();
+    let band: Vec<f64> = t["band_hz"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    // The nominal device is in the batch: its 45 Hz at that bias lies in the band.
+    assert!(band[0] < 45.0 && 45.0 < band[1], "{band:?} at {bias} V");
+    assert_eq!(t["every_device_reaches"], false);
+
+    let plain = DeviceFile::new("plain.toml", nominal);
+    let p = json(&["safe", "--device", plain.path(), "--json"]);
+    assert!(p.get("guaranteed").is_none() && p["device"].get("tolerance").is_none());
+    assert_eq!(p["limit"], v["limit"]);
+}
+
+/// A target beyond the guaranteed cap is refused, naming both figures.
+#[test]
+fn a_batch_refuses_a_target_only_its_nominal_device_reaches_safely() {
+    let batch = DeviceFile::new(
+        "batch-low.toml",
+        "shear_modulus = 45e3\njlim = 120\nrelative_permittivity = 4.7\ndensity = 960\n\
+         breakdown_field = 1e8\nthickness = 1e-3\nlength_active = 0.02\n\
+         length_passive = 0.02\nwidth = 0.04\nbar_mass = 2e-3\nprestretch_1 = 2.0\n\
+         prestretch_2 = 2.0\ndamping = 0\n[tolerance]\nbreakdown_field = [35e6, 200e6]\n",
+    );
+    let err = refused(&["tune", "--device", batch.path(), "--target-hz", "43.1"]);
+    assert!(err.contains("above the guaranteed cap"), "{err}");
+    assert!(err.contains("breakdown"), "{err}");
+}
+
 #[test]
 fn unreachable_target() {
     let range = json(&["safe", "--json"])["tunable_range_hz"].clone();

@@ -64,6 +64,14 @@ fn every_command_matches_the_schema() {
     conforms("safe", &[]);
     conforms("safe", &["--device", &neo]);
     conforms("tune", &["--target-hz", "44"]);
+    let batch = format!("{dir}/batch.toml");
+    std::fs::write(
+        &batch,
+        "jlim = 120\n[tolerance]\nshear_modulus = 0.05\nbreakdown_field = [35e6, 200e6]\n",
+    )
+    .unwrap();
+    conforms("safe", &["--device", &batch]);
+    conforms("tune", &["--device", &batch, "--target-hz", "45"]);
     conforms(
         "curve",
         &["--target-hz", "44", "--points", "5", "--out", &dir],

@@ -24,7 +24,8 @@ class Device:
     """A dielectric elastomer resonator (docs/model.md). Keywords: the device file's keys in
     SI units; absent keys take the reference device's values, an absent `jlim` makes it
     neo-Hookean (`jlim=None` says so). ValueError with the model's reason if it refuses a
-    value; TypeError for a value that is no number (a bool included)."""
+    value; TypeError for a value that is no number (a bool included). `tolerance` declares a
+    batch (docs/model.md §10): {key: fraction (0.1 for ±10%) or (low, high) in SI units}."""
 
     def __init__(
         self,
@@ -42,6 +43,7 @@ class Device:
         prestretch_1: float = ...,
         prestretch_2: float = ...,
         damping: float = ...,
+        tolerance: Optional[dict[str, Union[float, tuple[float, float]]]] = ...,
     ) -> None: ...
     @staticmethod
     def reference() -> Device:
@@ -57,23 +59,31 @@ class Device:
     def material(self) -> Literal["gent", "neo_hookean"]: ...
     @property
     def source(self) -> str: ...
-    def to_dict(self) -> dict[str, float]:
-        """The keys and values (SI): `Device(**d)` makes the same device."""
+    @property
+    def tolerance(self) -> Optional[dict[str, tuple[float, float]]]:
+        """The tolerances as ranges (SI units); None without any."""
+    def to_dict(self) -> dict[str, Any]:
+        """The keys and values (SI), and `tolerance` if any: `Device(**d)` makes the same
+        device."""
     def __getitem__(self, key: str) -> float: ...
     def __eq__(self, other: object) -> bool: ...
     def safe(self, margin: float = 0.05) -> Result:
         """The safe region: `limit` (mode, volts V, stretch, natural_frequency_hz Hz),
-        `max_bias_volts` (V), `tunable_range_hz` (Hz), `zero_bias_frequency_hz` (Hz)."""
+        `max_bias_volts` (V), `tunable_range_hz` (Hz), `zero_bias_frequency_hz` (Hz); with
+        tolerances `guaranteed` (the certified limit of every device, its cap and range)."""
     def tune(self, target_hz: float, margin: float = 0.05) -> Result:
         """The smallest bias for `target_hz`: `bias_volts` (V), `stretch`,
-        `natural_frequency_hz` (Hz) and the safe region. ValueError out of reach."""
+        `natural_frequency_hz` (Hz) and the safe region; with tolerances `band_hz` (the
+        batch's frequencies at that bias) and `every_device_reaches`. ValueError out of
+        reach, or above a batch's guaranteed cap."""
     def frequency(self, bias_volts: ArrayLike) -> Union[float, npt.NDArray[np.float64]]:
         """The natural frequency (Hz) at each bias (V, an int or float dtype); NaN where no
         equilibrium holds it (below 0 V, or past the limit)."""
     def tune_many(self, targets_hz: ArrayLike, margin: float = 0.05) -> Result:
         """`tune` for each target: arrays `bias_volts` (V), `stretch`,
         `natural_frequency_hz` (Hz) with NaN where out of reach, `ok` (bool), and `reason`
-        (a list, None where tuned)."""
+        (a list, None where tuned); with tolerances `band_low_hz`, `band_high_hz` (Hz) and
+        `every_device_reaches` (bool)."""
     def curve(
         self, points: int = 200, margin: float = 0.05, target_hz: Optional[float] = None
     ) -> Result:

@@ -9,11 +9,12 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{mpsc, Arc};
 use std::time::Duration;
 
+use de_resonator::model::tolerance::{DeviceBox, Spread};
 use de_resonator::{Device, DeviceParams, Field, Limit, Tuner, REFERENCE_DEVICE};
 use host_sim::cmd::curve::{one_curve, Curve};
 use host_sim::cmd::image::{ImageArgs, PowerUpArg};
 use host_sim::cmd::lut::LutFormat;
-use host_sim::cmd::safe::{targets_margin, Region};
+use host_sim::cmd::safe::{tune_batch, tune_in_batch, Guaranteed, Region, Tuned};
 use host_sim::cmd::simulate::Asked;
 use host_sim::cmd::sweep::SweepArgs;
 use host_sim::cmd::{DeviceArgs, DeviceInfo};
@@ -151,20 +152,32 @@ struct Device_ {
     params: DeviceParams<f64>,
     /// Where it came from: a file, `keywords`, or the reference device.
     source: String,
+    /// The batch its tolerances declare (docs/model.md §10): the device alone without any.
+    batch: DeviceBox,
 }
 
-/// Two devices are equal when their values are (wherever they came from).
+/// Two devices are equal when their values and tolerances are (wherever they came from).
 impl PartialEq for Device_ {
     fn eq(&self, other: &Self) -> bool {
-        self.params == other.params
+        self.params == other.params && self.batch == other.batch
     }
 }
 
 impl Device_ {
     /// The device from checked parameters.
     fn new(params: DeviceParams<f64>, source: String) -> PyResult<Self> {
+        Self::of_batch(DeviceBox::exact(params), source)
+    }
+
+    /// The device of a batch (its nominal device, the batch kept).
+    fn of_batch(batch: DeviceBox, source: String) -> PyResult<Self> {
+        let params = batch.nominal;
         Device::new(params).map_err(|e| value_error(format!("{source}: {e}")))?;
-        Ok(Self { params, source })
+        Ok(Self {
+            params,
+            source,
+            batch,
+        })
     }
 
     fn device(&self) -> Device<f64> {
@@ -177,7 +190,7 @@ impl Device_ {
     }
 
     fn info(&self) -> DeviceInfo {
-        DeviceInfo::new(self.source.clone(), &self.params)
+        DeviceInfo::new(self.source.clone(), &self.params).with_tolerance(&self.batch)
     }
 
     /// The margin checked: 0 ≤ margin < 1.
@@ -196,8 +209,13 @@ impl Device_ {
 fn from_keys(keys: &Bound<'_, PyDict>, quiet: bool) -> PyResult<Device_> {
     let mut pairs = Vec::new();
     let mut jlim_given = false;
+    let mut tolerance = None;
     for (key, value) in keys.iter() {
         let key: String = key.extract()?;
+        if key == device_file::TOLERANCE {
+            tolerance = Some(spreads_of(&value)?);
+            continue;
+        }
         if key == Field::Jlim.key() {
             jlim_given = true;
             if value.is_none() {
@@ -220,7 +238,11 @@ fn from_keys(keys: &Bound<'_, PyDict>, quiet: bool) -> PyResult<Device_> {
     }
     let borrowed: Vec<(&str, f64)> = pairs.iter().map(|(k, v)| (k.as_str(), *v)).collect();
     let (params, notes) = device_file::from_keys(&borrowed).map_err(value_error)?;
-    let device = Device_::new(params, "keywords".into())?;
+    let batch = match tolerance {
+        Some(spreads) => device_file::with_tolerances(params, &spreads).map_err(value_error)?,
+        None => DeviceBox::exact(params),
+    };
+    let device = Device_::of_batch(batch, "keywords".into())?;
     if !quiet {
         let mut said = notes.implausible;
         if !jlim_given {
@@ -233,6 +255,42 @@ fn from_keys(keys: &Bound<'_, PyDict>, quiet: bool) -> PyResult<Device_> {
         warn(keys.py(), &said)?;
     }
     Ok(device)
+}
+
+/// `tolerance={key: fraction or (low, high)}`: each key's spread, as a device file's
+/// `[tolerance]` table gives it (a bool is no number here either).
+fn spreads_of(value: &Bound<'_, PyAny>) -> PyResult<Vec<(String, Result<Spread, String>)>> {
+    let dict = value.cast::<PyDict>().map_err(|_| {
+        PyTypeError::new_err(
+            "`tolerance` is a dict: {key: fraction (0.1 for ±10%) or (low, high) in SI units}",
+        )
+    })?;
+    let number = |v: &Bound<'_, PyAny>| -> Option<f64> {
+        if v.is_instance_of::<PyBool>() {
+            None
+        } else {
+            v.extract().ok()
+        }
+    };
+    let mut out = Vec::new();
+    for (key, v) in dict.iter() {
+        let key: String = key.extract()?;
+        let spread = if let Some(x) = number(&v) {
+            Spread::Relative(x)
+        } else {
+            let ends: Option<(Bound<'_, PyAny>, Bound<'_, PyAny>)> = v.extract().ok();
+            match ends.and_then(|(low, high)| Some((number(&low)?, number(&high)?))) {
+                Some((low, high)) => Spread::Range { low, high },
+                None => {
+                    return Err(PyTypeError::new_err(format!(
+                        "tolerance `{key}` must be a fraction or (low, high), not {v:?}"
+                    )))
+                }
+            }
+        };
+        out.push((key, Ok(spread)));
+    }
+    Ok(out)
 }
 
 /// Each line a `UserWarning` (a value no real membrane has: a unit slip).
@@ -266,9 +324,9 @@ impl Device_ {
     fn from_file(py: Python<'_>, path: std::path::PathBuf) -> PyResult<Self> {
         let text = std::fs::read_to_string(&path).map_err(|e| read_error(&path, &e))?;
         let source = path.display().to_string();
-        let (params, notes) =
-            device_file::parse_noting(&text).map_err(|e| value_error(format!("{source}: {e}")))?;
-        let device = Self::new(params, source)?;
+        let (batch, notes) = device_file::parse_box_noting(&text)
+            .map_err(|e| value_error(format!("{source}: {e}")))?;
+        let device = Self::of_batch(batch, source)?;
         warn(py, &notes.implausible)?;
         Ok(device)
     }
@@ -276,8 +334,8 @@ impl Device_ {
     /// A device file's text.
     #[staticmethod]
     fn from_toml(py: Python<'_>, text: &str) -> PyResult<Self> {
-        let (params, notes) = device_file::parse_noting(text).map_err(value_error)?;
-        let device = Self::new(params, "toml".into())?;
+        let (batch, notes) = device_file::parse_box_noting(text).map_err(value_error)?;
+        let device = Self::of_batch(batch, "toml".into())?;
         warn(py, &notes.implausible)?;
         Ok(device)
     }
@@ -292,7 +350,24 @@ impl Device_ {
                 _ => dict.set_item(field.key(), self.params.get(field))?,
             }
         }
+        if let Some(tolerance) = self.tolerance(py)? {
+            dict.set_item(device_file::TOLERANCE, tolerance)?;
+        }
         Ok(dict)
+    }
+
+    /// The tolerances as ranges, `{key: (low, high)}` in SI units (docs/model.md §10);
+    /// None without any.
+    #[getter]
+    fn tolerance<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        if self.batch.is_exact() {
+            return Ok(None);
+        }
+        let dict = PyDict::new(py);
+        for f in self.batch.spread_fields() {
+            dict.set_item(f.key(), (self.batch.low.get(f), self.batch.high.get(f)))?;
+        }
+        Ok(Some(dict))
     }
 
     /// `gent` or `neo_hookean` (docs/model.md §3).
@@ -348,7 +423,8 @@ impl Device_ {
     #[pyo3(signature = (margin = 0.05))]
     fn safe<'py>(&self, py: Python<'py>, margin: f64) -> PyResult<Bound<'py, PyAny>> {
         let margin = Self::margin(margin)?;
-        let region = Region::new(self.info(), &self.tuner(), margin).map_err(value_error)?;
+        let region = Region::of_batch(self.info(), &self.tuner(), &self.batch, margin)
+            .map_err(value_error)?;
         result(py, &region)
     }
 
@@ -363,21 +439,9 @@ impl Device_ {
         margin: f64,
     ) -> PyResult<Bound<'py, PyAny>> {
         let margin = Self::margin(margin)?;
-        let tuner = self.tuner();
-        let region = Region::new(self.info(), &tuner, margin).map_err(value_error)?;
-        let bias = tuner
-            .tune(target_hz, targets_margin(margin))
-            .map_err(|e| value_error(format!("{e} (margin {margin})")))?;
-        result(
-            py,
-            &host_sim::cmd::safe::TuneReport {
-                region,
-                target_hz,
-                bias_volts: bias.volts,
-                stretch: bias.stretch,
-                natural_frequency_hz: bias.natural_frequency_hz,
-            },
-        )
+        let report = tune_batch(self.info(), &self.tuner(), &self.batch, target_hz, margin)
+            .map_err(value_error)?;
+        result(py, &report)
     }
 
     /// The small-oscillation natural frequency (Hz) at a static bias (V) on the loading
@@ -416,14 +480,14 @@ impl Device_ {
         let margin = Self::margin(margin)?;
         let (shape, targets) = numbers_of("targets_hz", targets_hz)?;
         let tuner = self.tuner();
+        // What holds for the batch, once for every target (docs/model.md §10).
+        let guaranteed = Guaranteed::of(&self.batch, margin).map_err(value_error)?;
         let tuned = stoppable(py, || {
             progress::each(&targets, |&hz| {
-                tuner
-                    .tune(hz, targets_margin(margin))
-                    .map_err(|e| e.to_string())
+                tune_in_batch(&tuner, &self.batch, guaranteed.as_ref(), hz, margin)
             })
         })?;
-        let column = |f: &dyn Fn(&de_resonator::Equilibrium<f64>) -> f64| -> PyResult<_> {
+        let column = |f: &dyn Fn(&Tuned) -> f64| -> PyResult<_> {
             let values: Vec<f64> = tuned
                 .iter()
                 .map(|t| t.as_ref().map_or(f64::NAN, f))
@@ -433,7 +497,8 @@ impl Device_ {
                 .into_pyarray(py))
         };
         let ok: Vec<bool> = tuned.iter().map(Result::is_ok).collect();
-        let reasons: Vec<Option<String>> = tuned.iter().map(|t| t.clone().err()).collect();
+        let reasons: Vec<Option<String>> =
+            tuned.iter().map(|t| t.as_ref().err().cloned()).collect();
         let dict = PyDict::new(py);
         dict.set_item(
             "targets_hz",
@@ -441,9 +506,30 @@ impl Device_ {
                 .map_err(value_error)?
                 .into_pyarray(py),
         )?;
-        dict.set_item("bias_volts", column(&|e| e.volts)?)?;
-        dict.set_item("stretch", column(&|e| e.stretch)?)?;
-        dict.set_item("natural_frequency_hz", column(&|e| e.natural_frequency_hz)?)?;
+        dict.set_item("bias_volts", column(&|t| t.bias.volts)?)?;
+        dict.set_item("stretch", column(&|t| t.bias.stretch)?)?;
+        dict.set_item(
+            "natural_frequency_hz",
+            column(&|t| t.bias.natural_frequency_hz)?,
+        )?;
+        if guaranteed.is_some() {
+            let end = |i: usize| move |t: &Tuned| t.band_hz.map_or(f64::NAN, |b| b[i]);
+            dict.set_item("band_low_hz", column(&end(0))?)?;
+            dict.set_item("band_high_hz", column(&end(1))?)?;
+            let every: Vec<bool> = tuned
+                .iter()
+                .map(|t| {
+                    t.as_ref()
+                        .is_ok_and(|t| t.every_device_reaches == Some(true))
+                })
+                .collect();
+            dict.set_item(
+                "every_device_reaches",
+                ArrayD::from_shape_vec(shape.clone(), every)
+                    .map_err(value_error)?
+                    .into_pyarray(py),
+            )?;
+        }
         dict.set_item(
             "ok",
             ArrayD::from_shape_vec(shape, ok)

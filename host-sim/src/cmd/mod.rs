@@ -19,6 +19,7 @@ use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use clap::Args;
+use de_resonator::model::tolerance::DeviceBox;
 use de_resonator::{Device, DeviceParams, FailureMode, Tuner, DEFAULT_MARGIN, REFERENCE_DEVICE};
 use serde::Serialize;
 
@@ -77,19 +78,35 @@ impl DeviceArgs {
 
     /// The device's parameters (the reference's without a file) and what it is.
     pub fn params(&self) -> Result<(DeviceParams<f64>, DeviceInfo), String> {
-        let (params, source) = match (&self.given, &self.device) {
-            (Some((params, source)), _) => (*params, source.clone()),
-            (None, Some(path)) => (device_file::load(path)?, path.display().to_string()),
-            (None, None) => (REFERENCE_DEVICE, "reference device (built in)".into()),
+        let (b, info) = self.batch()?;
+        Ok((b.nominal, info))
+    }
+
+    /// The batch the device file declares with its `[tolerance]` table (model.md §10): the
+    /// nominal device alone without one, and for a device given as values.
+    pub fn batch(&self) -> Result<(DeviceBox, DeviceInfo), String> {
+        let (b, source) = match (&self.given, &self.device) {
+            (Some((params, source)), _) => (DeviceBox::exact(*params), source.clone()),
+            (None, Some(path)) => (device_file::load_box(path)?, path.display().to_string()),
+            (None, None) => (
+                DeviceBox::exact(REFERENCE_DEVICE),
+                "reference device (built in)".into(),
+            ),
         };
-        Ok((params, DeviceInfo::new(source, &params)))
+        Ok((b, DeviceInfo::new(source, &b.nominal).with_tolerance(&b)))
     }
 
     /// The device validated, with its limit found, and what it is.
     pub fn tuner(&self) -> Result<(Tuner<f64>, DeviceInfo), String> {
-        let (params, name) = self.params()?;
-        let device = Device::new(params).map_err(|e| format!("{name}: {e}"))?;
-        Ok((Tuner::new(device), name))
+        let (_, tuner, name) = self.batch_tuner()?;
+        Ok((tuner, name))
+    }
+
+    /// The batch, its nominal device validated with its limit found, and what it is.
+    pub fn batch_tuner(&self) -> Result<(DeviceBox, Tuner<f64>, DeviceInfo), String> {
+        let (b, name) = self.batch()?;
+        let device = Device::new(b.nominal).map_err(|e| format!("{name}: {e}"))?;
+        Ok((b, Tuner::new(device), name))
     }
 }
 
@@ -103,6 +120,9 @@ pub struct DeviceInfo {
     pub material: &'static str,
     /// Gent's limit on I1 − 3 (`null`: neo-Hookean).
     pub jlim: Option<f64>,
+    /// The `[tolerance]` table as ranges, `{key: [low, high]}` in SI units (absent: none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tolerance: Option<std::collections::BTreeMap<&'static str, [f64; 2]>>,
 }
 
 impl DeviceInfo {
@@ -115,7 +135,20 @@ impl DeviceInfo {
                 "neo_hookean"
             },
             jlim: params.jlim,
+            tolerance: None,
         }
+    }
+
+    /// With the batch's ranges, where it has any.
+    pub fn with_tolerance(mut self, b: &DeviceBox) -> Self {
+        if !b.is_exact() {
+            self.tolerance = Some(
+                b.spread_fields()
+                    .map(|f| (f.key(), [b.low.get(f), b.high.get(f)]))
+                    .collect(),
+            );
+        }
+        self
     }
 }
 
