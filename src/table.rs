@@ -14,6 +14,11 @@
 //! | 68 | 8·N | points (frequency Hz, bias V), bias strictly rising; frequency turns at most `MAX_TURNS` times |
 //! | 68 + 8·N | 4 | CRC-32 (IEEE 802.3) of every byte before it, u32 |
 //!
+//! A table for a batch of membranes (model.md §10) is version 2: after the error, at 68, the
+//! batch's 13 low and 13 high parameters (104 bytes, each range holding the device's value)
+//! and its guaranteed limit in V (4 bytes), the points from 176. Its margin and top are
+//! against that limit. A device without tolerances is written as version 1, byte for byte.
+//!
 //! Between points the bias is interpolated as Φ² linear in f: Φ² enters the model linearly
 //! (model.md §5), so near zero bias, where f − f(0) ∝ Φ², this is exact to first order.
 //! f(Φ) need not be monotone (model.md §5): the lookup takes the first interval, in rising
@@ -27,14 +32,19 @@ use crate::numerics::decimal::Decimal;
 
 use crate::model::device::{Device, DeviceParams, Field};
 use crate::model::statics::Equilibrium;
+use crate::model::tolerance::DeviceBox;
 use crate::numerics::real::Real;
 
 /// The first four bytes of a table.
 pub const MAGIC: [u8; 4] = *b"DERT";
-/// The layout version this code reads and writes.
+/// The layout version of a table for one device.
 pub const VERSION: u16 = 1;
-/// Bytes before the first point.
+/// The layout version of a table for a batch (model.md §10).
+pub const VERSION_BATCH: u16 = 2;
+/// Bytes before the first point (version 1).
 pub const HEADER_BYTES: usize = 68;
+/// Bytes before the first point (version 2): the batch's ranges and limit besides.
+pub const BATCH_HEADER_BYTES: usize = HEADER_BYTES + 2 * 52 + 4;
 /// Bytes per point.
 pub const POINT_BYTES: usize = 8;
 /// The most points a table may hold.
@@ -56,6 +66,60 @@ pub fn table_margin(margin: f64) -> f64 {
 /// The length in bytes of a table of `points` points.
 pub const fn table_bytes(points: usize) -> usize {
     HEADER_BYTES + POINT_BYTES * points + 4
+}
+
+/// The length in bytes of a batch's table of `points` points.
+pub const fn batch_table_bytes(points: usize) -> usize {
+    BATCH_HEADER_BYTES + POINT_BYTES * points + 4
+}
+
+/// What a version-2 table holds of its batch (model.md §10): every device between `low`
+/// and `high` has its limit at or above `limit_volts` (the host's certified bound).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct TableBatch {
+    pub low: DeviceParams<f32>,
+    pub high: DeviceParams<f32>,
+    /// The guaranteed limit, V.
+    pub limit_volts: f32,
+}
+
+impl TableBatch {
+    /// The batch `b` with its guaranteed limit `limit_volts` as a table keeps them in f32:
+    /// the ranges rounded outward, the limit down (never a narrower batch, never a higher
+    /// limit than the f64 ones).
+    pub fn of(b: &DeviceBox, limit_volts: f64) -> Self {
+        let (mut low, mut high) = (b.low.cast::<f32>(), b.high.cast::<f32>());
+        for f in Field::ALL {
+            low.set(f, f32_below(b.low.get(f)));
+            high.set(f, f32_above(b.high.get(f)));
+        }
+        Self {
+            low,
+            high,
+            limit_volts: f32_below(limit_volts),
+        }
+    }
+}
+
+/// The largest f32 at or below `x`.
+fn f32_below(x: f64) -> f32 {
+    let y = x as f32;
+    if f64::from(y) > x {
+        y.next_down()
+    } else {
+        y
+    }
+}
+
+/// The smallest f32 at or above `x`.
+fn f32_above(x: f64) -> f32 {
+    let y = x as f32;
+    if f64::from(y) < x {
+        y.next_up()
+    } else {
+        y
+    }
 }
 
 /// Why a table cannot be used.
@@ -89,6 +153,9 @@ pub enum TableError {
     },
     /// The output buffer is too small for the table (writing).
     BufferTooSmall { needed: usize },
+    /// A batch's range for `field` is not a range holding the device's value, or its
+    /// guaranteed limit is not a positive number.
+    BadBatch { field: Option<Field> },
 }
 
 impl core::error::Error for TableError {}
@@ -138,6 +205,14 @@ impl fmt::Display for TableError {
             TableError::BufferTooSmall { needed } => {
                 write!(f, "table needs a buffer of {needed} bytes")
             }
+            TableError::BadBatch { field: Some(field) } => write!(
+                f,
+                "table's batch range for `{}` does not hold the device's value",
+                field.key()
+            ),
+            TableError::BadBatch { field: None } => {
+                write!(f, "table's guaranteed limit is not a positive number")
+            }
         }
     }
 }
@@ -147,6 +222,8 @@ impl fmt::Display for TableError {
 pub struct Table<'a> {
     bytes: &'a [u8],
     points: usize,
+    /// Bytes before the first point (its version's).
+    header: usize,
 }
 
 impl<'a> Table<'a> {
@@ -160,15 +237,17 @@ impl<'a> Table<'a> {
             return Err(TableError::BadMagic);
         }
         let version = u16_at(bytes, 4);
-        if version != VERSION {
-            return Err(TableError::UnsupportedVersion { version });
-        }
+        let header = match version {
+            VERSION => HEADER_BYTES,
+            VERSION_BATCH => BATCH_HEADER_BYTES,
+            _ => return Err(TableError::UnsupportedVersion { version }),
+        };
         let count = u16_at(bytes, 6);
         let points = usize::from(count);
         if !(2..=MAX_POINTS).contains(&points) {
             return Err(TableError::BadCount { points: count });
         }
-        let expected = table_bytes(points);
+        let expected = header + POINT_BYTES * points + 4;
         if bytes.len() != expected {
             return Err(TableError::WrongLength {
                 expected,
@@ -181,7 +260,11 @@ impl<'a> Table<'a> {
         if stored != computed {
             return Err(TableError::BadCrc { stored, computed });
         }
-        let table = Table { bytes, points };
+        let table = Table {
+            bytes,
+            points,
+            header,
+        };
         // Header values: parameters (jlim and damping may be 0), margin in [0, 1), error ≥ 0.
         for k in 0..15u16 {
             let v = f32_at(bytes, 8 + 4 * usize::from(k));
@@ -192,6 +275,28 @@ impl<'a> Table<'a> {
         }
         if !(table.margin() < 1.0) {
             return Err(TableError::NotFinite { index: 13 });
+        }
+        if let Some(batch) = table.batch() {
+            let nominal = table.params();
+            for field in Field::ALL {
+                let (low, x, high) = (
+                    batch.low.get(field),
+                    nominal.get(field),
+                    batch.high.get(field),
+                );
+                if !(low <= x && x <= high && low.is_finite() && high.is_finite() && low >= 0.0) {
+                    return Err(TableError::BadBatch { field: Some(field) });
+                }
+            }
+            // A Gent device's jlim range stays Gent; a neo-Hookean one has none.
+            if (nominal.jlim.is_some()) != (batch.low.jlim.is_some()) {
+                return Err(TableError::BadBatch {
+                    field: Some(Field::Jlim),
+                });
+            }
+            if !(batch.limit_volts.is_finite() && batch.limit_volts > 0.0) {
+                return Err(TableError::BadBatch { field: None });
+            }
         }
         let mut previous: Option<(f32, f32)> = None;
         let mut rising: Option<bool> = None;
@@ -223,16 +328,16 @@ impl<'a> Table<'a> {
 
     /// Point `k` as (frequency Hz, bias V); `k` below `points()`.
     pub fn point(&self, k: usize) -> (f32, f32) {
-        let at = HEADER_BYTES + POINT_BYTES * k;
+        let at = self.header + POINT_BYTES * k;
         (f32_at(self.bytes, at), f32_at(self.bytes, at + 4))
     }
 
     /// The points in order, (frequency Hz, bias V): one pass over the bytes.
     fn each_point(&self) -> impl Iterator<Item = (f32, f32)> + '_ {
-        let end = HEADER_BYTES + POINT_BYTES * self.points;
+        let end = self.header + POINT_BYTES * self.points;
         let word = |w: Option<&[u8; 4]>| w.copied().map_or(f32::NAN, f32::from_le_bytes);
         self.bytes
-            .get(HEADER_BYTES..end)
+            .get(self.header..end)
             .unwrap_or(&[])
             .chunks_exact(POINT_BYTES)
             .map(move |p| (word(p.first_chunk()), word(p.last_chunk())))
@@ -240,11 +345,25 @@ impl<'a> Table<'a> {
 
     /// The device parameters the table was made for.
     pub fn params(&self) -> DeviceParams<f32> {
+        self.params_at(8)
+    }
+
+    /// The 13 parameters stored from byte `at`.
+    fn params_at(&self, at: usize) -> DeviceParams<f32> {
         let mut values = [0.0f32; 13];
         for (k, value) in values.iter_mut().enumerate() {
-            *value = f32_at(self.bytes, 8 + 4 * k);
+            *value = f32_at(self.bytes, at + 4 * k);
         }
         DeviceParams::from_values(values)
+    }
+
+    /// The batch a version-2 table was made for (model.md §10); `None` for one device.
+    pub fn batch(&self) -> Option<TableBatch> {
+        (self.header == BATCH_HEADER_BYTES).then(|| TableBatch {
+            low: self.params_at(HEADER_BYTES),
+            high: self.params_at(HEADER_BYTES + 52),
+            limit_volts: f32_at(self.bytes, HEADER_BYTES + 104),
+        })
     }
 
     /// Check that the table was made for `params` (bit for bit, as f32), but for the
@@ -374,23 +493,46 @@ pub fn write(
     interpolation_error: f32,
     points: &[(f32, f32)],
 ) -> Result<usize, TableError> {
+    write_batch(out, params, None, margin, interpolation_error, points)
+}
+
+/// [`write`] for a batch (`Some`: version 2, its ranges and guaranteed limit kept).
+pub fn write_batch(
+    out: &mut [u8],
+    params: &DeviceParams<f32>,
+    batch: Option<&TableBatch>,
+    margin: f32,
+    interpolation_error: f32,
+    points: &[(f32, f32)],
+) -> Result<usize, TableError> {
     if !(2..=MAX_POINTS).contains(&points.len()) {
         return Err(TableError::BadCount {
             points: points.len().min(usize::from(u16::MAX)) as u16,
         });
     }
-    let needed = table_bytes(points.len());
+    let (version, needed) = match batch {
+        None => (VERSION, table_bytes(points.len())),
+        Some(_) => (VERSION_BATCH, batch_table_bytes(points.len())),
+    };
     let Some(out) = out.get_mut(..needed) else {
         return Err(TableError::BufferTooSmall { needed });
     };
     let header = MAGIC
         .into_iter()
-        .chain(VERSION.to_le_bytes())
+        .chain(version.to_le_bytes())
         .chain((points.len() as u16).to_le_bytes());
+    let ranges = batch.into_iter().flat_map(|b| {
+        b.low
+            .values()
+            .into_iter()
+            .chain(b.high.values())
+            .chain([b.limit_volts])
+    });
     let values = params
         .values()
         .into_iter()
         .chain([margin, interpolation_error])
+        .chain(ranges)
         .chain(points.iter().flat_map(|&(hz, volts)| [hz, volts]))
         .flat_map(f32::to_le_bytes);
     let (body, crc_bytes) = out.split_at_mut(needed - 4);

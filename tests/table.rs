@@ -356,3 +356,48 @@ fn the_controller_refuses_a_bad_table_and_a_table_for_another_device() {
         })
     );
 }
+
+/// A batch's table (version 2, model.md §10): its ranges and guaranteed limit read back; a
+/// range that does not hold the device's value, or a limit not a positive number, sealed
+/// with a fresh CRC, is refused naming the field; version 1 is what a device alone gets.
+#[test]
+fn a_batch_table_keeps_its_ranges_and_limit() {
+    let b = common::reference_batch();
+    let (bytes, g) = common::made_batch_table(&b, 0.05, 32, 4096).unwrap();
+    assert_eq!(bytes.len(), table::batch_table_bytes(32));
+    let t = Table::parse(&bytes).unwrap();
+    let batch = t.batch().unwrap();
+    assert!(f64::from(batch.low.shear_modulus) <= 40.5e3);
+    assert!(f64::from(batch.high.shear_modulus) >= 49.5e3);
+    assert_eq!(
+        (batch.low.breakdown_field, batch.high.breakdown_field),
+        (35e6, 200e6)
+    );
+    assert!(f64::from(batch.limit_volts) <= g && f64::from(batch.limit_volts) > g * (1.0 - 1e-7));
+    // Its top: (1 − margin)(1 − headroom) of the guaranteed limit, well below the device's.
+    let top = f64::from(t.max_volts());
+    assert!(
+        (top / (0.95 * (1.0 - table::HEADROOM) * g) - 1.0).abs() < 1e-6,
+        "{top} {g}"
+    );
+    assert_eq!(
+        Table::parse(&common::made_table(REFERENCE_DEVICE, 0.05, 32))
+            .unwrap()
+            .batch(),
+        None
+    );
+    let field_at = |k: usize| table::HEADER_BYTES + 4 * k;
+    for (at, value, says) in [
+        (field_at(0), 50e3f32, "shear_modulus"), // low above the device's 45 kPa
+        (field_at(13 + 4), 90e6, "breakdown_field"), // high below the device's 100 MV/m
+        (field_at(26), f32::NAN, "guaranteed limit"),
+        (field_at(26), -1.0, "guaranteed limit"),
+    ] {
+        let mut bad = bytes.clone();
+        bad[at..at + 4].copy_from_slice(&value.to_le_bytes());
+        reseal(&mut bad);
+        let e = Table::parse(&bad).unwrap_err();
+        assert!(matches!(e, TableError::BadBatch { .. }), "{e}");
+        assert!(e.to_string().contains(says), "{e}");
+    }
+}

@@ -3,7 +3,8 @@
 
 use de_resonator::acquire::FrontEnd;
 use de_resonator::image::{self, AmplifierSpec, Image, PowerUp};
-use de_resonator::table::{self, Table};
+use de_resonator::model::tolerance::DeviceBox;
+use de_resonator::table::{self, Table, TableBatch};
 use de_resonator::{DeviceParams, Settings, Tuner};
 
 /// Points a table starts with when its size is not asked for; doubled (up to
@@ -26,26 +27,33 @@ pub struct Made {
     /// The table against the f64 direct solve.
     pub errors: Errors,
     pub crc: u32,
+    /// For a batch: its guaranteed limit (model.md §10), V, which the table's top and the
+    /// board's cap are (1 − margin) of.
+    pub batch_limit_volts: Option<f64>,
 }
 
-/// Make the table for `params` up to (1 − margin)·limit less the `HEADROOM` the f32
-/// firmware needs: `points` points, or (`None`) the fewest of 64, 128, … 1024 whose
-/// interpolation error is at most `TARGET_ERROR`. `bias_error`: whether to measure the bias
-/// against the direct solve too (`Errors::volts`; the image needs only the frequency's).
+/// Make the table for the batch `b`'s device up to (1 − margin)·limit less the `HEADROOM`
+/// the f32 firmware needs — for a batch with tolerances, the guaranteed limit (model.md §10),
+/// kept in the table with the batch's ranges: `points` points, or (`None`) the fewest of 64,
+/// 128, … 1024 whose interpolation error is at most `TARGET_ERROR`. `bias_error`: whether to
+/// measure the bias against the direct solve too (`Errors::volts`; the image needs only the
+/// frequency's).
 pub fn make(
-    params: DeviceParams<f64>,
+    b: &DeviceBox,
     margin: f64,
     points: Option<usize>,
     bias_error: bool,
 ) -> Result<Made, String> {
+    let batch = batch_of(b)?;
+    let params = b.nominal;
     if let Some(points) = points {
-        return make_with(params, margin, points, bias_error, None);
+        return make_with(params, margin, batch, points, bias_error, None);
     }
     let mut points = DEFAULT_POINTS;
     loop {
         // A table with points to spare is given up at its first error above the target.
         let give_up_above = (points < table::MAX_POINTS).then_some(TARGET_ERROR);
-        let made = make_with(params, margin, points, bias_error, give_up_above)?;
+        let made = make_with(params, margin, batch, points, bias_error, give_up_above)?;
         if made.errors.frequency <= TARGET_ERROR || points >= table::MAX_POINTS {
             return Ok(made);
         }
@@ -59,6 +67,7 @@ pub fn make(
 fn make_with(
     params: DeviceParams<f64>,
     margin: f64,
+    batch: Option<(TableBatch, f64)>,
     points: usize,
     bias_error: bool,
     give_up_above: Option<f64>,
@@ -68,28 +77,39 @@ fn make_with(
     }
     let device = de_resonator::Device::new(params).map_err(|e| e.to_string())?;
     let tuner = Tuner::new(device);
+    // Against the device's own limit, the margin that puts the top at (1 − margin) times the
+    // batch's guaranteed one.
+    let own = match batch {
+        Some((_, limit)) => 1.0 - (1.0 - margin) * limit / tuner.limit().at.volts,
+        None => margin,
+    };
     let top = tuner
-        .max_bias(table::table_margin(margin))
+        .max_bias(table::table_margin(own))
         .map_err(|e| e.to_string())?;
     let mut turns = Vec::new();
     tuner
-        .for_each_turning_point(table::table_margin(margin), |turn| turns.push(turn))
+        .for_each_turning_point(table::table_margin(own), |turn| turns.push(turn))
         .map_err(|e| e.to_string())?;
     let mut stored = vec![(0.0f32, 0.0f32); points];
     table::fill(&device, &top, &turns, &mut stored).map_err(|e| e.to_string())?;
     // The f32 table is checked against the f64 direct solve, the table's error in its
     // header being found from the table itself: write once with 0, measure, write again.
     let params32 = params.cast::<f32>();
+    let kept = batch.as_ref().map(|(b, _)| b);
     let mut bytes = vec![0u8; table::table_bytes(points)];
-    table::write(&mut bytes, &params32, margin as f32, 0.0, &stored).map_err(|e| e.to_string())?;
+    if kept.is_some() {
+        bytes = vec![0u8; table::batch_table_bytes(points)];
+    }
+    table::write_batch(&mut bytes, &params32, kept, margin as f32, 0.0, &stored)
+        .map_err(|e| e.to_string())?;
     let errors = {
         let t = Table::parse(&bytes).map_err(|e| e.to_string())?;
         let top_volts = bias_error.then_some(top.volts);
-        let margin = table::table_margin(margin);
+        let margin = table::table_margin(own);
         interpolation_error(&t, &tuner, margin, top_volts, give_up_above)?
     };
     let error = errors.frequency as f32;
-    table::write(&mut bytes, &params32, margin as f32, error, &stored)
+    table::write_batch(&mut bytes, &params32, kept, margin as f32, error, &stored)
         .map_err(|e| e.to_string())?;
     let crc = u32::from_le_bytes(bytes[bytes.len() - 4..].try_into().unwrap_or([0; 4]));
     Ok(Made {
@@ -97,7 +117,27 @@ fn make_with(
         points: stored,
         errors,
         crc,
+        batch_limit_volts: batch.map(|(_, limit)| limit),
     })
+}
+
+/// What a table keeps of the batch `b` (none for a device alone): its ranges rounded
+/// outward to f32 and its guaranteed limit rounded down, and that limit in f64.
+fn batch_of(b: &DeviceBox) -> Result<Option<(TableBatch, f64)>, String> {
+    if b.is_exact() {
+        return Ok(None);
+    }
+    let mut leaves = crate::cmd::safe::search_leaves();
+    let g = b.guaranteed_limit(&mut leaves).map_err(|e| e.to_string())?;
+    if !(g.volts > 0.0) {
+        return Err(format!(
+            "no bias is safe for every device within the tolerances (the guaranteed limit is \
+             0 V; the lowest limit found {} V): narrow them",
+            g.lowest_found_volts
+        ));
+    }
+    let kept = TableBatch::of(b, g.volts);
+    Ok(Some((kept, g.volts)))
 }
 
 /// How far the table's bias is from the direct solve, at `CHECKS_PER_INTERVAL` points inside
@@ -171,13 +211,14 @@ pub struct Errors {
 /// The image of a device, an amplifier, a front end and settings, its table made for the
 /// settings' margin: the bytes `host-sim image` writes and `host-sim serve` boots from.
 pub fn image(
-    params: DeviceParams<f64>,
+    b: &DeviceBox,
     amplifier: &AmplifierSpec,
     front_end: &FrontEnd,
     settings: &Settings,
     power_up: PowerUp,
 ) -> Result<Vec<u8>, String> {
-    let made = make(params, f64::from(settings.margin), None, false)?;
+    let params = b.nominal;
+    let made = make(b, f64::from(settings.margin), None, false)?;
     let mut bytes = vec![0; image::image_bytes(made.bytes.len())];
     let params32: DeviceParams<f32> = params.cast();
     Image::write(

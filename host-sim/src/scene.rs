@@ -257,21 +257,13 @@ pub fn parse(text: &str) -> Result<Scene, String> {
         }
     })?;
     // No [device]: the reference device; else a device file's keys (absent jlim: neo-Hookean).
-    let nominal = if file.device.is_empty() {
-        de_resonator::REFERENCE_DEVICE
+    let batch = if file.device.is_empty() {
+        de_resonator::model::tolerance::DeviceBox::exact(de_resonator::REFERENCE_DEVICE)
     } else {
-        if file.device.contains_key(crate::device_file::TOLERANCE) {
-            // The board's cap from a batch's guaranteed limit is not wired yet (issue 59):
-            // a tolerance here would be read and then not kept, so it is refused.
-            return Err(format!(
-                "[device.{}]: a scene runs one plant on the nominal device; \
-                 `host-sim safe --device FILE` gives a batch's guaranteed limit",
-                crate::device_file::TOLERANCE
-            ));
-        }
         let text = toml::to_string(&file.device).map_err(|e| e.to_string())?;
-        crate::device_file::parse(&text).map_err(|e| format!("[device]: {e}"))?
+        crate::device_file::parse_box(&text).map_err(|e| format!("[device]: {e}"))?
     };
+    let nominal = batch.nominal;
     // The device told must itself be valid: its errors name [device], not the plant made
     // from it.
     de_resonator::Device::new(nominal).map_err(|e| format!("[device]: {e}"))?;
@@ -360,7 +352,7 @@ pub fn parse(text: &str) -> Result<Scene, String> {
         history: file.output.history,
         plot: file.output.plot,
         run: Loop {
-            nominal,
+            batch,
             plant,
             solver: file.plant.solver,
             tolerance,

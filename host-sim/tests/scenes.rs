@@ -1089,3 +1089,58 @@ fn the_barely_tunable_device_never_adopts_a_reading_it_cannot_resolve() {
         assert_eq!(r.max_command_volts, 0.0, "seed {seed}");
     }
 }
+
+/// A batch's scene (model.md §10): the image keeps the batch, the boot's cap is (1 − margin)
+/// times its guaranteed limit — which no corner of the batch's own limit (each found by the
+/// core on its own) lies below — the run never commands above it, and the plant (the soft
+/// corner) crosses nothing.
+#[test]
+fn a_batch_scene_is_capped_by_its_guaranteed_limit() {
+    use de_resonator::image::PowerUp;
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/batch-vhb.toml");
+    let mut s = scene::load(&path).unwrap();
+    s.run.history = false;
+    let bytes = s.run.image(PowerUp::Drive).unwrap();
+    let report = host_sim::cmd::image::describe(&bytes, "batch".into()).unwrap();
+    let verdict = serde_json::to_value(&report.verdict).unwrap();
+    assert_eq!(verdict["cap_by"], "batch");
+    let g = verdict["batch_limit_volts"].as_f64().unwrap();
+    let cap = verdict["max_volts"].as_f64().unwrap();
+    assert!(
+        cap <= 0.95 * g && cap > 0.95 * g * (1.0 - 1e-4),
+        "{cap} {g}"
+    );
+    let b = s.run.batch;
+    let mut lowest = f64::INFINITY;
+    for corner in 0..8u32 {
+        let mut p = b.nominal;
+        let pick = |bit: u32, f: de_resonator::Field| {
+            if corner & (1 << bit) == 0 {
+                b.low.get(f)
+            } else {
+                b.high.get(f)
+            }
+        };
+        p.shear_modulus = pick(0, de_resonator::Field::ShearModulus);
+        p.thickness = pick(1, de_resonator::Field::Thickness);
+        p.breakdown_field = pick(2, de_resonator::Field::BreakdownField);
+        let limit = Tuner::new(Device::new(p).unwrap()).limit().at.volts;
+        assert!(limit >= g, "corner {corner}: {limit} V below {g} V");
+        lowest = lowest.min(limit);
+    }
+    assert!(g >= 0.99 * lowest, "{g} vs {lowest}");
+    let nominal = Tuner::new(Device::new(b.nominal).unwrap()).limit().at.volts;
+    assert!(cap < 0.85 * nominal);
+    let volts = |v: f64| {
+        let v = v.round() as u64;
+        format!("{},{:03} V", v / 1000, v % 1000)
+    };
+    documents("batch-vhb.toml", &[volts(cap), volts(g)]);
+    let r = s.run.run().unwrap();
+    assert!(r.boot.is_some() && r.fault.is_none() && r.plant_crossing.is_none());
+    assert!(
+        r.max_command_volts <= cap,
+        "{} above {cap}",
+        r.max_command_volts
+    );
+}

@@ -72,6 +72,18 @@ fn every_command_matches_the_schema() {
     .unwrap();
     conforms("safe", &["--device", &batch]);
     conforms("tune", &["--device", &batch, "--target-hz", "45"]);
+    let batch_image = format!("{dir}/batch.img");
+    conforms(
+        "image",
+        &[
+            "--device",
+            &batch,
+            "--target-hz",
+            "45.5",
+            "--out",
+            &batch_image,
+        ],
+    );
     conforms(
         "curve",
         &["--target-hz", "44", "--points", "5", "--out", &dir],

@@ -601,9 +601,9 @@ impl Device_ {
     ) -> PyResult<Bound<'py, PyAny>> {
         let margin = Self::margin(margin)?;
         let points = points.map(|n| count("points", n, 1024)).transpose()?;
-        let params = self.params;
+        let batch = self.batch;
         let made = stoppable(py, move || {
-            host_sim::lut::make(params, margin, points, true).map_err(|e| e.to_string())
+            host_sim::lut::make(&batch, margin, points, true).map_err(|e| e.to_string())
         })?;
         let csv = out
             .as_ref()

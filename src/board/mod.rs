@@ -255,6 +255,17 @@ impl<'a, K: Keeper> Board<'a, K> {
                     Decimal(max_volts),
                     image.0.power_up.name()
                 );
+                // A batch's table (model.md §10): which bound set the cap, and the batch's.
+                if let Some(boot) = board.booted {
+                    if let Some(limit) = boot.batch_limit_volts {
+                        let _ = write!(
+                            started.notice,
+                            " cap_by={} batch_limit_volts={}",
+                            boot.cap_by.name(),
+                            Decimal(limit)
+                        );
+                    }
+                }
                 let _ = write!(
                     started.notice,
                     " output={}",

@@ -33,6 +33,30 @@ pub struct Boot {
     pub plan_ticks: u32,
     /// The stretch range the model run of the plan swept (`check_plan`).
     pub plan_stretch: Option<(f32, f32)>,
+    /// The guaranteed limit of the batch the table was made for (model.md §10), V; `None`
+    /// for a table of one device.
+    pub batch_limit_volts: Option<f32>,
+    /// Which bound set the cap after `cross_check`: the device's own limit, or the batch's.
+    pub cap_by: CapBy,
+}
+
+/// The bound behind the cap: (1 − margin) times the flashed device's limit (found on the
+/// chip), or times the guaranteed limit of the batch its table declares (model.md §10).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum CapBy {
+    Limit,
+    Batch,
+}
+
+impl CapBy {
+    /// As the boot's notice says it.
+    pub fn name(self) -> &'static str {
+        match self {
+            CapBy::Limit => "limit",
+            CapBy::Batch => "batch",
+        }
+    }
 }
 
 /// What `from_table` checks before a controller exists (small: the boot builds the controller
@@ -43,6 +67,8 @@ struct Checked {
     top_volts: f32,
     table_volts: f32,
     max_volts: f32,
+    /// The table's batch's guaranteed limit, V.
+    batch_limit_volts: Option<f32>,
 }
 
 impl Checked {
@@ -71,6 +97,7 @@ impl Checked {
                 None => table.bias_volts(settings.target_hz).map_err(Fault::Table)?,
             },
             max_volts: top_volts * ((1.0 - settings.margin) / (1.0 - table.margin())).min(1.0),
+            batch_limit_volts: table.batch().map(|b| b.limit_volts),
         })
     }
 
@@ -96,6 +123,12 @@ impl Checked {
             limit: None,
             plan_ticks: controller.set_plan(self.table_volts)?,
             plan_stretch: None,
+            batch_limit_volts: self.batch_limit_volts,
+            cap_by: if self.batch_limit_volts.is_some() {
+                CapBy::Batch
+            } else {
+                CapBy::Limit
+            },
         })
     }
 }
@@ -183,7 +216,15 @@ impl Controller {
         let tuner = Tuner::new(self.flashed);
         let limit = tuner.limit();
         let margin = guarded(settings.margin);
-        let max_volts = tuner.max_bias(margin).map_err(Fault::Tune)?.volts;
+        let own_volts = tuner.max_bias(margin).map_err(Fault::Tune)?.volts;
+        // A batch's table: never above (1 − margin) times its guaranteed limit, which no
+        // device of the batch fails below (the flashed device is one of them).
+        let (max_volts, cap_by) = match boot.batch_limit_volts {
+            Some(limit) if (1.0 - margin) * limit < own_volts => {
+                ((1.0 - margin) * limit, CapBy::Batch)
+            }
+            _ => (own_volts, CapBy::Limit),
+        };
         if !(boot.max_volts <= max_volts) {
             return Err(Fault::AboveSafe {
                 volts: boot.max_volts,
@@ -259,6 +300,7 @@ impl Controller {
             max_volts,
             limit: Some(*limit),
             plan_ticks,
+            cap_by,
             ..boot
         })
     }

@@ -365,6 +365,10 @@ fn table(p: &mut Put, e: TableError) {
             high_hz,
         } => p.d(9).f(target_hz).f(low_hz).f(high_hz),
         TableError::BufferTooSmall { needed } => p.d(10).n(needed),
+        // The field by its place in `Field::ALL`, u32::MAX for the guaranteed limit.
+        TableError::BadBatch { field } => p.d(11).u(field
+            .and_then(|f| Field::ALL.iter().position(|&g| g == f))
+            .map_or(u32::MAX, |k| k as u32)),
     };
 }
 
@@ -393,6 +397,12 @@ fn table_back(t: &mut Take) -> Option<TableError> {
             high_hz: t.f()?,
         },
         10 => TableError::BufferTooSmall { needed: t.n()? },
+        11 => TableError::BadBatch {
+            field: match t.u()? {
+                u32::MAX => None,
+                k => Some(*Field::ALL.get(usize::try_from(k).ok()?)?),
+            },
+        },
         _ => return None,
     })
 }

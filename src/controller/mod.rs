@@ -41,7 +41,7 @@ mod tracking;
 mod trim;
 mod watch;
 
-pub use boot::Boot;
+pub use boot::{Boot, CapBy};
 pub use command::{Refusal, ReplanJob, Replanned};
 pub use fault::{
     Event, EventKind, Fault, FaultStage, Output, BUS_FAULT_SAID, EVENT_VALUES, FAULT_KEYS,

@@ -29,6 +29,16 @@ pub fn non_monotone_device() -> DeviceParams<f64> {
 /// A tuning table for `p` as `host-sim lut` makes it (the core's writer: f's turning points
 /// and points evenly spaced in Φ², up to (1 − margin)·limit less the headroom).
 pub fn made_table(p: DeviceParams<f64>, margin: f64, points: usize) -> Vec<u8> {
+    use de_resonator::table;
+    let stored = table_points(p, margin, points);
+    let mut bytes = vec![0u8; table::table_bytes(points)];
+    table::write(&mut bytes, &p.cast(), margin as f32, 0.0, &stored).unwrap();
+    bytes
+}
+
+/// The points of `p`'s table (f's turning points and points evenly spaced in Φ², up to
+/// (1 − margin)·limit less the headroom).
+fn table_points(p: DeviceParams<f64>, margin: f64, points: usize) -> Vec<(f32, f32)> {
     use de_resonator::{table, Device, Tuner};
     let tuner = Tuner::new(Device::new(p).unwrap());
     let m = table::table_margin(margin);
@@ -39,9 +49,68 @@ pub fn made_table(p: DeviceParams<f64>, margin: f64, points: usize) -> Vec<u8> {
         .unwrap();
     let mut stored = vec![(0.0f32, 0.0f32); points];
     table::fill(tuner.device(), &top, &turns, &mut stored).unwrap();
-    let mut bytes = vec![0u8; table::table_bytes(points)];
-    table::write(&mut bytes, &p.cast(), margin as f32, 0.0, &stored).unwrap();
-    bytes
+    stored
+}
+
+/// The reference device as a batch (model.md §10): μ ±10%, H ±5%, E_B 35–200 MV/m.
+pub fn reference_batch() -> de_resonator::model::tolerance::DeviceBox {
+    use de_resonator::model::tolerance::{DeviceBox, Spread};
+    use de_resonator::Field;
+    DeviceBox::exact(de_resonator::REFERENCE_DEVICE)
+        .with(Field::ShearModulus, Spread::Relative(0.1))
+        .unwrap()
+        .with(Field::Thickness, Spread::Relative(0.05))
+        .unwrap()
+        .with(
+            Field::BreakdownField,
+            Spread::Range {
+                low: 35e6,
+                high: 200e6,
+            },
+        )
+        .unwrap()
+}
+
+/// A tuning table for the batch `b` as `host-sim lut` makes it (model.md §10): the nominal
+/// device's branch up to (1 − margin)·(the guaranteed limit) less the headroom, the batch's
+/// ranges (rounded outward to f32) and its guaranteed limit (rounded down) kept; version 1
+/// for a batch without tolerances. Also the guaranteed limit, V. `None` where no bias is
+/// safe for every device (the guaranteed limit below a thousandth of the lowest found).
+/// The search has `leaves` leaves (fewer: faster, less tight, as certain).
+pub fn made_batch_table(
+    b: &de_resonator::model::tolerance::DeviceBox,
+    margin: f64,
+    points: usize,
+    leaves: usize,
+) -> Option<(Vec<u8>, f64)> {
+    use de_resonator::model::guaranteed::Leaf;
+    use de_resonator::table::TableBatch;
+    use de_resonator::{table, Device, Tuner};
+    let found = b
+        .guaranteed_limit(&mut vec![Leaf::default(); leaves])
+        .ok()?;
+    let g = found.volts;
+    if g <= 1e-3 * found.lowest_found_volts || g.is_nan() {
+        return None;
+    }
+    if b.is_exact() {
+        return Some((made_table(b.nominal, margin, points), g));
+    }
+    let own_limit = Tuner::new(Device::new(b.nominal).unwrap()).limit().at.volts;
+    let own = 1.0 - (1.0 - margin) * g / own_limit;
+    let stored = table_points(b.nominal, own, points);
+    let batch = TableBatch::of(b, g);
+    let mut bytes = vec![0u8; table::batch_table_bytes(points)];
+    table::write_batch(
+        &mut bytes,
+        &b.nominal.cast(),
+        Some(&batch),
+        margin as f32,
+        0.0,
+        &stored,
+    )
+    .unwrap();
+    Some((bytes, g))
 }
 
 /// The wide-range device of the mismatch scenes (f0 34.5 Hz, limit `emi` at 8395.67 V).

@@ -121,6 +121,12 @@ pub enum Verdict {
         bias_volts: f32,
         max_volts: f32,
         limit: Option<&'static str>,
+        /// A batch's image (model.md §10): its guaranteed limit, V, and which bound set the
+        /// cap (`limit`: the device's own, `batch`: the batch's).
+        #[serde(skip_serializing_if = "Option::is_none")]
+        batch_limit_volts: Option<f32>,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        cap_by: Option<&'static str>,
     },
     /// The firmware would refuse, saying this (its own words).
     Refuses { reason: String },
@@ -294,12 +300,21 @@ impl fmt::Display for ImageReport {
                 bias_volts,
                 max_volts,
                 limit,
+                batch_limit_volts,
+                cap_by,
             } => write!(
                 f,
-                "boot checks     pass: bias {} V, commands at or below {} V{}",
+                "boot checks     pass: bias {} V, commands at or below {} V{}{}",
                 sig(f64::from(*bias_volts)),
                 sig(f64::from(*max_volts)),
-                limit.map_or(String::new(), |m| format!(" (limit: {m})"))
+                limit.map_or(String::new(), |m| format!(" (limit: {m})")),
+                match (batch_limit_volts, cap_by) {
+                    (Some(volts), Some(by)) => format!(
+                        "\n                the batch's guaranteed limit {} V; the cap set by the {by}",
+                        sig(f64::from(*volts))
+                    ),
+                    _ => String::new(),
+                }
             ),
             Verdict::Refuses { reason } => write!(f, "boot checks     refuse: {reason}"),
         }
@@ -417,7 +432,7 @@ pub fn build(args: &ImageArgs, file: String) -> Result<(Vec<u8>, ImageReport), S
         }
         return Ok((bytes, report));
     }
-    let (params, name) = args.device.params()?;
+    let (batch, name) = args.device.batch()?;
     let target_hz = args.target_hz.or_else(|| {
         (args.device.device.is_none() && args.device.given.is_none() && args.settings.is_none())
             .then_some(REFERENCE_TARGET_HZ)
@@ -446,7 +461,7 @@ pub fn build(args: &ImageArgs, file: String) -> Result<(Vec<u8>, ImageReport), S
         dac_bits: DAC_BITS,
     };
     let bytes = lut::image(
-        params,
+        &batch,
         &amplifier,
         &front_end,
         &settings,
@@ -560,6 +575,8 @@ pub fn describe(bytes: &[u8], file: String) -> Result<ImageReport, String> {
             bias_volts: boot.bias_volts,
             max_volts: boot.max_volts.min(top_volts),
             limit: boot.limit.map(|l| l.mode.name()),
+            batch_limit_volts: boot.batch_limit_volts,
+            cap_by: boot.batch_limit_volts.map(|_| boot.cap_by.name()),
         },
         Err(reason) => refuse(reason),
     };

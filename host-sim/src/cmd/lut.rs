@@ -107,7 +107,7 @@ impl Report for LutReport {
 }
 
 pub fn lut(args: &LutArgs) -> Result<LutReport, String> {
-    let (params, name) = args.device.params()?;
+    let (batch, name) = args.device.batch()?;
     let margin = args.margin.margin;
     let csv_named = args
         .out
@@ -130,7 +130,7 @@ pub fn lut(args: &LutArgs) -> Result<LutReport, String> {
         (None, false, _) => LutFormat::Bin,
     };
     prepare_file(&args.out)?;
-    let made = lut::make(params, margin, args.points, true).map_err(|e| format!("{name}: {e}"))?;
+    let made = lut::make(&batch, margin, args.points, true).map_err(|e| format!("{name}: {e}"))?;
     write_path(&args.out, &file_bytes(&made, format)?)?;
     Ok(report(
         name,

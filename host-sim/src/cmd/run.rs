@@ -396,7 +396,8 @@ pub fn report(scene: &Scene, run: &Run, files: Vec<String>) -> RunReport {
     RunReport {
         scene: scene.name.clone(),
         description: scene.description.clone(),
-        device: DeviceInfo::new(scene.device_source.clone(), &scene.run.nominal),
+        device: DeviceInfo::new(scene.device_source.clone(), &scene.run.batch.nominal)
+            .with_tolerance(&scene.run.batch),
         simulated_seconds: scene.run.duration_seconds,
         tick_hz: scene.run.settings.tick_hz,
         ticks: run.ticks,

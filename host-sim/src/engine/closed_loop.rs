@@ -14,8 +14,8 @@ use de_resonator::image::{AmplifierSpec, Image, PowerUp, DAC_BITS};
 use de_resonator::wire::link::{Booted, Observed, Words};
 use de_resonator::wire::stream::{self, Receiver, Record, Telemetry};
 use de_resonator::{
-    Amplifier, Controller, Dac8551, DeviceParams, Event, EventKind, FailureMode, Fault, Inputs,
-    OutputStage, Phase, Settings, BUS_FAULT_SAID, FAULT_SAID,
+    Amplifier, Controller, Dac8551, Event, EventKind, FailureMode, Fault, Inputs, OutputStage,
+    Phase, Settings, BUS_FAULT_SAID, FAULT_SAID,
 };
 
 use de_resonator::board;
@@ -114,8 +114,9 @@ pub enum Samples {
 /// A whole loop: the controller's side (what it is told), the plant's, and the run.
 #[derive(Clone, Debug)]
 pub struct Loop {
-    /// The device the controller is told about (its table is made from it).
-    pub nominal: DeviceParams<f64>,
+    /// The devices the controller is told about: the scene's device and its tolerances
+    /// (model.md §10); its table is made from them.
+    pub batch: de_resonator::model::tolerance::DeviceBox,
     pub plant: Plant,
     pub solver: Solver,
     pub tolerance: Tolerance,
@@ -352,7 +353,7 @@ impl Loop {
             dac_bits: DAC_BITS,
         };
         let front_end = self.analog.as_ref().map_or(FrontEnd::NONE, |a| a.front_end);
-        crate::lut::image(self.nominal, &spec, &front_end, &self.settings, power_up)
+        crate::lut::image(&self.batch, &spec, &front_end, &self.settings, power_up)
     }
 
     /// Run the loop for its duration on `board` (the core's, or the firmware's under QEMU),
