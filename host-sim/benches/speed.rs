@@ -6,6 +6,9 @@
 //! - `one_second`: one simulated second of the reference device (6000 V bias, 600 V AC at
 //!   0.9·f0) by the reference DOP853 at 1e-10 (goal under 2 ms), by BDF at 1e-10, and by the
 //!   core's RK4 in f64 at 64 steps a period.
+//! - `guaranteed`: a batch's certified limit (model.md §10) for the reference device with 4
+//!   and with 8 parameters toleranced (goal under 1 s each), against the uncertified peer
+//!   an engineer would write: the limit at every corner of the box (2⁴ and 2⁸ devices).
 
 use std::hint::black_box;
 
@@ -169,5 +172,74 @@ fn reference_scene(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, rk4_step, one_second, reference_scene);
+/// The reference device with the first `count` of these tolerances (model.md §10).
+fn batch(count: usize) -> de_resonator::model::tolerance::DeviceBox {
+    use de_resonator::model::tolerance::{DeviceBox, Spread};
+    use de_resonator::Field;
+    let spreads = [
+        (Field::ShearModulus, Spread::Relative(0.10)),
+        (Field::Thickness, Spread::Relative(0.05)),
+        (Field::Prestretch1, Spread::Relative(0.03)),
+        (Field::Prestretch2, Spread::Relative(0.03)),
+        (
+            Field::RelativePermittivity,
+            Spread::Range {
+                low: 4.7,
+                high: 4.8,
+            },
+        ),
+        (Field::Jlim, Spread::Relative(0.10)),
+        (Field::LengthActive, Spread::Relative(0.01)),
+        (
+            Field::BreakdownField,
+            Spread::Range {
+                low: 35e6,
+                high: 200e6,
+            },
+        ),
+    ];
+    spreads
+        .into_iter()
+        .take(count)
+        .fold(DeviceBox::exact(REFERENCE_DEVICE), |b, (f, s)| {
+            b.with(f, s).expect("a valid tolerance")
+        })
+}
+
+/// The certified guaranteed limit against the limit at every corner (not certified).
+fn guaranteed(c: &mut Criterion) {
+    use de_resonator::Limit;
+    let mut g = c.benchmark_group("guaranteed");
+    g.sample_size(10);
+    for count in [4, 8] {
+        let b = batch(count);
+        let mut leaves = host_sim::cmd::safe::search_leaves();
+        g.bench_function(format!("certified_{count}_parameters"), |bench| {
+            bench.iter(|| black_box(b.guaranteed_limit(&mut leaves).expect("a limit")))
+        });
+        let spread: Vec<_> = b.spread_fields().collect();
+        g.bench_function(format!("corners_{count}_parameters"), |bench| {
+            bench.iter(|| {
+                let mut lowest = f64::INFINITY;
+                for corner in 0..1u32 << spread.len() {
+                    let mut p = b.nominal;
+                    for (bit, &f) in spread.iter().enumerate() {
+                        let end = if corner & (1 << bit) == 0 {
+                            &b.low
+                        } else {
+                            &b.high
+                        };
+                        p.set(f, end.get(f));
+                    }
+                    let d = Device::new(p).expect("a device of the box");
+                    lowest = lowest.min(Limit::of(&d).at.volts);
+                }
+                black_box(lowest)
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, rk4_step, one_second, reference_scene, guaranteed);
 criterion_main!(benches);

@@ -1144,3 +1144,46 @@ fn a_batch_scene_is_capped_by_its_guaranteed_limit() {
         r.max_command_volts
     );
 }
+
+/// On the board the batch holds (model.md §10): a trim on a plant whose μ lies outside the
+/// batch's faults, naming μ and both figures, down at the slew rate; one inside it tunes.
+#[test]
+fn a_trim_outside_the_batch_faults_and_inside_it_tunes() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/batch-vhb.toml");
+    let text = std::fs::read_to_string(path).unwrap();
+    let with = |scale: f64| {
+        let text = text
+            .replace(
+                "shear_modulus_scale = 0.9",
+                &format!("shear_modulus_scale = {scale}"),
+            )
+            .replace(
+                "target_hz = 45.5\nac_volts = 100.0",
+                "target_hz = 44.5\ntrim_tolerance = 1e-3\nac_volts = 100.0",
+            );
+        let mut s = scene::parse(&text).unwrap();
+        s.run.history = false;
+        s.run.run().unwrap()
+    };
+    let inside = with(0.95);
+    assert!(inside.fault.is_none(), "{:?}", inside.fault_words);
+    let error = inside.natural_frequency_hz / 44.5 - 1.0;
+    assert!(error.abs() < 1e-3, "{error}");
+    let outside = with(0.8);
+    let words = outside.fault_words.clone().unwrap_or_default();
+    assert!(
+        words.contains("not what the image declares") && words.contains("shear_modulus"),
+        "{words}"
+    );
+    assert!(outside.plant_crossing.is_none());
+    assert!(
+        outside.final_command_volts == 0.0,
+        "{}",
+        outside.final_command_volts
+    );
+    // Said with both figures: the μ measured (36 kPa) and the batch's 40.5–49.5 kPa.
+    assert!(
+        words.contains("40500") && words.contains("49500"),
+        "{words}"
+    );
+}

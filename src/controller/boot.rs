@@ -67,8 +67,9 @@ struct Checked {
     top_volts: f32,
     table_volts: f32,
     max_volts: f32,
-    /// The table's batch's guaranteed limit, V.
+    /// The table's batch's guaranteed limit, V, and its shear modulus range, Pa.
     batch_limit_volts: Option<f32>,
+    batch_modulus: Option<(f32, f32)>,
 }
 
 impl Checked {
@@ -98,6 +99,9 @@ impl Checked {
             },
             max_volts: top_volts * ((1.0 - settings.margin) / (1.0 - table.margin())).min(1.0),
             batch_limit_volts: table.batch().map(|b| b.limit_volts),
+            batch_modulus: table
+                .batch()
+                .map(|b| (b.low.shear_modulus, b.high.shear_modulus)),
         })
     }
 
@@ -110,6 +114,7 @@ impl Checked {
     ) -> Controller {
         let mut controller = Controller::new(self.device, board, settings, self.max_volts);
         controller.plan.start_volts = from_volts;
+        controller.batch_modulus = self.batch_modulus;
         controller
     }
 

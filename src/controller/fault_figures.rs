@@ -545,6 +545,11 @@ fn trim(p: &mut Put, e: TrimError) {
             .f(needed)
             .f(ring)
             .f(noise),
+        TrimError::OutsideBatch {
+            shear_modulus,
+            low,
+            high,
+        } => p.d(4).f(shear_modulus).f(low).f(high),
     };
 }
 
@@ -560,6 +565,11 @@ fn trim_back(t: &mut Take) -> Option<TrimError> {
         2 => TrimError::NotConverged {
             measured_hz: t.f()?,
             target_hz: t.f()?,
+        },
+        4 => TrimError::OutsideBatch {
+            shear_modulus: t.f()?,
+            low: t.f()?,
+            high: t.f()?,
         },
         3 => TrimError::Unresolvable {
             input: t.at(&RingInput::ALL)?,
@@ -856,6 +866,11 @@ mod tests {
                     needed: b,
                     ring: c,
                     noise: d,
+                },
+                TrimError::OutsideBatch {
+                    shear_modulus: a,
+                    low: b,
+                    high: c,
                 },
             ]
             .map(Fault::Trim),

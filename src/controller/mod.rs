@@ -176,6 +176,9 @@ pub struct Controller {
     /// The lowest cap the measured estimates gave (trim, tracking; ∞ before any), V: it only
     /// falls.
     estimate_volts: f32,
+    /// The shear modulus range of the batch the table was made for, Pa (model.md §10): a
+    /// trim that measures μ outside it faults.
+    batch_modulus: Option<(f32, f32)>,
     /// The cap in force: the lowest of the ceiling, the operator's and the estimate's, V.
     max_volts: f32,
     plan: Plan,
@@ -222,6 +225,7 @@ impl Controller {
             estimate_at: 0,
             estimate_shares_terms: false,
             estimate_volts: f32::INFINITY,
+            batch_modulus: None,
             max_volts,
             plan: Plan::idle(),
             tick: 0,

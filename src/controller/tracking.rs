@@ -200,6 +200,10 @@ impl Controller {
         let Some(result) = &self.trim.result else {
             return Ok(None);
         };
+        if let Some(fault) = self.outside_batch(result) {
+            self.trim.result = None;
+            return Err(fault);
+        }
         match *result {
             TrimResult::Converged { shear_modulus, .. } => {
                 self.trim.params.shear_modulus = shear_modulus;

@@ -365,6 +365,9 @@ pub struct TrimJob {
     quality_factor: f32,
     /// Its number, carried by its result.
     job: u32,
+    /// The batch's shear modulus range, Pa (model.md §10): an estimate outside it is said
+    /// before any retune is solved from it.
+    batch_modulus: Option<(f32, f32)>,
 }
 
 /// A job's result, for `Controller::trim_done`: taken only if the job is still the one
@@ -417,6 +420,7 @@ impl TrimJob {
         settings: Settings,
         (bias_volts, cap_volts): (f32, f32),
         inputs: InputNoise,
+        batch_modulus: Option<(f32, f32)>,
     ) -> Self {
         Self {
             window: state.window,
@@ -434,6 +438,7 @@ impl TrimJob {
             measured_hz: state.tracked_hz,
             quality_factor: state.tracked_quality,
             job: state.job,
+            batch_modulus,
         }
     }
 
@@ -546,6 +551,9 @@ impl TrimJob {
         };
         let shear_modulus = estimate_shear_modulus(&self.params, self.bias_volts, measured_hz)
             .map_err(Fault::Trim)?;
+        if let Some(error) = outside_batch(self.batch_modulus, shear_modulus) {
+            return Err(Fault::Trim(error));
+        }
         // On target when within the tolerance less twice the timing's error: then the
         // frequency itself is within it.
         let converged = self.tuned
@@ -701,6 +709,7 @@ impl Controller {
             self.settings,
             (bias, cap),
             self.inputs,
+            self.batch_modulus,
         ))
     }
 
@@ -906,12 +915,29 @@ impl Controller {
         self.hold(k, needed_volts)
     }
 
+    /// A trim's result whose μ lies outside the batch the table was made for (model.md §10):
+    /// the fault that says so (checked here too: a result is given back from outside the
+    /// tick). A measurement never widens the batch, nor raises the cap past its own.
+    pub(super) fn outside_batch(&self, result: &TrimResult) -> Option<Fault> {
+        let shear_modulus = match *result {
+            TrimResult::Converged { shear_modulus, .. }
+            | TrimResult::Retune { shear_modulus, .. }
+            | TrimResult::AboveCeiling { shear_modulus, .. } => shear_modulus,
+            TrimResult::Failed(_) => return None,
+        };
+        outside_batch(self.batch_modulus, shear_modulus).map(Fault::Trim)
+    }
+
     /// Apply the trim's result at tick `k`, once it has come back.
     pub(super) fn apply_trim(&mut self, k: u32) -> Result<Option<Event>, Fault> {
         // Read in place (a `Retune` holds a device, large: copied once, into the estimate).
         let Some(result) = &self.trim.result else {
             return Ok(None);
         };
+        if let Some(fault) = self.outside_batch(result) {
+            self.trim.result = None;
+            return Err(fault);
+        }
         let bias_volts = self.plan.bias_volts;
         let result = match *result {
             TrimResult::Retune {
@@ -986,6 +1012,16 @@ impl Controller {
     }
 }
 
+/// The error for a shear modulus outside the batch's range `batch` (none without a batch).
+fn outside_batch(batch: Option<(f32, f32)>, shear_modulus: f32) -> Option<TrimError> {
+    let (low, high) = batch?;
+    (!(low <= shear_modulus && shear_modulus <= high)).then_some(TrimError::OutsideBatch {
+        shear_modulus,
+        low,
+        high,
+    })
+}
+
 #[cfg(test)]
 #[allow(clippy::panic)] // a test fails by panicking
 mod tests {
@@ -1020,6 +1056,7 @@ mod tests {
             measured_hz: None,
             quality_factor: f32::NAN,
             job: 0,
+            batch_modulus: None,
         }
     }
 
@@ -1141,5 +1178,22 @@ mod tests {
         // And a ring trim with that point does take it: the point matters.
         let ring = retune_bias(job(4000.0, 44.3, Some((3000.0 * 3000.0, 45.9))).solve());
         assert_ne!(ring, without);
+    }
+
+    /// A μ outside the batch's range, or NaN, is the batch's fault; inside it, or with no
+    /// batch, none.
+    #[test]
+    fn a_modulus_outside_the_batch_is_said() {
+        let batch = Some((40.5e3, 49.5e3));
+        for mu in [40.5e3, 45e3, 49.5e3] {
+            assert_eq!(outside_batch(batch, mu), None);
+        }
+        for mu in [40.4e3, 49.6e3, f32::NAN, 0.0] {
+            assert!(matches!(
+                outside_batch(batch, mu),
+                Some(TrimError::OutsideBatch { low, high, .. }) if (low, high) == (40.5e3, 49.5e3)
+            ));
+        }
+        assert_eq!(outside_batch(None, 1.0), None);
     }
 }

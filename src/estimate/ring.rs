@@ -64,6 +64,13 @@ pub enum TrimError {
         ring: f32,
         noise: f32,
     },
+    /// The ring gives a shear modulus, Pa, outside the range of the batch the image was made
+    /// for (model.md §10): the membrane is not what the image declares.
+    OutsideBatch {
+        shear_modulus: f32,
+        low: f32,
+        high: f32,
+    },
 }
 
 /// Where a refusal's noise figure came from.
@@ -147,6 +154,18 @@ impl fmt::Display for TrimError {
                 "trim did not converge: {} Hz measured for a target of {} Hz",
                 Decimal(measured_hz),
                 Decimal(target_hz)
+            ),
+            TrimError::OutsideBatch {
+                shear_modulus,
+                low,
+                high,
+            } => write!(
+                f,
+                "the membrane is not what the image declares: the ring gives shear_modulus \
+                 {} Pa, outside the batch's {} .. {} Pa",
+                Decimal(shear_modulus),
+                Decimal(low),
+                Decimal(high)
             ),
         }
     }
