@@ -208,15 +208,83 @@ fn a_batch_has_a_guaranteed_limit_and_band() {
     assert_eq!(p["limit"], v["limit"]);
 }
 
+/// Every key of the reference device (a file that leaves none out: nothing noted on stderr).
+const REFERENCE_KEYS: &str = "shear_modulus = 45e3\njlim = 120\nrelative_permittivity = 4.7\n\
+    density = 960\nbreakdown_field = 1e8\nthickness = 1e-3\nlength_active = 0.02\n\
+    length_passive = 0.02\nwidth = 0.04\nbar_mass = 2e-3\nprestretch_1 = 2.0\n\
+    prestretch_2 = 2.0\ndamping = 0\n";
+
+/// `curve` on a batch: band.csv's band holds the file's device's own curve below the
+/// guaranteed cap, and both guides are drawn; a family of pre-stretches with tolerances is
+/// refused, saying what to do.
+#[test]
+fn a_batch_curve_draws_its_band() {
+    let batch = DeviceFile::new(
+        "batch-curve.toml",
+        &format!("{REFERENCE_KEYS}[tolerance]\nshear_modulus = 0.05\nthickness = 0.02\n"),
+    );
+    let dir = std::env::temp_dir().join(format!("host-sim-cli-curve-{}", std::process::id()));
+    let out = dir.to_str().unwrap();
+    let v = json(&[
+        "curve",
+        "--device",
+        batch.path(),
+        "--points",
+        "50",
+        "--out",
+        out,
+        "--json",
+    ]);
+    let cap = v["guaranteed"]["max_bias_volts"].as_f64().unwrap();
+    let band = v["band"].as_array().unwrap();
+    assert_eq!(band.last().unwrap()["bias_volts"].as_f64().unwrap(), cap);
+    // The nominal device's own frequency at each band point's bias, from its curve's points
+    // (the nearest below and above, f monotone there): inside the band.
+    let points = v["curves"][0]["points"].as_array().unwrap();
+    for b in band {
+        let bias = b["bias_volts"].as_f64().unwrap();
+        let (low, high) = (
+            b["low_hz"].as_f64().unwrap(),
+            b["high_hz"].as_f64().unwrap(),
+        );
+        for p in points.windows(2) {
+            let (v0, v1) = (
+                p[0]["bias_volts"].as_f64().unwrap(),
+                p[1]["bias_volts"].as_f64().unwrap(),
+            );
+            if v0 <= bias && bias <= v1 {
+                for q in p {
+                    let f = q["natural_frequency_hz"].as_f64().unwrap();
+                    assert!(
+                        low < f && f < high,
+                        "{f} Hz outside {low}..{high} at {bias} V"
+                    );
+                }
+            }
+        }
+    }
+    let svg = std::fs::read_to_string(dir.join("curve.svg")).unwrap();
+    assert!(svg.contains("batch's guaranteed limit") && svg.contains("every device of the batch"));
+    assert!(dir.join("band.csv").exists());
+    let err = refused(&[
+        "curve",
+        "--device",
+        batch.path(),
+        "--prestretch-1",
+        "1.5:2.5:3",
+        "--out",
+        out,
+    ]);
+    assert!(err.contains("[tolerance]"), "{err}");
+    let _ = std::fs::remove_dir_all(dir);
+}
+
 /// A target beyond the guaranteed cap is refused, naming both figures.
 #[test]
 fn a_batch_refuses_a_target_only_its_nominal_device_reaches_safely() {
     let batch = DeviceFile::new(
         "batch-low.toml",
-        "shear_modulus = 45e3\njlim = 120\nrelative_permittivity = 4.7\ndensity = 960\n\
-         breakdown_field = 1e8\nthickness = 1e-3\nlength_active = 0.02\n\
-         length_passive = 0.02\nwidth = 0.04\nbar_mass = 2e-3\nprestretch_1 = 2.0\n\
-         prestretch_2 = 2.0\ndamping = 0\n[tolerance]\nbreakdown_field = [35e6, 200e6]\n",
+        &format!("{REFERENCE_KEYS}[tolerance]\nbreakdown_field = [35e6, 200e6]\n"),
     );
     let err = refused(&["tune", "--device", batch.path(), "--target-hz", "43.1"]);
     assert!(err.contains("above the guaranteed cap"), "{err}");

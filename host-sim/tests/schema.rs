@@ -72,6 +72,17 @@ fn every_command_matches_the_schema() {
     .unwrap();
     conforms("safe", &["--device", &batch]);
     conforms("tune", &["--device", &batch, "--target-hz", "45"]);
+    conforms(
+        "curve",
+        &[
+            "--device",
+            &batch,
+            "--points",
+            "5",
+            "--out",
+            &format!("{dir}/batch-curve"),
+        ],
+    );
     let batch_image = format!("{dir}/batch.img");
     conforms(
         "image",

@@ -13,6 +13,14 @@ code the CLI runs.
 With `--scheduler` it joins any Dask cluster (the workers need this package installed);
 without, it starts a `LocalCluster` of `--workers` processes (`--workers 0`: a plain loop
 here, no Dask). Prints the distribution and, with `--plot`, writes a figure.
+
+`--batch` studies the batch instead (docs/model.md §10): the same tolerances as a box (each
+±its spread), the guaranteed limit certified over it, devices drawn uniformly from the box,
+every sampled limit against the guaranteed one, and the yield of `--target-hz`: the share of
+devices within `--yield-tolerance` of it at the bias the board commands (the batch's nominal
+device's).
+
+    python python/examples/monte_carlo.py --batch --devices 5000 --target-hz 45.5
 """
 
 import argparse
@@ -120,6 +128,61 @@ def plot(rows, path):
     plt.close(fig)
 
 
+def batch_device():
+    """The reference device as a batch: each tolerance a ± range (docs/model.md §10)."""
+    return dr.Device(**dr.Device.reference().to_dict(), tolerance=dict(TOLERANCES))
+
+
+def draw_from_batch(batch, count, seed=0):
+    """`count` devices drawn uniformly from the batch's box (keys as `Device`'s)."""
+    rng = np.random.default_rng(seed)
+    keys = {k: v for k, v in batch.to_dict().items() if k != "tolerance"}
+    ranges = batch.tolerance
+    return [dr.Device(**{**keys, **{k: rng.uniform(lo, hi) for k, (lo, hi) in ranges.items()}})
+            for _ in range(count)]
+
+
+def batch_chunk(seed, count, bias_volts):
+    """One chunk of a batch study: each drawn device's limit (V) and its frequency at
+    `bias_volts` (Hz), an array count × 2."""
+    out = np.empty((count, 2))
+    for row, device in zip(out, draw_from_batch(batch_device(), count, seed)):
+        row[:] = [device.safe().limit["volts"], device.frequency(bias_volts)]
+    return out
+
+
+def batch_study(count, target_hz, seed=0, client=None, chunks=8):
+    """The batch's guaranteed limit and the tuned bias for `target_hz`, and `batch_chunk`'s
+    rows for `count` devices (on the client's workers, else here; the same numbers)."""
+    batch = batch_device()
+    guaranteed = batch.safe().guaranteed
+    tuned = batch.tune(target_hz)
+    sizes = [count // chunks + (k < count % chunks) for k in range(chunks)]
+    seeds = [seed * 100_003 + k for k in range(chunks)]
+    bias = [tuned.bias_volts] * chunks
+    if client is None:
+        parts = [batch_chunk(s, n, b) for s, n, b in zip(seeds, sizes, bias) if n]
+    else:
+        parts = client.gather(client.map(batch_chunk, seeds, sizes, bias, pure=False))
+    return guaranteed, tuned, np.vstack([p for p in parts if len(p)])
+
+
+def batch_report(guaranteed, tuned, rows, target_hz, tolerance):
+    """Every sampled limit against the guaranteed one, the band, and the target's yield."""
+    g = guaranteed["limit"]["volts"]
+    limits, freqs = rows[:, 0], rows[:, 1]
+    within = np.abs(freqs / target_hz - 1.0) <= tolerance
+    low, high = tuned.band_hz
+    return "\n".join([
+        f"{len(rows)} devices drawn from the batch",
+        f"  guaranteed limit {g:.1f} V ({guaranteed['limit']['mode']}); sampled limits "
+        f"{limits.min():.1f} .. {limits.max():.1f} V, none below: {bool(limits.min() >= g)}",
+        f"  at {tuned.bias_volts:.1f} V (the nominal device's bias for {target_hz} Hz): "
+        f"sampled {freqs.min():.3f} .. {freqs.max():.3f} Hz, band {low:.3f} .. {high:.3f} Hz",
+        f"  yield within {100 * tolerance:g}% of {target_hz} Hz: {100 * within.mean():.1f}%",
+    ])
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--devices", type=int, default=20000, help="devices to draw")
@@ -131,6 +194,12 @@ def main(argv=None):
                         help="pieces of the study, each drawn from its own seed (the numbers "
                              "depend on it, not on the workers)")
     parser.add_argument("--plot", help="write the histograms to this file (SVG, PNG)")
+    parser.add_argument("--batch", action="store_true",
+                        help="the tolerances as a batch: its guaranteed limit and a target's yield")
+    parser.add_argument("--target-hz", type=float, default=45.5,
+                        help="with --batch: the target whose yield is counted, Hz")
+    parser.add_argument("--yield-tolerance", type=float, default=0.01,
+                        help="with --batch: a device counts within this fraction of the target")
     args = parser.parse_args(argv)
     if args.devices < 1 or args.chunks < 1:
         parser.error("--devices and --chunks must be at least 1")
@@ -147,10 +216,19 @@ def main(argv=None):
         with client:
             workers = len(client.scheduler_info()["workers"])
             print(f"  on {workers} workers")
-            rows = study(args.devices, args.seed, client, chunks=args.chunks)
+            if args.batch:
+                found = batch_study(args.devices, args.target_hz, args.seed, client, args.chunks)
+            else:
+                rows = study(args.devices, args.seed, client, chunks=args.chunks)
+    elif args.batch:
+        found = batch_study(args.devices, args.target_hz, args.seed, chunks=args.chunks)
     else:
         rows = study(args.devices, args.seed, chunks=args.chunks)
     seconds = time.perf_counter() - started
+    if args.batch:
+        print(batch_report(*found, args.target_hz, args.yield_tolerance))
+        print(f"  {seconds:.2f} s")
+        return 0
     print(report(rows))
     print(f"  {seconds:.2f} s ({args.workers if not args.scheduler else 'cluster'} workers)")
     if args.plot:

@@ -59,6 +59,23 @@ def test_the_dask_example_gives_the_plain_loops_numbers_on_two_worker_processes(
     assert np.ptp(plain[:, 2]) > 0.1 * np.mean(plain[:, 2])
 
 
+def test_the_batch_study_finds_no_device_below_the_guaranteed_limit():
+    """docs/model.md §10: the sampled limits never below the guaranteed one, every frequency
+    at the commanded bias inside the band; the same numbers on two worker processes as in
+    the plain loop."""
+    from dask.distributed import Client, LocalCluster
+
+    guaranteed, tuned, rows = monte_carlo.batch_study(400, 45.5, seed=2, chunks=4)
+    g = guaranteed["limit"]["volts"]
+    assert rows[:, 0].min() >= g
+    low, high = tuned.band_hz
+    assert low <= rows[:, 1].min() and rows[:, 1].max() <= high
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                      dashboard_address=None) as cluster, Client(cluster) as client:
+        _, _, spread = monte_carlo.batch_study(400, 45.5, seed=2, client=client, chunks=4)
+    assert np.array_equal(spread, rows)
+
+
 def test_the_dask_example_runs_as_a_script(tmp_path, capsys):
     monte_carlo.main(["--devices", "300", "--workers", "0", "--plot", str(tmp_path / "mc.svg")])
     out = capsys.readouterr().out

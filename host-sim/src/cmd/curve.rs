@@ -1,7 +1,8 @@
 //! `curve`: the tuning curve, natural frequency against bias on the loading branch (model.md
 //! §5), with the limit (§6), the margin's highest bias, the tunable range and a target; over
 //! ranges of pre-stretch, a family of curves and the safe region's boundary through their
-//! limits (the paper's figures). curve.csv and curve.svg.
+//! limits (the paper's figures). curve.csv and curve.svg. For a device file with tolerances
+//! (model.md §10), the batch's band of frequencies below its guaranteed cap too (band.csv).
 
 use std::fmt;
 use std::path::PathBuf;
@@ -10,7 +11,7 @@ use clap::Args;
 use de_resonator::{Device, Field, Tuner};
 use serde::Serialize;
 
-use super::safe::targets_margin;
+use super::safe::{search_leaves, targets_margin, Guaranteed};
 use super::{
     prepare_dir, short, sig, write_csv_and_plot, DeviceArgs, DeviceInfo, MarginArgs, Report,
 };
@@ -98,8 +99,26 @@ pub struct CurveReport {
     pub device: DeviceInfo,
     pub margin: f64,
     pub curves: Vec<Curve>,
+    /// With tolerances: what holds for every device of the batch (as `safe`'s).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub guaranteed: Option<Guaranteed>,
+    /// With tolerances: the batch's natural frequencies from 0 V to its guaranteed cap
+    /// (band.csv's rows).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub band: Option<Vec<BandPoint>>,
     pub files: Vec<String>,
 }
+
+/// The batch's band at one bias: no device of it lies outside [low, high] (model.md §10).
+#[derive(Serialize, Debug, Clone, Copy)]
+pub struct BandPoint {
+    pub bias_volts: f64,
+    pub low_hz: f64,
+    pub high_hz: f64,
+}
+
+/// Biases the band is found at, from 0 V to the guaranteed cap evenly in Φ².
+const BAND_POINTS: usize = 41;
 
 impl fmt::Display for CurveReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -160,6 +179,9 @@ impl fmt::Display for CurveReport {
             }
             writeln!(f)?;
         }
+        if let Some(g) = &self.guaranteed {
+            writeln!(f, "{g}")?;
+        }
         write!(f, "wrote           {}", self.files.join(", "))
     }
 }
@@ -202,7 +224,8 @@ fn values(flag: &str, text: Option<&str>, default: f64) -> Result<Vec<f64>, Stri
 }
 
 pub fn curve(args: &CurveArgs) -> Result<CurveReport, String> {
-    let (params, device) = args.device.params()?;
+    let (batch, device) = args.device.batch()?;
+    let params = batch.nominal;
     let margin = args.margin.margin;
     if !(0.0..1.0).contains(&margin) {
         return Err(format!("--margin {margin}: need 0 ≤ margin < 1"));
@@ -229,6 +252,13 @@ pub fn curve(args: &CurveArgs) -> Result<CurveReport, String> {
             ones.len() * twos.len()
         ));
     }
+    if !batch.is_exact() && ones.len() * twos.len() > 1 {
+        return Err(
+            "a family of pre-stretches with a device file's tolerances: each curve would be \
+             another batch; give the pre-stretches' spread in [tolerance] instead"
+                .into(),
+        );
+    }
     // A single device must be valid: its errors are the user's to fix.
     if ones.len() * twos.len() == 1 {
         let mut one = params;
@@ -250,14 +280,80 @@ pub fn curve(args: &CurveArgs) -> Result<CurveReport, String> {
         .iter()
         .flat_map(|c| c.points.iter().copied())
         .collect();
-    let panel = plot(&device, &curves, ones.len() * twos.len() > 1);
-    let files = write_csv_and_plot(&args.out, "curve", &rows, &[panel])?;
+    let guaranteed = Guaranteed::of(&batch, margin)?;
+    let band = match &guaranteed {
+        Some(g) => Some(band_below(&batch, g.max_bias_volts)?),
+        None => None,
+    };
+    let mut panel = plot(&device, &curves, ones.len() * twos.len() > 1);
+    if let (Some(g), Some(band)) = (&guaranteed, &band) {
+        draw_batch(&mut panel, g, band);
+    }
+    let mut files = write_csv_and_plot(&args.out, "curve", &rows, &[panel])?;
+    if let Some(band) = &band {
+        files.push(super::write_file(
+            &args.out,
+            "band.csv",
+            &super::csv(band)?,
+        )?);
+    }
     Ok(CurveReport {
         device,
         margin,
         curves,
+        guaranteed,
+        band,
         files,
     })
+}
+
+/// The batch's band at `BAND_POINTS` biases from 0 V to `top_volts`, evenly in Φ².
+fn band_below(
+    batch: &de_resonator::model::tolerance::DeviceBox,
+    top_volts: f64,
+) -> Result<Vec<BandPoint>, String> {
+    let mut leaves = search_leaves();
+    (0..BAND_POINTS)
+        .map(|k| {
+            let bias_volts = top_volts * (k as f64 / (BAND_POINTS - 1) as f64).sqrt();
+            let band = batch
+                .band_hz(bias_volts, &mut leaves)
+                .map_err(|e| e.to_string())?;
+            Ok(BandPoint {
+                bias_volts,
+                low_hz: band.low_hz,
+                high_hz: band.high_hz,
+            })
+        })
+        .collect()
+}
+
+/// The batch on the plot: its band's two edges, dashed, and the guaranteed limit and cap.
+fn draw_batch(panel: &mut Panel, g: &Guaranteed, band: &[BandPoint]) {
+    let colour = COLOURS[3];
+    for (name, edge) in [("every device of the batch: between these", 0), ("", 1)] {
+        panel.series.push(Series {
+            name: name.into(),
+            points: band
+                .iter()
+                .map(|b| (b.bias_volts, if edge == 0 { b.low_hz } else { b.high_hz }))
+                .collect(),
+            style: Style {
+                colour: Some(colour),
+                dashed: true,
+                ..Style::default()
+            },
+            label: String::new(),
+        });
+    }
+    panel.guides.push((
+        g.max_bias_volts,
+        format!("batch's max bias {} V", short(g.max_bias_volts)),
+    ));
+    panel.guides.push((
+        g.limit.volts,
+        format!("batch's guaranteed limit {} V", short(g.limit.volts)),
+    ));
 }
 
 /// The loading branch of one device from 0 V to its limit, at offsets evenly spaced in √δ
