@@ -151,6 +151,7 @@ fi
 HOST_SIM="$PWD/target/debug/host-sim" python3 -m pytest -q python/tests
 python3 python/examples/figures.py --out out/python
 python3 python/examples/monte_carlo.py --devices 5000 --workers 2 --plot out/python/monte-carlo.svg
+python3 python/examples/monte_carlo.py --batch --devices 2000 --workers 2
 
 step "docs/plots/: every figure the docs show is what its command makes now (scripts/plots.sh --check)"
 HOST_SIM="$PWD/target/debug/host-sim" scripts/plots.sh --check
