@@ -656,7 +656,7 @@ impl Device_ {
             periods,
             steps_per_period,
             out: std::path::PathBuf::new(),
-            device: DeviceArgs::given(self.params, self.source.clone()),
+            device: DeviceArgs::given(self.batch, self.source.clone()),
         };
         let (report, _) = stoppable(py, || host_sim::cmd::sweep::measure(&args, || Ok(())))?;
         let out = result(py, &report)?;
@@ -1006,7 +1006,7 @@ fn image<'py>(
         check: None,
         scene,
         device: device.map_or_else(DeviceArgs::default, |d| {
-            DeviceArgs::given(d.params, d.source.clone())
+            DeviceArgs::given(d.batch, d.source.clone())
         }),
         settings,
         target_hz,

@@ -90,3 +90,15 @@ def test_bad_tolerances_are_refused():
         dr.Device(tolerance={"breakdown_field": (1e6, 2e6)})
     with pytest.raises(ValueError, match="fraction in"):
         dr.Device(tolerance={"thickness": 2.0})
+
+
+def test_an_image_of_a_batch_keeps_it_and_its_cap():
+    """`image(batch)`: the board's cap by the batch's guaranteed limit, as host-sim's."""
+    batch = dr.Device(jlim=120, tolerance=TOLERANCE)
+    made = dr.image(batch, target_hz=45.5)
+    verdict = made.verdict
+    g = batch.safe().guaranteed["limit"]["volts"]
+    assert verdict["cap_by"] == "batch"
+    assert verdict["batch_limit_volts"] == pytest.approx(g, rel=1e-6)
+    assert verdict["max_volts"] <= 0.95 * g
+    assert dr.check_image(made.data).verdict == verdict

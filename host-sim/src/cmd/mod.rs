@@ -61,18 +61,18 @@ pub struct DeviceArgs {
     /// Default: the built-in reference device.
     #[arg(long, value_name = "FILE")]
     pub device: Option<PathBuf>,
-    /// A device given as values (the Python package's `Device`), over the file and the
-    /// reference, with what it is called.
+    /// A device given as values (the Python package's `Device`, with its tolerances), over
+    /// the file and the reference, with what it is called.
     #[arg(skip)]
-    pub given: Option<(DeviceParams<f64>, String)>,
+    pub given: Option<(DeviceBox, String)>,
 }
 
 impl DeviceArgs {
-    /// A device given as values, called `source`.
-    pub fn given(params: DeviceParams<f64>, source: String) -> Self {
+    /// A device given as values (a batch with its tolerances), called `source`.
+    pub fn given(batch: DeviceBox, source: String) -> Self {
         Self {
             device: None,
-            given: Some((params, source)),
+            given: Some((batch, source)),
         }
     }
 
@@ -86,7 +86,7 @@ impl DeviceArgs {
     /// nominal device alone without one, and for a device given as values.
     pub fn batch(&self) -> Result<(DeviceBox, DeviceInfo), String> {
         let (b, source) = match (&self.given, &self.device) {
-            (Some((params, source)), _) => (DeviceBox::exact(*params), source.clone()),
+            (Some((batch, source)), _) => (*batch, source.clone()),
             (None, Some(path)) => (device_file::load_box(path)?, path.display().to_string()),
             (None, None) => (
                 DeviceBox::exact(REFERENCE_DEVICE),
