@@ -694,8 +694,10 @@ fn fuzz_the_controller() {
             // operator's) only on the way down to it, one slew step a tick at most, never up.
             assert!(
                 f64::from(c.max_volts()) <= operator_cap,
-                "tick {k}: cap in force {} V above the operator's {operator_cap} V",
-                c.max_volts()
+                "tick {k}: cap in force {} V above the operator's {operator_cap} V \
+                 (batch {batch_limit:?}, table {table_kind}, case {}): {flashed:?} {s:?}",
+                c.max_volts(),
+                tally.cases
             );
             let cap_now = operator_cap.min(f64::from(cap_before));
             // One slew step and one DAC step, and the f32 rounding of the difference.
