@@ -242,6 +242,8 @@ struct Operations {
     tick: u32,
     /// A new plan solved, to adopt at a tick, with its margin.
     replanned: Option<(u32, Replanned, f32)>,
+    /// What the operator did this case, by tick (said when a check fails).
+    log: Vec<(u32, String)>,
     /// Results to give back at a tick.
     #[cfg(feature = "trim")]
     results: Vec<(u32, TrimDone)>,
@@ -255,6 +257,7 @@ impl Operations {
             amplifier,
             tick: 0,
             replanned: None,
+            log: Vec::new(),
             #[cfg(feature = "trim")]
             results: Vec::new(),
         }
@@ -266,24 +269,31 @@ impl Operations {
         c: &mut Controller,
         table: &[u8],
         tally: &mut Tally,
-    ) -> Option<Operated> {
+    ) -> Vec<Operated> {
         self.tick += 1;
         #[cfg(feature = "trim")]
         self.background(rng, c, tally);
-        let mut said = |what: &str| *tally.operations.entry(what.to_string()).or_default() += 1;
-        let mut operated = None;
+        let tick = self.tick;
+        let log = &mut self.log;
+        let mut said = |what: &str| {
+            log.push((tick, what.to_string()));
+            *tally.operations.entry(what.to_string()).or_default() += 1
+        };
+        // An adoption and a stop can both fall between two ticks: each is told.
+        let mut operated = Vec::new();
         if self
             .replanned
             .as_ref()
             .is_some_and(|(at, ..)| *at <= self.tick)
         {
-            let (_, replanned, margin) = self.replanned.take()?;
-            match c.adopt(replanned) {
-                Ok(_) => {
-                    said("adopted");
-                    operated = Some(Operated::Adopted { margin });
+            if let Some((_, replanned, margin)) = self.replanned.take() {
+                match c.adopt(replanned) {
+                    Ok(_) => {
+                        said("adopted");
+                        operated.push(Operated::Adopted { margin });
+                    }
+                    Err(refusal) => said(&format!("adopt refused: {}", kind(&refusal))),
                 }
-                Err(refusal) => said(&format!("adopt refused: {}", kind(&refusal))),
             }
         }
         if rng.unit() >= 1.0 / 300.0 {
@@ -321,7 +331,7 @@ impl Operations {
             1 => {
                 said("stop");
                 c.stop();
-                operated = Some(Operated::Stopped);
+                operated.push(Operated::Stopped);
             }
             2 => match c.trim_now() {
                 Ok(()) => said("trim now"),
@@ -334,7 +344,7 @@ impl Operations {
                     said("clear");
                     *c = fresh;
                     self.replanned = None;
-                    operated = Some(Operated::Cleared);
+                    operated.push(Operated::Cleared);
                 }
             }
             _ => {}
@@ -695,9 +705,11 @@ fn fuzz_the_controller() {
             assert!(
                 f64::from(c.max_volts()) <= operator_cap,
                 "tick {k}: cap in force {} V above the operator's {operator_cap} V \
-                 (batch {batch_limit:?}, table {table_kind}, case {}): {flashed:?} {s:?}",
+                 (batch {batch_limit:?}, table {table_kind}, case {}, operator {:?}): \
+                 {flashed:?} {s:?}",
                 c.max_volts(),
-                tally.cases
+                tally.cases,
+                ops.log
             );
             let cap_now = operator_cap.min(f64::from(cap_before));
             // One slew step and one DAC step, and the f32 rounding of the difference.
@@ -781,20 +793,22 @@ fn fuzz_the_controller() {
             swing_before = swing_now;
             last_volts = out.volts;
             // The operator, and the background jobs, between ticks.
-            match ops.between_ticks(&mut rng, &mut c, &bytes, &mut tally) {
-                // A stop during a stop's way down starts it again from the voltage sent.
-                Some(Operated::Stopped) if faulted.is_none() => {
-                    stopped = Some((k, last_volts));
+            for operated in ops.between_ticks(&mut rng, &mut c, &bytes, &mut tally) {
+                match operated {
+                    // A stop during a stop's way down starts it again from the voltage sent.
+                    Operated::Stopped if faulted.is_none() => {
+                        stopped = Some((k, last_volts));
+                    }
+                    Operated::Adopted { margin } => {
+                        operator_cap = cap.min((1.0 - f64::from(margin)) * limit64);
+                        stopped = None;
+                    }
+                    Operated::Cleared => {
+                        operator_cap = cap;
+                        (faulted, stopped) = (None, None);
+                    }
+                    _ => {}
                 }
-                Some(Operated::Adopted { margin }) => {
-                    operator_cap = cap.min((1.0 - f64::from(margin)) * limit64);
-                    stopped = None;
-                }
-                Some(Operated::Cleared) => {
-                    operator_cap = cap;
-                    (faulted, stopped) = (None, None);
-                }
-                _ => {}
             }
             if let Some(m) = model.as_mut() {
                 let d = *m.device();
