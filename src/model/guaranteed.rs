@@ -432,8 +432,6 @@ pub struct Found {
     pub sampled: f64,
     /// The device sampled there.
     pub at: DeviceParams<f64>,
-    /// Leaves the search used.
-    pub leaves: usize,
 }
 
 /// The centre of a leaf (each field the middle of its range).
@@ -531,7 +529,6 @@ fn minimise(
                 bound: first.bound,
                 sampled: best.0,
                 at: best.1,
-                leaves: used,
             };
         };
         let done = best.0 - leaf.bound <= tolerance(best.0, highest.get() - best.0);
@@ -540,7 +537,6 @@ fn minimise(
                 bound: leaf.bound.min(best.0),
                 sampled: best.0,
                 at: best.1,
-                leaves: used,
             };
         }
         // Halve along the parameter widest against its width in the root.
@@ -557,7 +553,6 @@ fn minimise(
                 bound: leaf.bound.min(best.0),
                 sampled: best.0,
                 at: best.1,
-                leaves: used,
             };
         };
         let mid = leaf.low.get(field).mid_with(leaf.high.get(field));
@@ -604,8 +599,6 @@ pub struct GuaranteedLimit {
     pub mode: FailureMode,
     /// That device.
     pub at: DeviceParams<f64>,
-    /// Leaves the search used.
-    pub leaves: usize,
 }
 
 /// The parameters whose worst end is known (model.md §10): the limit falls as μ, H and E_B
@@ -698,7 +691,6 @@ impl DeviceBox {
                 lowest_found_volts: nominal.at.volts,
                 mode: nominal.mode,
                 at: self.nominal,
-                leaves: 0,
             });
         }
         let worst = self.worst_for_limit();
@@ -718,7 +710,6 @@ impl DeviceBox {
             lowest_found_volts: found.sampled,
             mode,
             at,
-            leaves: found.leaves,
         })
     }
 
@@ -738,8 +729,6 @@ impl DeviceBox {
                 high_hz: f,
                 sampled_low_hz: f,
                 sampled_high_hz: f,
-                low_at: self.nominal,
-                high_at: self.nominal,
             });
         }
         // f² = (μ·L2·H/M)·ω̄² with ω̄² free of m, ρ and L2: f falls with m and ρ, rises
@@ -798,8 +787,6 @@ impl DeviceBox {
             high_hz: -high.bound,
             sampled_low_hz: low.sampled,
             sampled_high_hz: -high.sampled,
-            low_at: low.at,
-            high_at: high.at,
         })
     }
 
@@ -865,7 +852,4 @@ pub struct Band {
     /// The lowest and highest frequencies of the devices sampled, Hz.
     pub sampled_low_hz: f64,
     pub sampled_high_hz: f64,
-    /// The devices sampled at each end.
-    pub low_at: DeviceParams<f64>,
-    pub high_at: DeviceParams<f64>,
 }

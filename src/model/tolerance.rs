@@ -146,14 +146,6 @@ impl DeviceBox {
             .filter(|&f| self.high.get(f) > self.low.get(f))
     }
 
-    /// Whether `params` lies in the box (every field within its range).
-    pub fn holds(&self, params: &DeviceParams<f64>) -> bool {
-        Field::ALL.into_iter().all(|f| {
-            let x = params.get(f);
-            self.low.get(f) <= x && x <= self.high.get(f)
-        })
-    }
-
     /// The box with `field` held at one value (its low or high end, for a parameter whose
     /// worst end is known).
     pub fn pinned(&self, field: Field, value: f64) -> Self {
