@@ -355,6 +355,8 @@ EXCLUDED = [
      "the firmware's stack high-water mark; serve runs on the host's stack (says 0)"),
     ("clock_us", None, None,
      "each board's own clock: QEMU's TIM2 from its start, serve's simulated time"),
+    ("clock_tick", None, None,
+     "the tick the clock was read at: the boards start and answer at other moments"),
     ("ticks", None, None,
      "ticks since boot when the request lands: the boards start and answer at other moments"),
     ("volts", MOVING, None,

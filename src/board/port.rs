@@ -227,7 +227,7 @@ pub enum Then {
 /// A reply line (one `ok …` or `err …`, without its `\n`); cut short if it would not fit.
 pub type ReplyLine = String<1024>;
 
-pub use protocol::Extras;
+pub use protocol::{Extras, TickClock};
 
 /// The controller as the command task reaches it: under a lock shared with the tick.
 pub trait Shared {

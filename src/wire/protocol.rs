@@ -662,6 +662,17 @@ impl MaxBy {
     }
 }
 
+/// An independent clock's reading at a tick's start, with that tick's count since power-up,
+/// read together in the tick (a status read between two ticks would otherwise pair one tick's
+/// count with the next tick's time).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TickClock {
+    /// The tick's count since power-up (wrapping).
+    pub tick: u32,
+    /// The clock at its start, µs (wrapping).
+    pub micros: u32,
+}
+
 /// What the status line takes from the hardware, read by the command task.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Extras {
@@ -670,8 +681,8 @@ pub struct Extras {
     pub tick_cycles_max: Option<u32>,
     /// The deepest stack so far, bytes.
     pub stack_bytes: u32,
-    /// Virtual time from an independent clock, µs (QEMU builds only).
-    pub clock_us: Option<u32>,
+    /// An independent clock at the last tick's start (QEMU builds and `serve` only).
+    pub clock: Option<TickClock>,
     /// The last tick's readings of the fitted analog inputs, in units (`acquire`).
     pub readings: Inputs,
     /// Whether the board has a port for the telemetry stream (`stream <hz>`).
@@ -687,8 +698,8 @@ impl fmt::Display for Extras {
             write!(f, " tick_cycles_max={cycles}")?;
         }
         write!(f, " stack_bytes={}", self.stack_bytes)?;
-        if let Some(us) = self.clock_us {
-            write!(f, " clock_us={us}")?;
+        if let Some(TickClock { tick, micros }) = self.clock {
+            write!(f, " clock_tick={tick} clock_us={micros}")?;
         }
         let r = &self.readings;
         for (key, reading) in [
@@ -906,7 +917,7 @@ mod tests {
             hardware: Extras {
                 tick_cycles_max: None,
                 stack_bytes: 1024,
-                clock_us: None,
+                clock: None,
                 readings: Inputs {
                     current_amps: Some(-2.5e-6),
                     ..Inputs::NONE

@@ -37,7 +37,7 @@ mod app {
     use rtic::mutex_prelude::*;
 
     use de_resonator::acquire::{Block, FrontEnd, Reader, BUFFER_CODES};
-    use de_resonator::board::port::Extras;
+    use de_resonator::board::port::{Extras, TickClock};
     use de_resonator::board::runner::{self, Follow, Logged, Ticker};
     use de_resonator::board::watchdog::CheckIn;
     use de_resonator::board::FlashKeeper;
@@ -82,8 +82,9 @@ mod app {
         controller: &'static mut Option<Controller>,
         /// The longest tick so far, core cycles.
         tick_cycles_max: u32,
-        /// QEMU builds: the independent clock (TIM2, µs) at the last tick's start.
-        last_tick_us: u32,
+        /// QEMU builds: the independent clock (TIM2, µs) at the last tick's start, with that
+        /// tick's count since power-up.
+        last_tick: TickClock,
         /// Whether the output stage is off (DAC powered down, enable low), as the tick left it.
         output_off: bool,
         /// Set by the heartbeat task (the low-priority tasks are not stuck), cleared by the tick.
@@ -313,7 +314,7 @@ mod app {
             Shared {
                 controller,
                 tick_cycles_max: 0,
-                last_tick_us: 0,
+                last_tick: TickClock::default(),
                 output_off: true,
                 checked_in: true,
                 block: Block::EMPTY,
@@ -436,12 +437,16 @@ mod app {
     }
 
     /// One controller tick: its code to the DAC, the enable line held, the events logged.
-    #[task(binds = SysTick, priority = 3, shared = [controller, tick_cycles_max, last_tick_us, output_off, checked_in, block, latest, logged], local = [stage, sensor, reader, dog, check_in, hang_after_ticks, #[cfg(feature = "qemu")] bus_fails_at_tick, to_log, driven_ticks: u32 = 0, #[cfg(feature = "qemu")] power_up_ticks: u32 = 0, ticker: Ticker = Ticker::new(), #[cfg(feature = "link")] to_reply])]
+    #[task(binds = SysTick, priority = 3, shared = [controller, tick_cycles_max, last_tick, output_off, checked_in, block, latest, logged], local = [stage, sensor, reader, dog, check_in, hang_after_ticks, #[cfg(feature = "qemu")] bus_fails_at_tick, to_log, driven_ticks: u32 = 0, #[cfg(feature = "qemu")] power_up_ticks: u32 = 0, ticker: Ticker = Ticker::new(), #[cfg(feature = "link")] to_reply])]
     fn tick(mut cx: tick::Context) {
         #[cfg(feature = "qemu")]
-        cx.shared
-            .last_tick_us
-            .lock(|at| *at = board::qemu_clock::micros());
+        {
+            let clock = TickClock {
+                tick: *cx.local.power_up_ticks,
+                micros: board::qemu_clock::micros(),
+            };
+            cx.shared.last_tick.lock(|at| *at = clock);
+        }
         let stage = cx.local.stage;
         let sensor = cx.local.sensor;
         let mut block = cx.shared.block.lock(Block::take);
@@ -696,7 +701,7 @@ mod app {
     }
 
     /// Each request answered, one reply line each.
-    #[task(priority = 1, shared = [controller, tick_cycles_max, last_tick_us, output_off, latest, telemetry, logged, stream_port], local = [from_rx, tx, logic, echo_out])]
+    #[task(priority = 1, shared = [controller, tick_cycles_max, last_tick, output_off, latest, telemetry, logged, stream_port], local = [from_rx, tx, logic, echo_out])]
     async fn command(mut cx: command::Context) {
         let mut reply = ReplyLine::new();
         while let Ok(work) = cx.local.from_rx.recv().await {
@@ -735,9 +740,9 @@ mod app {
                 tick_cycles_max: Some(cx.shared.tick_cycles_max.lock(|most| *most)),
                 stack_bytes: stack::used(),
                 #[cfg(feature = "qemu")]
-                clock_us: Some(cx.shared.last_tick_us.lock(|at| *at)),
+                clock: Some(cx.shared.last_tick.lock(|at| *at)),
                 #[cfg(not(feature = "qemu"))]
-                clock_us: None,
+                clock: None,
                 readings: cx.shared.latest.lock(|l| l.readings),
                 stream_port: cx.shared.stream_port.lock(|p| p.is_some()),
                 stalls_recovered: cx.shared.latest.lock(|l| l.stalls_recovered),

@@ -13,7 +13,7 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use clap::Args;
-use de_resonator::board::port::Extras;
+use de_resonator::board::port::{Extras, TickClock};
 use de_resonator::board::runner::{self, Follow, Ticker};
 use de_resonator::board::FlashKeeper;
 use de_resonator::board::{self, Board, Line, Lines, ReplyLine, ResetCause};
@@ -572,9 +572,12 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
                     stream_clients.push(client);
                 }
             }
-            // The clock the firmware's status reports (a u32 of µs, wrapping).
+            // The clock the firmware's status reports (u32s of ticks and µs, wrapping).
             let extras = Extras {
-                clock_us: Some((k as f64 * tick_seconds * 1e6) as u64 as u32),
+                clock: Some(TickClock {
+                    tick: k as u32,
+                    micros: (k as f64 * tick_seconds * 1e6) as u64 as u32,
+                }),
                 stream_port: streams.is_some(),
                 ..Extras::default()
             };
