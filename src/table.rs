@@ -15,8 +15,10 @@
 //! | 68 + 8·N | 4 | CRC-32 (IEEE 802.3) of every byte before it, u32 |
 //!
 //! A table for a batch of membranes (model.md §10) is version 2: after the error, at 68, the
-//! batch's 13 low and 13 high parameters (104 bytes, each range holding the device's value)
-//! and its guaranteed limit in V (4 bytes), the points from 176. Its margin and top are
+//! batch's 13 low and 13 high parameters (104 bytes, each range holding the device's value),
+//! its guaranteed limit in V (4 bytes), and at `BATCH_BIASES` biases from 0 V to the top
+//! (12 bytes each: bias V, then the lowest and highest capacitance of membrane A any device
+//! of the batch has there, F, model.md §8), the points after them. Its margin and top are
 //! against that limit. A device without tolerances is written as version 1, byte for byte.
 //!
 //! Between points the bias is interpolated as Φ² linear in f: Φ² enters the model linearly
@@ -31,6 +33,7 @@ use crate::bytes::{crc32, f32_at, u16_at, u32_at};
 use crate::numerics::decimal::Decimal;
 
 use crate::model::device::{Device, DeviceParams, Field};
+use crate::model::guaranteed::{BoxError, Leaf};
 use crate::model::statics::Equilibrium;
 use crate::model::tolerance::DeviceBox;
 use crate::numerics::real::Real;
@@ -43,8 +46,12 @@ pub const VERSION: u16 = 1;
 pub const VERSION_BATCH: u16 = 2;
 /// Bytes before the first point (version 1).
 pub const HEADER_BYTES: usize = 68;
-/// Bytes before the first point (version 2): the batch's ranges and limit besides.
-pub const BATCH_HEADER_BYTES: usize = HEADER_BYTES + 2 * 52 + 4;
+/// The biases a batch's table gives the capacitance at, evenly spaced in Φ² from 0 V to the
+/// top: the board's self-sensing checks the membrane against the batch between two of them.
+pub const BATCH_BIASES: usize = 16;
+/// Bytes before the first point (version 2): the batch's ranges, limit and capacitances
+/// besides.
+pub const BATCH_HEADER_BYTES: usize = HEADER_BYTES + 2 * 52 + 4 + 12 * BATCH_BIASES;
 /// Bytes per point.
 pub const POINT_BYTES: usize = 8;
 /// The most points a table may hold.
@@ -74,7 +81,8 @@ pub const fn batch_table_bytes(points: usize) -> usize {
 }
 
 /// What a version-2 table holds of its batch (model.md §10): every device between `low`
-/// and `high` has its limit at or above `limit_volts` (the host's certified bound).
+/// and `high` has its limit at or above `limit_volts` (the host's certified bound), and at
+/// each bias of `capacitance` membrane A's capacitance within its band.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TableBatch {
@@ -82,23 +90,72 @@ pub struct TableBatch {
     pub high: DeviceParams<f32>,
     /// The guaranteed limit, V.
     pub limit_volts: f32,
+    /// The capacitance band at `BATCH_BIASES` rising biases, from 0 V to the table's top.
+    pub capacitance: [CapacitanceBand; BATCH_BIASES],
+}
+
+/// The capacitance (F, model.md §8) every device of a batch has at one bias: certified.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct CapacitanceBand {
+    pub volts: f32,
+    pub low_farads: f32,
+    pub high_farads: f32,
 }
 
 impl TableBatch {
     /// The batch `b` with its guaranteed limit `limit_volts` as a table keeps them in f32:
     /// the ranges rounded outward, the limit down (never a narrower batch, never a higher
-    /// limit than the f64 ones).
-    pub fn of(b: &DeviceBox, limit_volts: f64) -> Self {
+    /// limit than the f64 ones), and the capacitance bands up to `top_volts` (the table's
+    /// top) rounded outward. `leaves`: the band search's storage.
+    pub fn of(
+        b: &DeviceBox,
+        limit_volts: f64,
+        top_volts: f64,
+        leaves: &mut [Leaf],
+    ) -> Result<Self, BoxError> {
         let (mut low, mut high) = (b.low.cast::<f32>(), b.high.cast::<f32>());
         for f in Field::ALL {
             low.set(f, f32_below(b.low.get(f)));
             high.set(f, f32_above(b.high.get(f)));
         }
-        Self {
+        let mut capacitance = [CapacitanceBand::default(); BATCH_BIASES];
+        let last = (BATCH_BIASES - 1) as f64;
+        for (j, band) in capacitance.iter_mut().enumerate() {
+            // Φ² evenly spaced; the last at or above the top as f32 holds it.
+            let volts = if j + 1 == BATCH_BIASES {
+                f32_above(top_volts)
+            } else {
+                (top_volts * libm::sqrt(j as f64 / last)) as f32
+            };
+            let (low_farads, high_farads) = b.capacitance_farads(f64::from(volts), leaves)?;
+            *band = CapacitanceBand {
+                volts,
+                low_farads: f32_below(low_farads),
+                high_farads: f32_above(high_farads),
+            };
+        }
+        Ok(Self {
             low,
             high,
             limit_volts: f32_below(limit_volts),
+            capacitance,
+        })
+    }
+
+    /// The capacitance every device of the batch has at the bias `volts`, (low, high) F:
+    /// between the bands of the biases about it (each device's capacitance rises with the
+    /// bias on its loading branch, model.md §5: the first equilibrium moves up with Φ);
+    /// `None` outside the biases the table gives.
+    pub fn capacitance_farads(&self, volts: f32) -> Option<(f32, f32)> {
+        let bands = &self.capacitance;
+        let above = bands.iter().position(|b| b.volts >= volts)?;
+        let at = bands.get(above)?;
+        if at.volts == volts {
+            return Some((at.low_farads, at.high_farads));
         }
+        let below = bands.get(above.checked_sub(1)?)?;
+        Some((below.low_farads, at.high_farads))
     }
 }
 
@@ -156,6 +213,9 @@ pub enum TableError {
     /// A batch's range for `field` is not a range holding the device's value, or its
     /// guaranteed limit is not a positive number.
     BadBatch { field: Option<Field> },
+    /// A batch's capacitance band `index` is not a positive range, its bias does not rise
+    /// from 0 V, or the last is below the table's top.
+    BadCapacitance { index: u16 },
 }
 
 impl core::error::Error for TableError {}
@@ -213,6 +273,11 @@ impl fmt::Display for TableError {
             TableError::BadBatch { field: None } => {
                 write!(f, "table's guaranteed limit is not a positive number")
             }
+            TableError::BadCapacitance { index } => write!(
+                f,
+                "table's batch capacitance {index} is not a positive range at a bias rising \
+                 from 0 V to the table's top"
+            ),
         }
     }
 }
@@ -297,6 +362,22 @@ impl<'a> Table<'a> {
             if !(batch.limit_volts.is_finite() && batch.limit_volts > 0.0) {
                 return Err(TableError::BadBatch { field: None });
             }
+            let mut below = -1.0f32;
+            for (k, band) in batch.capacitance.iter().enumerate() {
+                let index = k as u16;
+                let first = k == 0;
+                let CapacitanceBand {
+                    volts,
+                    low_farads: low,
+                    high_farads: high,
+                } = *band;
+                if !(volts > below && (!first || volts == 0.0) && low > 0.0 && low <= high)
+                    || !high.is_finite()
+                {
+                    return Err(TableError::BadCapacitance { index });
+                }
+                below = volts;
+            }
         }
         let mut previous: Option<(f32, f32)> = None;
         let mut rising: Option<bool> = None;
@@ -317,6 +398,12 @@ impl<'a> Table<'a> {
                 }
             }
             previous = Some((hz, volts));
+        }
+        let last = BATCH_BIASES - 1;
+        if let Some(band) = table.batch().and_then(|b| b.capacitance.get(last).copied()) {
+            if !(band.volts >= table.max_volts()) {
+                return Err(TableError::BadCapacitance { index: last as u16 });
+            }
         }
         Ok(table)
     }
@@ -359,10 +446,22 @@ impl<'a> Table<'a> {
 
     /// The batch a version-2 table was made for (model.md §10); `None` for one device.
     pub fn batch(&self) -> Option<TableBatch> {
-        (self.header == BATCH_HEADER_BYTES).then(|| TableBatch {
-            low: self.params_at(HEADER_BYTES),
-            high: self.params_at(HEADER_BYTES + 52),
-            limit_volts: f32_at(self.bytes, HEADER_BYTES + 104),
+        (self.header == BATCH_HEADER_BYTES).then(|| {
+            let mut capacitance = [CapacitanceBand::default(); BATCH_BIASES];
+            for (j, band) in capacitance.iter_mut().enumerate() {
+                let at = HEADER_BYTES + 108 + 12 * j;
+                *band = CapacitanceBand {
+                    volts: f32_at(self.bytes, at),
+                    low_farads: f32_at(self.bytes, at + 4),
+                    high_farads: f32_at(self.bytes, at + 8),
+                };
+            }
+            TableBatch {
+                low: self.params_at(HEADER_BYTES),
+                high: self.params_at(HEADER_BYTES + 52),
+                limit_volts: f32_at(self.bytes, HEADER_BYTES + 104),
+                capacitance,
+            }
         })
     }
 
@@ -527,6 +626,11 @@ pub fn write_batch(
             .into_iter()
             .chain(b.high.values())
             .chain([b.limit_volts])
+            .chain(
+                b.capacitance
+                    .iter()
+                    .flat_map(|c| [c.volts, c.low_farads, c.high_farads]),
+            )
     });
     let values = params
         .values()

@@ -44,7 +44,7 @@ pub fn make(
     points: Option<usize>,
     bias_error: bool,
 ) -> Result<Made, String> {
-    let batch = batch_of(b)?;
+    let batch = batch_of(b, margin)?;
     let params = b.nominal;
     if let Some(points) = points {
         return make_with(params, margin, batch, points, bias_error, None);
@@ -79,10 +79,7 @@ fn make_with(
     let tuner = Tuner::new(device);
     // Against the device's own limit, the margin that puts the top at (1 − margin) times the
     // batch's guaranteed one.
-    let own = match batch {
-        Some((_, limit)) => 1.0 - (1.0 - margin) * limit / tuner.limit().at.volts,
-        None => margin,
-    };
+    let own = own_margin(&tuner, margin, batch.map(|(_, limit)| limit));
     let top = tuner
         .max_bias(table::table_margin(own))
         .map_err(|e| e.to_string())?;
@@ -121,9 +118,19 @@ fn make_with(
     })
 }
 
-/// What a table keeps of the batch `b` (none for a device alone): its ranges rounded
-/// outward to f32 and its guaranteed limit rounded down, and that limit in f64.
-fn batch_of(b: &DeviceBox) -> Result<Option<(TableBatch, f64)>, String> {
+/// The margin against the device's own limit that puts a table's top at (1 − `margin`)
+/// times the batch's guaranteed limit (`margin` itself for a device alone).
+fn own_margin(tuner: &Tuner<f64>, margin: f64, batch_limit_volts: Option<f64>) -> f64 {
+    match batch_limit_volts {
+        Some(limit) => 1.0 - (1.0 - margin) * limit / tuner.limit().at.volts,
+        None => margin,
+    }
+}
+
+/// What a table made with `margin` keeps of the batch `b` (none for a device alone): its
+/// ranges rounded outward to f32, its guaranteed limit rounded down, its capacitance bands up
+/// to the table's top; and that limit in f64.
+fn batch_of(b: &DeviceBox, margin: f64) -> Result<Option<(TableBatch, f64)>, String> {
     if b.is_exact() {
         return Ok(None);
     }
@@ -136,7 +143,12 @@ fn batch_of(b: &DeviceBox) -> Result<Option<(TableBatch, f64)>, String> {
             g.lowest_found_volts
         ));
     }
-    let kept = TableBatch::of(b, g.volts);
+    let tuner = Tuner::new(de_resonator::Device::new(b.nominal).map_err(|e| e.to_string())?);
+    let own = own_margin(&tuner, margin, Some(g.volts));
+    let top = tuner
+        .max_bias(table::table_margin(own))
+        .map_err(|e| e.to_string())?;
+    let kept = TableBatch::of(b, g.volts, top.volts, &mut leaves).map_err(|e| e.to_string())?;
     Ok(Some((kept, g.volts)))
 }
 

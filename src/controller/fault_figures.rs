@@ -369,6 +369,7 @@ fn table(p: &mut Put, e: TableError) {
         TableError::BadBatch { field } => p.d(11).u(field
             .and_then(|f| Field::ALL.iter().position(|&g| g == f))
             .map_or(u32::MAX, |k| k as u32)),
+        TableError::BadCapacitance { index } => p.d(12).u(index.into()),
     };
 }
 
@@ -403,6 +404,7 @@ fn table_back(t: &mut Take) -> Option<TableError> {
                 k => Some(*Field::ALL.get(usize::try_from(k).ok()?)?),
             },
         },
+        12 => TableError::BadCapacitance { index: t.u16()? },
         _ => return None,
     })
 }
@@ -767,6 +769,11 @@ mod tests {
                     high_hz: 45.95,
                 },
                 TableError::BufferTooSmall { needed: 4096 },
+                TableError::BadBatch {
+                    field: Some(Field::Thickness),
+                },
+                TableError::BadBatch { field: None },
+                TableError::BadCapacitance { index: 15 },
             ]
             .map(Fault::Table),
         );

@@ -155,6 +155,8 @@ struct BoxModel {
     breakdown_dimless: I,
     /// (1/T0)² = μ·L2·H/M, rad²/s².
     rad_per_s_squared: I,
+    /// C1 = ε·L1A·L2·λ2p²/H, F (model.md §8).
+    farads_per_stretch_squared: I,
 }
 
 impl BoxModel {
@@ -189,6 +191,11 @@ impl BoxModel {
             volts_per_unit: h * sqrt_mu / sqrt_eps,
             breakdown_dimless: r(Field::BreakdownField) * sqrt_eps / sqrt_mu,
             rad_per_s_squared: scale(low, high).hull(scale(high, low)),
+            farads_per_stretch_squared: eps
+                * r(Field::LengthActive)
+                * r(Field::Width)
+                * r(Field::Prestretch2).square()
+                / h,
         }
     }
 
@@ -362,11 +369,17 @@ impl BoxModel {
         (bound.max(0.0), passed_to)
     }
 
-    /// The natural frequencies (Hz) the box's devices have at the bias `volts`, enclosed;
-    /// `None` when some device may hold no equilibrium at that bias before `end`.
-    /// Cells below `start` are known to lie below the bias for every device; returned with
-    /// the offset up to which every cell did.
-    fn frequency_band(&self, volts: f64, (start, end): (f64, f64)) -> (Option<I>, f64) {
+    /// A quantity of the equilibria the box's devices hold at the bias `volts`, enclosed
+    /// (`quantity` of a cell's offsets and its Φ̄² where it meets the bias); `None` when some
+    /// device may hold no equilibrium at that bias before `end`. Cells below `start` are
+    /// known to lie below the bias for every device; returned with the offset up to which
+    /// every cell did.
+    fn at_bias(
+        &self,
+        volts: f64,
+        (start, end): (f64, f64),
+        quantity: impl Fn(&Self, I, I) -> I,
+    ) -> (Option<I>, f64) {
         let target = (I::point(volts.abs()) / self.volts_per_unit).square();
         let floor = target.width().max(CELL_TOLERANCE * target.hi).max(1e-12);
         let mut band: Option<I> = None;
@@ -386,9 +399,8 @@ impl BoxModel {
                 return false;
             }
             if let Some(common) = p2.intersect(target) {
-                let w2 = (self.elastic_stiffness(d) - common * self.l2p().square()).non_negative();
-                let f = (self.rad_per_s_squared * w2).sqrt() / I::point(core::f64::consts::TAU);
-                band = Some(band.map_or(f, |b| b.hull(f)));
+                let q = quantity(self, d, common);
+                band = Some(band.map_or(q, |b| b.hull(q)));
             }
             true
         });
@@ -397,6 +409,19 @@ impl BoxModel {
         } else {
             (band, below_to)
         }
+    }
+
+    /// The natural frequency (Hz) on the cell at the offsets `d` under Φ̄² = `p2` (model.md
+    /// §5).
+    fn frequency_hz(&self, d: I, p2: I) -> I {
+        let w2 = (self.elastic_stiffness(d) - p2 * self.l2p().square()).non_negative();
+        (self.rad_per_s_squared * w2).sqrt() / I::point(core::f64::consts::TAU)
+    }
+
+    /// Membrane A's capacitance (F) on the cell at the offsets `d` (model.md §8: C1·λ²).
+    fn capacitance_farads(&self, d: I, _p2: I) -> I {
+        let l1p = self.ranges.get(1).copied().unwrap_or(I::ENTIRE);
+        self.farads_per_stretch_squared * (l1p + d).square()
     }
 }
 
@@ -716,21 +741,6 @@ impl DeviceBox {
     /// The natural frequencies (Hz) the box's devices have at the bias `volts`: a certified
     /// enclosure [low, high] and the devices sampled at each end.
     pub fn band_hz(&self, volts: f64, leaves: &mut [Leaf]) -> Result<Band, BoxError> {
-        self.check()?;
-        let at = |p: &DeviceParams<f64>| {
-            let d = Device::new(*p).ok()?;
-            let stretch = Limit::of(&d).stretch_for_bias(&d, volts)?;
-            Some(d.natural_frequency_hz(stretch))
-        };
-        if self.is_exact() {
-            let f = at(&self.nominal).ok_or(BoxError::NoEquilibrium { volts })?;
-            return Ok(Band {
-                low_hz: f,
-                high_hz: f,
-                sampled_low_hz: f,
-                sampled_high_hz: f,
-            });
-        }
         // f² = (μ·L2·H/M)·ω̄² with ω̄² free of m, ρ and L2: f falls with m and ρ, rises
         // with L2 (see `BoxModel::of`); each end of the band takes their worst.
         let pin = |b: DeviceBox, toward_high: bool| {
@@ -743,6 +753,71 @@ impl DeviceBox {
                 .pinned(Field::Density, down.get(Field::Density))
                 .pinned(Field::Width, up.get(Field::Width))
         };
+        let (low, high) = self.ends_at_bias(volts, leaves, pin, BoxModel::frequency_hz, |d, s| {
+            d.natural_frequency_hz(s)
+        })?;
+        Ok(Band {
+            low_hz: low.bound.max(0.0),
+            high_hz: -high.bound,
+            sampled_low_hz: low.sampled,
+            sampled_high_hz: -high.sampled,
+        })
+    }
+
+    /// Membrane A's capacitance (F, model.md §8) every device of the box has at the bias
+    /// `volts`, certified: (low, high). What the board's self-sensing measures at a known
+    /// bias (`crate::estimate::capacitance`).
+    pub fn capacitance_farads(
+        &self,
+        volts: f64,
+        leaves: &mut [Leaf],
+    ) -> Result<(f64, f64), BoxError> {
+        // C = C1·λ² with C1 = ε·L1A·L2·λ2p²/H: L2 enters C1 alone (not the branch), so each
+        // end takes its end; m and ρ enter neither.
+        let pin = |b: DeviceBox, toward_high: bool| {
+            let width = if toward_high { &b.high } else { &b.low }.get(Field::Width);
+            let nominal = b.nominal;
+            b.pinned(Field::BarMass, nominal.bar_mass)
+                .pinned(Field::Density, nominal.density)
+                .pinned(Field::Width, width)
+        };
+        let (low, high) = self.ends_at_bias(
+            volts,
+            leaves,
+            pin,
+            BoxModel::capacitance_farads,
+            |d, s| d.params().capacitance_farads(s),
+        )?;
+        Ok((low.bound.max(0.0), -high.bound))
+    }
+
+    /// The lowest and (negated) highest of a quantity of the box's devices at the bias
+    /// `volts`: `enclose` on a leaf's cells, `of` at one device's stretch there; `pin` sets
+    /// the parameters the quantity is monotone in to the end that makes it low (false) or
+    /// high (true).
+    fn ends_at_bias(
+        &self,
+        volts: f64,
+        leaves: &mut [Leaf],
+        pin: impl Fn(DeviceBox, bool) -> DeviceBox,
+        enclose: fn(&BoxModel, I, I) -> I,
+        of: fn(&Device<f64>, f64) -> f64,
+    ) -> Result<(Found, Found), BoxError> {
+        self.check()?;
+        let at = |p: &DeviceParams<f64>| {
+            let d = Device::new(*p).ok()?;
+            let stretch = Limit::of(&d).stretch_for_bias(&d, volts)?;
+            Some(of(&d, stretch))
+        };
+        if self.is_exact() {
+            let x = at(&self.nominal).ok_or(BoxError::NoEquilibrium { volts })?;
+            let found = |v: f64| Found {
+                bound: v,
+                sampled: v,
+                at: self.nominal,
+            };
+            return Ok((found(x), found(-x)));
+        }
         let dims = [
             Field::ShearModulus,
             Field::RelativePermittivity,
@@ -754,8 +829,8 @@ impl DeviceBox {
             Field::LengthPassive,
         ];
         let end = walk_end(&self.low, &self.high);
-        let band = |low: &DeviceParams<f64>, high: &DeviceParams<f64>, start: f64| {
-            BoxModel::of(low, high).frequency_band(volts, (start, end))
+        let enclosed = |low: &DeviceParams<f64>, high: &DeviceParams<f64>, start: f64| {
+            BoxModel::of(low, high).at_bias(volts, (start, end), enclose)
         };
         let low = minimise(
             &pin(*self, false),
@@ -763,7 +838,7 @@ impl DeviceBox {
             leaves,
             |_, spread| BAND_TOLERANCE * spread,
             |l, h, start| {
-                let (b, start) = band(l, h, start);
+                let (b, start) = enclosed(l, h, start);
                 (b.map_or(f64::NEG_INFINITY, |b| b.lo), start)
             },
             at,
@@ -774,20 +849,15 @@ impl DeviceBox {
             leaves,
             |_, spread| BAND_TOLERANCE * spread,
             |l, h, start| {
-                let (b, start) = band(l, h, start);
+                let (b, start) = enclosed(l, h, start);
                 (b.map_or(f64::NEG_INFINITY, |b| -b.hi), start)
             },
-            |p| at(p).map(|f| -f),
+            |p| at(p).map(|x| -x),
         );
         if !(low.bound.is_finite() && high.bound.is_finite()) {
             return Err(BoxError::NoEquilibrium { volts });
         }
-        Ok(Band {
-            low_hz: low.bound.max(0.0),
-            high_hz: -high.bound,
-            sampled_low_hz: low.sampled,
-            sampled_high_hz: -high.sampled,
-        })
+        Ok((low, high))
     }
 
     /// The targets every device of the box reaches at some bias in [0, `cap_volts`]: between

@@ -86,9 +86,8 @@ pub fn made_batch_table(
     use de_resonator::model::guaranteed::Leaf;
     use de_resonator::table::TableBatch;
     use de_resonator::{table, Device, Tuner};
-    let found = b
-        .guaranteed_limit(&mut vec![Leaf::default(); leaves])
-        .ok()?;
+    let mut leaves = vec![Leaf::default(); leaves];
+    let found = b.guaranteed_limit(&mut leaves).ok()?;
     let g = found.volts;
     if g <= 1e-3 * found.lowest_found_volts || g.is_nan() {
         return None;
@@ -99,7 +98,8 @@ pub fn made_batch_table(
     let own_limit = Tuner::new(Device::new(b.nominal).unwrap()).limit().at.volts;
     let own = 1.0 - (1.0 - margin) * g / own_limit;
     let stored = table_points(b.nominal, own, points);
-    let batch = TableBatch::of(b, g);
+    let top = f64::from(stored.last()?.1);
+    let batch = TableBatch::of(b, g, top, &mut leaves).ok()?;
     let mut bytes = vec![0u8; table::batch_table_bytes(points)];
     table::write_batch(
         &mut bytes,
