@@ -91,8 +91,13 @@ pub struct TableBatch {
     /// The guaranteed limit, V.
     pub limit_volts: f32,
     /// The capacitance band at `BATCH_BIASES` rising biases, from 0 V to the table's top.
-    pub capacitance: [CapacitanceBand; BATCH_BIASES],
+    pub capacitance: CapacitanceBands,
 }
+
+/// The capacitance bands of a batch at `BATCH_BIASES` rising biases, from 0 V to the top.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct CapacitanceBands(pub [CapacitanceBand; BATCH_BIASES]);
 
 /// The capacitance (F, model.md §8) every device of a batch has at one bias: certified.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -119,9 +124,9 @@ impl TableBatch {
             low.set(f, f32_below(b.low.get(f)));
             high.set(f, f32_above(b.high.get(f)));
         }
-        let mut capacitance = [CapacitanceBand::default(); BATCH_BIASES];
+        let mut capacitance = CapacitanceBands::default();
         let last = (BATCH_BIASES - 1) as f64;
-        for (j, band) in capacitance.iter_mut().enumerate() {
+        for (j, band) in capacitance.0.iter_mut().enumerate() {
             // Φ² evenly spaced; the last at or above the top as f32 holds it.
             let volts = if j + 1 == BATCH_BIASES {
                 f32_above(top_volts)
@@ -142,13 +147,15 @@ impl TableBatch {
             capacitance,
         })
     }
+}
 
+impl CapacitanceBands {
     /// The capacitance every device of the batch has at the bias `volts`, (low, high) F:
     /// between the bands of the biases about it (each device's capacitance rises with the
     /// bias on its loading branch, model.md §5: the first equilibrium moves up with Φ);
     /// `None` outside the biases the table gives.
-    pub fn capacitance_farads(&self, volts: f32) -> Option<(f32, f32)> {
-        let bands = &self.capacitance;
+    pub fn farads_at(&self, volts: f32) -> Option<(f32, f32)> {
+        let bands = &self.0;
         let above = bands.iter().position(|b| b.volts >= volts)?;
         let at = bands.get(above)?;
         if at.volts == volts {
@@ -363,7 +370,7 @@ impl<'a> Table<'a> {
                 return Err(TableError::BadBatch { field: None });
             }
             let mut below = -1.0f32;
-            for (k, band) in batch.capacitance.iter().enumerate() {
+            for (k, band) in batch.capacitance.0.iter().enumerate() {
                 let index = k as u16;
                 let first = k == 0;
                 let CapacitanceBand {
@@ -400,7 +407,10 @@ impl<'a> Table<'a> {
             previous = Some((hz, volts));
         }
         let last = BATCH_BIASES - 1;
-        if let Some(band) = table.batch().and_then(|b| b.capacitance.get(last).copied()) {
+        if let Some(band) = table
+            .batch()
+            .and_then(|b| b.capacitance.0.get(last).copied())
+        {
             if !(band.volts >= table.max_volts()) {
                 return Err(TableError::BadCapacitance { index: last as u16 });
             }
@@ -447,8 +457,8 @@ impl<'a> Table<'a> {
     /// The batch a version-2 table was made for (model.md §10); `None` for one device.
     pub fn batch(&self) -> Option<TableBatch> {
         (self.header == BATCH_HEADER_BYTES).then(|| {
-            let mut capacitance = [CapacitanceBand::default(); BATCH_BIASES];
-            for (j, band) in capacitance.iter_mut().enumerate() {
+            let mut capacitance = CapacitanceBands::default();
+            for (j, band) in capacitance.0.iter_mut().enumerate() {
                 let at = HEADER_BYTES + 108 + 12 * j;
                 *band = CapacitanceBand {
                     volts: f32_at(self.bytes, at),
@@ -628,6 +638,7 @@ pub fn write_batch(
             .chain([b.limit_volts])
             .chain(
                 b.capacitance
+                    .0
                     .iter()
                     .flat_map(|c| [c.volts, c.low_farads, c.high_farads]),
             )

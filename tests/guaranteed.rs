@@ -24,6 +24,16 @@ fn frequency(p: &DeviceParams<f64>, volts: f64) -> Option<f64> {
     Some(d.natural_frequency_hz(stretch))
 }
 
+/// Membrane A's capacitance at the bias `volts`, F, from its geometry (model.md §8, paper
+/// eq. 1): plates L1A·λ by L2·λ2p, H/(λ·λ2p) apart (incompressible), not the core's C1·λ².
+fn capacitance(p: &DeviceParams<f64>, volts: f64) -> Option<f64> {
+    let d = Device::new(*p).ok()?;
+    let stretch = Limit::of(&d).stretch_for_bias(&d, volts)?;
+    let area = p.length_active * stretch * p.width * p.prestretch_2;
+    let apart = p.thickness / (stretch * p.prestretch_2);
+    Some(8.8541878128e-12 * p.relative_permittivity * area / apart)
+}
+
 /// A random device of moderate shape (pre-stretches 1.5–3.5, Gent or neo-Hookean).
 fn moderate_device(rng: &mut Rng) -> DeviceParams<f64> {
     let (l1p, l2p) = (rng.range(1.5, 3.5), rng.range(1.5, 3.5));
@@ -210,6 +220,38 @@ fn no_frequency_outside_the_band() {
             band.high_hz
         );
     }
+}
+
+/// No device's capacitance at the bias falls outside `capacitance_farads` (what the board's
+/// self-sensing checks a membrane against); the band is at most 10% wider than the spread
+/// the samples show.
+#[test]
+fn no_capacitance_outside_its_band() {
+    let mut rng = Rng(0xca9a_0059);
+    let mut widest: f64 = 0.0;
+    for (b, g) in random_cases(&mut rng, 24) {
+        let volts = g.volts * rng.range(0.0, 0.95);
+        let (low, high) = b.capacitance_farads(volts, &mut leaves()).unwrap();
+        let c = |q: &DeviceParams<f64>| capacitance(q, volts).expect("below the guaranteed limit");
+        let mut tried = adversary(&mut rng, &b, c);
+        tried.extend(adversary(&mut rng, &b, |q| -c(q)));
+        let (lo, hi) = tried
+            .iter()
+            .map(c)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+                (a.min(x), b.max(x))
+            });
+        assert!(
+            low <= lo * (1.0 + 1e-12) && hi <= high * (1.0 + 1e-12),
+            "sampled {lo}..{hi} F outside the band {low}..{high} F at {volts} V: {b:?}"
+        );
+        widest = widest.max((high - low) / (hi - lo));
+        assert!(
+            high - low <= 1.1 * (hi - lo) + 1e-9 * hi,
+            "band {low}..{high} F, sampled {lo}..{hi} F: {b:?}"
+        );
+    }
+    println!("the widest band against the sampled spread: {widest:.4}");
 }
 
 /// The exact box answers as the nominal device, to the last digit.

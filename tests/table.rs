@@ -400,4 +400,51 @@ fn a_batch_table_keeps_its_ranges_and_limit() {
         assert!(matches!(e, TableError::BadBatch { .. }), "{e}");
         assert!(e.to_string().contains(says), "{e}");
     }
+    // The capacitance bands: from 0 V to the top, each holding the reference device's own
+    // C there (from its geometry, model.md §8); any device's C between two biases lies
+    // between the lower's low and the upper's high.
+    let bands = batch.capacitance;
+    assert_eq!(bands.0[0].volts, 0.0);
+    assert!(bands.0[table::BATCH_BIASES - 1].volts >= t.max_volts());
+    let d = de_resonator::Device::new(REFERENCE_DEVICE).unwrap();
+    let c = |volts: f64| {
+        let stretch = de_resonator::Limit::of(&d)
+            .stretch_for_bias(&d, volts)
+            .unwrap();
+        let p = REFERENCE_DEVICE;
+        let area = p.length_active * stretch * p.width * p.prestretch_2;
+        8.8541878128e-12 * p.relative_permittivity * area * stretch * p.prestretch_2 / p.thickness
+    };
+    for k in 0..=100 {
+        let volts = t.max_volts() * k as f32 / 100.0;
+        let (low, high) = bands.farads_at(volts).unwrap();
+        let own = c(f64::from(volts));
+        assert!(
+            f64::from(low) <= own && own <= f64::from(high),
+            "{low} {own} {high}"
+        );
+    }
+    assert_eq!(
+        bands.farads_at(1.01 * bands.0[table::BATCH_BIASES - 1].volts),
+        None
+    );
+    let band_at = |j: usize, word: usize| field_at(27 + 3 * j + word);
+    let last = table::BATCH_BIASES - 1;
+    // Above the band before it, below the table's top.
+    let below_top = 0.5 * (bands.0[last - 1].volts + t.max_volts());
+    for (at, value) in [
+        (band_at(0, 0), 1.0f32),        // the first bias not 0 V
+        (band_at(5, 0), 0.0),           // a bias not rising
+        (band_at(3, 1), -1e-10),        // a low not positive
+        (band_at(3, 2), 1e-13),         // a high below its low
+        (band_at(9, 2), f32::INFINITY), // a high not finite
+        (band_at(last, 0), below_top),  // the last below the top
+    ] {
+        let mut bad = bytes.clone();
+        bad[at..at + 4].copy_from_slice(&value.to_le_bytes());
+        reseal(&mut bad);
+        let e = Table::parse(&bad).unwrap_err();
+        assert!(matches!(e, TableError::BadCapacitance { .. }), "{at}: {e}");
+        assert!(e.to_string().contains("capacitance"), "{e}");
+    }
 }

@@ -189,7 +189,7 @@ fn reference_scene_tunes_within_a_tenth_of_a_percent() {
 #[test]
 fn fault_scenes_end_at_zero_volts_and_safe() {
     type IsKind = fn(&Fault) -> bool;
-    let cases: [(&str, IsKind); 4] = [
+    let cases: [(&str, IsKind); 5] = [
         ("fault-sensor-stuck.toml", |f| {
             matches!(f, Fault::SensorStuck { .. })
         }),
@@ -204,6 +204,9 @@ fn fault_scenes_end_at_zero_volts_and_safe() {
             matches!(f, Fault::AmplifierDisagrees { .. })
         }),
         ("fault-dac-bus.toml", |f| matches!(f, Fault::Bus)),
+        ("fault-outside-batch.toml", |f| {
+            matches!(f, Fault::OutsideBatch { .. })
+        }),
     ];
     for (file, kind) in cases {
         let r = run(file);
@@ -1143,6 +1146,73 @@ fn a_batch_scene_is_capped_by_its_guaranteed_limit() {
         "{} above {cap}",
         r.max_command_volts
     );
+}
+
+/// On the board the batch holds (model.md §10), by the self-sensed stretch at the held bias:
+/// the membrane 6% further pre-stretched than the batch's (exact) pre-stretch faults, saying
+/// the stretch from C against the batch's band there, each figure the scene's own (the
+/// plant's stretch at its end and the band from the image's table, both recomputed here);
+/// membranes at the batch's corners and centre drive on.
+#[test]
+fn the_self_sensed_stretch_outside_the_batch_faults_and_inside_it_drives() {
+    use de_resonator::model::guaranteed::Leaf;
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/fault-outside-batch.toml");
+    let text = std::fs::read_to_string(path).unwrap();
+    let run_with = |plant: &str| {
+        let text = text.replace("prestretch_scale = 1.06", plant);
+        let mut s = scene::parse(&text).unwrap();
+        s.run.history = false;
+        (s.run.run().unwrap(), s.run.batch)
+    };
+    let (outside, b) = run_with("prestretch_scale = 1.06");
+    assert!(!b.is_exact());
+    let Some(Fault::OutsideBatch {
+        stretch,
+        sigma,
+        low,
+        high,
+        volts,
+    }) = outside.fault
+    else {
+        panic!("{:?}", outside.fault_words);
+    };
+    assert!(outside
+        .fault_words
+        .unwrap()
+        .contains("not what the image declares"));
+    assert_eq!(outside.final_command_volts, 0.0);
+    assert!(outside.plant_crossing.is_none());
+    // The band at the held bias holds the band every device of the batch has there, through
+    // the file's C1 (the probe's), and the plant's C there lies above it.
+    let (c_low, c_high) = b
+        .capacitance_farads(f64::from(volts), &mut vec![Leaf::default(); 4096])
+        .unwrap();
+    let c1 = b.nominal.farads_per_stretch_squared();
+    assert!(
+        f64::from(low) <= (c_low / c1).sqrt() * (1.0 + 1e-6),
+        "{low}"
+    );
+    assert!(
+        f64::from(high) >= (c_high / c1).sqrt() * (1.0 - 1e-6),
+        "{high}"
+    );
+    // The membrane's: λ2p 6% up makes its C1 1.06² the file's; λ itself rises too.
+    assert!(
+        f64::from(stretch) > 1.06 * f64::from(low),
+        "{stretch} {low}"
+    );
+    assert!(
+        stretch - 4.0 * sigma > high,
+        "{stretch} ± {sigma} against {high}"
+    );
+    for plant in [
+        "shear_modulus_scale = 0.9",
+        "shear_modulus_scale = 1.1",
+        "prestretch_scale = 1.0",
+    ] {
+        let (inside, _) = run_with(plant);
+        assert!(inside.fault.is_none(), "{plant}: {:?}", inside.fault_words);
+    }
 }
 
 /// On the board the batch holds (model.md §10): a trim on a plant whose μ lies outside the

@@ -11,6 +11,8 @@ use crate::drive::Amplifier;
 use crate::model::device::Device;
 use crate::model::safety::Limit;
 use crate::model::swing::{AcDrive, Ramp};
+#[cfg(feature = "probe")]
+use crate::table::CapacitanceBands;
 use crate::table::Table;
 use crate::tuning::Tuner;
 use crate::{DeviceParams, Settings};
@@ -70,6 +72,9 @@ struct Checked {
     /// The table's batch's guaranteed limit, V, and its shear modulus range, Pa.
     batch_limit_volts: Option<f32>,
     batch_modulus: Option<(f32, f32)>,
+    /// The batch's capacitance bands, for the probe's check (model.md §10).
+    #[cfg(feature = "probe")]
+    batch_capacitance: Option<CapacitanceBands>,
 }
 
 impl Checked {
@@ -102,6 +107,8 @@ impl Checked {
             batch_modulus: table
                 .batch()
                 .map(|b| (b.low.shear_modulus, b.high.shear_modulus)),
+            #[cfg(feature = "probe")]
+            batch_capacitance: table.batch().map(|b| b.capacitance),
         })
     }
 
@@ -115,6 +122,10 @@ impl Checked {
         let mut controller = Controller::new(self.device, board, settings, self.max_volts);
         controller.plan.start_volts = from_volts;
         controller.batch_modulus = self.batch_modulus;
+        #[cfg(feature = "probe")]
+        {
+            controller.sensing.batch = self.batch_capacitance;
+        }
         controller
     }
 

@@ -98,6 +98,17 @@ pub enum Fault {
         stretch: f32,
         volts: f32,
     },
+    /// The self-sensed stretch at a steady bias (`volts`), widened by the probe's
+    /// uncertainty, lies outside the stretches every device of the table's batch has there
+    /// (model.md §10, its capacitance band through the flashed device's C1): the membrane is
+    /// not what the image declares.
+    OutsideBatch {
+        stretch: f32,
+        sigma: f32,
+        low: f32,
+        high: f32,
+        volts: f32,
+    },
 }
 
 impl fmt::Display for Fault {
@@ -202,6 +213,22 @@ impl fmt::Display for Fault {
                 "tracked drive at {} Hz, too far from the target {} Hz: lock lost",
                 Decimal(*drive_hz),
                 Decimal(*target_hz)
+            ),
+            Fault::OutsideBatch {
+                stretch,
+                sigma,
+                low,
+                high,
+                volts,
+            } => write!(
+                f,
+                "the membrane is not what the image declares: its capacitance at {} V gives \
+                 stretch {} (standard error {}), outside the batch's {} .. {} there",
+                Decimal(*volts),
+                Decimal(*stretch),
+                Decimal(*sigma),
+                Decimal(*low),
+                Decimal(*high)
             ),
             Fault::SensorImplausible { value, low, high } => write!(
                 f,
@@ -324,6 +351,7 @@ declare_fault_kinds! {
     Fault::Trim(_) => 22 "trim",
     Fault::DriveSwing(_) => 23 "drive_swing",
     Fault::NearLimit { .. } => 24 "near_limit",
+    Fault::OutsideBatch { .. } => 25 "outside_batch",
 }
 
 impl From<SettingError> for Fault {
@@ -364,7 +392,8 @@ impl Fault {
             | Fault::Bus
             | Fault::Input(_)
             | Fault::Trim(_)
-            | Fault::NearLimit { .. } => FaultStage::Running,
+            | Fault::NearLimit { .. }
+            | Fault::OutsideBatch { .. } => FaultStage::Running,
         }
     }
 }

@@ -225,6 +225,15 @@ impl Fault {
             } => {
                 p.at(&FailureMode::ALL, &mode).u(tick).f(stretch).f(volts);
             }
+            Fault::OutsideBatch {
+                stretch,
+                sigma,
+                low,
+                high,
+                volts,
+            } => {
+                p.f(stretch).f(sigma).f(low).f(high).f(volts);
+            }
         }
         p.0
     }
@@ -341,6 +350,13 @@ impl Fault {
                 mode: t.at(&FailureMode::ALL)?,
                 tick: t.u()?,
                 stretch: t.f()?,
+                volts: t.f()?,
+            },
+            25 => Fault::OutsideBatch {
+                stretch: t.f()?,
+                sigma: t.f()?,
+                low: t.f()?,
+                high: t.f()?,
                 volts: t.f()?,
             },
             _ => return None,
@@ -725,6 +741,13 @@ mod tests {
                 mode,
                 tick: 99,
                 stretch: a,
+                volts: c,
+            },
+            Fault::OutsideBatch {
+                stretch: a,
+                sigma: 1.5e-4,
+                low: b,
+                high: e,
                 volts: c,
             },
         ];

@@ -1,13 +1,25 @@
 //! The stretch from the capacitance in the tick (feature `probe`, `crate::estimate::capacitance`): each
 //! tick's current and voltage go to the probe's lock-in; each window's estimate, widened by
 //! `PROBE_SIGMAS` standard errors, is checked against model.md §6 for the device flashed and
-//! the trim's estimate, one check a tick (the tick's budget).
+//! the trim's estimate, and, at a steady bias, against the capacitance every device of the
+//! table's batch has there (model.md §10), one check a tick (the tick's budget).
 
 use super::fault::Fault;
 use super::watch::Inputs;
 use super::Controller;
 use crate::estimate::capacitance::{ProbeLockIn, SensedStretch};
 use crate::model::device::Device;
+use crate::table::CapacitanceBands;
+
+/// The probe's error on λ beyond its scatter, as a fraction (the amplifier's lag lets some of
+/// the probe's own motion through: −3e-4 of λ with host-sim's 2 kHz amplifier at a 1 kHz
+/// tick, `crate::estimate::capacitance`): the batch's check allows it on each side.
+pub const PROBE_SYSTEMATIC: f32 = 1e-3;
+
+/// Windows ended since a steady bias began when its estimate is first checked against the
+/// batch: the second's lies wholly in the hold (within the default 0.25 s settle before the
+/// AC), its mean over the ramp's ring the equilibrium's.
+const STEADY_WINDOWS: u8 = 2;
 
 /// The lock-in's memory between ticks.
 #[derive(Clone, Copy, Debug, Default)]
@@ -15,8 +27,13 @@ pub(super) struct Sensing {
     lock_in: Option<ProbeLockIn>,
     /// The probe's sign at the last tick (`None`: no probe then).
     last_positive: Option<bool>,
-    /// The last window's estimate and the next of its checks (`Check::ORDER`).
-    checking: Option<(SensedStretch, usize)>,
+    /// The last window's estimate, the next of its checks (`Check::ORDER`), and the steady
+    /// bias it was measured at, if it was.
+    checking: Option<(SensedStretch, usize, Option<f32>)>,
+    /// The bias held without AC or pulse since some tick, and the windows ended since.
+    steady: Option<(f32, u8)>,
+    /// The capacitance bands of the table's batch (model.md §10), if it has one.
+    pub(super) batch: Option<CapacitanceBands>,
 }
 
 /// One check of an estimate: the interval's ends against a device.
@@ -27,10 +44,13 @@ enum Check {
     /// An end of the widened interval (low: false) inside model.md §6 for the device flashed
     /// (true) or the trim's estimate.
     Limit { high: bool, flashed: bool },
+    /// At a steady bias, the widened interval meets the stretches every device of the batch
+    /// has there (model.md §10).
+    Batch,
 }
 
 impl Check {
-    const ORDER: [Check; 5] = [
+    const ORDER: [Check; 6] = [
         Check::Plausible,
         Check::Limit {
             high: false,
@@ -48,6 +68,7 @@ impl Check {
             high: true,
             flashed: false,
         },
+        Check::Batch,
     ];
 }
 
@@ -65,7 +86,13 @@ impl Controller {
         if let Some(fault) = self.check_sensed(k) {
             return Some(fault);
         }
-        let positive = self.plan.probe_positive(k, self.plan.ramp_volts(k));
+        let ramp = self.plan.ramp_volts(k);
+        let positive = self.plan.probe_positive(k, ramp);
+        let steady = match self.sensing.steady {
+            Some((volts, windows)) if volts == ramp => (volts, windows),
+            _ => (ramp, 0),
+        };
+        self.sensing.steady = self.held(k, ramp).then_some(steady);
         let was = core::mem::replace(&mut self.sensing.last_positive, positive);
         let (Some(amps), Some(now), Some(was)) = (inputs.current_amps, positive, was) else {
             // No probe, or no current: the halves start again with the next edge.
@@ -85,16 +112,32 @@ impl Controller {
         let volts = inputs.amplifier_volts.unwrap_or(self.last_volts);
         let edge = (now != was).then_some(was);
         if let Some(estimate) = lock_in.observe(amps, volts, edge) {
-            self.sensing.checking = Some((estimate, 0));
+            let steady = self.sensing.steady.as_mut().map(|(volts, windows)| {
+                *windows = windows.saturating_add(1);
+                (*volts, *windows)
+            });
+            let at =
+                steady.and_then(|(volts, windows)| (windows >= STEADY_WINDOWS).then_some(volts));
+            self.sensing.checking = Some((estimate, 0, at));
         }
         None
     }
 
+    /// Whether tick `k` holds the plan's bias (`ramp`, the ramp's voltage there) with no AC
+    /// and no pulse on it: the probe alone rides on it.
+    fn held(&self, k: u32, ramp: f32) -> bool {
+        let plan = &self.plan;
+        let (from, to) = plan.pulse_ticks;
+        ramp == plan.bias_volts
+            && (plan.ac_volts == 0.0 || plan.ac_tick.is_none_or(|t| k < t))
+            && !(k >= from && k < to)
+    }
+
     /// The next check of the last estimate, if one is due.
     fn check_sensed(&mut self, k: u32) -> Option<Fault> {
-        let (estimate, next) = self.sensing.checking?;
+        let (estimate, next, steady) = self.sensing.checking?;
         let check = Check::ORDER.get(next).copied();
-        self.sensing.checking = check.map(|_| (estimate, next + 1));
+        self.sensing.checking = check.map(|_| (estimate, next + 1, steady));
         match check? {
             Check::Plausible => {
                 let value = estimate.stretch;
@@ -122,6 +165,24 @@ impl Controller {
                 let p = estimate.volts / device.volts_per_unit();
                 let mode = device.first_failure(stretch, p * p)?;
                 Some(Fault::Limit { mode, tick: k })
+            }
+            Check::Batch => {
+                let volts = steady?;
+                let (low_farads, high_farads) = self.sensing.batch?.farads_at(volts)?;
+                // The band as the lock-in reads C: through the flashed device's C1.
+                let per_stretch_squared = self.flashed.params().farads_per_stretch_squared();
+                let low = libm::sqrtf(low_farads / per_stretch_squared);
+                let high = libm::sqrtf(high_farads / per_stretch_squared);
+                let (from, to) = estimate.widened();
+                let meets =
+                    to * (1.0 + PROBE_SYSTEMATIC) >= low && from * (1.0 - PROBE_SYSTEMATIC) <= high;
+                (!meets).then_some(Fault::OutsideBatch {
+                    stretch: estimate.stretch,
+                    sigma: estimate.sigma,
+                    low,
+                    high,
+                    volts,
+                })
             }
         }
     }
@@ -167,8 +228,8 @@ mod tests {
             farads: 1e-9,
             volts: 0.0,
         };
-        c.sensing.checking = Some((estimate, 0));
-        (0..5).find_map(|k| c.check_sensed(k))
+        c.sensing.checking = Some((estimate, 0, None));
+        (0..6).find_map(|k| c.check_sensed(k))
     }
 
     /// An estimate that is not a number, or whose standard error is not, is a sensor fault

@@ -753,9 +753,10 @@ impl DeviceBox {
                 .pinned(Field::Density, down.get(Field::Density))
                 .pinned(Field::Width, up.get(Field::Width))
         };
-        let (low, high) = self.ends_at_bias(volts, leaves, pin, BoxModel::frequency_hz, |d, s| {
-            d.natural_frequency_hz(s)
-        })?;
+        let (low, high) =
+            self.ends_at_bias(volts, leaves, pin, BoxModel::frequency_hz, |d, s| {
+                d.natural_frequency_hz(s)
+            })?;
         Ok(Band {
             low_hz: low.bound.max(0.0),
             high_hz: -high.bound,
@@ -781,13 +782,10 @@ impl DeviceBox {
                 .pinned(Field::Density, nominal.density)
                 .pinned(Field::Width, width)
         };
-        let (low, high) = self.ends_at_bias(
-            volts,
-            leaves,
-            pin,
-            BoxModel::capacitance_farads,
-            |d, s| d.params().capacitance_farads(s),
-        )?;
+        let (low, high) =
+            self.ends_at_bias(volts, leaves, pin, BoxModel::capacitance_farads, |d, s| {
+                d.params().capacitance_farads(s)
+            })?;
         Ok((low.bound.max(0.0), -high.bound))
     }
 
