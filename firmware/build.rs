@@ -5,6 +5,7 @@ fn main() {
     println!("cargo:rustc-link-search={}", root.display());
     println!("cargo:rerun-if-changed=../memory.x");
     println!("cargo:rerun-if-changed=../tables/reference.bin");
+    println!("cargo:rerun-if-changed=../tables/vhb-batch.bin");
     if std::env::var_os("CARGO_FEATURE_DEFMT").is_some() {
         println!("cargo:rustc-link-arg=-Tdefmt.x");
     }

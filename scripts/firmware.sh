@@ -22,6 +22,8 @@ export HOST_SIM
 host_sim="$HOST_SIM"
 "$host_sim" lut --out target/reference.bin >/dev/null
 cmp tables/reference.bin target/reference.bin
+"$host_sim" lut --device devices/vhb-batch.toml --out target/vhb-batch.bin >/dev/null
+cmp tables/vhb-batch.bin target/vhb-batch.bin
 
 cd firmware
 # The runs here end on their own; a hang ends at 5 minutes (qemu-run.sh has no limit unless told).

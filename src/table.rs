@@ -348,44 +348,6 @@ impl<'a> Table<'a> {
         if !(table.margin() < 1.0) {
             return Err(TableError::NotFinite { index: 13 });
         }
-        if let Some(batch) = table.batch() {
-            let nominal = table.params();
-            for field in Field::ALL {
-                let (low, x, high) = (
-                    batch.low.get(field),
-                    nominal.get(field),
-                    batch.high.get(field),
-                );
-                if !(low <= x && x <= high && low.is_finite() && high.is_finite() && low >= 0.0) {
-                    return Err(TableError::BadBatch { field: Some(field) });
-                }
-            }
-            // A Gent device's jlim range stays Gent; a neo-Hookean one has none.
-            if (nominal.jlim.is_some()) != (batch.low.jlim.is_some()) {
-                return Err(TableError::BadBatch {
-                    field: Some(Field::Jlim),
-                });
-            }
-            if !(batch.limit_volts.is_finite() && batch.limit_volts > 0.0) {
-                return Err(TableError::BadBatch { field: None });
-            }
-            let mut below = -1.0f32;
-            for (k, band) in batch.capacitance.0.iter().enumerate() {
-                let index = k as u16;
-                let first = k == 0;
-                let CapacitanceBand {
-                    volts,
-                    low_farads: low,
-                    high_farads: high,
-                } = *band;
-                if !(volts > below && (!first || volts == 0.0) && low > 0.0 && low <= high)
-                    || !high.is_finite()
-                {
-                    return Err(TableError::BadCapacitance { index });
-                }
-                below = volts;
-            }
-        }
         let mut previous: Option<(f32, f32)> = None;
         let mut rising: Option<bool> = None;
         let mut turns = 0;
@@ -406,16 +368,57 @@ impl<'a> Table<'a> {
             }
             previous = Some((hz, volts));
         }
-        let last = BATCH_BIASES - 1;
-        if let Some(band) = table
-            .batch()
-            .and_then(|b| b.capacitance.0.get(last).copied())
-        {
-            if !(band.volts >= table.max_volts()) {
-                return Err(TableError::BadCapacitance { index: last as u16 });
-            }
+        if let Some(batch) = table.batch() {
+            table.check_batch(&batch)?;
         }
         Ok(table)
+    }
+
+    /// A version-2 table's batch against its device and points: each range holding the
+    /// device's value, the limit a positive number, the capacitance bands positive ranges at
+    /// biases rising from 0 V to at least the top.
+    fn check_batch(&self, batch: &TableBatch) -> Result<(), TableError> {
+        let nominal = self.params();
+        for field in Field::ALL {
+            let (low, x, high) = (
+                batch.low.get(field),
+                nominal.get(field),
+                batch.high.get(field),
+            );
+            if !(low <= x && x <= high && low.is_finite() && high.is_finite() && low >= 0.0) {
+                return Err(TableError::BadBatch { field: Some(field) });
+            }
+        }
+        // A Gent device's jlim range stays Gent; a neo-Hookean one has none.
+        if (nominal.jlim.is_some()) != (batch.low.jlim.is_some()) {
+            return Err(TableError::BadBatch {
+                field: Some(Field::Jlim),
+            });
+        }
+        if !(batch.limit_volts.is_finite() && batch.limit_volts > 0.0) {
+            return Err(TableError::BadBatch { field: None });
+        }
+        let mut below = -1.0f32;
+        for (k, band) in batch.capacitance.0.iter().enumerate() {
+            let index = k as u16;
+            let first = k == 0;
+            let CapacitanceBand {
+                volts,
+                low_farads: low,
+                high_farads: high,
+            } = *band;
+            if !(volts > below && (!first || volts == 0.0) && low > 0.0 && low <= high)
+                || !high.is_finite()
+            {
+                return Err(TableError::BadCapacitance { index });
+            }
+            below = volts;
+        }
+        let last = BATCH_BIASES - 1;
+        match batch.capacitance.0.get(last) {
+            Some(band) if band.volts >= self.max_volts() => Ok(()),
+            _ => Err(TableError::BadCapacitance { index: last as u16 }),
+        }
     }
 
     /// Number of points.

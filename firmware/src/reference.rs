@@ -7,6 +7,11 @@ use de_resonator::{Amplifier, DeviceParams, Settings, REFERENCE_DEVICE};
 /// The tuning table for the reference device, from `host-sim lut` (tables/reference.bin).
 pub static TABLE: &[u8] = include_bytes!("../../tables/reference.bin");
 
+/// The table of a batch about the reference device (model.md §10: μ ±10%, H ±5%, E_B 35–200
+/// MV/m and more), from `host-sim lut --device devices/vhb-batch.toml`
+/// (tables/vhb-batch.bin): 44.35 to 45.95 Hz under its guaranteed cap.
+pub static BATCH_TABLE: &[u8] = include_bytes!("../../tables/vhb-batch.bin");
+
 /// The reference device of model.md §9, in f32.
 pub fn device() -> DeviceParams<f32> {
     REFERENCE_DEVICE.cast()

@@ -95,6 +95,7 @@ impl Checked {
         };
         settings.check()?;
         let top_volts = table.max_volts();
+        let batch = table.batch();
         Ok(Self {
             device,
             top_volts,
@@ -103,12 +104,12 @@ impl Checked {
                 None => table.bias_volts(settings.target_hz).map_err(Fault::Table)?,
             },
             max_volts: top_volts * ((1.0 - settings.margin) / (1.0 - table.margin())).min(1.0),
-            batch_limit_volts: table.batch().map(|b| b.limit_volts),
-            batch_modulus: table
-                .batch()
+            batch_limit_volts: batch.as_ref().map(|b| b.limit_volts),
+            batch_modulus: batch
+                .as_ref()
                 .map(|b| (b.low.shear_modulus, b.high.shear_modulus)),
             #[cfg(feature = "probe")]
-            batch_capacitance: table.batch().map(|b| b.capacitance),
+            batch_capacitance: batch.map(|b| b.capacitance),
         })
     }
 

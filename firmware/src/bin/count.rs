@@ -18,7 +18,7 @@ use de_resonator::{
     Controller, Dac8551, Device, Drive, Inputs, Integrator, Method, OutputStage, State, Table,
     Tuner, REFERENCE_DEVICE,
 };
-use de_resonator_firmware::reference::{amplifier, device, settings, TABLE};
+use de_resonator_firmware::reference::{amplifier, device, settings, BATCH_TABLE, TABLE};
 use de_resonator_firmware::stand_in::{EnableLine, RecordingBus};
 use de_resonator_firmware::{exit, stack};
 
@@ -381,10 +381,21 @@ fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
         ac_volts: 100.0,
         ac_hz: if track_seconds.is_some() { 44.0 } else { 40.0 },
         track_seconds,
-        // Self-sensing: λ from C as well, under a ±20 V probe.
+        // Self-sensing: λ from C as well, under a ±20 V probe, checked at the holds against
+        // the capacitance of a batch's table (model.md §10; 45 Hz: under the batch's cap).
         probe_volts: matches!(sensing, Sensing::Current).then_some(20.0),
         probe_hz: 500.0,
+        target_hz: if sensing == Sensing::Current {
+            45.0
+        } else {
+            settings().target_hz
+        },
         ..settings()
+    };
+    let table = if sensing == Sensing::Current {
+        BATCH_TABLE
+    } else {
+        TABLE
     };
     // A drive at the resonance is checked with the damping the device is told (model.md
     // §7): Q 60 at 44 Hz, half the plant's below.
@@ -392,7 +403,7 @@ fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
     if track_seconds.is_some() {
         told.damping = told.effective_mass() * core::f32::consts::TAU * 44.0 / 60.0;
     }
-    let Ok((c, _)) = Controller::start(told, TABLE, amp, s) else {
+    let Ok((c, _)) = Controller::start(told, table, amp, s) else {
         exit(1)
     };
     let mut slot = Some(c);
@@ -513,7 +524,7 @@ fn trim_cycle(sensing: Sensing, track_seconds: Option<f32>, track_ticks: u32) {
     let what = match (sensing, track_seconds) {
         (Sensing::Stretch, None) => "trim",
         (Sensing::Stretch, Some(_)) => "trim then tracking",
-        (Sensing::Current, _) => "sensorless trim (the current only, and λ from C under the probe)",
+        (Sensing::Current, _) => "sensorless trim (the current only, and λ from C under the probe, checked against a batch's table)",
     };
     defmt::info!(
         "board tick with {=str}, worst over the cycle: {=u32} instructions ({}; the call the firmware's tick task makes, `Ticker::tick_block`, over the stand-in bus and pin: the block through the front end, the controller, the DAC frame, a fault's entry; each tick's worst over its block whole, short of a buffer or stalled, the front end at most {=u32})",
