@@ -358,8 +358,10 @@ def tick_rate(ref):
         ticks = int(b["clock_tick"]) - int(a["clock_tick"])
         micros = int(b["clock_us"]) - int(a["clock_us"])
         rates[tick_hz] = ticks / micros * 1e6
-        # Within one microsecond of TIM2 over the run.
-        check(ticks >= 50 and abs(micros - ticks * 1e6 / tick_hz) <= 1.0,
+        # Within 5 µs of TIM2 over the run (≤ 10 ppm here): each tick's start is read a few µs
+        # late at most (QEMU takes the interrupt at the end of a translated block; 2 µs seen
+        # on a loaded machine). A reload one count off is the check above (12 ppm at 2 kHz).
+        check(ticks >= 50 and abs(micros - ticks * 1e6 / tick_hz) <= 5.0,
               f"tick_hz {tick_hz}: {ticks} ticks in {micros} µs of virtual time, "
               f"{rates[tick_hz]:.3f} Hz")
 
