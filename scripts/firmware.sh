@@ -128,3 +128,27 @@ cp "$elf" ../target/firmware-link.elf
 cd ..
 rm -rf target/firmware-loop
 python3 scripts/firmware_loop.py "$host_sim" target/firmware-link.elf target/firmware-loop
+
+step "a board that refuses before any voltage: the firmware in the loop says the core's words"
+# Two refusals at boot, made from shipped scenes: a target above a batch's guaranteed cap (the
+# table's), and a drive at resonance with no damping told while a trim is configured (the
+# swing's). Each report (its `refused` words), exit status, history and stream identical.
+rm -rf target/refused target/firmware-loop-refused
+mkdir -p target/refused
+sed -e 's/^name = .*/name = "refused-batch-cap"/' -e 's/^target_hz = 45.5/target_hz = 44.0/' \
+    scenes/batch-vhb.toml >target/refused/batch-cap.toml
+sed -e 's/^name = .*/name = "refused-resonance"/' \
+    -e 's/^ac_hz = 40.0/ac_hz = 44.0\ntrim_tolerance = 1e-3/' \
+    scenes/reference.toml >target/refused/resonance.toml
+python3 scripts/firmware_loop.py "$host_sim" target/firmware-link.elf target/firmware-loop-refused \
+    target/refused/batch-cap.toml target/refused/resonance.toml
+for s in batch-cap resonance; do
+    "$host_sim" --json run "target/refused/$s.toml" --firmware target/firmware-link.elf \
+        --out target/firmware-loop-refused/words >"target/refused/$s.json" || true
+    python3 - "target/refused/$s.json" <<'PY'
+import json, sys
+report = json.load(open(sys.argv[1]))
+assert report["refused"], f"{sys.argv[1]}: the board did not refuse"
+print("  refused, as the core:", report["refused"])
+PY
+done

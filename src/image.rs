@@ -8,7 +8,7 @@
 //! |---|---|---|
 //! | 0 | 4 | magic `DERI` |
 //! | 4 | 2 | version, u16 = 4 |
-//! | 6 | 2 | S, the number of settings it holds, u16 (21 now) |
+//! | 6 | 2 | S, the number of settings it holds, u16 (22 now) |
 //! | 8 | 4 | L, the image's length in bytes with its CRC, u32 |
 //! | 12 | 52 | the 13 device parameters in `DeviceParams` order (`jlim` 0 = neo-Hookean) |
 //! | 64 | 14 | the amplifier: DAC reference V, gain V/V, rail V, DAC bits u16 (16) |

@@ -275,6 +275,7 @@ fn every_setting_by_its_key() {
         "track_seconds",
         "probe_volts",
         "probe_hz",
+        "amplifier_slew_volts_per_second",
     ];
     assert_eq!(Setting::ALL.map(Setting::key), keys);
     for (id, key) in keys.iter().enumerate() {
@@ -371,6 +372,92 @@ fn each_bad_setting_is_refused_by_name() {
         assert!(
             matches!(fault, Fault::Tune(TuneError::InvalidMargin { .. })),
             "{margin}: {fault}"
+        );
+    }
+}
+
+/// The amplifier's declared slew rate (issue 60): a drive steeper than it is refused at boot
+/// with both figures — the AC's slope 2π·f·A (the derivative of A·sin(2π·f·t) at its zero
+/// crossing), a tracked drive's at 1.2 times the frequency on the ramp's rate, the ramp
+/// itself — and one within it boots. Not declared (the default), nothing is asked of it.
+#[test]
+fn a_drive_steeper_than_the_amplifier_is_refused_with_both_figures() {
+    let base = Settings {
+        ac_volts: 100.0,
+        ac_hz: 40.0,
+        ..Settings::for_target(44.0)
+    };
+    let slope = std::f64::consts::TAU * 40.0 * 100.0; // 25,132.7 V/s
+    let steeper = |settings: Settings| match start(settings) {
+        Err(Fault::Steeper {
+            setting,
+            volts_per_second,
+            amplifier_volts_per_second,
+        }) => {
+            let fault = Fault::Steeper {
+                setting,
+                volts_per_second,
+                amplifier_volts_per_second,
+            };
+            let words = fault.to_string();
+            assert!(
+                words.contains(&format!("{}", amplifier_volts_per_second))
+                    && words.contains(setting.key()),
+                "{words}"
+            );
+            (setting, f64::from(volts_per_second))
+        }
+        other => panic!("{other:?}"),
+    };
+    let (setting, v) = steeper(Settings {
+        amplifier_slew_volts_per_second: Some(20_000.0),
+        ..base
+    });
+    assert_eq!(setting, Setting::AcVolts);
+    assert!((v / slope - 1.0).abs() < 1e-6, "{v} {slope}");
+    assert!(start(Settings {
+        amplifier_slew_volts_per_second: Some(1.001 * slope as f32),
+        ..base
+    })
+    .is_ok());
+    assert!(start(base).is_ok());
+    // The bias ramp faster than the amplifier.
+    let (setting, v) = steeper(Settings {
+        amplifier_slew_volts_per_second: Some(30_000.0),
+        slew_volts_per_second: 40_000.0,
+        ..base
+    });
+    assert_eq!((setting, v), (Setting::SlewVoltsPerSecond, 40_000.0));
+    // A tracked drive at 44 Hz may follow up to 1.2 × 44 Hz while the bias moves at 10 kV/s
+    // (a build with tracking).
+    if cfg!(feature = "track") {
+        let tracked = Settings {
+            ac_hz: 44.0,
+            trim_tolerance: Some(1e-3),
+            track_seconds: Some(0.2),
+            amplifier_slew_volts_per_second: Some(30_000.0),
+            ..base
+        };
+        let (setting, v) = steeper(tracked);
+        let expected = std::f64::consts::TAU * 1.2 * 44.0 * 100.0 + 10_000.0;
+        assert_eq!(setting, Setting::AcVolts);
+        assert!((v / expected - 1.0).abs() < 1e-6, "{v} {expected}");
+    }
+    // A declared slew that is no number, or not positive, is a bad setting.
+    for bad in [0.0, -1.0, f32::NAN] {
+        let fault = start(Settings {
+            amplifier_slew_volts_per_second: Some(bad),
+            ..base
+        });
+        assert!(
+            matches!(
+                fault,
+                Err(Fault::Setting {
+                    setting: Setting::AmplifierSlewVoltsPerSecond,
+                    ..
+                })
+            ),
+            "{bad}: {fault:?}"
         );
     }
 }

@@ -11,6 +11,7 @@ mod common;
 use std::path::PathBuf;
 
 use de_resonator::acquire::FrontEnd;
+use de_resonator::controller::SettingSet;
 use de_resonator::flash::{RamFlash, RAM_PAGE_BYTES};
 use de_resonator::image::{self, AmplifierSpec, Image, PowerUp, DAC_BITS};
 use de_resonator::store;
@@ -58,6 +59,15 @@ fn settings() -> Settings {
         s.set(setting, value);
     }
     s
+}
+
+/// The settings declared after the day (not in `VALUES`): an older record or image lacks
+/// them, and says so.
+fn added_since() -> SettingSet {
+    Setting::ALL
+        .into_iter()
+        .filter(|s| VALUES.iter().all(|(key, _)| *key != s.key()))
+        .fold(SettingSet::EMPTY, SettingSet::with)
 }
 
 fn assert_every_value(what: &str, s: &Settings) {
@@ -127,7 +137,11 @@ fn the_saved_settings_of_2026_12_05_load_with_every_value() {
         .expect("a record");
     let (settings, new) = loaded.onto(Settings::for_target(0.0));
     assert_every_value(RECORD, &settings);
-    assert!(new.is_empty(), "every setting of the day saved: {new:?}");
+    assert_eq!(
+        new,
+        added_since(),
+        "the settings added since the day, and only they, new"
+    );
 }
 
 /// The image of 2026-12-05 parses with every value: the device, the amplifier, the power-up
@@ -141,5 +155,16 @@ fn the_image_of_2026_12_05_parses_with_every_value() {
     assert_eq!(image.power_up, PowerUp::Wait);
     assert_eq!(image.front_end, FrontEnd::NONE);
     assert_every_value(IMAGE, &image.settings);
-    assert!(image.defaulted.is_empty(), "{:?}", image.defaulted);
+    assert_eq!(
+        image.defaulted,
+        added_since(),
+        "defaulted: the settings added since"
+    );
+    for setting in added_since().iter() {
+        assert_eq!(
+            image.settings.get(setting),
+            setting.default_value(),
+            "{setting:?}"
+        );
+    }
 }

@@ -556,7 +556,8 @@ fn an_older_image_defaults_the_new_setting_and_a_newer_one_is_refused() {
     assert_eq!(good[at..at + 2], u16::from(lacking.id()).to_le_bytes());
     let mut older = good.clone();
     older.drain(at..at + 8);
-    older[6..8].copy_from_slice(&20u16.to_le_bytes());
+    let held = de_resonator::Setting::ALL.len() as u16 - 1;
+    older[6..8].copy_from_slice(&held.to_le_bytes());
     older[8..12].copy_from_slice(&((length - 8) as u32).to_le_bytes());
     reseal(&mut older);
     let read = Image::parse(&older).unwrap();

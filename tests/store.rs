@@ -135,7 +135,7 @@ fn a_blob_of_another_version_is_refused() {
         refused,
         Err(StoreError::Version {
             version: 7,
-            count: 21
+            count: Setting::ALL.len() as u16
         })
     );
     let message = refused.unwrap_err().to_string();
@@ -161,7 +161,7 @@ fn an_older_blob_keeps_its_values_and_a_newer_one_is_refused() {
     let older: Vec<u8> = 2u16
         .to_le_bytes()
         .into_iter()
-        .chain(20u16.to_le_bytes())
+        .chain((Setting::ALL.len() as u16 - 1).to_le_bytes())
         .chain(
             entries
                 .iter()
@@ -186,7 +186,7 @@ fn an_older_blob_keeps_its_values_and_a_newer_one_is_refused() {
     assert_eq!(new.iter().collect::<Vec<_>>(), [lacking]);
     // One more entry, of an id no setting has: refused by name.
     let mut newer = blob.to_vec();
-    newer[2..4].copy_from_slice(&22u16.to_le_bytes());
+    newer[2..4].copy_from_slice(&(Setting::ALL.len() as u16 + 1).to_le_bytes());
     newer.extend([200, 0, 0, 0, 0, 0, 128, 63]);
     assert_eq!(
         store::decode(&newer),
@@ -226,16 +226,16 @@ fn a_range_that_is_not_two_slots_is_refused() {
     }
 }
 
-/// The blob's documented layout: version 2, count, then each of the 21 settings as its id
-/// (u16), two zero bytes and its value (f32): 172 bytes; a blob whose count does not match
+/// The blob's documented layout: version 2, count, then each of the 22 settings as its id
+/// (u16), two zero bytes and its value (f32): 180 bytes; a blob whose count does not match
 /// its length is refused.
 #[test]
 fn the_blob_is_the_documented_one() {
     assert_eq!(BLOB_BYTES, 2 + 2 + 8 * de_resonator::Setting::ALL.len());
-    assert_eq!(BLOB_BYTES, 172);
+    assert_eq!(BLOB_BYTES, 180);
     let blob = store::encode(&nth(7));
     assert_eq!(u16::from_le_bytes([blob[0], blob[1]]), 2);
-    assert_eq!(u16::from_le_bytes([blob[2], blob[3]]), 21);
+    assert_eq!(u16::from_le_bytes([blob[2], blob[3]]), 22);
     for (k, entry) in blob[4..].chunks(8).enumerate() {
         assert_eq!(u16::from_le_bytes([entry[0], entry[1]]), k as u16);
         assert_eq!(&entry[2..4], [0, 0]);

@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use de_resonator::acquire::Stall;
-use de_resonator::DeviceParams;
+use de_resonator::{DeviceParams, Setting};
 use serde::Deserialize;
 
 use crate::engine::closed_loop::{Analog, CurrentMonitor, Loop, Scripted, Sensor};
@@ -267,7 +267,14 @@ pub fn parse(text: &str) -> Result<Scene, String> {
     // The device told must itself be valid: its errors name [device], not the plant made
     // from it.
     de_resonator::Device::new(nominal).map_err(|e| format!("[device]: {e}"))?;
-    let settings = crate::settings_file::from_table(&file.controller, "[controller]", None)?;
+    let mut settings = crate::settings_file::from_table(&file.controller, "[controller]", None)?;
+    // The board's image declares the amplifier the scene fits (its slew rate), unless the
+    // [controller] table says otherwise.
+    let declared = Setting::AmplifierSlewVoltsPerSecond;
+    let slew = file.amplifier.slew_volts_per_second;
+    if file.controller.get(declared.key()).is_none() && slew.is_finite() {
+        settings.set(declared, slew as f32);
+    }
     let plant = plant(&nominal, &file, settings.target_hz)?;
     if !(settings.tick_hz.is_finite() && settings.tick_hz > 0.0) {
         return Err(format!(

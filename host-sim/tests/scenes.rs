@@ -1148,6 +1148,44 @@ fn a_batch_scene_is_capped_by_its_guaranteed_limit() {
     );
 }
 
+/// The scene's amplifier is the one its image declares (issue 60): slewing at 20 kV/s, the
+/// reference scene's 100 V AC at 40 Hz (2π·40·100 = 25,133 V/s at its zero crossings) is
+/// refused at boot with both figures, 0 V throughout; at its 200 kV/s it drives; a
+/// `[controller]` that declares another slew rate has the last word.
+#[test]
+fn a_drive_steeper_than_the_scene_s_amplifier_is_refused_up_front() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/reference.toml");
+    let text = std::fs::read_to_string(path).unwrap();
+    let run_text = |text: &str| {
+        let mut s = scene::parse(text).unwrap();
+        s.run.history = false;
+        s.run.duration_seconds = 1.0;
+        s.run.run().unwrap()
+    };
+    let slow = text.replace(
+        "slew_volts_per_second = 200000.0",
+        "slew_volts_per_second = 20000.0",
+    );
+    let r = run_text(&slow);
+    let words = r.refused.clone().unwrap_or_default();
+    let slope = std::f64::consts::TAU * 40.0 * 100.0;
+    assert!(words.contains("20000 V/s"), "{words}");
+    assert!(
+        words.contains(&format!("{}", slope as u32)),
+        "{slope}: {words}"
+    );
+    assert_eq!(r.max_command_volts, 0.0);
+    assert!(r.plant_crossing.is_none());
+    let r = run_text(&text);
+    assert!(r.refused.is_none() && r.fault.is_none(), "{:?}", r.refused);
+    let told = slow.replace(
+        "[controller]",
+        "[controller]\namplifier_slew_volts_per_second = 30000.0",
+    );
+    let r = run_text(&told);
+    assert!(r.refused.is_none(), "{:?}", r.refused);
+}
+
 /// On the board the batch holds (model.md §10), by the self-sensed stretch at the held bias:
 /// the membrane 6% further pre-stretched than the batch's (exact) pre-stretch faults, saying
 /// the stretch from C against the batch's band there, each figure the scene's own (the

@@ -109,6 +109,13 @@ pub enum Fault {
         high: f32,
         volts: f32,
     },
+    /// The drive `setting` asks for (the AC's slope, or the bias ramp) is steeper than the
+    /// amplifier's declared slew rate (`amplifier_slew_volts_per_second`): both, V/s.
+    Steeper {
+        setting: Setting,
+        volts_per_second: f32,
+        amplifier_volts_per_second: f32,
+    },
 }
 
 impl fmt::Display for Fault {
@@ -214,6 +221,25 @@ impl fmt::Display for Fault {
                 Decimal(*drive_hz),
                 Decimal(*target_hz)
             ),
+            Fault::Steeper {
+                setting,
+                volts_per_second,
+                amplifier_volts_per_second,
+            } => {
+                let what = if *setting == Setting::SlewVoltsPerSecond {
+                    "the bias ramp (`slew_volts_per_second`)"
+                } else {
+                    "the AC drive's steepest slope (2π·ac_hz·ac_volts)"
+                };
+                write!(
+                    f,
+                    "{what} is {} V/s, steeper than the amplifier's declared slew rate {} V/s \
+                     (`amplifier_slew_volts_per_second`): lower `{}`",
+                    Decimal(*volts_per_second),
+                    Decimal(*amplifier_volts_per_second),
+                    setting.key()
+                )
+            }
             Fault::OutsideBatch {
                 stretch,
                 sigma,
@@ -352,6 +378,7 @@ declare_fault_kinds! {
     Fault::DriveSwing(_) => 23 "drive_swing",
     Fault::NearLimit { .. } => 24 "near_limit",
     Fault::OutsideBatch { .. } => 25 "outside_batch",
+    Fault::Steeper { .. } => 26 "steeper",
 }
 
 impl From<SettingError> for Fault {
@@ -359,6 +386,15 @@ impl From<SettingError> for Fault {
         match refused {
             SettingError::Setting { setting, value } => Fault::Setting { setting, value },
             SettingError::Margin { margin } => Fault::Tune(TuneError::InvalidMargin { margin }),
+            SettingError::Steeper {
+                setting,
+                volts_per_second,
+                amplifier_volts_per_second,
+            } => Fault::Steeper {
+                setting,
+                volts_per_second,
+                amplifier_volts_per_second,
+            },
         }
     }
 }
@@ -379,7 +415,8 @@ impl Fault {
             | Fault::PlanCrosses { .. }
             | Fault::PlanFailed(_)
             | Fault::Amplifier(_)
-            | Fault::DriveSwing(_) => FaultStage::Boot,
+            | Fault::DriveSwing(_)
+            | Fault::Steeper { .. } => FaultStage::Boot,
             Fault::Gate { .. }
             | Fault::Sensor { .. }
             | Fault::SensorImplausible { .. }

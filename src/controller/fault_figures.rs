@@ -234,6 +234,15 @@ impl Fault {
             } => {
                 p.f(stretch).f(sigma).f(low).f(high).f(volts);
             }
+            Fault::Steeper {
+                setting,
+                volts_per_second,
+                amplifier_volts_per_second,
+            } => {
+                p.at(&Setting::ALL, &setting)
+                    .f(volts_per_second)
+                    .f(amplifier_volts_per_second);
+            }
         }
         p.0
     }
@@ -358,6 +367,11 @@ impl Fault {
                 low: t.f()?,
                 high: t.f()?,
                 volts: t.f()?,
+            },
+            26 => Fault::Steeper {
+                setting: t.at(&Setting::ALL)?,
+                volts_per_second: t.f()?,
+                amplifier_volts_per_second: t.f()?,
             },
             _ => return None,
         })
@@ -749,6 +763,11 @@ mod tests {
                 low: b,
                 high: e,
                 volts: c,
+            },
+            Fault::Steeper {
+                setting: Setting::AcVolts,
+                volts_per_second: 25_132.7,
+                amplifier_volts_per_second: 20_000.0,
             },
         ];
         let problems = [

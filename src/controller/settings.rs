@@ -161,14 +161,32 @@ declare_settings! {
     /// every so many ticks).
     20 ProbeHz probe_hz: f32 = 500.0, "Hz",
         "at least 4x target_hz, a whole number of ticks per half period";
+    /// The amplifier's slew rate, V/s, as its maker states it (`None`: not declared): a
+    /// drive steeper than it is refused before it starts — the AC's steepest slope
+    /// 2π·ac_hz·ac_volts (a tracked drive's at the highest frequency it may follow, on the
+    /// bias moving at `slew_volts_per_second`), and the bias ramp.
+    21 AmplifierSlewVoltsPerSecond amplifier_slew_volts_per_second: Option<f32> = None, "V/s",
+        "> 0 or off; at least the AC's slope 2π·ac_hz·ac_volts and slew_volts_per_second";
 }
 
 /// A setting its checks refuse: which, with the value found (the controller's
 /// `Fault::Setting`); a margin out of range is the tuner's error (`Fault::Tune`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum SettingError {
-    Setting { setting: Setting, value: f32 },
-    Margin { margin: f32 },
+    Setting {
+        setting: Setting,
+        value: f32,
+    },
+    Margin {
+        margin: f32,
+    },
+    /// The drive `setting` asks for (the AC, or the bias ramp) moves the output faster than
+    /// the amplifier's declared slew rate: both, V/s.
+    Steeper {
+        setting: Setting,
+        volts_per_second: f32,
+        amplifier_volts_per_second: f32,
+    },
 }
 
 /// The f32 solve's allowance: the cap is (1 − margin)·(1 − F32_GUARD)·Φlimit in f32, so it
@@ -340,7 +358,38 @@ impl Settings {
                 margin: self.margin,
             });
         }
+        if let Some(slew) = self.amplifier_slew_volts_per_second {
+            let amplifier_volts_per_second = positive(Setting::AmplifierSlewVoltsPerSecond, slew)?;
+            let steeper = |setting, volts_per_second: f32| {
+                if volts_per_second <= amplifier_volts_per_second {
+                    Ok(())
+                } else {
+                    Err(SettingError::Steeper {
+                        setting,
+                        volts_per_second,
+                        amplifier_volts_per_second,
+                    })
+                }
+            };
+            steeper(Setting::SlewVoltsPerSecond, self.slew_volts_per_second)?;
+            steeper(Setting::AcVolts, self.ac_slope_volts_per_second())?;
+        }
         Ok(())
+    }
+
+    /// The steepest the AC drive moves the output, V/s: 2π·ac_hz·ac_volts; a tracked drive
+    /// at the highest frequency it may follow (`MAX_DETUNING` above the target's), on a bias
+    /// that may move at the ramp's rate meanwhile.
+    pub fn ac_slope_volts_per_second(&self) -> f32 {
+        let slope = core::f32::consts::TAU * self.ac_hz * self.ac_volts;
+        match self.track_seconds {
+            Some(_) => {
+                let highest =
+                    self.ac_hz.max(self.target_hz) * (1.0 + crate::estimate::lockin::MAX_DETUNING);
+                core::f32::consts::TAU * highest * self.ac_volts + self.slew_volts_per_second
+            }
+            None => slope,
+        }
     }
 }
 
