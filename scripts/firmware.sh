@@ -144,7 +144,7 @@ python3 scripts/firmware_loop.py "$host_sim" target/firmware-link.elf target/fir
     target/refused/batch-cap.toml target/refused/resonance.toml
 for s in batch-cap resonance; do
     "$host_sim" --json run "target/refused/$s.toml" --firmware target/firmware-link.elf \
-        --out target/firmware-loop-refused/words >"target/refused/$s.json" || true
+        --out target/firmware-loop-refused/words >"target/refused/$s.json" 2>/dev/null || true
     python3 - "target/refused/$s.json" <<'PY'
 import json, sys
 report = json.load(open(sys.argv[1]))
