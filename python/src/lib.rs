@@ -30,9 +30,48 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyBytes, PyDict, PyList};
 use serde::Serialize;
 
-/// A value error with the core's (or host-sim's) message.
+/// A value error with the core's (or host-sim's) message, in Python's words.
 fn value_error(why: impl std::fmt::Display) -> PyErr {
-    PyValueError::new_err(why.to_string())
+    PyValueError::new_err(pythonic(&why.to_string()))
+}
+
+/// host-sim's words for its command line, as this package is called: a flag `--ac-hz` is
+/// the keyword `ac_hz` (said once where the message gave both), and a build without BDF is
+/// this package's, not a cargo command's.
+fn pythonic(message: &str) -> String {
+    if message == host_sim::engine::solver::BDF_NOT_BUILT {
+        return "BDF is not in this package's build: method=\"reference-radau\" (Radau IIA 5) \
+                is the stiff method in every build"
+            .into();
+    }
+    let mut out = String::with_capacity(message.len());
+    let mut rest = message;
+    while let Some(at) = rest.find("--") {
+        let (before, from) = rest.split_at(at);
+        let name: String = from[2..]
+            .chars()
+            .take_while(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || *c == '-')
+            .collect();
+        if name.is_empty() {
+            out.push_str(&from[..2]);
+            rest = &from[2..];
+            continue;
+        }
+        let keyword = name.replace('-', "_");
+        let after = &from[2 + name.len()..];
+        // "ac_hz (--ac-hz)": the keyword was said already.
+        let repeated = before.ends_with(&format!("{keyword} (")) && after.starts_with(')');
+        if repeated {
+            out.push_str(&before[..before.len() - 2]);
+            rest = &after[1..];
+        } else {
+            out.push_str(before);
+            out.push_str(&keyword);
+            rest = after;
+        }
+    }
+    out.push_str(rest);
+    out
 }
 
 /// A file that cannot be read, as Python's own `open` says it: FileNotFoundError for a file

@@ -82,6 +82,30 @@ def test_the_stubs_take_what_the_docs_pass(tmp_path):
     assert dr.run_scene(scene).simulated_seconds == 0.2
 
 
+def test_errors_name_the_keywords_not_the_command_line():
+    # Each bad call's message names the keyword it was given by, never a host-sim flag
+    # (`--points`) or a cargo command.
+    device = dr.Device.reference()
+    calls = [
+        (lambda: device.sweep(points=10**6, bias_volts=4000, ac_volts=40), "points"),
+        (lambda: device.sweep(points=41, bias_volts=4000, ac_volts=40, quality_factor=-1),
+         "quality_factor"),
+        (lambda: device.curve(margin=2.0), "margin"),
+        (lambda: device.curve(points=1), "points"),
+        (lambda: dr.simulate(device, 4000.0, duration_seconds=0.1, ac_volts=10.0), "ac_hz"),
+        (lambda: dr.simulate(device, 4000.0, duration_seconds=0.1, ac_volts=10.0, ac_hz=-1.0),
+         "ac_hz"),
+        (lambda: dr.simulate(device, 4000.0, duration_seconds=0.1, method="reference-bdf"),
+         "reference-radau"),
+    ]
+    for call, keyword in calls:
+        with pytest.raises(ValueError) as raised:
+            call()
+        message = str(raised.value)
+        assert "--" not in message and "cargo" not in message, message
+        assert keyword in message, (keyword, message)
+
+
 def test_ctrl_c_stops_a_sweep_within_a_point():
     """docs/python.md: Ctrl-C stops a long call within a point. Measured against the same
     sweep's own run time on this machine (no fixed seconds): interrupted at a tenth of it,
