@@ -168,7 +168,11 @@ impl Controller {
             }
             Check::Batch => {
                 let volts = steady?;
-                let (low_farads, high_farads) = self.sensing.batch?.farads_at(volts)?;
+                // Between the bias held and the mean the window measured (an amplifier a
+                // little off its command moves the membrane with it): the hull of both.
+                let bands = self.sensing.batch?;
+                let (low_farads, _) = bands.farads_at(volts.min(estimate.volts))?;
+                let (_, high_farads) = bands.farads_at(volts.max(estimate.volts))?;
                 // The band as the lock-in reads C: through the flashed device's C1.
                 let per_stretch_squared = self.flashed.params().farads_per_stretch_squared();
                 let low = libm::sqrtf(low_farads / per_stretch_squared);
@@ -230,6 +234,63 @@ mod tests {
         };
         c.sensing.checking = Some((estimate, 0, None));
         (0..6).find_map(|k| c.check_sensed(k))
+    }
+
+    /// The batch's check alone (the last of `Check::ORDER`), on bands that read as stretches
+    /// 2.0 to 2.2 through the flashed C1 at every bias: an estimate whose widened interval
+    /// (4σ, then 0.1%) meets them passes; one that misses them faults with the band's ends
+    /// and the bias; none is made away from a steady bias or above the bands' last.
+    #[test]
+    fn the_batch_check_is_the_widened_estimate_against_the_band() {
+        use crate::table::{CapacitanceBand, CapacitanceBands, BATCH_BIASES};
+        let c1 = controller().flashed.params().farads_per_stretch_squared();
+        let mut bands = CapacitanceBands::default();
+        for (j, band) in bands.0.iter_mut().enumerate() {
+            *band = CapacitanceBand {
+                volts: 500.0 * j as f32,
+                low_farads: c1 * 4.0,
+                high_farads: c1 * 4.84,
+            };
+        }
+        let batch_check = |stretch: f32, sigma: f32, steady: Option<f32>, volts: f32| {
+            let mut c = controller();
+            c.sensing.batch = Some(bands);
+            let estimate = SensedStretch {
+                stretch,
+                sigma,
+                farads: c1 * stretch * stretch,
+                volts,
+            };
+            c.sensing.checking = Some((estimate, Check::ORDER.len() - 1, steady));
+            c.check_sensed(0)
+        };
+        assert_eq!(batch_check(2.1, 1e-3, Some(1000.0), 1000.0), None);
+        // 2.204 − 4·0.001 = 2.2, less 0.1%: meets the band's top.
+        assert_eq!(batch_check(2.204, 1e-3, Some(1000.0), 1000.0), None);
+        assert_eq!(batch_check(1.8, 0.05, Some(1000.0), 1000.0), None);
+        match batch_check(2.3, 0.01, Some(1000.0), 1000.0) {
+            Some(Fault::OutsideBatch {
+                stretch,
+                low,
+                high,
+                volts,
+                ..
+            }) => {
+                assert_eq!((stretch, volts), (2.3, 1000.0));
+                assert!(
+                    (low - 2.0).abs() < 1e-6 && (high - 2.2).abs() < 1e-6,
+                    "{low} {high}"
+                );
+            }
+            other => panic!("{other:?}"),
+        }
+        match batch_check(1.9, 1e-3, Some(1000.0), 1000.0) {
+            Some(Fault::OutsideBatch { .. }) => {}
+            other => panic!("{other:?}"),
+        }
+        assert_eq!(batch_check(2.3, 0.01, None, 1000.0), None);
+        let above = 500.0 * BATCH_BIASES as f32;
+        assert_eq!(batch_check(2.3, 0.01, Some(above), above), None);
     }
 
     /// An estimate that is not a number, or whose standard error is not, is a sensor fault
