@@ -193,7 +193,7 @@ impl Controller {
 }
 
 #[cfg(test)]
-#[allow(clippy::unwrap_used, clippy::indexing_slicing)] // a test fails by panicking
+#[allow(clippy::unwrap_used, clippy::indexing_slicing, clippy::panic)] // a test fails by panicking
 mod tests {
     extern crate std;
     use std::vec;
