@@ -271,9 +271,9 @@ pub fn parse(text: &str) -> Result<Scene, String> {
     // The board's image declares the amplifier the scene fits (its slew rate), unless the
     // [controller] table says otherwise.
     let declared = Setting::AmplifierSlewVoltsPerSecond;
-    let slew = file.amplifier.slew_volts_per_second;
-    if file.controller.get(declared.key()).is_none() && slew.is_finite() {
-        settings.set(declared, slew as f32);
+    let slew = file.amplifier.slew_volts_per_second as f32;
+    if file.controller.get(declared.key()).is_none() && slew.is_finite() && slew > 0.0 {
+        settings.set(declared, slew);
     }
     let plant = plant(&nominal, &file, settings.target_hz)?;
     if !(settings.tick_hz.is_finite() && settings.tick_hz > 0.0) {

@@ -336,7 +336,7 @@ fn spreads_of(value: &Bound<'_, PyAny>) -> PyResult<Vec<(String, Result<Spread, 
 fn warn(py: Python<'_>, lines: &[String]) -> PyResult<()> {
     let warnings = py.import("warnings")?;
     for line in lines {
-        warnings.call_method1("warn", (line.as_str(),))?;
+        warnings.call_method1("warn", (pythonic(line),))?;
     }
     Ok(())
 }

@@ -168,8 +168,11 @@ impl Controller {
             }
             Check::Batch => {
                 let volts = steady?;
-                // Between the bias held and the mean the window measured (an amplifier a
-                // little off its command moves the membrane with it): the hull of both.
+                // Between the bias held and the voltage the window measured at its blocks'
+                // ends (the bias ± the probe; an amplifier a little off its command moves the
+                // membrane with it): the hull of both. A ring left in the hold widens σ
+                // (the blocks' scatter, ∝ its amplitude) far more than it moves the mean of
+                // λ² (∝ its square).
                 let bands = self.sensing.batch?;
                 let (low_farads, _) = bands.farads_at(volts.min(estimate.volts))?;
                 let (_, high_farads) = bands.farads_at(volts.max(estimate.volts))?;

@@ -372,20 +372,25 @@ impl Settings {
                 }
             };
             steeper(Setting::SlewVoltsPerSecond, self.slew_volts_per_second)?;
-            steeper(Setting::AcVolts, self.ac_slope_volts_per_second())?;
+            // (A target that is no frequency is the tuner's to name.)
+            if target_ok {
+                steeper(Setting::AcVolts, self.ac_slope_volts_per_second())?;
+            }
         }
         Ok(())
     }
 
     /// The steepest the AC drive moves the output, V/s: 2π·ac_hz·ac_volts; a tracked drive
-    /// at the highest frequency it may follow (`MAX_DETUNING` above the target's), on a bias
-    /// that may move at the ramp's rate meanwhile.
+    /// at the highest frequency it may follow (`MAX_DETUNING` above the target, where the
+    /// tracker lets go), on a bias that may move at the ramp's rate meanwhile. The probe's
+    /// square wave and the trim's pulse (a drop) are steps by design, not counted.
     pub fn ac_slope_volts_per_second(&self) -> f32 {
         let slope = core::f32::consts::TAU * self.ac_hz * self.ac_volts;
         match self.track_seconds {
             Some(_) => {
-                let highest =
-                    self.ac_hz.max(self.target_hz) * (1.0 + crate::estimate::lockin::MAX_DETUNING);
+                let highest = self
+                    .ac_hz
+                    .max(self.target_hz * (1.0 + crate::estimate::lockin::MAX_DETUNING));
                 core::f32::consts::TAU * highest * self.ac_volts + self.slew_volts_per_second
             }
             None => slope,
