@@ -764,6 +764,15 @@ fn run_events_have_kinds_and_values() {
     );
     assert_eq!(events[on]["values"], serde_json::json!({}));
     assert!(events[at]["what"].as_str().unwrap().starts_with("at bias"));
+    // The board's cap: (1 − margin) of the limit `safe` finds in f64, less the f32 guard.
+    let cap = v["cap_volts"].as_f64().unwrap();
+    let safe = json(&["safe", "--json"])["max_bias_volts"]
+        .as_f64()
+        .unwrap();
+    assert!(
+        (cap / safe - 1.0).abs() < 1e-4 && cap <= safe,
+        "{cap} vs {safe}"
+    );
 }
 
 /// The stiff and extreme cases: no run fails silently; the guard refuses the steps past

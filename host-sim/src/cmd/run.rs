@@ -159,6 +159,10 @@ pub struct RunReport {
     pub target_hz: f64,
     pub bias_volts: f64,
     pub nominal_bias_volts: Option<f32>,
+    /// The most the board commands after its boot checks (`max_volts`: the cap from the
+    /// device's limit or a batch's guaranteed one, or the amplifier's top), V; `None` when
+    /// refused.
+    pub cap_volts: Option<f32>,
     pub refused: Option<String>,
     pub fault: Option<String>,
     /// The plant's natural frequency at the final bias; `None` where a fault or a refusal
@@ -196,6 +200,13 @@ impl fmt::Display for RunReport {
             self.device,
             sig(self.target_hz),
         )?;
+        if let Some(cap) = self.cap_volts {
+            writeln!(
+                f,
+                "cap             {} V: the most the board commands",
+                sig(f64::from(cap))
+            )?;
+        }
         match (&self.refused, &self.fault) {
             (Some(fault), _) => writeln!(f, "refused         {fault}: 0 V throughout")?,
             (None, Some(fault)) => writeln!(
@@ -404,6 +415,7 @@ pub fn report(scene: &Scene, run: &Run, files: Vec<String>) -> RunReport {
         target_hz: target,
         bias_volts: run.bias_volts,
         nominal_bias_volts: run.boot.filter(|b| b.driving).map(|b| b.bias_volts),
+        cap_volts: run.boot.filter(|b| b.driving).map(|b| b.max_volts),
         refused: run.refused.clone(),
         fault: run.fault_words.clone(),
         natural_frequency_hz: hz,
