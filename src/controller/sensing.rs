@@ -88,11 +88,13 @@ impl Controller {
         }
         let ramp = self.plan.ramp_volts(k);
         let positive = self.plan.probe_positive(k, ramp);
+        // The steady hold only matters to the batch's check: none kept without a batch.
         let steady = match self.sensing.steady {
             Some((volts, windows)) if volts == ramp => (volts, windows),
             _ => (ramp, 0),
         };
-        self.sensing.steady = self.held(k, ramp).then_some(steady);
+        let keep = self.sensing.batch.is_some() && self.held(k, ramp);
+        self.sensing.steady = keep.then_some(steady);
         let was = core::mem::replace(&mut self.sensing.last_positive, positive);
         let (Some(amps), Some(now), Some(was)) = (inputs.current_amps, positive, was) else {
             // No probe, or no current: the halves start again with the next edge.
