@@ -77,6 +77,28 @@ pub fn map<I: Sync, O: Send>(what: &str, items: &[I], job: impl Fn(&I) -> O + Sy
     out
 }
 
+/// `map` for few long jobs made of many units: one bar of `units` that the jobs advance
+/// themselves (`tick` once a unit).
+pub fn map_units<I: Sync, O: Send>(
+    what: &str,
+    items: &[I],
+    units: usize,
+    job: impl Fn(&I, &(dyn Fn() + Sync)) -> O + Sync,
+) -> Vec<O> {
+    let bar = bar(what, units);
+    let stop = STOP.with(|s| s.borrow().clone());
+    let tick = || bar.inc(1);
+    let out = items
+        .par_iter()
+        .map(|item| match &stop {
+            Some(flag) => stoppable(flag.clone(), || job(item, &tick)),
+            None => job(item, &tick),
+        })
+        .collect();
+    bar.finish_and_clear();
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use std::sync::atomic::{AtomicBool, Ordering};

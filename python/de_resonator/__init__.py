@@ -7,6 +7,8 @@ engines, built into ``de_resonator._native``): no second implementation.
   ``Device.reference()``; ``safe``, ``tune``, ``frequency``, ``tune_many``, ``curve``,
   ``family``, ``sweep`` (the frequency response), ``lut`` (the table to flash).
 - ``simulate``: the motion under a bias and an AC drive, shaped like SciPy's OdeResult.
+- ``poincare``, ``bifurcation``, ``lyapunov``: the driven membrane's nonlinear dynamics
+  (Poincaré sections, bifurcation diagrams by continuation, the largest Lyapunov exponent).
 - ``run_scene``: a scene file run as ``host-sim run`` runs it (the board against the plant).
 - ``image``, ``check_image``: the configuration image to flash, and what one holds.
 
@@ -14,9 +16,28 @@ Units are SI throughout and carried in names: ``bias_volts``, ``natural_frequenc
 ``duration_seconds``. See docs/python.md.
 """
 
-from ._native import Device, check_image, image, run_scene, simulate
+from ._native import (
+    Device,
+    bifurcation,
+    check_image,
+    image,
+    lyapunov,
+    poincare,
+    run_scene,
+    simulate,
+)
 
-__all__ = ["Device", "Result", "check_image", "image", "run_scene", "simulate"]
+__all__ = [
+    "Device",
+    "Result",
+    "bifurcation",
+    "check_image",
+    "image",
+    "lyapunov",
+    "poincare",
+    "run_scene",
+    "simulate",
+]
 
 
 class Result(dict):

@@ -141,6 +141,54 @@ def simulate(
     1/s, `volts` V, `status` 0 or 1, `message`, `success`, `t_events`, `y_events`, `limit`,
     `min_stretch`, `max_stretch`, `nfev`)."""
 
+def poincare(
+    device: Device,
+    bias_volts: float,
+    ac_volts: float,
+    ac_hz: float,
+    *,
+    periods: int,
+    transient_periods: int = 0,
+    y0: Optional[ArrayLike] = None,
+    damping: Optional[float] = None,
+    rtol: Optional[float] = None,
+) -> Result:
+    """A Poincaré section at the drive's phase 0: `stretch`, `velocity` (1/s) at `t` = k/ac_hz,
+    k from `transient_periods` on; `y0` one start (stretch, dλ/dt) or an n × 2 array (rows);
+    default the rest state at the bias. `limit`, `limit_time_seconds`, `stopped` per run."""
+
+def bifurcation(
+    device: Device,
+    bias_volts: ArrayLike,
+    ac_hz: ArrayLike,
+    ac_volts: ArrayLike,
+    *,
+    periods: int,
+    transient_periods: int = 0,
+    direction: Literal["up", "down", "both"] = "both",
+    y0: Optional[ArrayLike] = None,
+    damping: Optional[float] = None,
+    rtol: Optional[float] = None,
+) -> Result:
+    """A bifurcation diagram by continuation over the one of `bias_volts`, `ac_hz`, `ac_volts`
+    given as an increasing array: `parameter` and `direction` per row, `varied`, `stretch` and
+    `velocity` (rows × periods), `limit`, `limit_time_seconds`, `stopped` per row."""
+
+def lyapunov(
+    device: Device,
+    bias_volts: float,
+    ac_volts: float = 0.0,
+    ac_hz: float = 0.0,
+    *,
+    periods: int = 200,
+    transient_periods: int = 20,
+    y0: Optional[ArrayLike] = None,
+    damping: Optional[float] = None,
+    rtol: Optional[float] = None,
+) -> Result:
+    """The largest Lyapunov exponent, 1/s (`exponent`), with its convergence (`t` s,
+    `estimate` 1/s), `interval_seconds`, `limit`, `limit_time_seconds`, `stopped`."""
+
 def run_scene(scene: Union[str, PathLike[str]]) -> Result:
     """A scene (a file's path, or its TOML text) as `host-sim run` runs it: the report
     (`run --json`'s keys) and `history` (per tick: `time_seconds` s, `dac_code`, `dac_on`,

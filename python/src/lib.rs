@@ -4,6 +4,8 @@
 //! reports are the CLI's `--json` ones, as Python objects. The package around it
 //! (`python/de_resonator`) adds the result type and the type stubs.
 
+mod studies;
+
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{mpsc, Arc};
@@ -1097,6 +1099,9 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Device_>()?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
     m.add_function(wrap_pyfunction!(run_scene, m)?)?;
+    m.add_function(wrap_pyfunction!(studies::poincare, m)?)?;
+    m.add_function(wrap_pyfunction!(studies::bifurcation, m)?)?;
+    m.add_function(wrap_pyfunction!(studies::lyapunov, m)?)?;
     m.add_function(wrap_pyfunction!(image, m)?)?;
     m.add_function(wrap_pyfunction!(check_image, m)?)?;
     m.add_function(wrap_pyfunction!(_device_from_keys, m)?)?;

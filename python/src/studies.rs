@@ -1,0 +1,318 @@
+//! The nonlinear studies from Python (docs/python.md): Poincaré sections, bifurcation
+//! diagrams by continuation and the largest Lyapunov exponent, over host-sim's
+//! `study::stroboscopic` and `study::lyapunov` (the CLI's `poincare`, `bifurcation` and
+//! `lyapunov` run the same code).
+
+use host_sim::engine::solver::Tolerance;
+use host_sim::progress;
+use host_sim::study::lyapunov as exponent;
+use host_sim::study::stroboscopic::{
+    self, Direction, Driven, Parameter, Point, Section, STUDY_TOLERANCE,
+};
+use numpy::ndarray::Array2;
+use numpy::IntoPyArray;
+use pyo3::exceptions::PyTypeError;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+use super::{numbers_of, stoppable, value_error, wrap, Device_};
+
+/// The drive on `device` (its damping replaced if asked), at `rtol` (atol the same).
+fn driven(
+    device: &Device_,
+    bias_volts: f64,
+    ac_volts: f64,
+    ac_hz: f64,
+    damping: Option<f64>,
+    rtol: Option<f64>,
+) -> PyResult<Driven> {
+    let mut params = device.params;
+    if let Some(c) = damping {
+        params.damping = c;
+    }
+    let d = Driven {
+        params,
+        bias_volts,
+        ac_volts,
+        ac_hz,
+        tolerance: Tolerance::both(rtol.unwrap_or(STUDY_TOLERANCE)),
+    };
+    d.device().map_err(value_error)?;
+    Ok(d)
+}
+
+/// Start states from `y0`: `None` (the rest state), a pair (stretch, dλ/dt in 1/s) or an
+/// n × 2 array of them; whether it was many (the results then have a leading axis).
+fn starts(y0: Option<&Bound<'_, PyAny>>, rest: impl Fn() -> PyResult<Point>) -> PyResult<(Vec<Point>, bool)> {
+    let Some(y0) = y0 else {
+        return Ok((vec![rest()?], false));
+    };
+    let (shape, values) = numbers_of("y0", y0)?;
+    let many = match shape.as_slice() {
+        [2] => false,
+        [_, 2] => true,
+        _ => {
+            return Err(value_error(format!(
+                "y0 of shape {shape:?}: a pair (stretch, velocity in 1/s) or an n × 2 array"
+            )))
+        }
+    };
+    let points = values
+        .chunks(2)
+        .map(|p| Point {
+            stretch: p[0],
+            velocity_per_second: p[1],
+        })
+        .collect();
+    Ok((points, many))
+}
+
+/// A count given as an int ≥ `least`.
+fn count(name: &str, value: i64, least: i64) -> PyResult<usize> {
+    if value < least {
+        return Err(value_error(format!("{name} {value}: need at least {least}")));
+    }
+    usize::try_from(value).map_err(value_error)
+}
+
+/// Sections as rows of `stretch` and `velocity` (NaN past a stopped run's last point), with
+/// each run's first crossing and why it stopped, into `dict`.
+fn put_sections(
+    py: Python<'_>,
+    dict: &Bound<'_, PyDict>,
+    sections: &[Section],
+    periods: usize,
+    many: bool,
+) -> PyResult<()> {
+    let mut stretch = Array2::<f64>::from_elem((sections.len(), periods), f64::NAN);
+    let mut velocity = stretch.clone();
+    for (i, s) in sections.iter().enumerate() {
+        for (k, p) in s.points.iter().enumerate() {
+            stretch[(i, k)] = p.stretch;
+            velocity[(i, k)] = p.velocity_per_second;
+        }
+    }
+    let limits: Vec<Option<&str>> = sections
+        .iter()
+        .map(|s| s.first_limit.map(|(m, _)| m.name()))
+        .collect();
+    let times: Vec<f64> = sections
+        .iter()
+        .map(|s| s.first_limit.map_or(f64::NAN, |(_, t)| t))
+        .collect();
+    let stopped: Vec<Option<String>> = sections.iter().map(|s| s.stopped.clone()).collect();
+    if many {
+        dict.set_item("stretch", stretch.into_pyarray(py))?;
+        dict.set_item("velocity", velocity.into_pyarray(py))?;
+        dict.set_item("limit", PyList::new(py, limits)?)?;
+        dict.set_item("limit_time_seconds", times.into_pyarray(py))?;
+        dict.set_item("stopped", PyList::new(py, stopped)?)?;
+    } else {
+        dict.set_item("stretch", stretch.row(0).to_owned().into_pyarray(py))?;
+        dict.set_item("velocity", velocity.row(0).to_owned().into_pyarray(py))?;
+        dict.set_item("limit", limits[0])?;
+        dict.set_item("limit_time_seconds", times[0])?;
+        dict.set_item("stopped", stopped[0].clone())?;
+    }
+    Ok(())
+}
+
+/// A Poincaré section of the driven membrane (docs/python.md): `stretch` and `velocity`
+/// (1/s) at t = k/ac_hz, k = transient_periods, …, transient_periods + periods − 1, the drive
+/// Φ(t) = bias_volts + ac_volts·sin(2π·ac_hz·t); `t` those times. `y0`: the start (stretch,
+/// dλ/dt in 1/s), or an n × 2 array of starts (rows of the results, computed on all cores);
+/// default the rest state at the bias. `limit`, `limit_time_seconds`: the first check of
+/// docs/model.md §6 that failed along each run; `stopped`: why a run ended early.
+#[pyfunction]
+#[pyo3(signature = (device, bias_volts, ac_volts, ac_hz, *, periods, transient_periods = 0, y0 = None, damping = None, rtol = None))]
+#[allow(clippy::too_many_arguments)]
+pub fn poincare<'py>(
+    py: Python<'py>,
+    device: &Device_,
+    bias_volts: f64,
+    ac_volts: f64,
+    ac_hz: f64,
+    periods: i64,
+    transient_periods: i64,
+    y0: Option<&Bound<'py, PyAny>>,
+    damping: Option<f64>,
+    rtol: Option<f64>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let d = driven(device, bias_volts, ac_volts, ac_hz, damping, rtol)?;
+    let (periods, transient) = (
+        count("periods", periods, 1)?,
+        count("transient_periods", transient_periods, 0)?,
+    );
+    let (points, many) = starts(y0, || d.rest().map_err(value_error))?;
+    let work = points.len() as f64 * (transient + periods) as f64;
+    if work > stroboscopic::MAX_SECTION_POINTS {
+        return Err(value_error(format!(
+            "{work} drive periods in all: more than {}",
+            stroboscopic::MAX_SECTION_POINTS
+        )));
+    }
+    let sections = stoppable(py, || {
+        let out = progress::map("poincare", &points, |&from| {
+            stroboscopic::section(&d, from, transient, periods)
+        });
+        let out: Vec<Section> = out.into_iter().collect::<Result<_, _>>()?;
+        if out.iter().any(|s| s.stopped.as_deref() == Some(progress::INTERRUPTED)) {
+            return Err(progress::INTERRUPTED.to_string());
+        }
+        Ok(out)
+    })?;
+    let dict = PyDict::new(py);
+    let t: Vec<f64> = (transient..transient + periods)
+        .map(|k| k as f64 / ac_hz)
+        .collect();
+    dict.set_item("t", t.into_pyarray(py))?;
+    put_sections(py, &dict, &sections, periods, many)?;
+    wrap(py, dict.into_any())
+}
+
+/// A bifurcation diagram by continuation (docs/python.md): exactly one of `bias_volts`,
+/// `ac_volts`, `ac_hz` is an increasing array, the parameter varied. Each walk (`direction`:
+/// "up", "down" or "both", the two beside each other) starts from `y0` (default the rest
+/// state at its first value's bias) and each next value from the previous one's last
+/// section point. Returns `parameter` (the value of each row, in the order walked),
+/// `direction` (each row's walk), `varied` (the parameter's name), and `stretch`, `velocity`
+/// (rows × periods: the Poincaré points), `limit`, `limit_time_seconds`, `stopped` per row.
+#[pyfunction]
+#[pyo3(signature = (device, bias_volts, ac_hz, ac_volts, *, periods, transient_periods = 0, direction = "both", y0 = None, damping = None, rtol = None))]
+#[allow(clippy::too_many_arguments)]
+pub fn bifurcation<'py>(
+    py: Python<'py>,
+    device: &Device_,
+    bias_volts: &Bound<'py, PyAny>,
+    ac_hz: &Bound<'py, PyAny>,
+    ac_volts: &Bound<'py, PyAny>,
+    periods: i64,
+    transient_periods: i64,
+    direction: &str,
+    y0: Option<&Bound<'py, PyAny>>,
+    damping: Option<f64>,
+    rtol: Option<f64>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let (periods, transient) = (
+        count("periods", periods, 1)?,
+        count("transient_periods", transient_periods, 0)?,
+    );
+    let direction = match direction {
+        "up" => Direction::Up,
+        "down" => Direction::Down,
+        "both" => Direction::Both,
+        other => {
+            return Err(value_error(format!(
+                "direction `{other}`: `up`, `down` or `both`"
+            )))
+        }
+    };
+    let mut varied = None;
+    let mut fixed = [0.0; 3];
+    for (i, (name, parameter, given)) in [
+        ("bias_volts", Parameter::BiasVolts, bias_volts),
+        ("ac_volts", Parameter::AcVolts, ac_volts),
+        ("ac_hz", Parameter::AcHz, ac_hz),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let (shape, values) = numbers_of(name, given)?;
+        match shape.len() {
+            0 => fixed[i] = values[0],
+            1 if varied.is_none() => {
+                fixed[i] = values.first().copied().unwrap_or(f64::NAN);
+                varied = Some((parameter, values));
+            }
+            1 => {
+                return Err(value_error(
+                    "only one of bias_volts, ac_volts and ac_hz may be an array",
+                ))
+            }
+            _ => return Err(value_error(format!("{name}: a number or a 1-D array"))),
+        }
+    }
+    let Some((parameter, values)) = varied else {
+        return Err(PyTypeError::new_err(
+            "one of bias_volts, ac_volts and ac_hz must be an array: the values to vary",
+        ));
+    };
+    let base = driven(device, fixed[0], fixed[1], fixed[2], damping, rtol)?;
+    let from = match y0 {
+        None => None,
+        Some(y) => match starts(Some(y), || Err(value_error("no y0")))? {
+            (p, false) => Some(p[0]),
+            (_, true) => return Err(value_error("y0: one start (a pair) for a diagram")),
+        },
+    };
+    let rows = stoppable(py, || {
+        stroboscopic::bifurcation(&base, parameter, &values, direction, from, transient, periods)
+    })?;
+    let dict = PyDict::new(py);
+    dict.set_item("varied", parameter.name())?;
+    let values: Vec<f64> = rows.iter().map(|r| r.value).collect();
+    dict.set_item("parameter", values.into_pyarray(py))?;
+    let walks: Vec<&str> = rows
+        .iter()
+        .map(|r| match r.direction {
+            Direction::Down => "down",
+            _ => "up",
+        })
+        .collect();
+    dict.set_item("direction", PyList::new(py, walks)?)?;
+    let sections: Vec<Section> = rows.into_iter().map(|r| r.section).collect();
+    put_sections(py, &dict, &sections, periods, true)?;
+    wrap(py, dict.into_any())
+}
+
+/// The largest Lyapunov exponent (docs/python.md), 1/s, from the variational equation along
+/// the motion under Φ(t) = bias_volts + ac_volts·sin(2π·ac_hz·t) from `y0` (default the rest
+/// state at the bias), renormalised once a drive period (without a drive, once a period of
+/// the small oscillation at the start), over `periods` of them after `transient_periods`.
+/// Returns `exponent`, its convergence (`t` s after the transient, `estimate` 1/s),
+/// `interval_seconds`, `limit`, `limit_time_seconds`, `stopped`.
+#[pyfunction]
+#[pyo3(signature = (device, bias_volts, ac_volts = 0.0, ac_hz = 0.0, *, periods = 200, transient_periods = 20, y0 = None, damping = None, rtol = None))]
+#[allow(clippy::too_many_arguments)]
+pub fn lyapunov<'py>(
+    py: Python<'py>,
+    device: &Device_,
+    bias_volts: f64,
+    ac_volts: f64,
+    ac_hz: f64,
+    periods: i64,
+    transient_periods: i64,
+    y0: Option<&Bound<'py, PyAny>>,
+    damping: Option<f64>,
+    rtol: Option<f64>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let d = driven(device, bias_volts, ac_volts, ac_hz, damping, rtol)?;
+    let (periods, transient) = (
+        count("periods", periods, 1)?,
+        count("transient_periods", transient_periods, 0)?,
+    );
+    let from = match starts(y0, || d.rest().map_err(value_error))? {
+        (p, false) => p[0],
+        (_, true) => return Err(value_error("y0: one start (a pair) for an exponent")),
+    };
+    let out = stoppable(py, || {
+        let out = exponent::lyapunov(&d, from, transient, periods)?;
+        match out.stopped.as_deref() {
+            Some(progress::INTERRUPTED) => Err(progress::INTERRUPTED.to_string()),
+            _ => Ok(out),
+        }
+    })?;
+    let dict = PyDict::new(py);
+    dict.set_item("exponent", out.per_second)?;
+    let (t, estimate): (Vec<f64>, Vec<f64>) = out.convergence.iter().copied().unzip();
+    dict.set_item("t", t.into_pyarray(py))?;
+    dict.set_item("estimate", estimate.into_pyarray(py))?;
+    dict.set_item("interval_seconds", out.interval_seconds)?;
+    dict.set_item("limit", out.first_limit.map(|(m, _)| m.name()))?;
+    dict.set_item(
+        "limit_time_seconds",
+        out.first_limit.map_or(f64::NAN, |(_, t)| t),
+    )?;
+    dict.set_item("stopped", out.stopped)?;
+    wrap(py, dict.into_any())
+}
