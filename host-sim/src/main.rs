@@ -95,6 +95,29 @@ enum Command {
     /// near f0/2, f0 and 2·f0, f0 the small-oscillation frequency at the bias). Writes
     /// sweep.csv and sweep.svg into --out.
     Sweep(cmd::sweep::SweepArgs),
+    /// Poincaré section at the drive's phase 0, from one or many start states.
+    ///
+    /// The driven membrane's Poincaré section: the state (stretch, dλ/dt) at t = k/f under
+    /// Φ(t) = bias + ac·sin(2π·f·t), from one or many start states (`--y0 "S,V;S,V"`, run on
+    /// all cores), the checks of model.md §6 watched along each run. Writes poincare.csv and
+    /// poincare.svg into --out.
+    Poincare(cmd::poincare::PoincareArgs),
+    /// Bifurcation diagram by continuation, walked up and down.
+    ///
+    /// A bifurcation diagram by continuation: the Poincaré stretches at each value of the AC
+    /// amplitude, the drive frequency or the bias (--vary), each value started from the
+    /// previous one's end state, walked up and down (each walk from its own start, the two
+    /// beside each other) so that hysteresis and jumps show; the first value at which a walk
+    /// crossed a limit of model.md §6 marked. Writes bifurcation.csv and bifurcation.svg into
+    /// --out.
+    Bifurcation(cmd::bifurcation::BifurcationArgs),
+    /// Largest Lyapunov exponent, with its convergence.
+    ///
+    /// The largest Lyapunov exponent (1/s) of the driven membrane, from the variational
+    /// equation along the motion, the tangent renormalised once a drive period (without a
+    /// drive, once a period of the small oscillation at the start); the running estimate
+    /// shows its convergence. Writes lyapunov.csv and lyapunov.svg into --out.
+    Lyapunov(cmd::lyapunov::LyapunovArgs),
     /// Write the configuration image the firmware reads, or check one (--check).
     ///
     /// Write the configuration image the firmware reads from its own flash sector (sector 11,
@@ -153,6 +176,11 @@ fn main() -> ExitCode {
         Command::Lut(args) => cmd::lut::lut(&args).map(|r| emit(&r, json)),
         Command::Report(args) => cmd::report::precision(&args).map(|r| emit(&r, json)),
         Command::Sweep(args) => cmd::sweep::sweep(&args).map(|r| emit(&r, json)),
+        Command::Poincare(args) => cmd::poincare::poincare(&args).map(|r| emit(&r, json)),
+        Command::Bifurcation(args) => {
+            cmd::bifurcation::bifurcation(&args).map(|r| emit(&r, json))
+        }
+        Command::Lyapunov(args) => cmd::lyapunov::lyapunov(&args).map(|r| emit(&r, json)),
         Command::Image(args) => cmd::image::image(&args).map(|r| emit(&r, json)),
         Command::Console(args) => cmd::console::console(&args, json).map(|r| emit(&r, json)),
         Command::Serve(args) => cmd::serve::serve(&args).map(|r| emit(&r, json)),

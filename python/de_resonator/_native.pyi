@@ -135,11 +135,14 @@ def simulate(
     start: Literal["equilibrium", "prestretch"] = "equilibrium",
     damping: Optional[float] = None,
     stop_at_limit: bool = True,
+    y0: Optional[ArrayLike] = None,
+    t_eval: Optional[ArrayLike] = None,
 ) -> Result:
     """The motion under Φ(t) = bias_volts + ac_volts·sin(2π·ac_hz·t), checked against
     docs/model.md §6: a Result like SciPy's OdeResult (`t` s, `y` 2 × n: stretch and dλ/dt
     1/s, `volts` V, `status` 0 or 1, `message`, `success`, `t_events`, `y_events`, `limit`,
-    `min_stretch`, `max_stretch`, `nfev`)."""
+    `min_stretch`, `max_stretch`, `nfev`). `y0`: a start (stretch, dλ/dt 1/s) over `start`;
+    `t_eval`: the times to give the state at, as SciPy's."""
 
 def poincare(
     device: Device,

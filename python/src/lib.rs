@@ -786,15 +786,18 @@ fn curves<'py>(
 /// `verlet`, `implicit-midpoint`, each `-f32` as on the target or `-f64`); `step_seconds`:
 /// the output spacing (default 1/64 of the period at 0 V); `start`: `equilibrium` (at rest
 /// at the bias) or `prestretch` (the voltage switched on at t = 0); `damping` (N·s)
-/// overrides the device's. Returns a Result shaped like SciPy's OdeResult: `t` (s), `y`
+/// overrides the device's; `y0`: a start state of one's own (stretch, dλ/dt in 1/s) over
+/// `start`; `t_eval`: the times (s, increasing, within the run) to give the state at, as
+/// SciPy's (the reference's dense output; a core method's quintic through its step ends).
+/// Returns a Result shaped like SciPy's OdeResult: `t` (s), `y`
 /// (2 × n: stretch, dλ/dt in 1/s), `volts`, `status` (0: the end reached with no limit
 /// crossed; 1: a limit crossed, its time in `t_events[0]`, the state in `y_events[0]`,
 /// its mode in `message` and `limit`), `success`, `min_stretch`, `max_stretch` (over the
 /// whole run), `nfev` (the adaptive solver's right-hand sides). With `stop_at_limit` (the
-/// default) the samples end at the crossing, as at SciPy's terminal event; without, they
-/// run to the end.
+/// default) the samples end at the crossing, as at SciPy's terminal event (with `t_eval`,
+/// the times before it); without, they run to the end.
 #[pyfunction]
-#[pyo3(signature = (device, bias_volts, *, duration_seconds, ac_volts = 0.0, ac_hz = None, method = "reference", rtol = None, atol = None, step_seconds = None, start = "equilibrium", damping = None, stop_at_limit = true))]
+#[pyo3(signature = (device, bias_volts, *, duration_seconds, ac_volts = 0.0, ac_hz = None, method = "reference", rtol = None, atol = None, step_seconds = None, start = "equilibrium", damping = None, stop_at_limit = true, y0 = None, t_eval = None))]
 #[allow(clippy::too_many_arguments)]
 fn simulate<'py>(
     py: Python<'py>,
@@ -810,7 +813,27 @@ fn simulate<'py>(
     start: &str,
     damping: Option<f64>,
     stop_at_limit: bool,
+    y0: Option<&Bound<'py, PyAny>>,
+    t_eval: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyAny>> {
+    let y0 = match y0.map(|y| numbers_of("y0", y)).transpose()? {
+        None => None,
+        Some((shape, v)) if shape == [2] => Some([v[0], v[1]]),
+        Some((shape, _)) => {
+            return Err(value_error(format!(
+                "y0 of shape {shape:?}: a pair (stretch, velocity in 1/s)"
+            )))
+        }
+    };
+    let t_eval = match t_eval.map(|t| numbers_of("t_eval", t)).transpose()? {
+        None => None,
+        Some((shape, v)) if shape.len() == 1 => Some(v),
+        Some((shape, _)) => {
+            return Err(value_error(format!(
+                "t_eval of shape {shape:?}: a 1-D array of times"
+            )))
+        }
+    };
     let choice = Choice::ALL
         .into_iter()
         .find(|c| c.name() == method)
@@ -834,6 +857,7 @@ fn simulate<'py>(
         damping,
         duration_seconds,
         start,
+        y0,
         method: choice,
         step_seconds,
         rtol,
@@ -844,14 +868,24 @@ fn simulate<'py>(
         .map_err(value_error)?;
     let (ac_hz, tolerance) = (scene.drive_hz, scene.tolerance);
     let out = stoppable(py, || {
-        engine::simulate(&scene, choice, step).map_err(|e| e.to_string())
+        engine::simulate_at(&scene, choice, step, t_eval.as_deref()).map_err(|e| e.to_string())
     })?;
-    let mut t: Vec<f64> = (0..out.samples.len())
-        .map(|k| k as f64 * out.step_seconds)
-        .collect();
-    let (mut stretch, mut rate) = (out.samples.clone(), out.velocities.clone());
+    let (mut t, mut stretch, mut rate) = match &out.evaluated {
+        Some(at) => (
+            at.times_seconds.clone(),
+            at.stretch.clone(),
+            at.velocity_per_second.clone(),
+        ),
+        None => (
+            (0..out.samples.len())
+                .map(|k| k as f64 * out.step_seconds)
+                .collect(),
+            out.samples.clone(),
+            out.velocities.clone(),
+        ),
+    };
     // Stopped at the first crossing, as SciPy's terminal event: the samples before it, then
-    // the crossing itself.
+    // the crossing itself (with `t_eval`, as SciPy: the times asked for before it only).
     if let (true, Some((_, at)), Some((x, v))) =
         (stop_at_limit, out.first_limit, out.first_limit_state)
     {
@@ -859,9 +893,11 @@ fn simulate<'py>(
         t.truncate(before);
         stretch.truncate(before);
         rate.truncate(before);
-        t.push(at);
-        stretch.push(x);
-        rate.push(v);
+        if out.evaluated.is_none() {
+            t.push(at);
+            stretch.push(x);
+            rate.push(v);
+        }
     }
     let n = t.len();
     let volts: Vec<f64> = t

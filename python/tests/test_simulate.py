@@ -161,3 +161,37 @@ def test_ctrl_c_stops_a_long_simulation_cleanly():
     assert lines[0].startswith("interrupted after"), out.stdout
     assert float(lines[0].split()[2]) < 2.0
     assert lines[1] == "True"
+
+
+@pytest.mark.parametrize("method,within", [("reference", 1e-9), ("reference-radau", 1e-6),
+                                           ("rk4-f64", 1e-5)])
+def test_y0_and_t_eval_as_scipy_means_them(method, within):
+    rng = np.random.default_rng(621)
+    for device in [dr.Device.reference(), *random_devices(3, 621)]:
+        bias = 0.5 * device.safe(margin=0.3).max_bias_volts
+        f0 = device.frequency(bias)
+        model = Model(device.to_dict())
+        rest = model.stretch_for_bias(bias, device.safe(margin=0.0).limit["stretch"])
+        y0 = (rest * 1.002, 0.3 * rng.uniform(-1, 1))
+        duration = 8 / f0
+        t_eval = np.sort(rng.uniform(0, duration, 37))
+        ours = dr.simulate(device, bias, ac_volts=0.05 * bias, ac_hz=1.3 * f0,
+                           duration_seconds=duration, method=method, y0=y0, t_eval=t_eval,
+                           step_seconds=1 / (200 * f0))
+        assert ours.status == 0 and np.array_equal(ours.t, t_eval)
+        volts = lambda s: bias + 0.05 * bias * np.sin(2 * np.pi * 1.3 * f0 * s)
+        theirs = solve_ivp(model.rhs, (0.0, duration), list(y0), method="DOP853",
+                           t_eval=t_eval, args=(volts,), rtol=1e-12, atol=1e-12)
+        swing = np.ptp(theirs.y[0])
+        assert np.max(np.abs(ours.y[0] - theirs.y[0])) < within * swing, method
+        assert np.max(np.abs(ours.y[1] - theirs.y[1])) < within * np.ptp(theirs.y[1]), method
+
+
+def test_t_eval_outside_the_run_or_unsorted_is_refused():
+    device = dr.Device.reference()
+    with pytest.raises(ValueError, match="outside the run"):
+        dr.simulate(device, 5000.0, duration_seconds=0.1, t_eval=[0.05, 0.2])
+    with pytest.raises(ValueError, match="increasing"):
+        dr.simulate(device, 5000.0, duration_seconds=0.1, t_eval=[0.05, 0.01])
+    with pytest.raises(ValueError, match="y0 of shape"):
+        dr.simulate(device, 5000.0, duration_seconds=0.1, y0=[2.0])

@@ -188,39 +188,9 @@ impl fmt::Display for CurveReport {
 
 impl Report for CurveReport {}
 
-/// `A` or `low:high:count` (count ≥ 2, evenly spaced; at most `MAX_CURVES`).
+/// `A` or `low:high:count` ([`super::values`], at most `MAX_CURVES`); the default without.
 fn values(flag: &str, text: Option<&str>, default: f64) -> Result<Vec<f64>, String> {
-    let Some(text) = text else {
-        return Ok(vec![default]);
-    };
-    let number = |s: &str| {
-        s.trim()
-            .parse::<f64>()
-            .ok()
-            .filter(|x| x.is_finite())
-            .ok_or_else(|| format!("{flag} {text}: `{s}` is not a finite number"))
-    };
-    let parts: Vec<&str> = text.split(':').collect();
-    match parts[..] {
-        [one] => Ok(vec![number(one)?]),
-        [low, high, count] => {
-            let (low, high) = (number(low)?, number(high)?);
-            let count: usize = count
-                .trim()
-                .parse()
-                .ok()
-                .filter(|n| (2..=MAX_CURVES).contains(n))
-                .ok_or_else(|| {
-                    format!(
-                        "{flag} {text}: the count must be a whole number from 2 to {MAX_CURVES}"
-                    )
-                })?;
-            Ok((0..count)
-                .map(|k| low + (high - low) * k as f64 / (count - 1) as f64)
-                .collect())
-        }
-        _ => Err(format!("{flag} {text}: give one value or low:high:count")),
-    }
+    text.map_or(Ok(vec![default]), |text| super::values(flag, text, MAX_CURVES))
 }
 
 pub fn curve(args: &CurveArgs) -> Result<CurveReport, String> {

@@ -1,10 +1,13 @@
 //! host-sim's commands, one module each: its arguments, the work, and a typed report (JSON
 //! through `Serialize`, text through `Display`, CSV from the same rows where it writes one).
 
+pub mod bifurcation;
 pub mod console;
 pub mod curve;
 pub mod image;
 pub mod lut;
+pub mod lyapunov;
+pub mod poincare;
 pub mod record;
 pub mod report;
 pub mod run;
@@ -268,4 +271,39 @@ pub fn csv<R: Serialize>(rows: &[R]) -> Result<Vec<u8>, String> {
         writer.serialize(row).map_err(|e| e.to_string())?;
     }
     writer.into_inner().map_err(|e| e.to_string())
+}
+
+/// Numbers given on the command line: one, a comma list `a,b,c`, or `low:high:count` (count ≥
+/// 2, evenly spaced from low to high); at most `most`, each finite.
+pub fn values(flag: &str, text: &str, most: usize) -> Result<Vec<f64>, String> {
+    let number = |s: &str| {
+        s.trim()
+            .parse::<f64>()
+            .ok()
+            .filter(|x| x.is_finite())
+            .ok_or_else(|| format!("{flag} {text}: `{s}` is not a finite number"))
+    };
+    let parts: Vec<&str> = text.split(':').collect();
+    let out: Vec<f64> = match parts[..] {
+        [list] => list.split(',').map(number).collect::<Result<_, _>>()?,
+        [low, high, count] => {
+            let (low, high) = (number(low)?, number(high)?);
+            let count: usize = count
+                .trim()
+                .parse()
+                .ok()
+                .filter(|n| (2..=most).contains(n))
+                .ok_or_else(|| {
+                    format!("{flag} {text}: the count must be a whole number from 2 to {most}")
+                })?;
+            (0..count)
+                .map(|k| low + (high - low) * k as f64 / (count - 1) as f64)
+                .collect()
+        }
+        _ => return Err(format!("{flag} {text}: give a,b,c or low:high:count")),
+    };
+    if out.len() > most {
+        return Err(format!("{flag}: {} values, at most {most}", out.len()));
+    }
+    Ok(out)
 }

@@ -50,6 +50,13 @@ pub struct SimulateArgs {
     /// t = 0.
     #[arg(long, value_enum, default_value_t = Start::Equilibrium)]
     pub start: Start,
+    /// A start state of one's own, over --start: the stretch and dλ/dt (1/s), `S,V`.
+    #[arg(long, value_name = "S,V", allow_hyphen_values = true)]
+    pub y0: Option<String>,
+    /// The times to report the state at, s (SciPy's `t_eval`), instead of every step:
+    /// `a,b,c` or `from:to:count`, increasing, within the run.
+    #[arg(long, value_name = "TIMES", allow_hyphen_values = true)]
+    pub t_eval: Option<String>,
     /// The integrator: a reference (adaptive, f64) or a core fixed-step method.
     ///
     /// `reference` (adaptive DOP853, rtol = atol = 1e-12, f64), `reference-radau` (adaptive
@@ -124,6 +131,10 @@ pub struct Inputs {
     pub damping: f64,
     pub duration_seconds: f64,
     pub start: Start,
+    /// The start state asked for (stretch, dλ/dt in 1/s), over `start`.
+    pub y0: Option<[f64; 2]>,
+    /// The times the trajectory is given at (`--t-eval`; `null`: every step).
+    pub t_eval_points: Option<usize>,
     /// The step asked for (`null`: the default, 1/64 of the period at zero bias).
     pub step_seconds: Option<f64>,
 }
@@ -239,6 +250,8 @@ pub struct Asked {
     pub damping: Option<f64>,
     pub duration_seconds: f64,
     pub start: Start,
+    /// A start state of one's own (stretch, dλ/dt in 1/s), over `start`.
+    pub y0: Option<[f64; 2]>,
     pub method: Choice,
     pub step_seconds: Option<f64>,
     pub rtol: Option<f64>,
@@ -291,9 +304,21 @@ impl Asked {
             drive_hz: ac_hz,
             duration_seconds: self.duration_seconds,
             start: self.start,
+            y0: self.y0,
             tolerance,
         };
         Ok((scene, step))
+    }
+}
+
+/// The most `--t-eval` times.
+pub const MAX_T_EVAL: usize = 10_000_000;
+
+/// `--y0 S,V`: a stretch and dλ/dt (1/s).
+fn y0(text: &str) -> Result<[f64; 2], String> {
+    match super::values("--y0", text, 2)?[..] {
+        [stretch, velocity] => Ok([stretch, velocity]),
+        _ => Err(format!("--y0 {text}: give the stretch and dλ/dt, `S,V`")),
     }
 }
 
@@ -306,11 +331,17 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
         damping: args.damping,
         duration_seconds: args.duration_seconds,
         start: args.start,
+        y0: args.y0.as_deref().map(y0).transpose()?,
         method: args.method,
         step_seconds: args.step_seconds,
         rtol: args.rtol,
         atol: args.atol,
     };
+    let t_eval = args
+        .t_eval
+        .as_deref()
+        .map(|text| super::values("--t-eval", text, MAX_T_EVAL))
+        .transpose()?;
     let (scene, step) = asked.scene(params, &device)?;
     let checked = Device::new(scene.params).map_err(|e| format!("{device}: {e}"))?;
     let (ac_hz, tolerance) = (scene.drive_hz, scene.tolerance);
@@ -318,25 +349,25 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
     for path in [&args.csv, &args.plot].into_iter().flatten() {
         prepare_file(path)?;
     }
-    let out = solver::simulate(&scene, args.method, step).map_err(|e| e.to_string())?;
+    let out = solver::simulate_at(&scene, args.method, step, t_eval.as_deref())
+        .map_err(|e| e.to_string())?;
     let volts_at =
         |t: f64| args.bias_volts + args.ac_volts * (std::f64::consts::TAU * ac_hz * t).sin();
     let mut files = Vec::new();
-    let rows = (args.csv.is_some() || args.trajectory).then(|| {
-        out.samples
-            .iter()
-            .zip(&out.velocities)
-            .enumerate()
-            .map(|(k, (&stretch, &velocity_per_second))| {
-                let time_seconds = k as f64 * out.step_seconds;
-                Sample {
-                    time_seconds,
-                    stretch,
-                    velocity_per_second,
-                    volts: volts_at(time_seconds),
-                }
-            })
-            .collect::<Vec<Sample>>()
+    // The samples: at the times asked for, or every step.
+    let sample = |time_seconds: f64, stretch: f64, velocity_per_second: f64| Sample {
+        time_seconds,
+        stretch,
+        velocity_per_second,
+        volts: volts_at(time_seconds),
+    };
+    let rows = (args.csv.is_some() || args.trajectory).then(|| match &out.evaluated {
+        Some(at) => (0..at.times_seconds.len())
+            .map(|k| sample(at.times_seconds[k], at.stretch[k], at.velocity_per_second[k]))
+            .collect::<Vec<Sample>>(),
+        None => (0..out.samples.len())
+            .map(|k| sample(k as f64 * out.step_seconds, out.samples[k], out.velocities[k]))
+            .collect(),
     });
     if let (Some(path), Some(rows)) = (&args.csv, &rows) {
         files.push(write_path(path, &super::csv(rows)?)?);
@@ -354,6 +385,8 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
             damping: scene.params.damping,
             duration_seconds: args.duration_seconds,
             start: args.start,
+            y0: asked.y0,
+            t_eval_points: t_eval.as_ref().map(Vec::len),
             step_seconds: args.step_seconds,
         },
         method: args.method.name(),

@@ -1059,6 +1059,7 @@ mod tests {
                 drive_hz: 0.0,
                 duration_seconds: 0.03,
                 start: Start::Prestretch,
+                y0: None,
                 tolerance: None,
             },
             Choice::Reference,

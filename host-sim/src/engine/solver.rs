@@ -186,6 +186,8 @@ pub struct OpenLoop {
     pub drive_hz: f64,
     pub duration_seconds: f64,
     pub start: Start,
+    /// A start state of one's own, (stretch, dλ/dt in 1/s), over `start`.
+    pub y0: Option<[f64; 2]>,
     /// The reference's tolerance (`None`: `REFERENCE_TOLERANCE` for DOP853,
     /// `STIFF_REFERENCE_TOLERANCE` for Radau and BDF); the core's methods have none.
     pub tolerance: Option<Tolerance>,
@@ -223,10 +225,32 @@ pub struct Outcome {
     pub switched: Option<String>,
     /// The right-hand sides the adaptive solver evaluated (`None` for a core method).
     pub evaluations: Option<u64>,
+    /// The states at the times asked for ([`simulate_at`]), up to where the run ended.
+    pub evaluated: Option<Evaluated>,
+}
+
+/// A run's states at times asked for (SciPy's `t_eval`): the reference's dense output there,
+/// or the quintic through a core method's step ends.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Evaluated {
+    pub times_seconds: Vec<f64>,
+    pub stretch: Vec<f64>,
+    pub velocity_per_second: Vec<f64>,
 }
 
 impl OpenLoop {
-    /// The starting stretch, from rest.
+    /// The starting state: stretch and dλ/dτ (the model's time).
+    fn start_state(&self, device: &Device<f64>) -> Result<[f64; 2], String> {
+        if let Some([stretch, velocity]) = self.y0 {
+            if !(stretch.is_finite() && velocity.is_finite()) {
+                return Err(format!("y0 ({stretch}, {velocity}) must be finite numbers"));
+            }
+            return Ok([stretch, velocity / device.rad_per_s_per_unit()]);
+        }
+        self.start_stretch(device).map(|stretch| [stretch, 0.0])
+    }
+
+    /// The starting stretch of `start`, from rest.
     fn start_stretch(&self, device: &Device<f64>) -> Result<f64, String> {
         match self.start {
             Start::Prestretch => Ok(device.prestretch_1()),
@@ -267,6 +291,31 @@ impl From<String> for RunError {
 
 /// Run a scene with a method and a step (seconds; the reference samples at this spacing).
 pub fn simulate(scene: &OpenLoop, choice: Choice, step_seconds: f64) -> Result<Outcome, RunError> {
+    simulate_at(scene, choice, step_seconds, None)
+}
+
+/// `simulate`, and the states at `t_eval` (s, increasing, within the run) too, as SciPy's
+/// `t_eval` gives them: `Outcome::evaluated`.
+pub fn simulate_at(
+    scene: &OpenLoop,
+    choice: Choice,
+    step_seconds: f64,
+    t_eval: Option<&[f64]>,
+) -> Result<Outcome, RunError> {
+    if let Some(times) = t_eval {
+        let duration = scene.duration_seconds;
+        if let Some(t) = times.iter().find(|t| !(**t >= 0.0 && **t <= duration)) {
+            return Err(format!(
+                "t_eval's {} s is outside the run, [0, {}] s",
+                sig(*t),
+                sig(duration)
+            )
+            .into());
+        }
+        if !times.windows(2).all(|w| w[0] <= w[1]) {
+            return Err("t_eval's times must be in increasing order".to_string().into());
+        }
+    }
     if !(scene.duration_seconds.is_finite() && scene.duration_seconds > 0.0) {
         let why = format!("duration {} s must be positive", scene.duration_seconds);
         return Err(why.into());
@@ -308,22 +357,24 @@ pub fn simulate(scene: &OpenLoop, choice: Choice, step_seconds: f64) -> Result<O
     let steps = steps as u64;
     let step_seconds = scene.duration_seconds / steps as f64;
     let device = Device::new(scene.params).map_err(|e| e.to_string())?;
-    let start = scene.start_stretch(&device)?;
+    let start = scene.start_state(&device)?;
     let started = Instant::now();
     let mut outcome = match choice {
         // DOP853's stiffness test (Hairer's) hands a stiff scene to Radau, as LSODA would to
         // its BDF.
-        Choice::Reference => match reference(scene, &device, start, step_seconds, Solver::Dop853) {
+        Choice::Reference => match reference(scene, &device, start, step_seconds, t_eval, Solver::Dop853) {
             Err(why) if why.starts_with(STIFF_FOR_DOP853) => {
-                let mut out = reference(scene, &device, start, step_seconds, Solver::Radau)
+                let mut out = reference(scene, &device, start, step_seconds, t_eval, Solver::Radau)
                     .map_err(|e| format!("{why}; {e}"))?;
                 out.switched = Some("DOP853 found the scene stiff; solved by Radau".into());
                 out
             }
             done => done?,
         },
-        Choice::ReferenceRadau => reference(scene, &device, start, step_seconds, Solver::Radau)?,
-        Choice::ReferenceBdf => reference(scene, &device, start, step_seconds, Solver::Bdf)?,
+        Choice::ReferenceRadau => {
+            reference(scene, &device, start, step_seconds, t_eval, Solver::Radau)?
+        }
+        Choice::ReferenceBdf => reference(scene, &device, start, step_seconds, t_eval, Solver::Bdf)?,
         Choice::Core {
             method,
             single: true,
@@ -333,6 +384,9 @@ pub fn simulate(scene: &OpenLoop, choice: Choice, step_seconds: f64) -> Result<O
             single: false,
         } => core::<f64>(scene, method, start, step_seconds, steps)?,
     };
+    if let (Some(times), Choice::Core { .. }) = (t_eval, choice) {
+        outcome.evaluated = Some(between_steps(scene, &device, &outcome, step_seconds, times));
+    }
     outcome.run_seconds = started.elapsed().as_secs_f64();
     outcome.step_seconds = step_seconds;
     Ok(outcome)
@@ -357,13 +411,70 @@ fn outcome(samples: Vec<f64>, velocities: Vec<f64>) -> Outcome {
         solver: None,
         switched: None,
         evaluations: None,
+        evaluated: None,
     }
+}
+
+/// The states at `times` on the quintic through a core method's step ends (its own states,
+/// the model's acceleration at each), up to the last step it took.
+fn between_steps(
+    scene: &OpenLoop,
+    device: &Device<f64>,
+    out: &Outcome,
+    step_seconds: f64,
+    times: &[f64],
+) -> Evaluated {
+    let scale = device.rad_per_s_per_unit();
+    let drive = Drive::from_volts(device, scene.bias_volts, scene.ac_volts, scene.drive_hz);
+    let jet = |k: usize| {
+        let state = State {
+            stretch: out.samples[k],
+            velocity: out.velocities[k] / scale,
+        };
+        Jet::of_model(device, &drive, k as f64 * step_seconds, state)
+    };
+    let last = out.samples.len().saturating_sub(1);
+    let mut evaluated = Evaluated::default();
+    for &t in times {
+        let k = ((t / step_seconds).floor() as usize).min(last.saturating_sub(1));
+        if last == 0 || t > last as f64 * step_seconds * (1.0 + 1e-12) {
+            break;
+        }
+        let (stretch, velocity) = Hermite::new(jet(k), jet(k + 1)).at(t);
+        evaluated.times_seconds.push(t);
+        evaluated.stretch.push(stretch);
+        evaluated.velocity_per_second.push(velocity);
+    }
+    evaluated
+}
+
+/// The grid's times and the asked ones, merged without repeats: the merged times, where each
+/// grid time is in it, where each asked time is.
+fn merge(grid: &[f64], asked: &[f64]) -> (Vec<f64>, Vec<usize>, Vec<usize>) {
+    let mut merged: Vec<f64> = Vec::with_capacity(grid.len() + asked.len());
+    let (mut at_grid, mut at_asked) = (Vec::with_capacity(grid.len()), Vec::new());
+    let (mut i, mut j) = (0, 0);
+    while i < grid.len() || j < asked.len() {
+        let take_grid = j == asked.len() || (i < grid.len() && grid[i] <= asked[j]);
+        let t = if take_grid { grid[i] } else { asked[j] };
+        if merged.last() != Some(&t) {
+            merged.push(t);
+        }
+        if take_grid {
+            at_grid.push(merged.len() - 1);
+            i += 1;
+        } else {
+            at_asked.push(merged.len() - 1);
+            j += 1;
+        }
+    }
+    (merged, at_grid, at_asked)
 }
 
 fn core<T: Real>(
     scene: &OpenLoop,
     method: Method,
-    start: f64,
+    [start, start_velocity]: [f64; 2],
     step_seconds: f64,
     steps: u64,
 ) -> Result<Outcome, RunError> {
@@ -386,7 +497,7 @@ fn core<T: Real>(
         (T::of(range.0), T::of(range.1)),
         State {
             stretch: T::of(start),
-            velocity: T::zero(),
+            velocity: T::of(start_velocity),
         },
         false,
     )
@@ -411,7 +522,7 @@ fn core<T: Real>(
     let mut samples = Vec::with_capacity(steps as usize + 1);
     let mut velocities = Vec::with_capacity(steps as usize + 1);
     samples.push(start);
-    velocities.push(0.0);
+    velocities.push(start_velocity * scale);
     monitor.observe(&device, 0, T::of(start), it.bias_dimless_squared());
     let mut last = it.state();
     for k in 1..=steps {
@@ -966,14 +1077,18 @@ pub const BDF_NOT_BUILT: &str = "BDF is not in this build (Radau, `reference-rad
 fn reference(
     scene: &OpenLoop,
     device: &Device<f64>,
-    start: f64,
+    start: [f64; 2],
     step_seconds: f64,
+    t_eval: Option<&[f64]>,
     solver: Solver,
 ) -> Result<Outcome, String> {
     let drive = Drive::from_volts(device, scene.bias_volts, scene.ac_volts, scene.drive_hz);
     let scale = device.rad_per_s_per_unit();
     let tolerance = scene.tolerance.unwrap_or(solver.default_tolerance());
-    let times = sample_times(step_seconds * scale, scene.duration_seconds * scale);
+    let grid = sample_times(step_seconds * scale, scene.duration_seconds * scale);
+    // The asked times (SciPy's t_eval) among the grid's: one solve samples both.
+    let asked: Vec<f64> = t_eval.unwrap_or(&[]).iter().map(|t| t * scale).collect();
+    let (times, at_grid, at_asked) = merge(&grid, &asked);
     let motion = Motion { device, drive };
     let counted = Counted {
         ode: &motion,
@@ -993,7 +1108,7 @@ fn reference(
             };
             solver.sample(
                 &counted,
-                [start, 0.0],
+                start,
                 &times,
                 tolerance,
                 Some(&mut on_step),
@@ -1012,7 +1127,7 @@ fn reference(
                 })
                 .chain(times.last().copied())
                 .collect();
-            let all = solver.sample(&counted, [start, 0.0], &fine, tolerance, None)?;
+            let all = solver.sample(&counted, start, &fine, tolerance, None)?;
             let jet = |tau: f64, y: &[f64; 2]| {
                 let mut rate = [0.0; 2];
                 motion.diff(tau, y, &mut rate);
@@ -1035,9 +1150,14 @@ fn reference(
         }
     };
     let mut out = outcome(
-        ys.iter().map(|y| y[0]).collect(),
-        ys.iter().map(|y| y[1] * scale).collect(),
+        at_grid.iter().map(|&k| ys[k][0]).collect(),
+        at_grid.iter().map(|&k| ys[k][1] * scale).collect(),
     );
+    out.evaluated = t_eval.map(|times| Evaluated {
+        times_seconds: times.to_vec(),
+        stretch: at_asked.iter().map(|&k| ys[k][0]).collect(),
+        velocity_per_second: at_asked.iter().map(|&k| ys[k][1] * scale).collect(),
+    });
     out.min_stretch = out.min_stretch.min(watch.extremes.min);
     out.max_stretch = out.max_stretch.max(watch.extremes.max);
     out.first_limit = watch.first.map(|(tau, mode, _)| (mode, tau / scale));
@@ -1253,6 +1373,7 @@ mod tests {
             drive_hz: 30.0,
             duration_seconds: 0.5,
             start: Start::Equilibrium,
+            y0: None,
             tolerance: None,
         };
         let step = 0.5 / 100.3;
@@ -1321,6 +1442,7 @@ mod tests {
                 drive_hz: 0.0,
                 duration_seconds: 0.05,
                 start: Start::Equilibrium,
+                y0: None,
                 tolerance: None,
             };
             let out = simulate(&scene, Choice::Reference, 1e-3).unwrap();

@@ -235,6 +235,7 @@ fn run_case(case: &Case) -> Result<CaseReport, String> {
         drive_hz: f0,
         duration_seconds: PERIODS * period,
         start: case.start,
+        y0: None,
         tolerance: None,
     };
     let solver = if case.stiff {

@@ -59,6 +59,7 @@ pub fn studies(params: DeviceParams<f64>) -> Result<Vec<Study>, String> {
         drive_hz,
         duration_seconds: f64::from(PERIODS) / base_hz,
         start: Start::Equilibrium,
+        y0: None,
         tolerance: None,
     };
     let f_tuned = tuned.natural_frequency_hz;
