@@ -177,9 +177,7 @@ fn main() -> ExitCode {
         Command::Report(args) => cmd::report::precision(&args).map(|r| emit(&r, json)),
         Command::Sweep(args) => cmd::sweep::sweep(&args).map(|r| emit(&r, json)),
         Command::Poincare(args) => cmd::poincare::poincare(&args).map(|r| emit(&r, json)),
-        Command::Bifurcation(args) => {
-            cmd::bifurcation::bifurcation(&args).map(|r| emit(&r, json))
-        }
+        Command::Bifurcation(args) => cmd::bifurcation::bifurcation(&args).map(|r| emit(&r, json)),
         Command::Lyapunov(args) => cmd::lyapunov::lyapunov(&args).map(|r| emit(&r, json)),
         Command::Image(args) => cmd::image::image(&args).map(|r| emit(&r, json)),
         Command::Console(args) => cmd::console::console(&args, json).map(|r| emit(&r, json)),

@@ -1534,3 +1534,128 @@ fn image_check_names_the_settings_an_older_image_lacks() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The studies as a user runs them: a section's files and rows, a crossing's exit status, a
+/// bifurcation's first value the section from the same start, and the exponent of the
+/// membrane at rest against its linearisation: −c/(2M), M the effective mass of model.md §4
+/// worked out here from the reference device's numbers (bars and both membranes' inertia).
+#[test]
+fn the_studies_write_their_files_and_say_their_crossings() {
+    let dir = out_dir("studies");
+    let drive = [
+        "--bias-volts",
+        "6000",
+        "--ac-volts",
+        "1500",
+        "--ac-hz",
+        "85",
+    ];
+    let args = |more: &[&str]| -> Vec<String> {
+        let mut all: Vec<String> = drive.iter().chain(more).map(|s| s.to_string()).collect();
+        all.extend(["--out".into(), dir.clone(), "--json".into()]);
+        all
+    };
+    let run = |command: &str, more: &[&str]| {
+        let mut all = vec![command.to_string()];
+        all.extend(args(more));
+        ran(&all.iter().map(String::as_str).collect::<Vec<_>>())
+    };
+    let section = run("poincare", &["--periods", "7", "--y0", "2.2,0;2.3,-5"]);
+    assert_eq!(section["rows"].as_array().unwrap().len(), 14);
+    let csv = std::fs::read_to_string(format!("{dir}/poincare.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 15);
+    assert!(csv.starts_with("start,k,time_seconds,stretch,velocity_per_second\n"));
+    assert!(std::fs::read_to_string(format!("{dir}/poincare.svg"))
+        .unwrap()
+        .contains("Poincaré section"));
+    let diagram = run(
+        "bifurcation",
+        &[
+            "--values",
+            "1500,1600",
+            "--periods",
+            "7",
+            "--transient-periods",
+            "0",
+            "--y0",
+            "2.2,0",
+            "--direction",
+            "up",
+        ],
+    );
+    for k in 0..7 {
+        assert_eq!(
+            diagram["rows"][k]["stretch"], section["rows"][k]["stretch"],
+            "{k}"
+        );
+    }
+    // A drive past the limit: exit status 1, the crossing said.
+    let (v, why) = crossed(&[
+        "poincare",
+        "--bias-volts",
+        "9500",
+        "--ac-volts",
+        "2500",
+        "--ac-hz",
+        "80",
+        "--periods",
+        "5",
+        "--out",
+        &dir,
+        "--json",
+    ]);
+    assert_eq!(v["runs"][0]["first_limit"]["mode"], "emi");
+    assert!(why.contains("1 of 1 starts crossed a limit"), "{why}");
+    // At rest (no AC): the linearisation's decay, and none without damping.
+    let mass = 2e-3 * 0.02 + 960.0 * 0.04 * 1e-3 * 0.02 * 0.04 / 3.0;
+    let at_rest = |damping: &str| {
+        json(&[
+            "lyapunov",
+            "--bias-volts",
+            "6000",
+            "--damping",
+            damping,
+            "--out",
+            &dir,
+            "--json",
+        ])["exponent_per_second"]
+            .as_f64()
+            .unwrap()
+    };
+    let decay = at_rest("1e-3");
+    assert!(
+        (decay / (-1e-3 / (2.0 * mass)) - 1.0).abs() < 0.02,
+        "{decay}"
+    );
+    assert!(at_rest("0").abs() < 1e-3);
+    // Bad input: typed, up front.
+    let err = refused(&["poincare", "--bias-volts", "6000", "--out", &dir]);
+    assert!(
+        err.contains("--ac-hz 0") && err.contains("drive frequency > 0"),
+        "{err}"
+    );
+    let err = refused(&[
+        "poincare",
+        "--bias-volts",
+        "6000",
+        "--ac-hz",
+        "85",
+        "--y0",
+        "2.2",
+        "--out",
+        &dir,
+    ]);
+    assert!(err.contains("`S,V`"), "{err}");
+    let err = refused(&[
+        "bifurcation",
+        "--bias-volts",
+        "6000",
+        "--ac-hz",
+        "85",
+        "--values",
+        "3,2",
+        "--out",
+        &dir,
+    ]);
+    assert!(err.contains("must increase"), "{err}");
+}

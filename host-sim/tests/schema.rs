@@ -146,6 +146,72 @@ fn every_command_matches_the_schema() {
             &dir,
         ],
     );
+    conforms(
+        "simulate",
+        &[
+            "--bias-volts",
+            "7000",
+            "--duration-seconds",
+            "0.05",
+            "--y0",
+            "2.2,-1",
+            "--t-eval",
+            "0:0.05:11",
+            "--trajectory",
+        ],
+    );
+    let drive = [
+        "--bias-volts",
+        "6000",
+        "--ac-volts",
+        "1500",
+        "--ac-hz",
+        "85",
+    ];
+    let with = |more: &[&'static str]| -> Vec<String> {
+        drive
+            .iter()
+            .chain(more)
+            .map(|s| s.to_string())
+            .chain(["--out".to_string(), dir.clone()])
+            .collect()
+    };
+    let args = with(&["--periods", "5", "--y0", "2.2,0;2.3,0"]);
+    conforms(
+        "poincare",
+        &args.iter().map(String::as_str).collect::<Vec<_>>(),
+    );
+    // A drive that crosses a limit: its crossing in the report.
+    let crossing = [
+        "--bias-volts",
+        "9500",
+        "--ac-volts",
+        "2500",
+        "--ac-hz",
+        "80",
+        "--periods",
+        "20",
+        "--out",
+        &dir,
+    ];
+    conforms("poincare", &crossing);
+    let args = with(&[
+        "--values",
+        "0:1500:3",
+        "--periods",
+        "3",
+        "--transient-periods",
+        "2",
+    ]);
+    conforms(
+        "bifurcation",
+        &args.iter().map(String::as_str).collect::<Vec<_>>(),
+    );
+    let args = with(&["--periods", "10", "--quality-factor", "50"]);
+    conforms(
+        "lyapunov",
+        &args.iter().map(String::as_str).collect::<Vec<_>>(),
+    );
     conforms("lut", &["--out", &table]);
     conforms("image", &["--out", &image]);
     conforms("image", &["--check", &image]);

@@ -43,7 +43,10 @@ fn driven(
 
 /// Start states from `y0`: `None` (the rest state), a pair (stretch, dλ/dt in 1/s) or an
 /// n × 2 array of them; whether it was many (the results then have a leading axis).
-fn starts(y0: Option<&Bound<'_, PyAny>>, rest: impl Fn() -> PyResult<Point>) -> PyResult<(Vec<Point>, bool)> {
+fn starts(
+    y0: Option<&Bound<'_, PyAny>>,
+    rest: impl Fn() -> PyResult<Point>,
+) -> PyResult<(Vec<Point>, bool)> {
     let Some(y0) = y0 else {
         return Ok((vec![rest()?], false));
     };
@@ -70,7 +73,9 @@ fn starts(y0: Option<&Bound<'_, PyAny>>, rest: impl Fn() -> PyResult<Point>) -> 
 /// A count given as an int ≥ `least`.
 fn count(name: &str, value: i64, least: i64) -> PyResult<usize> {
     if value < least {
-        return Err(value_error(format!("{name} {value}: need at least {least}")));
+        return Err(value_error(format!(
+            "{name} {value}: need at least {least}"
+        )));
     }
     usize::try_from(value).map_err(value_error)
 }
@@ -156,7 +161,10 @@ pub fn poincare<'py>(
             stroboscopic::section(&d, from, transient, periods)
         });
         let out: Vec<Section> = out.into_iter().collect::<Result<_, _>>()?;
-        if out.iter().any(|s| s.stopped.as_deref() == Some(progress::INTERRUPTED)) {
+        if out
+            .iter()
+            .any(|s| s.stopped.as_deref() == Some(progress::INTERRUPTED))
+        {
             return Err(progress::INTERRUPTED.to_string());
         }
         Ok(out)
@@ -246,7 +254,9 @@ pub fn bifurcation<'py>(
         },
     };
     let rows = stoppable(py, || {
-        stroboscopic::bifurcation(&base, parameter, &values, direction, from, transient, periods)
+        stroboscopic::bifurcation(
+            &base, parameter, &values, direction, from, transient, periods,
+        )
     })?;
     let dict = PyDict::new(py);
     dict.set_item("varied", parameter.name())?;

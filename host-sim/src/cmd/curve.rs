@@ -190,7 +190,9 @@ impl Report for CurveReport {}
 
 /// `A` or `low:high:count` ([`super::values`], at most `MAX_CURVES`); the default without.
 fn values(flag: &str, text: Option<&str>, default: f64) -> Result<Vec<f64>, String> {
-    text.map_or(Ok(vec![default]), |text| super::values(flag, text, MAX_CURVES))
+    text.map_or(Ok(vec![default]), |text| {
+        super::values(flag, text, MAX_CURVES)
+    })
 }
 
 pub fn curve(args: &CurveArgs) -> Result<CurveReport, String> {

@@ -23,17 +23,37 @@ pub struct DrivenArgs {
     #[arg(long, value_name = "V", allow_negative_numbers = true)]
     pub bias_volts: f64,
     /// AC amplitude, V.
-    #[arg(long, value_name = "V", default_value_t = 0.0, allow_negative_numbers = true)]
+    #[arg(
+        long,
+        value_name = "V",
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
     pub ac_volts: f64,
     /// AC drive frequency, Hz: Φ(t) = bias + ac·sin(2π·f·t).
-    #[arg(long, value_name = "HZ", default_value_t = 0.0, allow_negative_numbers = true)]
+    #[arg(
+        long,
+        value_name = "HZ",
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
     pub ac_hz: f64,
     /// Viscous damping c, N·s (overrides the device's).
-    #[arg(long, value_name = "C", allow_negative_numbers = true, conflicts_with = "quality_factor")]
+    #[arg(
+        long,
+        value_name = "C",
+        allow_negative_numbers = true,
+        conflicts_with = "quality_factor"
+    )]
     pub damping: Option<f64>,
     /// Quality factor Q of the small oscillation at the bias: sets c = M·ω0/Q (M the effective
     /// mass of model.md §4), over the device's damping.
-    #[arg(long, visible_alias = "quality", value_name = "Q", allow_negative_numbers = true)]
+    #[arg(
+        long,
+        visible_alias = "quality",
+        value_name = "Q",
+        allow_negative_numbers = true
+    )]
     pub quality_factor: Option<f64>,
     /// The solver's tolerance (DOP853's rtol = atol).
     #[arg(long, value_name = "R", default_value_t = STUDY_TOLERANCE, allow_negative_numbers = true)]
@@ -181,7 +201,10 @@ impl fmt::Display for PoincareReport {
 impl Report for PoincareReport {
     /// A run crossed a limit of model.md §6, or stopped early.
     fn failure(&self) -> Option<String> {
-        failure(self.runs.iter().map(|r| (&r.first_limit, &r.stopped)), "starts")
+        failure(
+            self.runs.iter().map(|r| (&r.first_limit, &r.stopped)),
+            "starts",
+        )
     }
 }
 
@@ -198,7 +221,9 @@ pub fn failure<'a>(
     }
     match (crossed, stopped) {
         (0, 0) => None,
-        (c, 0) => Some(format!("{c} of {all} {what} crossed a limit of model.md §6")),
+        (c, 0) => Some(format!(
+            "{c} of {all} {what} crossed a limit of model.md §6"
+        )),
         (c, s) => Some(format!(
             "{c} of {all} {what} crossed a limit of model.md §6, {s} stopped early"
         )),

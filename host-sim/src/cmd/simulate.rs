@@ -363,10 +363,22 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
     };
     let rows = (args.csv.is_some() || args.trajectory).then(|| match &out.evaluated {
         Some(at) => (0..at.times_seconds.len())
-            .map(|k| sample(at.times_seconds[k], at.stretch[k], at.velocity_per_second[k]))
+            .map(|k| {
+                sample(
+                    at.times_seconds[k],
+                    at.stretch[k],
+                    at.velocity_per_second[k],
+                )
+            })
             .collect::<Vec<Sample>>(),
         None => (0..out.samples.len())
-            .map(|k| sample(k as f64 * out.step_seconds, out.samples[k], out.velocities[k]))
+            .map(|k| {
+                sample(
+                    k as f64 * out.step_seconds,
+                    out.samples[k],
+                    out.velocities[k],
+                )
+            })
             .collect(),
     });
     if let (Some(path), Some(rows)) = (&args.csv, &rows) {

@@ -313,7 +313,9 @@ pub fn simulate_at(
             .into());
         }
         if !times.windows(2).all(|w| w[0] <= w[1]) {
-            return Err("t_eval's times must be in increasing order".to_string().into());
+            return Err("t_eval's times must be in increasing order"
+                .to_string()
+                .into());
         }
     }
     if !(scene.duration_seconds.is_finite() && scene.duration_seconds > 0.0) {
@@ -362,19 +364,24 @@ pub fn simulate_at(
     let mut outcome = match choice {
         // DOP853's stiffness test (Hairer's) hands a stiff scene to Radau, as LSODA would to
         // its BDF.
-        Choice::Reference => match reference(scene, &device, start, step_seconds, t_eval, Solver::Dop853) {
-            Err(why) if why.starts_with(STIFF_FOR_DOP853) => {
-                let mut out = reference(scene, &device, start, step_seconds, t_eval, Solver::Radau)
-                    .map_err(|e| format!("{why}; {e}"))?;
-                out.switched = Some("DOP853 found the scene stiff; solved by Radau".into());
-                out
+        Choice::Reference => {
+            match reference(scene, &device, start, step_seconds, t_eval, Solver::Dop853) {
+                Err(why) if why.starts_with(STIFF_FOR_DOP853) => {
+                    let mut out =
+                        reference(scene, &device, start, step_seconds, t_eval, Solver::Radau)
+                            .map_err(|e| format!("{why}; {e}"))?;
+                    out.switched = Some("DOP853 found the scene stiff; solved by Radau".into());
+                    out
+                }
+                done => done?,
             }
-            done => done?,
-        },
+        }
         Choice::ReferenceRadau => {
             reference(scene, &device, start, step_seconds, t_eval, Solver::Radau)?
         }
-        Choice::ReferenceBdf => reference(scene, &device, start, step_seconds, t_eval, Solver::Bdf)?,
+        Choice::ReferenceBdf => {
+            reference(scene, &device, start, step_seconds, t_eval, Solver::Bdf)?
+        }
         Choice::Core {
             method,
             single: true,
@@ -1106,13 +1113,7 @@ fn reference(
             let mut on_step = |a, b, at: &mut dyn FnMut(f64) -> [f64; 2]| {
                 watch.step(a, b, at, key, fails);
             };
-            solver.sample(
-                &counted,
-                start,
-                &times,
-                tolerance,
-                Some(&mut on_step),
-            )?
+            solver.sample(&counted, start, &times, tolerance, Some(&mut on_step))?
         }
         // BDF gives samples only (its own dense output at the times asked): taken at
         // `BDF_EVENT_SUBDIVISION` times the output's rate, a quintic through them (value,

@@ -112,21 +112,15 @@ pub fn section(
     }
     let scale = device.rad_per_s_per_unit();
     let period = scale / driven.ac_hz;
-    let drive = Drive::from_volts(
-        &device,
-        driven.bias_volts,
-        driven.ac_volts,
-        driven.ac_hz,
-    );
+    let drive = Drive::from_volts(&device, driven.bias_volts, driven.ac_volts, driven.ac_hz);
     let last = transient + periods - 1;
     let times: Vec<f64> = (transient..=last).map(|k| k as f64 * period).collect();
     let y0 = [from.stretch, from.velocity_per_second / scale];
     let run = |solver: Solver| {
         let mut points = Vec::with_capacity(periods);
         let mut watch = Watch::new(EVENT_RESOLUTION_SECONDS * scale);
-        let fails = |tau: f64, y: &[f64; 2]| {
-            device.first_failure(y[0], drive.bias_dimless_squared_at(tau))
-        };
+        let fails =
+            |tau: f64, y: &[f64; 2]| device.first_failure(y[0], drive.bias_dimless_squared_at(tau));
         let at_point = |y: [f64; 2]| Point {
             stretch: y[0],
             velocity_per_second: y[1] * scale,
@@ -135,15 +129,16 @@ pub fn section(
         if times[0] == 0.0 {
             points.push(at_point(y0));
         }
-        let mut on_step = |a: (f64, [f64; 2]), b: (f64, [f64; 2]), at: &mut dyn FnMut(f64) -> [f64; 2]| {
-            while let Some(&tau) = times.get(points.len()) {
-                if tau > b.0 {
-                    break;
+        let mut on_step =
+            |a: (f64, [f64; 2]), b: (f64, [f64; 2]), at: &mut dyn FnMut(f64) -> [f64; 2]| {
+                while let Some(&tau) = times.get(points.len()) {
+                    if tau > b.0 {
+                        break;
+                    }
+                    points.push(at_point(if tau == b.0 { b.1 } else { at(tau) }));
                 }
-                points.push(at_point(if tau == b.0 { b.1 } else { at(tau) }));
-            }
-            watch.step(a, b, at, |y| (y[0], y[1]), fails);
-        };
+                watch.step(a, b, at, |y| (y[0], y[1]), fails);
+            };
         let end = times[times.len() - 1].max(period);
         let solved = solver.sample(
             &Motion {
@@ -168,7 +163,10 @@ pub fn section(
         }
     };
     let (mut points, mut first_limit, mut failed) = run(Solver::Dop853);
-    if failed.as_deref().is_some_and(|why| why.starts_with(STIFF_FOR_DOP853)) {
+    if failed
+        .as_deref()
+        .is_some_and(|why| why.starts_with(STIFF_FOR_DOP853))
+    {
         (points, first_limit, failed) = run(Solver::Radau);
     }
     points.truncate(periods);
@@ -254,7 +252,7 @@ pub fn bifurcation(
     }
     if !values.windows(2).all(|w| w[0] < w[1]) {
         return Err(format!(
-            "the values of {} must increase (a walk down is `direction = down`)",
+            "the values of {} must increase (to walk them down, ask for the direction `down`)",
             parameter.name()
         ));
     }
