@@ -118,6 +118,15 @@ enum Command {
     /// drive, once a period of the small oscillation at the start); the running estimate
     /// shows its convergence. Writes lyapunov.csv and lyapunov.svg into --out.
     Lyapunov(cmd::lyapunov::LyapunovArgs),
+    /// Safe drive map: AC amplitude × frequency, the full simulation beside the board.
+    ///
+    /// The safe drive map at the bias the board tunes to: over AC amplitude × drive
+    /// frequency, the full simulation's largest swing (from rest, the AC switched on) and
+    /// whether it stays inside model.md §6, beside the board's own acceptance of each `ac`
+    /// (every boot check of `start`, as the firmware runs them). Exit status 1 if the board
+    /// accepts a drive that crosses a limit. Writes drive-map.csv and drive-map.svg into
+    /// --out.
+    DriveMap(cmd::drive_map::DriveMapArgs),
     /// Write the configuration image the firmware reads, or check one (--check).
     ///
     /// Write the configuration image the firmware reads from its own flash sector (sector 11,
@@ -179,6 +188,7 @@ fn main() -> ExitCode {
         Command::Poincare(args) => cmd::poincare::poincare(&args).map(|r| emit(&r, json)),
         Command::Bifurcation(args) => cmd::bifurcation::bifurcation(&args).map(|r| emit(&r, json)),
         Command::Lyapunov(args) => cmd::lyapunov::lyapunov(&args).map(|r| emit(&r, json)),
+        Command::DriveMap(args) => cmd::drive_map::drive_map(&args).map(|r| emit(&r, json)),
         Command::Image(args) => cmd::image::image(&args).map(|r| emit(&r, json)),
         Command::Console(args) => cmd::console::console(&args, json).map(|r| emit(&r, json)),
         Command::Serve(args) => cmd::serve::serve(&args).map(|r| emit(&r, json)),

@@ -1659,3 +1659,58 @@ fn the_studies_write_their_files_and_say_their_crossings() {
     ]);
     assert!(err.contains("must increase"), "{err}");
 }
+
+/// The drive map as a user runs it: the board's acceptance below the full simulation's safe
+/// drives (exit status 0: they agree), every drive of the grid in the CSV, and at f0 with no
+/// damping the board refuses any AC (the swing has no bound) while the simulation stays
+/// safe for small ones over a short run: refused, never accepted-and-crossing.
+#[test]
+fn the_drive_map_puts_the_board_beside_the_full_simulation() {
+    let dir = out_dir("drive-map");
+    let v = json(&[
+        "drive-map",
+        "--quality-factor",
+        "100",
+        "--ac-volts",
+        "0:2400:4",
+        "--ac-hz",
+        "22,44,88",
+        "--periods",
+        "60",
+        "--out",
+        &dir,
+        "--json",
+    ]);
+    assert_eq!(v["cells"].as_array().unwrap().len(), 12);
+    assert_eq!(v["disagreements"], 0);
+    let cells = v["cells"].as_array().unwrap();
+    assert!(cells
+        .iter()
+        .all(|c| c["accepted"] == false || c["safe"] == true));
+    assert!(
+        cells.iter().any(|c| c["safe"] == false),
+        "the grid reaches a crossing"
+    );
+    let csv = std::fs::read_to_string(format!("{dir}/drive-map.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 13);
+    let v = json(&[
+        "drive-map",
+        "--ac-volts",
+        "10",
+        "--ac-hz",
+        "44",
+        "--periods",
+        "5",
+        "--out",
+        &dir,
+        "--json",
+    ]);
+    assert_eq!(v["cells"][0]["accepted"], false);
+    assert!(
+        v["cells"][0]["refusal"]
+            .as_str()
+            .unwrap()
+            .contains("no bound"),
+        "{v}"
+    );
+}

@@ -212,6 +212,21 @@ fn every_command_matches_the_schema() {
         "lyapunov",
         &args.iter().map(String::as_str).collect::<Vec<_>>(),
     );
+    conforms(
+        "drive-map",
+        &[
+            "--quality-factor",
+            "100",
+            "--ac-volts",
+            "0,2000",
+            "--ac-hz",
+            "44,88",
+            "--periods",
+            "20",
+            "--out",
+            &dir,
+        ],
+    );
     conforms("lut", &["--out", &table]);
     conforms("image", &["--out", &image]);
     conforms("image", &["--check", &image]);

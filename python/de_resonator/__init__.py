@@ -8,7 +8,8 @@ engines, built into ``de_resonator._native``): no second implementation.
   ``family``, ``sweep`` (the frequency response), ``lut`` (the table to flash).
 - ``simulate``: the motion under a bias and an AC drive, shaped like SciPy's OdeResult.
 - ``poincare``, ``bifurcation``, ``lyapunov``: the driven membrane's nonlinear dynamics
-  (Poincaré sections, bifurcation diagrams by continuation, the largest Lyapunov exponent).
+  (Poincaré sections, bifurcation diagrams by continuation, the largest Lyapunov exponent);
+  ``drive_map``: the safe drive map beside the board's own acceptance.
 - ``run_scene``: a scene file run as ``host-sim run`` runs it (the board against the plant).
 - ``image``, ``check_image``: the configuration image to flash, and what one holds.
 
@@ -20,6 +21,7 @@ from ._native import (
     Device,
     bifurcation,
     check_image,
+    drive_map,
     image,
     lyapunov,
     poincare,
@@ -32,6 +34,7 @@ __all__ = [
     "Result",
     "bifurcation",
     "check_image",
+    "drive_map",
     "image",
     "lyapunov",
     "poincare",

@@ -192,6 +192,22 @@ def lyapunov(
     """The largest Lyapunov exponent, 1/s (`exponent`), with its convergence (`t` s,
     `estimate` 1/s), `interval_seconds`, `limit`, `limit_time_seconds`, `stopped`."""
 
+def drive_map(
+    device: Optional[Device] = None,
+    *,
+    ac_volts: ArrayLike,
+    ac_hz: ArrayLike,
+    target_hz: Optional[float] = None,
+    periods: float = 200.0,
+    quality_factor: Optional[float] = None,
+    settings: Optional[Union[str, PathLike[str]]] = None,
+    gain: float = 4000.0,
+) -> Result:
+    """The safe drive map at the board's bias for `target_hz`: `max_swing`, `safe` (the full
+    simulation inside §6), `accepted` and `refusal` (the board's checks), `limit`, each
+    len(ac_volts) × len(ac_hz); `bias_volts`, `stretch`, `natural_frequency_hz`,
+    `disagreements` (accepted yet crossing)."""
+
 def run_scene(scene: Union[str, PathLike[str]]) -> Result:
     """A scene (a file's path, or its TOML text) as `host-sim run` runs it: the report
     (`run --json`'s keys) and `history` (per tick: `time_seconds` s, `dac_code`, `dac_on`,

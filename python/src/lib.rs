@@ -1138,6 +1138,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(studies::poincare, m)?)?;
     m.add_function(wrap_pyfunction!(studies::bifurcation, m)?)?;
     m.add_function(wrap_pyfunction!(studies::lyapunov, m)?)?;
+    m.add_function(wrap_pyfunction!(studies::drive_map, m)?)?;
     m.add_function(wrap_pyfunction!(image, m)?)?;
     m.add_function(wrap_pyfunction!(check_image, m)?)?;
     m.add_function(wrap_pyfunction!(_device_from_keys, m)?)?;

@@ -1,10 +1,13 @@
 //! The nonlinear studies from Python (docs/python.md): Poincaré sections, bifurcation
 //! diagrams by continuation and the largest Lyapunov exponent, over host-sim's
 //! `study::stroboscopic` and `study::lyapunov` (the CLI's `poincare`, `bifurcation` and
-//! `lyapunov` run the same code).
+//! `lyapunov` run the same code); the safe drive map over `study::drive_map` (`drive-map`).
 
+use host_sim::cmd::drive_map as drive_map_cmd;
+use host_sim::cmd::DeviceArgs;
 use host_sim::engine::solver::Tolerance;
 use host_sim::progress;
+use host_sim::study::drive_map as map;
 use host_sim::study::lyapunov as exponent;
 use host_sim::study::stroboscopic::{
     self, Direction, Driven, Parameter, Point, Section, STUDY_TOLERANCE,
@@ -324,5 +327,96 @@ pub fn lyapunov<'py>(
         out.first_limit.map_or(f64::NAN, |(_, t)| t),
     )?;
     dict.set_item("stopped", out.stopped)?;
+    wrap(py, dict.into_any())
+}
+
+/// The safe drive map (docs/python.md) at the bias a board tunes to for `target_hz` (default:
+/// 44 Hz on the reference device) with `settings` (a settings file), the damping of
+/// `quality_factor` at that bias if given: over `ac_volts` × `ac_hz` (1-D arrays), the full
+/// simulation's `max_swing` (largest |λ − λ*|, from rest, the AC switched on at t = 0, for
+/// `periods` of f0) and `safe` (inside docs/model.md §6), beside `accepted` (the board's own
+/// boot checks of `start` with that `ac` pass) and `refusal` (its words), each an
+/// len(ac_volts) × len(ac_hz) array; `limit` the first check each crossed; `bias_volts`,
+/// `stretch`, `natural_frequency_hz`, `disagreements` (accepted yet crossing: 0 when the two
+/// agree). `gain`: the amplifier's (full scale 2.5 V × gain), as `image`'s.
+#[pyfunction]
+#[pyo3(signature = (device = None, *, ac_volts, ac_hz, target_hz = None, periods = 200.0, quality_factor = None, settings = None, gain = 4000.0))]
+#[allow(clippy::too_many_arguments)]
+pub fn drive_map<'py>(
+    py: Python<'py>,
+    device: Option<&Device_>,
+    ac_volts: &Bound<'py, PyAny>,
+    ac_hz: &Bound<'py, PyAny>,
+    target_hz: Option<f32>,
+    periods: f64,
+    quality_factor: Option<f64>,
+    settings: Option<std::path::PathBuf>,
+    gain: f32,
+) -> PyResult<Bound<'py, PyAny>> {
+    let grid = |name: &str, values: &Bound<'py, PyAny>| -> PyResult<Vec<f64>> {
+        match numbers_of(name, values)? {
+            (shape, v) if shape.len() == 1 => Ok(v),
+            (shape, _) => Err(value_error(format!(
+                "{name} of shape {shape:?}: a 1-D array"
+            ))),
+        }
+    };
+    let (amplitudes, frequencies) = (grid("ac_volts", ac_volts)?, grid("ac_hz", ac_hz)?);
+    if amplitudes.len() * frequencies.len() > drive_map_cmd::MAX_CELLS {
+        return Err(value_error(format!(
+            "{} drives: at most {}",
+            amplitudes.len() * frequencies.len(),
+            drive_map_cmd::MAX_CELLS
+        )));
+    }
+    let args = device.map_or_else(DeviceArgs::default, |d| {
+        DeviceArgs::given(d.batch, d.source.clone())
+    });
+    let map = stoppable(py, || {
+        let (image, batch) =
+            drive_map_cmd::board_image(&args, target_hz, settings, quality_factor, gain)?;
+        let map = map::drive_map(&image, batch.nominal, &amplitudes, &frequencies, periods)?;
+        Ok((map, batch.nominal.damping))
+    })?;
+    let (map, damping) = map;
+    let shape = (amplitudes.len(), frequencies.len());
+    let column = |f: &dyn Fn(&map::Cell) -> f64| {
+        Array2::from_shape_vec(shape, map.cells.iter().map(f).collect()).map_err(value_error)
+    };
+    let flags = |f: &dyn Fn(&map::Cell) -> bool| {
+        Array2::from_shape_vec(shape, map.cells.iter().map(f).collect()).map_err(value_error)
+    };
+    let dict = PyDict::new(py);
+    dict.set_item("ac_volts", amplitudes.into_pyarray(py))?;
+    dict.set_item("ac_hz", frequencies.into_pyarray(py))?;
+    dict.set_item("max_swing", column(&|c| c.max_swing)?.into_pyarray(py))?;
+    let safe = |c: &map::Cell| c.first_limit.is_none() && c.failed.is_none();
+    dict.set_item("safe", flags(&safe)?.into_pyarray(py))?;
+    dict.set_item(
+        "accepted",
+        flags(&|c| c.refused.is_none())?.into_pyarray(py),
+    )?;
+    let rows = |f: &dyn Fn(&map::Cell) -> Option<String>| -> PyResult<Bound<'py, PyList>> {
+        let out: Vec<Vec<Option<String>>> = map
+            .cells
+            .chunks(shape.1.max(1))
+            .map(|row| row.iter().map(f).collect())
+            .collect();
+        PyList::new(py, out)
+    };
+    dict.set_item("refusal", rows(&|c| c.refused.clone())?)?;
+    dict.set_item(
+        "limit",
+        rows(&|c| c.first_limit.map(|(m, _)| m.name().to_string()))?,
+    )?;
+    dict.set_item(
+        "disagreements",
+        map.cells.iter().filter(|c| c.disagrees()).count(),
+    )?;
+    dict.set_item("bias_volts", map.bias_volts)?;
+    dict.set_item("stretch", map.stretch)?;
+    dict.set_item("natural_frequency_hz", map.natural_hz)?;
+    dict.set_item("duration_seconds", map.duration_seconds)?;
+    dict.set_item("damping", damping)?;
     wrap(py, dict.into_any())
 }

@@ -142,3 +142,41 @@ def test_the_studies_refuse_bad_input_with_clear_errors():
         dr.poincare(device, 5000.0, 100.0, 40.0, periods=3, y0=["a", "b"])
     with pytest.raises(ValueError, match="direction"):
         dr.bifurcation(device, 5000.0, 40.0, [1.0, 2.0], periods=3, direction="sideways")
+
+
+def test_every_drive_the_board_accepts_stays_inside_the_full_simulation():
+    for device in devices()[:3]:
+        low, high = device.safe(margin=0.05).tunable_range_hz
+        target = 0.5 * (low + high)
+        f0 = target
+        amplitudes = np.linspace(0.0, 0.3, 7) * device.safe(margin=0.05).max_bias_volts
+        freqs = np.array([0.5, 0.8, 1.0, 1.3, 2.0]) * f0
+        out = dr.drive_map(device, ac_volts=amplitudes, ac_hz=freqs, target_hz=target,
+                           periods=60, quality_factor=80,
+                           gain=device.safe(margin=0.0).limit["volts"] / 2.0)
+        assert out.safe.shape == out.accepted.shape == out.max_swing.shape == (7, 5)
+        assert out.disagreements == 0 and not np.any(out.accepted & ~out.safe), device
+        assert out.natural_frequency_hz == pytest.approx(target, rel=1e-3)
+        assert np.all(out.accepted[0]), "no AC is always accepted"
+        # The boundary against direct simulations: SciPy's run of model.md §4 (sampled 400
+        # times a period of f0) at the last safe and the first unsafe amplitude of each
+        # frequency, and a simulate() of the same drive crossing where the map says.
+        model = Model({**device.to_dict(), "damping": out.damping})
+        duration = out.duration_seconds
+        for j, hz in enumerate(freqs):
+            unsafe = np.flatnonzero(~out.safe[:, j])
+            for i in {max(unsafe[0] - 1, 0), unsafe[0]} if unsafe.size else {6}:
+                ac = amplitudes[i]
+                volts = lambda s: out.bias_volts + ac * np.sin(2 * np.pi * hz * s)
+                t = np.linspace(0, duration, int(400 * duration * f0))
+                theirs = solve_ivp(model.rhs, (0, duration), [out.stretch, 0.0],
+                                   method="DOP853", t_eval=t, args=(volts,), rtol=1e-11,
+                                   atol=1e-11)
+                if not theirs.success:
+                    assert not out.safe[i, j]
+                    continue
+                swing = np.max(np.abs(theirs.y[0] - out.stretch))
+                assert swing <= out.max_swing[i, j] <= swing * 1.001 + 1e-9, (i, j)
+                run = dr.simulate(device, out.bias_volts, ac_volts=ac, ac_hz=hz,
+                                  duration_seconds=duration, damping=out.damping)
+                assert (run.status == 0) == bool(out.safe[i, j]), (i, j, run.message)

@@ -17,7 +17,7 @@ use super::{prepare_file, sig, write_path, DeviceArgs, Report};
 use crate::lut;
 
 /// The reference job's target (model.md §9, scenes/reference.toml), Hz.
-const REFERENCE_TARGET_HZ: f32 = 44.0;
+pub const REFERENCE_TARGET_HZ: f32 = 44.0;
 
 #[derive(Args, Debug)]
 pub struct ImageArgs {

@@ -4,6 +4,7 @@
 pub mod bifurcation;
 pub mod console;
 pub mod curve;
+pub mod drive_map;
 pub mod image;
 pub mod lut;
 pub mod lyapunov;
