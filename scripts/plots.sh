@@ -46,6 +46,18 @@ ran run --out "$tmp/run" && cp "$tmp/run/reference/run.svg" "$out/run.svg"
 ran run scenes/fault-sensor-stuck.toml --out "$tmp/run" \
     && cp "$tmp/run/fault-sensor-stuck/run.svg" "$out/run-fault.svg"
 ran sweep --out "$tmp/sweep" && cp "$tmp/sweep/sweep.svg" "$out/sweep.svg"
+# The nonlinear studies at the bias of the reference job's 44 Hz, Q 100.
+ran poincare --bias-volts 7450 --ac-volts 1200 --ac-hz 85 --quality-factor 100 --periods 150 \
+    --y0 "2.19,0;2.3,0;2.05,-40" --out "$tmp/poincare" \
+    && cp "$tmp/poincare/poincare.svg" "$out/poincare.svg"
+ran bifurcation --bias-volts 7450 --ac-volts 200 --vary ac-hz --values 40:47:71 \
+    --quality-factor 100 --periods 10 --transient-periods 300 --out "$tmp/bif-hz" \
+    && cp "$tmp/bif-hz/bifurcation.svg" "$out/bifurcation-frequency.svg"
+ran bifurcation --bias-volts 7450 --ac-hz 88 --vary ac-volts --values 0:1500:61 \
+    --quality-factor 100 --periods 20 --transient-periods 300 --out "$tmp/bif-ac" \
+    && cp "$tmp/bif-ac/bifurcation.svg" "$out/bifurcation-amplitude.svg"
+ran drive-map --quality-factor 100 --ac-volts 0:3000:13 --ac-hz 13:106:32 --periods 80 \
+    --out "$tmp/drive-map" && cp "$tmp/drive-map/drive-map.svg" "$out/drive-map.svg"
 ran simulate --bias-volts 9400 --start prestretch --duration-seconds 0.05 \
     --plot "$out/simulate-crossing.svg"
 ran report --out "$tmp/report" && cp "$tmp/report/work-precision.svg" "$out/work-precision.svg"

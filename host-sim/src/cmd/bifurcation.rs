@@ -79,6 +79,9 @@ pub struct BifurcationReport {
     pub bias_volts: f64,
     pub ac_volts: f64,
     pub ac_hz: f64,
+    /// The drive in words, the parameter varied as its range.
+    #[serde(skip)]
+    drive: String,
     pub damping: f64,
     pub periods: usize,
     pub transient_periods: usize,
@@ -90,6 +93,23 @@ pub struct BifurcationReport {
     pub files: Vec<String>,
 }
 
+/// The drive in words, the parameter varied as its range: `7450 V + 100..400 V AC at 88 Hz`.
+fn drive_words(d: &Driven, varied: Parameter, range: (f64, f64), number: fn(f64) -> String) -> String {
+    let say = |p: Parameter, value: f64| {
+        if p == varied {
+            format!("{}..{}", number(range.0), number(range.1))
+        } else {
+            number(value)
+        }
+    };
+    format!(
+        "{} V + {} V AC at {} Hz",
+        say(Parameter::BiasVolts, d.bias_volts),
+        say(Parameter::AcVolts, d.ac_volts),
+        say(Parameter::AcHz, d.ac_hz)
+    )
+}
+
 impl fmt::Display for BifurcationReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let say = |v: Option<f64>| v.map_or("none".to_string(), sig);
@@ -97,16 +117,13 @@ impl fmt::Display for BifurcationReport {
         write!(
             f,
             "device          {}\n\
-             drive           {} V + {} V AC at {} Hz, c = {} N·s; {} varied\n\
+             drive           {}, c = {} N·s\n\
              walks           {} values up, {} down; {} points each after {} periods\n\
              first crossing  up: {}, down: {}\n\
              wrote           {}",
             self.device,
-            sig(self.bias_volts),
-            sig(self.ac_volts),
-            sig(self.ac_hz),
+            self.drive,
             sig(self.damping),
-            self.varied.name(),
             walks(Direction::Up),
             walks(Direction::Down),
             self.periods,
@@ -183,7 +200,8 @@ pub fn bifurcation(args: &BifurcationArgs) -> Result<BifurcationReport, String> 
             .find(|w| w.direction == d && w.section.first_limit.is_some())
             .map(|w| w.value)
     };
-    let panel = plot(&device, &driven, args.vary, &walked);
+    let range = (values[0], values[values.len() - 1]);
+    let panel = plot(&device, &driven, args.vary, range, &walked);
     let files = write_csv_and_plot(&args.out, "bifurcation", &rows, &[panel])?;
     Ok(BifurcationReport {
         device,
@@ -191,6 +209,7 @@ pub fn bifurcation(args: &BifurcationArgs) -> Result<BifurcationReport, String> 
         bias_volts: driven.bias_volts,
         ac_volts: driven.ac_volts,
         ac_hz: driven.ac_hz,
+        drive: drive_words(&driven, args.vary, range, sig),
         damping: driven.params.damping,
         periods: args.periods,
         transient_periods: args.transient_periods,
@@ -213,7 +232,13 @@ fn distinct(points: &[stroboscopic::Point]) -> usize {
 
 /// The Poincaré stretches against the value: up in blue, down in orange, the values whose
 /// run crossed a limit in red, the first crossing of each walk as a guide.
-fn plot(device: &DeviceInfo, driven: &Driven, varied: Parameter, walked: &[Walked]) -> Panel {
+fn plot(
+    device: &DeviceInfo,
+    driven: &Driven,
+    varied: Parameter,
+    range: (f64, f64),
+    walked: &[Walked],
+) -> Panel {
     let mut series = Vec::new();
     for (direction, colour, name) in [
         (Direction::Up, COLOURS[0], "walked up"),
@@ -275,12 +300,9 @@ fn plot(device: &DeviceInfo, driven: &Driven, varied: Parameter, walked: &[Walke
     let stretch = poincare::limit_stretch(driven);
     Panel {
         title: format!(
-            "{}: bifurcation over {}, {} V + {} V AC at {} Hz",
+            "{}: bifurcation, {}",
             device.title(),
-            varied.name(),
-            short(driven.bias_volts),
-            short(driven.ac_volts),
-            short(driven.ac_hz)
+            drive_words(driven, varied, range, short)
         ),
         x_label: unit.into(),
         y_label: "stretch at t = k/f".into(),
