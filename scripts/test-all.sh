@@ -150,6 +150,7 @@ fi
 # The tests compare against the CLI the test step built.
 HOST_SIM="$PWD/target/debug/host-sim" python3 -m pytest -q python/tests
 python3 python/examples/figures.py --out out/python
+python3 python/examples/studies.py --out out/python
 python3 python/examples/monte_carlo.py --devices 5000 --workers 2 --plot out/python/monte-carlo.svg
 python3 python/examples/monte_carlo.py --batch --devices 2000 --workers 2
 
