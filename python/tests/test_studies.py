@@ -180,3 +180,34 @@ def test_every_drive_the_board_accepts_stays_inside_the_full_simulation():
                 run = dr.simulate(device, out.bias_volts, ac_volts=ac, ac_hz=hz,
                                   duration_seconds=duration, damping=out.damping)
                 assert (run.status == 0) == bool(out.safe[i, j]), (i, j, run.message)
+
+
+@pytest.mark.parametrize("study", ["bifurcation", "drive_map", "poincare"])
+def test_ctrl_c_stops_a_study_within_a_run(study):
+    """Ctrl-C at a tenth of a study's own run time raises KeyboardInterrupt before half of it
+    (no fixed seconds: measured against the same call on this machine)."""
+    import _thread
+    import threading
+    import time
+
+    device = dr.Device.reference()
+    calls = {
+        "bifurcation": lambda: dr.bifurcation(device, 7450.0, 88.0, np.linspace(0, 1500, 800),
+                                              periods=50, transient_periods=150),
+        "drive_map": lambda: dr.drive_map(device, ac_volts=np.linspace(0, 2000, 12),
+                                          ac_hz=np.linspace(20, 100, 12), target_hz=44.0,
+                                          quality_factor=100, periods=100),
+        "poincare": lambda: dr.poincare(device, 7450.0, 1000.0, 85.0, periods=3000,
+                                        y0=np.tile([2.19, 0.0], (30, 1))),
+    }
+    t0 = time.perf_counter()
+    calls[study]()
+    whole = time.perf_counter() - t0
+    timer = threading.Timer(0.1 * whole, _thread.interrupt_main)
+    t0 = time.perf_counter()
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        calls[study]()
+    stopped = time.perf_counter() - t0
+    timer.join()
+    assert stopped < 0.5 * whole, (stopped, whole)

@@ -94,7 +94,12 @@ pub struct BifurcationReport {
 }
 
 /// The drive in words, the parameter varied as its range: `7450 V + 100..400 V AC at 88 Hz`.
-fn drive_words(d: &Driven, varied: Parameter, range: (f64, f64), number: fn(f64) -> String) -> String {
+fn drive_words(
+    d: &Driven,
+    varied: Parameter,
+    range: (f64, f64),
+    number: fn(f64) -> String,
+) -> String {
     let say = |p: Parameter, value: f64| {
         if p == varied {
             format!("{}..{}", number(range.0), number(range.1))
