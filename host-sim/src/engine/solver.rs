@@ -1421,6 +1421,80 @@ mod tests {
         assert!((out.final_stretch - straight[0]).abs() < 1e-5);
     }
 
+    /// `t_eval` and `y0` as SciPy means them, for every method: the states at the times asked
+    /// (off the output grid, on it, at both ends) against one tight solve straight to each
+    /// from the same start.
+    #[test]
+    fn t_eval_gives_the_states_at_the_times_asked_from_y0() {
+        let device = Device::new(REFERENCE_DEVICE).unwrap();
+        let y0 = [2.2, -1.5];
+        let scene = OpenLoop {
+            params: REFERENCE_DEVICE,
+            bias_volts: 7000.0,
+            ac_volts: 300.0,
+            drive_hz: 30.0,
+            duration_seconds: 0.2,
+            start: Start::Equilibrium,
+            y0: Some(y0),
+            tolerance: None,
+        };
+        let scale = device.rad_per_s_per_unit();
+        let motion = Motion {
+            device: &device,
+            drive: Drive::from_volts(&device, 7000.0, 300.0, 30.0),
+        };
+        let times = [0.0, 0.012_345, 0.1, 0.1, 0.177, 0.2];
+        let exact: Vec<[f64; 2]> = times
+            .iter()
+            .map(|&t| {
+                if t == 0.0 {
+                    return y0;
+                }
+                let start = [y0[0], y0[1] / scale];
+                let (y, _) = Solver::Dop853
+                    .advance(&motion, 0.0, t * scale, start, Tolerance::both(1e-13), None)
+                    .unwrap();
+                [y[0], y[1] * scale]
+            })
+            .collect();
+        let rk4 = Choice::Core {
+            method: Method::Rk4,
+            single: false,
+        };
+        for (choice, within) in [
+            (Choice::Reference, 1e-9),
+            (Choice::ReferenceRadau, 1e-6),
+            (Choice::ReferenceBdf, 1e-6),
+            (rk4, 1e-6),
+        ] {
+            if choice == Choice::ReferenceBdf && !cfg!(feature = "bdf") {
+                continue;
+            }
+            let out = simulate_at(&scene, choice, 1e-4, Some(&times)).unwrap();
+            let at = out.evaluated.expect("evaluated");
+            assert_eq!(at.times_seconds, times);
+            assert_eq!((out.samples[0], out.velocities[0]), (y0[0], y0[1]));
+            for (k, e) in exact.iter().enumerate() {
+                let (x, v) = (at.stretch[k], at.velocity_per_second[k]);
+                assert!(
+                    (x - e[0]).abs() < within,
+                    "{choice:?} t {}: {x} vs {}",
+                    times[k],
+                    e[0]
+                );
+                assert!(
+                    (v - e[1]).abs() < 1e3 * within,
+                    "{choice:?} t {}: {v} vs {}",
+                    times[k],
+                    e[1]
+                );
+            }
+        }
+        // Out of the run, or out of order: refused.
+        assert!(simulate_at(&scene, Choice::Reference, 1e-3, Some(&[0.3])).is_err());
+        assert!(simulate_at(&scene, Choice::Reference, 1e-3, Some(&[0.1, 0.05])).is_err());
+    }
+
     /// The equilibrium start on a Gent device with a low Jlim and a high pre-stretch, where a
     /// search to the scan's end meets Φ = NaN past B's lock-up: every bias from 0 V to the
     /// limit starts at a state that stays put (at rest, no AC: an equilibrium, checked by

@@ -358,6 +358,7 @@ mod tests {
             solver: None,
             switched: None,
             evaluations: None,
+            evaluated: None,
         };
         let found = upward_crossings(&out, dt, 0.0);
         assert_eq!(found.len(), 3);
