@@ -77,6 +77,15 @@ pub fn map<I: Sync, O: Send>(what: &str, items: &[I], job: impl Fn(&I) -> O + Sy
     out
 }
 
+/// `INTERRUPTED` as an error if any of the runs says it stopped for it: a study stopped by
+/// Ctrl-C reports nothing half done.
+pub fn interrupted<'a>(stopped: impl IntoIterator<Item = Option<&'a str>>) -> Result<(), String> {
+    match stopped.into_iter().any(|why| why == Some(INTERRUPTED)) {
+        true => Err(INTERRUPTED.into()),
+        false => Ok(()),
+    }
+}
+
 /// `map` for few long jobs made of many units: one bar of `units` that the jobs advance
 /// themselves (`tick` once a unit).
 pub fn map_units<I: Sync, O: Send>(

@@ -150,10 +150,11 @@ def poincare(
     ac_volts: float,
     ac_hz: float,
     *,
-    periods: int,
+    periods: int = 200,
     transient_periods: int = 0,
     y0: Optional[ArrayLike] = None,
     damping: Optional[float] = None,
+    quality_factor: Optional[float] = None,
     rtol: Optional[float] = None,
 ) -> Result:
     """A Poincaré section at the drive's phase 0: `stretch`, `velocity` (1/s) at `t` = k/ac_hz,
@@ -166,11 +167,12 @@ def bifurcation(
     ac_hz: ArrayLike,
     ac_volts: ArrayLike,
     *,
-    periods: int,
-    transient_periods: int = 0,
+    periods: int = 50,
+    transient_periods: int = 100,
     direction: Literal["up", "down", "both"] = "both",
     y0: Optional[ArrayLike] = None,
     damping: Optional[float] = None,
+    quality_factor: Optional[float] = None,
     rtol: Optional[float] = None,
 ) -> Result:
     """A bifurcation diagram by continuation over the one of `bias_volts`, `ac_hz`, `ac_volts`
@@ -187,6 +189,7 @@ def lyapunov(
     transient_periods: int = 20,
     y0: Optional[ArrayLike] = None,
     damping: Optional[float] = None,
+    quality_factor: Optional[float] = None,
     rtol: Optional[float] = None,
 ) -> Result:
     """The largest Lyapunov exponent, 1/s (`exponent`), with its convergence (`t` s,
@@ -204,9 +207,9 @@ def drive_map(
     gain: float = 4000.0,
 ) -> Result:
     """The safe drive map at the board's bias for `target_hz`: `max_swing`, `safe` (the full
-    simulation inside §6), `accepted` and `refusal` (the board's checks), `limit`, each
-    len(ac_volts) × len(ac_hz); `bias_volts`, `stretch`, `natural_frequency_hz`,
-    `disagreements` (accepted yet crossing)."""
+    simulation inside §6), `accepted` and `refusal` (the board's checks), `limit`, `stopped`,
+    each len(ac_volts) × len(ac_hz); `bias_volts`, `stretch`, `natural_frequency_hz`,
+    `duration_seconds`, `damping`, `disagreements` (accepted yet not safe)."""
 
 def run_scene(scene: Union[str, PathLike[str]]) -> Result:
     """A scene (a file's path, or its TOML text) as `host-sim run` runs it: the report

@@ -29,24 +29,15 @@ RED = "#d62728"
 BIAS = 7450.0  # V: the reference job's 44 Hz
 
 
-def damping_for(device, bias, quality):
-    """c = M·ω0/Q at the bias (M the effective mass of model.md §4), from the device's keys."""
-    k = device.to_dict()
-    length = k["length_active"] + k["length_passive"]
-    mass = k["bar_mass"] * k["length_active"] + (
-        k["density"] * k["width"] * k["thickness"] * k["length_active"] * length / 3)
-    return mass * 2 * np.pi * device.frequency(bias) / quality
-
-
 def save(fig, out, name):
     for ext in ("png", "svg"):
         fig.savefig(out / f"{name}.{ext}", dpi=120)
     plt.close(fig)
 
 
-def poincare(device, c, out):
+def poincare(device, out):
     starts = np.array([[2.19, 0.0], [2.3, 0.0], [2.05, -40.0]])
-    s = dr.poincare(device, BIAS, 1200.0, 85.0, periods=150, y0=starts, damping=c)
+    s = dr.poincare(device, BIAS, 1200.0, 85.0, periods=150, y0=starts, quality_factor=100)
     fig, ax = plt.subplots(figsize=(6, 4), constrained_layout=True)
     for i, colour in enumerate(COLOURS[:len(starts)]):
         crossed = s.limit[i] is not None
@@ -62,15 +53,15 @@ def poincare(device, c, out):
           f"crossings {sum(x is not None for x in s.limit)}")
 
 
-def bifurcation(device, c, out):
+def bifurcation(device, out):
     f0 = device.frequency(BIAS)
     fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4), constrained_layout=True)
     hz = np.linspace(0.91 * f0, 1.07 * f0, 71)
     over_hz = dr.bifurcation(device, BIAS, hz, 200.0, periods=10, transient_periods=300,
-                             damping=c)
+                             quality_factor=100)
     ac = np.linspace(0.0, 1500.0, 61)
     over_ac = dr.bifurcation(device, BIAS, 2 * f0, ac, periods=20, transient_periods=300,
-                             damping=c)
+                             quality_factor=100)
     for ax, d, xlabel, title in [
         (left, over_hz, "drive frequency, Hz", "200 V AC: the jump at f0"),
         (right, over_ac, "AC amplitude, V", f"at 2·f0 = {2 * f0:.1f} Hz: period doubling"),
@@ -127,9 +118,8 @@ def main():
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     device = dr.Device.reference()
-    c = damping_for(device, BIAS, 100.0)
-    poincare(device, c, out)
-    bifurcation(device, c, out)
+    poincare(device, out)
+    bifurcation(device, out)
     if drive_map(device, out):
         sys.exit("the board accepts drives that cross a limit")
 

@@ -20,17 +20,24 @@ use pyo3::types::{PyDict, PyList};
 
 use super::{numbers_of, stoppable, value_error, wrap, Device_};
 
-/// The drive on `device` (its damping replaced if asked), at `rtol` (atol the same).
+/// The damping asked for: c in N·s, or the quality factor Q at the bias (not both).
+#[derive(Clone, Copy)]
+struct Damping {
+    damping: Option<f64>,
+    quality_factor: Option<f64>,
+}
+
+/// The drive on `device` (its damping replaced as asked), at `rtol` (atol the same).
 fn driven(
     device: &Device_,
     bias_volts: f64,
     ac_volts: f64,
     ac_hz: f64,
-    damping: Option<f64>,
+    asked: Damping,
     rtol: Option<f64>,
 ) -> PyResult<Driven> {
     let mut params = device.params;
-    if let Some(c) = damping {
+    if let Some(c) = asked.damping {
         params.damping = c;
     }
     let d = Driven {
@@ -41,7 +48,13 @@ fn driven(
         tolerance: Tolerance::both(rtol.unwrap_or(STUDY_TOLERANCE)),
     };
     d.device().map_err(value_error)?;
-    Ok(d)
+    match (asked.damping, asked.quality_factor) {
+        (Some(_), Some(_)) => Err(value_error(
+            "damping and quality_factor: give one (the damping, or Q at the bias)",
+        )),
+        (_, Some(q)) => d.with_quality(q).map_err(value_error),
+        _ => Ok(d),
+    }
 }
 
 /// Start states from `y0`: `None` (the rest state), a pair (stretch, dλ/dt in 1/s) or an
@@ -74,7 +87,7 @@ fn starts(
 }
 
 /// A count given as an int ≥ `least`.
-fn count(name: &str, value: i64, least: i64) -> PyResult<usize> {
+fn at_least(name: &str, value: i64, least: i64) -> PyResult<usize> {
     if value < least {
         return Err(value_error(format!(
             "{name} {value}: need at least {least}"
@@ -129,10 +142,11 @@ fn put_sections(
 /// (1/s) at t = k/ac_hz, k = transient_periods, …, transient_periods + periods − 1, the drive
 /// Φ(t) = bias_volts + ac_volts·sin(2π·ac_hz·t); `t` those times. `y0`: the start (stretch,
 /// dλ/dt in 1/s), or an n × 2 array of starts (rows of the results, computed on all cores);
-/// default the rest state at the bias. `limit`, `limit_time_seconds`: the first check of
+/// default the rest state at the bias. `damping` (N·s) or `quality_factor` (Q at the bias)
+/// over the device's damping. `limit`, `limit_time_seconds`: the first check of
 /// docs/model.md §6 that failed along each run; `stopped`: why a run ended early.
 #[pyfunction]
-#[pyo3(signature = (device, bias_volts, ac_volts, ac_hz, *, periods, transient_periods = 0, y0 = None, damping = None, rtol = None))]
+#[pyo3(signature = (device, bias_volts, ac_volts, ac_hz, *, periods = 200, transient_periods = 0, y0 = None, damping = None, quality_factor = None, rtol = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn poincare<'py>(
     py: Python<'py>,
@@ -144,15 +158,20 @@ pub fn poincare<'py>(
     transient_periods: i64,
     y0: Option<&Bound<'py, PyAny>>,
     damping: Option<f64>,
+    quality_factor: Option<f64>,
     rtol: Option<f64>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let d = driven(device, bias_volts, ac_volts, ac_hz, damping, rtol)?;
+    let asked = Damping {
+        damping,
+        quality_factor,
+    };
+    let d = driven(device, bias_volts, ac_volts, ac_hz, asked, rtol)?;
     let (periods, transient) = (
-        count("periods", periods, 1)?,
-        count("transient_periods", transient_periods, 0)?,
+        at_least("periods", periods, 1)?,
+        at_least("transient_periods", transient_periods, 0)?,
     );
     let (points, many) = starts(y0, || d.rest().map_err(value_error))?;
-    let work = points.len() as f64 * (transient + periods) as f64;
+    let work = points.len() as f64 * (transient as f64 + periods as f64);
     if work > stroboscopic::MAX_SECTION_POINTS {
         return Err(value_error(format!(
             "{work} drive periods in all: more than {}",
@@ -188,8 +207,9 @@ pub fn poincare<'py>(
 /// section point. Returns `parameter` (the value of each row, in the order walked),
 /// `direction` (each row's walk), `varied` (the parameter's name), and `stretch`, `velocity`
 /// (rows × periods: the Poincaré points), `limit`, `limit_time_seconds`, `stopped` per row.
+/// `damping` (N·s) or `quality_factor` (Q at the bias) over the device's damping.
 #[pyfunction]
-#[pyo3(signature = (device, bias_volts, ac_hz, ac_volts, *, periods, transient_periods = 0, direction = "both", y0 = None, damping = None, rtol = None))]
+#[pyo3(signature = (device, bias_volts, ac_hz, ac_volts, *, periods = 50, transient_periods = 100, direction = "both", y0 = None, damping = None, quality_factor = None, rtol = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn bifurcation<'py>(
     py: Python<'py>,
@@ -202,11 +222,12 @@ pub fn bifurcation<'py>(
     direction: &str,
     y0: Option<&Bound<'py, PyAny>>,
     damping: Option<f64>,
+    quality_factor: Option<f64>,
     rtol: Option<f64>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let (periods, transient) = (
-        count("periods", periods, 1)?,
-        count("transient_periods", transient_periods, 0)?,
+        at_least("periods", periods, 1)?,
+        at_least("transient_periods", transient_periods, 0)?,
     );
     let direction = match direction {
         "up" => Direction::Up,
@@ -231,6 +252,11 @@ pub fn bifurcation<'py>(
         let (shape, values) = numbers_of(name, given)?;
         match shape.len() {
             0 => fixed[i] = values[0],
+            1 if values.is_empty() => {
+                return Err(value_error(format!(
+                    "{name}: no values to vary (an empty array)"
+                )))
+            }
             1 if varied.is_none() => {
                 fixed[i] = values.first().copied().unwrap_or(f64::NAN);
                 varied = Some((parameter, values));
@@ -248,7 +274,11 @@ pub fn bifurcation<'py>(
             "one of bias_volts, ac_volts and ac_hz must be an array: the values to vary",
         ));
     };
-    let base = driven(device, fixed[0], fixed[1], fixed[2], damping, rtol)?;
+    let asked = Damping {
+        damping,
+        quality_factor,
+    };
+    let base = driven(device, fixed[0], fixed[1], fixed[2], asked, rtol)?;
     let from = match y0 {
         None => None,
         Some(y) => match starts(Some(y), || Err(value_error("no y0")))? {
@@ -283,9 +313,10 @@ pub fn bifurcation<'py>(
 /// state at the bias), renormalised once a drive period (without a drive, once a period of
 /// the small oscillation at the start), over `periods` of them after `transient_periods`.
 /// Returns `exponent`, its convergence (`t` s after the transient, `estimate` 1/s),
-/// `interval_seconds`, `limit`, `limit_time_seconds`, `stopped`.
+/// `interval_seconds`, `limit`, `limit_time_seconds` (the checks at the solver's steps),
+/// `stopped`. `damping` (N·s) or `quality_factor` (Q at the bias) over the device's.
 #[pyfunction]
-#[pyo3(signature = (device, bias_volts, ac_volts = 0.0, ac_hz = 0.0, *, periods = 200, transient_periods = 20, y0 = None, damping = None, rtol = None))]
+#[pyo3(signature = (device, bias_volts, ac_volts = 0.0, ac_hz = 0.0, *, periods = 200, transient_periods = 20, y0 = None, damping = None, quality_factor = None, rtol = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn lyapunov<'py>(
     py: Python<'py>,
@@ -297,12 +328,17 @@ pub fn lyapunov<'py>(
     transient_periods: i64,
     y0: Option<&Bound<'py, PyAny>>,
     damping: Option<f64>,
+    quality_factor: Option<f64>,
     rtol: Option<f64>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let d = driven(device, bias_volts, ac_volts, ac_hz, damping, rtol)?;
+    let asked = Damping {
+        damping,
+        quality_factor,
+    };
+    let d = driven(device, bias_volts, ac_volts, ac_hz, asked, rtol)?;
     let (periods, transient) = (
-        count("periods", periods, 1)?,
-        count("transient_periods", transient_periods, 0)?,
+        at_least("periods", periods, 1)?,
+        at_least("transient_periods", transient_periods, 0)?,
     );
     let from = match starts(y0, || d.rest().map_err(value_error))? {
         (p, false) => p[0],
@@ -310,10 +346,8 @@ pub fn lyapunov<'py>(
     };
     let out = stoppable(py, || {
         let out = exponent::lyapunov(&d, from, transient, periods)?;
-        match out.stopped.as_deref() {
-            Some(progress::INTERRUPTED) => Err(progress::INTERRUPTED.to_string()),
-            _ => Ok(out),
-        }
+        progress::interrupted([out.stopped.as_deref()])?;
+        Ok(out)
     })?;
     let dict = PyDict::new(py);
     dict.set_item("exponent", out.per_second)?;
@@ -336,9 +370,10 @@ pub fn lyapunov<'py>(
 /// simulation's `max_swing` (largest |λ − λ*|, from rest, the AC switched on at t = 0, for
 /// `periods` of f0) and `safe` (inside docs/model.md §6), beside `accepted` (the board's own
 /// boot checks of `start` with that `ac` pass) and `refusal` (its words), each an
-/// len(ac_volts) × len(ac_hz) array; `limit` the first check each crossed; `bias_volts`,
-/// `stretch`, `natural_frequency_hz`, `disagreements` (accepted yet crossing: 0 when the two
-/// agree). `gain`: the amplifier's (full scale 2.5 V × gain), as `image`'s.
+/// len(ac_volts) × len(ac_hz) array; `limit` the first check each crossed, `stopped` why a
+/// run ended early (it left the model's range: not safe); `bias_volts`, `stretch`,
+/// `natural_frequency_hz`, `duration_seconds`, `damping` (N·s), `disagreements` (accepted
+/// yet not safe: 0 when the two agree). `gain`: the amplifier's (full scale 2.5 V × gain), as `image`'s.
 #[pyfunction]
 #[pyo3(signature = (device = None, *, ac_volts, ac_hz, target_hz = None, periods = 200.0, quality_factor = None, settings = None, gain = 4000.0))]
 #[allow(clippy::too_many_arguments)]
@@ -390,8 +425,7 @@ pub fn drive_map<'py>(
     dict.set_item("ac_volts", amplitudes.into_pyarray(py))?;
     dict.set_item("ac_hz", frequencies.into_pyarray(py))?;
     dict.set_item("max_swing", column(&|c| c.max_swing)?.into_pyarray(py))?;
-    let safe = |c: &map::Cell| c.first_limit.is_none() && c.failed.is_none();
-    dict.set_item("safe", flags(&safe)?.into_pyarray(py))?;
+    dict.set_item("safe", flags(&map::Cell::safe)?.into_pyarray(py))?;
     dict.set_item(
         "accepted",
         flags(&|c| c.refused.is_none())?.into_pyarray(py),
@@ -409,13 +443,14 @@ pub fn drive_map<'py>(
         "limit",
         rows(&|c| c.first_limit.map(|(m, _)| m.name().to_string()))?,
     )?;
+    dict.set_item("stopped", rows(&|c| c.stopped.clone())?)?;
     dict.set_item(
         "disagreements",
         map.cells.iter().filter(|c| c.disagrees()).count(),
     )?;
     dict.set_item("bias_volts", map.bias_volts)?;
     dict.set_item("stretch", map.stretch)?;
-    dict.set_item("natural_frequency_hz", map.natural_hz)?;
+    dict.set_item("natural_frequency_hz", map.natural_frequency_hz)?;
     dict.set_item("duration_seconds", map.duration_seconds)?;
     dict.set_item("damping", damping)?;
     wrap(py, dict.into_any())

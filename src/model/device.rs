@@ -316,6 +316,12 @@ impl<T: Real> DeviceParams<T> {
             + self.density * self.width * self.thickness * self.length_active * l1 / T::of(3.0)
     }
 
+    /// The damping c = M·ω0/Q that gives a small oscillation of `natural_hz` the quality
+    /// factor `quality_factor` (model.md §4), N·s.
+    pub fn damping_for_quality(&self, natural_hz: T, quality_factor: T) -> T {
+        self.effective_mass() * T::of(core::f64::consts::TAU) * natural_hz / quality_factor
+    }
+
     /// ε = εr·ε0, F/m.
     pub fn permittivity(&self) -> T {
         self.relative_permittivity * T::of(VACUUM_PERMITTIVITY)

@@ -22,7 +22,8 @@ pub const MAX_VALUES: usize = 100_000;
 pub struct BifurcationArgs {
     #[command(flatten)]
     pub drive: DrivenArgs,
-    /// The parameter varied (its value in the drive's flag is ignored).
+    /// The parameter varied: its own drive flag is not used but for --quality-factor's
+    /// rest state (Q at --bias-volts).
     #[arg(long, value_enum, default_value_t = Parameter::AcVolts)]
     pub vary: Parameter,
     /// Its values, increasing: `a,b,c` or `from:to:count`.
@@ -53,7 +54,7 @@ pub struct BifurcationArgs {
 pub struct Row {
     pub direction: Direction,
     pub value: f64,
-    /// The point's drive period, from the transient's end: t = (transient + k)/f.
+    /// The point's drive period: t = k/f, from k = --transient-periods.
     pub k: usize,
     pub stretch: f64,
     pub velocity_per_second: f64,
@@ -152,15 +153,23 @@ impl Report for BifurcationReport {
 pub fn bifurcation(args: &BifurcationArgs) -> Result<BifurcationReport, String> {
     let (driven, device) = args.drive.driven()?;
     let values = super::values("--values", &args.values, MAX_VALUES)?;
-    let from = match &args.y0 {
-        Some(text) => match poincare::starts(text)?[..] {
-            [one] => Some(one),
-            _ => return Err(format!("--y0 {text}: one start for a diagram")),
-        },
-        None => None,
-    };
+    let from = args
+        .y0
+        .as_deref()
+        .map(|text| super::state("--y0", text))
+        .transpose()?
+        .map(|[stretch, velocity_per_second]| stroboscopic::Point {
+            stretch,
+            velocity_per_second,
+        });
     // Checked before the work: every value, the work's size, where the files go.
-    let total = values.len() as f64 * (args.transient_periods + args.periods) as f64;
+    if args.vary != Parameter::AcHz && !(driven.ac_hz > 0.0) {
+        return Err(format!(
+            "--ac-hz {}: a section is taken once a drive period; need a drive frequency > 0",
+            sig(driven.ac_hz)
+        ));
+    }
+    let total = values.len() as f64 * (args.transient_periods as f64 + args.periods as f64);
     if total > stroboscopic::MAX_SECTION_POINTS {
         return Err(format!(
             "{} drive periods a walk, more than {}: fewer values or periods",
@@ -181,11 +190,11 @@ pub fn bifurcation(args: &BifurcationArgs) -> Result<BifurcationReport, String> 
     let mut rows = Vec::new();
     let mut summary = Vec::new();
     for w in &walked {
-        for (k, p) in w.section.points.iter().enumerate() {
+        for (j, p) in w.section.points.iter().enumerate() {
             rows.push(Row {
                 direction: w.direction,
                 value: w.value,
-                k,
+                k: args.transient_periods + j,
                 stretch: p.stretch,
                 velocity_per_second: p.velocity_per_second,
             });

@@ -89,6 +89,9 @@ pub struct Row {
     pub safe: bool,
     pub first_limit_mode: Option<&'static str>,
     pub first_limit_time_seconds: Option<f64>,
+    /// Why the simulation ended early (the motion left the model's range; empty: it ran to
+    /// its end).
+    pub stopped: String,
 }
 
 /// What `drive-map` reports.
@@ -104,7 +107,8 @@ pub struct DriveMapReport {
     pub duration_seconds: f64,
     pub accepted: usize,
     pub safe: usize,
-    /// Drives the board accepts that cross a limit in the full simulation (0: the two agree).
+    /// Drives the board accepts that are not safe in the full simulation: they cross a limit,
+    /// or leave the model's range (0: the two agree).
     pub disagreements: usize,
     pub cells: Vec<Row>,
     pub files: Vec<String>,
@@ -153,9 +157,10 @@ impl Report for DriveMapReport {
     }
 }
 
-/// The image a board holds (a 2.5 V DAC, the amplifier's `gain`) for `device` tuned to `target_hz` (`None`: the reference job's 44
-/// Hz on the reference device) with `settings`, the damping of `quality_factor` at that bias
-/// put in the device file's place if given; and the batch with it.
+/// The image a board holds (a 2.5 V DAC, the amplifier's `gain`) for `device` tuned to
+/// `target_hz` (`None`: the reference job's 44 Hz on the reference device) with `settings`,
+/// the damping of `quality_factor` at that bias in the device file's place if given; and the
+/// batch with it.
 pub fn board_image(
     device: &DeviceArgs,
     target_hz: Option<f32>,
@@ -187,8 +192,9 @@ pub fn board_image(
         let (image, _) = super::image::build(&image_args(batch), "(in memory)".into())?;
         let (_, stretch, _) = drive_map::operating_point(&image, batch.nominal)?;
         let d = de_resonator::Device::new(batch.nominal).map_err(|e| e.to_string())?;
-        let omega = std::f64::consts::TAU * d.natural_frequency_hz(stretch);
-        let c = batch.nominal.effective_mass() * omega / q;
+        let c = batch
+            .nominal
+            .damping_for_quality(d.natural_frequency_hz(stretch), q);
         batch = batch.pinned(de_resonator::Field::Damping, c);
         batch.nominal.damping = c;
     }
@@ -242,7 +248,7 @@ pub fn drive_map(args: &DriveMapArgs) -> Result<DriveMapReport, String> {
         target_hz: settings.target_hz,
         bias_volts: map.bias_volts,
         stretch: map.stretch,
-        natural_frequency_hz: map.natural_hz,
+        natural_frequency_hz: map.natural_frequency_hz,
         damping: batch.nominal.damping,
         duration_seconds: map.duration_seconds,
         accepted: rows.iter().filter(|r| r.accepted).count(),
@@ -260,9 +266,10 @@ fn row(c: &Cell) -> Row {
         accepted: c.refused.is_none(),
         refusal: c.refused.clone().unwrap_or_default(),
         max_swing: c.max_swing,
-        safe: c.first_limit.is_none() && c.failed.is_none(),
+        safe: c.safe(),
         first_limit_mode: c.first_limit.map(|(m, _)| m.name()),
         first_limit_time_seconds: c.first_limit.map(|(_, t)| t),
+        stopped: c.stopped.clone().unwrap_or_default(),
     }
 }
 
@@ -273,7 +280,7 @@ fn plot(device: &DeviceInfo, map: &Map, frequencies: &[f64]) -> Panel {
     let dots = |crossed: bool| -> Vec<(f64, f64)> {
         map.cells
             .iter()
-            .filter(|c| (c.first_limit.is_some() || c.failed.is_some()) == crossed)
+            .filter(|c| c.safe() != crossed)
             .map(|c| (c.ac_hz, c.ac_volts))
             .collect()
     };
@@ -304,7 +311,7 @@ fn plot(device: &DeviceInfo, map: &Map, frequencies: &[f64]) -> Panel {
             label: String::new(),
         },
         Series {
-            name: "crossed a limit of §6".into(),
+            name: "crossed a limit of §6 (or left the model)".into(),
             points: dots(true),
             style: Style {
                 colour: Some(RED),
@@ -316,7 +323,7 @@ fn plot(device: &DeviceInfo, map: &Map, frequencies: &[f64]) -> Panel {
         },
         Series {
             name: "largest safe from below".into(),
-            points: edge(&|c| c.first_limit.is_none() && c.failed.is_none()),
+            points: edge(&|c| c.safe()),
             style: Style {
                 colour: Some(COLOURS[0]),
                 ..Style::default()
@@ -337,7 +344,7 @@ fn plot(device: &DeviceInfo, map: &Map, frequencies: &[f64]) -> Panel {
     .into_iter()
     .filter(|s| !s.points.is_empty())
     .collect();
-    let f0 = map.natural_hz;
+    let f0 = map.natural_frequency_hz;
     Panel {
         title: format!(
             "{}: safe drives at {} V (f0 {} Hz)",

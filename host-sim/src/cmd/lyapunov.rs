@@ -54,7 +54,7 @@ pub struct LyapunovReport {
     /// The largest exponent, 1/s (NaN: nothing measured).
     pub exponent_per_second: f64,
     /// How much the estimate moved over the last tenth of the run, 1/s.
-    pub last_tenth_change: f64,
+    pub last_tenth_change_per_second: f64,
     pub interval_seconds: f64,
     pub first_limit: Option<Crossing>,
     pub stopped: Option<String>,
@@ -77,7 +77,7 @@ impl fmt::Display for LyapunovReport {
             sig(self.ac_hz),
             sig(self.damping),
             sig(self.exponent_per_second),
-            sig(self.last_tenth_change),
+            sig(self.last_tenth_change_per_second),
             self.rows.len(),
             sig(self.interval_seconds),
             self.first_limit.map_or("none crossed".into(), |c| format!(
@@ -102,10 +102,13 @@ impl Report for LyapunovReport {
 pub fn lyapunov(args: &LyapunovArgs) -> Result<LyapunovReport, String> {
     let (driven, device) = args.drive.driven()?;
     let from = match &args.y0 {
-        Some(text) => match poincare::starts(text)?[..] {
-            [one] => one,
-            _ => return Err(format!("--y0 {text}: one start for an exponent")),
-        },
+        Some(text) => {
+            let [stretch, velocity_per_second] = super::state("--y0", text)?;
+            crate::study::stroboscopic::Point {
+                stretch,
+                velocity_per_second,
+            }
+        }
         None => driven.rest()?,
     };
     if args.periods == 0 {
@@ -113,7 +116,7 @@ pub fn lyapunov(args: &LyapunovArgs) -> Result<LyapunovReport, String> {
     }
     prepare_dir(&args.out)?;
     let out = lyapunov::lyapunov(&driven, from, args.transient_periods, args.periods)?;
-    poincare::interrupted(std::iter::once(&out.stopped))?;
+    crate::progress::interrupted([out.stopped.as_deref()])?;
     let rows: Vec<Row> = out
         .convergence
         .iter()
@@ -123,7 +126,7 @@ pub fn lyapunov(args: &LyapunovArgs) -> Result<LyapunovReport, String> {
         })
         .collect();
     let tenth = rows.len() - rows.len() * 9 / 10;
-    let last_tenth_change = match (rows.len().checked_sub(tenth + 1), rows.last()) {
+    let last_tenth_change_per_second = match (rows.len().checked_sub(tenth + 1), rows.last()) {
         (Some(k), Some(last)) => (last.estimate_per_second - rows[k].estimate_per_second).abs(),
         _ => f64::NAN,
     };
@@ -155,7 +158,7 @@ pub fn lyapunov(args: &LyapunovArgs) -> Result<LyapunovReport, String> {
         ac_hz: driven.ac_hz,
         damping: driven.params.damping,
         exponent_per_second: out.per_second,
-        last_tenth_change,
+        last_tenth_change_per_second,
         interval_seconds: out.interval_seconds,
         first_limit: Crossing::of(out.first_limit),
         stopped: out.stopped,

@@ -308,3 +308,23 @@ pub fn values(flag: &str, text: &str, most: usize) -> Result<Vec<f64>, String> {
     }
     Ok(out)
 }
+
+/// States given on the command line: `S,V` (a stretch and dλ/dt in 1/s), `;` between several.
+pub fn states(flag: &str, text: &str) -> Result<Vec<[f64; 2]>, String> {
+    text.split(';')
+        .map(|one| match values(flag, one, 2)?[..] {
+            [stretch, velocity] => Ok([stretch, velocity]),
+            _ => Err(format!(
+                "{flag} {text}: each state is a stretch and dλ/dt (1/s), `S,V`"
+            )),
+        })
+        .collect()
+}
+
+/// One state given on the command line (`states`).
+pub fn state(flag: &str, text: &str) -> Result<[f64; 2], String> {
+    match states(flag, text)?[..] {
+        [one] => Ok(one),
+        _ => Err(format!("{flag} {text}: one state, `S,V`")),
+    }
+}

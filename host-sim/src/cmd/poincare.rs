@@ -69,39 +69,30 @@ impl DrivenArgs {
         if let Some(c) = self.damping {
             params.damping = c;
         }
-        let mut driven = Driven {
+        let driven = Driven {
             params,
             bias_volts: self.bias_volts,
             ac_volts: self.ac_volts,
             ac_hz: self.ac_hz,
             tolerance: Tolerance::both(self.rtol),
         };
-        let device = driven.device().map_err(|e| format!("{info}: {e}"))?;
-        if let Some(q) = self.quality_factor {
-            if !(q.is_finite() && q > 0.0) {
-                return Err(format!("--quality-factor {q}: need Q > 0"));
-            }
-            let rest = driven.rest()?;
-            let omega = std::f64::consts::TAU * device.natural_frequency_hz(rest.stretch);
-            driven.params.damping = params.effective_mass() * omega / q;
+        driven.device().map_err(|e| format!("{info}: {e}"))?;
+        match self.quality_factor {
+            Some(q) => Ok((driven.with_quality(q)?, info)),
+            None => Ok((driven, info)),
         }
-        Ok((driven, info))
     }
 }
 
-/// `S,V` start states, `;` between them.
+/// `S,V` start states, `;` between them (`super::states`).
 pub fn starts(text: &str) -> Result<Vec<Point>, String> {
-    text.split(';')
-        .map(|one| match super::values("--y0", one, 2)?[..] {
-            [stretch, velocity_per_second] => Ok(Point {
-                stretch,
-                velocity_per_second,
-            }),
-            _ => Err(format!(
-                "--y0 {text}: each start is a stretch and dλ/dt (1/s), `S,V`"
-            )),
+    Ok(super::states("--y0", text)?
+        .into_iter()
+        .map(|[stretch, velocity_per_second]| Point {
+            stretch,
+            velocity_per_second,
         })
-        .collect()
+        .collect())
 }
 
 #[derive(Args, Debug)]
@@ -239,7 +230,7 @@ pub fn poincare(args: &PoincareArgs) -> Result<PoincareReport, String> {
         Some(text) => starts(text)?,
         None => vec![driven.rest()?],
     };
-    let work = starts.len() as f64 * (args.periods + args.transient_periods) as f64;
+    let work = starts.len() as f64 * (args.periods as f64 + args.transient_periods as f64);
     if work > stroboscopic::MAX_SECTION_POINTS {
         return Err(format!(
             "{} drive periods in all, more than {}: fewer starts or periods",
@@ -259,7 +250,7 @@ pub fn poincare(args: &PoincareArgs) -> Result<PoincareReport, String> {
     })
     .into_iter()
     .collect::<Result<Vec<Section>, _>>()?;
-    interrupted(sections.iter().map(|s| &s.stopped))?;
+    crate::progress::interrupted(sections.iter().map(|s| s.stopped.as_deref()))?;
     let mut rows = Vec::new();
     for (i, s) in sections.iter().enumerate() {
         for (j, p) in s.points.iter().enumerate() {
@@ -296,16 +287,6 @@ pub fn poincare(args: &PoincareArgs) -> Result<PoincareReport, String> {
         rows,
         files,
     })
-}
-
-/// A study stopped by Ctrl-C is an error (nothing half done is reported).
-pub fn interrupted<'a>(stopped: impl Iterator<Item = &'a Option<String>>) -> Result<(), String> {
-    for why in stopped {
-        if why.as_deref() == Some(crate::progress::INTERRUPTED) {
-            return Err(crate::progress::INTERRUPTED.into());
-        }
-    }
-    Ok(())
 }
 
 /// The loading branch's limit stretch of the device driven, as a guide line's place.

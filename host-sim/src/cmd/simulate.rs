@@ -53,7 +53,7 @@ pub struct SimulateArgs {
     /// A start state of one's own, over --start: the stretch and dλ/dt (1/s), `S,V`.
     #[arg(long, value_name = "S,V", allow_hyphen_values = true)]
     pub y0: Option<String>,
-    /// The times to report the state at, s (SciPy's `t_eval`), instead of every step:
+    /// The times to give the trajectory at (`--csv`, `--trajectory`), s, as SciPy's `t_eval`:
     /// `a,b,c` or `from:to:count`, increasing, within the run.
     #[arg(long, value_name = "TIMES", allow_hyphen_values = true)]
     pub t_eval: Option<String>,
@@ -314,14 +314,6 @@ impl Asked {
 /// The most `--t-eval` times.
 pub const MAX_T_EVAL: usize = 10_000_000;
 
-/// `--y0 S,V`: a stretch and dλ/dt (1/s).
-fn y0(text: &str) -> Result<[f64; 2], String> {
-    match super::values("--y0", text, 2)?[..] {
-        [stretch, velocity] => Ok([stretch, velocity]),
-        _ => Err(format!("--y0 {text}: give the stretch and dλ/dt, `S,V`")),
-    }
-}
-
 pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
     let (params, device) = args.device.params()?;
     let asked = Asked {
@@ -331,7 +323,11 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
         damping: args.damping,
         duration_seconds: args.duration_seconds,
         start: args.start,
-        y0: args.y0.as_deref().map(y0).transpose()?,
+        y0: args
+            .y0
+            .as_deref()
+            .map(|t| super::state("--y0", t))
+            .transpose()?,
         method: args.method,
         step_seconds: args.step_seconds,
         rtol: args.rtol,

@@ -269,7 +269,7 @@ pub fn measure(
     }
     ready()?;
     if quality > 0.0 {
-        params.damping = params.effective_mass() * std::f64::consts::TAU * natural_hz / quality;
+        params.damping = params.damping_for_quality(natural_hz, quality);
         s.params = params;
     }
     let response = frequency_response::run(&s)?;

@@ -443,11 +443,16 @@ fn between_steps(
     let last = out.samples.len().saturating_sub(1);
     let mut evaluated = Evaluated::default();
     for &t in times {
-        let k = ((t / step_seconds).floor() as usize).min(last.saturating_sub(1));
-        if last == 0 || t > last as f64 * step_seconds * (1.0 + 1e-12) {
+        if t > last as f64 * step_seconds * (1.0 + 1e-12) {
             break;
         }
-        let (stretch, velocity) = Hermite::new(jet(k), jet(k + 1)).at(t);
+        let (stretch, velocity) = if last == 0 {
+            // No step taken: only t = 0 is reached.
+            (out.samples[0], out.velocities[0])
+        } else {
+            let k = ((t / step_seconds).floor() as usize).min(last - 1);
+            Hermite::new(jet(k), jet(k + 1)).at(t)
+        };
         evaluated.times_seconds.push(t);
         evaluated.stretch.push(stretch);
         evaluated.velocity_per_second.push(velocity);
@@ -455,8 +460,9 @@ fn between_steps(
     evaluated
 }
 
-/// The grid's times and the asked ones, merged without repeats: the merged times, where each
-/// grid time is in it, where each asked time is.
+/// The grid's times and the asked ones, merged without repeats (times within 1e-12 of each
+/// other, relative, are one): the merged times, where each grid time is in it, where each
+/// asked time is.
 fn merge(grid: &[f64], asked: &[f64]) -> (Vec<f64>, Vec<usize>, Vec<usize>) {
     let mut merged: Vec<f64> = Vec::with_capacity(grid.len() + asked.len());
     let (mut at_grid, mut at_asked) = (Vec::with_capacity(grid.len()), Vec::new());
@@ -464,7 +470,12 @@ fn merge(grid: &[f64], asked: &[f64]) -> (Vec<f64>, Vec<usize>, Vec<usize>) {
     while i < grid.len() || j < asked.len() {
         let take_grid = j == asked.len() || (i < grid.len() && grid[i] <= asked[j]);
         let t = if take_grid { grid[i] } else { asked[j] };
-        if merged.last() != Some(&t) {
+        // A time a rounding from the last one is that one (an asked time one ulp off a grid
+        // time would make an interval of nothing).
+        if !merged
+            .last()
+            .is_some_and(|&last| t - last <= 1e-12 * last.abs().max(f64::MIN_POSITIVE))
+        {
             merged.push(t);
         }
         if take_grid {
@@ -1419,6 +1430,18 @@ mod tests {
         let out = simulate(&scene, rk4, 0.5 / 1000.3).unwrap();
         assert_eq!(out.samples.len(), 1002);
         assert!((out.final_stretch - straight[0]).abs() < 1e-5);
+    }
+
+    /// The asked times merge into the grid: one entry for a time on it (or a rounding off
+    /// it), each index pointing where its time went.
+    #[test]
+    fn asked_times_merge_into_the_grid_without_repeats() {
+        let grid = [0.0, 0.1, 0.2, 0.30000000000000004];
+        let near = f64::from_bits(0.2_f64.to_bits() + 1);
+        let (merged, at_grid, at_asked) = merge(&grid, &[0.0, 0.05, near, 0.25, 0.25, 0.3]);
+        assert_eq!(merged, [0.0, 0.05, 0.1, 0.2, 0.25, 0.3]);
+        assert_eq!(at_grid, [0, 2, 3, 5]);
+        assert_eq!(at_asked, [0, 1, 3, 4, 4, 5]);
     }
 
     /// `t_eval` and `y0` as SciPy means them, for every method: the states at the times asked

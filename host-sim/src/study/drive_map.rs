@@ -3,13 +3,15 @@
 //! at the bias's equilibrium, the AC switched on at t = 0) and whether it stays inside §6,
 //! beside the board's own acceptance of that `ac`: every boot check of `start` with it
 //! (`Controller::start` on the image's device, table, amplifier and settings, in f32 as on
-//! the target). The two agree when every drive the board accepts stays inside.
+//! the target). The two agree when every drive the board accepts stays inside (a run that
+//! leaves the model's range before its end counts as not inside).
 
 use de_resonator::controller::{Controller, Settings};
 use de_resonator::image::Image;
 use de_resonator::{DeviceParams, FailureMode};
 
-use crate::engine::solver::{self, Choice, OpenLoop, Start};
+use crate::engine::solver::Tolerance;
+use crate::study::stroboscopic::{self, Driven, Point, STUDY_TOLERANCE};
 
 /// One drive of the map.
 #[derive(Clone, Debug)]
@@ -18,18 +20,25 @@ pub struct Cell {
     pub ac_hz: f64,
     /// The board's verdict: `None` accepted, else its refusal in its own words.
     pub refused: Option<String>,
-    /// The largest |λ − λ*| of the full simulation (λ* the bias's equilibrium).
+    /// The largest |λ − λ*| of the full simulation (λ* the bias's equilibrium), up to where
+    /// it ran.
     pub max_swing: f64,
     /// The first check of model.md §6 the simulation failed, and when (s).
     pub first_limit: Option<(FailureMode, f64)>,
-    /// Why the simulation gave nothing (it could not run).
-    pub failed: Option<String>,
+    /// Why the simulation ended early: the motion left the model's range (after a crossing,
+    /// or before any).
+    pub stopped: Option<String>,
 }
 
 impl Cell {
-    /// Accepted by the board yet crossing a limit in the full simulation: the two disagree.
+    /// The full simulation ran to its end inside model.md §6.
+    pub fn safe(&self) -> bool {
+        self.first_limit.is_none() && self.stopped.is_none()
+    }
+
+    /// Accepted by the board yet not safe in the full simulation: the two disagree.
     pub fn disagrees(&self) -> bool {
-        self.refused.is_none() && (self.first_limit.is_some() || self.failed.is_some())
+        self.refused.is_none() && !self.safe()
     }
 }
 
@@ -38,9 +47,9 @@ impl Cell {
 pub struct Map {
     /// The bias the board tunes to for the image's target, V.
     pub bias_volts: f64,
-    /// λ* there, and the small-oscillation frequency, Hz.
+    /// λ* there, and the small-oscillation frequency there.
     pub stretch: f64,
-    pub natural_hz: f64,
+    pub natural_frequency_hz: f64,
     pub duration_seconds: f64,
     /// Row by row: each amplitude over every frequency.
     pub cells: Vec<Cell>,
@@ -63,7 +72,13 @@ pub fn operating_point(image: &[u8], plant: DeviceParams<f64>) -> Result<(f64, f
     let stretch = de_resonator::Limit::of(&device)
         .stretch_for_bias(&device, bias_volts)
         .ok_or_else(|| format!("the plant holds no equilibrium at {bias_volts} V"))?;
-    Ok((bias_volts, stretch, device.natural_frequency_hz(stretch)))
+    let natural_hz = device.natural_frequency_hz(stretch);
+    if !(natural_hz.is_finite() && natural_hz > 0.0) {
+        return Err(format!(
+            "the plant has no small oscillation at {bias_volts} V (stretch {stretch})"
+        ));
+    }
+    Ok((bias_volts, stretch, natural_hz))
 }
 
 /// The map of `amplitudes` × `frequencies` for the board `image` describes, its plant the
@@ -102,45 +117,41 @@ pub fn drive_map(
             ..image.settings
         };
         let refused = board(asked).err().map(|e| e.to_string());
-        let scene = OpenLoop {
+        let driven = Driven {
             params: plant,
             bias_volts,
             ac_volts,
-            drive_hz: ac_hz,
-            duration_seconds,
-            start: Start::Equilibrium,
-            y0: None,
-            tolerance: None,
+            ac_hz,
+            tolerance: Tolerance::both(STUDY_TOLERANCE),
         };
-        // One sample at the end: the extremes and the crossing come from the dense path.
-        let run = solver::simulate(&scene, Choice::Reference, duration_seconds);
-        let (max_swing, first_limit, failed) = match run {
-            Ok(out) => (
-                (out.max_stretch - stretch).max(stretch - out.min_stretch),
-                out.first_limit,
-                None,
-            ),
-            Err(e) => (f64::NAN, None, Some(e.to_string())),
+        let rest = Point {
+            stretch,
+            velocity_per_second: 0.0,
         };
+        // No section: the extremes and the crossing come from the watched path.
+        let (max_swing, first_limit, stopped) =
+            match stroboscopic::watched(&driven, rest, &[], duration_seconds) {
+                Ok(run) => (
+                    (run.extremes.max - stretch).max(stretch - run.extremes.min),
+                    run.first_limit,
+                    run.stopped,
+                ),
+                Err(e) => (f64::NAN, None, Some(e)),
+            };
         Cell {
             ac_volts,
             ac_hz,
             refused,
             max_swing,
             first_limit,
-            failed,
+            stopped,
         }
     });
-    if cells
-        .iter()
-        .any(|c| c.failed.as_deref() == Some(crate::progress::INTERRUPTED))
-    {
-        return Err(crate::progress::INTERRUPTED.into());
-    }
+    crate::progress::interrupted(cells.iter().map(|c| c.stopped.as_deref()))?;
     Ok(Map {
         bias_volts,
         stretch,
-        natural_hz,
+        natural_frequency_hz: natural_hz,
         duration_seconds,
         cells,
     })

@@ -1,13 +1,15 @@
 //! The largest Lyapunov exponent of the driven membrane (model.md §4): the variational
 //! equation δ'' = −k(λ, Φ̄²)·δ − c̄·δ' (k the local stiffness of model.md §5) solved along the
-//! motion by the reference's DOP853, the tangent renormalised once a drive period (without a
-//! drive, once a period of the small oscillation at the start): the mean of the logarithms of
-//! its growth over the time after the transient, 1/s.
+//! motion by the reference's DOP853 (Radau once DOP853 finds it stiff), the tangent
+//! renormalised once a drive period (without a drive, once a period of the small oscillation
+//! at the start): the mean of the logarithms of its growth over the time after the
+//! transient, 1/s. The checks of model.md §6 run at the solver's step ends; Ctrl-C is heard
+//! between periods.
 
 use de_resonator::{Drive, FailureMode};
 use differential_equations::prelude::*;
 
-use crate::engine::solver::{Motion, Solver};
+use crate::engine::solver::{Motion, Solver, STIFF_FOR_DOP853};
 use crate::study::stroboscopic::{Driven, Point, MAX_SECTION_POINTS};
 use crate::text::sig;
 
@@ -55,10 +57,11 @@ pub fn lyapunov(
     if periods == 0 {
         return Err("periods must be at least 1".into());
     }
-    if (transient + periods) as f64 > MAX_SECTION_POINTS {
+    let all = transient as f64 + periods as f64;
+    if all > MAX_SECTION_POINTS {
         return Err(format!(
             "{} periods, more than {}",
-            sig((transient + periods) as f64),
+            sig(all),
             sig(MAX_SECTION_POINTS)
         ));
     }
@@ -87,7 +90,7 @@ pub fn lyapunov(
     let dtau = interval_seconds * scale;
     let norm = std::f64::consts::FRAC_1_SQRT_2;
     let mut y = [from.stretch, from.velocity_per_second / scale, norm, norm];
-    let (mut sum, mut first_step) = (0.0, None);
+    let (mut sum, mut first_step, mut solver) = (0.0, None, Solver::Dop853);
     let mut out = Exponent {
         per_second: f64::NAN,
         convergence: Vec::with_capacity(periods),
@@ -95,7 +98,7 @@ pub fn lyapunov(
         stopped: None,
         interval_seconds,
     };
-    for k in 0..transient + periods {
+    for k in 0..transient.saturating_add(periods) {
         if crate::progress::stopped() {
             out.stopped = Some(crate::progress::INTERRUPTED.into());
             break;
@@ -113,14 +116,16 @@ pub fn lyapunov(
                 limit = device.first_failure(s[0], p2).map(|m| (m, t / scale));
             }
         };
-        let advanced = Solver::Dop853.advance_watched(
-            &ode,
-            span,
-            start,
-            driven.tolerance,
-            first_step,
-            &mut watch,
-        );
+        // DOP853, or Radau for the rest of the run once DOP853 finds the motion stiff.
+        let mut advanced =
+            solver.advance_watched(&ode, span, start, driven.tolerance, first_step, &mut watch);
+        if let Err(why) = &advanced {
+            if solver == Solver::Dop853 && why.starts_with(STIFF_FOR_DOP853) {
+                solver = Solver::Radau;
+                advanced =
+                    solver.advance_watched(&ode, span, start, driven.tolerance, None, &mut watch);
+            }
+        }
         if out.first_limit.is_none() {
             out.first_limit = limit;
         }

@@ -7,7 +7,7 @@
 use de_resonator::{Device, DeviceParams, Drive, FailureMode, Limit};
 use serde::Serialize;
 
-use crate::engine::events::Watch;
+use crate::engine::events::{Extremes, Watch};
 use crate::engine::solver::{
     Motion, Solver, Tolerance, EVENT_RESOLUTION_SECONDS, STIFF_FOR_DOP853,
 };
@@ -57,6 +57,18 @@ impl Driven {
         Device::new(self.params).map_err(|e| e.to_string())
     }
 
+    /// With the damping that gives the small oscillation at the bias's rest state the quality
+    /// factor `q` (c = M·ω0/Q, model.md §4).
+    pub fn with_quality(self, q: f64) -> Result<Driven, String> {
+        if !(q.is_finite() && q > 0.0) {
+            return Err(format!("quality factor {q}: need Q > 0"));
+        }
+        let natural_hz = self.device()?.natural_frequency_hz(self.rest()?.stretch);
+        let mut out = self;
+        out.params.damping = self.params.damping_for_quality(natural_hz, q);
+        Ok(out)
+    }
+
     /// The state at rest at the bias's equilibrium on the loading branch (the studies'
     /// default start).
     pub fn rest(&self) -> Result<Point, String> {
@@ -88,20 +100,26 @@ pub struct Section {
     pub stopped: Option<String>,
 }
 
-/// `periods` section points of `driven` from `from` at t = 0, after `transient` periods.
-pub fn section(
+/// One run of `driven` from `from` at t = 0 to `end_seconds`, watched on the reference's
+/// path: the states at `times_seconds` (increasing, within the run), the stretch's extremes
+/// and the first check of model.md §6 that failed, kept when the solve stops early (`stopped`
+/// says why).
+#[derive(Clone, Debug)]
+pub struct Watched {
+    pub points: Vec<Point>,
+    pub extremes: Extremes,
+    pub first_limit: Option<(FailureMode, f64)>,
+    pub stopped: Option<String>,
+}
+
+/// The run of [`Watched`], by DOP853, or by Radau where DOP853 finds the motion stiff.
+pub fn watched(
     driven: &Driven,
     from: Point,
-    transient: usize,
-    periods: usize,
-) -> Result<Section, String> {
+    times_seconds: &[f64],
+    end_seconds: f64,
+) -> Result<Watched, String> {
     let device = driven.device()?;
-    if !(driven.ac_hz > 0.0) {
-        return Err("a section needs a drive: ac_hz must be > 0".into());
-    }
-    if periods == 0 {
-        return Err("periods must be at least 1".into());
-    }
     for (what, value) in [
         ("the start's stretch", from.stretch),
         ("the start's velocity", from.velocity_per_second),
@@ -110,23 +128,26 @@ pub fn section(
             return Err(format!("{what} {value} must be a finite number"));
         }
     }
+    if !(end_seconds.is_finite() && end_seconds > 0.0) {
+        return Err(format!(
+            "a run of {end_seconds} s: need a positive duration"
+        ));
+    }
     let scale = device.rad_per_s_per_unit();
-    let period = scale / driven.ac_hz;
     let drive = Drive::from_volts(&device, driven.bias_volts, driven.ac_volts, driven.ac_hz);
-    let last = transient + periods - 1;
-    let times: Vec<f64> = (transient..=last).map(|k| k as f64 * period).collect();
+    let times: Vec<f64> = times_seconds.iter().map(|t| t * scale).collect();
+    let end = end_seconds * scale;
     let y0 = [from.stretch, from.velocity_per_second / scale];
+    let at_point = |y: [f64; 2]| Point {
+        stretch: y[0],
+        velocity_per_second: y[1] * scale,
+    };
     let run = |solver: Solver| {
-        let mut points = Vec::with_capacity(periods);
+        let mut points = Vec::with_capacity(times.len());
         let mut watch = Watch::new(EVENT_RESOLUTION_SECONDS * scale);
         let fails =
             |tau: f64, y: &[f64; 2]| device.first_failure(y[0], drive.bias_dimless_squared_at(tau));
-        let at_point = |y: [f64; 2]| Point {
-            stretch: y[0],
-            velocity_per_second: y[1] * scale,
-        };
-        // A transient of 0: the start is the first point.
-        if times[0] == 0.0 {
+        while times.get(points.len()) == Some(&0.0) {
             points.push(at_point(y0));
         }
         let mut on_step =
@@ -139,7 +160,6 @@ pub fn section(
                 }
                 watch.step(a, b, at, |y| (y[0], y[1]), fails);
             };
-        let end = times[times.len() - 1].max(period);
         let solved = solver.sample(
             &Motion {
                 device: &device,
@@ -150,27 +170,66 @@ pub fn section(
             driven.tolerance,
             Some(&mut on_step),
         );
-        let first_limit = watch.first.map(|(tau, mode, _)| (mode, tau / scale));
-        match solved {
+        let stopped = match solved {
             Ok(ys) => {
                 // The solver's end, where the dense output's last time fell a rounding past it.
-                if points.len() + 1 == times.len() && end == times[times.len() - 1] {
+                while points.len() < times.len() && times[points.len()] >= end {
                     points.extend(ys.last().map(|&y| at_point(y)));
                 }
-                (points, first_limit, None)
+                None
             }
-            Err(why) => (points, first_limit, Some(why)),
+            Err(why) => Some(why),
+        };
+        Watched {
+            points,
+            extremes: watch.extremes,
+            first_limit: watch.first.map(|(tau, mode, _)| (mode, tau / scale)),
+            stopped,
         }
     };
-    let (mut points, mut first_limit, mut failed) = run(Solver::Dop853);
-    if failed
+    let out = run(Solver::Dop853);
+    if out
+        .stopped
         .as_deref()
         .is_some_and(|why| why.starts_with(STIFF_FOR_DOP853))
     {
-        (points, first_limit, failed) = run(Solver::Radau);
+        return Ok(run(Solver::Radau));
     }
-    points.truncate(periods);
-    let stopped = failed.or_else(|| {
+    Ok(out)
+}
+
+/// `periods` section points of `driven` from `from` at t = 0, after `transient` periods.
+pub fn section(
+    driven: &Driven,
+    from: Point,
+    transient: usize,
+    periods: usize,
+) -> Result<Section, String> {
+    if !(driven.ac_hz > 0.0) {
+        return Err("a section needs a drive: ac_hz must be > 0".into());
+    }
+    if periods == 0 {
+        return Err("periods must be at least 1".into());
+    }
+    if transient as f64 + periods as f64 > MAX_SECTION_POINTS {
+        return Err(format!(
+            "{} drive periods: more than {}",
+            sig(transient as f64 + periods as f64),
+            sig(MAX_SECTION_POINTS)
+        ));
+    }
+    let period = 1.0 / driven.ac_hz;
+    let times: Vec<f64> = (transient..transient + periods)
+        .map(|k| k as f64 * period)
+        .collect();
+    let end = times[times.len() - 1].max(period);
+    let Watched {
+        points,
+        first_limit,
+        stopped,
+        ..
+    } = watched(driven, from, &times, end)?;
+    let stopped = stopped.or_else(|| {
         (points.len() < periods).then(|| format!("{} of {periods} points", points.len()))
     });
     Ok(Section {
@@ -248,7 +307,7 @@ pub fn bifurcation(
     periods: usize,
 ) -> Result<Vec<Row>, String> {
     if values.is_empty() {
-        return Err("no values to vary".into());
+        return Err(format!("no values of {} to vary", parameter.name()));
     }
     if !values.windows(2).all(|w| w[0] < w[1]) {
         return Err(format!(
@@ -262,6 +321,9 @@ pub fn bifurcation(
             return Err(format!("ac_hz {} must be > 0", sig(v)));
         }
     }
+    if parameter != Parameter::AcHz && !(base.ac_hz > 0.0) {
+        return Err("a section needs a drive: ac_hz must be > 0".into());
+    }
     if periods == 0 {
         return Err("periods must be at least 1".into());
     }
@@ -269,7 +331,7 @@ pub fn bifurcation(
         Direction::Both => vec![Direction::Up, Direction::Down],
         one => vec![one],
     };
-    let total = (walks.len() * values.len()) as f64 * (transient + periods) as f64;
+    let total = (walks.len() * values.len()) as f64 * (transient as f64 + periods as f64);
     if total > MAX_SECTION_POINTS {
         return Err(format!(
             "{} drive periods in all, more than {}: fewer values, periods or transient periods",
@@ -315,9 +377,7 @@ pub fn bifurcation(
                     (None, Some(&p)) => Some(p),
                     _ => None,
                 };
-                if section.stopped.as_deref() == Some(crate::progress::INTERRUPTED) {
-                    return Err(crate::progress::INTERRUPTED.into());
-                }
+                crate::progress::interrupted([section.stopped.as_deref()])?;
                 rows.push(Row {
                     value,
                     direction,
