@@ -20,7 +20,7 @@ use host_sim::cmd::safe::{tune_batch, tune_in_batch, Guaranteed, Region, Tuned};
 use host_sim::cmd::simulate::Asked;
 use host_sim::cmd::sweep::SweepArgs;
 use host_sim::cmd::{DeviceArgs, DeviceInfo};
-use host_sim::engine::solver::{self as engine, Choice, Start};
+use host_sim::engine::open_loop::{self as engine, Choice, Start};
 use host_sim::{device_file, progress, scene};
 use numpy::ndarray::{Array2, ArrayD};
 use numpy::{AllowTypeChange, IntoPyArray, PyArrayLikeDyn, PyUntypedArrayMethods};
@@ -956,7 +956,10 @@ fn simulate<'py>(
     dict.set_item("min_stretch", out.min_stretch)?;
     dict.set_item("max_stretch", out.max_stretch)?;
     dict.set_item("method", choice.name())?;
-    dict.set_item("solver", out.solver.map(engine::Solver::name))?;
+    dict.set_item(
+        "solver",
+        out.solver.map(host_sim::engine::solver::Solver::name),
+    )?;
     dict.set_item("solver_note", out.switched.clone())?;
     dict.set_item(
         "tolerance",

@@ -8,7 +8,7 @@ use clap::Args;
 use serde::Serialize;
 
 use super::{prepare_dir, write_csv_and_plot, DeviceArgs, DeviceInfo, Report};
-use crate::engine::solver::Choice;
+use crate::engine::open_loop::Choice;
 use crate::plot::{Mark, Marker, Panel, Series, Style, COLOURS};
 use crate::study::work_precision::{reference, rows, studies, Row, ToleranceRow};
 

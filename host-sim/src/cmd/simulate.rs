@@ -9,7 +9,8 @@ use de_resonator::{Device, DeviceParams};
 use serde::Serialize;
 
 use super::{prepare_file, short, sig, write_path, Crossing, DeviceArgs, DeviceInfo, Report};
-use crate::engine::solver::{self, Choice, OpenLoop, Solver, Start, Tolerance};
+use crate::engine::open_loop::{self, Choice, OpenLoop, Start};
+use crate::engine::solver::{Solver, Tolerance};
 use crate::plot::{svg, Marker, Panel, Series, RED};
 
 #[derive(Args, Debug)]
@@ -345,7 +346,7 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
     for path in [&args.csv, &args.plot].into_iter().flatten() {
         prepare_file(path)?;
     }
-    let out = solver::simulate_at(&scene, args.method, step, t_eval.as_deref())
+    let out = open_loop::simulate_at(&scene, args.method, step, t_eval.as_deref())
         .map_err(|e| e.to_string())?;
     let volts_at =
         |t: f64| args.bias_volts + args.ac_volts * (std::f64::consts::TAU * ac_hz * t).sin();
@@ -427,7 +428,7 @@ fn plot(
     device: &DeviceInfo,
     checked: &Device<f64>,
     scene: &OpenLoop,
-    out: &solver::Outcome,
+    out: &open_loop::Outcome,
     method: &str,
 ) -> Panel {
     let limit = de_resonator::Limit::of(checked);

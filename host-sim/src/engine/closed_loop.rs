@@ -1019,7 +1019,7 @@ pub(crate) fn command_line(line: &str) -> Result<Line, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::engine::solver::{simulate, Choice, OpenLoop, Start};
+    use crate::engine::open_loop::{simulate, Choice, OpenLoop, Start};
     use de_resonator::REFERENCE_DEVICE;
 
     /// The plant's monitor finds a crossing that comes and goes within one tick, at its

@@ -9,7 +9,7 @@
 use de_resonator::{Device, DeviceParams, Tuner};
 use serde::Serialize;
 
-use crate::engine::solver::{simulate, Choice, OpenLoop, RunError, Start};
+use crate::engine::open_loop::{simulate, Choice, OpenLoop, RunError, Start};
 
 /// A named extreme case: a device, a drive, and how it starts.
 struct Case {

@@ -12,9 +12,8 @@ use std::time::Instant;
 
 use de_resonator::{Device, DeviceParams, Tuner, DEFAULT_MARGIN};
 
-use crate::engine::solver::{
-    simulate, Choice, OpenLoop, Outcome, RunError, Solver, Start, Tolerance,
-};
+use crate::engine::open_loop::{simulate, Choice, OpenLoop, Outcome, RunError, Start};
+use crate::engine::solver::{Solver, Tolerance};
 
 /// Steps a period each method runs at.
 pub const STEPS_PER_PERIOD: [u32; 7] = [8, 16, 32, 64, 128, 256, 512];
