@@ -58,10 +58,9 @@ rustup show active-toolchain
 rustup component add clippy rustfmt
 rustup target add "$TARGET"
 
-step "the tools: QEMU, picocom and tmux, Chromium and its driver, selenium, defmt-print and cargo-fuzz (installing in the background while the workspace builds)"
-# They install beside the builds (apt's and pip's wait on the network; the two cargo tools
-# build on the cores' slack); awaited (tools_ready) before the first step that uses them,
-# their log shown if they fail.
+step "the system's tools: QEMU, picocom and tmux, Chromium and its driver, selenium (installing in the background while the workspace builds), defmt-print"
+# Network-bound, so they install beside the builds; awaited (tools_ready) before the first
+# step that uses them, their log shown if they fail.
 mkdir -p target
 tools_log=target/tools-install.log
 (
@@ -78,10 +77,6 @@ tools_log=target/tools-install.log
     # The browser tests' driver, pinned (4.53.0's dependencies do not install here; 4.51.0's do).
     python3 -c 'import selenium, sys; sys.exit(selenium.__version__ != "4.51.0")' 2>/dev/null ||
         python3 -m pip install --quiet --disable-pip-version-check selenium==4.51.0
-    # The firmware's log decoder and the fuzzers' driver, built from crates.io where missing
-    # (51 s and 22 s on this machine, 2026-12-07): beside the workspace's builds, not before.
-    command -v defmt-print >/dev/null || cargo install --locked defmt-print --version 1.2.0
-    command -v cargo-fuzz >/dev/null || cargo install --locked cargo-fuzz --version 0.13.2
 ) >"$tools_log" 2>&1 &
 tools_pid=$!
 tools_ready() {
@@ -95,9 +90,11 @@ tools_ready() {
     qemu-system-arm --version | head -1
     chromium --version 2>/dev/null
     python3 -c 'import selenium; print("selenium", selenium.__version__)'
-    defmt-print --version
-    cargo fuzz --version
 }
+if ! command -v defmt-print >/dev/null; then
+    cargo install --locked defmt-print --version 1.2.0
+fi
+defmt-print --version
 
 step "format"
 cargo fmt --all -- --check
