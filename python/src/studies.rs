@@ -408,7 +408,7 @@ pub fn drive_map<'py>(
         DeviceArgs::given(d.batch, d.source.clone())
     });
     let map = stoppable(py, || {
-        let (image, batch) =
+        let (image, batch, _) =
             drive_map_cmd::board_image(&args, target_hz, settings, quality_factor, gain)?;
         let map = map::drive_map(&image, batch.nominal, &amplitudes, &frequencies, periods)?;
         Ok((map, batch.nominal.damping))

@@ -159,15 +159,15 @@ impl Report for DriveMapReport {
 
 /// The image a board holds (a 2.5 V DAC, the amplifier's `gain`) for `device` tuned to
 /// `target_hz` (`None`: the reference job's 44 Hz on the reference device) with `settings`,
-/// the damping of `quality_factor` at that bias in the device file's place if given; and the
-/// batch with it.
+/// the damping of `quality_factor` at that bias in the device file's place if given; the
+/// batch with it, and the device as reports name it.
 pub fn board_image(
     device: &DeviceArgs,
     target_hz: Option<f32>,
     settings: Option<PathBuf>,
     quality_factor: Option<f64>,
     gain: f32,
-) -> Result<(Vec<u8>, DeviceBox), String> {
+) -> Result<(Vec<u8>, DeviceBox, DeviceInfo), String> {
     let (mut batch, info) = device.batch()?;
     let image_args = |batch: DeviceBox| ImageArgs {
         out: None,
@@ -199,12 +199,11 @@ pub fn board_image(
         batch.nominal.damping = c;
     }
     let (image, _) = super::image::build(&image_args(batch), "(in memory)".into())?;
-    Ok((image, batch))
+    Ok((image, batch, info))
 }
 
 pub fn drive_map(args: &DriveMapArgs) -> Result<DriveMapReport, String> {
-    let (_, device) = args.device.batch()?;
-    let (image, batch) = board_image(
+    let (image, batch, device) = board_image(
         &args.device,
         args.target_hz,
         args.settings.clone(),
