@@ -1,22 +1,38 @@
 #!/usr/bin/env bash
-# The reference simulator against compiled peers, side by side in one run (issue 13):
-# - `host-sim simulate` (reference DOP853), whole process, against numbalsoda's DOP853
-#   (Hairer's code in C++, a numba-compiled right-hand side) in-process with the JIT
-#   excluded, on the reference scene: 7000 V + 200 V at 30 Hz, 10 s, output every 1/64 of
-#   the zero-bias period, rtol = atol = 1e-12;
-# - `host-sim simulate --method reference-bdf`, whole process, against SUNDIALS CVODE's BDF
-#   (scripts/peers/cvode_scene.c, compiled here), whole process, on a damped scene where BDF
-#   is the right choice: the same drive with c = 10 N·s from the pre-stretch, 1 s, 1e-10.
-# - Radau IIA 5 (every build) and BDF against CVODE on the damped scene and a stiff one
-#   (c = 10,000 N·s at 5912.84 V, issue 29's), all from the pre-stretch, 1 s, 1e-10.
+# host-sim against its peers, side by side in one run.
+# 1. Work-precision (issue 63; scripts/peers/work_precision.py): error against run time on two
+#    scenes of the reference device, our DOP853, Radau and the core's fixed-step methods beside
+#    SciPy's DOP853, Radau and LSODA, numbalsoda's DOP853 and CVODE's BDF, tolerances 1e-4 …
+#    1e-12, the median of RUNS launches a point, whole process and in process; writes
+#    docs/plots/work-precision-peers{.csv,.svg,-whole.svg}.
+# 2. The goals' tables (issue 13):
+#    - `host-sim simulate` (reference DOP853), whole process, against numbalsoda's DOP853
+#      (Hairer's code in C++, a numba-compiled right-hand side) in-process with the JIT
+#      excluded, on the reference scene: 7000 V + 200 V at 30 Hz, 10 s, output every 1/64 of
+#      the zero-bias period, rtol = atol = 1e-12;
+#    - `host-sim simulate --method reference-bdf`, whole process, against SUNDIALS CVODE's BDF
+#      (scripts/peers/cvode_scene.c, compiled here), whole process, on a damped scene where
+#      BDF is the right choice: the same drive with c = 10 N·s from the pre-stretch, 1 s, 1e-10.
+#    - Radau IIA 5 (every build) and BDF against CVODE on the damped scene and a stiff one
+#      (c = 10,000 N·s at 5912.84 V, issue 29's), all from the pre-stretch, 1 s, 1e-10.
 # The peers restate the equations (scripts/peers/scene.py and the C file), sharing no code
-# with the core; each comparison checks the final stretches agree before it times anything.
-# Usage: scripts/bench-peers.sh [RUNS]
-# Installs numbalsoda and numba into target/peers-venv (gfortran builds numbalsoda) and
-# libsundials-dev with apt where missing.
+# with the core; each comparison checks the final states agree before it times anything.
+# Usage: scripts/bench-peers.sh [RUNS]    both, host-sim's peak build (RUNS: 10)
+#        scripts/bench-peers.sh --check   (CI) 1 only, fewer points, one launch each, with
+#                                         $HOST_SIM (default target/debug/host-sim): the
+#                                         figures' words and each point's times (within 4×)
+#                                         and errors against docs/plots/
+#        scripts/bench-peers.sh --install the peers only (CI installs them beside its builds)
+# Installs gfortran and libsundials-dev with apt where missing, and the peers at the versions
+# named below into target/peers-venv.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-RUNS=${1:-10}
+mode=${1:-10}
+case "$mode" in
+    -h|--help) sed -n '2,29p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    --check|--install|[0-9]*) ;;
+    *) echo "bench-peers.sh: unknown argument \`$mode\` (see --help)" >&2; exit 2 ;;
+esac
 SUDO=$([ "$(id -u)" = 0 ] && echo || echo sudo)
 need=()
 command -v gfortran >/dev/null || need+=(gfortran)
@@ -25,14 +41,28 @@ if [ ${#need[@]} -gt 0 ]; then
     $SUDO apt-get update -qq
     $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${need[@]}"
 fi
+# The peers' versions, named (BENCHMARKS.md quotes them with the figures).
+PEERS="numbalsoda==0.3.4 numba==0.68.1 scipy==1.17.1 numpy==2.4.6 matplotlib==3.11.2"
 VENV=target/peers-venv
-if [ ! -x "$VENV/bin/python" ] || ! "$VENV/bin/python" -c "import numbalsoda, numba" 2>/dev/null; then
+if [ ! -x "$VENV/bin/python" ] || [ "$(cat "$VENV/peers" 2>/dev/null)" != "$PEERS" ]; then
     python3 -m venv "$VENV"
-    "$VENV/bin/pip" install --quiet numbalsoda numba
+    # shellcheck disable=SC2086
+    "$VENV/bin/pip" install --quiet --disable-pip-version-check $PEERS
+    echo "$PEERS" >"$VENV/peers"
 fi
-cargo build --locked --profile peak -p host-sim --features bdf --quiet
-gcc -O2 -o target/cvode_scene scripts/peers/cvode_scene.c \
+gcc -O2 -Wall -o target/cvode_scene scripts/peers/cvode_scene.c \
     -lsundials_cvode -lsundials_nvecserial -lm
+[ "$mode" = --install ] && exit 0
+if [ "$mode" = --check ]; then
+    tmp=$(mktemp -d)
+    trap 'rm -rf "$tmp"' EXIT
+    exec "$VENV/bin/python" scripts/peers/work_precision.py --check --runs 1 \
+        --host-sim "${HOST_SIM:-target/debug/host-sim}" --cvode target/cvode_scene --out "$tmp"
+fi
+RUNS=$mode
+cargo build --locked --profile peak -p host-sim --features bdf --quiet
+"$VENV/bin/python" scripts/peers/work_precision.py --runs "$RUNS" \
+    --host-sim target/peak/host-sim --cvode target/cvode_scene --out docs/plots
 "$VENV/bin/python" - "$RUNS" <<'PY'
 import json, subprocess, sys, time
 runs = int(sys.argv[1])

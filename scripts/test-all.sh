@@ -58,7 +58,7 @@ rustup show active-toolchain
 rustup component add clippy rustfmt
 rustup target add "$TARGET"
 
-step "the system's tools: QEMU, picocom and tmux, Chromium and its driver, selenium (installing in the background while the workspace builds), defmt-print"
+step "the system's tools: QEMU, picocom and tmux, Chromium and its driver, selenium, the work-precision peers (installing in the background while the workspace builds), defmt-print"
 # Network-bound, so they install beside the builds; awaited (tools_ready) before the first
 # step that uses them, their log shown if they fail.
 mkdir -p target
@@ -77,6 +77,9 @@ tools_log=target/tools-install.log
     # The browser tests' driver, pinned (4.53.0's dependencies do not install here; 4.51.0's do).
     python3 -c 'import selenium, sys; sys.exit(selenium.__version__ != "4.51.0")' 2>/dev/null ||
         python3 -m pip install --quiet --disable-pip-version-check selenium==4.51.0
+    # The work-precision study's peers: SUNDIALS and gfortran, SciPy and numbalsoda at the
+    # versions it names, into their own venv; CVODE's scene compiled.
+    scripts/bench-peers.sh --install
 ) >"$tools_log" 2>&1 &
 tools_pid=$!
 tools_ready() {
@@ -156,6 +159,9 @@ python3 python/examples/monte_carlo.py --batch --devices 2000 --workers 2
 
 step "docs/plots/: every figure the docs show is what its command makes now (scripts/plots.sh --check)"
 HOST_SIM="$PWD/target/debug/host-sim" scripts/plots.sh --check
+
+step "work-precision beside the peers: SciPy, numbalsoda, CVODE (scripts/bench-peers.sh --check against docs/plots/)"
+HOST_SIM="$PWD/target/debug/host-sim" scripts/bench-peers.sh --check
 
 step "firmware under QEMU: the reference run and the on-target checks against expected logs"
 # host-sim as `cargo test` built it for its CLI tests (the test profile, optimised): no

@@ -40,3 +40,19 @@ def equilibrium(bias_dimless):
         else:
             high = mid
     return 0.5 * (low + high)
+
+
+def ds1(l1):
+    """ds̄1/dλ1 at (λ1, λ2p), by the quotient rule on s1's numerator and denominator."""
+    i1 = l1 * l1 + L2P * L2P + 1.0 / (l1 * l1 * L2P * L2P)
+    num = l1 - 1.0 / (l1 ** 3 * L2P * L2P)
+    den = 1.0 - (i1 - 3.0) / JLIM
+    dnum = 1.0 + 3.0 / (l1 ** 4 * L2P * L2P)
+    dden = -(2.0 * l1 - 2.0 / (l1 ** 3 * L2P * L2P)) / JLIM
+    return (dnum * den - num * dden) / (den * den)
+
+
+def stiffness(stretch, bias_dimless):
+    """∂λ''/∂λ at a constant voltage (the Jacobian's lower-left entry, damping apart)."""
+    passive = ((L1A + L1B) * L1P - L1A * stretch) / L1B
+    return -ds1(passive) * L1A / L1B - ds1(stretch) + bias_dimless * bias_dimless * L2P * L2P
