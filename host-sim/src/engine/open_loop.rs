@@ -543,8 +543,16 @@ fn reference(
     let tolerance = scene.tolerance.unwrap_or(solver.default_tolerance());
     let grid = sample_times(step_seconds * scale, scene.duration_seconds * scale);
     // The asked times (SciPy's t_eval) among the grid's: one solve samples both.
+    // Without them the grid is the times (no copy: 29,411 samples of the reference scene are
+    // a few hundred pages the process would fault in).
     let asked: Vec<f64> = t_eval.unwrap_or(&[]).iter().map(|t| t * scale).collect();
-    let (times, at_grid, at_asked) = merge(&grid, &asked);
+    let (merged, at_grid, at_asked) = if asked.is_empty() {
+        (None, None, Vec::new())
+    } else {
+        let (merged, at_grid, at_asked) = merge(&grid, &asked);
+        (Some(merged), Some(at_grid), at_asked)
+    };
+    let times: &[f64] = merged.as_deref().unwrap_or(&grid);
     let motion = Motion { device, drive };
     let counted = Counted {
         ode: &motion,
@@ -562,7 +570,7 @@ fn reference(
             let mut on_step = |a, b, at: &mut dyn FnMut(f64) -> [f64; 2]| {
                 watch.step(a, b, at, key, fails);
             };
-            solver.sample(&counted, start, &times, tolerance, Some(&mut on_step))?
+            solver.sample(&counted, start, times, tolerance, Some(&mut on_step))?
         }
         // BDF gives samples only (its own dense output at the times asked): taken at
         // `BDF_EVENT_SUBDIVISION` times the output's rate, a quintic through them (value,
@@ -599,10 +607,16 @@ fn reference(
             all.into_iter().step_by(BDF_EVENT_SUBDIVISION).collect()
         }
     };
-    let mut out = outcome(
-        at_grid.iter().map(|&k| ys[k][0]).collect(),
-        at_grid.iter().map(|&k| ys[k][1] * scale).collect(),
-    );
+    let mut out = match &at_grid {
+        Some(at_grid) => outcome(
+            at_grid.iter().map(|&k| ys[k][0]).collect(),
+            at_grid.iter().map(|&k| ys[k][1] * scale).collect(),
+        ),
+        None => outcome(
+            ys.iter().map(|y| y[0]).collect(),
+            ys.iter().map(|y| y[1] * scale).collect(),
+        ),
+    };
     out.evaluated = t_eval.map(|times| Evaluated {
         times_seconds: times.to_vec(),
         stretch: at_asked.iter().map(|&k| ys[k][0]).collect(),
