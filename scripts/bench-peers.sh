@@ -66,7 +66,6 @@ cargo build --locked --profile peak -p host-sim --features bdf --quiet
 "$VENV/bin/python" - "$RUNS" <<'PY'
 import json, subprocess, sys, time
 runs = int(sys.argv[1])
-sys.path.insert(0, "scripts/peers")
 
 def whole(cmd):
     """Best and mean wall time of the whole process over `runs`, and its last output."""
@@ -92,8 +91,8 @@ print("DOP853: reference scene, 7000 V + 200 V at 30 Hz, 10 s, output every 1/64
 ours, best, mean = whole(host_sim("--bias-volts", "7000", "--ac-volts", "200", "--ac-hz",
                                   "30", "--duration-seconds", "10"))
 peer = json.loads(subprocess.run(
-    [sys.executable, "scripts/peers/numbalsoda_scene.py", "7000", "200", "30", "10",
-     repr(ours["step_seconds"]), "1e-12", str(runs)],
+    [sys.executable, "scripts/peers/solve.py", "--runs", str(runs), "numbalsoda-dop853",
+     "7000", "200", "30", "0", "10", repr(ours["step_seconds"]), "equilibrium", "1e-12"],
     check=True, capture_output=True, text=True).stdout)
 agree("dop853", ours["final"]["stretch"], peer["final_stretch"], 1e-8)
 print(f"  {'':34}{'best ms':>10}{'mean ms':>10}")

@@ -4,15 +4,18 @@ SciPy's DOP853, Radau or LSODA (`solve_ivp`, the analytic Jacobian for the impli
 numbalsoda's DOP853 (Hairer's code in C++, the right-hand side compiled by numba and cached
 on disk), on the reference device's equations as scene.py restates them.
 
-Usage: solve.py SOLVER BIAS_V AC_V DRIVE_HZ DAMPING_NS DURATION_S STEP_S START TOLERANCE [SERIES]
+Usage: solve.py [--runs N] SOLVER BIAS_V AC_V DRIVE_HZ DAMPING_NS DURATION_S STEP_S START
+                TOLERANCE [SERIES]
   SOLVER     scipy-DOP853 | scipy-Radau | scipy-LSODA | numbalsoda-dop853
   START      equilibrium (the bias's equilibrium, at rest) | prestretch (λ1p, at rest)
   SERIES     a file to write the stretch at every output time to (float64, raw)
+  --runs N   solve N times in this process (default 1)
 Output times as host-sim's: every STEP_S from 0, the last at the duration exactly; rtol = atol
 = TOLERANCE on the dimensionless state. Prints one JSON object: the final stretch, the solve's
-time in this process (s; numbalsoda's JIT excluded by a first solve), the right-hand side's
-evaluations where the solver counts them.
+time in this process (s, the median of the runs; their best and mean; numbalsoda's JIT
+excluded by a first solve), the right-hand side's evaluations where the solver counts them.
 """
+import functools
 import json
 import math
 import sys
@@ -26,6 +29,9 @@ SOLVERS = ("scipy-DOP853", "scipy-Radau", "scipy-LSODA", "numbalsoda-dop853")
 
 
 def main(argv):
+    runs = 1
+    if argv[:1] == ["--runs"] and len(argv) > 1 and argv[1].isdigit() and int(argv[1]) > 0:
+        runs, argv = int(argv[1]), argv[2:]
     if len(argv) not in (9, 10) or argv[0] not in SOLVERS:
         sys.exit(__doc__)
     solver = argv[0]
@@ -35,21 +41,27 @@ def main(argv):
     y0 = np.array([scene.equilibrium(pb) if start == "equilibrium" else scene.L1P, 0.0])
     count = int(math.ceil(duration / step * (1.0 - 1e-12)))
     tau = np.append(np.arange(count) * step * scene.RAD_PER_S, duration * scene.RAD_PER_S)
-    if solver == "numbalsoda-dop853":
-        stretch, seconds, evaluations = numbalsoda(y0, tau, (pb, pa, omega, c), tol)
-    else:
-        stretch, seconds, evaluations = scipy(solver.split("-")[1], y0, tau,
-                                              (pb, pa, omega, c), tol)
+    solve = numbalsoda if solver == "numbalsoda-dop853" else scipy(solver.split("-")[1])
+    times = []
+    for _ in range(runs):
+        stretch, seconds, evaluations = solve(y0, tau, (pb, pa, omega, c), tol)
+        times.append(seconds)
     if len(argv) == 10:
         stretch.astype(np.float64).tofile(argv[9])
     print(json.dumps({"solver": solver, "final_stretch": float(stretch[-1]),
-                      "samples": len(tau), "solve_seconds": seconds,
+                      "samples": len(tau), "solve_seconds": float(np.median(times)),
+                      "best_seconds": min(times), "mean_seconds": sum(times) / runs,
                       "evaluations": evaluations}))
 
 
-def scipy(method, y0, tau, drive, tol):
+def scipy(method):
+    """SciPy's `method` as a solve of (y0, tau, drive, tol)."""
     from scipy.integrate import solve_ivp
 
+    return lambda y0, tau, drive, tol: scipy_solve(solve_ivp, method, y0, tau, drive, tol)
+
+
+def scipy_solve(solve_ivp, method, y0, tau, drive, tol):
     pb, pa, omega, c = drive
 
     def rhs(t, y):
@@ -71,6 +83,20 @@ def scipy(method, y0, tau, drive, tol):
 
 
 def numbalsoda(y0, tau, drive, tol):
+    rhs, dop853 = numbalsoda_rhs()
+    data = np.array(drive, dtype=np.float64)
+    dop853(rhs.address, y0, tau[:2], data=data, rtol=tol, atol=tol)  # warm-up (JIT)
+    started = time.perf_counter()
+    usol, ok = dop853(rhs.address, y0, tau, data=data, rtol=tol, atol=tol)
+    seconds = time.perf_counter() - started
+    if not ok:
+        sys.exit("numbalsoda's dop853 failed")
+    return usol[:, 0], seconds, None
+
+
+@functools.cache
+def numbalsoda_rhs():
+    """The right-hand side compiled by numba (cached on disk), and numbalsoda's dop853."""
     import numba as nb
     from numbalsoda import dop853
 
@@ -89,14 +115,7 @@ def numbalsoda(y0, tau, drive, tol):
         dy[0] = y[1]
         dy[1] = sb - sa + volts * volts * stretch * L2P * L2P - p[3] * y[1]
 
-    data = np.array(drive, dtype=np.float64)
-    dop853(rhs.address, y0, tau[:2], data=data, rtol=tol, atol=tol)  # warm-up (JIT)
-    started = time.perf_counter()
-    usol, ok = dop853(rhs.address, y0, tau, data=data, rtol=tol, atol=tol)
-    seconds = time.perf_counter() - started
-    if not ok:
-        sys.exit("numbalsoda's dop853 failed")
-    return usol[:, 0], seconds, None
+    return rhs, dop853
 
 
 if __name__ == "__main__":
