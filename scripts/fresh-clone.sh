@@ -5,12 +5,12 @@
 # Usage: scripts/fresh-clone.sh [--main-only] [--keep] [--bare]
 #   --main-only  time only the main command (`cargo run --release -p host-sim`)
 #   --keep       leave the clone and its cargo home (default: removed at the end)
-#   --bare       as on a machine without the tools: first REMOVES from this machine what
-#                the test command installs (apt: QEMU, picocom, tmux, Chromium and its
-#                driver, gfortran, SUNDIALS; pip: numpy, SciPy, matplotlib, Dask, pytest,
-#                selenium, the package; the rustup target thumbv7em-none-eabihf) and hides
-#                the cargo-installed tools (defmt-print, cargo-fuzz) from PATH; the test
-#                command installs them all again
+#   --bare       as on a machine without the tools: hides the cargo-installed tools
+#                (defmt-print, cargo-fuzz) from PATH, then PURGES from this machine what the
+#                test command installs (apt, with what came only for them: QEMU, picocom,
+#                tmux, Chromium and its driver, gfortran, SUNDIALS; pip: numpy, SciPy,
+#                matplotlib, Dask, pytest, selenium, the package, and pip's cache; the
+#                rustup target thumbv7em-none-eabihf); the test command installs them again
 # Prints a line per command, `main_seconds=… tests_seconds=…`, for BENCHMARKS.md.
 # The rustup toolchain itself is not re-installed (rust-toolchain.toml names it; rustup has it).
 set -euo pipefail
@@ -35,21 +35,29 @@ mkdir -p "$CARGO_HOME"
 # (but with --bare: only rustup's own proxies, and the new cargo home's bin, where the test
 # command installs them).
 if [ "$bare" = 1 ]; then
-    SUDO=$([ "$(id -u)" = 0 ] || echo sudo)
-    $SUDO env DEBIAN_FRONTEND=noninteractive apt-get remove -y -qq qemu-system-arm picocom tmux \
-        chromium chromium-driver gfortran libsundials-dev >&2 || true
-    python3 -m pip uninstall -y -q numpy scipy matplotlib dask distributed pytest selenium \
-        de-resonator >&2 || true
-    rustup target remove thumbv7em-none-eabihf >&2 || true
+    # The PATH first (nothing removed yet if it cannot be made): rustup's proxies alone, then
+    # the new cargo home's bin, where the test command installs its cargo tools.
+    cargo_bin=$(dirname "$(command -v cargo)")
     proxies="$work/rustup-bin"
     mkdir -p "$proxies" "$CARGO_HOME/bin"
     for tool in cargo rustc rustdoc rustup cargo-clippy clippy-driver rustfmt cargo-fmt; do
-        ln -s "$(command -v "$tool")" "$proxies/$tool"
+        ln -s "$cargo_bin/$tool" "$proxies/$tool"
     done
-    PATH="$CARGO_HOME/bin:$proxies:$(echo "$PATH" | tr : '\n' | grep -vx "$HOME/.cargo/bin" | paste -sd:)"
+    PATH="$CARGO_HOME/bin:$proxies:$(echo "$PATH" | tr : '\n' | grep -vxF "$cargo_bin" | paste -sd:)"
     export PATH
-    for tool in qemu-system-arm chromium defmt-print cargo-fuzz gfortran; do
+    # Then what the test command installs, purged with what came only for it, and pip's cache.
+    SUDO=$([ "$(id -u)" = 0 ] || echo sudo)
+    $SUDO env DEBIAN_FRONTEND=noninteractive apt-get purge -y -qq --autoremove qemu-system-arm \
+        picocom tmux chromium chromium-driver gfortran libsundials-dev >&2
+    python3 -m pip uninstall -y -q numpy scipy matplotlib dask distributed pytest selenium \
+        de-resonator >&2 || true
+    python3 -m pip cache purge >&2 || true
+    rustup target remove thumbv7em-none-eabihf >&2 || true
+    for tool in qemu-system-arm picocom tmux chromium chromedriver defmt-print cargo-fuzz gfortran; do
         ! command -v "$tool" >/dev/null || { echo "fresh-clone.sh: $tool still on PATH" >&2; exit 1; }
+    done
+    for module in numpy scipy matplotlib dask pytest selenium de_resonator; do
+        ! python3 -c "import $module" 2>/dev/null || { echo "fresh-clone.sh: $module still importable" >&2; exit 1; }
     done
 fi
 cd "$work/repo"

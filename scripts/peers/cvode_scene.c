@@ -112,7 +112,11 @@ int main(int argc, char **argv) {
     for (int run = 0; run < runs; run++) {
         double started = now();
         SUNContext ctx;
+#if SUNDIALS_VERSION_MAJOR >= 7
+        SUNContext_Create(SUN_COMM_NULL, &ctx);
+#else
         SUNContext_Create(NULL, &ctx);
+#endif
         N_Vector y = N_VNew_Serial(2, ctx);
         NV_Ith_S(y, 0) = start;
         NV_Ith_S(y, 1) = 0.0;

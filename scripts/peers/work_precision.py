@@ -5,19 +5,25 @@ fixed-step methods (the output step divided by 1 … 16), beside SciPy's DOP853,
 numbalsoda's DOP853 (Hairer's, compiled) and CVODE's BDF (C), all with the output at the same
 times and the same tolerances on the same dimensionless state.
 
-The reference of each scene: two independent solvers at 1e-14, checked to agree (host-sim's
-and SciPy's). Errors, of the stretch against the reference: at the final time, and the L2 error
-over the series (the root mean square over every output time). Times: the median of RUNS
-launches of the whole process (start, solve, its summary out; the series kept in memory, not
-written: a first, untimed launch writes it for the errors), and the median of the solve's own
-time in those processes (host-sim's `run_seconds`; the peers' timers round their solve
-alone, numbalsoda's JIT excluded).
+The reference of each scene: a solve at 1e-14 checked against a second solver's at 1e-14, of
+another code (REFERENCES: numbalsoda's DOP853 and host-sim's on the reference drive, both
+Hairer's method written twice; SciPy's Radau and DOP853 on the stiff scene). Errors, of the
+stretch against the reference: at the final time, and the L2 error over the series (the root
+mean square over every output time). Times: the median of RUNS launches of the whole process
+(start, solve, its summary out; the series kept in memory), and the median of the solve's own
+time in those processes: host-sim's `run_seconds` (the scene's setup, the solve with the §6
+monitor at every step, the outcome), the peers' timers round their solve (numbalsoda's JIT
+excluded; CVODE's context made and freed). The series for the errors: host-sim writes it as
+CSV in one more, untimed launch; a peer writes it (raw floats) in its first timed one.
 
 Writes work-precision-peers.csv (a row per point), work-precision-peers.svg (in-process
 time) and work-precision-peers-whole.svg (whole process) into --out. With --check (CI):
-fewer points, then each figure's words (titles, axes, legend; not tick numbers) compared with
-the committed ones in docs/plots/, and each point's times against the committed CSV's: within
-a factor --slack either way. Run by scripts/bench-peers.sh, which installs the peers.
+the committed figures drawn again from the committed CSV, byte for byte; then fewer points
+measured (host-sim and CVODE with 5 launches each, the Python peers with --runs), each
+figure's words (titles, axes, legend, the peers' versions; not tick numbers) compared with
+the committed ones, each point's errors within 20% (and 10 times the references' distance)
+of the committed CSV's, and its times within --slack either way (--ours-slack for host-sim's,
+which CI runs in its test profile). Run by scripts/bench-peers.sh, which installs the peers.
 """
 import argparse
 import csv
@@ -87,9 +93,14 @@ def main():
     p.add_argument("--scene", choices=[s[0] for s in SCENES], action="append",
                    help="only this scene (repeatable; default: all; not with --check)")
     p.add_argument("--slack", type=float, default=4.0,
-                   help="--check: a time may be this factor off the committed one")
+                   help="--check: a peer's time may be this factor off the committed one")
+    p.add_argument("--ours-slack", type=float, default=6.0,
+                   help="--check: host-sim's (the test profile's is 2–2.4× the peak build's)")
+    p.add_argument("--versions", default="", help="the peers' versions, named in the figures")
     args = p.parse_args()
     os.makedirs(args.out, exist_ok=True)
+    if args.check:
+        failed = redrawn(args.out, args.versions)
     tolerances = CHECK_TOLERANCES if args.check else TOLERANCES
     divisions = CHECK_DIVISIONS if args.check else DIVISIONS
     rows = []
@@ -103,13 +114,44 @@ def main():
         w = csv.DictWriter(f, fieldnames=list(rows[0]))
         w.writeheader()
         w.writerows(rows)
-    figures = [plot(rows, "solve_seconds", "in process (the solve alone)",
-                    os.path.join(args.out, "work-precision-peers.svg")),
-               plot(rows, "whole_seconds", "whole process (start, solve, a summary out)",
-                    os.path.join(args.out, "work-precision-peers-whole.svg"))]
+    figures = figures_of(rows, args.out, args.versions)
     print(f"wrote {path}, {figures[0]}, {figures[1]}")
     if args.check:
-        sys.exit(check(rows, figures, args.slack))
+        sys.exit(check(rows, figures, args.slack, args.ours_slack) or failed)
+
+
+def figures_of(rows, out, versions):
+    """Both figures of `rows` into `out`: against the solve's time and the whole process's."""
+    return [plot(rows, "solve_seconds", "in process (the solve alone)", versions,
+                 os.path.join(out, "work-precision-peers.svg")),
+            plot(rows, "whole_seconds", "whole process (start, solve, a summary out)",
+                 versions, os.path.join(out, "work-precision-peers-whole.svg"))]
+
+
+def committed_rows():
+    with open(os.path.join(KEPT, "work-precision-peers.csv")) as f:
+        rows = list(csv.DictReader(f))
+    for r in rows:
+        for key in ["error_final", "error_l2", "whole_seconds", "solve_seconds",
+                    "reference_apart"]:
+            r[key] = float(r[key])
+        r["runs"] = int(r["runs"])
+    return rows
+
+
+def redrawn(out, versions):
+    """1 where a committed figure is not what its committed CSV draws (byte for byte)."""
+    folder = os.path.join(out, "committed")
+    os.makedirs(folder, exist_ok=True)
+    failed = 0
+    for made in figures_of(committed_rows(), folder, versions):
+        kept = os.path.join(KEPT, os.path.basename(made))
+        with open(made, "rb") as a, open(kept, "rb") as b:
+            if a.read() != b.read():
+                print(f"work_precision.py: {kept} is not what work-precision-peers.csv draws "
+                      f"(with {versions or 'no versions named'})", file=sys.stderr)
+                failed = 1
+    return failed
 
 
 def study(args, scene, tolerances, divisions, tmp):
@@ -183,11 +225,14 @@ def study(args, scene, tolerances, divisions, tmp):
             read(run(launch(series)))
         final, l2 = errors(series_of(series)[::every])
         cmd = launch(None)
-        while len(whole) < args.runs:
+        # --check's single launches: host-sim's and CVODE's (milliseconds) five times over.
+        runs = max(args.runs, 5) if args.check and not solver.startswith(("scipy", "numbalsoda")) \
+            else args.runs
+        while len(whole) < runs:
             timed(cmd)
         row = {"scene": name, "solver": solver, "setting": setting, "error_final": final,
                "error_l2": l2, "whole_seconds": statistics.median(whole),
-               "solve_seconds": statistics.median(inner), "runs": args.runs,
+               "solve_seconds": statistics.median(inner), "runs": len(whole),
                "reference_apart": apart}
         rows.append(row)
         print(f"  {LABELS[solver]:30} {setting:>10}  final {final:8.1e}  L2 {l2:8.1e}  "
@@ -211,6 +256,11 @@ def study(args, scene, tolerances, divisions, tmp):
     return rows
 
 
+def peer_of(solver):
+    """Whether `solver` is a peer's (else host-sim's)."""
+    return solver.startswith(("scipy", "numbalsoda", "cvode"))
+
+
 def series_of(path):
     """The stretch series a launch wrote: host-sim's CSV (a finer step's every k-th row) or
     the peers' raw float64."""
@@ -223,12 +273,12 @@ def series_of(path):
 
 def run(cmd):
     done = subprocess.run(cmd, capture_output=True, text=True)
-    if done.returncode not in (0, 1):
+    if done.returncode != 0:
         raise SystemExit(f"{' '.join(cmd)} failed ({done.returncode}): {done.stderr.strip()}")
     return done.stdout
 
 
-def plot(rows, time_key, what, path):
+def plot(rows, time_key, what, versions, path):
     import matplotlib
 
     matplotlib.use("svg")
@@ -249,7 +299,7 @@ def plot(rows, time_key, what, path):
                 if not pts:
                     continue
                 colour, marker = STYLE[solver]
-                ours = not solver.startswith(("scipy", "numbalsoda", "cvode"))
+                ours = not peer_of(solver)
                 ax.loglog([r[time_key] for r in pts], [max(r[key], 1e-17) for r in pts],
                           color=colour, marker=marker, markersize=5,
                           linestyle="-" if ours else "--", label=LABELS[solver])
@@ -269,6 +319,8 @@ def plot(rows, time_key, what, path):
     fig.legend(handles, labels, loc="lower center", ncol=4, fontsize=9)
     fig.suptitle(f"Work-precision against the peers, {what}; median of each point's runs "
                  "(solid: ours, dashed: the peers)", fontsize=11)
+    if versions:
+        fig.text(0.5, 0.005, f"peers: {versions}", ha="center", fontsize=8)
     fig.tight_layout(rect=(0, 0.09, 1, 0.97))
     fig.savefig(path, metadata={"Date": None})
     plt.close(fig)
@@ -282,7 +334,7 @@ def words(path):
     return [t for t in texts if not re.fullmatch(r"[-+0-9.,eE×·^ −⁰¹²³⁴⁵⁶⁷⁸⁹⁻]*", t)]
 
 
-def check(rows, figures, slack):
+def check(rows, figures, slack, ours_slack):
     failed = 0
     for made in figures:
         kept = os.path.join(KEPT, os.path.basename(made))
@@ -290,10 +342,7 @@ def check(rows, figures, slack):
             print(f"work_precision.py: {kept} differs in its words from what is made now",
                   file=sys.stderr)
             failed = 1
-    committed = {}
-    with open(os.path.join(KEPT, "work-precision-peers.csv")) as f:
-        for r in csv.DictReader(f):
-            committed[(r["scene"], r["solver"], r["setting"])] = r
+    committed = {(r["scene"], r["solver"], r["setting"]): r for r in committed_rows()}
     for r in rows:
         kept = committed.get((r["scene"], r["solver"], r["setting"]))
         if kept is None:
@@ -301,16 +350,18 @@ def check(rows, figures, slack):
                   f"{r['setting']}", file=sys.stderr)
             failed = 1
             continue
+        factor = slack if peer_of(r["solver"]) else ours_slack
         for key in ["whole_seconds", "solve_seconds"]:
-            ratio = r[key] / float(kept[key])
-            if not 1.0 / slack <= ratio <= slack:
+            ratio = r[key] / kept[key]
+            if not 1.0 / factor <= ratio <= factor:
                 print(f"work_precision.py: {r['scene']} {r['solver']} {r['setting']}: {key} "
-                      f"{r[key]:.3g} s against the committed {float(kept[key]):.3g} s "
-                      f"(more than {slack}× apart)", file=sys.stderr)
+                      f"{r[key]:.3g} s against the committed {kept[key]:.3g} s "
+                      f"(more than {factor}× apart)", file=sys.stderr)
                 failed = 1
         for key in ["error_final", "error_l2"]:
-            was = float(kept[key])
-            if not abs(r[key] - was) <= 0.05 * was + 1e-15:
+            was = kept[key]
+            # Rounding may move an error at the references' floor; a method's, not 20%.
+            if not abs(r[key] - was) <= 0.2 * was + 10.0 * kept["reference_apart"]:
                 print(f"work_precision.py: {r['scene']} {r['solver']} {r['setting']}: {key} "
                       f"{r[key]:.3g} against the committed {was:.3g}", file=sys.stderr)
                 failed = 1
@@ -318,8 +369,9 @@ def check(rows, figures, slack):
         print("work_precision.py: run scripts/bench-peers.sh and commit docs/plots/ "
               "(each figure read before)", file=sys.stderr)
     else:
-        print(f"work_precision.py: {len(rows)} points within {slack}× of the committed times, "
-              "their errors and the figures' words as committed")
+        print(f"work_precision.py: the committed figures drawn from the committed CSV; "
+              f"{len(rows)} points within {slack}× (ours {ours_slack}×) of the committed "
+              "times, their errors and the figures' words as committed")
     return failed
 
 
