@@ -194,7 +194,9 @@ fn no_input_makes_the_controller_exceed_the_limit() {
         prop_oneof![19 => Just(500.0f32), 1 => any::<f32>()],
         prop_oneof![19 => 0.0f32..1e-3, 1 => any::<f32>()],
     );
-    let cases = 64;
+    // About 70% of the draws start a controller (39 to 54 of 64 over 50 runs); 64 cases once
+    // fell to half or fewer in CI. At 256 the asserted half is some ten deviations below.
+    let cases = 256;
     let (started, ticks) = (Cell::new(0u32), Cell::new(0u32));
     let mut runner = TestRunner::new(ProptestConfig::with_cases(cases));
     let result = runner.run(
