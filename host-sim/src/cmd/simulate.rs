@@ -149,6 +149,8 @@ pub struct SimulateReport {
     /// The adaptive solver that ran (`null` for a core method): `radau` when the reference
     /// found the scene stiff for DOP853, with `solver_note` saying so.
     pub solver: Option<&'static str>,
+    /// Why the solver differs from the one asked, or solved at another tolerance (Radau's
+    /// floor), in words; `null` where neither.
     pub solver_note: Option<String>,
     /// The reference's tolerance (`null` for the core's fixed-step methods).
     pub tolerance: Option<Tolerance>,

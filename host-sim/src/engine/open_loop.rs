@@ -174,7 +174,7 @@ pub struct Outcome {
     /// at the duration exactly, s.
     pub step_seconds: f64,
     /// The adaptive solver that ran (`None` for a core method), and why the reference left
-    /// DOP853 for Radau when it did.
+    /// DOP853 for Radau when it did, or solved at a tolerance other than the one asked.
     pub solver: Option<Solver>,
     pub switched: Option<String>,
     /// The right-hand sides the adaptive solver evaluated (`None` for a core method).
@@ -345,6 +345,21 @@ pub fn simulate_at(
             single: false,
         } => core::<f64>(scene, method, start, step_seconds, steps)?,
     };
+    // A tolerance tighter than the solver keeps is solved at its least: said, not silent.
+    if let Some(solver) = outcome.solver {
+        let asked = scene.tolerance.unwrap_or(solver.default_tolerance()).rtol;
+        if let Some(least) = solver.least_rtol().filter(|&least| asked < least) {
+            let floor = format!(
+                "{} keeps rtol {least:.2e} at least (RADAU5's floor): solved at it, not at \
+                 {asked:e}",
+                solver.name()
+            );
+            outcome.switched = Some(match outcome.switched.take() {
+                Some(why) => format!("{why}; {floor}"),
+                None => floor,
+            });
+        }
+    }
     if let (Some(times), Choice::Core { .. }) = (t_eval, choice) {
         outcome.evaluated = Some(between_steps(scene, &device, &outcome, step_seconds, times));
     }
@@ -710,6 +725,42 @@ mod tests {
         let out = simulate(&scene, rk4, 0.5 / 1000.3).unwrap();
         assert_eq!(out.samples.len(), 1002);
         assert!((out.final_stretch - straight[0]).abs() < 1e-5);
+    }
+
+    /// Radau says where its tolerance stops: above the floor a tighter tolerance changes the
+    /// answer and no note is given; below it two tolerances give the same answer, bit for
+    /// bit, and the note names both. DOP853 has no floor to say.
+    #[test]
+    fn radau_says_when_its_tolerance_floor_is_what_ran() {
+        let run = |choice, rtol: f64| {
+            let scene = OpenLoop {
+                params: REFERENCE_DEVICE,
+                bias_volts: 7000.0,
+                ac_volts: 200.0,
+                drive_hz: 30.0,
+                duration_seconds: 0.2,
+                start: Start::Prestretch,
+                y0: None,
+                tolerance: Some(Tolerance::both(rtol)),
+            };
+            simulate(&scene, choice, 1e-3).unwrap()
+        };
+        let (loose, tight) = (
+            run(Choice::ReferenceRadau, 1e-9),
+            run(Choice::ReferenceRadau, 1e-10),
+        );
+        assert_ne!(loose.final_stretch, tight.final_stretch);
+        assert_eq!((loose.switched, tight.switched), (None, None));
+        let (below, further) = (
+            run(Choice::ReferenceRadau, 1e-12),
+            run(Choice::ReferenceRadau, 1e-13),
+        );
+        assert_eq!(below.final_stretch, further.final_stretch);
+        for (out, asked) in [(&below, "1e-12"), (&further, "1e-13")] {
+            let note = out.switched.as_deref().unwrap_or_default();
+            assert!(note.contains("not at") && note.contains(asked), "{note}");
+        }
+        assert_eq!(run(Choice::Reference, 1e-13).switched, None);
     }
 
     /// The asked times merge into the grid: one entry for a time on it (or a rounding off

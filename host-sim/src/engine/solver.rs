@@ -54,6 +54,16 @@ impl Solver {
             Solver::Radau | Solver::Bdf => STIFF_REFERENCE_TOLERANCE,
         })
     }
+
+    /// The least relative tolerance this solver keeps (`None`: any `Tolerance::check`
+    /// passes): Radau's is the one host-sim's transform (`radau`) turns into RADAU5's floor,
+    /// about 1.6e-11; a tighter one is solved at it.
+    pub fn least_rtol(self) -> Option<f64> {
+        match self {
+            Solver::Radau => Some(RADAU_RTOL_FLOOR.powf(2.0 / 3.0) / 10.0),
+            Solver::Dop853 | Solver::Bdf => None,
+        }
+    }
 }
 
 /// The equation of motion for the reference integrator, dimensionless time.
