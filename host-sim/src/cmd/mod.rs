@@ -24,7 +24,7 @@ use std::path::{Path, PathBuf};
 
 use clap::Args;
 use de_resonator::model::tolerance::DeviceBox;
-use de_resonator::{Device, DeviceParams, FailureMode, Tuner, DEFAULT_MARGIN, REFERENCE_DEVICE};
+use de_resonator::{Device, DeviceParams, Tuner, DEFAULT_MARGIN, REFERENCE_DEVICE};
 use serde::Serialize;
 
 use crate::device_file;
@@ -186,39 +186,7 @@ pub struct MarginArgs {
     pub margin: f64,
 }
 
-/// A check that failed along a run, and when (JSON: `{mode, time_seconds}`, and the state
-/// there where the run located it: `stretch`, `velocity_per_second`).
-#[derive(Serialize, Debug, Clone, Copy)]
-pub struct Crossing {
-    pub mode: &'static str,
-    pub time_seconds: f64,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub stretch: Option<f64>,
-    /// dλ/dt there, 1/s.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub velocity_per_second: Option<f64>,
-}
-
-impl Crossing {
-    pub fn of(first: Option<(FailureMode, f64)>) -> Option<Self> {
-        Self::with_state(first, None)
-    }
-
-    /// With the state where it was located: stretch, dλ/dt in 1/s.
-    pub fn with_state(
-        first: Option<(FailureMode, f64)>,
-        state: Option<(f64, f64)>,
-    ) -> Option<Self> {
-        first.map(|(mode, time_seconds)| Crossing {
-            mode: mode.name(),
-            time_seconds,
-            stretch: state.map(|s| s.0),
-            velocity_per_second: state.map(|s| s.1),
-        })
-    }
-}
-
-pub use crate::text::{finite, short, sig};
+pub use crate::text::{finite, short, sig, Crossing};
 
 /// Create `dir` and check it takes files, before the work that fills it (not after).
 pub fn prepare_dir(dir: &Path) -> Result<(), String> {

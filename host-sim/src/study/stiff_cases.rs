@@ -154,7 +154,7 @@ pub struct ReferenceRun {
     pub run_seconds: f64,
     pub min_stretch: f64,
     pub max_stretch: f64,
-    pub first_limit: Option<crate::cmd::Crossing>,
+    pub first_limit: Option<crate::text::Crossing>,
 }
 
 /// One case and every run of it.
@@ -293,7 +293,7 @@ fn run_case(case: &Case) -> Result<CaseReport, String> {
             run_seconds: reference.run_seconds,
             min_stretch: reference.min_stretch,
             max_stretch: reference.max_stretch,
-            first_limit: crate::cmd::Crossing::of(reference.first_limit),
+            first_limit: crate::text::Crossing::of(reference.first_limit),
         }),
         runs,
         problem: None,

@@ -307,7 +307,7 @@ pub fn rows(study: &Study, reference: &Reference, choice: Choice) -> Vec<Row> {
                 row.status = "stopped";
             } else {
                 let (final_relative, max, phase) = errors(study, reference, &out, n);
-                let finite = crate::cmd::finite;
+                let finite = crate::text::finite;
                 row.final_relative_error = finite(final_relative);
                 row.max_error = finite(max);
                 row.phase_error_rad = finite(phase);
