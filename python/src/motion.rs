@@ -97,7 +97,7 @@ pub fn simulate<'py>(
     let (scene, step) = asked
         .scene(device.params, &device.info())
         .map_err(value_error)?;
-    let (ac_hz, tolerance) = (scene.drive_hz, scene.tolerance);
+    let ac_hz = scene.drive_hz;
     let out = stoppable(py, || {
         engine::simulate_at(&scene, choice, step, t_eval.as_deref()).map_err(|e| e.to_string())
     })?;
@@ -195,7 +195,7 @@ pub fn simulate<'py>(
     dict.set_item(
         "tolerance",
         out.solver.map(|s| {
-            let t = tolerance.unwrap_or(s.default_tolerance());
+            let t = scene.tolerance_of(s);
             (t.rtol, t.atol)
         }),
     )?;

@@ -28,7 +28,6 @@ which CI runs in its test profile). Run by scripts/bench-peers.sh, which install
 import argparse
 import csv
 import json
-import math
 import os
 import re
 import statistics
@@ -225,9 +224,9 @@ def study(args, scene, tolerances, divisions, tmp):
             read(run(launch(series)))
         final, l2 = errors(series_of(series)[::every])
         cmd = launch(None)
-        # --check's single launches: host-sim's and CVODE's (milliseconds) five times over.
-        runs = max(args.runs, 5) if args.check and not solver.startswith(("scipy", "numbalsoda")) \
-            else args.runs
+        # --check's single launches: the compiled ones' (milliseconds) five times over.
+        compiled = solver == "cvode-bdf" or not peer_of(solver)
+        runs = max(args.runs, 5) if args.check and compiled else args.runs
         while len(whole) < runs:
             timed(cmd)
         row = {"scene": name, "solver": solver, "setting": setting, "error_final": final,

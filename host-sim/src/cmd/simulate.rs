@@ -344,7 +344,7 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
         .transpose()?;
     let (scene, step) = asked.scene(params, &device)?;
     let checked = Device::new(scene.params).map_err(|e| format!("{device}: {e}"))?;
-    let (ac_hz, tolerance) = (scene.drive_hz, scene.tolerance);
+    let ac_hz = scene.drive_hz;
     // Where the files go, checked before the work.
     for path in [&args.csv, &args.plot].into_iter().flatten() {
         prepare_file(path)?;
@@ -404,9 +404,7 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
         method: args.method.name(),
         solver: out.solver.map(Solver::name),
         solver_note: out.switched.clone(),
-        tolerance: out
-            .solver
-            .map(|solver| tolerance.unwrap_or(solver.default_tolerance())),
+        tolerance: out.solver.map(|solver| scene.tolerance_of(solver)),
         step_seconds: out.step_seconds,
         steps: out.samples.len().saturating_sub(1),
         end: Final {

@@ -193,6 +193,11 @@ pub struct Evaluated {
 }
 
 impl OpenLoop {
+    /// The tolerance `solver` solves this scene at: the one asked, else its default.
+    pub fn tolerance_of(&self, solver: Solver) -> Tolerance {
+        self.tolerance.unwrap_or(solver.default_tolerance())
+    }
+
     /// The starting state: stretch and dλ/dτ (the model's time).
     fn start_state(&self, device: &Device<f64>) -> Result<[f64; 2], String> {
         if let Some([stretch, velocity]) = self.y0 {
@@ -347,7 +352,7 @@ pub fn simulate_at(
     };
     // A tolerance tighter than the solver keeps is solved at its least: said, not silent.
     if let Some(solver) = outcome.solver {
-        let asked = scene.tolerance.unwrap_or(solver.default_tolerance()).rtol;
+        let asked = scene.tolerance_of(solver).rtol;
         if let Some(least) = solver.least_rtol().filter(|&least| asked < least) {
             let floor = format!(
                 "{} keeps rtol {least:.2e} at least (RADAU5's floor): solved at it, not at \
@@ -555,7 +560,7 @@ fn reference(
 ) -> Result<Outcome, String> {
     let drive = Drive::from_volts(device, scene.bias_volts, scene.ac_volts, scene.drive_hz);
     let scale = device.rad_per_s_per_unit();
-    let tolerance = scene.tolerance.unwrap_or(solver.default_tolerance());
+    let tolerance = scene.tolerance_of(solver);
     let grid = sample_times(step_seconds * scale, scene.duration_seconds * scale);
     // The asked times (SciPy's t_eval) among the grid's: one solve samples both.
     // Without them the grid is the times (no copy: 29,411 samples of the reference scene are
