@@ -411,9 +411,16 @@ fn tampered(rng: &mut Rng, mut done: TrimDone) -> TrimDone {
                 ring,
                 resolution,
                 device,
+                predicted,
             },
         ) => TrimResult::Retune {
             resolution,
+            // A lying prediction only loosens or tightens the swing's watch: the §6 checks
+            // on every sample stay.
+            predicted: predicted.map(|p| de_resonator::controller::Predicted {
+                allowed: wild(rng) as f32 * p.allowed,
+                ..p
+            }),
             ring: de_resonator::NextRing {
                 gain: de_resonator::estimate::ring::RingGain {
                     stretch_per_volt_squared: wild(rng) as f32 * ring.gain.stretch_per_volt_squared,

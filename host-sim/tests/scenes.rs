@@ -1267,13 +1267,16 @@ fn a_trim_outside_the_batch_faults_and_inside_it_tunes() {
             )
             .replace(
                 "target_hz = 45.5\nac_volts = 100.0",
-                "target_hz = 44.5\ntrim_tolerance = 1e-3\nac_volts = 100.0",
+                // 100 V at 40 Hz swings a corner of the batch (f 41 Hz at the bias, no
+                // damping told) across breakdown: 91 V fits.
+                "target_hz = 44.5\ntrim_tolerance = 1e-3\nac_volts = 80.0",
             );
         let mut s = scene::parse(&text).unwrap();
         s.run.history = false;
         s.run.run().unwrap()
     };
     let inside = with(0.95);
+    assert!(inside.boot.is_some(), "{:?}", inside.refused);
     assert!(inside.fault.is_none(), "{:?}", inside.fault_words);
     let error = inside.natural_frequency_hz / 44.5 - 1.0;
     assert!(error.abs() < 1e-3, "{error}");

@@ -113,6 +113,7 @@ fn no_accepted_drive_crosses_a_limit_on_random_devices() {
                             bias_volts: run.bias_volts,
                             ac_volts: case.ac_volts,
                             ac_hz: case.ac_hz,
+                            ringing: 0.0,
                             ramp: Some(Ramp {
                                 from_volts: 0.0,
                                 slew_volts_per_second: defaults.slew_volts_per_second.into(),

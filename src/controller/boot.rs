@@ -2,15 +2,16 @@
 //! direct solve on the chip, model.md §6–§7) and `check_plan` (the plan through the model,
 //! model.md §6). A firmware may take the first alone, or the first two.
 
+use super::envelope::Predicted;
 use super::fault::Fault;
 use super::plan::Plan;
 use super::settings::guarded;
 use super::{Controller, State};
 use crate::acquire::InputNoise;
 use crate::drive::Amplifier;
-use crate::model::device::Device;
+use crate::model::device::{Device, Field};
 use crate::model::safety::Limit;
-use crate::model::swing::{AcDrive, Ramp};
+use crate::model::swing::{AcDrive, Ramp, Swing};
 #[cfg(feature = "probe")]
 use crate::table::CapacitanceBands;
 use crate::table::Table;
@@ -69,9 +70,9 @@ struct Checked {
     top_volts: f32,
     table_volts: f32,
     max_volts: f32,
-    /// The table's batch's guaranteed limit, V, and its shear modulus range, Pa.
+    /// The table's batch's guaranteed limit, V, and its box (lowest and highest parameters).
     batch_limit_volts: Option<f32>,
-    batch_modulus: Option<(f32, f32)>,
+    batch: Option<(DeviceParams<f32>, DeviceParams<f32>)>,
     /// The batch's capacitance bands, for the probe's check (model.md §10).
     #[cfg(feature = "probe")]
     batch_capacitance: Option<CapacitanceBands>,
@@ -105,9 +106,7 @@ impl Checked {
             },
             max_volts: top_volts * ((1.0 - settings.margin) / (1.0 - table.margin())).min(1.0),
             batch_limit_volts: batch.as_ref().map(|b| b.limit_volts),
-            batch_modulus: batch
-                .as_ref()
-                .map(|b| (b.low.shear_modulus, b.high.shear_modulus)),
+            batch: batch.as_ref().map(|b| (b.low, b.high)),
             #[cfg(feature = "probe")]
             batch_capacitance: batch.map(|b| b.capacitance),
         })
@@ -122,7 +121,7 @@ impl Checked {
     ) -> Controller {
         let mut controller = Controller::new(self.device, board, settings, self.max_volts);
         controller.plan.start_volts = from_volts;
-        controller.batch_modulus = self.batch_modulus;
+        controller.batch = self.batch;
         #[cfg(feature = "probe")]
         {
             controller.sensing.batch = self.batch_capacitance;
@@ -175,7 +174,7 @@ impl Controller {
         settings: Settings,
     ) -> Result<Boot, Fault> {
         let result =
-            Self::checks_in(slot, params, table, board, settings, 0.0).map(|(_, boot)| boot);
+            Self::checks_in(slot, params, table, board, settings, (0.0, 0.0)).map(|(_, boot)| boot);
         if result.is_err() {
             *slot = None;
         }
@@ -189,10 +188,11 @@ impl Controller {
         table: &[u8],
         board: (Amplifier, InputNoise),
         settings: Settings,
-        from_volts: f32,
+        (from_volts, carried_ring): (f32, f32),
     ) -> Result<(&'s mut Self, Boot), Fault> {
         let checked = Checked::new(params, table, &settings)?;
         let controller = slot.insert(checked.controller(board, settings, from_volts));
+        controller.carried_ring = carried_ring;
         let boot = checked.plan(controller)?;
         let boot = controller.cross_check(boot)?;
         let boot = controller.check_plan(boot)?;
@@ -291,6 +291,7 @@ impl Controller {
                 Some(_) => solved.natural_frequency_hz,
                 None => settings.ac_hz,
             },
+            ringing: self.pulse_ring(solved.volts, limit.at.offset) + self.carried_ring,
             ramp: Some(Ramp {
                 from_volts: self.plan.start_volts,
                 slew_volts_per_second: settings.slew_volts_per_second,
@@ -298,9 +299,18 @@ impl Controller {
                 after_descent: true,
             }),
         };
-        self.flashed
-            .check_swing(drive, limit.at.offset, None, settings.margin)
-            .map_err(Fault::DriveSwing)?;
+        let swing = self.checked_swing(drive, limit.at.offset, settings.margin)?;
+        // What the board then watches the measured swing against (`envelope`).
+        self.watch.predicted = (drive.ac_volts > 0.0).then(|| {
+            let noise = self.inputs.stretch;
+            Predicted::of(
+                &swing,
+                drive.ac_hz,
+                settings.tick_hz,
+                settings.margin,
+                noise,
+            )
+        });
         // The ring the first pulse will leave at the bias it measures at, as the device's
         // damping leaves it over the window, against the noise the front end declares: now,
         // before any voltage, and by the tick before it pulses against the noise it hears.
@@ -320,6 +330,46 @@ impl Controller {
             cap_by,
             ..boot
         })
+    }
+
+    /// The swing of `drive` on the device flashed (its limit at `limit_offset`) and, for a
+    /// batch's table, on the device at every corner of the batch's box (each at its own
+    /// equilibrium, below its own limit; the damping the flashed device's): the first that
+    /// does not fit refuses the drive, and the largest swing is the one the board watches.
+    /// A box spread in n parameters has 2ⁿ corners (a boot's work, not a tick's).
+    fn checked_swing(
+        &self,
+        drive: AcDrive<f32>,
+        limit_offset: f32,
+        margin: f32,
+    ) -> Result<Swing<f32>, Fault> {
+        let check = |device: &Device<f32>, offset: f32| {
+            device
+                .check_swing(drive, offset, None, margin)
+                .map_err(Fault::DriveSwing)
+        };
+        let mut widest = check(&self.flashed, limit_offset)?;
+        let Some((low, high)) = self.batch else {
+            return Ok(widest);
+        };
+        let spread = |f: &Field| *f != Field::Damping && low.get(*f) != high.get(*f);
+        let n = Field::ALL.iter().filter(|f| spread(f)).count();
+        for corner in 0..1u32 << n {
+            let mut params = low;
+            for (bit, &field) in Field::ALL.iter().filter(|f| spread(f)).enumerate() {
+                if corner & (1 << bit) != 0 {
+                    params.set(field, high.get(field));
+                }
+            }
+            params.damping = self.flashed.params().damping;
+            let device = Device::new(params).map_err(Fault::Device)?;
+            let offset = Tuner::new(device).limit().at.offset;
+            let swing = check(&device, offset)?;
+            if swing.stretch - swing.low_stretch > widest.stretch - widest.low_stretch {
+                widest = swing;
+            }
+        }
+        Ok(widest)
     }
 
     /// Run the whole plan through the model (f32 RK4 under the monitor, from rest at the

@@ -74,6 +74,9 @@ pub struct ReplanJob {
     settings: Settings,
     /// The plan in force when the job was made: `adopt` takes the result only if it still is.
     plan: Plan,
+    /// The swing the membrane may still carry from the drive in force, in stretch: the new
+    /// plan's swing counts it, undecayed.
+    carried_ring: f32,
 }
 
 /// A checked new plan, for `adopt`: what the boot stages left in a fresh controller (its
@@ -115,7 +118,7 @@ impl ReplanJob {
             table,
             (self.amplifier, self.inputs),
             self.settings,
-            self.plan.bias_volts,
+            (self.plan.bias_volts, self.carried_ring),
         )
         .map_err(Refusal::Checks)?;
         Ok(Replanned {
@@ -149,6 +152,15 @@ impl Controller {
         self.last_code
     }
 
+    /// The swing a new plan may find the membrane in, in stretch: the predicted amplitude of
+    /// the drive in force, while it is on or held (its ring outlasts the AC); 0 otherwise.
+    fn carried_ring(&self) -> f32 {
+        match (self.state, self.watch.predicted) {
+            (State::Driving { .. } | State::Held { .. }, Some(p)) => p.amplitude,
+            _ => 0.0,
+        }
+    }
+
     /// Whether the bias holds still (no ramp, no trim under way): when a new plan may start.
     fn steady(&self) -> Result<(), Refusal> {
         match self.state {
@@ -178,6 +190,7 @@ impl Controller {
                 ..settings
             },
             plan: self.plan,
+            carried_ring: self.carried_ring(),
         })
     }
 

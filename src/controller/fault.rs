@@ -109,6 +109,16 @@ pub enum Fault {
         high: f32,
         volts: f32,
     },
+    /// The measured swing of a drive outgrew its prediction (model.md §7): the window's
+    /// half-span (with a growth that has not slowed, carried a window ahead) is above the
+    /// predicted amplitude widened by 1/(1 − margin) and the sensor's noise (`allowed`), all
+    /// in stretch: taken off at the edge of the box the checks passed.
+    SwingOutgrown {
+        tick: u32,
+        half_span: f32,
+        growth: f32,
+        allowed: f32,
+    },
     /// The drive `setting` asks for (the AC's slope, or the bias ramp) is steeper than the
     /// amplifier's declared slew rate (`amplifier_slew_volts_per_second`): both, V/s.
     Steeper {
@@ -240,6 +250,20 @@ impl fmt::Display for Fault {
                     setting.key()
                 )
             }
+            Fault::SwingOutgrown {
+                tick,
+                half_span,
+                growth,
+                allowed,
+            } => write!(
+                f,
+                "measured swing outgrew its prediction at tick {tick}: half-span λ {} (growing \
+                 {} a window) against {} allowed (the predicted swing widened by the margin): \
+                 the membrane, its damping or the drive is not what the image says",
+                Decimal(*half_span),
+                Decimal(*growth),
+                Decimal(*allowed)
+            ),
             Fault::OutsideBatch {
                 stretch,
                 sigma,
@@ -379,6 +403,7 @@ declare_fault_kinds! {
     Fault::NearLimit { .. } => 24 "near_limit",
     Fault::OutsideBatch { .. } => 25 "outside_batch",
     Fault::Steeper { .. } => 26 "steeper",
+    Fault::SwingOutgrown { .. } => 27 "swing_outgrown",
 }
 
 impl From<SettingError> for Fault {
@@ -430,7 +455,8 @@ impl Fault {
             | Fault::Input(_)
             | Fault::Trim(_)
             | Fault::NearLimit { .. }
-            | Fault::OutsideBatch { .. } => FaultStage::Running,
+            | Fault::OutsideBatch { .. }
+            | Fault::SwingOutgrown { .. } => FaultStage::Running,
         }
     }
 }

@@ -234,6 +234,14 @@ impl Fault {
             } => {
                 p.f(stretch).f(sigma).f(low).f(high).f(volts);
             }
+            Fault::SwingOutgrown {
+                tick,
+                half_span,
+                growth,
+                allowed,
+            } => {
+                p.u(tick).f(half_span).f(growth).f(allowed);
+            }
             Fault::Steeper {
                 setting,
                 volts_per_second,
@@ -372,6 +380,12 @@ impl Fault {
                 setting: t.at(&Setting::ALL)?,
                 volts_per_second: t.f()?,
                 amplifier_volts_per_second: t.f()?,
+            },
+            27 => Fault::SwingOutgrown {
+                tick: t.u()?,
+                half_span: t.f()?,
+                growth: t.f()?,
+                allowed: t.f()?,
             },
             _ => return None,
         })
@@ -768,6 +782,12 @@ mod tests {
                 setting: Setting::AcVolts,
                 volts_per_second: 25_132.7,
                 amplifier_volts_per_second: 20_000.0,
+            },
+            Fault::SwingOutgrown {
+                tick: 1352,
+                half_span: b,
+                growth: 3.5e-5,
+                allowed: 1.5e-3,
             },
         ];
         let problems = [

@@ -28,6 +28,7 @@
 
 mod boot;
 mod command;
+mod envelope;
 mod fault;
 mod fault_figures;
 mod gate;
@@ -43,6 +44,7 @@ mod watch;
 
 pub use boot::{Boot, CapBy};
 pub use command::{Refusal, ReplanJob, Replanned};
+pub use envelope::Predicted;
 pub use fault::{
     Event, EventKind, Fault, FaultStage, Output, BUS_FAULT_SAID, EVENT_VALUES, FAULT_KEYS,
     FAULT_SAID,
@@ -58,7 +60,7 @@ use crate::acquire::{InputError, InputNoise};
 use crate::drive::{Amplifier, DacCode};
 #[cfg(feature = "trim")]
 use crate::estimate::ring::RingInput;
-use crate::model::device::Device;
+use crate::model::device::{Device, DeviceParams};
 use gate::gate;
 use watch::{Leakage, LeakageLimits, Ring, Watch};
 
@@ -176,14 +178,18 @@ pub struct Controller {
     /// The lowest cap the measured estimates gave (trim, tracking; ∞ before any), V: it only
     /// falls.
     estimate_volts: f32,
-    /// The shear modulus range of the batch the table was made for, Pa (model.md §10): a
-    /// trim that measures μ outside it faults.
-    batch_modulus: Option<(f32, f32)>,
+    /// The box of the batch the table was made for (model.md §10), its lowest and highest
+    /// parameters: a drive's swing is checked at its corners, and a trim that measures μ
+    /// outside its range faults.
+    batch: Option<(DeviceParams<f32>, DeviceParams<f32>)>,
     /// The cap in force: the lowest of the ceiling, the operator's and the estimate's, V.
     max_volts: f32,
     plan: Plan,
     tick: u32,
     watch: Watch,
+    /// The swing the membrane may carry into this plan from the drive before it (a replan's
+    /// job made while driving), in stretch: counted in this plan's swing at boot.
+    carried_ring: f32,
     /// The leakage watch's sums (model.md §8).
     leakage: Leakage,
     /// The voltage commanded at the last tick, V.
@@ -225,11 +231,12 @@ impl Controller {
             estimate_at: 0,
             estimate_shares_terms: false,
             estimate_volts: f32::INFINITY,
-            batch_modulus: None,
+            batch: None,
             max_volts,
             plan: Plan::idle(),
             tick: 0,
             watch: Watch::new(settings.margin),
+            carried_ring: 0.0,
             leakage: Leakage::default(),
             last_volts: 0.0,
             last_code: DacCode(0),
@@ -440,6 +447,10 @@ impl Controller {
             {
                 return self.fault(fault);
             }
+            let driving = matches!(self.state, State::Driving { .. });
+            if let Some(fault) = self.watch.swing(k, stretch, driving) {
+                return self.fault(fault);
+            }
         }
         #[cfg(feature = "probe")]
         if let Some(fault) = self.sense(k, &inputs) {
@@ -595,8 +606,25 @@ impl Controller {
     }
 
     /// Whether a trim was asked for.
+    /// The shear modulus range of the batch, Pa, if the table has one.
+    fn batch_modulus(&self) -> Option<(f32, f32)> {
+        self.batch
+            .map(|(low, high)| (low.shear_modulus, high.shear_modulus))
+    }
+
     fn trim_wanted(&self) -> bool {
         self.settings.trim_tolerance.is_some()
+    }
+
+    /// The ring a trim's pulse at `bias_volts` leaves, in stretch, where a trim is wanted
+    /// (the AC starts after its last pulse; 0 otherwise).
+    fn pulse_ring(&self, bias_volts: f32, limit_offset: f32) -> f32 {
+        #[cfg(feature = "trim")]
+        if self.trim_wanted() {
+            return trim::pulse_ring(&self.flashed, limit_offset, bias_volts, &self.settings);
+        }
+        let _ = (bias_volts, limit_offset);
+        0.0
     }
 
     /// When the next trim falls, the AC starting at tick `k`.

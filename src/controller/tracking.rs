@@ -214,9 +214,13 @@ impl Controller {
                 shear_modulus,
                 bias_volts,
                 max_volts,
+                predicted,
                 ..
             } => {
                 self.trim.params.shear_modulus = shear_modulus;
+                if predicted.is_some() {
+                    self.watch.predicted = predicted;
+                }
                 // A drift's solves are not counted against `MAX_TRIMS` (a lost lock is
                 // `TrackLost`), take no secant (`TrimJob::solve`) and leave no point for a
                 // later trim's: two points apart in time differ by the drift too.

@@ -5,6 +5,7 @@
 //! bias: `crate::estimate::ring`, `crate::tuning`) and gives the `TrimResult` back; a later tick
 //! applies it.
 
+use super::envelope::Predicted;
 use super::fault::Fault;
 use super::settings::{guarded, Settings, MAX_TRIMS, TRIM_SECANT_STEP};
 use super::watch::Ring;
@@ -238,6 +239,22 @@ pub(super) fn pulse_ticks(s: &Settings) -> u32 {
     libm::roundf(0.5 * s.tick_hz / s.target_hz).max(1.0) as u32
 }
 
+/// The ring a trim's pulse at `bias_volts` leaves in the stretch (`RingGain`: undamped, an
+/// upper bound), on `device` below `limit_offset`: what the AC starts on when the trim
+/// converges (NaN where the bias has no equilibrium).
+pub(super) fn pulse_ring(
+    device: &Device<f32>,
+    limit_offset: f32,
+    bias_volts: f32,
+    s: &Settings,
+) -> f32 {
+    RingGain::at(device, limit_offset, bias_volts, pulse_seconds(s)).ring(
+        RingInput::Stretch,
+        bias_volts,
+        s.trim_pulse_volts,
+    )
+}
+
 /// How long the trim's pulse lasts, s.
 pub(super) fn pulse_seconds(s: &Settings) -> f32 {
     pulse_ticks(s) as f32 / s.tick_hz
@@ -399,6 +416,8 @@ pub enum TrimResult {
         ring: NextRing,
         resolution: Option<f32>,
         device: Device<f32>,
+        /// The drive's swing at the new bias, as the estimate predicts it (`None`: no AC).
+        predicted: Option<Predicted>,
     },
     /// The estimate needs `needed_volts` (bias and AC) above the lower of the cap in force
     /// and its own cap `max_volts` (which the controller takes as Retune's): hold.
@@ -642,6 +661,7 @@ impl TrimJob {
                 .map_or(s.ac_hz, |offset| device.natural_frequency_hz_at(offset)),
             None => s.ac_hz,
         };
+        let mut predicted = None;
         if s.ac_volts > 0.0 {
             // No natural frequency at the new bias (a fold): no swing to bound.
             if !(ac_hz > 0.0) {
@@ -657,6 +677,8 @@ impl TrimJob {
                 bias_volts,
                 ac_volts: s.ac_volts,
                 ac_hz,
+                // The AC starts again after the pulse at the new bias.
+                ringing: pulse_ring(&device, tuner.limit().at.offset, bias_volts, &s),
                 ramp: Some(Ramp {
                     from_volts: self.bias_volts,
                     slew_volts_per_second: s.slew_volts_per_second,
@@ -667,9 +689,11 @@ impl TrimJob {
                     after_descent: false,
                 }),
             };
-            device
+            let swing = device
                 .check_swing(drive, tuner.limit().at.offset, quality, s.margin)
                 .map_err(Fault::DriveSwing)?;
+            let (tick_hz, noise) = (s.tick_hz, self.inputs.stretch);
+            predicted = Some(Predicted::of(&swing, ac_hz, tick_hz, s.margin, noise));
         }
         Ok(TrimResult::Retune {
             measured_hz,
@@ -688,6 +712,7 @@ impl TrimJob {
             },
             resolution,
             device,
+            predicted,
         })
     }
 }
@@ -709,7 +734,7 @@ impl Controller {
             self.settings,
             (bias, cap),
             self.inputs,
-            self.batch_modulus,
+            self.batch_modulus(),
         ))
     }
 
@@ -925,7 +950,7 @@ impl Controller {
             | TrimResult::AboveCeiling { shear_modulus, .. } => shear_modulus,
             TrimResult::Failed(_) => return None,
         };
-        outside_batch(self.batch_modulus, shear_modulus).map(Fault::Trim)
+        outside_batch(self.batch_modulus(), shear_modulus).map(Fault::Trim)
     }
 
     /// Apply the trim's result at tick `k`, once it has come back.
@@ -947,8 +972,12 @@ impl Controller {
                 max_volts,
                 ring,
                 resolution,
+                predicted,
                 ..
             } => {
+                if predicted.is_some() {
+                    self.watch.predicted = predicted;
+                }
                 let applied = self.retune(
                     k,
                     bias_volts,

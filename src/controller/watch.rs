@@ -2,6 +2,7 @@
 //! sample (a number, one a device could give, not stuck, inside model.md §6) and the
 //! amplifier's monitored output against the last command.
 
+use super::envelope::{Envelope, Predicted};
 use super::fault::Fault;
 pub use crate::acquire::Inputs;
 use crate::model::device::Device;
@@ -149,6 +150,10 @@ pub(super) struct Watch {
     repeated: Option<(f32, u32)>,
     /// Ticks in a row the amplifier has been off its command.
     amplifier_off_ticks: u32,
+    /// The swing the drive of the plan in force is predicted to have (`None`: no AC), and
+    /// the swing measured while it is on.
+    pub(super) predicted: Option<Predicted>,
+    envelope: Envelope,
 }
 
 impl Watch {
@@ -160,6 +165,8 @@ impl Watch {
             raise: 1.0 / (1.0 - margin),
             repeated: None,
             amplifier_off_ticks: 0,
+            predicted: None,
+            envelope: Envelope::default(),
         }
     }
 
@@ -259,11 +266,24 @@ impl Watch {
         None
     }
 
-    /// The margins of another watch's plan (an adopted replan's): its band and raise; the
-    /// sample history stays.
+    /// The margins of another watch's plan (an adopted replan's): its band, raise and
+    /// predicted swing; the sample history stays.
     pub(super) fn guard_as(&mut self, other: &Watch) {
         self.band = other.band;
         self.raise = other.raise;
+        self.predicted = other.predicted;
+    }
+
+    /// The drive's swing at tick `k` (`Envelope`): while `driving`, the stretch sample
+    /// against the prediction; otherwise the measured swing starts again.
+    pub(super) fn swing(&mut self, k: u32, stretch: f32, driving: bool) -> Option<Fault> {
+        match self.predicted {
+            Some(predicted) if driving => self.envelope.observe(k, stretch, &predicted),
+            _ => {
+                self.envelope = Envelope::default();
+                None
+            }
+        }
     }
 
     /// A current sample must be a number (`Sensor`); its size is the plant's business.

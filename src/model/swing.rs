@@ -54,6 +54,9 @@ pub struct AcDrive<T> {
     pub ac_volts: T,
     pub ac_hz: T,
     pub ramp: Option<Ramp<T>>,
+    /// A ring already there when the AC starts, besides the ramp's, in stretch: a trim's
+    /// last pulse (a converged trim starts the AC right after it), counted undecayed.
+    pub ringing: T,
 }
 
 /// The ramp to the bias at the slew rate and the hold after it, before the AC starts: the
@@ -271,7 +274,7 @@ impl<T: Real> Device<T> {
         let ring = match drive.ramp {
             Some(ramp) => self.ramp_ring(&about, ramp, max_offset)?,
             None => T::zero(),
-        };
+        } + drive.ringing.abs();
         let fits = |ac: T| self.swing_fits(&about, ac / unit, drive_rad, ring, margin);
         match fits(drive.ac_volts.abs()) {
             Ok((low_stretch, high_stretch)) => Ok(Swing {

@@ -108,3 +108,44 @@ pub fn assert_way_down(volts: &[f32], from_volts: f32, step_volts: f32, lsb_volt
     }
     assert!(volts.len() >= needed, "{} ticks checked", volts.len());
 }
+
+/// λ* held by `volts` on the loading branch (model.md §5): Φ²(λ) rises from 0 at λ1p to the
+/// fold; found by stepping up from λ1p and halving. `None` past the fold.
+pub fn equilibrium_stretch(p: &DeviceParams<f64>, volts: f64) -> Option<f64> {
+    let target = volts * volts;
+    let (mut below, mut step) = (p.prestretch_1, 1e-3 * p.prestretch_1);
+    let mut last = 0.0;
+    loop {
+        let next = below + step;
+        let v2 = bias_squared(p, next);
+        if v2.is_nan() || v2 <= last || passive_stretch(p, next) <= 0.0 {
+            return None;
+        }
+        if v2 >= target {
+            let mut above = next;
+            for _ in 0..200 {
+                let mid = 0.5 * (below + above);
+                if bias_squared(p, mid) < target {
+                    below = mid;
+                } else {
+                    above = mid;
+                }
+            }
+            return Some(0.5 * (below + above));
+        }
+        below = next;
+        last = v2;
+        step *= 1.05;
+    }
+}
+
+/// ∂λ''/∂(Φ²) at stretch λ, 1/(V²·s²): the electrostatic force per volt squared (model.md
+/// §4, linear in Φ², so the difference is exact).
+pub fn force_per_volt_squared(p: &DeviceParams<f64>, l: f64) -> f64 {
+    acceleration(p, l, 1.0) - acceleration(p, l, 0.0)
+}
+
+/// c/M, 1/s: the damping's rate in λ'' (model.md §4).
+pub fn damping_rate(p: &DeviceParams<f64>) -> f64 {
+    p.damping / effective_mass(p)
+}

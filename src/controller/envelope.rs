@@ -1,0 +1,230 @@
+//! The drive's swing as the sensor measures it, against its prediction (model.md §7,
+//! `Device::check_swing`). The checks of §6 passed on the predicted swing widened by
+//! 1/(1 − margin), under the peak voltage raised as much; a measured swing that leaves that
+//! box, or grows window after window without slowing fast enough to leave it within the
+//! next, is taken off there: before any limit, whatever the device file says of the
+//! damping (docs/safety.md, "The drive's swing").
+
+use super::fault::Fault;
+use crate::model::swing::Swing;
+
+/// Windows of growth, each at least the one before, that make a swing growing rather
+/// than settling (a switch-on's beat rises for fewer).
+const GROWTHS: usize = 3;
+
+/// A tick's stretch noise (RMS, as the front end declares it), counted this many times on
+/// each side of the swing.
+const NOISE_SIGMAS: f32 = 5.0;
+
+/// The noise allowed on each side of the swing, in stretch, where the front end declares
+/// none (a host's sensor read directly).
+const UNDECLARED_NOISE_STRETCH: f32 = 1e-4;
+
+/// The drive's predicted swing, as the board watches it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Predicted {
+    /// The predicted amplitude about λ*, in stretch (switch-on, the ramp's ring and a
+    /// pulse's included): what a new plan's swing counts as already there.
+    pub amplitude: f32,
+    /// The half-span the measured swing may reach, in stretch: the predicted amplitude
+    /// about λ* (switch-on, the ramp's ring and a pulse's included) widened by 1/(1 −
+    /// margin) as the checks had it, and the sensor's noise.
+    pub allowed: f32,
+    /// A window's ticks: the longest period in the motion (two of the drive's, for the
+    /// parametric response at half its frequency; the natural one, for the free ring).
+    pub window_ticks: u32,
+}
+
+impl Predicted {
+    /// The watch of `swing` (a drive at `ac_hz` that fits, its prediction with the margin
+    /// `margin`) on a board ticking at `tick_hz` whose stretch reading has the RMS noise
+    /// `noise` a tick (`None`: not declared).
+    pub fn of(
+        swing: &Swing<f32>,
+        ac_hz: f32,
+        tick_hz: f32,
+        margin: f32,
+        noise: Option<f32>,
+    ) -> Self {
+        let amplitude = swing.stretch - swing.low_stretch;
+        let noise = noise.map_or(UNDECLARED_NOISE_STRETCH, |sigma| NOISE_SIGMAS * sigma);
+        let seconds = (2.0 / ac_hz).max(1.0 / swing.natural_hz);
+        let window = libm::ceilf(seconds * tick_hz);
+        Self {
+            amplitude,
+            allowed: amplitude / (1.0 - margin) + noise,
+            // Saturating: NaN and ∞ (no natural frequency) give 0 and u32::MAX.
+            window_ticks: (window as u32).max(1),
+        }
+    }
+}
+
+/// The measured swing over the current window while a drive is on, and the last windows'.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(super) struct Envelope {
+    ticks: u32,
+    low: f32,
+    high: f32,
+    /// The last whole window's half-span.
+    previous: Option<f32>,
+    /// The growths of the last windows' half-spans over the ones before, the latest first
+    /// (0 before there are any; NaN after a window with none before it).
+    growths: [f32; GROWTHS],
+}
+
+impl Envelope {
+    /// A stretch sample at tick `k` of a drive predicted as `predicted`: a fault where the
+    /// window's half-span so far is above what is allowed; or, at a window's end, where a
+    /// growth that has not slowed for `GROWTHS` windows (a swing pumped or driven past its
+    /// damping, not one settling) carried a window ahead would be.
+    pub(super) fn observe(&mut self, k: u32, stretch: f32, predicted: &Predicted) -> Option<Fault> {
+        if self.ticks == 0 {
+            (self.low, self.high) = (stretch, stretch);
+        } else {
+            self.low = self.low.min(stretch);
+            self.high = self.high.max(stretch);
+        }
+        self.ticks += 1;
+        let half_span = (self.high - self.low) / 2.0;
+        let mut ahead = 0.0;
+        if self.ticks >= predicted.window_ticks {
+            let growth = self
+                .previous
+                .map_or(f32::NAN, |previous| half_span - previous);
+            self.growths.rotate_right(1);
+            self.growths[0] = growth;
+            // Growing, and not slowing, window after window (NaN compares false).
+            let [now, before, first] = self.growths;
+            if now >= before && before >= first && first > 0.0 {
+                ahead = now;
+            }
+            (self.ticks, self.previous) = (0, Some(half_span));
+        }
+        let within = half_span <= predicted.allowed && half_span + ahead <= predicted.allowed;
+        (!within).then_some(Fault::SwingOutgrown {
+            tick: k,
+            half_span,
+            growth: ahead,
+            allowed: predicted.allowed,
+        })
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::panic)]
+mod tests {
+    use super::*;
+
+    fn predicted(allowed: f32, window_ticks: u32) -> Predicted {
+        Predicted {
+            amplitude: allowed,
+            allowed,
+            window_ticks,
+        }
+    }
+
+    /// A sine of `amplitude` about 2, `ticks_per_period` a period, at tick `k`.
+    fn sine(amplitude: f32, ticks_per_period: u32, k: u32) -> f32 {
+        let turn = (k % ticks_per_period) as f32 / ticks_per_period as f32;
+        2.0 + amplitude * libm::sinf(core::f32::consts::TAU * turn)
+    }
+
+    #[test]
+    fn a_swing_within_the_prediction_runs() {
+        let p = predicted(1e-3, 40);
+        let mut e = Envelope::default();
+        for k in 0..4000 {
+            assert_eq!(e.observe(k, sine(0.99e-3, 20, k), &p), None, "tick {k}");
+        }
+    }
+
+    /// The half-span above what is allowed faults at the tick it is seen, not at the window's
+    /// end.
+    #[test]
+    fn a_swing_above_the_allowed_faults_within_its_half_period() {
+        let p = predicted(1e-3, 400);
+        let mut e = Envelope::default();
+        let fault = (0..400).find_map(|k| e.observe(k, sine(1.02e-3, 20, k), &p));
+        match fault {
+            Some(Fault::SwingOutgrown {
+                tick, half_span, ..
+            }) => {
+                assert!(tick <= 15, "tick {tick}");
+                assert!(half_span > 1e-3 && half_span <= 1.02e-3, "{half_span}");
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+
+    /// Growing by 3/16 of what is allowed a window, from 6/16 of it: the window at 15/16,
+    /// its growth not slowing for three windows, carried one window ahead reaches 18/16 and
+    /// faults a window before the swing itself would.
+    #[test]
+    fn a_growth_not_slowing_faults_a_window_ahead() {
+        let p = predicted(1.0, 10);
+        let mut e = Envelope::default();
+        let mut fault = None;
+        'windows: for window in 0..6u32 {
+            let amplitude = 0.375 + 0.1875 * window as f32;
+            for i in 0..10 {
+                let k = window * 10 + i;
+                let x = if i % 2 == 0 { amplitude } else { -amplitude };
+                if let Some(f) = e.observe(k, x, &p) {
+                    fault = Some(f);
+                    break 'windows;
+                }
+            }
+        }
+        match fault {
+            Some(Fault::SwingOutgrown {
+                tick,
+                half_span,
+                growth,
+                allowed,
+            }) => {
+                assert_eq!(tick, 39, "the fourth window's end");
+                assert_eq!((half_span, growth), (0.9375, 0.1875));
+                assert_eq!(allowed, 1.0);
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+
+    /// A swing settling (switched on: its growth falls window by window) is not carried
+    /// ahead, however large its first growth.
+    #[test]
+    fn a_settling_growth_is_not_carried_ahead() {
+        let p = predicted(1.0, 10);
+        let mut e = Envelope::default();
+        for k in 0..400u32 {
+            let window = (k / 10) as f32;
+            let amplitude = 0.99 * (1.0 - libm::expf(-(window + 1.0) / 1.5));
+            let x = if k % 2 == 0 { amplitude } else { -amplitude };
+            assert_eq!(e.observe(k, x, &p), None, "tick {k}");
+        }
+    }
+
+    /// A swing that dies away (a ring decaying) never counts a growth.
+    #[test]
+    fn a_decaying_ring_is_no_growth() {
+        let p = predicted(1.0, 10);
+        let mut e = Envelope::default();
+        for k in 0..1000u32 {
+            let amplitude = 0.99 * libm::expf(-(k as f32) / 200.0);
+            let x = if k % 2 == 0 { amplitude } else { -amplitude };
+            assert_eq!(e.observe(k, x, &p), None, "tick {k}");
+        }
+    }
+
+    /// NaN never passes.
+    #[test]
+    fn nan_faults() {
+        let p = predicted(1.0, 10);
+        let mut e = Envelope::default();
+        assert!(e.observe(0, f32::NAN, &p).is_some());
+        let p = predicted(f32::NAN, 10);
+        let mut e = Envelope::default();
+        assert!(e.observe(0, 2.0, &p).is_some());
+    }
+}
