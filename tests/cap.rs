@@ -43,9 +43,9 @@ fn tick_until(c: &mut Controller, limit: u32, done: impl Fn(&Controller, f32) ->
 }
 
 /// The reproduction, up to the fault: the reference device at 44 Hz with 300 V of
-/// AC at 40 Hz, at an AC peak; a new plan with a larger margin (0.22) and 40 V of AC (what
-/// fits on the undamped file's ring of the 300 V drive, carried undecayed), adopted, lowers
-/// the cap below the voltage just sent. The controller, the voltage sent and
+/// AC at 40 Hz, at an AC peak; a new plan with a larger margin (0.22) and 5 V of AC (what
+/// fits on the undamped file's ring of the 300 V drive, carried undecayed through the
+/// ramp), adopted, lowers the cap below the voltage just sent. The controller, the voltage sent and
 /// the settings it booted with.
 fn a_cap_lowered_below_an_ac_peak() -> (Controller, f32, Settings) {
     let settings = Settings {
@@ -61,7 +61,7 @@ fn a_cap_lowered_below_an_ac_peak() -> (Controller, f32, Settings) {
     let sent = c.last_volts();
     let tighter = Settings {
         margin: 0.22,
-        ac_volts: 40.0,
+        ac_volts: 5.0,
         ..settings
     };
     let table = made_table(REFERENCE_DEVICE, 0.05, 64);

@@ -101,7 +101,7 @@ fn stages_one_by_one_are_start() {
     let table = reference_table();
     let (all, boot_all) = Controller::start(params, &table, amplifier(), settings).unwrap();
     let (mut c, boot) = Controller::from_table(params, &table, amplifier(), settings).unwrap();
-    let boot = c.cross_check(boot).unwrap();
+    let boot = c.cross_check(boot, &table).unwrap();
     let boot = c.check_plan(boot).unwrap();
     assert_eq!(boot, boot_all);
     assert_eq!(c.plan(), all.plan());
@@ -125,7 +125,7 @@ fn stages_one_by_one_are_start() {
         ..settings
     };
     let (mut c, boot) = Controller::from_table(params, &table, amplifier(), strict).unwrap();
-    let fault = c.cross_check(boot);
+    let fault = c.cross_check(boot, &table);
     assert!(matches!(fault, Err(Fault::Disagree { .. })), "{fault:?}");
     assert_eq!(c.phase(), de_resonator::Phase::Faulted);
     assert!((0..100).all(|_| c.tick(Inputs::NONE).volts == 0.0));

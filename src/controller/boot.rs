@@ -70,9 +70,9 @@ struct Checked {
     top_volts: f32,
     table_volts: f32,
     max_volts: f32,
-    /// The table's batch's guaranteed limit, V, and its box (lowest and highest parameters).
+    /// The table's batch's guaranteed limit, V, and its shear modulus range, Pa.
     batch_limit_volts: Option<f32>,
-    batch: Option<(DeviceParams<f32>, DeviceParams<f32>)>,
+    batch_modulus: Option<(f32, f32)>,
     /// The batch's capacitance bands, for the probe's check (model.md §10).
     #[cfg(feature = "probe")]
     batch_capacitance: Option<CapacitanceBands>,
@@ -106,7 +106,9 @@ impl Checked {
             },
             max_volts: top_volts * ((1.0 - settings.margin) / (1.0 - table.margin())).min(1.0),
             batch_limit_volts: batch.as_ref().map(|b| b.limit_volts),
-            batch: batch.as_ref().map(|b| (b.low, b.high)),
+            batch_modulus: batch
+                .as_ref()
+                .map(|b| (b.low.shear_modulus, b.high.shear_modulus)),
             #[cfg(feature = "probe")]
             batch_capacitance: batch.map(|b| b.capacitance),
         })
@@ -121,7 +123,7 @@ impl Checked {
     ) -> Controller {
         let mut controller = Controller::new(self.device, board, settings, self.max_volts);
         controller.plan.start_volts = from_volts;
-        controller.batch = self.batch;
+        controller.batch_modulus = self.batch_modulus;
         #[cfg(feature = "probe")]
         {
             controller.sensing.batch = self.batch_capacitance;
@@ -158,7 +160,7 @@ impl Controller {
         settings: Settings,
     ) -> Result<(Self, Boot), Fault> {
         let (mut controller, boot) = Self::from_table(params, table, amplifier, settings)?;
-        let boot = controller.cross_check(boot)?;
+        let boot = controller.cross_check(boot, table)?;
         let boot = controller.check_plan(boot)?;
         Ok((controller, boot))
     }
@@ -194,7 +196,7 @@ impl Controller {
         let controller = slot.insert(checked.controller(board, settings, from_volts));
         controller.carried_ring = carried_ring;
         let boot = checked.plan(controller)?;
-        let boot = controller.cross_check(boot)?;
+        let boot = controller.cross_check(boot, table)?;
         let boot = controller.check_plan(boot)?;
         Ok((controller, boot))
     }
@@ -220,15 +222,15 @@ impl Controller {
     /// the solve's bias, capped at (1 − margin)·(1 − F32_GUARD)·limit.
     /// On a refusal the controller is left faulted at 0 V: a stage's caller that carried
     /// on with it would drive nothing.
-    pub fn cross_check(&mut self, boot: Boot) -> Result<Boot, Fault> {
-        let checked = self.cross_checked(boot);
+    pub fn cross_check(&mut self, boot: Boot, table: &[u8]) -> Result<Boot, Fault> {
+        let checked = self.cross_checked(boot, table);
         if let Err(fault) = checked {
             self.fault(fault);
         }
         checked
     }
 
-    fn cross_checked(&mut self, boot: Boot) -> Result<Boot, Fault> {
+    fn cross_checked(&mut self, boot: Boot, table: &[u8]) -> Result<Boot, Fault> {
         let settings = self.settings;
         let tuner = Tuner::new(self.flashed);
         let limit = tuner.limit();
@@ -299,7 +301,8 @@ impl Controller {
                 after_descent: true,
             }),
         };
-        let swing = self.checked_swing(drive, limit.at.offset, settings.margin)?;
+        let batch = boot.batch_limit_volts.map(|_| table);
+        let swing = self.checked_swing(drive, limit.at.offset, settings.margin, batch)?;
         // What the board then watches the measured swing against (`envelope`).
         self.watch.predicted = (drive.ac_volts > 0.0).then(|| {
             let noise = self.inputs.stretch;
@@ -333,25 +336,44 @@ impl Controller {
     }
 
     /// The swing of `drive` on the device flashed (its limit at `limit_offset`) and, for a
-    /// batch's table, on the device at every corner of the batch's box (each at its own
-    /// equilibrium, below its own limit; the damping the flashed device's): the first that
-    /// does not fit refuses the drive, and the largest swing is the one the board watches.
-    /// A box spread in n parameters has 2ⁿ corners (a boot's work, not a tick's).
+    /// batch's `table`, on the device at every corner of the batch's box (`corners_swing`):
+    /// the first that does not fit refuses the drive, and the largest swing is the one the
+    /// board watches.
+    #[inline(never)]
     fn checked_swing(
         &self,
         drive: AcDrive<f32>,
         limit_offset: f32,
         margin: f32,
+        batch: Option<&[u8]>,
     ) -> Result<Swing<f32>, Fault> {
-        let check = |device: &Device<f32>, offset: f32| {
-            device
-                .check_swing(drive, offset, None, margin)
-                .map_err(Fault::DriveSwing)
-        };
-        let mut widest = check(&self.flashed, limit_offset)?;
-        let Some((low, high)) = self.batch else {
+        let swing = self
+            .flashed
+            .check_swing(drive, limit_offset, None, margin)
+            .map_err(Fault::DriveSwing)?;
+        match batch {
+            Some(table) => self.corners_swing(table, &drive, margin, swing),
+            None => Ok(swing),
+        }
+    }
+
+    /// The swing of `drive` at every corner of the box of the batch `table` declares (each
+    /// device at its own equilibrium, below its own limit; the damping the flashed
+    /// device's), the widest of them and `widest`. A box spread in n parameters has 2ⁿ
+    /// corners: a boot's work, not a tick's. The box is read from the table here, not kept
+    /// (the stack's budget: the boot's frames hold a controller).
+    #[inline(never)]
+    fn corners_swing(
+        &self,
+        table: &[u8],
+        drive: &AcDrive<f32>,
+        margin: f32,
+        mut widest: Swing<f32>,
+    ) -> Result<Swing<f32>, Fault> {
+        let Some(batch) = Table::parse(table).map_err(Fault::Table)?.batch() else {
             return Ok(widest);
         };
+        let (low, high) = (batch.low, batch.high);
         let spread = |f: &Field| *f != Field::Damping && low.get(*f) != high.get(*f);
         let n = Field::ALL.iter().filter(|f| spread(f)).count();
         for corner in 0..1u32 << n {
@@ -363,8 +385,10 @@ impl Controller {
             }
             params.damping = self.flashed.params().damping;
             let device = Device::new(params).map_err(Fault::Device)?;
-            let offset = Tuner::new(device).limit().at.offset;
-            let swing = check(&device, offset)?;
+            let offset = Limit::of(&device).at.offset;
+            let swing = device
+                .check_swing(*drive, offset, None, margin)
+                .map_err(Fault::DriveSwing)?;
             if swing.stretch - swing.low_stretch > widest.stretch - widest.low_stretch {
                 widest = swing;
             }

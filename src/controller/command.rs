@@ -8,7 +8,7 @@ use core::fmt;
 
 use super::fault::Fault;
 use super::plan::Plan;
-use super::watch::Watch;
+use super::watch::Guard;
 use super::{Boot, Controller, Phase, State};
 use crate::acquire::InputNoise;
 use crate::drive::{Amplifier, DacCode};
@@ -87,8 +87,9 @@ pub struct Replanned {
     plan: Plan,
     settings: Settings,
     max_volts: f32,
-    /// Its monitor's margins (the band about its bias, the voltage's raise).
-    watch: Watch,
+    /// Its monitor's margins (the band about its bias, the voltage's raise) and predicted
+    /// swing.
+    guard: Guard,
     state: State,
     /// Whether the fresh plan holds the tuned bias (not a trim's probe bias).
     tuned: bool,
@@ -125,7 +126,7 @@ impl ReplanJob {
             plan: fresh.plan,
             settings: fresh.settings,
             max_volts: fresh.max_volts,
-            watch: fresh.watch,
+            guard: fresh.watch.guard(),
             state: fresh.state,
             tuned: fresh.tuned(),
             #[cfg(feature = "trim")]
@@ -222,7 +223,7 @@ impl Controller {
         plan.probe_off_above(max_volts);
         self.settings = replanned.settings;
         self.set_caps(replanned.max_volts, self.estimate_volts);
-        self.watch.guard_as(&replanned.watch);
+        self.watch.guard_as(&replanned.guard);
         self.plan = plan;
         self.state = replanned.state;
         #[cfg(feature = "trim")]

@@ -8,10 +8,6 @@
 use super::fault::Fault;
 use crate::model::swing::Swing;
 
-/// Windows of growth, each at least the one before, that make a swing growing rather
-/// than settling (a switch-on's beat rises for fewer).
-const GROWTHS: usize = 3;
-
 /// A tick's stretch noise (RMS, as the front end declares it), counted this many times on
 /// each side of the swing.
 const NOISE_SIGMAS: f32 = 5.0;
@@ -40,6 +36,7 @@ impl Predicted {
     /// The watch of `swing` (a drive at `ac_hz` that fits, its prediction with the margin
     /// `margin`) on a board ticking at `tick_hz` whose stretch reading has the RMS noise
     /// `noise` a tick (`None`: not declared).
+    #[inline(never)]
     pub fn of(
         swing: &Swing<f32>,
         ac_hz: f32,
@@ -61,47 +58,69 @@ impl Predicted {
 }
 
 /// The measured swing over the current window while a drive is on, and the last windows'.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct Envelope {
     ticks: u32,
+    /// The window's lowest and highest samples (∞ and −∞ before its first).
     low: f32,
     high: f32,
-    /// The last whole window's half-span.
-    previous: Option<f32>,
-    /// The growths of the last windows' half-spans over the ones before, the latest first
-    /// (0 before there are any; NaN after a window with none before it).
-    growths: [f32; GROWTHS],
+    /// The last whole window's half-span (NaN before one).
+    previous: f32,
+    /// The growths of the last two windows' half-spans over the ones before them, the
+    /// latest first (NaN where there was none).
+    growths: (f32, f32),
+}
+
+impl Default for Envelope {
+    fn default() -> Self {
+        Self {
+            ticks: 0,
+            low: f32::INFINITY,
+            high: f32::NEG_INFINITY,
+            previous: f32::NAN,
+            growths: (f32::NAN, f32::NAN),
+        }
+    }
 }
 
 impl Envelope {
-    /// A stretch sample at tick `k` of a drive predicted as `predicted`: a fault where the
-    /// window's half-span so far is above what is allowed; or, at a window's end, where a
-    /// growth that has not slowed for `GROWTHS` windows (a swing pumped or driven past its
-    /// damping, not one settling) carried a window ahead would be.
+    /// A stretch sample at tick `k` (a number: the watch refused any other before) of a
+    /// drive predicted as `predicted`: a fault where the window's half-span so far is above
+    /// what is allowed; or, at a window's end, where a growth that has not slowed for
+    /// three windows (a swing pumped or driven past its damping, not one settling) carried
+    /// a window ahead would be. The tick's budget: compares only, but at a window's end.
     pub(super) fn observe(&mut self, k: u32, stretch: f32, predicted: &Predicted) -> Option<Fault> {
-        if self.ticks == 0 {
-            (self.low, self.high) = (stretch, stretch);
-        } else {
-            self.low = self.low.min(stretch);
-            self.high = self.high.max(stretch);
+        if stretch < self.low {
+            self.low = stretch;
+        }
+        if stretch > self.high {
+            self.high = stretch;
         }
         self.ticks += 1;
-        let half_span = (self.high - self.low) / 2.0;
+        let span = self.high - self.low;
+        if self.ticks < predicted.window_ticks && span <= 2.0 * predicted.allowed {
+            return None;
+        }
+        self.window_end(k, span / 2.0, predicted)
+    }
+
+    /// The window's end (or a half-span above what is allowed): the growth over the last
+    /// window, carried ahead if it has not slowed, and the verdict.
+    #[inline]
+    fn window_end(&mut self, k: u32, half_span: f32, predicted: &Predicted) -> Option<Fault> {
         let mut ahead = 0.0;
         if self.ticks >= predicted.window_ticks {
-            let growth = self
-                .previous
-                .map_or(f32::NAN, |previous| half_span - previous);
-            self.growths.rotate_right(1);
-            self.growths[0] = growth;
-            // Growing, and not slowing, window after window (NaN compares false).
-            let [now, before, first] = self.growths;
+            let now = half_span - self.previous;
+            let (before, first) = self.growths;
+            // Growing, and not slowing, three windows in a row (NaN compares false).
             if now >= before && before >= first && first > 0.0 {
                 ahead = now;
             }
-            (self.ticks, self.previous) = (0, Some(half_span));
+            self.growths = (now, before);
+            (self.ticks, self.previous) = (0, half_span);
+            (self.low, self.high) = (f32::INFINITY, f32::NEG_INFINITY);
         }
-        let within = half_span <= predicted.allowed && half_span + ahead <= predicted.allowed;
+        let within = half_span + ahead <= predicted.allowed;
         (!within).then_some(Fault::SwingOutgrown {
             tick: k,
             half_span,
@@ -217,12 +236,9 @@ mod tests {
         }
     }
 
-    /// NaN never passes.
+    /// An allowed half-span that is not a number passes nothing.
     #[test]
-    fn nan_faults() {
-        let p = predicted(1.0, 10);
-        let mut e = Envelope::default();
-        assert!(e.observe(0, f32::NAN, &p).is_some());
+    fn nan_allowed_faults() {
         let p = predicted(f32::NAN, 10);
         let mut e = Envelope::default();
         assert!(e.observe(0, 2.0, &p).is_some());

@@ -60,7 +60,7 @@ use crate::acquire::{InputError, InputNoise};
 use crate::drive::{Amplifier, DacCode};
 #[cfg(feature = "trim")]
 use crate::estimate::ring::RingInput;
-use crate::model::device::{Device, DeviceParams};
+use crate::model::device::Device;
 use gate::gate;
 use watch::{Leakage, LeakageLimits, Ring, Watch};
 
@@ -178,10 +178,9 @@ pub struct Controller {
     /// The lowest cap the measured estimates gave (trim, tracking; ∞ before any), V: it only
     /// falls.
     estimate_volts: f32,
-    /// The box of the batch the table was made for (model.md §10), its lowest and highest
-    /// parameters: a drive's swing is checked at its corners, and a trim that measures μ
-    /// outside its range faults.
-    batch: Option<(DeviceParams<f32>, DeviceParams<f32>)>,
+    /// The shear modulus range of the batch the table was made for, Pa (model.md §10): a
+    /// trim that measures μ outside it faults.
+    batch_modulus: Option<(f32, f32)>,
     /// The cap in force: the lowest of the ceiling, the operator's and the estimate's, V.
     max_volts: f32,
     plan: Plan,
@@ -231,7 +230,7 @@ impl Controller {
             estimate_at: 0,
             estimate_shares_terms: false,
             estimate_volts: f32::INFINITY,
-            batch: None,
+            batch_modulus: None,
             max_volts,
             plan: Plan::idle(),
             tick: 0,
@@ -447,9 +446,10 @@ impl Controller {
             {
                 return self.fault(fault);
             }
-            let driving = matches!(self.state, State::Driving { .. });
-            if let Some(fault) = self.watch.swing(k, stretch, driving) {
-                return self.fault(fault);
+            if let State::Driving { .. } = self.state {
+                if let Some(fault) = self.watch.swing(k, stretch) {
+                    return self.fault(fault);
+                }
             }
         }
         #[cfg(feature = "probe")]
@@ -561,6 +561,7 @@ impl Controller {
                 self.state = State::Driving {
                     next_trim: self.next_trim(k),
                 };
+                self.watch.drive_on();
                 // A drive (re)started tracks from scratch, at the plan's frequency: a tracker
                 // of an earlier drive (before a trim, another plan) measures against a
                 // frequency no longer driven.
@@ -606,18 +607,13 @@ impl Controller {
     }
 
     /// Whether a trim was asked for.
-    /// The shear modulus range of the batch, Pa, if the table has one.
-    fn batch_modulus(&self) -> Option<(f32, f32)> {
-        self.batch
-            .map(|(low, high)| (low.shear_modulus, high.shear_modulus))
-    }
-
     fn trim_wanted(&self) -> bool {
         self.settings.trim_tolerance.is_some()
     }
 
     /// The ring a trim's pulse at `bias_volts` leaves, in stretch, where a trim is wanted
     /// (the AC starts after its last pulse; 0 otherwise).
+    #[inline(never)]
     fn pulse_ring(&self, bias_volts: f32, limit_offset: f32) -> f32 {
         #[cfg(feature = "trim")]
         if self.trim_wanted() {

@@ -734,7 +734,7 @@ impl Controller {
             self.settings,
             (bias, cap),
             self.inputs,
-            self.batch_modulus(),
+            self.batch_modulus,
         ))
     }
 
@@ -950,7 +950,7 @@ impl Controller {
             | TrimResult::AboveCeiling { shear_modulus, .. } => shear_modulus,
             TrimResult::Failed(_) => return None,
         };
-        outside_batch(self.batch_modulus(), shear_modulus).map(Fault::Trim)
+        outside_batch(self.batch_modulus, shear_modulus).map(Fault::Trim)
     }
 
     /// Apply the trim's result at tick `k`, once it has come back.

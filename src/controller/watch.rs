@@ -136,6 +136,15 @@ impl Leakage {
     }
 }
 
+/// What a plan's checks set for the watch (`Watch::guard`), without its memory: what a
+/// replan hands over.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Guard {
+    band: StretchBand<f32>,
+    raise: f32,
+    predicted: Option<Predicted>,
+}
+
 /// The watch's memory between ticks.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Watch {
@@ -266,24 +275,32 @@ impl Watch {
         None
     }
 
-    /// The margins of another watch's plan (an adopted replan's): its band, raise and
-    /// predicted swing; the sample history stays.
-    pub(super) fn guard_as(&mut self, other: &Watch) {
-        self.band = other.band;
-        self.raise = other.raise;
-        self.predicted = other.predicted;
+    /// What a plan's checks set for the watch: its band, raise and predicted swing.
+    pub(super) fn guard(&self) -> Guard {
+        Guard {
+            band: self.band,
+            raise: self.raise,
+            predicted: self.predicted,
+        }
     }
 
-    /// The drive's swing at tick `k` (`Envelope`): while `driving`, the stretch sample
-    /// against the prediction; otherwise the measured swing starts again.
-    pub(super) fn swing(&mut self, k: u32, stretch: f32, driving: bool) -> Option<Fault> {
-        match self.predicted {
-            Some(predicted) if driving => self.envelope.observe(k, stretch, &predicted),
-            _ => {
-                self.envelope = Envelope::default();
-                None
-            }
-        }
+    /// The guard of another plan (an adopted replan's); the sample history stays.
+    pub(super) fn guard_as(&mut self, guard: &Guard) {
+        self.band = guard.band;
+        self.raise = guard.raise;
+        self.predicted = guard.predicted;
+    }
+
+    /// The drive's swing at tick `k` while it is on (`Envelope`): the stretch sample against
+    /// the prediction.
+    pub(super) fn swing(&mut self, k: u32, stretch: f32) -> Option<Fault> {
+        let predicted = self.predicted.as_ref()?;
+        self.envelope.observe(k, stretch, predicted)
+    }
+
+    /// A drive (re)started: its swing is measured afresh.
+    pub(super) fn drive_on(&mut self) {
+        self.envelope = Envelope::default();
     }
 
     /// A current sample must be a number (`Sensor`); its size is the plant's business.

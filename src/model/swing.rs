@@ -55,7 +55,9 @@ pub struct AcDrive<T> {
     pub ac_hz: T,
     pub ramp: Option<Ramp<T>>,
     /// A ring already there when the AC starts, besides the ramp's, in stretch: a trim's
-    /// last pulse (a converged trim starts the AC right after it), counted undecayed.
+    /// last pulse (a converged trim starts the AC right after it), or the swing of the drive
+    /// before a new plan; counted undecayed, and through the ramp, if any, with the ramp's
+    /// allowance (the stiffness changes along it).
     pub ringing: T,
 }
 
@@ -271,10 +273,14 @@ impl<T: Real> Device<T> {
         let natural_hz = omega * self.rad_per_s_per_unit() / T::of(core::f64::consts::TAU);
         let quality_factor = omega / damping;
         let drive_rad = T::of(core::f64::consts::TAU) * drive.ac_hz / self.rad_per_s_per_unit();
+        // A ring already there rides through the ramp, if any, as the ramp's own does.
         let ring = match drive.ramp {
-            Some(ramp) => self.ramp_ring(&about, ramp, max_offset)?,
-            None => T::zero(),
-        } + drive.ringing.abs();
+            Some(ramp) => {
+                self.ramp_ring(&about, ramp, max_offset)?
+                    + T::of(RING_ALLOWANCE) * drive.ringing.abs()
+            }
+            None => drive.ringing.abs(),
+        };
         let fits = |ac: T| self.swing_fits(&about, ac / unit, drive_rad, ring, margin);
         match fits(drive.ac_volts.abs()) {
             Ok((low_stretch, high_stretch)) => Ok(Swing {

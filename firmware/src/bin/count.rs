@@ -226,7 +226,9 @@ fn main() -> ! {
     }) else {
         exit(1)
     };
-    let Ok(boot) = deepest("cross-check by the direct solve", || c.cross_check(boot)) else {
+    let Ok(boot) = deepest("cross-check by the direct solve", || {
+        c.cross_check(boot, TABLE)
+    }) else {
         exit(1)
     };
     let Ok(_) = deepest("plan run through the model", || c.check_plan(boot)) else {
