@@ -1,5 +1,5 @@
 //! The acquisition's processing (`acquire`) on samples made from the plant's signals: the
-//! reference device ringing at a bias, its stretch, its current (the membrane's charge, model.md
+//! reference device ring_stretch at a bias, its stretch, its current (the membrane's charge, model.md
 //! §8) and the amplifier's voltage, through a front end (noise, quantisation, the ADC's
 //! rails). Each tick's reading is right within its stated error (half a count and five
 //! standard errors of the noise), or a named fault: a rail-stuck input, an open input, a

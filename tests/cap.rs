@@ -42,33 +42,36 @@ fn tick_until(c: &mut Controller, limit: u32, done: impl Fn(&Controller, f32) ->
     panic!("not reached in {limit} ticks: {:?}", c.phase());
 }
 
-/// The issue's reproduction, up to the fault: the reference device at 44 Hz with 300 V of
-/// AC at 40 Hz, at an AC peak; a new plan with a larger margin (0.22) and 5 V of AC (what
-/// fits on the undamped file's ring of the 300 V drive, carried undecayed through the
-/// ramp), adopted, lowers the cap below the voltage just sent. The controller, the voltage sent and
-/// the settings it booted with.
+/// The issue's reproduction, up to the fault: the reference device tuned near its cap (43.1
+/// Hz) with 100 V of AC at 20 Hz, at an AC peak; a new plan with a larger margin, its cap 50
+/// V above the bias (below the peak), and 10 V of AC, adopted (the old drive's swing, carried
+/// undecayed, fits under it), lowers the cap below the voltage just sent. The controller, the
+/// voltage sent and the settings it booted with. (Issue 25 had 300 V at 40 Hz and a margin
+/// of 0.22: the ring that drive leaves on the undamped file fits under no larger margin.)
 fn a_cap_lowered_below_an_ac_peak() -> (Controller, f32, Settings) {
     let settings = Settings {
-        ac_volts: 300.0,
-        ac_hz: 40.0,
-        ..Settings::for_target(44.0)
+        ac_volts: 100.0,
+        ac_hz: 20.0,
+        ..Settings::for_target(43.1)
     };
     let mut c = started(REFERENCE_DEVICE, settings);
     let bias = c.plan().bias_volts;
     tick_until(&mut c, 10_000, |c, volts| {
-        c.phase() == Phase::Driving && volts > bias + 299.0
+        c.phase() == Phase::Driving && volts > bias + 99.0
     });
     let sent = c.last_volts();
+    let limit = limit_volts(REFERENCE_DEVICE);
+    let margin = 1.0 - (f64::from(bias) + 50.0) / limit;
     let tighter = Settings {
-        margin: 0.22,
-        ac_volts: 5.0,
+        margin: margin as f32,
+        ac_volts: 10.0,
         ..settings
     };
     let table = made_table(REFERENCE_DEVICE, 0.05, 64);
     c.adopt(c.replan(tighter).unwrap().solve(&table).unwrap())
         .unwrap();
-    // The new cap, from the f64 model: (1 − 0.22)·Φlimit, below the voltage sent.
-    let cap = 0.78 * limit_volts(REFERENCE_DEVICE);
+    // The new cap, from the f64 model: (1 − margin)·Φlimit, below the voltage sent.
+    let cap = (1.0 - margin) * limit;
     assert!(f64::from(c.max_volts()) <= cap && f64::from(sent) > cap);
     (c, sent, settings)
 }

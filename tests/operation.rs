@@ -188,6 +188,32 @@ fn a_plan_changed_since_its_job_is_not_adopted() {
     assert_eq!(c.plan().bias_volts, 0.0);
 }
 
+/// A plan's job made in the hold before its AC came on does not count that drive's swing:
+/// once the drive is on, the job's plan is not adopted (the membrane may carry the swing
+/// into the new plan); one made while driving is.
+#[test]
+fn a_job_made_before_a_drive_came_on_is_not_adopted() {
+    let settings = Settings {
+        ac_volts: 100.0,
+        ac_hz: 40.0,
+        ..Settings::for_target(44.0)
+    };
+    let mut c = started(settings);
+    run_until(&mut c, &[Phase::Holding], 5_000);
+    let smaller = Settings {
+        ac_volts: 50.0,
+        ..settings
+    };
+    let job = c.replan(smaller).unwrap();
+    run_until(&mut c, &[Phase::Driving], 5_000);
+    let replanned = job.solve(&reference_table()).unwrap();
+    assert!(matches!(c.adopt(replanned), Err(Refusal::Busy { .. })));
+    assert_eq!(c.settings().ac_volts, 100.0);
+    let job = c.replan(smaller).unwrap();
+    c.adopt(job.solve(&reference_table()).unwrap()).unwrap();
+    assert_eq!(c.settings().ac_volts, 50.0);
+}
+
 #[test]
 fn stop_ramps_down_at_the_slew_rate_and_stays_at_zero() {
     let settings = Settings {

@@ -38,7 +38,7 @@ fn check(
 /// An AC of `ac_volts` at `ac_rad_per_s` on `bias_volts`, no ramp.
 fn ac(bias_volts: f64, ac_volts: f64, ac_rad_per_s: f64) -> AcDrive<f64> {
     AcDrive {
-        ringing: 0.0,
+        ring_stretch: 0.0,
         bias_volts,
         ac_volts,
         ac_hz: ac_rad_per_s / TAU,
@@ -485,7 +485,7 @@ fn a_ramps_ring_is_its_kinks_or_its_step() {
         bias_volts: to,
         ac_volts: 0.0,
         ac_hz: 1.0,
-        ringing: 0.0,
+        ring_stretch: 0.0,
         ramp: Some(Ramp {
             from_volts: from,
             slew_volts_per_second: slew,
@@ -545,7 +545,7 @@ fn a_rings_decay_over_the_hold_and_after_a_descent() {
             bias_volts: to,
             ac_volts: 0.0,
             ac_hz: 1.0,
-            ringing: 0.0,
+            ring_stretch: 0.0,
             ramp: Some(Ramp {
                 from_volts: from,
                 slew_volts_per_second: 1e4,
@@ -592,7 +592,7 @@ fn the_predicted_ring_bounds_the_simulated_one() {
                 bias_volts: to,
                 ac_volts: 0.0,
                 ac_hz: 1.0,
-                ringing: 0.0,
+                ring_stretch: 0.0,
                 ramp: Some(Ramp {
                     from_volts: from,
                     slew_volts_per_second: slew,
@@ -661,6 +661,36 @@ fn a_refusal_says_what_and_how_to_mend_it() {
     assert!(crossed.contains("no damping known"), "{crossed}");
 }
 
+/// A ring already there before a ramp (a drive's before a new plan) rides through it with
+/// the ramp's documented allowance of 1.25 (the stiffness changes along the ramp), on top
+/// of the ramp's own ring.
+#[test]
+fn a_ring_through_a_ramp_is_counted_with_the_allowance() {
+    let p = damped();
+    let ramp = Some(Ramp {
+        from_volts: 2000.0,
+        slew_volts_per_second: 1e4,
+        settle_seconds: 0.0,
+        after_descent: false,
+    });
+    let ring = |ring_stretch: f64| {
+        let drive = AcDrive {
+            ring_stretch,
+            ramp,
+            ..ac(5000.0, 0.0, 1.0)
+        };
+        let s = check(p, drive, None, 0.05).unwrap();
+        s.high_stretch - s.stretch
+    };
+    let own = ring(0.0);
+    for carried in [1e-4, 2e-3] {
+        assert!(
+            rel(ring(carried), own + RING_ALLOWANCE * carried) < 1e-9,
+            "{carried}"
+        );
+    }
+}
+
 /// A ring already there when the AC starts (a trim's last pulse) rides under the swing
 /// undecayed: alone, it is the swing; under a small AC far from any resonance, it adds to
 /// the harmonic term's amplitude as it is.
@@ -668,31 +698,31 @@ fn a_refusal_says_what_and_how_to_mend_it() {
 fn a_ring_already_there_adds_to_the_swing() {
     let p = damped();
     let lin = Linear::at(&p, 5000.0);
-    for ringing in [1e-4, 3e-3] {
+    for ring_stretch in [1e-4, 3e-3] {
         let alone = check(
             p,
             AcDrive {
-                ringing,
+                ring_stretch,
                 ..ac(5000.0, 0.0, 1.0)
             },
             None,
             0.05,
         )
         .unwrap();
-        assert!(rel(alone.high_stretch - alone.stretch, ringing) < 1e-9);
-        assert!(rel(alone.stretch - alone.low_stretch, ringing) < 1e-9);
+        assert!(rel(alone.high_stretch - alone.stretch, ring_stretch) < 1e-9);
+        assert!(rel(alone.stretch - alone.low_stretch, ring_stretch) < 1e-9);
         let w = 0.3 * lin.omega();
         let with = check(
             p,
             AcDrive {
-                ringing,
+                ring_stretch,
                 ..ac(5000.0, 1.0, w)
             },
             None,
             0.05,
         )
         .unwrap();
-        let expected = lin.first(5000.0, 1.0, w) * 1.3 + ringing;
+        let expected = lin.first(5000.0, 1.0, w) * 1.3 + ring_stretch;
         assert!(rel(with.stretch - with.low_stretch, expected) < 2e-3);
     }
 }

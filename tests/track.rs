@@ -381,7 +381,7 @@ fn first_slope(
 
 /// The tracked drive's timing, on the reference device as plant (Q 50): the first slope is
 /// asked three of the loop's time after the drive has settled on the resonance (the
-/// estimate of a plant still ringing from the drive's moves read 0.3% high at 4.5 kV), the
+/// estimate of a plant still ring_stretch from the drive's moves read 0.3% high at 4.5 kV), the
 /// loop's time the longer of `track_seconds` and the plant's ring time Q/(π·f) = 2m/c
 /// (before, at Q 200 the bias swung wider each time and faulted); and a drive started
 /// 0.5 Hz below the resonance ends on it (the plant's f64 statics at the bias).

@@ -5,7 +5,7 @@
 //! core's prediction.
 
 use de_resonator::wire::protocol::ErrorCode;
-use de_resonator::{AcDrive, Device, DeviceParams, Phase, Ramp, Settings, Tuner};
+use de_resonator::{AcDrive, Device, DeviceParams, Phase, Ramp, Settings, SwingError, Tuner};
 
 use host_sim::engine::closed_loop::Run;
 use host_sim::scene;
@@ -113,7 +113,7 @@ fn no_accepted_drive_crosses_a_limit_on_random_devices() {
                             bias_volts: run.bias_volts,
                             ac_volts: case.ac_volts,
                             ac_hz: case.ac_hz,
-                            ringing: 0.0,
+                            ring_stretch: 0.0,
                             ramp: Some(Ramp {
                                 from_volts: 0.0,
                                 slew_volts_per_second: defaults.slew_volts_per_second.into(),
@@ -158,6 +158,106 @@ fn no_accepted_drive_crosses_a_limit_on_random_devices() {
     assert!(driven >= cases / 4, "{driven} of {cases} driven");
 }
 
+/// Issue 60's property: random devices on plants of Q 30 to 3,000 whose device file states
+/// 0.3 to 10 times the plant's damping, drives at and 1–3% off f0, 2·f0 and f0/2 at the
+/// largest AC the board accepts (99% of the f64 check's largest that fits, the cap's room at
+/// most). On the full plant with its sensor: zero crossings. Each case the board stopped is
+/// run again blind (no sensor: nothing watches the motion): where the blind run crosses,
+/// the board's fault came before it, by the margin printed (the least, in seconds and in
+/// the plant's periods); one at least would have. A file that states no more damping than
+/// the plant has is never stopped. `SWING_EDGE_CASES` sets the number of cases (default
+/// 200); `SWING_EDGE_SHOW` prints each case and what the board said.
+#[test]
+fn the_watch_stops_an_accepted_drive_before_the_limit_whatever_the_file_says() {
+    let cases: usize = std::env::var("SWING_EDGE_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(200);
+    let mut rng = Rng(0x5eed_0060);
+    let (mut driven, mut stopped, mut refused, mut tried) = (0, 0, 0, 0);
+    let (mut would_have_crossed, mut least_seconds, mut least_periods) =
+        (0, f64::INFINITY, f64::INFINITY);
+    let mut overstated_and_stopped = 0;
+    while driven + stopped + refused < cases {
+        tried += 1;
+        assert!(tried < 50 * cases, "too few valid devices");
+        let Some(case) = Case::edge(&mut rng) else {
+            continue;
+        };
+        let run = run(&case.scene(), false);
+        assert_eq!(
+            run.plant_crossing, None,
+            "{case:?}: {:?} {:?}",
+            run.refused, run.fault_words
+        );
+        if std::env::var("SWING_EDGE_SHOW").is_ok() {
+            println!(
+                "f0 {:.2} Hz, plant Q {:.0}, told {:.2}× its damping, {:.1} V at {:.2} Hz for \
+                 {:.2} s: {:?} {:?}",
+                case.target_hz,
+                case.plant_q,
+                case.told,
+                case.ac_volts,
+                case.ac_hz,
+                case.duration_seconds,
+                run.refused,
+                run.fault_words
+            );
+        }
+        if run.refused.is_some() {
+            refused += 1;
+            continue;
+        }
+        let Some(words) = run.fault_words.clone() else {
+            driven += 1;
+            continue;
+        };
+        stopped += 1;
+        assert!(
+            words.contains("outgrew its prediction") || words.contains("near a limit"),
+            "{case:?}: {words}"
+        );
+        // A file that states no more damping than the plant has: its prediction holds, and
+        // the board never has to act.
+        assert!(
+            case.told > 1.0,
+            "{case:?}: told {}, yet stopped: {words}",
+            case.told
+        );
+        overstated_and_stopped += 1;
+        let fault_seconds = run
+            .events
+            .iter()
+            .find(|e| e.kind == de_resonator::EventKind::Fault)
+            .map(|e| e.seconds)
+            .unwrap_or_else(|| panic!("{case:?}: no fault event"));
+        let blind = run_blind(&case.scene());
+        if let Some((mode, crossed_seconds)) = blind.plant_crossing {
+            would_have_crossed += 1;
+            let margin = crossed_seconds - fault_seconds;
+            assert!(
+                margin > 0.0,
+                "{case:?}: the fault at {fault_seconds} s, the blind plant crossed {mode:?} at \
+                 {crossed_seconds} s"
+            );
+            least_seconds = least_seconds.min(margin);
+            least_periods = least_periods.min(margin * case.target_hz);
+        }
+    }
+    println!(
+        "swing edge: {cases} cases ({tried} drawn): {driven} driven to the end, {stopped} \
+         stopped by the board ({overstated_and_stopped} of them with the damping overstated), \
+         {refused} refused; {would_have_crossed} would have crossed blind, the board's fault \
+         at least {least_seconds:.3} s ({least_periods:.1} periods) before"
+    );
+    assert!(
+        driven + stopped >= cases / 2,
+        "{driven} driven, {stopped} stopped"
+    );
+    // The property must meet a case the board saved, not only cases that stayed inside.
+    assert!(would_have_crossed >= 1, "no case would have crossed blind");
+}
+
 /// One random case of the property.
 #[derive(Debug)]
 struct Case {
@@ -169,11 +269,14 @@ struct Case {
     branch: Option<(f64, f64)>,
     tick_hz: f64,
     duration_seconds: f64,
+    /// The plant's damping the device file states, over the plant's (1: told as it is).
+    told: f64,
 }
 
 impl Case {
-    fn random(rng: &mut Rng) -> Option<Case> {
-        let mut params = DeviceParams {
+    /// A random device (no damping), valid or not.
+    fn random_device(rng: &mut Rng) -> DeviceParams<f64> {
+        DeviceParams {
             shear_modulus: rng.log_range(20e3, 200e3),
             jlim: (rng.unit() < 0.7).then(|| rng.range(30.0, 200.0)),
             relative_permittivity: rng.range(3.0, 6.0),
@@ -187,7 +290,11 @@ impl Case {
             prestretch_1: rng.range(1.2, 4.0),
             prestretch_2: rng.range(1.0, 4.0),
             damping: 0.0,
-        };
+        }
+    }
+
+    fn random(rng: &mut Rng) -> Option<Case> {
+        let mut params = Self::random_device(rng);
         let tuner = Tuner::new(Device::new(params).ok()?);
         let range = tuner.tunable_range(0.05).ok()?;
         let target_hz = range.low_hz + (range.high_hz - range.low_hz) * rng.range(0.05, 0.95);
@@ -231,6 +338,81 @@ impl Case {
             branch,
             tick_hz,
             duration_seconds: drive_starts + 5.0 * ring,
+            told: told.map_or(0.0, |factor| 1.0 / factor),
+        })
+    }
+
+    /// A case of issue 60's property (`Case::random`'s devices): plant Q 30–3,000, the file
+    /// stating `told` = 0.3–10 times the plant's damping, the AC the largest the board takes.
+    fn edge(rng: &mut Rng) -> Option<Case> {
+        let mut params = Self::random_device(rng);
+        let tuner = Tuner::new(Device::new(params).ok()?);
+        let range = tuner.tunable_range(0.05).ok()?;
+        let target_hz = range.low_hz + (range.high_hz - range.low_hz) * rng.range(0.05, 0.95);
+        if target_hz.is_nan() || target_hz <= 5.0 || target_hz >= 300.0 {
+            return None;
+        }
+        let bias = tuner.tune(target_hz, 0.05).ok()?.volts;
+        let cap = tuner.max_bias(0.05).ok()?.volts;
+        let room = bias.min(cap - bias);
+        if room.is_nan() || room <= 1.0 {
+            return None;
+        }
+        let near = [1.0, 2.0, 0.5][rng.below(3)];
+        let off = [0.0, 0.01, -0.01, 0.03, -0.03][rng.below(5)];
+        let ac_hz = target_hz * near * (1.0 + off);
+        let plant_q = rng.log_range(30.0, 3000.0);
+        let told = rng.log_range(0.3, 10.0);
+        let omega = std::f64::consts::TAU * target_hz;
+        params.damping = told * params.effective_mass() * omega / plant_q;
+        let defaults = Settings::for_target(1.0);
+        // What the board takes besides the swing: within the cap (its f32 guard: 1% short),
+        // the amplifier's top (10 kV) and slew (the scenes' 200 kV/s).
+        let slew = 200e3 / (std::f64::consts::TAU * ac_hz);
+        let room = 0.99 * room.min(10e3 - bias).min(slew);
+        if room.is_nan() || room <= 1.0 {
+            return None;
+        }
+        let drive = AcDrive {
+            bias_volts: bias,
+            ac_volts: room,
+            ac_hz,
+            ring_stretch: 0.0,
+            ramp: Some(Ramp {
+                from_volts: 0.0,
+                slew_volts_per_second: defaults.slew_volts_per_second.into(),
+                settle_seconds: defaults.settle_seconds.into(),
+                after_descent: true,
+            }),
+        };
+        let device = Device::new(params).ok()?;
+        let ac_volts = match device.check_swing(drive, tuner.limit().at.offset, None, 0.05) {
+            Ok(_) => room,
+            Err(SwingError::Crosses {
+                largest_ac_volts, ..
+            })
+            | Err(SwingError::Unbounded {
+                largest_ac_volts, ..
+            }) => 0.99 * largest_ac_volts,
+            Err(SwingError::NoEquilibrium { .. }) => return None,
+        };
+        if ac_volts.is_nan() || ac_volts <= 1.0 {
+            return None;
+        }
+        let tick_hz = (20.0 * ac_hz).max(1000.0).ceil();
+        let drive_starts =
+            bias / f64::from(defaults.slew_volts_per_second) + f64::from(defaults.settle_seconds);
+        let ring = plant_q / (std::f64::consts::PI * target_hz.min(ac_hz));
+        Some(Case {
+            params,
+            target_hz,
+            ac_volts,
+            ac_hz,
+            plant_q,
+            branch: None,
+            tick_hz,
+            duration_seconds: drive_starts + (5.0 * ring).min(12.0),
+            told,
         })
     }
 
@@ -323,6 +505,13 @@ fn run(text: &str, history: bool) -> Run {
     let mut s = scene::parse(text).unwrap_or_else(|e| panic!("{e}\n{text}"));
     s.run.history = history;
     s.run.run().unwrap_or_else(|e| panic!("{e}\n{text}"))
+}
+
+/// The scene `text` run blind: its `[sensor]` left out, so that nothing watches the motion.
+fn run_blind(text: &str) -> Run {
+    let blind = text.replace("[sensor]\nnoise = 1e-5\n", "");
+    assert_ne!(blind, text, "a scene with a sensor");
+    run(&blind, false)
 }
 
 /// SplitMix64: the cases from a seed, the same every run.

@@ -190,11 +190,11 @@ impl Controller {
         table: &[u8],
         board: (Amplifier, InputNoise),
         settings: Settings,
-        (from_volts, carried_ring): (f32, f32),
+        (from_volts, carried_ring_stretch): (f32, f32),
     ) -> Result<(&'s mut Self, Boot), Fault> {
         let checked = Checked::new(params, table, &settings)?;
         let controller = slot.insert(checked.controller(board, settings, from_volts));
-        controller.carried_ring = carried_ring;
+        controller.carried_ring_stretch = carried_ring_stretch;
         let boot = checked.plan(controller)?;
         let boot = controller.cross_check(boot, table)?;
         let boot = controller.check_plan(boot)?;
@@ -293,7 +293,8 @@ impl Controller {
                 Some(_) => solved.natural_frequency_hz,
                 None => settings.ac_hz,
             },
-            ringing: self.pulse_ring(solved.volts, limit.at.offset) + self.carried_ring,
+            ring_stretch: self.pulse_ring(solved.volts, limit.at.offset)
+                + self.carried_ring_stretch,
             ramp: Some(Ramp {
                 from_volts: self.plan.start_volts,
                 slew_volts_per_second: settings.slew_volts_per_second,
@@ -304,7 +305,7 @@ impl Controller {
         let batch = boot.batch_limit_volts.map(|_| table);
         let swing = self.checked_swing(drive, limit.at.offset, settings.margin, batch)?;
         // What the board then watches the measured swing against (`envelope`).
-        self.watch.predicted = (drive.ac_volts > 0.0).then(|| {
+        self.watch.predict((drive.ac_volts > 0.0).then(|| {
             let noise = self.inputs.stretch;
             Predicted::of(
                 &swing,
@@ -313,7 +314,7 @@ impl Controller {
                 settings.margin,
                 noise,
             )
-        });
+        }));
         // The ring the first pulse will leave at the bias it measures at, as the device's
         // damping leaves it over the window, against the noise the front end declares: now,
         // before any voltage, and by the tick before it pulses against the noise it hears.
@@ -384,12 +385,16 @@ impl Controller {
                 }
             }
             params.damping = self.flashed.params().damping;
-            let device = Device::new(params).map_err(Fault::Device)?;
+            // A corner that is no valid device is no membrane of the batch (as for its
+            // guaranteed limit, `model::guaranteed`).
+            let Ok(device) = Device::new(params) else {
+                continue;
+            };
             let offset = Limit::of(&device).at.offset;
             let swing = device
                 .check_swing(*drive, offset, None, margin)
                 .map_err(Fault::DriveSwing)?;
-            if swing.stretch - swing.low_stretch > widest.stretch - widest.low_stretch {
+            if swing.high_stretch - swing.low_stretch > widest.high_stretch - widest.low_stretch {
                 widest = swing;
             }
         }

@@ -76,7 +76,7 @@ pub struct ReplanJob {
     plan: Plan,
     /// The swing the membrane may still carry from the drive in force, in stretch: the new
     /// plan's swing counts it, undecayed.
-    carried_ring: f32,
+    carried_ring_stretch: f32,
 }
 
 /// A checked new plan, for `adopt`: what the boot stages left in a fresh controller (its
@@ -99,6 +99,8 @@ pub struct Replanned {
     boot: Boot,
     /// The plan in force when the job was made.
     was: Plan,
+    /// The ring the job counted as carried into the new plan, in stretch.
+    carried_ring_stretch: f32,
 }
 
 impl Replanned {
@@ -119,7 +121,7 @@ impl ReplanJob {
             table,
             (self.amplifier, self.inputs),
             self.settings,
-            (self.plan.bias_volts, self.carried_ring),
+            (self.plan.bias_volts, self.carried_ring_stretch),
         )
         .map_err(Refusal::Checks)?;
         Ok(Replanned {
@@ -129,6 +131,7 @@ impl ReplanJob {
             guard: fresh.watch.guard(),
             state: fresh.state,
             tuned: fresh.tuned(),
+            carried_ring_stretch: self.carried_ring_stretch,
             #[cfg(feature = "trim")]
             ring: fresh.next_ring(),
             boot,
@@ -151,15 +154,6 @@ impl Controller {
     /// The DAC code sent at the last tick (`last_volts` is its voltage).
     pub fn last_code(&self) -> DacCode {
         self.last_code
-    }
-
-    /// The swing a new plan may find the membrane in, in stretch: the predicted amplitude of
-    /// the drive in force, while it is on or held (its ring outlasts the AC); 0 otherwise.
-    fn carried_ring(&self) -> f32 {
-        match (self.state, self.watch.predicted) {
-            (State::Driving { .. } | State::Held { .. }, Some(p)) => p.amplitude,
-            _ => 0.0,
-        }
     }
 
     /// Whether the bias holds still (no ramp, no trim under way): when a new plan may start.
@@ -191,7 +185,7 @@ impl Controller {
                 ..settings
             },
             plan: self.plan,
-            carried_ring: self.carried_ring(),
+            carried_ring_stretch: self.watch.ring_to_carry_stretch(),
         })
     }
 
@@ -204,7 +198,10 @@ impl Controller {
     /// made.
     pub fn adopt(&mut self, replanned: Replanned) -> Result<Boot, Refusal> {
         self.steady()?;
-        if self.plan != replanned.was {
+        // The plan changed, or a drive came on since the job was made (its ring is not in
+        // the new plan's swing): the job is stale.
+        let carried = self.watch.ring_to_carry_stretch();
+        if self.plan != replanned.was || !(carried <= replanned.carried_ring_stretch) {
             return Err(Refusal::Busy {
                 phase: self.phase(),
             });

@@ -20,12 +20,9 @@ const UNDECLARED_NOISE_STRETCH: f32 = 1e-4;
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Predicted {
-    /// The predicted amplitude about λ*, in stretch (switch-on, the ramp's ring and a
-    /// pulse's included): what a new plan's swing counts as already there.
-    pub amplitude: f32,
-    /// The half-span the measured swing may reach, in stretch: the predicted amplitude
-    /// about λ* (switch-on, the ramp's ring and a pulse's included) widened by 1/(1 −
-    /// margin) as the checks had it, and the sensor's noise.
+    /// The half-span the measured swing may reach, in stretch: half the predicted swing's
+    /// span (switch-on, the ramp's ring, a pulse's and a carried one included) widened by
+    /// 1/(1 − margin) as the checks had it, and the sensor's noise.
     pub allowed: f32,
     /// A window's ticks: the longest period in the motion (two of the drive's, for the
     /// parametric response at half its frequency; the natural one, for the free ring).
@@ -44,12 +41,13 @@ impl Predicted {
         margin: f32,
         noise: Option<f32>,
     ) -> Self {
-        let amplitude = swing.stretch - swing.low_stretch;
+        // Half the predicted span: about the mean the motion settles to, the forced terms
+        // and rings; the steady push's own step rings as much about it.
+        let amplitude = (swing.high_stretch - swing.low_stretch) / 2.0;
         let noise = noise.map_or(UNDECLARED_NOISE_STRETCH, |sigma| NOISE_SIGMAS * sigma);
         let seconds = (2.0 / ac_hz).max(1.0 / swing.natural_hz);
         let window = libm::ceilf(seconds * tick_hz);
         Self {
-            amplitude,
             allowed: amplitude / (1.0 - margin) + noise,
             // Saturating: NaN and ∞ (no natural frequency) give 0 and u32::MAX.
             window_ticks: (window as u32).max(1),
@@ -137,10 +135,41 @@ mod tests {
 
     fn predicted(allowed: f32, window_ticks: u32) -> Predicted {
         Predicted {
-            amplitude: allowed,
             allowed,
             window_ticks,
         }
+    }
+
+    /// The watch of a prediction as docs/safety.md states it: half the predicted span
+    /// widened by 1/(1 − margin), and five times the declared noise (10⁻⁴ where none is);
+    /// the window the longer of two drive periods and the natural one, in whole ticks.
+    #[test]
+    fn a_prediction_is_watched_as_documented() {
+        let swing = Swing {
+            stretch: 2.0,
+            low_stretch: 1.99,
+            high_stretch: 2.03,
+            natural_hz: 40.0,
+            quality_factor: 100.0,
+        };
+        let amplitude = (2.03f32 - 1.99) / 2.0;
+        let p = Predicted::of(&swing, 30.0, 1000.0, 0.2, Some(1e-5));
+        assert!((p.allowed - (amplitude / 0.8 + 5e-5)).abs() < 1e-7, "{p:?}");
+        // Two periods of 30 Hz, 66.7 ms: 67 ticks at 1 kHz.
+        assert_eq!(p.window_ticks, 67);
+        let p = Predicted::of(&swing, 200.0, 1000.0, 0.0, None);
+        assert!((p.allowed - (amplitude + 1e-4)).abs() < 1e-7, "{p:?}");
+        // The natural period, 25 ms, is the longer.
+        assert_eq!(p.window_ticks, 25);
+        // No natural frequency: a window that never ends (the half-span still checked).
+        let none = Swing {
+            natural_hz: 0.0,
+            ..swing
+        };
+        assert_eq!(
+            Predicted::of(&none, 30.0, 1000.0, 0.05, None).window_ticks,
+            u32::MAX
+        );
     }
 
     /// A sine of `amplitude` about 2, `ticks_per_period` a period, at tick `k`.

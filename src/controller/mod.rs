@@ -188,7 +188,7 @@ pub struct Controller {
     watch: Watch,
     /// The swing the membrane may carry into this plan from the drive before it (a replan's
     /// job made while driving), in stretch: counted in this plan's swing at boot.
-    carried_ring: f32,
+    carried_ring_stretch: f32,
     /// The leakage watch's sums (model.md §8).
     leakage: Leakage,
     /// The voltage commanded at the last tick, V.
@@ -235,7 +235,7 @@ impl Controller {
             plan: Plan::idle(),
             tick: 0,
             watch: Watch::new(settings.margin),
-            carried_ring: 0.0,
+            carried_ring_stretch: 0.0,
             leakage: Leakage::default(),
             last_volts: 0.0,
             last_code: DacCode(0),

@@ -34,7 +34,7 @@ const SETTLE_TIME_CONSTANTS: f32 = 3.0;
 
 /// The drive is settled on the resonance when it is within this fraction of the resonance's
 /// half-width f/(2Q) of the cycle's estimate (about 6° of phase); until then the estimate
-/// is of a plant still ringing from the drive's moves, and the settling starts again. (A
+/// is of a plant still ring_stretch from the drive's moves, and the settling starts again. (A
 /// creeping plant's drive follows the resonance within it; measured from where the drive
 /// was instead, the settling never ended on the VHB plant.)
 const SETTLED_HALF_WIDTHS: f32 = 0.1;
@@ -219,7 +219,7 @@ impl Controller {
             } => {
                 self.trim.params.shear_modulus = shear_modulus;
                 if predicted.is_some() {
-                    self.watch.predicted = predicted;
+                    self.watch.predict(predicted);
                 }
                 // A drift's solves are not counted against `MAX_TRIMS` (a lost lock is
                 // `TrackLost`), take no secant (`TrimJob::solve`) and leave no point for a

@@ -678,7 +678,7 @@ impl TrimJob {
                 ac_volts: s.ac_volts,
                 ac_hz,
                 // The AC starts again after the pulse at the new bias.
-                ringing: pulse_ring(&device, tuner.limit().at.offset, bias_volts, &s),
+                ring_stretch: pulse_ring(&device, tuner.limit().at.offset, bias_volts, &s),
                 ramp: Some(Ramp {
                     from_volts: self.bias_volts,
                     slew_volts_per_second: s.slew_volts_per_second,
@@ -976,7 +976,7 @@ impl Controller {
                 ..
             } => {
                 if predicted.is_some() {
-                    self.watch.predicted = predicted;
+                    self.watch.predict(predicted);
                 }
                 let applied = self.retune(
                     k,

@@ -161,8 +161,10 @@ pub(super) struct Watch {
     amplifier_off_ticks: u32,
     /// The swing the drive of the plan in force is predicted to have (`None`: no AC), and
     /// the swing measured while it is on.
-    pub(super) predicted: Option<Predicted>,
+    predicted: Option<Predicted>,
     envelope: Envelope,
+    /// The most any drive so far was allowed to swing, in stretch (`ring_to_carry_stretch`).
+    carried_stretch: f32,
 }
 
 impl Watch {
@@ -176,6 +178,7 @@ impl Watch {
             amplifier_off_ticks: 0,
             predicted: None,
             envelope: Envelope::default(),
+            carried_stretch: 0.0,
         }
     }
 
@@ -298,9 +301,34 @@ impl Watch {
         self.envelope.observe(k, stretch, predicted)
     }
 
-    /// A drive (re)started: its swing is measured afresh.
+    /// The swing the next drive is predicted to have (`None`: no AC). One that allows a
+    /// half-span that is not a finite number (a result from outside the tick that lies) is
+    /// kept as NaN: the drive faults at its first sample rather than go unwatched.
+    pub(super) fn predict(&mut self, predicted: Option<Predicted>) {
+        self.predicted = predicted.map(|p| Predicted {
+            allowed: if p.allowed.is_finite() {
+                p.allowed
+            } else {
+                f32::NAN
+            },
+            ..p
+        });
+    }
+
+    /// A drive (re)started: its swing is measured afresh, and the membrane may carry as much
+    /// as it is allowed into any plan after it.
     pub(super) fn drive_on(&mut self) {
         self.envelope = Envelope::default();
+        if let Some(p) = self.predicted {
+            self.carried_stretch = self.carried_stretch.max(p.allowed);
+        }
+    }
+
+    /// The swing a new plan may find the membrane in, in stretch: the most any drive so far
+    /// was allowed (its ring outlasts the AC: a pause, a hold, `stop`), undecayed; 0 before
+    /// any drive.
+    pub(super) fn ring_to_carry_stretch(&self) -> f32 {
+        self.carried_stretch
     }
 
     /// A current sample must be a number (`Sensor`); its size is the plant's business.

@@ -58,7 +58,7 @@ pub struct AcDrive<T> {
     /// last pulse (a converged trim starts the AC right after it), or the swing of the drive
     /// before a new plan; counted undecayed, and through the ramp, if any, with the ramp's
     /// allowance (the stiffness changes along it).
-    pub ringing: T,
+    pub ring_stretch: T,
 }
 
 /// The ramp to the bias at the slew rate and the hold after it, before the AC starts: the
@@ -277,9 +277,9 @@ impl<T: Real> Device<T> {
         let ring = match drive.ramp {
             Some(ramp) => {
                 self.ramp_ring(&about, ramp, max_offset)?
-                    + T::of(RING_ALLOWANCE) * drive.ringing.abs()
+                    + T::of(RING_ALLOWANCE) * drive.ring_stretch.abs()
             }
-            None => drive.ringing.abs(),
+            None => drive.ring_stretch.abs(),
         };
         let fits = |ac: T| self.swing_fits(&about, ac / unit, drive_rad, ring, margin);
         match fits(drive.ac_volts.abs()) {

@@ -2,7 +2,7 @@
 //! QEMU, its image made from the scene, as the board of a loop (`closed_loop::LoopBoard`). Each tick
 //! the plant's ADC codes go out and the tick's output comes back, in the core's frames
 //! (`de_resonator::wire::link`), through two pipes the firmware opens by semihosting
-//! (`samples`, `output`), a byte on its USART3 ringing each tick in; its command port
+//! (`samples`, `output`), a byte on its USART3 ring_stretch each tick in; its command port
 //! (USART2) is connected. QEMU is stopped when the board is dropped.
 
 use std::fs::File;
