@@ -307,13 +307,7 @@ impl Controller {
         // What the board then watches the measured swing against (`envelope`).
         self.watch.predict((drive.ac_volts > 0.0).then(|| {
             let noise = self.inputs.stretch;
-            Predicted::of(
-                &swing,
-                drive.ac_hz,
-                settings.tick_hz,
-                settings.margin,
-                noise,
-            )
+            Predicted::of(&swing, drive.ac_hz, settings.margin, noise)
         }));
         // The ring the first pulse will leave at the bias it measures at, as the device's
         // damping leaves it over the window, against the noise the front end declares: now,

@@ -24,33 +24,34 @@ pub struct Predicted {
     /// span (switch-on, the ramp's ring, a pulse's and a carried one included) widened by
     /// 1/(1 − margin) as the checks had it, and the sensor's noise.
     pub allowed: f32,
-    /// A window's ticks: the longest period in the motion (two of the drive's, for the
-    /// parametric response at half its frequency; the natural one, for the free ring).
-    pub window_ticks: u32,
+    /// A window's drive periods: the longest period in the motion (two of the drive's, for
+    /// the parametric response at half its frequency; the natural one, for the free ring).
+    /// Counted on the drive's phase, each ending as it passes half a turn: half a period
+    /// from where a tracker's cycle ends (the tick's budget).
+    pub window_periods: u32,
 }
 
 impl Predicted {
+    /// No prediction: a drive with it faults at its second sample rather than go unwatched.
+    pub const NONE: Predicted = Predicted {
+        allowed: f32::NAN,
+        window_periods: u32::MAX,
+    };
+
     /// The watch of `swing` (a drive at `ac_hz` that fits, its prediction with the margin
     /// `margin`) on a board ticking at `tick_hz` whose stretch reading has the RMS noise
     /// `noise` a tick (`None`: not declared).
     #[inline(never)]
-    pub fn of(
-        swing: &Swing<f32>,
-        ac_hz: f32,
-        tick_hz: f32,
-        margin: f32,
-        noise: Option<f32>,
-    ) -> Self {
+    pub fn of(swing: &Swing<f32>, ac_hz: f32, margin: f32, noise: Option<f32>) -> Self {
         // Half the predicted span: about the mean the motion settles to, the forced terms
         // and rings; the steady push's own step rings as much about it.
         let amplitude = (swing.high_stretch - swing.low_stretch) / 2.0;
         let noise = noise.map_or(UNDECLARED_NOISE_STRETCH, |sigma| NOISE_SIGMAS * sigma);
-        let seconds = (2.0 / ac_hz).max(1.0 / swing.natural_hz);
-        let window = libm::ceilf(seconds * tick_hz);
+        let periods = libm::ceilf((ac_hz / swing.natural_hz).max(2.0));
         Self {
             allowed: amplitude / (1.0 - margin) + noise,
-            // Saturating: NaN and ∞ (no natural frequency) give 0 and u32::MAX.
-            window_ticks: (window as u32).max(1),
+            // Saturating: ∞ (no natural frequency) gives u32::MAX, NaN 0 (then 2).
+            window_periods: (periods as u32).max(2),
         }
     }
 }
@@ -58,8 +59,11 @@ impl Predicted {
 /// The measured swing over the current window while a drive is on, and the last windows'.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct Envelope {
-    ticks: u32,
-    /// The window's lowest and highest samples (∞ and −∞ before its first).
+    /// Whether the drive's phase was past half a turn at the last sample, and the half
+    /// turns it has passed in this window (`None`: no window yet).
+    past_half: bool,
+    periods: Option<u32>,
+    /// The window's lowest and highest samples.
     low: f32,
     high: f32,
     /// The last whole window's half-span (NaN before one).
@@ -67,64 +71,82 @@ pub(super) struct Envelope {
     /// The growths of the last two windows' half-spans over the ones before them, the
     /// latest first (NaN where there was none).
     growths: (f32, f32),
+    /// The growth carried ahead at the last window's end (0 where none was).
+    ahead: f32,
 }
 
 impl Default for Envelope {
     fn default() -> Self {
         Self {
-            ticks: 0,
-            low: f32::INFINITY,
-            high: f32::NEG_INFINITY,
+            past_half: false,
+            periods: None,
+            low: f32::NAN,
+            high: f32::NAN,
             previous: f32::NAN,
             growths: (f32::NAN, f32::NAN),
+            ahead: 0.0,
         }
     }
 }
 
 impl Envelope {
-    /// A stretch sample at tick `k` (a number: the watch refused any other before) of a
-    /// drive predicted as `predicted`: a fault where the window's half-span so far is above
-    /// what is allowed; or, at a window's end, where a growth that has not slowed for
-    /// three windows (a swing pumped or driven past its damping, not one settling) carried
-    /// a window ahead would be. The tick's budget: compares only, but at a window's end.
-    pub(super) fn observe(&mut self, k: u32, stretch: f32, predicted: &Predicted) -> Option<Fault> {
+    /// A stretch sample (a number: the watch refused any other before) at the drive's
+    /// `phase` (a turn is 2³²) of a drive predicted as `predicted`: whether the swing is
+    /// within what is allowed. Not where the window's span so far is above twice it; nor,
+    /// at a window's end, where a growth that has not slowed for three windows (a swing
+    /// pumped or driven past its damping, not one settling) carried a window ahead would be
+    /// (`outgrown` says how). The tick's budget: a few compares a sample, a few operations
+    /// more at a window's end.
+    pub(super) fn within(&mut self, phase: u32, stretch: f32, predicted: &Predicted) -> bool {
+        let past_half = phase >= 1 << 31;
+        let passed = past_half && !self.past_half;
+        self.past_half = past_half;
+        let Some(periods) = self.periods else {
+            (self.periods, self.low, self.high) = (Some(0), stretch, stretch);
+            return true;
+        };
         if stretch < self.low {
             self.low = stretch;
-        }
-        if stretch > self.high {
+        } else if stretch > self.high {
             self.high = stretch;
         }
-        self.ticks += 1;
         let span = self.high - self.low;
-        if self.ticks < predicted.window_ticks && span <= 2.0 * predicted.allowed {
-            return None;
+        if !passed || periods + 1 < predicted.window_periods {
+            self.periods = Some(periods + u32::from(passed));
+            return span <= predicted.allowed + predicted.allowed;
         }
-        self.window_end(k, span / 2.0, predicted)
+        self.window_end(stretch, span * 0.5, predicted)
     }
 
-    /// The window's end (or a half-span above what is allowed): the growth over the last
-    /// window, carried ahead if it has not slowed, and the verdict.
-    #[inline]
-    fn window_end(&mut self, k: u32, half_span: f32, predicted: &Predicted) -> Option<Fault> {
-        let mut ahead = 0.0;
-        if self.ticks >= predicted.window_ticks {
-            let now = half_span - self.previous;
-            let (before, first) = self.growths;
-            // Growing, and not slowing, three windows in a row (NaN compares false).
-            if now >= before && before >= first && first > 0.0 {
-                ahead = now;
-            }
-            self.growths = (now, before);
-            (self.ticks, self.previous) = (0, half_span);
-            (self.low, self.high) = (f32::INFINITY, f32::NEG_INFINITY);
+    /// The window's end: the growth over the last window, carried ahead if it has not
+    /// slowed, the verdict, and the next window from this sample.
+    fn window_end(&mut self, stretch: f32, half_span: f32, predicted: &Predicted) -> bool {
+        let now = half_span - self.previous;
+        let (before, first) = self.growths;
+        // Growing, and not slowing, three windows in a row (NaN compares false).
+        self.ahead = if now >= before && before >= first && first > 0.0 {
+            now
+        } else {
+            0.0
+        };
+        self.growths = (now, before);
+        self.previous = half_span;
+        let within = half_span + self.ahead <= predicted.allowed;
+        if within {
+            (self.periods, self.low, self.high) = (Some(0), stretch, stretch);
         }
-        let within = half_span + ahead <= predicted.allowed;
-        (!within).then_some(Fault::SwingOutgrown {
+        within
+    }
+
+    /// Why the swing is not within (`within` false at tick `k`): its half-span, the growth
+    /// carried ahead, and what was allowed.
+    pub(super) fn outgrown(&self, k: u32, predicted: &Predicted) -> Fault {
+        Fault::SwingOutgrown {
             tick: k,
-            half_span,
-            growth: ahead,
+            half_span: (self.high - self.low) * 0.5,
+            growth: self.ahead,
             allowed: predicted.allowed,
-        })
+        }
     }
 }
 
@@ -133,16 +155,27 @@ impl Envelope {
 mod tests {
     use super::*;
 
-    fn predicted(allowed: f32, window_ticks: u32) -> Predicted {
+    /// The drive's phase at tick `k`, `ticks_per_period` ticks a period.
+    fn phase(k: u32, ticks_per_period: u32) -> u32 {
+        ((u64::from(k % ticks_per_period) << 32) / u64::from(ticks_per_period)) as u32
+    }
+
+    /// The fault a sample at tick `k` brings, if any, the drive 5 ticks a period.
+    fn observe(e: &mut Envelope, k: u32, stretch: f32, p: &Predicted) -> Option<Fault> {
+        (!e.within(phase(k, 5), stretch, p)).then(|| e.outgrown(k, p))
+    }
+
+    /// Windows of two drive periods (10 ticks).
+    fn predicted(allowed: f32) -> Predicted {
         Predicted {
             allowed,
-            window_ticks,
+            window_periods: 2,
         }
     }
 
     /// The watch of a prediction as docs/safety.md states it: half the predicted span
     /// widened by 1/(1 − margin), and five times the declared noise (10⁻⁴ where none is);
-    /// the window the longer of two drive periods and the natural one, in whole ticks.
+    /// the window the longer of two drive periods and the natural one, in drive periods.
     #[test]
     fn a_prediction_is_watched_as_documented() {
         let swing = Swing {
@@ -153,37 +186,31 @@ mod tests {
             quality_factor: 100.0,
         };
         let amplitude = (2.03f32 - 1.99) / 2.0;
-        let p = Predicted::of(&swing, 30.0, 1000.0, 0.2, Some(1e-5));
+        let p = Predicted::of(&swing, 30.0, 0.2, Some(1e-5));
         assert!((p.allowed - (amplitude / 0.8 + 5e-5)).abs() < 1e-7, "{p:?}");
-        // Two periods of 30 Hz, 66.7 ms: 67 ticks at 1 kHz.
-        assert_eq!(p.window_ticks, 67);
-        let p = Predicted::of(&swing, 200.0, 1000.0, 0.0, None);
+        assert_eq!(p.window_periods, 2);
+        let p = Predicted::of(&swing, 200.0, 0.0, None);
         assert!((p.allowed - (amplitude + 1e-4)).abs() < 1e-7, "{p:?}");
-        // The natural period, 25 ms, is the longer.
-        assert_eq!(p.window_ticks, 25);
+        // The natural period, 25 ms, is five of the drive's 5 ms.
+        assert_eq!(p.window_periods, 5);
         // No natural frequency: a window that never ends (the half-span still checked).
         let none = Swing {
             natural_hz: 0.0,
             ..swing
         };
         assert_eq!(
-            Predicted::of(&none, 30.0, 1000.0, 0.05, None).window_ticks,
+            Predicted::of(&none, 30.0, 0.05, None).window_periods,
             u32::MAX
         );
     }
 
-    /// A sine of `amplitude` about 2, `ticks_per_period` a period, at tick `k`.
-    fn sine(amplitude: f32, ticks_per_period: u32, k: u32) -> f32 {
-        let turn = (k % ticks_per_period) as f32 / ticks_per_period as f32;
-        2.0 + amplitude * libm::sinf(core::f32::consts::TAU * turn)
-    }
-
     #[test]
     fn a_swing_within_the_prediction_runs() {
-        let p = predicted(1e-3, 40);
+        let p = predicted(1e-3);
         let mut e = Envelope::default();
         for k in 0..4000 {
-            assert_eq!(e.observe(k, sine(0.99e-3, 20, k), &p), None, "tick {k}");
+            let x = 2.0 + 0.99e-3 * libm::sinf(core::f32::consts::TAU * (k % 5) as f32 / 5.0);
+            assert_eq!(observe(&mut e, k, x, &p), None, "tick {k}");
         }
     }
 
@@ -191,9 +218,15 @@ mod tests {
     /// end.
     #[test]
     fn a_swing_above_the_allowed_faults_within_its_half_period() {
-        let p = predicted(1e-3, 400);
+        let p = Predicted {
+            window_periods: 1000,
+            ..predicted(1e-3)
+        };
         let mut e = Envelope::default();
-        let fault = (0..400).find_map(|k| e.observe(k, sine(1.02e-3, 20, k), &p));
+        let fault = (0..400).find_map(|k| {
+            let x = 2.0 + 1.02e-3 * libm::sinf(core::f32::consts::TAU * (k % 20) as f32 / 20.0);
+            observe(&mut e, k, x, &p)
+        });
         match fault {
             Some(Fault::SwingOutgrown {
                 tick, half_span, ..
@@ -205,25 +238,22 @@ mod tests {
         }
     }
 
-    /// Growing by 3/16 of what is allowed a window, from 6/16 of it: the window at 15/16,
-    /// its growth not slowing for three windows, carried one window ahead reaches 18/16 and
-    /// faults a window before the swing itself would.
+    /// Growing by 1/64 of what is allowed a tick from a quarter of it, not slowing: carried
+    /// one window ahead, it faults at a window's end while the swing itself is still within
+    /// what is allowed, a window before it would not be.
     #[test]
     fn a_growth_not_slowing_faults_a_window_ahead() {
-        let p = predicted(1.0, 10);
+        let p = predicted(1.0);
         let mut e = Envelope::default();
-        let mut fault = None;
-        'windows: for window in 0..6u32 {
-            let amplitude = 0.375 + 0.1875 * window as f32;
-            for i in 0..10 {
-                let k = window * 10 + i;
-                let x = if i % 2 == 0 { amplitude } else { -amplitude };
-                if let Some(f) = e.observe(k, x, &p) {
-                    fault = Some(f);
-                    break 'windows;
-                }
-            }
-        }
+        let amplitude = |k: u32| 0.25 + k as f32 / 64.0 / 10.0;
+        let fault = (0..1000u32).find_map(|k| {
+            let x = if k % 2 == 0 {
+                amplitude(k)
+            } else {
+                -amplitude(k)
+            };
+            observe(&mut e, k, x, &p)
+        });
         match fault {
             Some(Fault::SwingOutgrown {
                 tick,
@@ -231,9 +261,16 @@ mod tests {
                 growth,
                 allowed,
             }) => {
-                assert_eq!(tick, 39, "the fourth window's end");
-                assert_eq!((half_span, growth), (0.9375, 0.1875));
-                assert_eq!(allowed, 1.0);
+                assert!(
+                    growth > 0.0 && half_span <= allowed,
+                    "{half_span} + {growth}"
+                );
+                assert!(half_span + growth > allowed);
+                // The swing itself passes what is allowed only later.
+                assert!(
+                    amplitude(tick) <= 1.0 && amplitude(tick + 10) > 0.98,
+                    "tick {tick}"
+                );
             }
             other => panic!("{other:?}"),
         }
@@ -243,33 +280,34 @@ mod tests {
     /// ahead, however large its first growth.
     #[test]
     fn a_settling_growth_is_not_carried_ahead() {
-        let p = predicted(1.0, 10);
+        let p = predicted(1.0);
         let mut e = Envelope::default();
         for k in 0..400u32 {
             let window = (k / 10) as f32;
             let amplitude = 0.99 * (1.0 - libm::expf(-(window + 1.0) / 1.5));
             let x = if k % 2 == 0 { amplitude } else { -amplitude };
-            assert_eq!(e.observe(k, x, &p), None, "tick {k}");
+            assert_eq!(observe(&mut e, k, x, &p), None, "tick {k}");
         }
     }
 
     /// A swing that dies away (a ring decaying) never counts a growth.
     #[test]
     fn a_decaying_ring_is_no_growth() {
-        let p = predicted(1.0, 10);
+        let p = predicted(1.0);
         let mut e = Envelope::default();
         for k in 0..1000u32 {
             let amplitude = 0.99 * libm::expf(-(k as f32) / 200.0);
             let x = if k % 2 == 0 { amplitude } else { -amplitude };
-            assert_eq!(e.observe(k, x, &p), None, "tick {k}");
+            assert_eq!(observe(&mut e, k, x, &p), None, "tick {k}");
         }
     }
 
     /// An allowed half-span that is not a number passes nothing.
     #[test]
     fn nan_allowed_faults() {
-        let p = predicted(f32::NAN, 10);
+        let p = predicted(f32::NAN);
         let mut e = Envelope::default();
-        assert!(e.observe(0, 2.0, &p).is_some());
+        let first = observe(&mut e, 0, 2.0, &p);
+        assert!(first.or(observe(&mut e, 1, 2.0, &p)).is_some());
     }
 }

@@ -148,6 +148,9 @@ enum State {
 /// The controller, between ticks: its configuration, fixed at boot, apart from its state.
 #[derive(Clone, Debug)]
 pub struct Controller {
+    // The monitor first: its fields within reach of the tick's short offsets (the tick's
+    // budget).
+    watch: Watch,
     // Configuration, fixed at boot.
     /// The device flashed: the monitor checks every sample against it, whatever the trim
     /// estimates.
@@ -185,7 +188,6 @@ pub struct Controller {
     max_volts: f32,
     plan: Plan,
     tick: u32,
-    watch: Watch,
     /// The swing the membrane may carry into this plan from the drive before it (a replan's
     /// job made while driving), in stretch: counted in this plan's swing at boot.
     carried_ring_stretch: f32,
@@ -425,7 +427,8 @@ impl Controller {
         }
         let k = self.tick;
         self.tick = self.tick.saturating_add(1);
-        let volts = self.plan.volts(k);
+        let phase = self.plan.phase(k);
+        let volts = self.plan.volts_at(k, phase);
         // Above the cap in force only on the way down to a cap just lowered: never up.
         let bound = self.max_volts.max(self.last_volts);
         let code = match gate(&self.amplifier, volts, bound) {
@@ -447,7 +450,7 @@ impl Controller {
                 return self.fault(fault);
             }
             if let State::Driving { .. } = self.state {
-                if let Some(fault) = self.watch.swing(k, stretch) {
+                if let Some(fault) = self.watch.swing(k, phase, stretch) {
                     return self.fault(fault);
                 }
             }
@@ -462,7 +465,7 @@ impl Controller {
         // starts from what was sent before.
         let sent_before = (self.last_volts, self.last_code);
         (self.last_volts, self.last_code) = (commanded_volts, code);
-        match self.advance(k, Ring::of(&inputs)) {
+        match self.advance(k, Ring::of(&inputs), phase) {
             Ok(event) => Output {
                 code,
                 volts: commanded_volts,
@@ -506,8 +509,8 @@ impl Controller {
     }
 
     /// The state machine's step at tick `k`, and what it says; `ring` is what the trim
-    /// records.
-    fn advance(&mut self, k: u32, ring: Ring) -> Result<Option<Event>, Fault> {
+    /// records, `phase` the AC's phase at `k` (`Plan::phase`).
+    fn advance(&mut self, k: u32, ring: Ring, phase: u32) -> Result<Option<Event>, Fault> {
         let _ = ring;
         match self.state {
             State::Ramping { then_measure } if self.plan.ramp_volts(k) == self.plan.bias_volts => {
@@ -586,7 +589,9 @@ impl Controller {
             #[cfg(feature = "trim")]
             State::Solving => self.apply_trim(k),
             #[cfg(feature = "track")]
-            State::Driving { .. } if self.settings.track_seconds.is_some() => self.track(k, ring),
+            State::Driving { .. } if self.settings.track_seconds.is_some() => {
+                self.track(k, ring, phase)
+            }
             _ => Ok(None),
         }
     }

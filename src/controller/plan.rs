@@ -143,6 +143,12 @@ impl Plan {
     /// The voltage at tick `k`: the AC rides on the ramp (a tracked drive's bias moves with
     /// the drive on), and the probe on both.
     pub fn volts(&self, k: u32) -> f32 {
+        self.volts_at(k, self.phase(k))
+    }
+
+    /// As `volts`, the AC's phase at `k` given (`phase(k)`: the tick works it out once for
+    /// the voltage and the swing's watch).
+    pub fn volts_at(&self, k: u32, phase: u32) -> f32 {
         let ramp = self.ramp_volts(k);
         let probe = match self.probe_positive(k, ramp) {
             Some(true) => self.probe_volts,
@@ -150,9 +156,7 @@ impl Plan {
             None => 0.0,
         };
         match self.ac_tick {
-            Some(from) if k >= from => {
-                ramp + self.ac_volts * sin_cos_turns(self.phase(k)).0 + probe
-            }
+            Some(from) if k >= from => ramp + self.ac_volts * sin_cos_turns(phase).0 + probe,
             _ => {
                 let (from, to) = self.pulse_ticks;
                 if k >= from && k < to {

@@ -55,9 +55,10 @@ impl Controller {
         self.tracking.tracker.and_then(|t| t.lock())
     }
 
-    /// The tracked drive at tick `k`: a solve's slope taken, the sample fed to the tracker,
-    /// and at a cycle's end the drive moved in phase and the bias moved by the integral law.
-    pub(super) fn track(&mut self, k: u32, ring: Ring) -> Result<Option<Event>, Fault> {
+    /// The tracked drive at tick `k` (the AC's phase then `phase`): a solve's slope taken,
+    /// the sample fed to the tracker, and at a cycle's end the drive moved in phase and the
+    /// bias moved by the integral law.
+    pub(super) fn track(&mut self, k: u32, ring: Ring, phase: u32) -> Result<Option<Event>, Fault> {
         if self.trim.result.is_some() {
             let taken = self.take_slope(k);
             // The result dropped with the job (read in place: a device is large).
@@ -75,7 +76,7 @@ impl Controller {
         // The sample is the state at the tick's start; the last command held over the tick
         // before, centred half a tick back: the drive's phase at the sample is half a step
         // behind this tick's.
-        let phase = self.plan.phase(k).wrapping_sub(step / 2);
+        let phase = phase.wrapping_sub(step / 2);
         // The drive's frequency as the plan runs it.
         let drive_hz = || tick_hz * (step as f32 / 4_294_967_296.0);
         if self.tracking.tracker.is_none() {

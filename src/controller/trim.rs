@@ -692,8 +692,8 @@ impl TrimJob {
             let swing = device
                 .check_swing(drive, tuner.limit().at.offset, quality, s.margin)
                 .map_err(Fault::DriveSwing)?;
-            let (tick_hz, noise) = (s.tick_hz, self.inputs.stretch);
-            predicted = Some(Predicted::of(&swing, ac_hz, tick_hz, s.margin, noise));
+            let noise = self.inputs.stretch;
+            predicted = Some(Predicted::of(&swing, ac_hz, s.margin, noise));
         }
         Ok(TrimResult::Retune {
             measured_hz,

@@ -142,7 +142,7 @@ impl Leakage {
 pub(super) struct Guard {
     band: StretchBand<f32>,
     raise: f32,
-    predicted: Option<Predicted>,
+    predicted: Predicted,
 }
 
 /// The watch's memory between ticks.
@@ -159,9 +159,9 @@ pub(super) struct Watch {
     repeated: Option<(f32, u32)>,
     /// Ticks in a row the amplifier has been off its command.
     amplifier_off_ticks: u32,
-    /// The swing the drive of the plan in force is predicted to have (`None`: no AC), and
-    /// the swing measured while it is on.
-    predicted: Option<Predicted>,
+    /// The swing the drive of the plan in force is predicted to have (`Predicted::NONE`: no
+    /// AC), and the swing measured while it is on.
+    predicted: Predicted,
     envelope: Envelope,
     /// The most any drive so far was allowed to swing, in stretch (`ring_to_carry_stretch`).
     carried_stretch: f32,
@@ -176,7 +176,7 @@ impl Watch {
             raise: 1.0 / (1.0 - margin),
             repeated: None,
             amplifier_off_ticks: 0,
-            predicted: None,
+            predicted: Predicted::NONE,
             envelope: Envelope::default(),
             carried_stretch: 0.0,
         }
@@ -294,34 +294,35 @@ impl Watch {
         self.predicted = guard.predicted;
     }
 
-    /// The drive's swing at tick `k` while it is on (`Envelope`): the stretch sample against
-    /// the prediction.
-    pub(super) fn swing(&mut self, k: u32, stretch: f32) -> Option<Fault> {
-        let predicted = self.predicted.as_ref()?;
-        self.envelope.observe(k, stretch, predicted)
+    /// The drive's swing at tick `k`, the drive's phase `phase` (`Envelope`): the stretch
+    /// sample against the prediction.
+    pub(super) fn swing(&mut self, k: u32, phase: u32, stretch: f32) -> Option<Fault> {
+        if self.envelope.within(phase, stretch, &self.predicted) {
+            return None;
+        }
+        Some(self.envelope.outgrown(k, &self.predicted))
     }
 
-    /// The swing the next drive is predicted to have (`None`: no AC). One that allows a
+    /// The swing the next drive is predicted to have (`None`: no AC: `Predicted::NONE`, with
+    /// which a drive faults at its second sample). One that allows a
     /// half-span that is not a finite number (a result from outside the tick that lies) is
     /// kept as NaN: the drive faults at its first sample rather than go unwatched.
     pub(super) fn predict(&mut self, predicted: Option<Predicted>) {
-        self.predicted = predicted.map(|p| Predicted {
-            allowed: if p.allowed.is_finite() {
-                p.allowed
-            } else {
-                f32::NAN
+        self.predicted = match predicted {
+            Some(p) if p.allowed.is_finite() => p,
+            Some(p) => Predicted {
+                allowed: f32::NAN,
+                ..p
             },
-            ..p
-        });
+            None => Predicted::NONE,
+        };
     }
 
     /// A drive (re)started: its swing is measured afresh, and the membrane may carry as much
     /// as it is allowed into any plan after it.
     pub(super) fn drive_on(&mut self) {
         self.envelope = Envelope::default();
-        if let Some(p) = self.predicted {
-            self.carried_stretch = self.carried_stretch.max(p.allowed);
-        }
+        self.carried_stretch = self.carried_stretch.max(self.predicted.allowed);
     }
 
     /// The swing a new plan may find the membrane in, in stretch: the most any drive so far
