@@ -151,7 +151,7 @@ impl Envelope {
 }
 
 #[cfg(test)]
-#[allow(clippy::panic)]
+#[allow(clippy::panic, clippy::unwrap_used)]
 mod tests {
     use super::*;
 
@@ -288,6 +288,49 @@ mod tests {
             let x = if k % 2 == 0 { amplitude } else { -amplitude };
             assert_eq!(observe(&mut e, k, x, &p), None, "tick {k}");
         }
+    }
+
+    /// A swing settling fast (each window's growth under half the one before: carried
+    /// ahead, it would pass what is allowed) is not carried ahead either.
+    #[test]
+    fn a_fast_settling_growth_is_not_carried_ahead() {
+        let p = predicted(1.0);
+        let mut e = Envelope::default();
+        for k in 0..400u32 {
+            let amplitude = 0.98 - 0.5 * libm::powf(0.3, (k / 10) as f32);
+            let x = if k % 2 == 0 { amplitude } else { -amplitude };
+            assert_eq!(observe(&mut e, k, x, &p), None, "tick {k}");
+        }
+    }
+
+    /// A window ends as the drive's phase passes half a turn, every `window_periods` turns
+    /// (2 here, 5 ticks a turn, the phase past half a turn at ticks 3, 8, 13, …: windows end
+    /// at 8, 18, 28, …, half a period from where a tracker's cycle ends): a swing growing by
+    /// 1/512 a tick (exact in binary) grows 10/512 a window, and that growth carried ahead is said at the first
+    /// such end where the swing and it pass what is allowed.
+    #[test]
+    fn windows_end_as_the_phase_passes_half_a_turn() {
+        let p = predicted(1.0);
+        let mut e = Envelope::default();
+        let amplitude = |k: u32| 0.25 + k as f32 / 512.0;
+        let fault = (0..1000u32).find_map(|k| {
+            let x = if k % 2 == 0 {
+                amplitude(k)
+            } else {
+                -amplitude(k)
+            };
+            observe(&mut e, k, x, &p).map(|f| (k, f))
+        });
+        let Some((k, Fault::SwingOutgrown { growth, .. })) = fault else {
+            panic!("{fault:?}");
+        };
+        let expected = (8..1000)
+            .step_by(10)
+            .find(|&end| amplitude(end) + 10.0 / 512.0 > 1.0)
+            .unwrap();
+        assert!(growth > 0.0, "said at a window's end");
+        assert_eq!(k, expected);
+        assert!(phase(k, 5) >= 1 << 31 && phase(k - 1, 5) < 1 << 31);
     }
 
     /// A swing that dies away (a ring decaying) never counts a growth.
