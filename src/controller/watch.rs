@@ -287,11 +287,16 @@ impl Watch {
         }
     }
 
-    /// The guard of another plan (an adopted replan's); the sample history stays.
+    /// The guard of another plan (an adopted replan's); the sample history stays. A plan
+    /// without AC carries no drive's ring on (its ring decaying then is not counted:
+    /// docs/safety.md).
     pub(super) fn guard_as(&mut self, guard: &Guard) {
         self.band = guard.band;
         self.raise = guard.raise;
         self.predicted = guard.predicted;
+        if guard.predicted.allowed.is_nan() {
+            self.carried_stretch = 0.0;
+        }
     }
 
     /// The drive's swing at tick `k`, the drive's phase `phase` (`Envelope`): the stretch
@@ -325,9 +330,9 @@ impl Watch {
         self.carried_stretch = self.carried_stretch.max(self.predicted.allowed);
     }
 
-    /// The swing a new plan may find the membrane in, in stretch: the most any drive so far
-    /// was allowed (its ring outlasts the AC: a pause, a hold, `stop`), undecayed; 0 before
-    /// any drive.
+    /// The swing a new plan may find the membrane in, in stretch: the most any drive since
+    /// the last plan without AC was allowed (its ring outlasts the AC: a pause, a hold,
+    /// `stop`), undecayed; 0 before any drive.
     pub(super) fn ring_to_carry_stretch(&self) -> f32 {
         self.carried_stretch
     }
