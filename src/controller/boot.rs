@@ -219,9 +219,11 @@ impl Controller {
     /// Find the limit and the bias on the chip by the direct solve: the table's cap (its top,
     /// scaled down to a larger margin than the table's) must lie below (1 − margin)·limit,
     /// and the natural frequencies at the two biases must agree. The controller then drives
-    /// the solve's bias, capped at (1 − margin)·(1 − F32_GUARD)·limit.
-    /// On a refusal the controller is left faulted at 0 V: a stage's caller that carried
-    /// on with it would drive nothing.
+    /// the solve's bias, capped at (1 − margin)·(1 − F32_GUARD)·limit. The drive's swing is
+    /// checked there (on the device flashed, and at the corners of the batch `table`
+    /// declares, if any: `table` is the one `from_table` took), and its prediction set for
+    /// the swing's watch. On a refusal the controller is left faulted at 0 V: a stage's
+    /// caller that carried on with it would drive nothing.
     pub fn cross_check(&mut self, boot: Boot, table: &[u8]) -> Result<Boot, Fault> {
         let checked = self.cross_checked(boot, table);
         if let Err(fault) = checked {
@@ -333,7 +335,7 @@ impl Controller {
     /// The swing of `drive` on the device flashed (its limit at `limit_offset`) and, for a
     /// batch's `table`, on the device at every corner of the batch's box (`corners_swing`):
     /// the first that does not fit refuses the drive, and the largest swing is the one the
-    /// board watches.
+    /// board watches. Out of line, as `corners_swing` (the stack's budget).
     #[inline(never)]
     fn checked_swing(
         &self,

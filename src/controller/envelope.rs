@@ -3,7 +3,7 @@
 //! 1/(1 − margin), under the peak voltage raised as much; a measured swing that leaves that
 //! box, or grows window after window without slowing fast enough to leave it within the
 //! next, is taken off there: before any limit, whatever the device file says of the
-//! damping (docs/safety.md, "The drive's swing").
+//! damping (docs/safety.md, "The measured swing stays inside the box the checks passed").
 
 use super::fault::Fault;
 use crate::model::swing::Swing;
@@ -39,8 +39,8 @@ impl Predicted {
     };
 
     /// The watch of `swing` (a drive at `ac_hz` that fits, its prediction with the margin
-    /// `margin`) on a board ticking at `tick_hz` whose stretch reading has the RMS noise
-    /// `noise` a tick (`None`: not declared).
+    /// `margin`) on a board whose stretch reading has the RMS noise `noise` a tick (`None`:
+    /// not declared). Out of line: the boot's frame stays the smaller (the stack's budget).
     #[inline(never)]
     pub fn of(swing: &Swing<f32>, ac_hz: f32, margin: f32, noise: Option<f32>) -> Self {
         // Half the predicted span: about the mean the motion settles to, the forced terms

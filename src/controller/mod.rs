@@ -617,7 +617,8 @@ impl Controller {
     }
 
     /// The ring a trim's pulse at `bias_volts` leaves, in stretch, where a trim is wanted
-    /// (the AC starts after its last pulse; 0 otherwise).
+    /// (the AC starts after its last pulse; 0 otherwise). Out of line: the boot's frame stays
+    /// the smaller (the stack's budget).
     #[inline(never)]
     fn pulse_ring(&self, bias_volts: f32, limit_offset: f32) -> f32 {
         #[cfg(feature = "trim")]
