@@ -258,6 +258,15 @@ fn the_watch_stops_an_accepted_drive_before_the_limit_whatever_the_file_says() {
     assert!(would_have_crossed >= 1, "no case would have crossed blind");
 }
 
+/// A random device tuned inside its range (`Case::tuned`).
+struct Tuned {
+    params: DeviceParams<f64>,
+    tuner: Tuner<f64>,
+    target_hz: f64,
+    bias: f64,
+    room: f64,
+}
+
 /// One random case of the property.
 #[derive(Debug)]
 struct Case {
@@ -293,8 +302,11 @@ impl Case {
         }
     }
 
-    fn random(rng: &mut Rng) -> Option<Case> {
-        let mut params = Self::random_device(rng);
+    /// A random device tuned inside its range (5–300 Hz) at margin 0.05: its tuner, the
+    /// target, the bias and the room for an AC about it under the cap; `None` where any is
+    /// wanting.
+    fn tuned(rng: &mut Rng) -> Option<Tuned> {
+        let params = Self::random_device(rng);
         let tuner = Tuner::new(Device::new(params).ok()?);
         let range = tuner.tunable_range(0.05).ok()?;
         let target_hz = range.low_hz + (range.high_hz - range.low_hz) * rng.range(0.05, 0.95);
@@ -307,6 +319,23 @@ impl Case {
         if room.is_nan() || room <= 1.0 {
             return None;
         }
+        Some(Tuned {
+            params,
+            tuner,
+            target_hz,
+            bias,
+            room,
+        })
+    }
+
+    fn random(rng: &mut Rng) -> Option<Case> {
+        let Tuned {
+            mut params,
+            target_hz,
+            bias,
+            room,
+            ..
+        } = Self::tuned(rng)?;
         let ac_volts = room * rng.log_range(0.02, 1.0);
         let near = [1.0, 2.0, 0.5][rng.below(3)];
         let off = [0.0, 0.01, -0.01, 0.03, -0.03][rng.below(5)];
@@ -345,19 +374,13 @@ impl Case {
     /// A case of issue 60's property (`Case::random`'s devices): plant Q 30–3,000, the file
     /// stating `told` = 0.3–10 times the plant's damping, the AC the largest the board takes.
     fn edge(rng: &mut Rng) -> Option<Case> {
-        let mut params = Self::random_device(rng);
-        let tuner = Tuner::new(Device::new(params).ok()?);
-        let range = tuner.tunable_range(0.05).ok()?;
-        let target_hz = range.low_hz + (range.high_hz - range.low_hz) * rng.range(0.05, 0.95);
-        if target_hz.is_nan() || target_hz <= 5.0 || target_hz >= 300.0 {
-            return None;
-        }
-        let bias = tuner.tune(target_hz, 0.05).ok()?.volts;
-        let cap = tuner.max_bias(0.05).ok()?.volts;
-        let room = bias.min(cap - bias);
-        if room.is_nan() || room <= 1.0 {
-            return None;
-        }
+        let Tuned {
+            mut params,
+            tuner,
+            target_hz,
+            bias,
+            room,
+        } = Self::tuned(rng)?;
         let near = [1.0, 2.0, 0.5][rng.below(3)];
         let off = [0.0, 0.01, -0.01, 0.03, -0.03][rng.below(5)];
         let ac_hz = target_hz * near * (1.0 + off);
