@@ -353,22 +353,15 @@ impl Case {
                 rng.log_range(0.05, 5.0),
             )
         });
-        let tick_hz = (20.0 * ac_hz).max(1000.0).ceil();
-        let defaults = Settings::for_target(1.0);
-        let drive_starts =
-            bias / f64::from(defaults.slew_volts_per_second) + f64::from(defaults.settle_seconds);
-        let ring = plant_q / (std::f64::consts::PI * target_hz.min(ac_hz));
-        Some(Case {
+        let told = told.map_or(0.0, |factor| 1.0 / factor);
+        Some(Case::at(
             params,
-            target_hz,
-            ac_volts,
-            ac_hz,
-            plant_q,
+            (target_hz, bias),
+            (ac_volts, ac_hz),
+            (plant_q, told),
             branch,
-            tick_hz,
-            duration_seconds: drive_starts + 5.0 * ring,
-            told: told.map_or(0.0, |factor| 1.0 / factor),
-        })
+            None,
+        ))
     }
 
     /// A case of issue 60's property (`Case::random`'s devices): plant Q 30–3,000, the file
@@ -422,21 +415,45 @@ impl Case {
         if ac_volts.is_nan() || ac_volts <= 1.0 {
             return None;
         }
-        let tick_hz = (20.0 * ac_hz).max(1000.0).ceil();
+        let drive = (ac_volts, ac_hz);
+        Some(Case::at(
+            params,
+            (target_hz, bias),
+            drive,
+            (plant_q, told),
+            None,
+            Some(12.0),
+        ))
+    }
+
+    /// The case of `params` tuned to `target_hz` at `bias` V, an AC of `ac_volts` at `ac_hz`,
+    /// a plant of Q `plant_q` (the file stating `told` times its damping) and `branch`: ticks
+    /// 20 a drive period (1 kHz at least), run five ring times Q/(π·f) after the drive starts
+    /// (at most `most_seconds`).
+    fn at(
+        params: DeviceParams<f64>,
+        (target_hz, bias): (f64, f64),
+        (ac_volts, ac_hz): (f64, f64),
+        (plant_q, told): (f64, f64),
+        branch: Option<(f64, f64)>,
+        most_seconds: Option<f64>,
+    ) -> Case {
+        let defaults = Settings::for_target(1.0);
         let drive_starts =
             bias / f64::from(defaults.slew_volts_per_second) + f64::from(defaults.settle_seconds);
         let ring = plant_q / (std::f64::consts::PI * target_hz.min(ac_hz));
-        Some(Case {
+        Case {
             params,
             target_hz,
             ac_volts,
             ac_hz,
             plant_q,
-            branch: None,
-            tick_hz,
-            duration_seconds: drive_starts + (5.0 * ring).min(12.0),
+            branch,
+            tick_hz: (20.0 * ac_hz).max(1000.0).ceil(),
+            duration_seconds: drive_starts
+                + (5.0 * ring).min(most_seconds.unwrap_or(f64::INFINITY)),
             told,
-        })
+        }
     }
 
     fn scene(&self) -> String {
