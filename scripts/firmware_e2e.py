@@ -366,6 +366,42 @@ def tick_rate(ref):
               f"{rates[tick_hz]:.3f} Hz")
 
 
+def trim_on_chip(ref):
+    """The trim on the chip: the model-sensor build, the flashed device's model as its plant."""
+    print("== the trim on the chip (the flashed device's model as its sensor)")
+    settings = os.path.join(WORK, "trim-settings.toml")
+    with open(settings, "w") as f:
+        f.write("target_hz = 44.0\ntrim_tolerance = 0.001\nac_volts = 100.0\nac_hz = 40.0\n")
+        f.write(FRONT_END)
+    img = os.path.join(WORK, "trim.img")
+    host_sim("image", "--settings", settings, "--power-up", "drive", "--out", img)
+    fw = Firmware("trim", img, trace=False, elf=TRIM_ELF)
+    s = fw.wait_phase(("driving", "faulted"))
+    check(s["fault"] == "none", f"boot: probe low, measure, retune, drive: {s['phase']}")
+    reply = fw.ask("trim")
+    check(reply == "ok trim: measuring", f"trim: {reply}")
+    time.sleep(0.5)
+    s = fw.wait_phase(("driving", "faulted"))
+    log = open(fw.log).read()
+    trims = re.findall(r"Trimmed \{ bias_volts: ([0-9.]+), measured_hz: ([0-9.]+), "
+                       r"shear_modulus: ([0-9.]+)", log)
+    check(s["fault"] == "none" and len(trims) >= 3,
+          f"{len(trims)} trims (two at boot, one asked), the drive on after: {s['phase']}")
+    # The plant is the flashed device itself: the estimate is its shear modulus, 45 kPa.
+    worst = max(abs(float(mu) - 45000.0) / 45000.0 for _, _, mu in trims)
+    check(worst <= 1e-3, f"the trims' shear modulus within {worst:.1e} of the device's")
+    check(abs(float(trims[-1][1]) - 44.0) <= 44.0 * 1e-3,
+          f"the asked trim measured {trims[-1][1]} Hz for 44 Hz (tolerance 1e-3)")
+    # A replan while driving (the new plan's checks in the command task, the tick
+    # preempting it): the deepest stack the port reaches, after the boot's.
+    reply = fw.ask("target 43.5")
+    check(reply.startswith("ok target_hz=43.5"), f"a replan while driving: {reply}")
+    s = fw.wait_phase(("driving", "faulted"))
+    check(s["fault"] == "none", f"driving the new plan: {s['phase']} ({s['fault']})")
+    fw.stop()
+    ram_within_budget(s, TRIM_ELF, "the boot's trims, a trim asked for and a replan")
+
+
 def main():
     os.makedirs(WORK, exist_ok=True)
     ref = os.path.join(WORK, "reference.img")
@@ -623,38 +659,7 @@ def main():
     tick_rate(ref)
 
     if TRIM_ELF:
-        print("== the trim on the chip (the flashed device's model as its sensor)")
-        settings = os.path.join(WORK, "trim-settings.toml")
-        with open(settings, "w") as f:
-            f.write("target_hz = 44.0\ntrim_tolerance = 0.001\nac_volts = 100.0\nac_hz = 40.0\n")
-            f.write(FRONT_END)
-        img = os.path.join(WORK, "trim.img")
-        host_sim("image", "--settings", settings, "--power-up", "drive", "--out", img)
-        fw = Firmware("trim", img, trace=False, elf=TRIM_ELF)
-        s = fw.wait_phase(("driving", "faulted"))
-        check(s["fault"] == "none", f"boot: probe low, measure, retune, drive: {s['phase']}")
-        reply = fw.ask("trim")
-        check(reply == "ok trim: measuring", f"trim: {reply}")
-        time.sleep(0.5)
-        s = fw.wait_phase(("driving", "faulted"))
-        log = open(fw.log).read()
-        trims = re.findall(r"Trimmed \{ bias_volts: ([0-9.]+), measured_hz: ([0-9.]+), "
-                           r"shear_modulus: ([0-9.]+)", log)
-        check(s["fault"] == "none" and len(trims) >= 3,
-              f"{len(trims)} trims (two at boot, one asked), the drive on after: {s['phase']}")
-        # The plant is the flashed device itself: the estimate is its shear modulus, 45 kPa.
-        worst = max(abs(float(mu) - 45000.0) / 45000.0 for _, _, mu in trims)
-        check(worst <= 1e-3, f"the trims' shear modulus within {worst:.1e} of the device's")
-        check(abs(float(trims[-1][1]) - 44.0) <= 44.0 * 1e-3,
-              f"the asked trim measured {trims[-1][1]} Hz for 44 Hz (tolerance 1e-3)")
-        # A replan while driving (the new plan's checks in the command task, the tick
-        # preempting it): the deepest stack the port reaches, after the boot's.
-        reply = fw.ask("target 43.5")
-        check(reply.startswith("ok target_hz=43.5"), f"a replan while driving: {reply}")
-        s = fw.wait_phase(("driving", "faulted"))
-        check(s["fault"] == "none", f"driving the new plan: {s['phase']} ({s['fault']})")
-        fw.stop()
-        ram_within_budget(s, TRIM_ELF, "the boot's trims, a trim asked for and a replan")
+        trim_on_chip(ref)
 
         print("== a runtime fault latches: down at the slew rate, 0 V, until clear; clear with the "
               "cause still there stays faulted")

@@ -105,9 +105,10 @@ cargo fmt --all -- --check
 step "docs: every model.md citation names a section of docs/model.md; nothing points outside"
 scripts/check-citations.sh
 
-step "clippy, host (host-sim as built by default, and with its bdf feature)"
+step "clippy, host (host-sim as built by default, and with its bdf feature; the core without its optional features)"
 cargo clippy --locked --workspace --all-targets -- -D warnings
 cargo clippy --locked --workspace --all-targets --features host-sim/bdf -- -D warnings
+cargo clippy --locked -p de-resonator --all-targets --no-default-features -- -D warnings
 
 step "clippy, target (core with defmt)"
 cargo clippy --locked -p de-resonator --target "$TARGET" --features defmt -- -D warnings

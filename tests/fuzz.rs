@@ -436,10 +436,20 @@ fn tampered(rng: &mut Rng, mut done: TrimDone) -> TrimDone {
 
             device,
         },
-        (1, _) => TrimResult::Converged {
+        (1, result) => TrimResult::Converged {
             resolution: None,
             measured_hz: wild(rng) as f32,
             shear_modulus: wild(rng) as f32,
+            // A converged trim's prediction, kept or lying as a retune's (or none).
+            predicted: match result {
+                TrimResult::Converged { predicted, .. } | TrimResult::Retune { predicted, .. } => {
+                    predicted.map(|p| de_resonator::controller::Predicted {
+                        allowed: wild(rng) as f32 * p.allowed,
+                        ..p
+                    })
+                }
+                _ => None,
+            },
         },
         (2, _) => TrimResult::AboveCeiling {
             measured_hz: 0.0,

@@ -511,7 +511,7 @@ impl Controller {
     /// The state machine's step at tick `k`, and what it says; `ring` is what the trim
     /// records, `phase` the AC's phase at `k` (`Plan::phase`).
     fn advance(&mut self, k: u32, ring: Ring, phase: u32) -> Result<Option<Event>, Fault> {
-        let _ = ring;
+        let _ = (ring, phase);
         match self.state {
             State::Ramping { then_measure } if self.plan.ramp_volts(k) == self.plan.bias_volts => {
                 // The probe, off on a way down from above the cap (`adopt`), rides again.

@@ -404,6 +404,8 @@ pub enum TrimResult {
         measured_hz: f32,
         shear_modulus: f32,
         resolution: Option<f32>,
+        /// The drive's swing from the bias on the ring the window heard (`None`: no AC).
+        predicted: Option<Predicted>,
     },
     /// Ramp to `bias_volts` and measure again; `max_volts` is the estimate's own cap (the
     /// controller takes the lowest of it and the caps in force); `device` is the estimate
@@ -493,6 +495,9 @@ impl TrimJob {
         // The ring seen against the one the statics gave for this bias: the plant's damping
         // and the window's settling, which the next pulse's reckoning then takes in.
         let (mut ring_seen, mut ring_span) = (self.ring.seen, self.ring.span);
+        // The ring the window heard, in its input (the AC a trim pauses rings on in it: what
+        // the drive then starts on).
+        let mut heard_ring = None;
         let measured_hz = match self.measured_hz {
             Some(hz) => hz,
             None => {
@@ -564,6 +569,7 @@ impl TrimJob {
                 if seen > 0.0 && seen.is_finite() {
                     ring_seen = seen;
                 }
+                heard_ring = Some((input, ring.amplitude * to_ring));
                 ring_span = timing.span;
                 measured_hz
             }
@@ -573,15 +579,43 @@ impl TrimJob {
         if let Some(error) = outside_batch(self.batch_modulus, shear_modulus) {
             return Err(Fault::Trim(error));
         }
+        let params = DeviceParams {
+            shear_modulus,
+            ..self.params
+        };
+        let device = Device::new(params).map_err(Fault::Device)?;
+        let tuner = Tuner::new(device);
+        let limit_offset = tuner.limit().at.offset;
+        // The free ring the membrane carries now, in stretch (model.md §7): the window's, as
+        // heard (a paused drive's and the pulse's together; 0 unheard or not a number).
+        let carried_ring_stretch = heard_ring.map_or(0.0, |(input, ring)| {
+            let gain = RingGain::at(&device, limit_offset, self.bias_volts, pulse_seconds(&s));
+            let stretch = gain.stretch_of(input, self.bias_volts, ring);
+            if stretch.is_finite() {
+                stretch
+            } else {
+                0.0
+            }
+        });
         // On target when within the tolerance less twice the timing's error: then the
         // frequency itself is within it.
         let converged = self.tuned
             && (measured_hz - s.target_hz).abs() <= (tolerance - 2.0 * timing_error) * s.target_hz;
         if converged {
+            // The AC starts at once on the ring heard (or the pulse's, if more).
+            let pulse = pulse_ring(&device, limit_offset, self.bias_volts, &s);
+            let predicted = self.restart_swing(
+                &device,
+                limit_offset,
+                self.bias_volts,
+                carried_ring_stretch.max(pulse),
+                None,
+            )?;
             return Ok(TrimResult::Converged {
                 measured_hz,
                 shear_modulus,
                 resolution,
+                predicted,
             });
         }
         if self.count.saturating_add(1) >= MAX_TRIMS {
@@ -590,12 +624,6 @@ impl TrimJob {
                 target_hz: s.target_hz,
             }));
         }
-        let params = DeviceParams {
-            shear_modulus,
-            ..self.params
-        };
-        let device = Device::new(params).map_err(Fault::Device)?;
-        let tuner = Tuner::new(device);
         let margin = guarded(s.margin);
         // The estimate may lower the cap (a softer plant), never raise it past the cap in
         // force (the operator's, the ceiling, an earlier estimate's).
@@ -652,49 +680,20 @@ impl TrimJob {
                 max_volts: estimate_volts,
             });
         }
-        // The drive's swing at the new bias on the estimate (model.md §7): a tracked drive
-        // follows the resonance, so it is checked there, with the tracker's Q.
-        let quality = (self.quality_factor > 0.0).then_some(self.quality_factor);
-        let ac_hz = match self.measured_hz {
-            Some(_) => device
-                .offset_for_bias(bias_volts, tuner.limit().at.offset)
-                .map_or(s.ac_hz, |offset| device.natural_frequency_hz_at(offset)),
-            None => s.ac_hz,
+        // The drive's swing at the new bias on the estimate (model.md §7), from the bias
+        // measured at: the ring carried through the ramp and the next pulse's.
+        let ring_stretch = pulse_ring(&device, limit_offset, bias_volts, &s) + carried_ring_stretch;
+        let ramp = Ramp {
+            from_volts: self.bias_volts,
+            slew_volts_per_second: s.slew_volts_per_second,
+            settle_seconds: match self.measured_hz {
+                Some(_) => 0.0,
+                None => s.settle_seconds,
+            },
+            after_descent: false,
         };
-        let mut predicted = None;
-        if s.ac_volts > 0.0 {
-            // No natural frequency at the new bias (a fold): no swing to bound.
-            if !(ac_hz > 0.0) {
-                return Err(Fault::DriveSwing(SwingError::Unbounded {
-                    resonance: Resonance::Static,
-                    natural_hz: 0.0,
-                    quality_factor: self.quality_factor,
-                    largest_ac_volts: 0.0,
-                }));
-            }
-            // From the bias measured at: a tracked drive moves it with the AC on.
-            let drive = AcDrive {
-                bias_volts,
-                ac_volts: s.ac_volts,
-                ac_hz,
-                // The AC starts again after the pulse at the new bias.
-                ring_stretch: pulse_ring(&device, tuner.limit().at.offset, bias_volts, &s),
-                ramp: Some(Ramp {
-                    from_volts: self.bias_volts,
-                    slew_volts_per_second: s.slew_volts_per_second,
-                    settle_seconds: match self.measured_hz {
-                        Some(_) => 0.0,
-                        None => s.settle_seconds,
-                    },
-                    after_descent: false,
-                }),
-            };
-            let swing = device
-                .check_swing(drive, tuner.limit().at.offset, quality, s.margin)
-                .map_err(Fault::DriveSwing)?;
-            let noise = self.inputs.stretch;
-            predicted = Some(Predicted::of(&swing, ac_hz, s.margin, noise));
-        }
+        let predicted =
+            self.restart_swing(&device, limit_offset, bias_volts, ring_stretch, Some(ramp))?;
         Ok(TrimResult::Retune {
             measured_hz,
             shear_modulus,
@@ -714,6 +713,56 @@ impl TrimJob {
             device,
             predicted,
         })
+    }
+
+    /// The swing of the drive the trim starts at `bias_volts` on the estimate `device` (below
+    /// `limit_offset`), on a free ring of `ring_stretch` (after `ramp`, if any), checked
+    /// (model.md §7) and predicted for the watch; `None` without AC. A tracked drive follows
+    /// the resonance, so it is checked there, with the tracker's Q.
+    fn restart_swing(
+        &self,
+        device: &Device<f32>,
+        limit_offset: f32,
+        bias_volts: f32,
+        ring_stretch: f32,
+        ramp: Option<Ramp<f32>>,
+    ) -> Result<Option<Predicted>, Fault> {
+        let s = &self.settings;
+        if !(s.ac_volts > 0.0) {
+            return Ok(None);
+        }
+        let quality = (self.quality_factor > 0.0).then_some(self.quality_factor);
+        let ac_hz = match self.measured_hz {
+            Some(_) => device
+                .offset_for_bias(bias_volts, limit_offset)
+                .map_or(s.ac_hz, |offset| device.natural_frequency_hz_at(offset)),
+            None => s.ac_hz,
+        };
+        // No natural frequency at the bias (a fold): no swing to bound.
+        if !(ac_hz > 0.0) {
+            return Err(Fault::DriveSwing(SwingError::Unbounded {
+                resonance: Resonance::Static,
+                natural_hz: 0.0,
+                quality_factor: self.quality_factor,
+                largest_ac_volts: 0.0,
+            }));
+        }
+        let drive = AcDrive {
+            bias_volts,
+            ac_volts: s.ac_volts,
+            ac_hz,
+            ring_stretch,
+            ramp,
+        };
+        let swing = device
+            .check_swing(drive, limit_offset, quality, s.margin)
+            .map_err(Fault::DriveSwing)?;
+        Ok(Some(Predicted::of(
+            &swing,
+            ac_hz,
+            s.margin,
+            self.inputs.stretch,
+        )))
     }
 }
 
@@ -1005,8 +1054,12 @@ impl Controller {
                 measured_hz,
                 shear_modulus,
                 resolution,
+                predicted,
             } => {
                 self.trim.params.shear_modulus = shear_modulus;
+                if predicted.is_some() {
+                    self.watch.predict(predicted);
+                }
                 self.trim.count = self.trim.count.saturating_add(1);
                 // The AC from phase 0, as the swing's check has it switched on.
                 self.plan.ac_tick = Some(k.saturating_add(1));
@@ -1036,6 +1089,20 @@ impl Controller {
                 needed_volts,
                 max_volts,
             ))),
+            // A ring too weak to time in the window, on a membrane that may carry a ring of
+            // its own (a drive ran since the last plan without AC: paused, or before a new
+            // plan's ramp): that ring can meet the pulse's out of phase. Measured again from a
+            // hold (the next pulse meets it elsewhere in its phase), within `MAX_TRIMS`.
+            TrimResult::Failed(Fault::Trim(TrimError::Unresolvable {
+                from: NoiseFrom::Window,
+                ..
+            })) if self.watch.ring_to_carry_stretch() > 0.0
+                && self.trim.count.saturating_add(1) < MAX_TRIMS =>
+            {
+                self.trim.count = self.trim.count.saturating_add(1);
+                self.hold_from(k, true);
+                Ok(None)
+            }
             TrimResult::Failed(fault) => Err(fault),
         }
     }

@@ -599,6 +599,15 @@ impl RingGain {
             RingInput::Charge => self.farads_per_stretch * bias_volts * stretch,
         }
     }
+
+    /// A ring of `ring` in `input` at `bias_volts` as the stretch's (the charge's over
+    /// Φ·C'(λ), model.md §8).
+    pub fn stretch_of(&self, input: RingInput, bias_volts: f32, ring: f32) -> f32 {
+        match input {
+            RingInput::Stretch => ring,
+            RingInput::Charge => ring / (self.farads_per_stretch * bias_volts),
+        }
+    }
 }
 
 /// The share of a window of `window_seconds` a ring decaying at `decay_per_second` stands
