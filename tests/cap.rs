@@ -467,6 +467,7 @@ fn a_retune_whose_probe_would_pass_the_cap_is_refused_when_it_comes() {
                     max_volts: 3010.0,
                     ring: de_resonator::NextRing::UNKNOWN,
                     resolution: None,
+                    quality: None,
                     device,
                     predicted: None,
                 };

@@ -410,11 +410,17 @@ fn tampered(rng: &mut Rng, mut done: TrimDone) -> TrimDone {
                 max_volts,
                 ring,
                 resolution,
+                quality,
                 device,
                 predicted,
             },
         ) => TrimResult::Retune {
             resolution,
+            // A lying Q, as a lying prediction: only what the swing is checked with.
+            quality: quality.map(|q| de_resonator::estimate::ring::RingQuality {
+                quality_factor: wild(rng) as f32 * q.quality_factor,
+                high: wild(rng) as f32 * q.high,
+            }),
             // A lying prediction only loosens or tightens the swing's watch: the §6 checks
             // on every sample stay.
             predicted: predicted.map(|p| de_resonator::controller::Predicted {
@@ -438,6 +444,7 @@ fn tampered(rng: &mut Rng, mut done: TrimDone) -> TrimDone {
         },
         (1, result) => TrimResult::Converged {
             resolution: None,
+            quality: None,
             measured_hz: wild(rng) as f32,
             shear_modulus: wild(rng) as f32,
             // A converged trim's prediction, kept or lying as a retune's (or none).

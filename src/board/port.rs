@@ -701,6 +701,7 @@ fn status(
         limit,
         ticks: c.ticks(),
         hardware: *extras,
+        ring: c.ring_quality(),
         fault: c.latched_fault(),
     }
 }

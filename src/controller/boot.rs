@@ -305,12 +305,28 @@ impl Controller {
             }),
         };
         let batch = boot.batch_limit_volts.map(|_| table);
-        let swing = self.checked_swing(drive, limit.at.offset, settings.margin, batch)?;
+        let checked = self.checked_swing(drive, limit.at.offset, settings.margin, batch);
+        let swing = match checked {
+            // No damping told, and a trim whose ring measures the plant's Q before the AC
+            // starts (the AC waits for it): the ramp's and the pulse's rings are checked
+            // now, the drive's swing with the measured Q when the trim converges
+            // (`TrimJob::restart_swing`), refused there if it does not fit.
+            Err(Fault::DriveSwing(_)) if self.quality_to_measure() => {
+                let quiet = AcDrive {
+                    ac_volts: 0.0,
+                    ..drive
+                };
+                self.checked_swing(quiet, limit.at.offset, settings.margin, batch)?;
+                None
+            }
+            checked => Some(checked?),
+        };
         // What the board then watches the measured swing against (`envelope`).
-        self.watch.predict((drive.ac_volts > 0.0).then(|| {
-            let noise = self.inputs.stretch;
-            Predicted::of(&swing, drive.ac_hz, settings.margin, noise)
-        }));
+        self.watch
+            .predict(swing.filter(|_| drive.ac_volts > 0.0).map(|swing| {
+                let noise = self.inputs.stretch;
+                Predicted::of(&swing, drive.ac_hz, settings.margin, noise)
+            }));
         // The ring the first pulse will leave at the bias it measures at, as the device's
         // damping leaves it over the window, against the noise the front end declares: now,
         // before any voltage, and by the tick before it pulses against the noise it hears.

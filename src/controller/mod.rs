@@ -60,6 +60,7 @@ use crate::acquire::{InputError, InputNoise};
 use crate::drive::{Amplifier, DacCode};
 #[cfg(feature = "trim")]
 use crate::estimate::ring::RingInput;
+use crate::estimate::ring::RingQuality;
 use crate::model::device::Device;
 use gate::gate;
 use watch::{Leakage, LeakageLimits, Ring, Watch};
@@ -301,6 +302,22 @@ impl Controller {
         #[cfg(feature = "track")]
         return self.tracked().map(|l| (l.natural_hz, l.quality_factor));
         #[cfg(not(feature = "track"))]
+        None
+    }
+
+    /// The measured natural frequency (Hz) and quality factor: tracking's, else the last
+    /// trim window's ring's (its Q from the decay).
+    pub fn resonance(&self) -> Option<(f32, f32)> {
+        self.tracking()
+            .or_else(|| self.ring_quality().map(|(hz, q)| (hz, q.quality_factor)))
+    }
+
+    /// The last trim window's ring: its frequency, Hz, and its Q from the decay (with the
+    /// highest Q the window allows), if a window measured one.
+    pub fn ring_quality(&self) -> Option<(f32, RingQuality)> {
+        #[cfg(feature = "trim")]
+        return self.trim.ring_quality;
+        #[cfg(not(feature = "trim"))]
         None
     }
 
@@ -614,6 +631,15 @@ impl Controller {
     /// Whether a trim was asked for.
     fn trim_wanted(&self) -> bool {
         self.settings.trim_tolerance.is_some()
+    }
+
+    /// Whether the AC's swing waits for the Q a trim's ring measures: no damping told, a
+    /// trim asked for, and no tracked drive (whose tracker measures its own).
+    fn quality_to_measure(&self) -> bool {
+        cfg!(feature = "trim")
+            && self.trim_wanted()
+            && self.settings.track_seconds.is_none()
+            && !(self.flashed.params().damping > 0.0)
     }
 
     /// The ring a trim's pulse at `bias_volts` leaves, in stretch, where a trim is wanted

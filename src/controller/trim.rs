@@ -13,7 +13,8 @@ use super::{Controller, Event, State};
 use crate::acquire::InputNoise;
 use crate::estimate::ring::{
     estimate_shear_modulus, high_passed, model_hz, ring_frequency_hz, ring_share, ring_span,
-    NoiseFrom, RingFit, RingGain, RingInput, TrimError, MAX_WINDOW, TIMING_ERROR_TIMES_RESOLUTION,
+    NoiseFrom, RingFit, RingGain, RingInput, RingQuality, TrimError, MAX_WINDOW,
+    TIMING_ERROR_TIMES_RESOLUTION,
 };
 use crate::model::device::{Device, DeviceParams};
 use crate::model::swing::{AcDrive, Ramp, Resonance, SwingError};
@@ -66,6 +67,8 @@ pub(super) struct TrimState {
     pub(super) tracked_hz: Option<f32>,
     /// The tracker's Q with it (NaN: none): the damping the drive's swing is checked with.
     pub(super) tracked_quality: f32,
+    /// The last window's ring: its frequency, Hz, and Q (`None` before any).
+    pub(super) ring_quality: Option<(f32, RingQuality)>,
 }
 
 impl TrimState {
@@ -89,6 +92,7 @@ impl TrimState {
             job: 0,
             tracked_hz: None,
             tracked_quality: f32::NAN,
+            ring_quality: None,
         }
     }
 
@@ -404,6 +408,8 @@ pub enum TrimResult {
         measured_hz: f32,
         shear_modulus: f32,
         resolution: Option<f32>,
+        /// The ring's Q, from its decay over the window (`None`: a tracked drive's solve).
+        quality: Option<RingQuality>,
         /// The drive's swing from the bias on the ring the window heard (`None`: no AC).
         predicted: Option<Predicted>,
     },
@@ -417,6 +423,8 @@ pub enum TrimResult {
         max_volts: f32,
         ring: NextRing,
         resolution: Option<f32>,
+        /// The ring's Q, as `Converged`'s.
+        quality: Option<RingQuality>,
         device: Device<f32>,
         /// The drive's swing at the new bias, as the estimate predicts it (`None`: no AC).
         predicted: Option<Predicted>,
@@ -498,6 +506,8 @@ impl TrimJob {
         // The ring the window heard, in its input (the AC a trim pauses rings on in it: what
         // the drive then starts on).
         let mut heard_ring = None;
+        // Its decay: the plant's Q (model.md §7), whatever the device file says.
+        let mut quality = None;
         let measured_hz = match self.measured_hz {
             Some(hz) => hz,
             None => {
@@ -570,6 +580,7 @@ impl TrimJob {
                     ring_seen = seen;
                 }
                 heard_ring = Some((input, ring.amplitude * to_ring));
+                quality = Some(RingQuality::of(window, half, floor, sample_hz, timing.hz));
                 ring_span = timing.span;
                 measured_hz
             }
@@ -605,16 +616,16 @@ impl TrimJob {
             // The AC starts at once on the ring heard (or the pulse's, if more).
             let pulse = pulse_ring(&device, limit_offset, self.bias_volts, &s);
             let predicted = self.restart_swing(
-                &device,
-                limit_offset,
+                (&device, limit_offset),
                 self.bias_volts,
-                carried_ring_stretch.max(pulse),
+                (carried_ring_stretch.max(pulse), quality),
                 None,
             )?;
             return Ok(TrimResult::Converged {
                 measured_hz,
                 shear_modulus,
                 resolution,
+                quality,
                 predicted,
             });
         }
@@ -692,8 +703,12 @@ impl TrimJob {
             },
             after_descent: false,
         };
-        let predicted =
-            self.restart_swing(&device, limit_offset, bias_volts, ring_stretch, Some(ramp))?;
+        let predicted = self.restart_swing(
+            (&device, limit_offset),
+            bias_volts,
+            (ring_stretch, quality),
+            Some(ramp),
+        )?;
         Ok(TrimResult::Retune {
             measured_hz,
             shear_modulus,
@@ -710,6 +725,7 @@ impl TrimJob {
                 span: ring_span,
             },
             resolution,
+            quality,
             device,
             predicted,
         })
@@ -718,25 +734,42 @@ impl TrimJob {
     /// The swing of the drive the trim starts at `bias_volts` on the estimate `device` (below
     /// `limit_offset`), on a free ring of `ring_stretch` (after `ramp`, if any), checked
     /// (model.md §7) and predicted for the watch; `None` without AC. A tracked drive follows
-    /// the resonance, so it is checked there, with the tracker's Q.
+    /// the resonance, so it is checked there, with the tracker's Q; else with the highest Q
+    /// the window's ring allows (`ring_quality`), or the device's damping where it gives a
+    /// higher Q or the ring bounds none.
     fn restart_swing(
         &self,
-        device: &Device<f32>,
-        limit_offset: f32,
+        (device, limit_offset): (&Device<f32>, f32),
         bias_volts: f32,
-        ring_stretch: f32,
+        (ring_stretch, ring_quality): (f32, Option<RingQuality>),
         ramp: Option<Ramp<f32>>,
     ) -> Result<Option<Predicted>, Fault> {
         let s = &self.settings;
         if !(s.ac_volts > 0.0) {
             return Ok(None);
         }
-        let quality = (self.quality_factor > 0.0).then_some(self.quality_factor);
+        let natural_hz = device
+            .offset_for_bias(bias_volts, limit_offset)
+            .map_or(f32::NAN, |offset| device.natural_frequency_hz_at(offset));
+        let quality = match self.measured_hz {
+            Some(_) => (self.quality_factor > 0.0).then_some(self.quality_factor),
+            None => ring_quality
+                .map(|q| q.high)
+                .filter(|high| high.is_finite())
+                .map(|high| {
+                    // The device's own Q at the bias (∞ undamped: the ring's then).
+                    let p = device.params();
+                    let told = p.effective_mass() * core::f32::consts::TAU * natural_hz / p.damping;
+                    if told.is_finite() && told > high {
+                        told
+                    } else {
+                        high
+                    }
+                }),
+        };
         let ac_hz = match self.measured_hz {
-            Some(_) => device
-                .offset_for_bias(bias_volts, limit_offset)
-                .map_or(s.ac_hz, |offset| device.natural_frequency_hz_at(offset)),
-            None => s.ac_hz,
+            Some(_) if natural_hz > 0.0 => natural_hz,
+            _ => s.ac_hz,
         };
         // No natural frequency at the bias (a fold): no swing to bound.
         if !(ac_hz > 0.0) {
@@ -1021,12 +1054,14 @@ impl Controller {
                 max_volts,
                 ring,
                 resolution,
+                quality,
                 predicted,
                 ..
             } => {
                 if predicted.is_some() {
                     self.watch.predict(predicted);
                 }
+                self.trim.ring_quality = quality.map(|q| (measured_hz, q));
                 let applied = self.retune(
                     k,
                     bias_volts,
@@ -1054,9 +1089,11 @@ impl Controller {
                 measured_hz,
                 shear_modulus,
                 resolution,
+                quality,
                 predicted,
             } => {
                 self.trim.params.shear_modulus = shear_modulus;
+                self.trim.ring_quality = quality.map(|q| (measured_hz, q));
                 if predicted.is_some() {
                     self.watch.predict(predicted);
                 }

@@ -536,6 +536,104 @@ impl RingFit {
     }
 }
 
+/// A ring's quality factor from its decay over a window (model.md §7: a free ring's
+/// amplitude falls as e^(−ω·t/(2Q)), Q = ω·M/c), with the highest Q the window allows.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct RingQuality {
+    /// Q from the amplitudes of the window's two halves (∞: no decay heard).
+    pub quality_factor: f32,
+    /// The highest Q within the halves' errors, `QUALITY_DEVIATIONS` deviations of their
+    /// ratio (∞: the decay is not told from none).
+    pub high: f32,
+}
+
+/// The deviations of the halves' amplitude ratio `RingQuality::high` allows.
+pub const QUALITY_DEVIATIONS: f32 = 3.0;
+
+impl RingQuality {
+    /// The decay of the ring in `samples` (a ring input's running sum, as `RingFit` takes
+    /// it, `samples_per_second` of them) at `ring_hz`, high-passed over `2·half + 1` samples
+    /// (a period), the noise at least `floor` a sample (`RingFit`'s): the amplitudes of its
+    /// two halves (`amplitude`; a ring decaying at δ has the second's e^(−δ·Δ) times the
+    /// first's, Δ the halves' distance, each fitted over an equal span) and their errors
+    /// (`relative_error`).
+    pub fn of(
+        samples: &[f32],
+        half: usize,
+        floor: f32,
+        samples_per_second: f32,
+        ring_hz: f32,
+    ) -> Self {
+        let n = samples.len() / 2;
+        let turn = core::f32::consts::TAU * ring_hz / samples_per_second;
+        let halves = [samples.get(..n), samples.get(n..2 * n)].map(|h| h.unwrap_or(&[]));
+        let [first, second] =
+            halves.map(|h| (RingFit::of(h, half, floor), Self::amplitude(h, half, turn)));
+        let per_period = 2.0 * half as f32 + 1.0;
+        let valid = n.saturating_sub(2 * half) as f32;
+        let error = |(fit, amplitude): (RingFit, f32)| {
+            Self::relative_error(fit.noise, amplitude, valid, per_period)
+        };
+        let (a, b) = (error(first), error(second));
+        let spread = libm::sqrtf(a * a + b * b);
+        let ratio = libm::logf(first.1 / second.1);
+        // δ = ln(A₁/A₂)/Δ, Q = ω/(2δ) = π·f/δ.
+        let seconds = n as f32 / samples_per_second;
+        let quality = |log_ratio: f32| {
+            if log_ratio > 0.0 {
+                core::f32::consts::PI * ring_hz * seconds / log_ratio
+            } else {
+                f32::INFINITY
+            }
+        };
+        let quality_factor = quality(ratio);
+        let high = quality(ratio - QUALITY_DEVIATIONS * spread);
+        if !(quality_factor >= 0.0 && high >= 0.0) {
+            return RingQuality {
+                quality_factor: f32::INFINITY,
+                high: f32::INFINITY,
+            };
+        }
+        RingQuality {
+            quality_factor,
+            high,
+        }
+    }
+
+    /// The amplitude of the sine of `turn` radians a sample that fits `samples` high-passed
+    /// over `2·half + 1` of them best (least squares in its sine and cosine): exact for a
+    /// steady ring whatever its phase, where a mean square over a part of a period is not.
+    fn amplitude(samples: &[f32], half: usize, turn: f32) -> f32 {
+        let (mut ss, mut sc, mut cc, mut ys, mut yc) = (0.0f32, 0.0f32, 0.0f32, 0.0f32, 0.0f32);
+        for (k, y) in high_passed(samples, half).enumerate() {
+            if y.is_finite() {
+                let (sin, cos) = (libm::sinf(turn * k as f32), libm::cosf(turn * k as f32));
+                ss += sin * sin;
+                sc += sin * cos;
+                cc += cos * cos;
+                ys += y * sin;
+                yc += y * cos;
+            }
+        }
+        let det = ss * cc - sc * sc;
+        let (a, b) = ((ys * cc - yc * sc) / det, (yc * ss - ys * sc) / det);
+        libm::sqrtf(a * a + b * b)
+    }
+
+    /// A half's `amplitude`'s relative error (one deviation), fitted over `valid` high-passed
+    /// samples, `per_period` a period. Their noise w is the walk of steps of `noise`
+    /// (variance `walk_variance`), correlated over about a period (L samples): the fit's
+    /// cross term with the ring, 2·A·w·sin, averages to a deviation of A·σ_w·√(2L/n), the
+    /// noise's own square to σ_w²·√(2L/n); over A²/2, an amplitude's relative error is half
+    /// its square's. NaN or ∞ where no ring was heard.
+    fn relative_error(noise: f32, amplitude: f32, valid: f32, per_period: f32) -> f32 {
+        let half = ((per_period - 1.0) * 0.5) as usize;
+        let noise = noise * libm::sqrtf(walk_variance(half)) / amplitude;
+        libm::sqrtf(2.0 * per_period / valid) * (noise + noise * noise)
+    }
+}
+
 /// Sums for a least-squares line through (k − middle, y_k) over the finite samples:
 /// (n, Σt, Σy, Σt², Σty), about the window's middle (well conditioned in f32).
 fn line_sums(samples: impl Iterator<Item = f32> + Clone) -> (f32, f32, f32, f32, f32) {

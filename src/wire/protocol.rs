@@ -13,6 +13,7 @@
 use core::fmt;
 
 use crate::controller::{Fault, Inputs, Phase, Setting};
+use crate::estimate::ring::RingQuality;
 use crate::model::safety::FailureMode;
 use crate::numerics::decimal::{scale10, Decimal};
 
@@ -640,6 +641,9 @@ pub struct Status {
     pub limit: Option<FailureMode>,
     pub ticks: u32,
     pub hardware: Extras,
+    /// The last trim window's ring: its frequency, Hz, and Q with the highest its decay
+    /// allows (`ring_hz`, `quality_factor`, `quality_high`), if a window measured one.
+    pub ring: Option<(f32, RingQuality)>,
     /// The fault that brings the output down to 0 V and holds it there, if any.
     pub fault: Option<Fault>,
 }
@@ -735,6 +739,15 @@ impl fmt::Display for Status {
             self.ticks,
             self.hardware,
         )?;
+        if let Some((hz, q)) = self.ring {
+            write!(
+                f,
+                " ring_hz={} quality_factor={} quality_high={}",
+                Decimal(hz),
+                Decimal(q.quality_factor),
+                Decimal(q.high)
+            )?;
+        }
         match self.fault {
             Some(fault) => write!(f, " fault={fault}"),
             None => write!(f, " fault=none"),
@@ -925,6 +938,13 @@ mod tests {
                 stream_port: false,
                 stalls_recovered: 0,
             },
+            ring: Some((
+                44.0,
+                RingQuality {
+                    quality_factor: 199.5,
+                    high: f32::INFINITY,
+                },
+            )),
             fault: Some(Fault::Bus),
         };
         let mut line = heapless::String::<256>::new();
@@ -941,6 +961,8 @@ mod tests {
         assert_eq!(reply.field("stretch"), None);
         assert_eq!(reply.field("tick_cycles_max"), None);
         assert_eq!(reply.field("max_by"), Some("cap"));
+        assert_eq!(reply.field("quality_factor"), Some("199.5"));
+        assert_eq!(reply.field("quality_high"), Some("inf"));
         assert_eq!(reply.field("fault"), Some("DAC bus error"));
         assert_eq!(
             Reply::parse("err 2 target out of range"),

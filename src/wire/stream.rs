@@ -27,8 +27,8 @@
 //! | 32 | 4 | the amplifier's monitor, V |
 //! | 36 | 4 | λ from the capacitance (the probe's last window) |
 //! | 40 | 4 | its standard error |
-//! | 44 | 4 | tracking's natural frequency, Hz |
-//! | 48 | 4 | tracking's quality factor |
+//! | 44 | 4 | the measured natural frequency, Hz: tracking's, else the last trim window's ring |
+//! | 48 | 4 | its quality factor (the ring's: from its decay) |
 //! | 52 | 4 | the leakage watch's resistance, Ω |
 //! | 56 | 4 | the plan's bias, V |
 //! | 60 | 4 | CRC-32 (IEEE 802.3) of bytes 0–59 |
@@ -71,8 +71,8 @@ pub struct Record {
     pub inputs: Inputs,
     /// λ from the capacitance and its standard error (the probe).
     pub sensed: Option<(f32, f32)>,
-    /// Tracking's natural frequency (Hz) and quality factor.
-    pub tracked: Option<(f32, f32)>,
+    /// The measured natural frequency (Hz) and quality factor (`Controller::resonance`).
+    pub resonance: Option<(f32, f32)>,
     /// The leakage watch's resistance, Ω.
     pub leakage_ohms: Option<f32>,
     /// The plan's bias, V (NaN: no controller).
@@ -144,7 +144,7 @@ impl Record {
             max_volts: controller.map_or(f32::NAN, Controller::max_volts),
             inputs: *inputs,
             sensed: controller.and_then(Controller::sensing),
-            tracked: controller.and_then(Controller::tracking),
+            resonance: controller.and_then(Controller::resonance),
             leakage_ohms: controller.and_then(Controller::leakage_ohms),
             bias_volts: controller.map_or(f32::NAN, |c| c.plan().bias_volts),
         }
@@ -167,7 +167,7 @@ impl Record {
         put.bytes(&[0, 0]);
         let pair = |p: Option<(f32, f32)>| p.map_or((f32::NAN, f32::NAN), |(a, b)| (a, b));
         let (sensed, sigma) = pair(self.sensed);
-        let (natural_hz, quality) = pair(self.tracked);
+        let (natural_hz, quality) = pair(self.resonance);
         let none = f32::NAN;
         for x in [
             self.max_volts,
@@ -229,7 +229,7 @@ impl Record {
                 amplifier_volts: number(at(32)),
             },
             sensed: pair(36),
-            tracked: pair(44),
+            resonance: pair(44),
             leakage_ohms: number(at(52)),
             bias_volts: at(56),
         })
@@ -445,7 +445,7 @@ mod tests {
                 amplifier_volts: None,
             },
             sensed: Some((2.3, 1e-4)),
-            tracked: None,
+            resonance: None,
             leakage_ohms: Some(2e11),
             bias_volts: 6000.0,
         }

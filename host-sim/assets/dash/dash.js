@@ -294,8 +294,8 @@ function records(rows) {
     cols.hi.push(s == null || sd == null ? null : s + sd);
     cols.current.push(r[k.current_amps]);
     seen.current = seen.current || r[k.current_amps] != null;
-    seen.track = seen.track || r[k.tracked_hz] != null;
-    cols.fhz.push(r[k.tracked_hz]);
+    seen.track = seen.track || r[k.natural_hz] != null;
+    cols.fhz.push(r[k.natural_hz]);
     cols.q.push(r[k.quality_factor]);
     cols.bias.push(r[k.bias_volts]);
     cols.phase.push(r[k.phase]);
@@ -593,7 +593,7 @@ function draw() {
     if (seen[name]) plots[name].setData(data);
   }
   const missing = [!seen.current && "current (no current input)",
-    !seen.track && "f and Q (not tracking)"].filter(Boolean);
+    !seen.track && "f and Q (no trim or tracking measured them)"].filter(Boolean);
   $("unmeasured").textContent = missing.length ? "not plotted, nothing received: " + missing.join(", ") : "";
   if (plots.curve && dash.curve) {
     // The operating point, drawn by the curve's hook at the voltage commanded now.
