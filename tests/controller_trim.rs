@@ -701,6 +701,10 @@ fn a_drive_restarted_after_a_trim_is_predicted_on_the_ring_the_pause_left() {
     }
 }
 
+/// The first tick and check of model.md §6 a plant crossed, if any.
+#[cfg(feature = "trim")]
+type Crossed = Option<(u32, de_resonator::FailureMode)>;
+
 /// The controller against `plant` (read exactly) for `ticks` ticks, the trim's jobs solved as
 /// they come: what it said, and the first check of model.md §6 the plant crossed under the
 /// voltage it held (none: `None`).
@@ -710,7 +714,7 @@ fn watched_run(
     plant: &mut common::Plant,
     params: &DeviceParams<f64>,
     ticks: u32,
-) -> (Vec<(u32, Event)>, Option<(u32, de_resonator::FailureMode)>) {
+) -> (Vec<(u32, Event)>, Crossed) {
     let device = Device::new(*params).unwrap();
     let (mut said, mut crossed) = (Vec::new(), None);
     for _ in 0..ticks {
