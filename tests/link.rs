@@ -96,6 +96,10 @@ fn a_ticks_output_reads_back_with_the_events_words() {
         shear_modulus: 41234.5,
         next_bias_volts: 3020.0,
         resolution: Some(120.0),
+        quality: Some(de_resonator::estimate::ring::RingQuality {
+            quality_factor: 150.5,
+            high: 175.25,
+        }),
     };
     let observed = Observed {
         dac_code: 51234,
@@ -125,7 +129,7 @@ fn a_ticks_output_reads_back_with_the_events_words() {
     assert_eq!(back.said, Some(EventKind::Trimmed));
     assert_eq!(
         back.said_values,
-        [3012.25, 43.98765, 41234.5, 3020.0, 120.0]
+        [3012.25, 43.98765, 41234.5, 3020.0, 120.0, 150.5, 175.25]
     );
     assert_eq!(
         EventKind::Trimmed.value_names(),
@@ -134,7 +138,9 @@ fn a_ticks_output_reads_back_with_the_events_words() {
             "measured_hz",
             "shear_modulus_pa",
             "next_bias_volts",
-            "resolution"
+            "resolution",
+            "quality_factor",
+            "quality_high"
         ]
     );
     assert_eq!(
@@ -149,8 +155,8 @@ fn a_ticks_output_reads_back_with_the_events_words() {
     );
     assert_eq!(
         std::str::from_utf8(words).unwrap(),
-        "trim: 43.9877 Hz measured at 3012.2 V (resolution 120), μ estimated 41.23 kPa, \
-         next bias 3020.0 V"
+        "trim: 43.9877 Hz measured at 3012.2 V (resolution 120), Q 150 (at most 175), μ \
+         estimated 41.23 kPa, next bias 3020.0 V"
     );
 }
 
@@ -201,6 +207,7 @@ fn words_longer_than_the_room_are_cut_at_a_character() {
         shear_modulus: 1.0,
         next_bias_volts: 1.0,
         resolution: None,
+        quality: None,
     };
     let n = observed.write(Some(&event), &mut out).unwrap();
     assert_eq!(&out[link::OBSERVED_BYTES..n], b"trim:");

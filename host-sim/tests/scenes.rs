@@ -5,8 +5,8 @@ use std::path::Path;
 
 use de_resonator::acquire::{InputError, Stall};
 use de_resonator::estimate::capacitance::PROBE_SIGMAS;
-use de_resonator::{Device, DeviceParams, FailureMode, Fault, Tuner, REFERENCE_DEVICE};
-use host_sim::engine::closed_loop::Run;
+use de_resonator::{Device, DeviceParams, EventKind, FailureMode, Fault, Tuner, REFERENCE_DEVICE};
+use host_sim::engine::closed_loop::{Run, Said};
 use host_sim::engine::plant::{AmplifierModel, Leakage, Plant};
 use host_sim::scene;
 
@@ -1296,5 +1296,53 @@ fn a_trim_outside_the_batch_faults_and_inside_it_tunes() {
     assert!(
         words.contains("40500") && words.contains("49500"),
         "{words}"
+    );
+}
+
+/// Issue 60's scene (`q-measured.toml`): the reference file, no damping told, its plant of
+/// Q 200 at 44 Hz, and an AC at 44 Hz of 0.5% of the bias. Before, the boot refused it (no
+/// bound without a Q); now the AC waits for the trims, whose rings give Q: each within 10%
+/// of the plant's at the frequency measured (a fixed damping: Q = 200·f/44), the highest its
+/// window allows at or above it. The drive starts after the last trim and runs to the end,
+/// nothing faults, and the plant crosses nothing.
+#[test]
+fn the_board_measures_q_and_drives_at_the_resonance() {
+    let r = run("q-measured.toml");
+    assert!(r.refused.is_none() && r.fault.is_none(), "{r:?}");
+    assert_eq!(r.plant_crossing, None);
+    let value = |said: &Said, name: &str| {
+        said.values
+            .iter()
+            .find(|(n, _)| *n == name)
+            .map_or(f64::NAN, |&(_, v)| v)
+    };
+    let trims: Vec<&Said> = r
+        .events
+        .iter()
+        .filter(|e| e.kind == EventKind::Trimmed)
+        .collect();
+    assert!(trims.len() >= 2, "{:?}", r.events);
+    for said in &trims {
+        let plant_q = 200.0 * value(said, "measured_hz") / 44.0;
+        let (q, high) = (value(said, "quality_factor"), value(said, "quality_high"));
+        assert!((q / plant_q - 1.0).abs() < 0.1, "{plant_q}: {said:?}");
+        assert!(high >= plant_q, "{plant_q}: {said:?}");
+    }
+    let on = r.events.iter().position(|e| e.kind == EventKind::DriveOn);
+    let on = on.unwrap_or_else(|| panic!("{:?}", r.events));
+    assert_eq!(r.events[on - 1].kind, EventKind::Trimmed);
+    assert!(r.events[on].seconds < 3.0, "{:?}", r.events);
+    let last = trims.last().unwrap();
+    documents(
+        "q-measured.toml",
+        &[
+            format!("{} trims", trims.len()),
+            format!(
+                "Q {:.0} (at most {:.0})",
+                value(last, "quality_factor"),
+                value(last, "quality_high")
+            ),
+            format!("{:.3} s", r.events[on].seconds),
+        ],
     );
 }

@@ -8,7 +8,7 @@ use crate::numerics::decimal::Decimal;
 use super::settings::{Setting, SettingError};
 use crate::acquire::InputError;
 use crate::drive::{CodeError, DacCode};
-use crate::estimate::ring::TrimError;
+use crate::estimate::ring::{RingQuality, TrimError};
 use crate::model::device::ParamError;
 use crate::model::motion::StepError;
 use crate::model::safety::FailureMode;
@@ -482,6 +482,9 @@ pub enum Event {
         /// (`crate::estimate::ring::RingFit::resolution`; its relative timing error is about
         /// `TIMING_ERROR_TIMES_RESOLUTION` over it).
         resolution: Option<f32>,
+        /// The ring's Q from its decay, with the highest its window allows (`None`: a
+        /// tracked drive's solve, no window).
+        quality: Option<RingQuality>,
     },
     /// The plant needs `needed_volts` (bias and swing: the trim's next bias, tracking's, or
     /// the plan in force under a cap a measurement just lowered), above the cap in force:
@@ -509,7 +512,7 @@ pub enum EventKind {
 }
 
 /// The most numbers an event carries (`Event::values`).
-pub const EVENT_VALUES: usize = 5;
+pub const EVENT_VALUES: usize = 7;
 
 impl EventKind {
     pub const ALL: [EventKind; 7] = [
@@ -545,6 +548,8 @@ impl EventKind {
                 "shear_modulus_pa",
                 "next_bias_volts",
                 "resolution",
+                "quality_factor",
+                "quality_high",
             ],
             EventKind::AboveCeiling => &["needed_volts", "cap_volts"],
             EventKind::DriveOn | EventKind::DriveOff | EventKind::Fault | EventKind::BusFault => {
@@ -573,7 +578,7 @@ impl Event {
     }
 
     /// Its numbers in the order of `kind().value_names()`, NaN past them (and for a
-    /// resolution not measured); a fault's are in its words.
+    /// resolution or a Q not measured); a fault's are in its words.
     pub fn values(&self) -> [f32; EVENT_VALUES] {
         let mut v = [f32::NAN; EVENT_VALUES];
         let given: &[f32] = match *self {
@@ -584,12 +589,15 @@ impl Event {
                 shear_modulus,
                 next_bias_volts,
                 resolution,
+                quality,
             } => &[
                 bias_volts,
                 measured_hz,
                 shear_modulus,
                 next_bias_volts,
                 resolution.unwrap_or(f32::NAN),
+                quality.map_or(f32::NAN, |q| q.quality_factor),
+                quality.map_or(f32::NAN, |q| q.high),
             ],
             Event::AboveCeiling {
                 needed_volts,
@@ -626,10 +634,14 @@ impl fmt::Display for Event {
                 shear_modulus,
                 next_bias_volts,
                 resolution,
+                quality,
             } => {
                 write!(f, "trim: {measured_hz:.4} Hz measured at {bias_volts:.1} V")?;
                 if let Some(r) = resolution {
                     write!(f, " (resolution {r:.0})")?;
+                }
+                if let Some(q) = quality {
+                    write!(f, ", Q {:.0} (at most {:.0})", q.quality_factor, q.high)?;
                 }
                 write!(
                     f,

@@ -1077,6 +1077,7 @@ impl Controller {
                     shear_modulus,
                     next_bias_volts,
                     resolution,
+                    quality,
                 }));
             }
             _ => self.trim.result.take(),
@@ -1111,6 +1112,7 @@ impl Controller {
                     shear_modulus,
                     next_bias_volts: bias_volts,
                     resolution,
+                    quality,
                 }))
             }
             // Taken above.
