@@ -152,14 +152,14 @@ python3 scripts/firmware_loop.py "$host_sim" target/firmware-link.elf target/fir
 
 step "a board that refuses before any voltage: the firmware in the loop says the core's words"
 # Two refusals at boot, made from shipped scenes: a target above a batch's guaranteed cap (the
-# table's), and a drive at resonance with no damping told while a trim is configured (the
+# table's), and a drive at resonance with no damping told and no trim to measure Q (the
 # swing's). Each report (its `refused` words), exit status, history and stream identical.
 rm -rf target/refused target/firmware-loop-refused
 mkdir -p target/refused
 sed -e 's/^name = .*/name = "refused-batch-cap"/' -e 's/^target_hz = 45.5/target_hz = 44.0/' \
     scenes/batch-vhb.toml >target/refused/batch-cap.toml
 sed -e 's/^name = .*/name = "refused-resonance"/' \
-    -e 's/^ac_hz = 40.0/ac_hz = 44.0\ntrim_tolerance = 1e-3/' \
+    -e 's/^ac_hz = 40.0/ac_hz = 44.0/' \
     scenes/reference.toml >target/refused/resonance.toml
 python3 scripts/firmware_loop.py "$host_sim" target/firmware-link.elf target/firmware-loop-refused \
     target/refused/batch-cap.toml target/refused/resonance.toml
