@@ -392,6 +392,13 @@ def trim_on_chip(ref):
     check(worst <= 1e-3, f"the trims' shear modulus within {worst:.1e} of the device's")
     check(abs(float(trims[-1][1]) - 44.0) <= 44.0 * 1e-3,
           f"the asked trim measured {trims[-1][1]} Hz for 44 Hz (tolerance 1e-3)")
+    # The ring's Q from its decay, in `status`: the plant is the flashed device, told no
+    # damping, so its ring (f32 RK4 at the tick) barely decays: the highest Q the window
+    # allows is far above any a damped membrane has, and the ring's frequency the trim's.
+    ring_hz, high = float(s.get("ring_hz", "nan")), float(s.get("quality_high", "nan"))
+    check(abs(ring_hz - float(trims[-1][1])) <= 1e-3 and high > 1000.0,
+          f"status says the ring's Q: ring_hz={s.get('ring_hz')} "
+          f"quality_factor={s.get('quality_factor')} quality_high={s.get('quality_high')}")
     # A replan while driving (the new plan's checks in the command task, the tick
     # preempting it): the deepest stack the port reaches, after the boot's.
     reply = fw.ask("target 43.5")
