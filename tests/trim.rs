@@ -237,16 +237,19 @@ fn decaying_sum(
 /// below the window's highest (`RingQuality::high`) in all but 1% (three deviations: 0.13%
 /// expected), and the median estimate within 5% of it where the decay over the window is
 /// more than its error (Q ≤ 200), the median highest under twice it at the lower noise;
-/// an undamped ring's highest Q is above 1,000 in 99%.
+/// an undamped ring's highest Q is above 1,000 in 99%. The deviation the highest claims
+/// (a third of the log ratio's way to it) covers the estimates' scatter about the Q put in:
+/// their ratio's RMS between 0.3 and 1.2.
 #[test]
 fn the_ring_tells_its_quality_factor_within_its_error() {
-    use de_resonator::estimate::ring::RingQuality;
+    use de_resonator::estimate::ring::{RingQuality, QUALITY_DEVIATIONS};
     let mut rng = common::Rng(0x853c_49e6_748f_ea9b);
     for hz in [29.5f64, 44.0, 61.7] {
         let half = (0.5 * 1000.0 / hz).round() as usize;
         for sigma in [5e-5, 1.5e-4] {
             for quality in [30.0, 100.0, 200.0, 1000.0, f64::INFINITY] {
                 let (mut above, mut estimates, mut highs) = (0, Vec::new(), Vec::new());
+                let mut z = Vec::new();
                 for _ in 0..100 {
                     let window = decaying_sum((hz, quality), 1e-3, sigma, &mut rng);
                     let q = RingQuality::of(&window, half, 0.0, 1000.0, hz as f32);
@@ -256,7 +259,26 @@ fn the_ring_tells_its_quality_factor_within_its_error() {
                     }
                     estimates.push(q.quality_factor);
                     highs.push(q.high);
+                    // The halves' log ratio, π·f·T/Q (T a half's 0.25 s), against the one put
+                    // in, over the deviation `high` claims for it (a third of the way down).
+                    let log_ratio = |q: f64| std::f64::consts::PI * hz * 0.25 / q;
+                    let claimed = (log_ratio(f64::from(q.quality_factor))
+                        - log_ratio(f64::from(q.high)))
+                        / f64::from(QUALITY_DEVIATIONS);
+                    if claimed > 0.0 && q.high.is_finite() {
+                        let off = log_ratio(f64::from(q.quality_factor)) - log_ratio(quality);
+                        z.push(off / claimed);
+                    }
                 }
+                // The deviation claimed is at least the scatter's, and not far above it
+                // (an error a period correlated: about twice the scatter of these white
+                // rings), where the decay is told (Q ≤ 200, the quieter: a finite highest).
+                let rms = (z.iter().map(|z| z * z).sum::<f64>() / z.len() as f64).sqrt();
+                assert!(
+                    quality > 200.0 || sigma > 5e-5 || (z.len() >= 90 && (0.3..1.2).contains(&rms)),
+                    "{hz} Hz, σ {sigma}, Q {quality}: {} claims, RMS {rms}",
+                    z.len()
+                );
                 assert!(above <= 1, "{hz} Hz, σ {sigma}, Q {quality}: {above} above");
                 if quality <= 200.0 {
                     estimates.sort_by(f32::total_cmp);
@@ -275,5 +297,14 @@ fn the_ring_tells_its_quality_factor_within_its_error() {
                 }
             }
         }
+    }
+    // No frequency, or no time: nothing bounds Q.
+    let window = decaying_sum((44.0, 100.0), 1e-3, 5e-5, &mut rng);
+    for (per_second, hz) in [(1000.0, f32::NAN), (0.0, 44.0), (1000.0, -44.0)] {
+        let q = RingQuality::of(&window, 11, 0.0, per_second, hz);
+        assert!(
+            q.quality_factor.is_infinite() && q.high.is_infinite(),
+            "{q:?}"
+        );
     }
 }

@@ -565,6 +565,14 @@ impl RingQuality {
         samples_per_second: f32,
         ring_hz: f32,
     ) -> Self {
+        const UNBOUNDED: RingQuality = RingQuality {
+            quality_factor: f32::INFINITY,
+            high: f32::INFINITY,
+        };
+        // No frequency, no time: nothing bounds Q.
+        if !(ring_hz > 0.0 && samples_per_second > 0.0) {
+            return UNBOUNDED;
+        }
         let n = samples.len() / 2;
         let turn = core::f32::consts::TAU * ring_hz / samples_per_second;
         let halves = [samples.get(..n), samples.get(n..2 * n)].map(|h| h.unwrap_or(&[]));
@@ -587,17 +595,10 @@ impl RingQuality {
                 f32::INFINITY
             }
         };
-        let quality_factor = quality(ratio);
-        let high = quality(ratio - QUALITY_DEVIATIONS * spread);
-        if !(quality_factor >= 0.0 && high >= 0.0) {
-            return RingQuality {
-                quality_factor: f32::INFINITY,
-                high: f32::INFINITY,
-            };
-        }
+        // (A ratio or spread that is no number gives ∞: `quality`'s test fails on NaN.)
         RingQuality {
-            quality_factor,
-            high,
+            quality_factor: quality(ratio),
+            high: quality(ratio - QUALITY_DEVIATIONS * spread),
         }
     }
 
