@@ -308,10 +308,19 @@ impl Controller {
         let checked = self.checked_swing(drive, limit.at.offset, settings.margin, batch);
         let swing = match checked {
             // No damping told, and a trim whose ring measures the plant's Q before the AC
-            // starts (the AC waits for it): the ramp's and the pulse's rings are checked
-            // now, the drive's swing with the measured Q when the trim converges
-            // (`TrimJob::restart_swing`), refused there if it does not fit.
-            Err(Fault::DriveSwing(_)) if self.quality_to_measure() => {
+            // starts (the AC waits for it): where some Q would let the drive fit (it does at
+            // Q = 1: the swing only grows with Q), the ramp's and the pulse's rings are
+            // checked now, the drive's swing with the measured Q when the trim converges
+            // (`TrimJob::restart_swing`), a fault there if it does not fit. Not for a
+            // batch's table: its corners are checked here only.
+            Err(Fault::DriveSwing(_))
+                if self.quality_to_measure()
+                    && batch.is_none()
+                    && self
+                        .flashed
+                        .check_swing(drive, limit.at.offset, Some(1.0), settings.margin)
+                        .is_ok() =>
+            {
                 let quiet = AcDrive {
                     ac_volts: 0.0,
                     ..drive

@@ -220,7 +220,9 @@ impl Controller {
         plan.probe_off_above(max_volts);
         self.settings = replanned.settings;
         self.set_caps(replanned.max_volts, self.estimate_volts);
-        self.watch.guard_as(&replanned.guard);
+        let settings = &replanned.settings;
+        let with_ac = settings.ac_volts > 0.0 && settings.ac_hz > 0.0;
+        self.watch.guard_as(&replanned.guard, with_ac);
         self.plan = plan;
         self.state = replanned.state;
         #[cfg(feature = "trim")]

@@ -613,14 +613,18 @@ impl TrimJob {
         let converged = self.tuned
             && (measured_hz - s.target_hz).abs() <= (tolerance - 2.0 * timing_error) * s.target_hz;
         if converged {
-            // The AC starts at once on the ring heard (or the pulse's, if more).
+            // The AC starts at once on the ring heard (or the pulse's, if more). A tracked
+            // drive's solve restarts nothing: its drive runs on.
             let pulse = pulse_ring(&device, limit_offset, self.bias_volts, &s);
-            let predicted = self.restart_swing(
-                (&device, limit_offset),
-                self.bias_volts,
-                (carried_ring_stretch.max(pulse), quality),
-                None,
-            )?;
+            let predicted = match self.measured_hz {
+                Some(_) => None,
+                None => self.restart_swing(
+                    (&device, limit_offset),
+                    self.bias_volts,
+                    (carried_ring_stretch.max(pulse), quality),
+                    None,
+                )?,
+            };
             return Ok(TrimResult::Converged {
                 measured_hz,
                 shear_modulus,
@@ -767,9 +771,12 @@ impl TrimJob {
                     }
                 }),
         };
-        let ac_hz = match self.measured_hz {
-            Some(_) if natural_hz > 0.0 => natural_hz,
-            _ => s.ac_hz,
+        // A tracked drive (its solves, and the trims before it) at the resonance it follows.
+        let tracked = self.measured_hz.is_some() || s.track_seconds.is_some();
+        let ac_hz = if tracked && natural_hz > 0.0 {
+            natural_hz
+        } else {
+            s.ac_hz
         };
         // No natural frequency at the bias (a fold): no swing to bound.
         if !(ac_hz > 0.0) {

@@ -288,13 +288,13 @@ impl Watch {
     }
 
     /// The guard of another plan (an adopted replan's); the sample history stays. A plan
-    /// without AC carries no drive's ring on (its ring decaying then is not counted:
-    /// docs/safety.md).
-    pub(super) fn guard_as(&mut self, guard: &Guard) {
+    /// without AC (`with_ac` false) carries no drive's ring on (its ring decaying then is
+    /// not counted: docs/safety.md); one whose AC waits for a trim's Q does.
+    pub(super) fn guard_as(&mut self, guard: &Guard, with_ac: bool) {
         self.band = guard.band;
         self.raise = guard.raise;
         self.predicted = guard.predicted;
-        if guard.predicted.allowed.is_nan() {
+        if !with_ac {
             self.carried_stretch = 0.0;
         }
     }

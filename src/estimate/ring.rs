@@ -551,6 +551,10 @@ pub struct RingQuality {
 /// The deviations of the halves' amplitude ratio `RingQuality::high` allows.
 pub const QUALITY_DEVIATIONS: f32 = 3.0;
 
+/// The least relative error a half's amplitude is taken to have, however quiet the ring: an
+/// allowance for a decay not quite one exponential (a viscous branch's) and for the fit.
+pub const MIN_AMPLITUDE_ERROR: f32 = 2e-3;
+
 impl RingQuality {
     /// The decay of the ring in `samples` (a ring input's running sum, as `RingFit` takes
     /// it, `samples_per_second` of them) at `ring_hz`, high-passed over `2·half + 1` samples
@@ -579,13 +583,12 @@ impl RingQuality {
         let [first, second] =
             halves.map(|h| (RingFit::of(h, half, floor), Self::amplitude(h, half, turn)));
         let per_period = 2.0 * half as f32 + 1.0;
-        let valid = n.saturating_sub(2 * half) as f32;
-        let error = |(fit, amplitude): (RingFit, f32)| {
-            Self::relative_error(fit.noise, amplitude, valid, per_period)
+        let error = |(fit, (amplitude, valid)): (RingFit, (f32, f32))| {
+            Self::relative_error(fit.noise, amplitude, valid, per_period).max(MIN_AMPLITUDE_ERROR)
         };
         let (a, b) = (error(first), error(second));
         let spread = libm::sqrtf(a * a + b * b);
-        let ratio = libm::logf(first.1 / second.1);
+        let ratio = libm::logf(first.1 .0 / second.1 .0);
         // δ = ln(A₁/A₂)/Δ, Q = ω/(2δ) = π·f/δ.
         let seconds = n as f32 / samples_per_second;
         let quality = |log_ratio: f32| {
@@ -604,11 +607,15 @@ impl RingQuality {
 
     /// The amplitude of the sine of `turn` radians a sample that fits `samples` high-passed
     /// over `2·half + 1` of them best (least squares in its sine and cosine): exact for a
-    /// steady ring whatever its phase, where a mean square over a part of a period is not.
-    fn amplitude(samples: &[f32], half: usize, turn: f32) -> f32 {
+    /// steady ring whatever its phase, where a mean square over a part of a period is not;
+    /// and how many high-passed samples it was fitted over (a missing sample takes a
+    /// period's with it).
+    fn amplitude(samples: &[f32], half: usize, turn: f32) -> (f32, f32) {
+        let mut valid = 0.0f32;
         let (mut ss, mut sc, mut cc, mut ys, mut yc) = (0.0f32, 0.0f32, 0.0f32, 0.0f32, 0.0f32);
         for (k, y) in high_passed(samples, half).enumerate() {
             if y.is_finite() {
+                valid += 1.0;
                 let (sin, cos) = (libm::sinf(turn * k as f32), libm::cosf(turn * k as f32));
                 ss += sin * sin;
                 sc += sin * cos;
@@ -619,7 +626,7 @@ impl RingQuality {
         }
         let det = ss * cc - sc * sc;
         let (a, b) = ((ys * cc - yc * sc) / det, (yc * ss - ys * sc) / det);
-        libm::sqrtf(a * a + b * b)
+        (libm::sqrtf(a * a + b * b), valid)
     }
 
     /// A half's `amplitude`'s relative error (one deviation), fitted over `valid` high-passed

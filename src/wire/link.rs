@@ -278,7 +278,8 @@ pub struct Observed {
     pub target_hz: f32,
     /// The AC drive's phase step a tick (`None`: no AC).
     pub ac_phase_step: Option<u32>,
-    /// Tracking's last cycle's natural frequency, Hz (NaN: none).
+    /// Tracking's last cycle's natural frequency, Hz (NaN: none). Tracking's only: a trim's
+    /// ring's comes with its `Event::Trimmed` (the stream's pair is either, `resonance`).
     pub tracked_hz: f32,
     /// Tracking's last cycle's quality factor (NaN: none).
     pub quality_factor: f32,
