@@ -175,8 +175,8 @@ impl<T: Real> fmt::Display for SwingError<T> {
             } => write!(
                 f,
                 "the swing has no bound in the model: {} at {} Hz, Q {}; give the device's \
-                 damping, or (no track_seconds) a trim whose ring bounds Q (trim_tolerance; \
-                 a longer trim_window_seconds); the largest AC that fits is {} V",
+                 damping, or a trim to measure Q (trim_tolerance); the largest AC that fits \
+                 is {} V",
                 resonance.description(),
                 Decimal(natural_hz),
                 Decimal(quality_factor),
@@ -211,8 +211,7 @@ impl<T: Real> fmt::Display for SwingError<T> {
                 if !quality_factor.is_finite() {
                     write!(
                         f,
-                        " (no damping known: give the device's damping, or a trim whose ring \
-                         bounds Q)"
+                        " (no damping known: give the device's damping, or measure Q)"
                     )?;
                 }
                 Ok(())
