@@ -367,7 +367,8 @@ def tick_rate(ref):
 
 
 def trim_on_chip(ref):
-    """The trim on the chip: the model-sensor build, the flashed device's model as its plant."""
+    """The trim on the chip: the model-sensor build, the flashed device's model as its plant.
+    Its image, for the latch's run after it."""
     print("== the trim on the chip (the flashed device's model as its sensor)")
     settings = os.path.join(WORK, "trim-settings.toml")
     with open(settings, "w") as f:
@@ -407,6 +408,7 @@ def trim_on_chip(ref):
     check(s["fault"] == "none", f"driving the new plan: {s['phase']} ({s['fault']})")
     fw.stop()
     ram_within_budget(s, TRIM_ELF, "the boot's trims, a trim asked for and a replan")
+    return img
 
 
 def main():
@@ -666,7 +668,7 @@ def main():
     tick_rate(ref)
 
     if TRIM_ELF:
-        trim_on_chip(ref)
+        img = trim_on_chip(ref)
 
         print("== a runtime fault latches: down at the slew rate, 0 V, until clear; clear with the "
               "cause still there stays faulted")
