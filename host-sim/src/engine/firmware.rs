@@ -40,8 +40,11 @@ pub struct Qemu<'w> {
     /// The firmware's frames, read from the output pipe by a thread of their own.
     output: mpsc::Receiver<Result<Vec<u8>, String>>,
     output_path: PathBuf,
-    /// The command port (USART2).
-    command: BufReader<UnixStream>,
+    /// The command port (USART2): its writing end, and its lines read by a thread of their
+    /// own from the start (QEMU's UART writes a byte at a time, and the socket holds a few
+    /// hundred such writes: a start-up line left unread that long would stop QEMU).
+    command: UnixStream,
+    lines: mpsc::Receiver<Result<String, String>>,
     frame: Vec<u8>,
     booted: (Booted, Option<String>),
     wires: &'w Wires,
@@ -135,6 +138,11 @@ impl<'w> Qemu<'w> {
         child.0 = Some(spawned);
         // QEMU waits on the command socket first, then the link's.
         let command = connect_later(&command_path, &mut child)?;
+        let lines = read_lines(
+            command
+                .try_clone()
+                .map_err(|e| format!("the command port: {e}"))?,
+        );
         let bell = connect_later(&link_path, &mut child)?;
         // The firmware opens `samples` to read, then `output` to write.
         let samples = open_writer(&samples_path, &mut child)?;
@@ -149,7 +157,8 @@ impl<'w> Qemu<'w> {
             bell,
             samples,
             output,
-            command: BufReader::new(command),
+            command,
+            lines,
             frame: vec![0; MAX_FRAME],
             booted: (Booted::of(None), None),
             wires,
@@ -247,6 +256,33 @@ fn open_writer(path: &Path, child: &mut Killed) -> Result<File, String> {
 
 /// The firmware's frames from the pipe at `path`, each whole, read by a thread (a read that
 /// waits can then be given up: `Qemu::frame`); the pipe's end or an error ends it.
+/// The command port's lines, read as they come by a thread of their own (an error, and the
+/// end, once the port closes).
+fn read_lines(port: UnixStream) -> mpsc::Receiver<Result<String, String>> {
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        // Blocking: the lines come when they come; the port closes with QEMU.
+        if let Err(e) = port.set_read_timeout(None) {
+            let _ = tx.send(Err(format!("the command port: {e}")));
+            return;
+        }
+        let mut port = BufReader::new(port);
+        loop {
+            let mut line = String::new();
+            let read = match port.read_line(&mut line) {
+                Ok(0) => Err("the command port closed".to_string()),
+                Ok(_) => Ok(line),
+                Err(e) => Err(format!("the command port: {e}")),
+            };
+            let failed = read.is_err();
+            if tx.send(read).is_err() || failed {
+                return;
+            }
+        }
+    });
+    rx
+}
+
 fn read_frames(path: PathBuf) -> mpsc::Receiver<Result<Vec<u8>, String>> {
     let (tx, rx) = mpsc::channel();
     std::thread::spawn(move || {
@@ -339,27 +375,19 @@ impl Drop for Qemu<'_> {
 
 impl LoopBoard for Qemu<'_> {
     fn command(&mut self, line: &str) -> Result<String, String> {
-        let sent = self
-            .command
-            .get_mut()
-            .write_all(format!("{line}\n").as_bytes());
+        let sent = self.command.write_all(format!("{line}\n").as_bytes());
         if let Err(e) = sent {
             return Err(self.gone(&format!("the command port: {e}")));
         }
         // The reply: the first line that is not a notice (the start-up lines come first).
         let deadline = Instant::now() + REPLY_TIMEOUT;
-        let mut reply = String::new();
         loop {
-            match self.command.read_line(&mut reply) {
-                Ok(0) => return Err(self.gone("the command port closed")),
-                Ok(_) if reply.starts_with(NOTICE) => reply.clear(),
-                Ok(_) => return Ok(reply.trim_end().to_string()),
-                Err(e)
-                    if matches!(
-                        e.kind(),
-                        std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
-                    ) && Instant::now() < deadline => {}
-                Err(e) => return Err(self.gone(&format!("`{line}` got no reply: {e}"))),
+            let left = deadline.saturating_duration_since(Instant::now());
+            match self.lines.recv_timeout(left) {
+                Ok(Ok(reply)) if reply.starts_with(NOTICE) => {}
+                Ok(Ok(reply)) => return Ok(reply.trim_end().to_string()),
+                Ok(Err(why)) => return Err(self.gone(&why)),
+                Err(_) => return Err(self.gone(&format!("`{line}` got no reply in 10 s"))),
             }
         }
     }
