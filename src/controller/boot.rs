@@ -330,6 +330,12 @@ impl Controller {
             }
             checked => Some(checked?),
         };
+        // A dead DAC bus drops the output from the plan's top to 0 V at once: its rebound
+        // from rest there (the swing it may have then is not counted: docs/safety.md).
+        let top_volts = solved.volts + settings.swing_volts();
+        self.flashed
+            .check_drop(top_volts, 0.0, limit.at.offset, settings.margin)
+            .map_err(|e| Fault::of_drop(top_volts, e))?;
         // What the board then watches the measured swing against (`envelope`).
         self.watch
             .predict(swing.filter(|_| drive.ac_volts > 0.0).map(|swing| {

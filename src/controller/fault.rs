@@ -126,6 +126,21 @@ pub enum Fault {
         volts_per_second: f32,
         amplifier_volts_per_second: f32,
     },
+    /// A dead DAC bus drops the output to 0 V at once (the enable line down): from the
+    /// plan's highest voltage `from_volts`, the membrane's rebound below its rest
+    /// (`Device::check_drop`) comes within the margin of `mode` (model.md §6).
+    DropRings { from_volts: f32, mode: FailureMode },
+}
+
+impl Fault {
+    /// A dead bus's drop from `from_volts` refused by `Device::check_drop`: the check it
+    /// comes within the margin of (`DropRings`), or why there is no drop to check.
+    pub fn of_drop(from_volts: f32, error: SwingError<f32>) -> Fault {
+        match error {
+            SwingError::Crosses { mode, .. } => Fault::DropRings { from_volts, mode },
+            other => Fault::DriveSwing(other),
+        }
+    }
 }
 
 impl fmt::Display for Fault {
@@ -250,6 +265,13 @@ impl fmt::Display for Fault {
                     setting.key()
                 )
             }
+            Fault::DropRings { from_volts, mode } => write!(
+                f,
+                "a dead DAC bus would drop {} V to 0 V at once, and the membrane's rebound \
+                 would come within the margin of {}: lower the target or the AC",
+                Decimal(*from_volts),
+                mode.description()
+            ),
             Fault::SwingOutgrown {
                 tick,
                 half_span,
@@ -404,6 +426,7 @@ declare_fault_kinds! {
     Fault::OutsideBatch { .. } => 25 "outside_batch",
     Fault::Steeper { .. } => 26 "steeper",
     Fault::SwingOutgrown { .. } => 27 "swing_outgrown",
+    Fault::DropRings { .. } => 28 "drop_rings",
 }
 
 impl From<SettingError> for Fault {
@@ -441,7 +464,8 @@ impl Fault {
             | Fault::PlanFailed(_)
             | Fault::Amplifier(_)
             | Fault::DriveSwing(_)
-            | Fault::Steeper { .. } => FaultStage::Boot,
+            | Fault::Steeper { .. }
+            | Fault::DropRings { .. } => FaultStage::Boot,
             Fault::Gate { .. }
             | Fault::Sensor { .. }
             | Fault::SensorImplausible { .. }

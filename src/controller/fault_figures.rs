@@ -251,6 +251,9 @@ impl Fault {
                     .f(volts_per_second)
                     .f(amplifier_volts_per_second);
             }
+            Fault::DropRings { from_volts, mode } => {
+                p.at(&FailureMode::ALL, &mode).f(from_volts);
+            }
         }
         p.0
     }
@@ -386,6 +389,10 @@ impl Fault {
                 half_span: t.f()?,
                 growth: t.f()?,
                 allowed: t.f()?,
+            },
+            28 => Fault::DropRings {
+                mode: t.at(&FailureMode::ALL)?,
+                from_volts: t.f()?,
             },
             _ => return None,
         })
@@ -788,6 +795,10 @@ mod tests {
                 half_span: b,
                 growth: 3.5e-5,
                 allowed: 1.5e-3,
+            },
+            Fault::DropRings {
+                from_volts: c,
+                mode,
             },
         ];
         let problems = [

@@ -749,6 +749,12 @@ impl TrimJob {
         ramp: Option<Ramp<f32>>,
     ) -> Result<Option<Predicted>, Fault> {
         let s = &self.settings;
+        // A dead DAC bus's drop from the drive's top to 0 V at once, from rest there
+        // (`Device::check_drop`; the boot's).
+        let top_volts = bias_volts + s.swing_volts();
+        device
+            .check_drop(top_volts, 0.0, limit_offset, s.margin)
+            .map_err(|e| Fault::of_drop(top_volts, e))?;
         if !(s.ac_volts > 0.0) {
             return Ok(None);
         }

@@ -233,7 +233,97 @@ struct About<T> {
     stiffness_slope: T,
 }
 
+/// Steps of the drop's energy integral up to the top (`Device::check_drop`), and the most
+/// it marches below the rest.
+const DROP_STEPS: usize = 128;
+const DROP_MAX_STEPS: usize = 4096;
+
 impl<T: Real> Device<T> {
+    /// The output dropped from `from_volts` to 0 V at once (a dead DAC bus: the amplifier
+    /// disabled), on a membrane swinging by `swing_stretch` (half its span) then: released
+    /// with at most the energy at no field of its highest stretch, λ(from) + swing, and of
+    /// the swing's speed there (ω·swing), it falls through its rest λ(0) and turns where the
+    /// elastic energy at no field (model.md §4: the stress difference integrated from the
+    /// rest) reaches that: undamped, exact for the model. That rebound, widened by
+    /// 1/(1 − margin) about the rest, and the highest stretch are checked at 0 V (model.md
+    /// §6); `Crosses` names the first check that fails (the rebound past the model's range:
+    /// loss of tension 1). `Ok`: the rebound's lowest stretch (before the margin).
+    pub fn check_drop(
+        &self,
+        from_volts: T,
+        swing_stretch: T,
+        max_offset: T,
+        margin: T,
+    ) -> Result<T, SwingError<T>> {
+        let top =
+            self.offset_for_bias(from_volts, max_offset)
+                .ok_or(SwingError::NoEquilibrium {
+                    bias_volts: from_volts,
+                })?;
+        let swing = swing_stretch.abs();
+        let high = top + swing;
+        // The restoring force at no field, the stress difference (Φ̄²·λ·λ2p² at the
+        // equilibrium that would hold δ): positive above the rest, negative below.
+        let l2p = self.prestretch_2();
+        let force = |offset: T| {
+            self.bias_dimless_squared_at(offset) * (self.prestretch_1() + offset) * l2p * l2p
+        };
+        let half = T::of(0.5);
+        // The energy at the highest stretch, at rest there, by the trapezoid rule.
+        let h = high / T::of(DROP_STEPS as f64);
+        let mut energy = T::zero();
+        let mut at = T::zero();
+        for _ in 0..DROP_STEPS {
+            energy = energy + (force(at) + force(at + h)) * half * h;
+            at = at + h;
+        }
+        // And the swing's speed there, at the bias: ω̄²·swing².
+        let bias = from_volts / self.volts_per_unit();
+        let omega_squared = self.stiffness_dimless(self.prestretch_1() + top, bias * bias);
+        energy = energy + half * omega_squared.max(T::zero()) * swing * swing;
+        // Down from the rest until the elastic energy at no field has taken all of it.
+        let (low_end, _) = self.model_range();
+        let floor = low_end - self.prestretch_1();
+        let mut turn = T::zero();
+        let mut stored = T::zero();
+        let mut steps = 0;
+        while stored < energy && turn > floor && steps < DROP_MAX_STEPS {
+            let next = turn - h;
+            stored = stored - (force(turn) + force(next)) * half * h;
+            turn = next;
+            steps += 1;
+        }
+        if !(energy.is_finite() && h > T::zero()) {
+            return if high > T::zero() || !high.is_finite() {
+                Err(SwingError::NoEquilibrium {
+                    bias_volts: from_volts,
+                })
+            } else {
+                Ok(self.prestretch_1())
+            };
+        }
+        let rest = self.prestretch_1();
+        let low = rest + turn / (T::one() - margin);
+        let crossed = if !(stored >= energy) {
+            Some(FailureMode::LossOfTension1)
+        } else {
+            self.first_failure(low, T::zero())
+                .or_else(|| self.first_failure(rest + high, T::zero()))
+        };
+        match crossed {
+            Some(mode) => Err(SwingError::Crosses {
+                mode,
+                resonance: None,
+                low_stretch: low,
+                high_stretch: rest + high,
+                natural_hz: self.natural_frequency_hz_at(T::zero()),
+                quality_factor: T::of(f64::INFINITY),
+                largest_ac_volts: T::zero(),
+            }),
+            None => Ok(rest + turn),
+        }
+    }
+
     /// The predicted swing of `drive` about its bias with the margin's widening, checked
     /// against model.md §6: `Ok` where it fits. `max_offset` bounds the search for the
     /// bias's equilibrium (the limit's offset); `quality_factor` is a measured Q, which
