@@ -247,7 +247,9 @@ impl<T: Real> Device<T> {
     /// rest) reaches that: undamped, exact for the model. That rebound, widened by
     /// 1/(1 − margin) about the rest, and the highest stretch are checked at 0 V (model.md
     /// §6); `Crosses` names the first check that fails (the rebound past the model's range:
-    /// loss of tension 1). `Ok`: the rebound's lowest stretch (before the margin).
+    /// loss of tension 1). `Ok`: the rebound's lowest stretch (before the margin). Out of
+    /// line: the boot's frame stays the smaller (the stack's budget).
+    #[inline(never)]
     pub fn check_drop(
         &self,
         from_volts: T,
