@@ -838,6 +838,130 @@ fn simulated_drop(
     (lowest, failed)
 }
 
+/// RK4's lowest stretch after a drop to 0 V from `stretch` moving at `velocity`.
+fn simulated_drop_moving(device: &de_resonator::Device<f64>, stretch: f64, velocity: f64) -> f64 {
+    use de_resonator::{Drive, Integrator, Method, State};
+    let start = State { stretch, velocity };
+    let (drive, range) = (Drive::constant(device, 0.0), device.model_range());
+    let mut m = Integrator::new(*device, drive, Method::Rk4, 1e-5, range, start, true).unwrap();
+    let period = 1.0 / device.natural_frequency_hz_at(0.0);
+    let mut lowest = stretch;
+    for _ in 0..(2.0 * period / 1e-5) as usize {
+        if m.step().is_err() {
+            return f64::NEG_INFINITY;
+        }
+        lowest = lowest.min(m.state().stretch);
+    }
+    lowest
+}
+
+/// The drop with the swing the membrane had (`check_drop`'s `swing_stretch`): from anywhere
+/// on a swing of 0.05 about the reference device's equilibrium at 60% of its limit, at the
+/// swing's speed there (ω·√(s² − x²), ω at the bias), RK4's rebound never goes below the
+/// check's, and the worst of 16 phases comes within 15% of the check's extra depth over the
+/// drop from rest. The refusal's figures: the highest stretch the top plus the swing, the
+/// lowest the rebound widened by 1/(1 − margin); with the margin, a rebound refused exactly
+/// where the one found without it, widened, fails §6 (the long fuzz's membrane, scanned);
+/// no drop from 0 V (the rest), and no equilibrium for a voltage that is no number.
+#[test]
+fn a_dead_bus_drop_counts_the_swing_and_the_margin() {
+    use de_resonator::{Device, DeviceParams, SwingError, Tuner, REFERENCE_DEVICE};
+    let device = Device::new(DeviceParams {
+        damping: 0.0,
+        ..REFERENCE_DEVICE
+    })
+    .unwrap();
+    let limit = *Tuner::new(device).limit();
+    let volts = 0.6 * limit.at.volts;
+    let offset = device.offset_for_bias(volts, limit.at.offset).unwrap();
+    let top = device.stretch_at(offset);
+    let swing = 0.05;
+    let still = device.check_drop(volts, 0.0, limit.at.offset, 0.0).unwrap();
+    let moving = device
+        .check_drop(volts, swing, limit.at.offset, 0.0)
+        .unwrap();
+    // In the model's time (`State::velocity` is dλ/dτ): ω̄ at the bias.
+    let bias = volts / device.volts_per_unit();
+    let omega = device.stiffness_dimless(top, bias * bias).sqrt();
+    let mut worst = f64::INFINITY;
+    for k in 0..16 {
+        let phase = k as f64 * std::f64::consts::TAU / 16.0;
+        let lowest = simulated_drop_moving(
+            &device,
+            top + swing * phase.cos(),
+            -omega * swing * phase.sin(),
+        );
+        assert!(
+            lowest >= moving - 1e-3 * (top - still),
+            "{phase}: {lowest} < {moving}"
+        );
+        worst = worst.min(lowest);
+    }
+    assert!(worst < still, "{worst} {still}");
+    assert!(
+        (still - worst) >= 0.85 * (still - moving) - 1e-3,
+        "{still} {worst} {moving}"
+    );
+
+    // The figures and the margin, on the long fuzz's membrane.
+    let fuzzed = DeviceParams {
+        shear_modulus: 980050.0,
+        jlim: None,
+        relative_permittivity: 7.069533348083496,
+        density: 815.9725341796875,
+        breakdown_field: 274862912.0,
+        thickness: 0.000157674599904567,
+        length_active: 0.007408554200083017,
+        length_passive: 0.02995372749865055,
+        width: 0.088212750852108,
+        bar_mass: 0.014267484657466412,
+        prestretch_1: 0.966606855392456,
+        prestretch_2: 1.3772172927856445,
+        damping: 0.0,
+    };
+    let device = Device::new(fuzzed).unwrap();
+    let limit = *Tuner::new(device).limit();
+    let rest = device.prestretch_1();
+    let margin = 0.05;
+    let (mut refused, mut taken) = (0, 0);
+    for k in 1..=40 {
+        let volts = k as f64 / 40.0 * 0.99 * limit.at.volts;
+        let top = device.stretch_at(device.offset_for_bias(volts, limit.at.offset).unwrap());
+        let bare = device.check_drop(volts, 0.0, limit.at.offset, 0.0);
+        let widened = bare.map(|turn| rest - (rest - turn) / (1.0 - margin));
+        let expect_ok = matches!(widened, Ok(low) if device.first_failure(low, 0.0).is_none()
+            && device.first_failure(top, 0.0).is_none());
+        match device.check_drop(volts, 0.0, limit.at.offset, margin) {
+            Ok(_) => {
+                assert!(expect_ok, "{volts}");
+                taken += 1;
+            }
+            Err(SwingError::Crosses {
+                low_stretch,
+                high_stretch,
+                ..
+            }) => {
+                assert!(!expect_ok, "{volts}");
+                assert!((high_stretch - top).abs() < 1e-9, "{high_stretch} {top}");
+                if let Ok(low) = widened {
+                    assert!((low_stretch - low).abs() < 1e-9, "{low_stretch} {low}");
+                }
+                refused += 1;
+            }
+            Err(other) => panic!("{volts}: {other:?}"),
+        }
+    }
+    assert!(refused > 0 && taken > 0, "{refused} {taken}");
+    assert_eq!(
+        device.check_drop(0.0, 0.0, limit.at.offset, margin),
+        Ok(rest)
+    );
+    assert!(matches!(
+        device.check_drop(f64::NAN, 0.0, limit.at.offset, margin),
+        Err(SwingError::NoEquilibrium { .. })
+    ));
+}
+
 /// A dead DAC bus's drop (`Device::check_drop`): released from rest at the equilibrium of a
 /// bias, at no field, the membrane rebounds to where the elastic energy at no field has
 /// taken all it had. Against RK4 on the model (a second method): the reference device, the
