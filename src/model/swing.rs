@@ -289,11 +289,17 @@ impl<T: Real> Device<T> {
         let mut turn = T::zero();
         let mut stored = T::zero();
         let mut steps = 0;
+        let mut last = T::zero();
         while stored < energy && turn > floor && steps < DROP_MAX_STEPS {
             let next = turn - h;
-            stored = stored - (force(turn) + force(next)) * half * h;
+            last = -(force(turn) + force(next)) * half * h;
+            stored = stored + last;
             turn = next;
             steps += 1;
+        }
+        // The turn inside the last step, where its energy was just taken (linear in it).
+        if stored >= energy && last > T::zero() {
+            turn = turn + h * ((stored - energy) / last);
         }
         if !(energy.is_finite() && h > T::zero()) {
             return if high > T::zero() || !high.is_finite() {
