@@ -264,6 +264,10 @@ impl<T: Real> Device<T> {
                 })?;
         let swing = swing_stretch.abs();
         let high = top + swing;
+        // At the rest (0 V), nothing drops.
+        if !(high > T::zero()) {
+            return Ok(self.prestretch_1());
+        }
         // The restoring force at no field, the stress difference (Φ̄²·λ·λ2p² at the
         // equilibrium that would hold δ): positive above the rest, negative below.
         let l2p = self.prestretch_2();
@@ -301,14 +305,10 @@ impl<T: Real> Device<T> {
         if stored >= energy && last > T::zero() {
             turn = turn + h * ((stored - energy) / last);
         }
-        if !(energy.is_finite() && h > T::zero()) {
-            return if high > T::zero() || !high.is_finite() {
-                Err(SwingError::NoEquilibrium {
-                    bias_volts: from_volts,
-                })
-            } else {
-                Ok(self.prestretch_1())
-            };
+        if !energy.is_finite() {
+            return Err(SwingError::NoEquilibrium {
+                bias_volts: from_volts,
+            });
         }
         let rest = self.prestretch_1();
         let low = rest + turn / (T::one() - margin);
