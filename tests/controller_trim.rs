@@ -625,46 +625,59 @@ fn a_trim_window_too_long_for_its_samples_is_refused_saying_why() {
     );
 }
 
-/// The controller against `plant` for `ticks` ticks, its stretch read through an ADC of
-/// `per_count` (the front end of firmware_e2e.py's trim run: about a fifth of the pulse's
-/// ring), the trim's jobs solved as they come: what it said.
+/// The reference front end's stretch input, a count (firmware_e2e.py's trim run too: about
+/// a fifth of the pulse's ring).
 #[cfg(feature = "trim")]
-fn run_for(
-    c: &mut Controller,
-    plant: &mut common::Plant,
-    per_count: f64,
-    ticks: u32,
-) -> Vec<(u32, Event)> {
-    run_counting(c, plant, per_count, ticks).0
+const STRETCH_PER_COUNT: f64 = 5.4054054e-4;
+
+/// What a run against a plant said and did.
+#[cfg(feature = "trim")]
+struct Watched {
+    said: Vec<(u32, Event)>,
+    /// Windows whose ring was too weak to time.
+    weak: u32,
+    /// The first tick and check of model.md §6 the plant crossed under the voltage it held.
+    crossed: Option<(u32, de_resonator::FailureMode)>,
 }
 
-/// `run_for`, with how many windows' rings were too weak to time.
+/// The controller against `plant` (the device `params`) for `ticks` ticks, its stretch read
+/// through `STRETCH_PER_COUNT`'s ADC, the trim's jobs solved as they come.
 #[cfg(feature = "trim")]
-fn run_counting(
+fn watched(
     c: &mut Controller,
     plant: &mut common::Plant,
-    per_count: f64,
+    params: &DeviceParams<f64>,
     ticks: u32,
-) -> (Vec<(u32, Event)>, u32) {
+) -> Watched {
     use de_resonator::{TrimError, TrimResult};
-    let (mut said, mut weak) = (Vec::new(), 0);
+    let device = Device::new(*params).unwrap();
+    let mut run = Watched {
+        said: Vec::new(),
+        weak: 0,
+        crossed: None,
+    };
     for _ in 0..ticks {
         let k = c.ticks();
-        let read = (plant.stretch() / per_count).round() * per_count;
+        let read = (plant.stretch() / STRETCH_PER_COUNT).round() * STRETCH_PER_COUNT;
         let out = c.tick(Inputs::stretch(read as f32));
         if let Some(event) = out.event {
-            said.push((k, event));
+            run.said.push((k, event));
         }
         if let Some(job) = c.trim_job() {
             let done = job.solve();
             if let TrimResult::Failed(Fault::Trim(TrimError::Unresolvable { .. })) = done.result {
-                weak += 1;
+                run.weak += 1;
             }
             c.trim_done(done);
         }
         plant.step(out.volts);
+        let bias = f64::from(out.volts) / device.volts_per_unit();
+        let failed = device.first_failure(plant.stretch(), bias * bias);
+        if let (None, Some(mode)) = (run.crossed, failed) {
+            run.crossed = Some((k, mode));
+        }
     }
-    (said, weak)
+    run
 }
 
 /// The run on the chip of firmware_e2e.py ("the trim on the chip"): the reference device,
@@ -684,7 +697,6 @@ fn a_drive_restarted_after_a_trim_is_predicted_on_the_ring_the_pause_left() {
         trim_tolerance: Some(1e-3),
         ..Settings::for_target(44.0)
     };
-    let per_count = 5.4054054e-4;
     let no_fault = |said: &[(u32, Event)], what: &str| {
         let fault = said.iter().find(|(_, e)| matches!(e, Event::Fault(_)));
         assert!(fault.is_none(), "{what}: {fault:?}");
@@ -693,11 +705,11 @@ fn a_drive_restarted_after_a_trim_is_predicted_on_the_ring_the_pause_left() {
     for (trim_at, target_at) in (0..25).flat_map(|n| (0..25).map(move |m| (10 * n, 10 * m))) {
         let mut c = start(settings).unwrap();
         let mut plant = common::Plant::new(REFERENCE_DEVICE, 1000.0);
-        let said = run_for(&mut c, &mut plant, per_count, 6000 + trim_at);
+        let said = watched(&mut c, &mut plant, &REFERENCE_DEVICE, 6000 + trim_at).said;
         no_fault(&said, "boot");
         assert_eq!(c.phase(), Phase::Driving, "{said:?}");
         c.trim_now().unwrap();
-        let said = run_for(&mut c, &mut plant, per_count, 4000 + target_at);
+        let said = watched(&mut c, &mut plant, &REFERENCE_DEVICE, 4000 + target_at).said;
         let what = format!("trim asked {trim_at} ticks into a beat, target {target_at}");
         no_fault(&said, &what);
         assert!(
@@ -712,7 +724,7 @@ fn a_drive_restarted_after_a_trim_is_predicted_on_the_ring_the_pause_left() {
             .unwrap();
         let replanned = job.solve(&reference_table()).unwrap();
         c.adopt(replanned).unwrap();
-        let (said, weak) = run_counting(&mut c, &mut plant, per_count, 8000);
+        let Watched { said, weak, .. } = watched(&mut c, &mut plant, &REFERENCE_DEVICE, 8000);
         measured_again += weak;
         no_fault(&said, &what);
         assert_eq!(c.phase(), Phase::Driving, "{what}: {said:?}");
@@ -721,41 +733,30 @@ fn a_drive_restarted_after_a_trim_is_predicted_on_the_ring_the_pause_left() {
     assert!(measured_again >= 1);
 }
 
-/// The first tick and check of model.md §6 a plant crossed, if any.
+/// Issue 60's settings: the reference device tuned to 44 Hz, trimmed to 1e-3, an AC at
+/// 44 Hz of `share` of the bias (the f64 solve's).
 #[cfg(feature = "trim")]
-type Crossed = Option<(u32, de_resonator::FailureMode)>;
-
-/// The controller against `plant` for `ticks` ticks, its stretch read through the reference
-/// front end's ADC (5.4e-4 a count, as `run_for`), the trim's jobs solved as they come: what
-/// it said, and the first check of model.md §6 the plant crossed under the voltage it held
-/// (none: `None`).
-#[cfg(feature = "trim")]
-fn watched_run(
-    c: &mut Controller,
-    plant: &mut common::Plant,
-    params: &DeviceParams<f64>,
-    ticks: u32,
-) -> (Vec<(u32, Event)>, Crossed) {
-    let device = Device::new(*params).unwrap();
-    let (mut said, mut crossed) = (Vec::new(), None);
-    for _ in 0..ticks {
-        let k = c.ticks();
-        let per_count = 5.4054054e-4;
-        let read = (plant.stretch() / per_count).round() * per_count;
-        let out = c.tick(Inputs::stretch(read as f32));
-        if let Some(event) = out.event {
-            said.push((k, event));
-        }
-        if let Some(job) = c.trim_job() {
-            c.trim_done(job.solve());
-        }
-        plant.step(out.volts);
-        let bias = f64::from(out.volts) / device.volts_per_unit();
-        if let (None, Some(mode)) = (crossed, device.first_failure(plant.stretch(), bias * bias)) {
-            crossed = Some((k, mode));
-        }
+fn at_resonance(share: f64) -> Settings {
+    let bias = Tuner::new(Device::new(REFERENCE_DEVICE).unwrap())
+        .tune(44.0, 0.05)
+        .unwrap()
+        .volts;
+    Settings {
+        ac_volts: (share * bias) as f32,
+        ac_hz: 44.0,
+        trim_tolerance: Some(1e-3),
+        ..Settings::for_target(44.0)
     }
-    (said, crossed)
+}
+
+/// The reference device damped to quality factor `quality` at 44 Hz (model.md §4: c = M·ω/Q).
+#[cfg(feature = "trim")]
+fn plant_at_44_hz(quality: f64) -> DeviceParams<f64> {
+    let file = REFERENCE_DEVICE;
+    DeviceParams {
+        damping: file.effective_mass() * std::f64::consts::TAU * 44.0 / quality,
+        ..file
+    }
 }
 
 /// Issue 60's scene: the reference device's file, no damping told; a plant of Q 200 at the
@@ -769,25 +770,11 @@ fn watched_run(
 #[cfg(feature = "trim")]
 #[test]
 fn the_trim_measures_q_and_the_resonant_drive_starts_on_it() {
-    let file = REFERENCE_DEVICE;
-    let bias = Tuner::new(Device::new(file).unwrap())
-        .tune(44.0, 0.05)
-        .unwrap()
-        .volts;
-    let settings = Settings {
-        ac_volts: (0.005 * bias) as f32,
-        ac_hz: 44.0,
-        trim_tolerance: Some(1e-3),
-        ..Settings::for_target(44.0)
-    };
+    let settings = at_resonance(0.005);
     let mut c = start(settings).unwrap();
-    let plant_at = |quality: f64| DeviceParams {
-        damping: file.effective_mass() * std::f64::consts::TAU * 44.0 / quality,
-        ..file
-    };
-    let plant = plant_at(200.0);
+    let plant = plant_at_44_hz(200.0);
     let mut model = common::Plant::new(plant, 1000.0);
-    let (said, crossed) = watched_run(&mut c, &mut model, &plant, 14_000);
+    let Watched { said, crossed, .. } = watched(&mut c, &mut model, &plant, 14_000);
     assert_eq!(crossed, None);
     assert!(
         !said.iter().any(|(_, e)| matches!(e, Event::Fault(_))),
@@ -803,9 +790,9 @@ fn the_trim_measures_q_and_the_resonant_drive_starts_on_it() {
     assert!(c.ticks() - said[on.unwrap()].0 >= 10_000);
 
     let mut c = start(settings).unwrap();
-    let plant = plant_at(20_000.0);
+    let plant = plant_at_44_hz(20_000.0);
     let mut model = common::Plant::new(plant, 1000.0);
-    let (said, crossed) = watched_run(&mut c, &mut model, &plant, 8_000);
+    let Watched { said, crossed, .. } = watched(&mut c, &mut model, &plant, 8_000);
     assert_eq!(crossed, None);
     assert!(!said.iter().any(|(_, e)| *e == Event::DriveOn), "{said:?}");
     let fault = said.iter().find_map(|(_, e)| match e {
@@ -832,28 +819,14 @@ fn the_trim_measures_q_and_the_resonant_drive_starts_on_it() {
 #[cfg(feature = "trim")]
 #[test]
 fn a_trim_during_a_resonant_drive_restarts_it_only_if_its_ring_still_fits() {
-    let file = REFERENCE_DEVICE;
-    let bias = Tuner::new(Device::new(file).unwrap())
-        .tune(44.0, 0.05)
-        .unwrap()
-        .volts;
-    let plant = DeviceParams {
-        damping: file.effective_mass() * std::f64::consts::TAU * 44.0 / 200.0,
-        ..file
-    };
+    let plant = plant_at_44_hz(200.0);
     for (share, restarts) in [(0.003, true), (0.005, false)] {
-        let settings = Settings {
-            ac_volts: (share * bias) as f32,
-            ac_hz: 44.0,
-            trim_tolerance: Some(1e-3),
-            ..Settings::for_target(44.0)
-        };
-        let mut c = start(settings).unwrap();
+        let mut c = start(at_resonance(share)).unwrap();
         let mut model = common::Plant::new(plant, 1000.0);
-        let (_, crossed) = watched_run(&mut c, &mut model, &plant, 8_000);
+        let crossed = watched(&mut c, &mut model, &plant, 8_000).crossed;
         assert_eq!((c.phase(), crossed), (Phase::Driving, None), "{share}");
         c.trim_now().unwrap();
-        let (said, crossed) = watched_run(&mut c, &mut model, &plant, 8_000);
+        let Watched { said, crossed, .. } = watched(&mut c, &mut model, &plant, 8_000);
         assert_eq!(crossed, None, "{share}");
         let on = said.iter().any(|(_, e)| *e == Event::DriveOn);
         let refused = said
