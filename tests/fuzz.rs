@@ -189,6 +189,11 @@ fn settings(
         s.probe_volts = Some((0.01 * bias_volts * rng.range(0.1, 2.0)) as f32);
         s.probe_hz = s.tick_hz / 4.0;
     }
+    // A quarter behind a first-order amplifier of 0.5 to 50 times f0, declared (the plant
+    // steps behind it).
+    if rng.unit() < 0.25 {
+        s.amplifier_bandwidth_hz = Some((f0 * rng.log_range(0.5, 50.0)) as f32);
+    }
     if rng.unit() < 0.15 {
         let v = wild(rng) as f32;
         match rng.below(8) {
@@ -646,6 +651,12 @@ fn fuzz_the_controller() {
             Integrator::new(d, drive, Method::Rk4, step, d.model_range(), rest, true).ok()
         });
         let (mut faulted, mut last_volts, mut stuck) = (None, 0.0f32, f32::NAN);
+        // The amplifier's output (the command itself where no bandwidth is declared), and
+        // what of its gap to the command a tick leaves.
+        let mut output_volts = 0.0f64;
+        let keep = s.amplifier_bandwidth_hz.map_or(0.0, |hz| {
+            (-std::f64::consts::TAU * f64::from(hz) / f64::from(s.tick_hz)).exp()
+        });
         let slew_step = s.slew_volts_per_second / s.tick_hz;
         let lsb_volts = amplifier.volts(DacCode(1));
         // The operator's cap in force, from the f64 model: (1 − margin of the plan in force)
@@ -679,11 +690,11 @@ fn fuzz_the_controller() {
             };
             let amplifier_volts = match monitor_amplifier {
                 0 => None,
-                1 => Some(last_volts + rng.range(-5.0, 5.0) as f32),
+                1 => Some(output_volts as f32 + rng.range(-5.0, 5.0) as f32),
                 _ => Some(if rng.unit() < 0.01 {
                     wild(&mut rng) as f32
                 } else {
-                    last_volts
+                    output_volts as f32
                 }),
             };
             // The current monitor: absent, the plant's speed as a current (what self-sensing
@@ -834,10 +845,18 @@ fn fuzz_the_controller() {
                     _ => {}
                 }
             }
+            // The amplifier over the tick: its mean output drives the plant.
+            let before = output_volts;
+            output_volts = f64::from(out.volts) + (output_volts - f64::from(out.volts)) * keep;
+            let held_volts = if keep > 0.0 {
+                0.5 * (before + output_volts)
+            } else {
+                output_volts
+            };
             if let Some(m) = model.as_mut() {
                 let d = *m.device();
                 let moved = m
-                    .set_drive(Drive::constant(&d, f64::from(out.volts)))
+                    .set_drive(Drive::constant(&d, held_volts))
                     .and_then(|_| m.step());
                 if moved.is_err() {
                     model = None;
@@ -846,7 +865,7 @@ fn fuzz_the_controller() {
             // The plant against model.md §6 under the voltage it now holds.
             if let (Some(m), false) = (model.as_ref(), crossed) {
                 let d = m.device();
-                let p = f64::from(out.volts) / d.volts_per_unit();
+                let p = output_volts / d.volts_per_unit();
                 if let Some(mode) = d.first_failure(m.state().stretch, p * p) {
                     crossed = true;
                     let covered = matches!(sensor, Sensor::Plant { .. }) && !mismatched;

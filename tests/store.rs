@@ -226,16 +226,16 @@ fn a_range_that_is_not_two_slots_is_refused() {
     }
 }
 
-/// The blob's documented layout: version 2, count, then each of the 22 settings as its id
-/// (u16), two zero bytes and its value (f32): 180 bytes; a blob whose count does not match
+/// The blob's documented layout: version 2, count, then each of the 23 settings as its id
+/// (u16), two zero bytes and its value (f32): 188 bytes; a blob whose count does not match
 /// its length is refused.
 #[test]
 fn the_blob_is_the_documented_one() {
     assert_eq!(BLOB_BYTES, 2 + 2 + 8 * de_resonator::Setting::ALL.len());
-    assert_eq!(BLOB_BYTES, 180);
+    assert_eq!(BLOB_BYTES, 188);
     let blob = store::encode(&nth(7));
     assert_eq!(u16::from_le_bytes([blob[0], blob[1]]), 2);
-    assert_eq!(u16::from_le_bytes([blob[2], blob[3]]), 22);
+    assert_eq!(u16::from_le_bytes([blob[2], blob[3]]), 23);
     for (k, entry) in blob[4..].chunks(8).enumerate() {
         assert_eq!(u16::from_le_bytes([entry[0], entry[1]]), k as u16);
         assert_eq!(&entry[2..4], [0, 0]);

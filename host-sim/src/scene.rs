@@ -268,12 +268,19 @@ pub fn parse(text: &str) -> Result<Scene, String> {
     // from it.
     de_resonator::Device::new(nominal).map_err(|e| format!("[device]: {e}"))?;
     let mut settings = crate::settings_file::from_table(&file.controller, "[controller]", None)?;
-    // The board's image declares the amplifier the scene fits (its slew rate), unless the
-    // [controller] table says otherwise.
-    let declared = Setting::AmplifierSlewVoltsPerSecond;
-    let slew = file.amplifier.slew_volts_per_second as f32;
-    if file.controller.get(declared.key()).is_none() && slew.is_finite() && slew > 0.0 {
-        settings.set(declared, slew);
+    // The board's settings declare the amplifier the scene fits (its slew rate and
+    // bandwidth), unless the [controller] table says otherwise.
+    for (declared, value) in [
+        (
+            Setting::AmplifierSlewVoltsPerSecond,
+            file.amplifier.slew_volts_per_second,
+        ),
+        (Setting::AmplifierBandwidthHz, file.amplifier.bandwidth_hz),
+    ] {
+        let value = value as f32;
+        if file.controller.get(declared.key()).is_none() && value.is_finite() && value > 0.0 {
+            settings.set(declared, value);
+        }
     }
     let plant = plant(&nominal, &file, settings.target_hz)?;
     if !(settings.tick_hz.is_finite() && settings.tick_hz > 0.0) {

@@ -295,6 +295,7 @@ impl Controller {
                 Some(_) => solved.natural_frequency_hz,
                 None => settings.ac_hz,
             },
+            amplifier_bandwidth_hz: settings.amplifier_bandwidth_hz.unwrap_or(f32::INFINITY),
             ring_stretch: self.pulse_ring(solved.volts, limit.at.offset)
                 + self.carried_ring_stretch,
             ramp: Some(Ramp {

@@ -29,6 +29,9 @@ pub struct Predicted {
     /// Counted on the drive's phase, each ending as it passes half a turn: half a period
     /// from where a tracker's cycle ends (the tick's budget).
     pub window_periods: u32,
+    /// The quality factor the swing was predicted with (the device's, or the trim's ring's
+    /// highest): the fault log says it when the measured swing outgrows the prediction.
+    pub quality_factor: f32,
 }
 
 impl Predicted {
@@ -36,6 +39,7 @@ impl Predicted {
     pub const NONE: Predicted = Predicted {
         allowed: f32::NAN,
         window_periods: u32::MAX,
+        quality_factor: f32::NAN,
     };
 
     /// The watch of `swing` (a drive at `ac_hz` that fits, its prediction with the margin
@@ -52,6 +56,7 @@ impl Predicted {
             allowed: amplitude / (1.0 - margin) + noise,
             // Saturating: ∞ (no natural frequency) gives u32::MAX, NaN 0 (then 2).
             window_periods: (periods as u32).max(2),
+            quality_factor: swing.quality_factor,
         }
     }
 }
@@ -146,6 +151,7 @@ impl Envelope {
             half_span: (self.high - self.low) * 0.5,
             growth: self.ahead,
             allowed: predicted.allowed,
+            quality_factor: predicted.quality_factor,
         }
     }
 }
@@ -170,6 +176,7 @@ mod tests {
         Predicted {
             allowed,
             window_periods: 2,
+            quality_factor: 50.0,
         }
     }
 
@@ -189,6 +196,7 @@ mod tests {
         let p = Predicted::of(&swing, 30.0, 0.2, Some(1e-5));
         assert!((p.allowed - (amplitude / 0.8 + 5e-5)).abs() < 1e-7, "{p:?}");
         assert_eq!(p.window_periods, 2);
+        assert_eq!(p.quality_factor, 100.0);
         let p = Predicted::of(&swing, 200.0, 0.0, None);
         assert!((p.allowed - (amplitude + 1e-4)).abs() < 1e-7, "{p:?}");
         // The natural period, 25 ms, is five of the drive's 5 ms.
@@ -260,7 +268,10 @@ mod tests {
                 half_span,
                 growth,
                 allowed,
+                quality_factor,
             }) => {
+                // The Q it was predicted with, said with it.
+                assert_eq!(quality_factor, 50.0);
                 assert!(
                     growth > 0.0 && half_span <= allowed,
                     "{half_span} + {growth}"

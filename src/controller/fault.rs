@@ -118,6 +118,8 @@ pub enum Fault {
         half_span: f32,
         growth: f32,
         allowed: f32,
+        /// The Q the prediction was made with (0: an entry logged before it was kept).
+        quality_factor: f32,
     },
     /// The drive `setting` asks for (the AC's slope, or the bias ramp) is steeper than the
     /// amplifier's declared slew rate (`amplifier_slew_volts_per_second`): both, V/s.
@@ -130,6 +132,14 @@ pub enum Fault {
     /// plan's highest voltage `from_volts`, the membrane's rebound below its rest
     /// (`Device::check_drop`) comes within the margin of `mode` (model.md §6).
     DropRings { from_volts: f32, mode: FailureMode },
+    /// The amplifier's output, of its declared bandwidth (`amplifier_bandwidth_hz`), would
+    /// follow the drive `setting` asks for (the AC, or the bias ramp) further off its
+    /// command than `amplifier_tolerance_volts`: both, V (the watch would fault it running).
+    AmplifierLags {
+        setting: Setting,
+        following_volts: f32,
+        tolerance_volts: f32,
+    },
 }
 
 impl Fault {
@@ -265,6 +275,25 @@ impl fmt::Display for Fault {
                     setting.key()
                 )
             }
+            Fault::AmplifierLags {
+                setting,
+                following_volts,
+                tolerance_volts,
+            } => {
+                let what = if *setting == Setting::SlewVoltsPerSecond {
+                    "the bias ramp (`slew_volts_per_second`)"
+                } else {
+                    "the AC drive (`ac_volts` at `ac_hz`)"
+                };
+                write!(
+                    f,
+                    "the amplifier's output (`amplifier_bandwidth_hz`) would follow {what} {} V \
+                     off its command, more than `amplifier_tolerance_volts` {} V: lower `{}`",
+                    Decimal(*following_volts),
+                    Decimal(*tolerance_volts),
+                    setting.key()
+                )
+            }
             Fault::DropRings { from_volts, mode } => write!(
                 f,
                 "a dead DAC bus would drop {} V to 0 V at once, and the membrane's rebound \
@@ -277,15 +306,26 @@ impl fmt::Display for Fault {
                 half_span,
                 growth,
                 allowed,
-            } => write!(
-                f,
-                "measured swing outgrew its prediction at tick {tick}: half-span λ {} (growing \
-                 {} a window) against {} allowed (the predicted swing widened by the margin): \
-                 the membrane, its damping or the drive is not what the image says",
-                Decimal(*half_span),
-                Decimal(*growth),
-                Decimal(*allowed)
-            ),
+                quality_factor,
+            } => {
+                write!(
+                    f,
+                    "measured swing outgrew its prediction at tick {tick}: half-span λ {} \
+                     (growing {} a window) against {} allowed (the predicted swing",
+                    Decimal(*half_span),
+                    Decimal(*growth),
+                    Decimal(*allowed)
+                )?;
+                // (0: logged before the Q was kept; NaN: none.)
+                if *quality_factor > 0.0 {
+                    write!(f, " at Q {}", Decimal(*quality_factor))?;
+                }
+                write!(
+                    f,
+                    " widened by the margin): the membrane, its damping or the drive is not \
+                     what the image says"
+                )
+            }
             Fault::OutsideBatch {
                 stretch,
                 sigma,
@@ -427,6 +467,7 @@ declare_fault_kinds! {
     Fault::Steeper { .. } => 26 "steeper",
     Fault::SwingOutgrown { .. } => 27 "swing_outgrown",
     Fault::DropRings { .. } => 28 "drop_rings",
+    Fault::AmplifierLags { .. } => 29 "amplifier_lags",
 }
 
 impl From<SettingError> for Fault {
@@ -442,6 +483,15 @@ impl From<SettingError> for Fault {
                 setting,
                 volts_per_second,
                 amplifier_volts_per_second,
+            },
+            SettingError::Lags {
+                setting,
+                following_volts,
+                tolerance_volts,
+            } => Fault::AmplifierLags {
+                setting,
+                following_volts,
+                tolerance_volts,
             },
         }
     }
@@ -465,7 +515,8 @@ impl Fault {
             | Fault::Amplifier(_)
             | Fault::DriveSwing(_)
             | Fault::Steeper { .. }
-            | Fault::DropRings { .. } => FaultStage::Boot,
+            | Fault::DropRings { .. }
+            | Fault::AmplifierLags { .. } => FaultStage::Boot,
             Fault::Gate { .. }
             | Fault::Sensor { .. }
             | Fault::SensorImplausible { .. }

@@ -239,8 +239,13 @@ impl Fault {
                 half_span,
                 growth,
                 allowed,
+                quality_factor,
             } => {
-                p.u(tick).f(half_span).f(growth).f(allowed);
+                p.u(tick)
+                    .f(half_span)
+                    .f(growth)
+                    .f(allowed)
+                    .f(quality_factor);
             }
             Fault::Steeper {
                 setting,
@@ -253,6 +258,15 @@ impl Fault {
             }
             Fault::DropRings { from_volts, mode } => {
                 p.at(&FailureMode::ALL, &mode).f(from_volts);
+            }
+            Fault::AmplifierLags {
+                setting,
+                following_volts,
+                tolerance_volts,
+            } => {
+                p.at(&Setting::ALL, &setting)
+                    .f(following_volts)
+                    .f(tolerance_volts);
             }
         }
         p.0
@@ -389,10 +403,16 @@ impl Fault {
                 half_span: t.f()?,
                 growth: t.f()?,
                 allowed: t.f()?,
+                quality_factor: t.f()?,
             },
             28 => Fault::DropRings {
                 mode: t.at(&FailureMode::ALL)?,
                 from_volts: t.f()?,
+            },
+            29 => Fault::AmplifierLags {
+                setting: t.at(&Setting::ALL)?,
+                following_volts: t.f()?,
+                tolerance_volts: t.f()?,
             },
             _ => return None,
         })
@@ -795,10 +815,16 @@ mod tests {
                 half_span: b,
                 growth: 3.5e-5,
                 allowed: 1.5e-3,
+                quality_factor: 201.0,
             },
             Fault::DropRings {
                 from_volts: c,
                 mode,
+            },
+            Fault::AmplifierLags {
+                setting: Setting::AcVolts,
+                following_volts: 214.6,
+                tolerance_volts: 200.0,
             },
         ];
         let problems = [
@@ -1111,6 +1137,29 @@ mod tests {
                 values: [100, 0x4020_0000, 0, 0, 0, 0, 0],
             }
         );
+        // An outgrown swing logged before its Q was kept (four numbers): Q 0, the sentence
+        // as it was then, without a Q.
+        let before = Figures {
+            number: 27,
+            details: [0; DETAILS],
+            values: [1352, 0x3a80_0000, 0, 0x3a80_0000, 0, 0, 0],
+        };
+        let read = Fault::from_figures(&before);
+        assert!(
+            matches!(read, Some(Fault::SwingOutgrown { tick: 1352, quality_factor, .. })
+                if quality_factor == 0.0),
+            "{read:?}"
+        );
+        let said = read.map(|f| f.to_string()).unwrap_or_default();
+        assert!(!said.contains(" Q "), "{said}");
+        let now = Fault::SwingOutgrown {
+            tick: 1352,
+            half_span: 1e-3,
+            growth: 0.0,
+            allowed: 1e-3,
+            quality_factor: 201.0,
+        };
+        assert!(format!("{now}").contains("at Q 201 widened"), "{now}");
     }
 
     #[test]

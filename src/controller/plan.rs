@@ -35,6 +35,14 @@ pub struct Plan {
     pub ac_phase_step: u32,
     /// The AC's phase at `ac_tick` (a tracked drive changes its frequency there, in phase).
     pub ac_phase_start: u32,
+    /// The amplifier's lag at the drive's frequency, in the same units: the output's phase
+    /// is the command's less it (`Settings::amplifier_lag`; a tracked drive's at the target
+    /// it holds the resonance on: off it, by the lag's change between, until it settles).
+    /// A tracker reads the motion against the output.
+    pub ac_lag_phase: u32,
+    /// The amplifier's gain there (`Settings::amplifier_gain`): the AC at its output is
+    /// `ac_volts` times it, the force a tracker fits its Q with.
+    pub ac_gain: f32,
     /// The self-sensing probe (`crate::estimate::capacitance`): ±`probe_volts` on the ramp wherever the ramp
     /// is at least that high, its sign flipping every `probe_half_ticks` ticks (0: none).
     pub probe_volts: f32,
@@ -60,6 +68,8 @@ impl Plan {
             ac_volts: 0.0,
             ac_phase_step: 0,
             ac_phase_start: 0,
+            ac_lag_phase: 0,
+            ac_gain: 1.0,
             probe_volts: 0.0,
             probe_half_ticks: 0,
         }
@@ -89,6 +99,11 @@ impl Plan {
             };
             return Err(Fault::Setting { setting, value });
         }
+        // The drive's frequency for the amplifier's lag and gain: a tracked drive's target.
+        let drive_hz = match s.track_seconds {
+            Some(_) => s.target_hz,
+            None => s.ac_hz,
+        };
         let plan = Plan {
             start_tick: 0,
             start_volts: from_volts,
@@ -100,6 +115,9 @@ impl Plan {
             ac_volts: if s.ac_hz > 0.0 { s.ac_volts } else { 0.0 },
             ac_phase_step: phase_step(s.ac_hz, s.tick_hz),
             ac_phase_start: 0,
+            ac_lag_phase: (s.amplifier_lag(drive_hz) / core::f32::consts::TAU * 4_294_967_296.0)
+                as u32,
+            ac_gain: s.amplifier_gain(drive_hz),
             probe_volts: s.probe_volts.unwrap_or(0.0),
             probe_half_ticks: match s.probe_volts {
                 Some(_) if cfg!(feature = "probe") => s.probe_half_ticks()?,

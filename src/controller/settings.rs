@@ -167,7 +167,18 @@ declare_settings! {
     /// bias moving at `slew_volts_per_second`), and the bias ramp.
     21 AmplifierSlewVoltsPerSecond amplifier_slew_volts_per_second: Option<f32> = None, "V/s",
         "> 0 or off; at least the AC's slope 2π·ac_hz·ac_volts and slew_volts_per_second";
+    /// The amplifier's bandwidth, Hz, as its maker states it (`None`: not declared): a
+    /// first-order response, gain 1/√(1 + x²) and lag atan(x) at x = f/bandwidth. The
+    /// drive's swing is bounded at the output too (`Device::check_swing`), a tracked drive's
+    /// phase read against the output's, and a drive the output would follow further off its
+    /// command than `amplifier_tolerance_volts` refused before it starts.
+    22 AmplifierBandwidthHz amplifier_bandwidth_hz: Option<f32> = None, "Hz",
+        "> 0 or off; the output within amplifier_tolerance_volts of the ramp and the AC";
 }
+
+/// Where the amplifier's following error over the AC's amplitude, x/√(1 + x²)·(1 + cos φ·
+/// e^(−(π/2 + φ)/x)) (`Settings::ac_following_volts`), is largest: x = f/bandwidth.
+const FOLLOWING_PEAK_X: f32 = 4.918;
 
 /// A setting its checks refuse: which, with the value found (the controller's
 /// `Fault::Setting`); a margin out of range is the tuner's error (`Fault::Tune`).
@@ -186,6 +197,13 @@ pub enum SettingError {
         setting: Setting,
         volts_per_second: f32,
         amplifier_volts_per_second: f32,
+    },
+    /// The amplifier's output, of the declared bandwidth, follows the drive `setting` asks
+    /// for (the AC, or the bias ramp) further off its command than the watch allows: both, V.
+    Lags {
+        setting: Setting,
+        following_volts: f32,
+        tolerance_volts: f32,
     },
 }
 
@@ -377,7 +395,96 @@ impl Settings {
                 steeper(Setting::AcVolts, self.ac_slope_volts_per_second())?;
             }
         }
+        if let Some(bandwidth) = self.amplifier_bandwidth_hz {
+            positive(Setting::AmplifierBandwidthHz, bandwidth)?;
+            let tolerance_volts = self.amplifier_tolerance_volts;
+            let lags = |setting, following_volts: f32| {
+                if following_volts <= tolerance_volts {
+                    Ok(())
+                } else {
+                    Err(SettingError::Lags {
+                        setting,
+                        following_volts,
+                        tolerance_volts,
+                    })
+                }
+            };
+            lags(Setting::SlewVoltsPerSecond, self.ramp_following_volts())?;
+            if target_ok {
+                lags(Setting::AcVolts, self.ac_following_volts())?;
+            }
+        }
         Ok(())
+    }
+
+    /// The amplifier's lag at `hz`, rad (`amplifier_bandwidth_hz`, first order): atan(x),
+    /// x = hz/bandwidth; 0 where none is declared.
+    pub fn amplifier_lag(&self, hz: f32) -> f32 {
+        match self.amplifier_bandwidth_hz {
+            Some(bandwidth) if bandwidth > 0.0 => libm::atanf(hz / bandwidth),
+            _ => 0.0,
+        }
+    }
+
+    /// The lowest and highest frequencies the AC may run at, Hz: `ac_hz`; a tracked drive
+    /// follows the resonance up to `MAX_DETUNING` off the target either way.
+    pub fn ac_hz_span(&self) -> (f32, f32) {
+        match self.track_seconds {
+            Some(_) => {
+                let detuning = crate::estimate::lockin::MAX_DETUNING;
+                (
+                    self.ac_hz.min(self.target_hz * (1.0 - detuning)),
+                    self.ac_hz.max(self.target_hz * (1.0 + detuning)),
+                )
+            }
+            None => (self.ac_hz, self.ac_hz),
+        }
+    }
+
+    /// The amplifier's gain at `hz` (`amplifier_bandwidth_hz`, first order): 1/√(1 + x²),
+    /// x = hz/bandwidth; 1 where none is declared.
+    pub fn amplifier_gain(&self, hz: f32) -> f32 {
+        match self.amplifier_bandwidth_hz {
+            Some(bandwidth) if bandwidth > 0.0 => 1.0 / libm::hypotf(1.0, hz / bandwidth),
+            _ => 1.0,
+        }
+    }
+
+    /// How far the amplifier's output lags a ramp at `slew_volts_per_second`, V: the slew
+    /// over 2π·bandwidth (a first order's settled lag; 0 where no bandwidth is declared).
+    pub fn ramp_following_volts(&self) -> f32 {
+        match self.amplifier_bandwidth_hz {
+            Some(bandwidth) => self.slew_volts_per_second / (core::f32::consts::TAU * bandwidth),
+            None => 0.0,
+        }
+    }
+
+    /// The most the amplifier's output is off the AC's command, V, switched on included:
+    /// the settled difference A·x/√(1 + x²) (x = f/bandwidth), and on the first lobe against
+    /// the switch-on's decaying term, at most cos φ·e^(−(π/2 + φ)/x) of it more (φ = atan x);
+    /// the two together rise to 1.0873·A at x = 4.918 and fall after, so taken at the x of
+    /// the frequencies the AC may run nearest that; a tracked drive's bias moves meanwhile
+    /// (`ramp_following_volts`). 0 where no bandwidth is declared.
+    pub fn ac_following_volts(&self) -> f32 {
+        let Some(bandwidth) = self.amplifier_bandwidth_hz else {
+            return 0.0;
+        };
+        let (lowest, highest) = self.ac_hz_span();
+        // (Not `clamp`: it panics on NaN.)
+        let x = FOLLOWING_PEAK_X
+            .max(lowest / bandwidth)
+            .min(highest / bandwidth);
+        if !(x > 0.0) {
+            return 0.0;
+        }
+        let lag = libm::atanf(x);
+        let settled = self.ac_volts * x / libm::hypotf(1.0, x);
+        let transient = libm::cosf(lag) * libm::expf(-(core::f32::consts::FRAC_PI_2 + lag) / x);
+        let ramp = match self.track_seconds {
+            Some(_) => self.ramp_following_volts(),
+            None => 0.0,
+        };
+        settled * (1.0 + transient) + ramp
     }
 
     /// The steepest the AC drive moves the output, V/s: 2π·ac_hz·ac_volts; a tracked drive
@@ -385,14 +492,9 @@ impl Settings {
     /// tracker lets go), on a bias that may move at the ramp's rate meanwhile. The probe's
     /// square wave and the trim's pulse (a drop) are steps by design, not counted.
     pub fn ac_slope_volts_per_second(&self) -> f32 {
-        let slope = core::f32::consts::TAU * self.ac_hz * self.ac_volts;
+        let slope = core::f32::consts::TAU * self.ac_hz_span().1 * self.ac_volts;
         match self.track_seconds {
-            Some(_) => {
-                let highest = self
-                    .ac_hz
-                    .max(self.target_hz * (1.0 + crate::estimate::lockin::MAX_DETUNING));
-                core::f32::consts::TAU * highest * self.ac_volts + self.slew_volts_per_second
-            }
+            Some(_) => slope + self.slew_volts_per_second,
             None => slope,
         }
     }

@@ -25,8 +25,11 @@ pub(super) struct Tracking {
     pub(super) solved_at: Option<u32>,
     /// The last cycle's fit, applied on the tick after it.
     pub(super) to_apply: Option<Lock>,
-    /// The fit's force per stretch and gain, worked out when its cycle was set aside.
-    pub(super) fit_inputs: (f32, f32),
+    /// The fit's force per stretch and gain, worked out on the tick after its cycle was set
+    /// aside (`None` until then).
+    pub(super) fit_inputs: Option<(f32, f32)>,
+    /// The plan's amplifier lag (`Plan::ac_lag_phase`), taken with the drive's first sample.
+    pub(super) lag_phase: u32,
 }
 
 /// Time constants of the tracker the estimate waits before the bias moves on it.
@@ -65,48 +68,57 @@ impl Controller {
             self.trim.drop_job();
             return taken;
         }
-        // The settings read here, not the whole copied (the tick's budget).
-        let (tick_hz, target_hz) = (self.settings.tick_hz, self.settings.target_hz);
-        let track_seconds = self.settings.track_seconds.unwrap_or(1.0);
-        let bias = self.plan.bias_volts;
         let Ring::Stretch(stretch) = ring else {
             return Ok(None);
         };
+        // The settings read where they are used, not the whole copied (the tick's budget).
+        let tick_hz = self.settings.tick_hz;
+        let track_seconds = || self.settings.track_seconds.unwrap_or(1.0);
         let step = self.plan.ac_phase_step;
-        // The sample is the state at the tick's start; the last command held over the tick
-        // before, centred half a tick back: the drive's phase at the sample is half a step
-        // behind this tick's.
-        let phase = phase.wrapping_sub(step / 2);
-        // The drive's frequency as the plan runs it.
-        let drive_hz = || tick_hz * (step as f32 / 4_294_967_296.0);
         if self.tracking.tracker.is_none() {
             // The drive's first sample: the estimate settles from here.
             self.tracking.steady_from = k;
+            self.tracking.lag_phase = self.plan.ac_lag_phase;
         }
+        // The sample is the state at the tick's start; the last command held over the tick
+        // before, centred half a tick back: the drive's phase at the sample is half a step
+        // behind this tick's, and the amplifier's output behind that.
+        let phase = phase
+            .wrapping_sub(step / 2)
+            .wrapping_sub(self.tracking.lag_phase);
+        // The drive's frequency as the plan runs it.
+        let drive_hz = || tick_hz * (step as f32 / 4_294_967_296.0);
         let tracker = self
             .tracking
             .tracker
             .get_or_insert_with(|| Tracker::new(drive_hz(), stretch));
-        // One of three small things a tick (the budget): sum; set a cycle aside, solve its
-        // least squares and work out the fit's inputs; fit it. The fit's result is applied
-        // on the tick after.
+        // Besides the sample's sum, one small thing a tick (the budget): set a cycle aside
+        // and solve its least squares; work out the fit's inputs; fit it. The fit's result
+        // is applied on the tick after.
         if tracker.observe(phase, stretch) {
             tracker.solve();
-            let device = self.estimate().unwrap_or(&self.flashed);
-            let force = drive_force_per_stretch(device, bias, self.plan.ac_volts);
-            let gain = (1.0 / (drive_hz() * track_seconds)).min(1.0);
-            self.tracking.fit_inputs = (force, gain);
+            self.tracking.fit_inputs = None;
             return Ok(None);
         }
         if tracker.pending() {
-            let (force, gain) = self.tracking.fit_inputs;
-            self.tracking.to_apply = tracker.fit(force, gain);
+            match self.tracking.fit_inputs {
+                Some((force, gain)) => self.tracking.to_apply = tracker.fit(force, gain),
+                None => {
+                    let device = self.estimate().unwrap_or(&self.flashed);
+                    // The force of the AC at the amplifier's output.
+                    let (bias, ac) = (self.plan.bias_volts, self.plan.ac_volts * self.plan.ac_gain);
+                    let force = drive_force_per_stretch(device, bias, ac);
+                    let gain = (1.0 / (drive_hz() * track_seconds())).min(1.0);
+                    self.tracking.fit_inputs = Some((force, gain));
+                }
+            }
             return Ok(None);
         }
         let Some(lock) = self.tracking.to_apply.take() else {
             return Ok(None);
         };
         let hz = tracker.drive_hz();
+        let (target_hz, track_seconds) = (self.settings.target_hz, track_seconds());
         if !((hz - target_hz).abs() <= MAX_DETUNING * target_hz) {
             return Err(Fault::TrackLost {
                 drive_hz: hz,

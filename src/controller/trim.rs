@@ -797,6 +797,7 @@ impl TrimJob {
             bias_volts,
             ac_volts: s.ac_volts,
             ac_hz,
+            amplifier_bandwidth_hz: s.amplifier_bandwidth_hz.unwrap_or(f32::INFINITY),
             ring_stretch,
             ramp,
         };

@@ -112,9 +112,9 @@ struct Solved {
 
 /// The tracker between ticks: the drive's frequency and the cycle being summed.
 ///
-/// A tick does one of three small things (the tick's budget): sum a sample; at a cycle's
+/// Besides a sample's sum, a tick does one small thing (the tick's budget): at a cycle's
 /// end, set its sums aside (`observe` says so) and solve their least squares (`solve`); on
-/// a later tick, fit them (`fit`).
+/// a later tick, fit them (`fit`), its inputs worked out by the caller between.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Tracker {
     /// The drive's frequency, Hz.

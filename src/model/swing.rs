@@ -51,8 +51,12 @@ const AMPLITUDE_RESOLUTION: f64 = 1.0 / 16_777_216.0;
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct AcDrive<T> {
     pub bias_volts: T,
+    /// The AC's amplitude as commanded, V.
     pub ac_volts: T,
     pub ac_hz: T,
+    /// The amplifier's bandwidth, Hz, a first-order response (∞, or anything not positive:
+    /// none declared): the AC's first-order swing is taken at its output (`Device::forced`).
+    pub amplifier_bandwidth_hz: T,
     pub ramp: Option<Ramp<T>>,
     /// A ring already there when the AC starts, besides the ramp's, in stretch: a trim's
     /// last pulse (a converged trim starts the AC right after it), or the swing of the drive
@@ -380,7 +384,28 @@ impl<T: Real> Device<T> {
             }
             None => drive.ring_stretch.abs(),
         };
-        let fits = |ac: T| self.swing_fits(&about, ac / unit, drive_rad, ring, margin);
+        // The amplifier at the drive's frequency: gain 1/√(1 + x²), lag sin φ = x/√(1 + x²).
+        let x = drive.ac_hz / drive.amplifier_bandwidth_hz;
+        let x = if x >= T::zero() && x.is_finite() {
+            x
+        } else {
+            T::zero()
+        };
+        // (Over 1, by 1/x: x² would overflow first.)
+        let amplifier = if x > T::one() {
+            let lag_sin = T::one() / (T::one() + T::one() / (x * x)).sqrt();
+            Amplifier {
+                gain: lag_sin / x,
+                lag_sin,
+            }
+        } else {
+            let gain = T::one() / (T::one() + x * x).sqrt();
+            Amplifier {
+                gain,
+                lag_sin: x * gain,
+            }
+        };
+        let fits = |ac: T| self.swing_fits(&about, ac / unit, drive_rad, ring, amplifier, margin);
         match fits(drive.ac_volts.abs()) {
             Ok((low_stretch, high_stretch)) => Ok(Swing {
                 stretch,
@@ -487,6 +512,7 @@ impl<T: Real> Device<T> {
         ac: T,
         drive: T,
         ring: T,
+        amplifier: Amplifier<T>,
         margin: T,
     ) -> Result<(T, T), Failed<T>> {
         let l2 = self.prestretch_2().squared();
@@ -504,7 +530,7 @@ impl<T: Real> Device<T> {
         let mut band = (mean, about.stiffness);
         let mut resonance = None;
         for _ in 0..BAND_ROUNDS {
-            let forced = self.forced(about, ac, drive, ring, band)?;
+            let forced = self.forced(about, ac, drive, ring, amplifier, band)?;
             resonance = forced.resonance;
             let (low, high) = (forced.low, forced.high);
             let (wide_low, wide_high) = (
@@ -539,13 +565,15 @@ impl<T: Real> Device<T> {
     }
 
     /// The forced swing about λ* when the stiffness may lie anywhere in `band` (ω̄² under
-    /// the drive's mean): each term at the worst stiffness of the band.
+    /// the drive's mean): each term at the worst stiffness of the band; the first-order
+    /// term's at the amplifier's output where that bounds it more tightly.
     fn forced(
         &self,
         about: &About<T>,
         ac: T,
         drive: T,
         ring: T,
+        amplifier: Amplifier<T>,
         (stiff_low, stiff_high): (T, T),
     ) -> Result<Forced<T>, Failed<T>> {
         let (zero, one, two) = (T::zero(), T::one(), T::of(2.0));
@@ -629,7 +657,18 @@ impl<T: Real> Device<T> {
         // step overshoot, and the ring the ramp left (all pumped alike).
         let omega = stiff_low.sqrt();
         let overshoot = |n: T| one + n * drive / omega;
-        let amplitude = pumped * (first * overshoot(one) + second * overshoot(two) + ring);
+        // The first-order term behind the amplifier, the lesser of two bounds. As commanded:
+        // a first order's output is a weighted mean of the command's past (an impulse
+        // response ≥ 0 of area 1), so the motion it drives, linear in it, stays within the
+        // command's own. At the output: its sine, gain g, starts at phase −φ, so its free
+        // ring is at most max(1, Ω/ω) of it; and the output's decaying term g·sin φ·e^(−t/τ),
+        // a force falling from its start, moves the membrane at most twice its static
+        // deflection (the step response's bound).
+        let commanded = first * overshoot(one);
+        let at_output = amplifier.gain * first * (one + (drive / omega).max(one))
+            + two * amplifier.gain * amplifier.lag_sin * force * two * about.bias * ac / stiff_low;
+        let first_swing = commanded.min(at_output);
+        let amplitude = pumped * (first_swing + second * overshoot(two) + ring);
         let (low, high) = (
             about.stretch - amplitude,
             about.stretch + two * steady + amplitude,
@@ -643,6 +682,13 @@ impl<T: Real> Device<T> {
             resonance,
         })
     }
+}
+
+/// The amplifier at the drive's frequency: its gain, and the sine of its lag.
+#[derive(Clone, Copy)]
+struct Amplifier<T> {
+    gain: T,
+    lag_sin: T,
 }
 
 /// A forced swing's extremes (before the margin) and the resonance behind it.
