@@ -29,11 +29,21 @@ pub fn non_monotone_device() -> DeviceParams<f64> {
 /// A tuning table for `p` as `host-sim lut` makes it (the core's writer: f's turning points
 /// and points evenly spaced in Φ², up to (1 − margin)·limit less the headroom).
 pub fn made_table(p: DeviceParams<f64>, margin: f64, points: usize) -> Vec<u8> {
+    try_made_table(p, margin, points).unwrap()
+}
+
+/// The same, or the writer's refusal (points that are not monotone in f32, on a device
+/// whose frequency barely moves with the bias).
+pub fn try_made_table(
+    p: DeviceParams<f64>,
+    margin: f64,
+    points: usize,
+) -> Result<Vec<u8>, de_resonator::table::TableError> {
     use de_resonator::table;
     let stored = table_points(p, margin, points);
     let mut bytes = vec![0u8; table::table_bytes(points)];
-    table::write(&mut bytes, &p.cast(), margin as f32, 0.0, &stored).unwrap();
-    bytes
+    table::write(&mut bytes, &p.cast(), margin as f32, 0.0, &stored)?;
+    Ok(bytes)
 }
 
 /// The points of `p`'s table (f's turning points and points evenly spaced in Φ², up to
