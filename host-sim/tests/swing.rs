@@ -225,12 +225,7 @@ fn the_watch_stops_an_accepted_drive_before_the_limit_whatever_the_file_says() {
         let Some(case) = Case::edge(&mut rng) else {
             continue;
         };
-        let run = run(&case.scene(), false);
-        assert_eq!(
-            run.plant_crossing, None,
-            "{case:?}: {:?} {:?}",
-            run.refused, run.fault_words
-        );
+        let run = run_crossing_nothing(&case);
         if std::env::var("SWING_EDGE_SHOW").is_ok() {
             println!(
                 "f0 {:.2} Hz, plant Q {:.0}, told {:.2}× its damping, {:.1} V at {:.2} Hz for \
@@ -318,12 +313,7 @@ fn the_swing_behind_a_slow_amplifier_holds_on_random_devices() {
         let Some(case) = Case::edge_behind(&mut rng, true) else {
             continue;
         };
-        let run = run(&case.scene(), false);
-        assert_eq!(
-            run.plant_crossing, None,
-            "{case:?}: {:?} {:?}",
-            run.refused, run.fault_words
-        );
+        let run = run_crossing_nothing(&case);
         if run.refused.is_some() {
             refused += 1;
             continue;
@@ -677,6 +667,17 @@ fn vhb_like_behind(plant_q: f64, told_q: f64, bandwidth_hz: f64, seconds: f64, l
         text
     };
     run(&text, false)
+}
+
+/// `case`'s scene run without the plant's history, the plant crossing nothing.
+fn run_crossing_nothing(case: &Case) -> Run {
+    let run = run(&case.scene(), false);
+    assert_eq!(
+        run.plant_crossing, None,
+        "{case:?}: {:?} {:?}",
+        run.refused, run.fault_words
+    );
+    run
 }
 
 /// The number of cases the environment variable `name` sets, `default` otherwise.
