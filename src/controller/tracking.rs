@@ -28,8 +28,6 @@ pub(super) struct Tracking {
     /// The fit's force per stretch and gain, worked out on the tick after its cycle was set
     /// aside (`None` until then).
     pub(super) fit_inputs: Option<(f32, f32)>,
-    /// The plan's amplifier lag (`Plan::ac_lag_phase`), taken with the drive's first sample.
-    pub(super) lag_phase: u32,
 }
 
 /// Time constants of the tracker the estimate waits before the bias moves on it.
@@ -78,14 +76,13 @@ impl Controller {
         if self.tracking.tracker.is_none() {
             // The drive's first sample: the estimate settles from here.
             self.tracking.steady_from = k;
-            self.tracking.lag_phase = self.plan.ac_lag_phase;
         }
         // The sample is the state at the tick's start; the last command held over the tick
         // before, centred half a tick back: the drive's phase at the sample is half a step
         // behind this tick's, and the amplifier's output behind that.
         let phase = phase
             .wrapping_sub(step / 2)
-            .wrapping_sub(self.tracking.lag_phase);
+            .wrapping_sub(self.plan.ac_lag_phase);
         // The drive's frequency as the plan runs it.
         let drive_hz = || tick_hz * (step as f32 / 4_294_967_296.0);
         let tracker = self
