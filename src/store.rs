@@ -106,6 +106,7 @@ impl StoreError {
 }
 
 /// The settings as a blob, each by its id.
+#[inline]
 pub fn encode(settings: &Settings) -> [u8; BLOB_BYTES] {
     let mut blob = [0u8; BLOB_BYTES];
     let head = BLOB_VERSION

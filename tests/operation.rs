@@ -8,9 +8,9 @@ mod common;
 use common::{amplifier, reference_table, reseal};
 
 use de_resonator::acquire::{FrontEnd, FrontEndError};
+use de_resonator::board::commands::{self, Command};
 use de_resonator::image::{self, AmplifierSpec, Image, ImageError, PowerUp, DAC_BITS};
 use de_resonator::table::TableError;
-use de_resonator::wire::protocol::{self, Command};
 use de_resonator::wire::reply::Reply;
 use de_resonator::{
     Controller, Device, Fault, Inputs, Phase, Refusal, Settings, TuneError, Tuner, REFERENCE_DEVICE,
@@ -650,29 +650,29 @@ fn the_protocol_covers_what_help_says() {
     for name in [
         "help", "status", "info", "stop", "trim", "clear", "save", "reset",
     ] {
-        assert!(protocol::parse(name.as_bytes()).is_ok(), "{name}");
+        assert!(commands::parse(name.as_bytes()).is_ok(), "{name}");
     }
     assert_eq!(
-        protocol::parse(b"target 44"),
+        commands::parse(b"target 44"),
         Ok(Command::Target { hz: 44.0 })
     );
-    assert!(protocol::HELP.contains("target <Hz>"));
+    assert!(commands::HELP.contains("target <Hz>"));
     assert_eq!(
-        protocol::parse(b"stream 100"),
+        commands::parse(b"stream 100"),
         Ok(Command::Stream(Some(100.0)))
     );
-    assert_eq!(protocol::parse(b"stream off"), Ok(Command::Stream(None)));
-    assert!(protocol::parse(b"stream").is_err() && protocol::parse(b"stream fast").is_err());
-    assert!(protocol::HELP.contains("stream <Hz>"));
-    assert!(protocol::HELP.contains("faults [<n> | clear]"));
-    assert!(!protocol::HELP.contains('\n'), "one reply line");
-    use de_resonator::wire::protocol::FaultsAsk;
+    assert_eq!(commands::parse(b"stream off"), Ok(Command::Stream(None)));
+    assert!(commands::parse(b"stream").is_err() && commands::parse(b"stream fast").is_err());
+    assert!(commands::HELP.contains("stream <Hz>"));
+    assert!(commands::HELP.contains("faults [<n> | clear]"));
+    assert!(!commands::HELP.contains('\n'), "one reply line");
+    use de_resonator::board::commands::FaultsAsk;
     for (line, ask) in [
         (&b"faults"[..], FaultsAsk::List),
         (b"faults clear", FaultsAsk::Clear),
         (b"faults 7", FaultsAsk::One(7)),
     ] {
-        assert_eq!(protocol::parse(line), Ok(Command::Faults(ask)));
+        assert_eq!(commands::parse(line), Ok(Command::Faults(ask)));
     }
     for bad in [
         &b"faults 0"[..],
@@ -682,7 +682,7 @@ fn the_protocol_covers_what_help_says() {
         b"faults x",
     ] {
         assert!(
-            protocol::parse(bad).is_err(),
+            commands::parse(bad).is_err(),
             "{}",
             String::from_utf8_lossy(bad)
         );
@@ -697,16 +697,19 @@ fn the_protocol_covers_what_help_says() {
 /// suggests the nearest command or setting.
 #[test]
 fn help_knows_every_command_and_suggests_for_a_typo() {
-    use de_resonator::wire::protocol::{ParseError, Topic, COMMANDS};
-    for (k, (name, said)) in COMMANDS.iter().enumerate() {
+    use de_resonator::board::commands::{Topic, COMMANDS};
+    use de_resonator::wire::protocol::ParseError;
+    for (k, command) in COMMANDS.iter().enumerate() {
+        let name = command.name();
+        let said = format!("{}: {}", command.form, command.does);
         let asked = format!("help {name}");
         assert_eq!(
-            protocol::parse(asked.as_bytes()),
+            commands::parse(asked.as_bytes()),
             Ok(Command::Help(Some(Topic::Command(k as u8)))),
             "{name}"
         );
         assert!(said.starts_with(name), "{name}: {said}");
-        assert!(protocol::HELP.contains(name), "{name}");
+        assert!(commands::HELP.contains(name), "{name}");
         // The command itself parses: bare, or with what its form asks.
         let form = said.split(':').next().unwrap_or_default();
         let example = form
@@ -726,32 +729,30 @@ fn help_knows_every_command_and_suggests_for_a_typo() {
         } else {
             words.join(" ")
         };
-        assert!(protocol::parse(bare.as_bytes()).is_ok(), "{name}: `{bare}`");
+        assert!(commands::parse(bare.as_bytes()).is_ok(), "{name}: `{bare}`");
     }
     // Every word `parse` takes as a command is in the list (and so in `help`).
     for word in ["sto", "stat", "targe", "tirm", "faultz"] {
-        assert!(protocol::parse(word.as_bytes()).is_err(), "{word}");
+        assert!(commands::parse(word.as_bytes()).is_err(), "{word}");
     }
     assert_eq!(
-        protocol::parse(b"help stpo"),
+        commands::parse(b"help stpo"),
         Err(ParseError::UnknownTopic {
-            nearest: Some(Topic::Command(
-                COMMANDS.iter().position(|c| c.0 == "stop").unwrap() as u8
-            ))
+            nearest: Some("stop")
         })
     );
     assert_eq!(
-        protocol::parse(b"help marign"),
+        commands::parse(b"help marign"),
         Err(ParseError::UnknownTopic {
-            nearest: Some(Topic::Setting(de_resonator::controller::Setting::Margin))
+            nearest: Some(de_resonator::controller::Setting::Margin.key())
         })
     );
     assert_eq!(
-        protocol::parse(b"help foo"),
+        commands::parse(b"help foo"),
         Err(ParseError::UnknownTopic { nearest: None })
     );
     let said = ParseError::UnknownTopic {
-        nearest: Some(Topic::Command(0)),
+        nearest: Some(COMMANDS[0].name()),
     }
     .to_string();
     assert!(said.contains("did you mean `help`?"), "{said}");
@@ -769,14 +770,14 @@ fn units_after_numbers_are_taken_or_named_and_counts_are_whole() {
         "target 33.5Hz",
         "target 33.5 hz",
     ] {
-        assert_eq!(protocol::parse(line.as_bytes()), target, "{line}");
+        assert_eq!(commands::parse(line.as_bytes()), target, "{line}");
     }
     let ac = Ok(Command::Ac {
         volts: 80.0,
         hz: 33.0,
     });
     for line in ["ac 80 33", "ac 80 V 33 Hz", "ac 80V 33Hz", "ac 80 v 33"] {
-        assert_eq!(protocol::parse(line.as_bytes()), ac, "{line}");
+        assert_eq!(commands::parse(line.as_bytes()), ac, "{line}");
     }
     for (line, index, unit) in [
         ("target 33.5 kHz", 1, "Hz"),
@@ -785,7 +786,7 @@ fn units_after_numbers_are_taken_or_named_and_counts_are_whole() {
         ("ac 80 33 V", 2, "Hz"),
         ("set slew_volts_per_second 1e4 V", 2, "V/s"),
     ] {
-        let got = protocol::parse(line.as_bytes());
+        let got = commands::parse(line.as_bytes());
         assert_eq!(got, Err(ParseError::WrongUnit { index, unit }), "{line}");
         let said = got.unwrap_err().to_string();
         assert!(
@@ -794,26 +795,26 @@ fn units_after_numbers_are_taken_or_named_and_counts_are_whole() {
         );
     }
     assert_eq!(
-        protocol::parse(b"set slew_volts_per_second 1e4 V/s"),
+        commands::parse(b"set slew_volts_per_second 1e4 V/s"),
         Ok(Command::Set(Setting::SlewVoltsPerSecond, 1e4))
     );
     assert_eq!(
-        protocol::parse(b"stream 100Hz"),
+        commands::parse(b"stream 100Hz"),
         Ok(Command::Stream(Some(100.0)))
     );
-    assert_eq!(protocol::parse(b"target 33.5 Hz 2"), Err(ParseError::Extra));
-    assert_eq!(protocol::parse(b"target 44 extra"), Err(ParseError::Extra));
+    assert_eq!(commands::parse(b"target 33.5 Hz 2"), Err(ParseError::Extra));
+    assert_eq!(commands::parse(b"target 44 extra"), Err(ParseError::Extra));
     assert_eq!(
-        protocol::parse(b"target Hz"),
+        commands::parse(b"target Hz"),
         Err(ParseError::BadNumber { index: 1 })
     );
     // A count: a fraction is refused, not rounded (1.5 would have been 1).
     assert_eq!(
-        protocol::parse(b"set stuck_samples 1.5"),
+        commands::parse(b"set stuck_samples 1.5"),
         Err(ParseError::NotWhole { index: 2 })
     );
     assert_eq!(
-        protocol::parse(b"set stuck_samples 100"),
+        commands::parse(b"set stuck_samples 100"),
         Ok(Command::Set(Setting::StuckSamples, 100.0))
     );
     assert!(Setting::ALL
@@ -886,4 +887,46 @@ fn a_target_out_of_range_is_refused_for_its_range_before_a_setting_it_implies() 
         }
         other => panic!("{:?}", other.map(|(_, boot)| boot)),
     }
+}
+
+/// docs/commands.md, the requests' reference, is what their declarations say (each one's
+/// form, rule and docs): written from them with `UPDATE_DOCS=1 cargo test --test operation
+/// requests_reference`, and compared with them in every other run.
+#[test]
+fn the_requests_reference_is_the_declarations() {
+    use de_resonator::board::commands::{Rule, COMMANDS, COMMAND_DOCS, COMMAND_RULES};
+    use std::fmt::Write;
+    let mut doc = String::from(
+        "# The command port's requests\n\n\
+         One request a line, one reply line each (`ok …` or `err <code> <message>`; \
+         docs/firmware.md, **The command port**). `help` lists them, `help <command>` says \
+         what one does.\n\n\
+         This file is written from the declarations in `src/board/commands/mod.rs` \
+         (`tests/operation.rs` checks it).\n\n\
+         | request | answered | what it does |\n|---|---|---|\n",
+    );
+    for ((command, docs), rule) in COMMANDS.iter().zip(COMMAND_DOCS).zip(COMMAND_RULES) {
+        let when = match rule {
+            Rule::Always => "always",
+            Rule::Imaged => "with an image",
+            Rule::Booted => "once booted",
+        };
+        let what: Vec<&str> = docs.iter().map(|line| line.trim()).collect();
+        let _ = writeln!(
+            doc,
+            "| `{}` | {when} | {} |",
+            command.form.replace('|', "\\|"),
+            what.join(" ").replace('|', "\\|")
+        );
+    }
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/commands.md");
+    if std::env::var_os("UPDATE_DOCS").is_some() {
+        std::fs::write(&path, &doc).unwrap();
+    }
+    let kept = std::fs::read_to_string(&path).unwrap_or_default();
+    assert!(
+        kept == doc,
+        "docs/commands.md is not what the declarations say: UPDATE_DOCS=1 cargo test --test \
+         operation requests_reference writes it"
+    );
 }

@@ -5,8 +5,9 @@
 //! it parses is finite.
 #![no_main]
 
+use de_resonator::board::commands::{self, Command, FaultsAsk};
 use de_resonator::image::Image;
-use de_resonator::wire::protocol::{self, Command};
+use de_resonator::wire::protocol;
 use de_resonator::wire::stream::{Receiver, Record};
 use de_resonator::Controller;
 use libfuzzer_sys::fuzz_target;
@@ -39,12 +40,12 @@ fuzz_target!(|data: &[u8]| {
         return;
     }
     for line in data.split(|&b| b == b'\n') {
-        match protocol::parse(line) {
+        match commands::parse(line) {
             Ok(Command::Target { hz }) => assert!(hz.is_finite()),
             Ok(Command::Ac { volts, hz }) => assert!(volts.is_finite() && hz.is_finite()),
             Ok(Command::Set(_, value)) => assert!(value.is_finite()),
             Ok(Command::Stream(Some(hz))) => assert!(hz.is_finite()),
-            Ok(Command::Faults(protocol::FaultsAsk::One(n))) => assert!(n >= 1),
+            Ok(Command::Faults(FaultsAsk::One(n))) => assert!(n >= 1),
             _ => {}
         }
         if let Ok(text) = core::str::from_utf8(line) {

@@ -5,13 +5,14 @@
 
 use core::fmt::Write as _;
 
+use super::commands::FaultsAsk;
 use super::{Board, FaultKeeper, Keeper, ResetCause, Shared};
 use crate::acquire::Inputs;
 use crate::board::port::ReplyLine;
 use crate::controller::Fault;
 use crate::fault_log::{keep_newest, Cause, Entry, KEPT};
 use crate::numerics::decimal::Decimal;
-use crate::wire::protocol::{ErrorCode, FaultsAsk};
+use crate::wire::protocol::ErrorCode;
 
 impl<K: Keeper> Board<'_, K> {
     /// The fault log, if the board keeps one.

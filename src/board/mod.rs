@@ -14,6 +14,7 @@
 //! takes only briefly ([`port::Shared`]), so the long work of a request (a new plan's checks,
 //! a boot) runs outside the lock while the tick preempts it.
 
+pub mod commands;
 pub mod faults;
 #[cfg(feature = "storage")]
 mod flash_keeper;

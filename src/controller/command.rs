@@ -268,6 +268,7 @@ impl Controller {
     }
 
     /// Measure the natural frequency and trim now (AC paused), as a periodic trim does.
+    #[inline]
     pub fn trim_now(&mut self) -> Result<(), Refusal> {
         self.steady()?;
         if let State::Held { needed_volts } = self.state {

@@ -29,8 +29,8 @@
 mod boot;
 mod command;
 mod envelope;
+mod event;
 mod fault;
-mod fault_figures;
 mod gate;
 mod plan;
 #[cfg(feature = "probe")]
@@ -45,11 +45,8 @@ mod watch;
 pub use boot::{Boot, CapBy};
 pub use command::{Refusal, ReplanJob, Replanned};
 pub use envelope::Predicted;
-pub use fault::{
-    Event, EventKind, Fault, FaultStage, Output, BUS_FAULT_SAID, EVENT_VALUES, FAULT_KEYS,
-    FAULT_SAID,
-};
-pub use fault_figures::Figures;
+pub use event::{Event, EventKind, Output, BUS_FAULT_SAID, EVENT_VALUES, FAULT_SAID};
+pub use fault::{Fault, FaultStage, Figures, FAULT_KEYS};
 pub use plan::{Plan, MAX_PLAN_TICKS};
 pub use settings::{Held, Setting, SettingSet, Settings, F32_GUARD, MAX_TRIMS, TRIM_SECANT_STEP};
 #[cfg(feature = "trim")]

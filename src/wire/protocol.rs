@@ -23,154 +23,6 @@ pub const NOTICE: &str = "# ";
 /// The longest request line, in bytes (without its `\n`).
 pub const MAX_LINE: usize = 96;
 
-/// What `help` answers, one line.
-pub const HELP: &str =
-    "commands: help [command | setting] | status | info | start | target <Hz> | \
-                        ac <volts> <Hz> | stop | trim | clear | get [setting] | \
-                        set <setting> <value> | save | reset | stream <Hz> | stream off | \
-                        faults [<n> | clear] (`help <command>` says what one does; `get` lists \
-                        every setting, `help <setting>` its unit and range)";
-
-/// Each command's name, its form and what it does: what `help <command>` answers, and where
-/// `help`'s suggestion for a typo is found. `parse` takes no other command.
-pub const COMMANDS: [(&str, &str); 15] = [
-    (
-        "help",
-        "help [command | setting]: the commands, or what one command does, or one \
-              setting's unit and range",
-    ),
-    (
-        "status",
-        "status: the phase, whether the output is on and its volts, the target, the \
-                bias, the cap in force, the limit, the last fault, the ticks",
-    ),
-    (
-        "info",
-        "info: the firmware's version, the image's CRC, the telemetry record's layout",
-    ),
-    (
-        "start",
-        "start: switch the high voltage on: ramp at the slew rate to the bias of the \
-               settings in force (checked as `target` is)",
-    ),
-    (
-        "target",
-        "target <Hz>: tune to this natural frequency: the bias solved within the \
-                margin, the plan checked in the model, a ramp there; switches the output on",
-    ),
-    (
-        "ac",
-        "ac <volts> <Hz>: a new AC drive on the bias (0 V: none), its swing checked \
-            against every limit first; switches the output on",
-    ),
-    (
-        "stop",
-        "stop: AC off, then down to 0 V at the slew rate; the output off",
-    ),
-    (
-        "trim",
-        "trim: measure the natural frequency now and trim the bias to the target",
-    ),
-    (
-        "clear",
-        "clear: re-arm after a fault, at 0 V: the boot checks again, the output left \
-               off (`start` switches it on)",
-    ),
-    (
-        "get",
-        "get [setting]: one setting's value, or every setting's",
-    ),
-    (
-        "set",
-        "set <setting> <value>: a new value, the plan checked again (err 2 names the \
-             rule it breaks); at rest the output stays off",
-    ),
-    (
-        "save",
-        "save: store the settings in force in flash (at rest at 0 V); the board boots \
-              with them",
-    ),
-    (
-        "reset",
-        "reset: restart the firmware (at rest at 0 V: `stop` first); it comes up \
-               with the output off",
-    ),
-    (
-        "stream",
-        "stream <Hz> | stream off: send the telemetry records at this rate on the \
-                stream port, or stop",
-    ),
-    (
-        "faults",
-        "faults [<n> | clear]: the fault log, newest first; entry n whole; or empty \
-                it (at rest)",
-    ),
-];
-
-/// What `help` is asked about.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Topic {
-    /// A command, by its index in [`COMMANDS`].
-    Command(u8),
-    Setting(Setting),
-}
-
-/// A request.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Command {
-    /// The commands, or what one command does, or one setting's meaning, unit and range.
-    Help(Option<Topic>),
-    /// Phase, target, bias, cap, limit mode, last fault, ticks.
-    Status,
-    /// What runs: the firmware's version, the image's CRC, the stream's record layout and
-    /// whether the board has its port (a recording's header names them).
-    Info,
-    /// Switch the high voltage on: the plan of the settings in force, checked as `target`
-    /// is, ramped to from the present voltage (after `clear` or `stop`, from 0 V).
-    Start,
-    /// Tune to a new natural frequency: solve, check the plan in the model, ramp there from
-    /// the present bias.
-    Target {
-        hz: f32,
-    },
-    /// A new AC drive on the bias (0 V: none), checked as `target` is.
-    Ac {
-        volts: f32,
-        hz: f32,
-    },
-    /// Ramp to 0 V at the slew rate and stay there.
-    Stop,
-    /// Measure the natural frequency and trim the bias now (the `trim` feature).
-    Trim,
-    /// Re-arm after a latched fault, or at 0 V: the boot checks again, the output left off at
-    /// 0 V (`start` switches it on: no command named `clear` does).
-    Clear,
-    /// One setting's value, or every setting's (`None`).
-    Get(Option<Setting>),
-    Set(Setting, f32),
-    /// Store the settings in force in flash: the firmware boots with them from then on.
-    Save,
-    /// Restart the firmware, at rest at 0 V only (`stop` first); the boot checks run again.
-    Reset,
-    /// Send the telemetry stream's records (`wire::stream`) on the stream port at this
-    /// rate, Hz (`None`: `stream off`, stop sending).
-    Stream(Option<f32>),
-    /// The fault log: the newest entries, one whole, or emptied.
-    Faults(FaultsAsk),
-}
-
-/// What `faults` asks of the fault log.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum FaultsAsk {
-    /// `faults`: the newest entries, newest first.
-    List,
-    /// `faults <n>`: entry number n whole.
-    One(u32),
-    /// `faults clear`: empty the log.
-    Clear,
-}
-
 /// Why a request was not done: the number after `err`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -228,17 +80,18 @@ pub enum ParseError {
     TooLong,
     /// Bytes that are not printable ASCII.
     NotText,
-    /// No command has this name; the nearest one (its index in [`COMMANDS`]), if one is near.
+    /// No command has this name; the nearest one's, if one is near.
     UnknownCommand {
-        nearest: Option<u8>,
+        nearest: Option<&'static str>,
     },
     /// No setting has this key; the nearest one, if one is near.
     UnknownSetting {
         nearest: Option<Setting>,
     },
-    /// `help` of a word that is no command and no setting; the nearest of either.
+    /// `help` of a word that is no command and no setting; the nearest of either (a
+    /// command's name or a setting's key).
     UnknownTopic {
-        nearest: Option<Topic>,
+        nearest: Option<&'static str>,
     },
     /// Argument `index` (from 1) is missing.
     Missing {
@@ -269,8 +122,8 @@ impl fmt::Display for ParseError {
             ParseError::NotText => write!(f, "line holds bytes that are not printable ASCII"),
             ParseError::UnknownCommand { nearest } => {
                 write!(f, "unknown command")?;
-                if let Some(name) = nearest.and_then(|k| COMMANDS.get(usize::from(k))) {
-                    write!(f, "; did you mean `{}`?", name.0)?;
+                if let Some(name) = nearest {
+                    write!(f, "; did you mean `{name}`?")?;
                 }
                 write!(f, " (`help` lists the commands)")
             }
@@ -283,13 +136,8 @@ impl fmt::Display for ParseError {
             }
             ParseError::UnknownTopic { nearest } => {
                 write!(f, "no command or setting has this name")?;
-                match nearest {
-                    Some(Topic::Command(k)) => {
-                        let name = COMMANDS.get(usize::from(k)).map_or("", |c| c.0);
-                        write!(f, "; did you mean `{name}`?")?;
-                    }
-                    Some(Topic::Setting(s)) => write!(f, "; did you mean `{}`?", s.key())?,
-                    None => {}
+                if let Some(name) = nearest {
+                    write!(f, "; did you mean `{name}`?")?;
                 }
                 write!(f, " (`help` lists the commands, `get` every setting)")
             }
@@ -311,8 +159,9 @@ impl fmt::Display for ParseError {
     }
 }
 
-/// Parse one request line (without its `\n`; a trailing `\r` is dropped).
-pub fn parse(line: &[u8]) -> Result<Command, ParseError> {
+/// The words of one request line (without its `\n`; a trailing `\r` is dropped): the
+/// command's name and its arguments (`Args`), or why the line is not a request.
+pub fn words(line: &[u8]) -> Result<(&str, Args<'_>), ParseError> {
     let line = line.strip_suffix(b"\r").unwrap_or(line);
     if line.len() > MAX_LINE {
         return Err(ParseError::TooLong);
@@ -326,82 +175,41 @@ pub fn parse(line: &[u8]) -> Result<Command, ParseError> {
     let text = core::str::from_utf8(line).map_err(|_| ParseError::NotText)?;
     let mut words = text.split_ascii_whitespace().peekable();
     let name = words.next().ok_or(ParseError::Empty)?;
-    // The commands are COMMANDS' (what `help` says): no command without its help.
-    if !COMMANDS.iter().any(|c| c.0 == name) {
-        return Err(ParseError::UnknownCommand {
-            nearest: nearest_command(name).map(|(_, k)| k),
-        });
-    }
-    let mut args = Args { words, index: 0 };
-    let command = match name {
-        "help" => Command::Help(args.optional_topic()?),
-        "status" => Command::Status,
-        "info" => Command::Info,
-        "start" => Command::Start,
-        "target" => Command::Target {
-            hz: args.number_in("Hz")?,
-        },
-        "ac" => Command::Ac {
-            volts: args.number_in("V")?,
-            hz: args.number_in("Hz")?,
-        },
-        "stop" => Command::Stop,
-        "trim" => Command::Trim,
-        "clear" => Command::Clear,
-        "get" => Command::Get(args.optional_setting()?),
-        "set" => {
-            let setting = args.setting()?;
-            let value = args.number_in(setting.unit())?;
-            if setting.whole() && libm::truncf(value) != value {
-                return Err(ParseError::NotWhole { index: 2 });
-            }
-            Command::Set(setting, value)
-        }
-        "save" => Command::Save,
-        "reset" => Command::Reset,
-        "stream" => match args.words.next() {
-            Some("off") => Command::Stream(None),
-            Some(word) => {
-                args.index += 1;
-                Command::Stream(Some(args.with_unit(word, "Hz")?))
-            }
-            None => return Err(ParseError::Missing { index: 1 }),
-        },
-        "faults" => match args.words.next() {
-            None => Command::Faults(FaultsAsk::List),
-            Some("clear") => Command::Faults(FaultsAsk::Clear),
-            Some(word) => {
-                args.index += 1;
-                let n = parse_number(word)
-                    .filter(|n| *n >= 1.0 && *n < 16_777_216.0 && libm::truncf(*n) == *n)
-                    .ok_or(ParseError::BadNumber { index: 1 })?;
-                Command::Faults(FaultsAsk::One(n as u32))
-            }
-        },
-        _ => return Err(ParseError::UnknownCommand { nearest: None }),
-    };
-    if args.words.next().is_some() {
-        return Err(ParseError::Extra);
-    }
-    Ok(command)
+    Ok((name, Args { words, index: 0 }))
 }
 
-struct Args<'a, I: Iterator<Item = &'a str>> {
-    words: core::iter::Peekable<I>,
+/// A request's arguments, read in order; each error names the argument by its place.
+pub struct Args<'a> {
+    words: core::iter::Peekable<core::str::SplitAsciiWhitespace<'a>>,
     index: u8,
 }
 
-impl<'a, I: Iterator<Item = &'a str>> Args<'a, I> {
+impl<'a> Args<'a> {
+    /// The next word, if one is left (counted as an argument).
+    pub fn optional_word(&mut self) -> Option<&'a str> {
+        let word = self.words.next()?;
+        self.index += 1;
+        Some(word)
+    }
+
+    /// Nothing is left: more is `Extra`.
+    pub fn end(mut self) -> Result<(), ParseError> {
+        match self.words.next() {
+            Some(_) => Err(ParseError::Extra),
+            None => Ok(()),
+        }
+    }
+
     /// A number in `unit`: `33.5`, `33.5Hz` or `33.5 Hz` (the unit's case ignored); another
     /// unit after it is named in the error, never ignored.
-    fn number_in(&mut self, unit: &'static str) -> Result<f32, ParseError> {
+    pub fn number_in(&mut self, unit: &'static str) -> Result<f32, ParseError> {
         let word = self.word()?;
         self.with_unit(word, unit)
     }
 
     /// `word` (argument `self.index`) as a number in `unit`, its unit written on it or the
     /// next word.
-    fn with_unit(&mut self, word: &'a str, unit: &'static str) -> Result<f32, ParseError> {
+    pub fn with_unit(&mut self, word: &'a str, unit: &'static str) -> Result<f32, ParseError> {
         let index = self.index;
         if let Some(x) = parse_number(word) {
             // A unit as the next word: its own is taken, a word of letters that is not
@@ -435,43 +243,15 @@ impl<'a, I: Iterator<Item = &'a str>> Args<'a, I> {
             .ok_or(ParseError::Missing { index: self.index })
     }
 
-    fn setting(&mut self) -> Result<Setting, ParseError> {
+    pub fn setting(&mut self) -> Result<Setting, ParseError> {
         let word = self.word()?;
         Setting::from_key(word).ok_or(ParseError::UnknownSetting {
             nearest: nearest_setting(word),
         })
     }
 
-    /// A command or a setting if a word is left, `None` if none is.
-    fn optional_topic(&mut self) -> Result<Option<Topic>, ParseError> {
-        let Some(word) = self.words.next() else {
-            return Ok(None);
-        };
-        self.index += 1;
-        if let Some(k) = COMMANDS.iter().position(|c| c.0 == word) {
-            return Ok(Some(Topic::Command(k as u8)));
-        }
-        if let Some(s) = Setting::from_key(word) {
-            return Ok(Some(Topic::Setting(s)));
-        }
-        let command = nearest_command(word).map(|(d, k)| (d, Topic::Command(k)));
-        let setting = nearest_setting(word).map(|s| {
-            (
-                edit_distance(word.as_bytes(), s.key().as_bytes()),
-                Topic::Setting(s),
-            )
-        });
-        // The nearer; a command on a tie.
-        let nearest = [command, setting]
-            .into_iter()
-            .flatten()
-            .min_by_key(|&(d, _)| d)
-            .map(|(_, topic)| topic);
-        Err(ParseError::UnknownTopic { nearest })
-    }
-
     /// A setting if a word is left, `None` if none is.
-    fn optional_setting(&mut self) -> Result<Option<Setting>, ParseError> {
+    pub fn optional_setting(&mut self) -> Result<Option<Setting>, ParseError> {
         match self.words.next() {
             None => Ok(None),
             Some(word) => {
@@ -497,21 +277,28 @@ fn unit_free(unit: &str) -> bool {
     matches!(unit, "fraction" | "samples" | "")
 }
 
-/// The command whose name is nearest `word` (edit distance, case ignored) if it is within a
-/// third of the name's length (rounded up): its distance and index in [`COMMANDS`].
-fn nearest_command(word: &str) -> Option<(usize, u8)> {
-    COMMANDS
-        .iter()
-        .enumerate()
-        .map(|(k, c)| (edit_distance(word.as_bytes(), c.0.as_bytes()), k, c.0.len()))
-        .filter(|&(d, _, len)| d <= len.div_ceil(3))
-        .min_by_key(|&(d, _, _)| d)
-        .map(|(d, k, _)| (d, k as u8))
+/// The item of `items` whose name is nearest `word` (edit distance, case ignored) if it is
+/// within a third of the name's length (rounded up): its distance and the name (the first
+/// of the nearest).
+pub fn nearest_name<T>(
+    word: &str,
+    items: &[T],
+    name: fn(&T) -> &'static str,
+) -> Option<(usize, &'static str)> {
+    let mut nearest: Option<(usize, &'static str)> = None;
+    for item in items {
+        let name = name(item);
+        let d = edit_distance(word.as_bytes(), name.as_bytes());
+        if d <= name.len().div_ceil(3) && nearest.is_none_or(|(best, _)| d < best) {
+            nearest = Some((d, name));
+        }
+    }
+    nearest
 }
 
 /// The setting whose key is nearest `word` (edit distance, case ignored) if it is within a
 /// third of the key's length: a typo's suggestion.
-fn nearest_setting(word: &str) -> Option<Setting> {
+pub fn nearest_setting(word: &str) -> Option<Setting> {
     Setting::ALL
         .into_iter()
         .map(|s| (edit_distance(word.as_bytes(), s.key().as_bytes()), s))
@@ -521,7 +308,7 @@ fn nearest_setting(word: &str) -> Option<Setting> {
 }
 
 /// Levenshtein distance over ASCII (case ignored), for words up to 32 bytes (longer: far).
-fn edit_distance(a: &[u8], b: &[u8]) -> usize {
+pub fn edit_distance(a: &[u8], b: &[u8]) -> usize {
     const MAX: usize = 32;
     if a.len() > MAX || b.len() > MAX {
         return usize::MAX;
@@ -817,102 +604,6 @@ mod tests {
         ] {
             assert_eq!(parse_number(word), None, "{word}");
         }
-    }
-
-    #[test]
-    fn requests_parse() {
-        assert_eq!(parse(b"target 44.5"), Ok(Command::Target { hz: 44.5 }));
-        assert_eq!(
-            parse(b"  ac 100   40\r"),
-            Ok(Command::Ac {
-                volts: 100.0,
-                hz: 40.0
-            })
-        );
-        assert_eq!(
-            parse(b"set margin 0.1"),
-            Ok(Command::Set(Setting::Margin, 0.1))
-        );
-        assert_eq!(
-            parse(b"get tick_hz"),
-            Ok(Command::Get(Some(Setting::TickHz)))
-        );
-        assert_eq!(parse(b"get"), Ok(Command::Get(None)));
-        assert_eq!(parse(b"help"), Ok(Command::Help(None)));
-        assert_eq!(
-            parse(b"help ac_volts"),
-            Ok(Command::Help(Some(Topic::Setting(Setting::AcVolts))))
-        );
-        assert_eq!(parse(b""), Err(ParseError::Empty));
-        assert_eq!(parse(b"target"), Err(ParseError::Missing { index: 1 }));
-        assert_eq!(parse(b"ac 100"), Err(ParseError::Missing { index: 2 }));
-        assert_eq!(parse(b"stop now"), Err(ParseError::Extra));
-        assert_eq!(
-            parse(b"target 4x"),
-            Err(ParseError::WrongUnit {
-                index: 1,
-                unit: "Hz"
-            })
-        );
-        assert_eq!(parse(b"target x4"), Err(ParseError::BadNumber { index: 1 }));
-        assert_eq!(
-            parse(b"get volume"),
-            Err(ParseError::UnknownSetting { nearest: None })
-        );
-        // A typo's suggestion: one letter off, a letter missing, two swapped, case.
-        for (typo, meant) in [
-            ("ac_volt", Setting::AcVolts),
-            ("acvolts", Setting::AcVolts),
-            ("tagret_hz", Setting::TargetHz),
-            ("MARGIN", Setting::Margin),
-            ("slew_volts_per_secnd", Setting::SlewVoltsPerSecond),
-        ] {
-            let mut line = heapless::Vec::<u8, 64>::new();
-            let _ = line.extend_from_slice(b"set ");
-            let _ = line.extend_from_slice(typo.as_bytes());
-            let _ = line.extend_from_slice(b" 1");
-            assert_eq!(
-                parse(&line),
-                Err(ParseError::UnknownSetting {
-                    nearest: Some(meant)
-                }),
-                "{typo}"
-            );
-        }
-        assert_eq!(edit_distance(b"kitten", b"sitting"), 3);
-        assert_eq!(edit_distance(b"", b"abc"), 3);
-        assert_eq!(edit_distance(b"flaw", b"lawn"), 2);
-        assert_eq!(parse(b"start"), Ok(Command::Start));
-        assert_eq!(
-            parse(b"launch"),
-            Err(ParseError::UnknownCommand { nearest: None })
-        );
-        // A mistyped command is named as `help <typo>` names it.
-        for (typo, meant) in [
-            ("stauts", "status"),
-            ("strat", "start"),
-            ("targte", "target"),
-        ] {
-            let nearest = COMMANDS.iter().position(|c| c.0 == meant).map(|k| k as u8);
-            assert_eq!(
-                parse(typo.as_bytes()),
-                Err(ParseError::UnknownCommand { nearest }),
-                "{typo}"
-            );
-        }
-        assert_eq!(parse(b"target \xff44"), Err(ParseError::NotText));
-        assert_eq!(parse(&[b'a'; MAX_LINE + 1]), Err(ParseError::TooLong));
-        // Exactly MAX_LINE bytes is a line; tabs separate words as spaces do.
-        let mut longest = b"target 44".to_vec();
-        longest.resize(MAX_LINE, b' ');
-        assert_eq!(parse(&longest), Ok(Command::Target { hz: 44.0 }));
-        assert_eq!(
-            parse(b"ac\t100\t40"),
-            Ok(Command::Ac {
-                volts: 100.0,
-                hz: 40.0
-            })
-        );
     }
 
     #[test]

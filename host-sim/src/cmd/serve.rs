@@ -13,6 +13,7 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use clap::Args;
+use de_resonator::board::commands::{self, Command};
 use de_resonator::board::port::{Extras, TickClock};
 use de_resonator::board::runner::{self, Follow, Ticker};
 use de_resonator::board::FlashKeeper;
@@ -189,20 +190,12 @@ struct Client {
 }
 
 /// What a connection that does not control the board may ask: what changes nothing, and
-/// `stop`, an emergency stop any connection may give (the controlling one is told).
+/// `stop`, an emergency stop any connection may give (the controlling one is told): each
+/// command's entry says (`Command::reads_only`).
 fn read_only(line: &Line) -> bool {
-    use de_resonator::wire::protocol::{self, Command, FaultsAsk};
     match line {
-        Line::Text(bytes) => match protocol::parse(bytes) {
-            Ok(
-                Command::Help(_)
-                | Command::Status
-                | Command::Info
-                | Command::Get(_)
-                | Command::Stop,
-            ) => true,
-            Ok(Command::Faults(ask)) => ask != FaultsAsk::Clear,
-            Ok(_) => false,
+        Line::Text(bytes) => match commands::parse(bytes) {
+            Ok(command) => command.reads_only(),
             // Not a request: the board's own `err 1` says why.
             Err(_) => true,
         },
@@ -212,8 +205,7 @@ fn read_only(line: &Line) -> bool {
 
 /// Whether `line` is a `stop`.
 fn is_stop(line: &Line) -> bool {
-    use de_resonator::wire::protocol::{self, Command};
-    matches!(line, Line::Text(bytes) if protocol::parse(bytes) == Ok(Command::Stop))
+    matches!(line, Line::Text(bytes) if commands::parse(bytes) == Ok(Command::Stop))
 }
 
 /// The controlling connection gone (found by its read): the oldest left takes over, and is
