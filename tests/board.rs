@@ -731,6 +731,61 @@ fn refusals_hold_or_lift_as_they_say() {
     assert_eq!(memory.saved.unwrap().target_hz, 45.0);
 }
 
+/// Each request under its command's rule: on an image whose boot was refused, every request
+/// that drives is refused with the reason (`err 5`), not answered by a controller that is not
+/// there; `stream` by the board's port, its rate as the tick's whole divisor; `status` says
+/// whether the output is on.
+#[test]
+fn requests_keep_their_rules_and_say_what_is() {
+    let bytes = image_with(&Settings::for_target(44.0));
+    let mut b = Bench::boot(&bytes, None::<NoKeeper>, None);
+    // The stream: no port, `err 6`; with one, 100 Hz is every 10th tick of 1 kHz, a frame
+    // of 66 bytes each, 6,600 B/s; off.
+    assert_eq!(code(&b.ask("stream 100")), Some(6));
+    let with_port = Extras {
+        stream_port: true,
+        ..Extras::default()
+    };
+    let mut out = ReplyLine::new();
+    let then = b
+        .board
+        .serve(&line("stream 100"), &mut &mut b.slot, &with_port, &mut out);
+    assert_eq!(
+        (out.as_str(), then),
+        (
+            "ok stream hz=100 every_ticks=10 frame_bytes=66 bytes_per_second=6600",
+            Then::Stream(Some(10))
+        )
+    );
+    let then = b
+        .board
+        .serve(&line("stream off"), &mut &mut b.slot, &with_port, &mut out);
+    assert_eq!((out.as_str(), then), ("ok stream off", Then::Stream(None)));
+    // The output: on while the ramp and the hold drive, off once stopped at 0 V.
+    assert!(b.ask("status").contains(" output=on "));
+    b.run(30_000, Inputs::NONE);
+    assert!(b.ask("status").contains(" output=on "));
+    b.ask("stop");
+    b.run(60_000, Inputs::NONE);
+    assert!(b.ask("status").contains(" output=off "));
+    // An image whose own settings the boot refuses (a target outside its table): the image
+    // is there, no controller runs.
+    let bytes = image_with(&Settings::for_target(300.0));
+    let mut b = Bench::boot(&bytes, None::<NoKeeper>, None);
+    assert!(
+        b.slot.is_none() && b.board.image().is_some(),
+        "{}",
+        b.notice
+    );
+    let why = b.board.refusal().unwrap().to_string();
+    for request in ["start", "target 45", "ac 10 40", "stop", "trim", "reset"] {
+        let reply = b.ask(request);
+        assert_eq!(reply, format!("err 5 {why}"), "{request}");
+    }
+    // What needs only the image still answers.
+    assert_eq!(b.ask("get target_hz"), "ok target_hz=300");
+}
+
 /// Issue 29, 1: an image that waits (the default of `host-sim image`) boots its checks and
 /// says so, but drives nothing, the stage off, until `start`; then ramps to the bias.
 #[test]

@@ -105,13 +105,13 @@ fn root_names(lib: &str) -> BTreeMap<String, Vec<String>> {
     names
 }
 
-#[test]
-fn no_module_of_the_core_imports_one_that_imports_it_back() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+/// Each module of the crate whose sources are under `root` (its root file `lib.rs`), and the
+/// modules it imports.
+fn imports(root: &Path) -> BTreeMap<Vec<String>, BTreeSet<Vec<String>>> {
     let mut files = BTreeMap::new();
-    modules(&root, &[], &mut files);
+    modules(root, &[], &mut files);
     let known: BTreeSet<Vec<String>> = files.keys().cloned().collect();
-    let lib = std::fs::read_to_string(root.join("lib.rs")).unwrap();
+    let lib = std::fs::read_to_string(root.join("lib.rs")).unwrap_or_default();
     let names = root_names(&lib);
     // The longest module a path names (a root re-export: the module it comes from).
     let resolve = |words: &[String]| {
@@ -156,26 +156,41 @@ fn no_module_of_the_core_imports_one_that_imports_it_back() {
             }
         }
     }
-    // A cycle: a module reached again from itself.
+    uses
+}
+
+/// Every import circle among `uses`: a module reached again from itself, said with its path.
+fn circles(uses: &BTreeMap<Vec<String>, BTreeSet<Vec<String>>>) -> Vec<String> {
+    let mut found = Vec::new();
     for start in uses.keys() {
         let mut seen = BTreeSet::new();
         let mut stack: Vec<(Vec<String>, Vec<String>)> = vec![(start.clone(), vec![])];
-        while let Some((at, trail)) = stack.pop() {
+        'walk: while let Some((at, trail)) = stack.pop() {
             for next in uses.get(&at).into_iter().flatten() {
                 let mut path = trail.clone();
                 path.push(next.join("::"));
-                assert!(
-                    next != start,
-                    "{} imports {}, which imports it back",
-                    start.join("::"),
-                    path.join(" → ")
-                );
+                if next == start {
+                    found.push(format!(
+                        "{} imports {}, which imports it back",
+                        start.join("::"),
+                        path.join(" → ")
+                    ));
+                    break 'walk;
+                }
                 if seen.insert(next.clone()) {
                     stack.push((next.clone(), path));
                 }
             }
         }
     }
+    found
+}
+
+#[test]
+fn no_module_of_the_core_imports_one_that_imports_it_back() {
+    let uses = imports(&Path::new(env!("CARGO_MANIFEST_DIR")).join("src"));
+    let found = circles(&uses);
+    assert!(found.is_empty(), "{found:#?}");
     assert!(uses.len() > 40, "{} modules read", uses.len());
     // The reader sees imports at all: the board runs the controller, through a group and a
     // root re-export alike.
@@ -186,4 +201,73 @@ fn no_module_of_the_core_imports_one_that_imports_it_back() {
         board.contains(&vec!["controller".to_string()]),
         "the board's imports read as {board:?}"
     );
+}
+
+/// host-sim's modules likewise (its library and its binary's, read as one tree).
+#[test]
+fn no_module_of_host_sim_imports_one_that_imports_it_back() {
+    let uses = imports(&Path::new(env!("CARGO_MANIFEST_DIR")).join("host-sim/src"));
+    assert!(uses.len() > 30, "{} modules read", uses.len());
+    let found = circles(&uses);
+    assert!(found.is_empty(), "{found:#?}");
+}
+
+/// The firmware's library likewise (its `bin/` are wiring, each a crate of its own).
+#[test]
+fn no_module_of_the_firmware_imports_one_that_imports_it_back() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("firmware/src");
+    let uses: BTreeMap<_, _> = imports(&root)
+        .into_iter()
+        .filter(|(module, _)| module.first().is_none_or(|m| m != "bin"))
+        .collect();
+    assert!(uses.len() > 8, "{} modules read", uses.len());
+    let found = circles(&uses);
+    assert!(found.is_empty(), "{found:#?}");
+}
+
+/// Every `.rs` file under `dir` (vendored code left out), with its path from `top`.
+fn sources(top: &Path, dir: &Path, out: &mut Vec<(String, usize)>) {
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_dir() {
+            if path.file_name().is_some_and(|n| n != "vendor") {
+                sources(top, &path, out);
+            }
+        } else if path.extension().is_some_and(|e| e == "rs") {
+            let lines = std::fs::read_to_string(&path).unwrap().lines().count();
+            let name = path
+                .strip_prefix(top)
+                .unwrap()
+                .to_string_lossy()
+                .to_string();
+            out.push((name, lines));
+        }
+    }
+}
+
+/// No source file of the core, the firmware, host-sim or the Python package over 1,000 lines
+/// (a room a newcomer reads whole), but those still to be split, listed with their length
+/// today: each may only shrink, and leaves the list once under.
+#[test]
+fn no_source_file_is_over_a_thousand_lines() {
+    const STILL_LONGER: [(&str, usize); 3] = [
+        ("host-sim/src/plot.rs", 1_423),
+        ("host-sim/src/engine/closed_loop.rs", 1_080),
+        ("host-sim/src/engine/plant.rs", 1_054),
+    ];
+    let top = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files = Vec::new();
+    for dir in ["src", "firmware/src", "host-sim/src", "python/src"] {
+        sources(top, &top.join(dir), &mut files);
+    }
+    assert!(files.len() > 120, "{} files read", files.len());
+    for (name, lines) in files {
+        match STILL_LONGER.iter().find(|(longer, _)| *longer == name) {
+            Some(&(_, most)) => {
+                assert!(lines <= most, "{name}: {lines} lines, more than {most}");
+                assert!(lines > 1_000, "{name}: {lines} lines: off the list now");
+            }
+            None => assert!(lines <= 1_000, "{name}: {lines} lines, over 1,000"),
+        }
+    }
 }

@@ -3,7 +3,7 @@
 //! ticks the core's controller on SysTick, writes the DAC through SPI1, and serves the
 //! command port on USART2. The logic is in the `de-resonator` core; nothing here decides a
 //! voltage, answers a request or decides when the amplifier is on (the core's `board`). One
-//! module a part: `board` (clocks, pins, peripherals), `analog` (silicon's ADC, its timer and
+//! module a part: `chip` (clocks, pins, peripherals), `analog` (silicon's ADC, its timer and
 //! DMA, filling the tick's block of codes), `config` (the image), `sensor` (QEMU's stand-ins
 //! for the analog inputs), `storage` (where `save` keeps the settings), `stream` (the telemetry stream's port),
 //! `watchdog` (the
@@ -35,7 +35,7 @@ pub mod analog {
         }
     }
 }
-pub mod board;
+pub mod chip;
 pub mod config;
 pub mod link;
 #[cfg(all(feature = "link", feature = "model-sensor"))]

@@ -52,7 +52,7 @@ pub fn take_reset_cause() -> Option<ResetCause> {
     }
 }
 
-/// QEMU's broken DAC bus (`board::Breakable`), kept through a reset as a broken wire is: a
+/// QEMU's broken DAC bus (`chip::Breakable`), kept through a reset as a broken wire is: a
 /// word of `.uninit` RAM (zeros at QEMU's power-up; QEMU's `sys_reset` keeps it).
 #[cfg(feature = "qemu")]
 pub mod broken_bus {
@@ -211,6 +211,11 @@ fn brown_out_on() -> bool {
     flash.optcr().read().bor_lev().bits() != 0b11
 }
 
+/// The settings' RAM pages under QEMU (two slots of a page): `storage`'s stand-in for flash.
+pub const SETTINGS_PAGES: usize = 2;
+/// The fault log's RAM pages under QEMU: two halves of two, 32 entries each.
+pub const LOG_PAGES: usize = 4;
+
 /// The RAM pages that a reset keeps (`.uninit`: cortex-m-rt does not zero it; QEMU's
 /// `sys_reset` keeps it): the settings' flash (`SETTINGS_PAGES`) and the fault log's
 /// (`LOG_PAGES`) under QEMU. Given out once.
@@ -219,8 +224,7 @@ pub fn storage_ram() -> Option<&'static mut [u8]> {
     use core::mem::MaybeUninit;
     use core::sync::atomic::{AtomicBool, Ordering};
 
-    const BYTES: usize = (crate::storage::SETTINGS_PAGES + crate::storage::LOG_PAGES)
-        * de_resonator::flash::RAM_PAGE_BYTES;
+    const BYTES: usize = (SETTINGS_PAGES + LOG_PAGES) * de_resonator::flash::RAM_PAGE_BYTES;
     #[link_section = ".uninit.SETTINGS"]
     static mut RAM: MaybeUninit<[u8; BYTES]> = MaybeUninit::uninit();
     static TAKEN: AtomicBool = AtomicBool::new(false);

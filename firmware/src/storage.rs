@@ -11,10 +11,8 @@
 
 use de_resonator::board::FlashKeeper;
 
-/// The settings' RAM pages under QEMU (two slots of a page).
-pub const SETTINGS_PAGES: usize = 2;
-/// The fault log's RAM pages under QEMU: two halves of two, 32 entries each.
-pub const LOG_PAGES: usize = 4;
+#[cfg(feature = "qemu")]
+use crate::runtime::SETTINGS_PAGES;
 
 /// The settings' flash as this build has it.
 #[cfg(feature = "qemu")]
@@ -81,7 +79,7 @@ mod slow_ram {
     /// the watchdog's lengthened window.
     #[cfg(not(feature = "link"))]
     fn stall() {
-        use crate::board::qemu_clock;
+        use crate::chip::qemu_clock;
         use crate::watchdog::{through_stall, SECTOR_ERASE_MS};
         through_stall(|| {
             cortex_m::interrupt::free(|_| {

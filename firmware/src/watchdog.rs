@@ -144,13 +144,13 @@ mod stand_in {
     pub static FED_AT_MICROS: AtomicU32 = AtomicU32::new(0);
 
     pub fn feed() {
-        FED_AT_MICROS.store(crate::board::qemu_clock::micros(), Ordering::Relaxed);
+        FED_AT_MICROS.store(crate::chip::qemu_clock::micros(), Ordering::Relaxed);
     }
 
     pub fn starved() -> bool {
         let timeout = TIMEOUT_MICROS.load(Ordering::Relaxed);
         let since =
-            crate::board::qemu_clock::micros().wrapping_sub(FED_AT_MICROS.load(Ordering::Relaxed));
+            crate::chip::qemu_clock::micros().wrapping_sub(FED_AT_MICROS.load(Ordering::Relaxed));
         timeout > 0 && since > timeout
     }
 }

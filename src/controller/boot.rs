@@ -5,18 +5,17 @@
 use super::envelope::Predicted;
 use super::fault::Fault;
 use super::plan::Plan;
-use super::settings::guarded;
+use super::settings::{guarded, Settings};
 use super::{Controller, State};
 use crate::acquire::InputNoise;
 use crate::drive::Amplifier;
-use crate::model::device::{Device, Field};
+use crate::model::device::{Device, DeviceParams, Field};
 use crate::model::safety::Limit;
 use crate::model::swing::{AcDrive, Ramp, Swing};
 #[cfg(feature = "probe")]
 use crate::table::CapacitanceBands;
 use crate::table::Table;
 use crate::tuning::Tuner;
-use crate::{DeviceParams, Settings};
 
 /// What the boot stages found.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -8,11 +8,12 @@ use core::fmt;
 
 use super::fault::Fault;
 use super::plan::Plan;
+use super::settings::Settings;
 use super::watch::Guard;
 use super::{Boot, Controller, Phase, State};
 use crate::acquire::InputNoise;
 use crate::drive::{Amplifier, DacCode};
-use crate::{DeviceParams, Settings};
+use crate::model::device::DeviceParams;
 
 /// Why a request to a running controller was not done. The controller runs on as before.
 #[derive(Clone, Copy, Debug, PartialEq)]

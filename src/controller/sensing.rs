@@ -204,8 +204,11 @@ mod tests {
     use std::vec;
 
     use super::*;
+    use crate::controller::Settings;
+    use crate::drive::Amplifier;
     use crate::model::device::REFERENCE_DEVICE;
-    use crate::{table, Amplifier, Settings, Tuner};
+    use crate::table;
+    use crate::tuning::Tuner;
 
     /// The reference device's controller with the probe on (its table as `host-sim lut`
     /// makes it).

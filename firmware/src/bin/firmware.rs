@@ -41,7 +41,7 @@ mod app {
     use de_resonator::board::runner::{self, Follow, Logged, Ticker};
     use de_resonator::board::watchdog::CheckIn;
     use de_resonator::board::FlashKeeper;
-    use de_resonator::board::{self as logic, Line, Lines, ReplyLine};
+    use de_resonator::board::{self, Line, Lines, ReplyLine};
     #[cfg(feature = "link")]
     use de_resonator::wire::link::{Booted, Kind, Observed};
     use de_resonator::wire::stream::{Telemetry, FRAME_BYTES};
@@ -51,7 +51,7 @@ mod app {
     use de_resonator_firmware::analog::Acquisition;
     #[cfg(not(feature = "qemu"))]
     use de_resonator_firmware::analog::Parts;
-    use de_resonator_firmware::board::{self, Board, StagePin, StageSpi};
+    use de_resonator_firmware::chip::{self, Chip, StagePin, StageSpi};
     use de_resonator_firmware::link::{LinkIn, LinkOut, TickDone, REPLIES};
     use de_resonator_firmware::runtime::{self, ResetCause};
     #[cfg(feature = "model-sensor")]
@@ -148,7 +148,7 @@ mod app {
         from_rx: Receiver<'static, Work, QUEUE>,
         tx: Tx<USART2>,
         /// The core's board: the image, the settings, the refusal, the command port's answers.
-        logic: logic::Board<'static, FlashKeeper<SettingsFlash>>,
+        board: board::Board<'static, FlashKeeper<SettingsFlash>>,
         /// Idle without `wfi` (QEMU runs that measure the tick rate).
         busy_idle: bool,
         /// QEMU's test of a stuck tick (semihosting argument `tick-hangs`): the tick hangs
@@ -184,21 +184,21 @@ mod app {
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
         #[cfg(feature = "qemu")]
-        board::qemu_clock::start(&cx.device.TIM2);
+        chip::qemu_clock::start(&cx.device.TIM2);
         // The link paces the tick at the simulation's speed, not virtual time's: no stand-in
         // watchdog clock to bite between ticks the host has not sent yet.
         #[cfg(all(feature = "qemu", not(feature = "link")))]
         Dog::start_clock(&cx.device.TIM3);
         stack::paint();
         let mut core = cx.core;
-        let mut board = Board::new(cx.device);
-        let mut tx = board.tx;
-        let (dac, enable) = board::stage_wires(board.dac, board.enable);
+        let mut chip = Chip::new(cx.device);
+        let mut tx = chip.tx;
+        let (dac, enable) = chip::stage_wires(chip.dac, chip.enable);
         let mut stage = OutputStage::new(Dac8551::new(dac), enable);
         // 0 V, DAC powered down, amplifier disabled, until the checks pass.
         let _ = stage.safe();
         #[cfg(feature = "defmt")]
-        if let Some(e) = board.clock_error {
+        if let Some(e) = chip.clock_error {
             defmt::warn!("clock: {}; running on the 16 MHz HSI", e);
         }
         let cause = runtime::take_reset_cause();
@@ -206,10 +206,10 @@ mod app {
             let _ = runner::write_reset(cause, &mut tx, "\n");
         }
         let controller = cx.local.slot.write(None);
-        let (mut logic, mut started) = logic::Board::boot(
+        let (mut board, mut started) = board::Board::boot(
             controller,
             config::image(),
-            storage::open(board.flash),
+            storage::open(chip.flash),
             cause,
         );
         #[cfg(feature = "defmt")]
@@ -217,29 +217,29 @@ mod app {
             defmt::warn!("{=str}", warning.as_str());
         }
         let notice = &mut started.notice;
-        let tick_hz = logic.tick_hz(controller);
+        let tick_hz = board.tick_hz(controller);
         // The image's front end at the tick rate booted with: `Board::boot` has refused one
         // the board cannot run (its image then gone: none here), so this gives the scans a
         // tick; the acquisition started before the tick (the tick's reader gives the first
         // buffers a few ticks).
-        let front_end = logic.image().map_or(FrontEnd::NONE, |i| i.front_end);
+        let front_end = board.image().map_or(FrontEnd::NONE, |i| i.front_end);
         let scans_per_tick = match front_end.check(tick_hz) {
             Ok(scans) => scans,
             Err(e) => {
-                logic.refuse(controller, &e, notice);
+                board.refuse(controller, &e, notice);
                 0
             }
         };
         // On the HSI fallback the ADC converts about 4 times slower than the image assumed.
         #[cfg(not(feature = "qemu"))]
         if let Err(e) =
-            front_end.check_adc_clock(de_resonator_firmware::analog::adc_clock_hz(&board.rcc))
+            front_end.check_adc_clock(de_resonator_firmware::analog::adc_clock_hz(&chip.rcc))
         {
-            logic.refuse(controller, &e, notice);
+            board.refuse(controller, &e, notice);
         }
         #[cfg(not(feature = "qemu"))]
         let acquisition = {
-            let analog = board.analog;
+            let analog = chip.analog;
             let parts = Parts {
                 adc1: analog.adc1,
                 dma: analog.dma,
@@ -247,36 +247,36 @@ mod app {
                 pins: analog.pins,
                 buffers: cx.local.buffers,
             };
-            let started = Acquisition::start(parts, &mut board.rcc, &front_end, scans_per_tick);
+            let started = Acquisition::start(parts, &mut chip.rcc, &front_end, scans_per_tick);
             if started.is_none() && scans_per_tick > 0 {
-                logic.refuse(controller, &"the ADC's acquisition did not start", notice);
+                board.refuse(controller, &"the ADC's acquisition did not start", notice);
             }
             started
         };
         #[cfg(feature = "qemu")]
         let acquisition = {
-            let _ = (&mut board.rcc, cx.local.buffers);
+            let _ = (&mut chip.rcc, cx.local.buffers);
             None
         };
         #[cfg(not(feature = "qemu"))]
-        let stream_port = board
+        let stream_port = chip
             .stream_tx
-            .map(|tx| StreamPort::new(board.stream_dma, tx, cx.local.frames));
+            .map(|tx| StreamPort::new(chip.stream_dma, tx, cx.local.frames));
         #[cfg(feature = "qemu")]
         let stream_port = {
             let _ = cx.local.frames;
-            board.stream_tx.map(StreamPort::new)
+            chip.stream_tx.map(StreamPort::new)
         };
         // The link build's tick is pended by each samples frame, not SysTick's count.
         #[cfg(feature = "link")]
         let _ = &mut core;
         #[cfg(not(feature = "link"))]
-        if logic.image().is_some()
-            && board::start_tick(&mut core.SYST, board.core_hz, tick_hz).is_none()
+        if board.image().is_some()
+            && chip::start_tick(&mut core.SYST, chip.core_hz, tick_hz).is_none()
         {
             // The controller's own checks bound tick_hz; this is the timer's 24-bit reach.
             let why = Decimal(tick_hz);
-            logic.refuse(
+            board.refuse(
                 controller,
                 &format_args!("tick_hz = {why} is beyond SysTick's reach"),
                 notice,
@@ -291,10 +291,10 @@ mod app {
         let _ = started.write_banner(&mut tx, "\n");
         #[cfg(feature = "link")]
         let (link_in, link_out) = {
-            let link_in = LinkIn::open(board.link, front_end);
+            let link_in = LinkIn::open(chip.link, front_end);
             let mut out = LinkOut::open();
-            let booted = Booted::of(logic.booted());
-            let refusal = logic.refusal().unwrap_or("");
+            let booted = Booted::of(board.booted());
+            let refusal = board.refusal().unwrap_or("");
             out.send(Kind::Boot, 0, |p| booted.write(refusal, p));
             (link_in, out)
         };
@@ -334,14 +334,14 @@ mod app {
                 sensor: Sensors,
                 #[cfg(feature = "model-sensor")]
                 sensor: Sensors::new(
-                    logic.image().map(|i| i.params),
+                    board.image().map(|i| i.params),
                     front_end,
                     scans_per_tick,
                     tick_hz,
                 )
-                .failing_after(board::asked("sensor-fails").then_some(2.0 * tick_hz)),
+                .failing_after(chip::asked("sensor-fails").then_some(2.0 * tick_hz)),
                 reader: Reader::new(front_end, scans_per_tick),
-                serial_rx: board.rx,
+                serial_rx: chip.rx,
                 lines: Lines::default(),
                 held: None,
                 echo_in,
@@ -350,12 +350,12 @@ mod app {
                 to_log,
                 from_rx,
                 tx,
-                logic,
-                busy_idle: board::asked("busy-idle"),
-                hang_after_ticks: board::asked("tick-hangs").then_some(2 * tick_hz as u32),
+                board,
+                busy_idle: chip::asked("busy-idle"),
+                hang_after_ticks: chip::asked("tick-hangs").then_some(2 * tick_hz as u32),
                 #[cfg(feature = "qemu")]
-                bus_fails_at_tick: board::asked("dac-bus-fails").then_some(2 * tick_hz as u32),
-                dog: Dog::new(board.iwdg, &board.dbgmcu),
+                bus_fails_at_tick: chip::asked("dac-bus-fails").then_some(2 * tick_hz as u32),
+                dog: Dog::new(chip.iwdg, &chip.dbgmcu),
                 check_in: CheckIn::new(tick_hz),
                 #[cfg(feature = "link")]
                 link_in,
@@ -443,7 +443,7 @@ mod app {
         {
             let clock = TickClock {
                 tick: *cx.local.power_up_ticks,
-                micros: board::qemu_clock::micros(),
+                micros: chip::qemu_clock::micros(),
             };
             cx.shared.last_tick.lock(|at| *at = clock);
         }
@@ -456,7 +456,7 @@ mod app {
         {
             let ticks = cx.local.power_up_ticks;
             if cx.local.bus_fails_at_tick.is_some_and(|n| *ticks >= n) {
-                board::break_dac_bus();
+                chip::break_dac_bus();
             }
             *ticks = ticks.wrapping_add(1);
         }
@@ -533,7 +533,7 @@ mod app {
         }
         let off = stage.is_safe();
         cx.shared.output_off.lock(|o| *o = off);
-        let cycles = board::cycles_into_tick();
+        let cycles = chip::cycles_into_tick();
         cx.shared
             .tick_cycles_max
             .lock(|most| *most = (*most).max(cycles));
@@ -558,7 +558,7 @@ mod app {
         let mut tick = 0u32;
         while let Ok(done) = cx.local.from_tick.recv().await {
             if done.job {
-                logic::tick::run_job(|f| {
+                board::tick::run_job(|f| {
                     cx.shared.controller.lock(|c| {
                         if let Some(c) = c.as_mut() {
                             f(c);
@@ -666,7 +666,7 @@ mod app {
             match next.take().unwrap_or_else(|| rx.read()) {
                 Ok(byte) => {
                     let pushed = lines.push(byte);
-                    if pushed.echo != logic::Echo::Nothing {
+                    if pushed.echo != board::Echo::Nothing {
                         // Shown only: past the buffer's room a byte is not shown. The wake-up
                         // may find the queue full: the next line's drains it anyway.
                         pushed.echo.bytes(|b| {
@@ -694,14 +694,14 @@ mod app {
     /// The controller under the lock it shares with the tick.
     struct Locked<'a, M>(&'a mut M);
 
-    impl<M: rtic::Mutex<T = &'static mut Option<Controller>>> logic::Shared for Locked<'_, M> {
+    impl<M: rtic::Mutex<T = &'static mut Option<Controller>>> board::Shared for Locked<'_, M> {
         fn with<R>(&mut self, f: impl FnOnce(&mut Option<Controller>) -> R) -> R {
             self.0.lock(|c| f(c))
         }
     }
 
     /// Each request answered, one reply line each.
-    #[task(priority = 1, shared = [controller, tick_cycles_max, last_tick, output_off, latest, telemetry, logged, stream_port], local = [from_rx, tx, logic, echo_out])]
+    #[task(priority = 1, shared = [controller, tick_cycles_max, last_tick, output_off, latest, telemetry, logged, stream_port], local = [from_rx, tx, board, echo_out])]
     async fn command(mut cx: command::Context) {
         let mut reply = ReplyLine::new();
         while let Ok(work) = cx.local.from_rx.recv().await {
@@ -710,9 +710,9 @@ mod app {
             // A fault the tick left, into the log (the flash's own policy: no erase while
             // running on the chip, `board::FlashKeeper::erase_stalls`).
             if let Some(logged) = cx.shared.logged.lock(Option::take) {
-                let logic = &mut *cx.local.logic;
-                let tick_hz = cx.shared.controller.lock(|c| logic.tick_hz(c));
-                let done = logic.log(&logged, tick_hz);
+                let board = &mut *cx.local.board;
+                let tick_hz = cx.shared.controller.lock(|c| board.tick_hz(c));
+                let done = board.log(&logged, tick_hz);
                 #[cfg(feature = "defmt")]
                 if let Some(Err(e)) = done {
                     defmt::error!("the fault log: {}", e);
@@ -750,14 +750,14 @@ mod app {
             let mut controller = Locked(&mut cx.shared.controller);
             let then = cx
                 .local
-                .logic
+                .board
                 .serve(&line, &mut controller, &extras, &mut reply);
             let _ = write!(cx.local.tx, "{reply}{end}");
             if cx.shared.telemetry.lock(|t| runner::follow(then, t)) == Follow::Reset {
                 // The board took the controller out of its slot: the tick turns the output
                 // off; then the restart.
                 cx.shared.output_off.lock(|o| *o = false);
-                for _ in 0..board::RESET_WAIT_POLLS {
+                for _ in 0..chip::RESET_WAIT_POLLS {
                     if cx.shared.output_off.lock(|o| *o) {
                         break;
                     }
@@ -772,7 +772,7 @@ mod app {
     /// result back at the next tick.
     #[task(priority = 1, shared = [controller])]
     async fn job(mut cx: job::Context) {
-        logic::tick::run_job(|f| {
+        board::tick::run_job(|f| {
             cx.shared.controller.lock(|c| {
                 if let Some(c) = c.as_mut() {
                     f(c);

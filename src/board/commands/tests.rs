@@ -101,3 +101,63 @@ fn requests_parse() {
         })
     );
 }
+
+/// `HELP`, made at compile time, is the forms joined as `help` says them (joined here by the
+/// standard library's `join`), with nothing after its tail.
+#[test]
+fn help_is_every_form_joined() {
+    let forms: std::vec::Vec<&str> = COMMANDS.iter().map(|c| c.form).collect();
+    let joined = std::format!("{HELP_HEAD}{}{HELP_TAIL}", forms.join(HELP_SEPARATOR));
+    assert_eq!(HELP, joined);
+    assert!(!HELP.contains('\0'));
+}
+
+/// The table's check that a form starts with its command's name (`names`), on forms right
+/// and wrong.
+#[test]
+fn a_form_names_its_command() {
+    for (form, name) in [
+        ("target <Hz>", "target"),
+        ("stop", "stop"),
+        ("get [setting]", "get"),
+    ] {
+        assert!(names(form, name), "{form} {name}");
+    }
+    for (form, name) in [
+        ("targets <Hz>", "target"),
+        ("tar", "target"),
+        ("targex <Hz>", "target"),
+        ("xtop", "stop"),
+        ("sto", "stop"),
+        ("", "stop"),
+    ] {
+        assert!(!names(form, name), "{form} {name}");
+    }
+    // Each command's name is its form's first word.
+    for command in COMMANDS {
+        let first = command.form.split(' ').next().unwrap_or_default();
+        assert_eq!(command.name(), first);
+        assert!(names(command.form, command.name()));
+    }
+}
+
+/// `help` of a word near a command and a setting both names the nearer (distances worked out
+/// by hand: `target_h` is 1 from `target_hz`, 2 from `target`; `marget` 1 from `target`, 2
+/// from `margin`), a command on a tie (`target_m`: 2 from each of `target` and `target_hz`).
+#[test]
+fn help_of_a_typo_names_the_nearer_of_a_command_and_a_setting() {
+    for (typo, nearest) in [
+        ("target_h", "target_hz"),
+        ("marget", "target"),
+        ("target_m", "target"),
+    ] {
+        let line = std::format!("help {typo}");
+        assert_eq!(
+            parse(line.as_bytes()),
+            Err(ParseError::UnknownTopic {
+                nearest: Some(nearest)
+            }),
+            "{typo}"
+        );
+    }
+}

@@ -1,4 +1,4 @@
-//! The board: clocks, the tick's timer, and the pins and peripherals the app drives. Wiring
+//! The chip: clocks, the tick's timer, and the pins and peripherals the app drives. Wiring
 //! (README, Firmware: wiring):
 //!
 //! | signal | pin | peripheral |
@@ -121,7 +121,7 @@ pub enum ClockError {
 }
 
 /// The peripherals the app owns, set up.
-pub struct Board {
+pub struct Chip {
     pub dac: DacSpi,
     pub enable: EnablePin,
     pub tx: Tx<USART2>,
@@ -218,7 +218,7 @@ fn clocks(rcc: Rcc) -> (Rcc, u32, Option<ClockError>) {
     }
 }
 
-impl Board {
+impl Chip {
     /// Set up the board. The pins that hold the output safe come first, before the clock
     /// probe (which may wait milliseconds on a dead crystal): the amplifier's enable driven
     /// low, the DAC's SYNC high; the command port's RX pulled up (an unconnected port reads
