@@ -8,7 +8,7 @@ use core::fmt::Write as _;
 use super::commands::FaultsAsk;
 use super::{Board, FaultKeeper, Keeper, ResetCause, Shared};
 use crate::acquire::Inputs;
-use crate::board::port::ReplyLine;
+use crate::board::port::{at_zero, ReplyLine};
 use crate::controller::Fault;
 use crate::fault_log::{keep_newest, Cause, Entry, KEPT};
 use crate::numerics::decimal::Decimal;
@@ -56,7 +56,7 @@ impl<K: Keeper> Board<'_, K> {
         controller: &mut impl Shared,
         out: &mut ReplyLine,
     ) {
-        if ask == FaultsAsk::Clear && !controller.with(|c| c.as_ref().is_none_or(|c| c.at_rest())) {
+        if ask == FaultsAsk::Clear && !at_zero(controller) {
             return super::port::err(
                 out,
                 ErrorCode::State,

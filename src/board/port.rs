@@ -235,6 +235,12 @@ impl Shared for &mut Option<Controller> {
     }
 }
 
+/// Whether the output is at rest at 0 V: no controller, or one at rest (`Controller::at_rest`).
+#[inline]
+pub(super) fn at_zero(controller: &mut impl Shared) -> bool {
+    controller.with(|c| c.as_ref().is_none_or(Controller::at_rest))
+}
+
 /// `err <code> <message>` into `out`.
 pub(super) fn err(out: &mut ReplyLine, code: ErrorCode, message: impl core::fmt::Display) {
     out.clear();

@@ -5,7 +5,7 @@
 use core::fmt::Write as _;
 
 use super::{Request, Topic, COMMANDS, HELP};
-use crate::board::port::{err, ReplyLine, Shared, Then};
+use crate::board::port::{at_zero, err, ReplyLine, Shared, Then};
 use crate::board::{Board, Keeper};
 use crate::controller::{Controller, Phase, Refusal, Setting, Settings};
 use crate::model::device::Field;
@@ -402,12 +402,6 @@ impl<K: Keeper> Board<'_, K> {
         }
         Then::Reply
     }
-}
-
-/// Whether the output is at rest at 0 V: no controller, or one at rest (`Controller::at_rest`).
-#[inline]
-pub(crate) fn at_zero(controller: &mut impl Shared) -> bool {
-    controller.with(|c| c.as_ref().is_none_or(Controller::at_rest))
 }
 
 /// Put `next` in the slot if the output is at rest, the check and the swap under one lock
