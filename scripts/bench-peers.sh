@@ -20,7 +20,8 @@
 # Usage: scripts/bench-peers.sh [RUNS]    both, host-sim's peak build (RUNS: 10)
 #        scripts/bench-peers.sh --check   (CI) 1 only, fewer points, one launch each, with
 #                                         $HOST_SIM (default target/debug/host-sim): the
-#                                         figures' words and each point's times (within 4×)
+#                                         figures' words and each point's times (within 4×
+#                                         after the machine's factor, the peers' median)
 #                                         and errors against docs/plots/
 #        scripts/bench-peers.sh --install the peers only (CI installs them beside its builds)
 # Installs gfortran and libsundials-dev with apt where missing, and the peers at the versions
@@ -29,7 +30,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 mode=${1:-10}
 case "$mode" in
-    -h|--help) sed -n '2,27p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h|--help) sed -n '2,28p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     --check|--install|[0-9]*) ;;
     *) echo "bench-peers.sh: unknown argument \`$mode\` (see --help)" >&2; exit 2 ;;
 esac

@@ -92,7 +92,8 @@ def main():
     p.add_argument("--scene", choices=[s[0] for s in SCENES], action="append",
                    help="only this scene (repeatable; default: all; not with --check)")
     p.add_argument("--slack", type=float, default=4.0,
-                   help="--check: a peer's time may be this factor off the committed one")
+                   help="--check: a peer's time may be this factor off the committed one, "
+                   "after the machine's (the peers' median ratio)")
     p.add_argument("--ours-slack", type=float, default=6.0,
                    help="--check: host-sim's (the test profile's is 2–2.4× the peak build's)")
     p.add_argument("--versions", default="", help="the peers' versions, named in the figures")
@@ -333,6 +334,12 @@ def words(path):
     return [t for t in texts if not re.fullmatch(r"[-+0-9.,eE×·^ −⁰¹²³⁴⁵⁶⁷⁸⁹⁻]*", t)]
 
 
+def machine_factor(pairs, key):
+    """The median over the peers' points of the time now over the time committed."""
+    ratios = [r[key] / kept[key] for r, kept in pairs if peer_of(r["solver"])]
+    return statistics.median(ratios) if ratios else 1.0
+
+
 def check(rows, figures, slack, ours_slack):
     failed = 0
     for made in figures:
@@ -342,6 +349,7 @@ def check(rows, figures, slack, ours_slack):
                   file=sys.stderr)
             failed = 1
     committed = {(r["scene"], r["solver"], r["setting"]): r for r in committed_rows()}
+    pairs = []
     for r in rows:
         kept = committed.get((r["scene"], r["solver"], r["setting"]))
         if kept is None:
@@ -349,12 +357,22 @@ def check(rows, figures, slack, ours_slack):
                   f"{r['setting']}", file=sys.stderr)
             failed = 1
             continue
+        pairs.append((r, kept))
+    # This machine against the one the figures were taken on: the median over the peers'
+    # points (which no change of ours moves) of time now / time committed, a key at a time.
+    # Each point is then compared after that factor, so a machine uniformly slower or faster
+    # passes, and a point that moved against its peers in this one run does not.
+    machine = {key: machine_factor(pairs, key) for key in ["whole_seconds", "solve_seconds"]}
+    print("work_precision.py: this machine against the committed figures' (the peers' "
+          "median): " + ", ".join(f"{key} {f:.2f}×" for key, f in machine.items()))
+    for r, kept in pairs:
         factor = slack if peer_of(r["solver"]) else ours_slack
         for key in ["whole_seconds", "solve_seconds"]:
-            ratio = r[key] / kept[key]
+            ratio = r[key] / kept[key] / machine[key]
             if not 1.0 / factor <= ratio <= factor:
                 print(f"work_precision.py: {r['scene']} {r['solver']} {r['setting']}: {key} "
-                      f"{r[key]:.3g} s against the committed {kept[key]:.3g} s "
+                      f"{r[key]:.3g} s against the committed {kept[key]:.3g} s, "
+                      f"{ratio:.2f}× after this machine's {machine[key]:.2f}× "
                       f"(more than {factor}× apart)", file=sys.stderr)
                 failed = 1
         for key in ["error_final", "error_l2"]:
@@ -370,7 +388,7 @@ def check(rows, figures, slack, ours_slack):
     else:
         print(f"work_precision.py: the committed figures drawn from the committed CSV; "
               f"{len(rows)} points within {slack}× (ours {ours_slack}×) of the committed "
-              "times, their errors and the figures' words as committed")
+              "times after this machine's factor, their errors and the figures' words as committed")
     return failed
 
 
