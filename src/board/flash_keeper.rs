@@ -31,11 +31,11 @@ impl<F: NorFlash> SettingsKeeper for FlashKeeper<F> {
     type Error = StoreError;
 
     fn load(&mut self) -> Result<Option<Held>, StoreError> {
-        at_once(load(&mut self.flash, self.range.clone()))
+        at_once(|| load(&mut self.flash, self.range.clone()))
     }
 
     fn save(&mut self, settings: &Settings) -> Result<(), StoreError> {
-        at_once(save(&mut self.flash, self.range.clone(), settings))
+        at_once(|| save(&mut self.flash, self.range.clone(), settings))
     }
 }
 
@@ -72,25 +72,28 @@ impl<F: NorFlash> FaultKeeper for FlashLog<'_, F> {
 
     fn log(&mut self, entry: &Entry) -> Result<u32, StoreError> {
         let (range, may_erase) = (self.range.clone(), self.may_erase);
-        at_once(fault_log::append(&mut *self.flash, range, entry, may_erase))
+        at_once(|| fault_log::append(&mut *self.flash, range, entry, may_erase))
     }
 
     fn prepare(&mut self) -> Result<bool, StoreError> {
-        at_once(fault_log::prepare(&mut *self.flash, self.range.clone()))
+        at_once(|| fault_log::prepare(&mut *self.flash, self.range.clone()))
     }
 
     fn each(&mut self, each: &mut dyn FnMut(Entry)) -> Result<(), StoreError> {
-        at_once(fault_log::each(&mut *self.flash, self.range.clone(), each))
+        at_once(|| fault_log::each(&mut *self.flash, self.range.clone(), each))
     }
 
     fn clear(&mut self) -> Result<(), StoreError> {
-        at_once(fault_log::clear(&mut *self.flash, self.range.clone()))
+        at_once(|| fault_log::clear(&mut *self.flash, self.range.clone()))
     }
 }
 
-/// A flash call run to its end at once; one that still waits is a flash error.
-fn at_once<T>(
-    call: impl core::future::Future<Output = Result<T, StoreError>>,
+/// A flash call run to its end at once; one that still waits is a flash error. Made and
+/// run in a frame of its own: the call's state (its buffers) is not carried, in the frame of
+/// its caller, under what the caller calls next (the boot's checks, RAM's deepest path).
+#[inline(never)]
+fn at_once<T, F: core::future::Future<Output = Result<T, StoreError>>>(
+    call: impl FnOnce() -> F,
 ) -> Result<T, StoreError> {
-    block_on(call).unwrap_or(Err(StoreError::Flash(FlashKind::Other)))
+    block_on(call()).unwrap_or(Err(StoreError::Flash(FlashKind::Other)))
 }

@@ -161,11 +161,12 @@ impl<'a, K: Keeper> Board<'a, K> {
         board.image = Some(image);
         board.idle_settings = image.0.settings;
         let mut source = "image";
-        let mut warning = ReplyLine::new();
+        // Written where it is returned: a second 1 KB line would sit under the boot's checks.
+        let warning = started.warning.insert(ReplyLine::new());
         let saved = match board.keeper.as_mut().map(SettingsKeeper::load) {
             Some(Ok(saved)) => saved,
             Some(Err(e)) => {
-                clause(&mut warning, format_args!("{e}: the image's settings used"));
+                clause(warning, format_args!("{e}: the image's settings used"));
                 None
             }
             None => None,
@@ -195,24 +196,24 @@ impl<'a, K: Keeper> Board<'a, K> {
                     booted = Some(bias);
                     defaulted = defaulted.and(new);
                     clause_naming(
-                        &mut warning,
+                        warning,
                         "saved settings from an earlier firmware; new since, at the image's values:",
                         new,
                     );
                 }
                 Err(why) => clause(
-                    &mut warning,
+                    warning,
                     format_args!("saved settings refused ({why}): the image's used"),
                 ),
             }
         }
         clause_naming(
-            &mut warning,
+            warning,
             "image from an earlier host-sim; new since, at their defaults:",
             defaulted,
         );
-        if !warning.is_empty() {
-            started.warning = Some(warning);
+        if warning.is_empty() {
+            started.warning = None;
         }
         let booted = match booted {
             Some(bias) => Ok(bias),

@@ -69,7 +69,10 @@ fn job_wanted(_: &Controller) -> bool {
 /// The background job, at low priority: take it from the controller under the lock, solve it
 /// outside, give the result back (the next tick applies it). `with` runs a closure on the
 /// controller under its lock. Whether there was one.
+/// Kept out of line: the job (a 2 KB window) then sits in a frame of its own, not in the
+/// frame of the task that runs it, where every request would carry it.
 #[cfg(feature = "trim")]
+#[inline(never)]
 pub fn run_job(mut with: impl FnMut(&mut dyn FnMut(&mut Controller))) -> bool {
     let mut job = None;
     with(&mut |c| job = c.trim_job());
