@@ -65,12 +65,11 @@ impl AfterTick {
     }
 }
 
-/// The tick's own state: the board tick's count since boot, the voltage last sent, and what
-/// the last tick did.
+/// The tick's own state: the board tick's count since boot and what the last tick did (the
+/// voltage last sent is the controller's: [`Controller::last_volts`]).
 #[derive(Clone, Copy, Debug)]
 pub struct Ticker {
     next_tick: u32,
-    sent_volts: f32,
     last: AfterTick,
 }
 
@@ -85,7 +84,6 @@ impl Ticker {
     pub const fn new() -> Self {
         Ticker {
             next_tick: 0,
-            sent_volts: 0.0,
             last: AfterTick {
                 tick: 0,
                 readings: Inputs::NONE,
@@ -124,11 +122,9 @@ impl Ticker {
             Ok(readings) => *readings,
             Err(_) => Inputs::NONE,
         };
-        last.volts_before = self.sent_volts;
+        // Read only with a controller's fault (`AfterTick::logged`): its own last voltage.
+        last.volts_before = slot.as_ref().map_or(0.0, Controller::last_volts);
         last.ticked = tick::drive(slot, stage, inputs);
-        if let Some(t) = &last.ticked {
-            self.sent_volts = t.output.volts;
-        }
         &self.last
     }
 

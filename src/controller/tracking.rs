@@ -207,13 +207,9 @@ impl Controller {
     /// and the bias it gives for the target, and the estimate's cap; or a fault.
     fn take_slope(&mut self, k: u32) -> Result<Option<Event>, Fault> {
         let bias = self.plan.bias_volts;
-        let Some(result) = &self.trim.result else {
+        let Some(result) = self.checked_result()? else {
             return Ok(None);
         };
-        if let Some(fault) = self.outside_batch(result) {
-            self.trim.result = None;
-            return Err(fault);
-        }
         match *result {
             TrimResult::Converged { shear_modulus, .. } => {
                 self.trim.params.shear_modulus = shear_modulus;

@@ -427,7 +427,7 @@ impl Controller {
     /// A trim's result whose μ lies outside the batch the table was made for (model.md §10):
     /// the fault that says so (checked here too: a result is given back from outside the
     /// tick). A measurement never widens the batch, nor raises the cap past its own.
-    pub(super) fn outside_batch(&self, result: &TrimResult) -> Option<Fault> {
+    fn outside_batch(&self, result: &TrimResult) -> Option<Fault> {
         let shear_modulus = match *result {
             TrimResult::Converged { shear_modulus, .. }
             | TrimResult::Retune { shear_modulus, .. }
@@ -437,9 +437,10 @@ impl Controller {
         outside_batch(self.batch_modulus, shear_modulus).map(Fault::Trim)
     }
 
-    /// Apply the trim's result at tick `k`, once it has come back.
-    pub(super) fn apply_trim(&mut self, k: u32) -> Result<Option<Event>, Fault> {
-        // Read in place (a `Retune` holds a device, large: copied once, into the estimate).
+    /// The solve's result once it has come back (`None` before), read in place (a `Retune`
+    /// holds a device, large: copied once, into the estimate); one whose μ lies outside the
+    /// batch is dropped for its fault. The first step of every use of a result.
+    pub(super) fn checked_result(&mut self) -> Result<Option<&TrimResult>, Fault> {
         let Some(result) = &self.trim.result else {
             return Ok(None);
         };
@@ -447,7 +448,15 @@ impl Controller {
             self.trim.result = None;
             return Err(fault);
         }
+        Ok(self.trim.result.as_ref())
+    }
+
+    /// Apply the trim's result at tick `k`, once it has come back.
+    pub(super) fn apply_trim(&mut self, k: u32) -> Result<Option<Event>, Fault> {
         let bias_volts = self.plan.bias_volts;
+        let Some(result) = self.checked_result()? else {
+            return Ok(None);
+        };
         let result = match *result {
             TrimResult::Retune {
                 measured_hz,
