@@ -594,7 +594,7 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
                 let faulted = slot.as_ref().is_some_and(|c| c.latched_fault().is_some());
                 let said = if asked_since_boot || faulted {
                     let mut now = ReplyLine::new();
-                    let status = crate::engine::closed_loop::command_line("status")?;
+                    let status = crate::engine::core_board::command_line("status")?;
                     logic.serve(&status, &mut &mut slot, &extras, &mut now);
                     vec![format!("{NOTICE}now {}", now.trim_start_matches("ok "))]
                 } else {
@@ -694,7 +694,7 @@ pub fn serve(args: &ServeArgs) -> Result<ServeReport, String> {
         k += 1;
     }
     let mut now = ReplyLine::new();
-    let status = crate::engine::closed_loop::command_line("status")?;
+    let status = crate::engine::core_board::command_line("status")?;
     logic.serve(&status, &mut &mut slot, &Extras::default(), &mut now);
     let how = if interrupted.load(std::sync::atomic::Ordering::Relaxed) {
         "interrupted"

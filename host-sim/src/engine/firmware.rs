@@ -1,5 +1,5 @@
 //! The firmware in the loop: the firmware's link build (`firmware --features link`) under
-//! QEMU, its image made from the scene, as the board of a loop (`closed_loop::LoopBoard`). Each tick
+//! QEMU, its image made from the scene, as the board of a loop (`loop_board::LoopBoard`). Each tick
 //! the plant's ADC codes go out and the tick's output comes back, in the core's frames
 //! (`de_resonator::wire::link`), through two pipes the firmware opens by semihosting
 //! (`samples`, `output`), a byte on its USART3 ring_stretch each tick in; its command port
@@ -20,7 +20,8 @@ use de_resonator::wire::protocol::NOTICE;
 use de_resonator::wire::stream::{Receiver, Record};
 use de_resonator::Inputs;
 
-use crate::engine::closed_loop::{LoopBoard, Samples, Wires};
+use crate::engine::closed_loop::Wires;
+use crate::engine::loop_board::{LoopBoard, Samples};
 use crate::telemetry::{Recorder, Source};
 
 /// How long QEMU may take to open a port or a pipe, and the firmware to answer a tick or a
