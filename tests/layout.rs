@@ -245,6 +245,38 @@ fn sources(top: &Path, dir: &Path, out: &mut Vec<(String, usize)>) {
     }
 }
 
+/// Paths a crate's own modules take through its root's re-exports (`crate::Device` for
+/// `crate::model::device::Device`): the re-exports are for users, a module names where a
+/// thing lives.
+fn through_root(root: &Path) -> Vec<String> {
+    let lib = std::fs::read_to_string(root.join("lib.rs")).unwrap_or_default();
+    let names = root_names(&lib);
+    let mut files = BTreeMap::new();
+    modules(root, &[], &mut files);
+    let mut found = Vec::new();
+    for (module, file) in &files {
+        if module.is_empty() {
+            continue;
+        }
+        let text = std::fs::read_to_string(file).unwrap();
+        for words in paths(&text, "crate::") {
+            if words.first().is_some_and(|w| names.contains_key(w)) {
+                found.push(format!("{}: crate::{}", file.display(), words.join("::")));
+            }
+        }
+    }
+    found
+}
+
+#[test]
+fn no_module_imports_through_its_crate_roots_re_exports() {
+    let top = Path::new(env!("CARGO_MANIFEST_DIR"));
+    for crate_root in ["src", "firmware/src"] {
+        let found = through_root(&top.join(crate_root));
+        assert!(found.is_empty(), "{found:#?}");
+    }
+}
+
 /// No source file of the core, the firmware, host-sim or the Python package over 1,000 lines:
 /// a room a newcomer reads whole.
 #[test]

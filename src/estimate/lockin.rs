@@ -244,7 +244,11 @@ impl Tracker {
 
 /// F/λ̄ of the drive (model.md §4): the Φ² term ε(Φ/H)²·λ·λ2p² per unit mass holds
 /// 2·Φdc·Φac·sin Ωt; in the model's units that is ω_unit²·2·Φ̄dc·Φ̄ac·λ2p², (rad/s)².
-pub fn drive_force_per_stretch(device: &crate::Device<f32>, bias_volts: f32, ac_volts: f32) -> f32 {
+pub fn drive_force_per_stretch(
+    device: &crate::model::device::Device<f32>,
+    bias_volts: f32,
+    ac_volts: f32,
+) -> f32 {
     let w = device.rad_per_s_per_unit();
     let v = device.volts_per_unit();
     let l2 = device.prestretch_2();

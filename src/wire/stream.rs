@@ -258,8 +258,8 @@ impl fmt::Display for RateError {
         write!(
             f,
             "stream rate {} Hz: give a rate above 0 and at most the tick rate, {} Hz",
-            crate::Decimal(self.hz),
-            crate::Decimal(self.tick_hz)
+            crate::numerics::decimal::Decimal(self.hz),
+            crate::numerics::decimal::Decimal(self.tick_hz)
         )
     }
 }
