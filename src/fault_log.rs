@@ -10,7 +10,7 @@
 //! own after the rest: a power cut in an append leaves that entry unreadable (skipped) and
 //! every other as it was. When that half is full, the other half is erased and the log goes on
 //! there: the full half still holds the `KEPT` newest. `read` gives the valid entries, newest
-//! first; `clear` erases both halves. Generic over embedded-storage's async `NorFlash`, as the
+//! first; `clear` erases both halves. Generic over embedded-storage's `NorFlash`, as the
 //! settings' `store` is.
 //!
 //! The entries (always) and their flash (the `storage` feature). An entry ([`ENTRY_BYTES`],
@@ -39,7 +39,7 @@ use core::fmt;
 use core::ops::Range;
 
 #[cfg(feature = "storage")]
-use embedded_storage_async::nor_flash::NorFlash;
+use embedded_storage::nor_flash::NorFlash;
 use heapless::String;
 #[cfg(feature = "storage")]
 use heapless::Vec;
@@ -337,7 +337,7 @@ struct Scan {
 }
 
 #[cfg(feature = "storage")]
-async fn scan<F: NorFlash>(
+fn scan<F: NorFlash>(
     flash: &mut F,
     range: &Range<u32>,
     mut each: impl FnMut(Entry),
@@ -354,7 +354,6 @@ async fn scan<F: NorFlash>(
             let mut bytes = [0u8; ENTRY_BYTES];
             flash
                 .read(slot_at::<F>(start, k), &mut bytes)
-                .await
                 .map_err(StoreError::flash)?;
             if bytes.iter().all(|&b| b == 0xFF) {
                 continue;
@@ -380,14 +379,14 @@ async fn scan<F: NorFlash>(
 /// `StoreError::LogFull`, nothing written: an erase stalls a chip that runs from the same
 /// flash bank, for longer than its watchdog waits). The sequence number written.
 #[cfg(feature = "storage")]
-pub async fn append<F: NorFlash>(
+pub fn append<F: NorFlash>(
     mut flash: F,
     range: Range<u32>,
     entry: &Entry,
     may_erase: bool,
 ) -> Result<u32, StoreError> {
     let (starts, slots) = halves::<F>(&range)?;
-    let found = scan(&mut flash, &range, |_| {}).await?;
+    let found = scan(&mut flash, &range, |_| {})?;
     let (sequence, half) = match found.newest {
         Some((s, h)) => (s.wrapping_add(1), h),
         None => (1, 0),
@@ -400,7 +399,7 @@ pub async fn append<F: NorFlash>(
         None if found.free.get(other).copied().flatten() == Some(0) => (other, 0),
         None if !may_erase => return Err(StoreError::LogFull),
         None => {
-            erase_half(&mut flash, &starts, other).await?;
+            erase_half(&mut flash, &starts, other)?;
             (other, 0)
         }
     };
@@ -423,7 +422,7 @@ pub async fn append<F: NorFlash>(
         *slot = byte;
     }
     let head = padded.get(..body_len).ok_or(StoreError::Range)?;
-    flash.write(at, head).await.map_err(StoreError::flash)?;
+    flash.write(at, head).map_err(StoreError::flash)?;
     for (slot, &byte) in padded.iter_mut().zip(&bytes).skip(CRC_AT) {
         *slot = byte;
     }
@@ -432,24 +431,18 @@ pub async fn append<F: NorFlash>(
         .ok_or(StoreError::Range)?;
     flash
         .write(at + body_len as u32, tail)
-        .await
         .map_err(StoreError::flash)?;
     Ok(sequence)
 }
 
 /// Erase half `h` (its whole pages).
 #[cfg(feature = "storage")]
-async fn erase_half<F: NorFlash>(
-    flash: &mut F,
-    starts: &[u32; 2],
-    h: usize,
-) -> Result<(), StoreError> {
+fn erase_half<F: NorFlash>(flash: &mut F, starts: &[u32; 2], h: usize) -> Result<(), StoreError> {
     let start = starts.get(h).copied().ok_or(StoreError::Range)?;
     // The halves are the same length: the second's start less the first's.
     let [first, second] = *starts;
     flash
         .erase(start, start + (second - first))
-        .await
         .map_err(StoreError::flash)
 }
 
@@ -460,15 +453,15 @@ async fn erase_half<F: NorFlash>(
 /// the first half (another program's bytes in the sectors, QEMU's zeroed RAM), the second is
 /// erased, where the first append goes. Whether it erased.
 #[cfg(feature = "storage")]
-pub async fn prepare<F: NorFlash>(mut flash: F, range: Range<u32>) -> Result<bool, StoreError> {
+pub fn prepare<F: NorFlash>(mut flash: F, range: Range<u32>) -> Result<bool, StoreError> {
     let (starts, slots) = halves::<F>(&range)?;
-    let found = scan(&mut flash, &range, |_| {}).await?;
+    let found = scan(&mut flash, &range, |_| {})?;
     let Some((_, half)) = found.newest else {
         let free = |h: usize| found.free.get(h).copied().flatten();
         if free(0).is_some() || free(1) == Some(0) {
             return Ok(false);
         }
-        erase_half(&mut flash, &starts, 1).await?;
+        erase_half(&mut flash, &starts, 1)?;
         return Ok(true);
     };
     let used = found.free.get(half).copied().flatten().unwrap_or(slots);
@@ -476,32 +469,28 @@ pub async fn prepare<F: NorFlash>(mut flash: F, range: Range<u32>) -> Result<boo
     if used < KEPT || found.free.get(other).copied().flatten() == Some(0) {
         return Ok(false);
     }
-    erase_half(&mut flash, &starts, other).await?;
+    erase_half(&mut flash, &starts, other)?;
     Ok(true)
 }
 
 /// Every valid entry, in flash order (the board's `faults`: a list, or one entry, without
 /// holding them all).
 #[cfg(feature = "storage")]
-pub async fn each<F: NorFlash>(
+pub fn each<F: NorFlash>(
     mut flash: F,
     range: Range<u32>,
     each: impl FnMut(Entry),
 ) -> Result<(), StoreError> {
-    scan(&mut flash, &range, each).await.map(|_| ())
+    scan(&mut flash, &range, each).map(|_| ())
 }
 
 /// The valid entries, newest first (at most `KEPT`).
 #[cfg(feature = "storage")]
-pub async fn read<F: NorFlash>(
-    mut flash: F,
-    range: Range<u32>,
-) -> Result<Vec<Entry, KEPT>, StoreError> {
+pub fn read<F: NorFlash>(mut flash: F, range: Range<u32>) -> Result<Vec<Entry, KEPT>, StoreError> {
     let mut kept: [Option<Entry>; KEPT] = core::array::from_fn(|_| None);
     scan(&mut flash, &range, |entry| {
         keep_newest(&mut kept, |e| e.sequence, entry)
-    })
-    .await?;
+    })?;
     let mut list = Vec::new();
     for entry in kept.into_iter().flatten() {
         let _ = list.push(entry);
@@ -511,10 +500,9 @@ pub async fn read<F: NorFlash>(
 
 /// Erase both halves: the log empty.
 #[cfg(feature = "storage")]
-pub async fn clear<F: NorFlash>(mut flash: F, range: Range<u32>) -> Result<(), StoreError> {
+pub fn clear<F: NorFlash>(mut flash: F, range: Range<u32>) -> Result<(), StoreError> {
     halves::<F>(&range)?;
     flash
         .erase(range.start, range.end)
-        .await
         .map_err(StoreError::flash)
 }

@@ -1,11 +1,13 @@
 //! The flash layer every record kept in flash sits on (the settings' two slots, `store`; the
 //! fault log's two halves, `fault_log`): a range as two halves of whole pages, how a flash
-//! operation failed, a boot's way to run a flash future without an executor, and a NOR flash
-//! in RAM for QEMU and the tests (which can fail or tear a write at any byte: a power cut).
+//! operation failed, and a NOR flash in RAM for QEMU and the tests (which can fail or tear a
+//! write at any byte: a power cut). Over embedded-storage's blocking `NorFlash`: the chip's
+//! flash controller waits in each call, so an async store was only ever blocked on, and its
+//! futures cost stack and flash (BENCHMARKS.md, "Target: flash and RAM").
 
 use core::ops::Range;
 
-use embedded_storage_async::nor_flash::{
+use embedded_storage::nor_flash::{
     ErrorType, MultiwriteNorFlash, NorFlash, NorFlashError, NorFlashErrorKind, ReadNorFlash,
 };
 
@@ -38,21 +40,6 @@ pub fn halves<F: NorFlash>(range: &Range<u32>) -> Option<([u32; 2], usize)> {
         && half.is_multiple_of(page)
         && (range.start as usize).is_multiple_of(page);
     whole.then_some(([range.start, range.start + half as u32], half))
-}
-
-/// Run a future whose flash never waits to its end, without an executor (a boot cannot
-/// await). `None` if it still waits after a few polls.
-pub fn block_on<T>(future: impl core::future::Future<Output = T>) -> Option<T> {
-    use core::task::{Context, Poll, Waker};
-    let mut future = core::pin::pin!(future);
-    let mut cx = Context::from_waker(Waker::noop());
-    // A future over a blocking flash is ready at its first poll; a few more are allowed.
-    for _ in 0..4 {
-        if let Poll::Ready(out) = future.as_mut().poll(&mut cx) {
-            return Some(out);
-        }
-    }
-    None
 }
 
 /// A NOR flash in RAM: erased bytes read 0xFF, a write can only clear bits, writes are whole
@@ -124,7 +111,7 @@ impl<const WORD: usize> ErrorType for RamFlashWords<'_, WORD> {
 impl<const WORD: usize> ReadNorFlash for RamFlashWords<'_, WORD> {
     const READ_SIZE: usize = 1;
 
-    async fn read(&mut self, offset: u32, out: &mut [u8]) -> Result<(), Self::Error> {
+    fn read(&mut self, offset: u32, out: &mut [u8]) -> Result<(), Self::Error> {
         let span = self.span(offset, out.len())?;
         out.copy_from_slice(span);
         Ok(())
@@ -139,7 +126,7 @@ impl<const WORD: usize> NorFlash for RamFlashWords<'_, WORD> {
     const WRITE_SIZE: usize = WORD;
     const ERASE_SIZE: usize = RAM_PAGE_BYTES;
 
-    async fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
+    fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
         let len = (to as usize).saturating_sub(from as usize);
         let page = RAM_PAGE_BYTES;
         if !((from as usize).is_multiple_of(page) && len.is_multiple_of(page)) {
@@ -155,7 +142,7 @@ impl<const WORD: usize> NorFlash for RamFlashWords<'_, WORD> {
         Ok(())
     }
 
-    async fn write(&mut self, offset: u32, data: &[u8]) -> Result<(), Self::Error> {
+    fn write(&mut self, offset: u32, data: &[u8]) -> Result<(), Self::Error> {
         let word = WORD.max(1);
         if !((offset as usize).is_multiple_of(word) && data.len().is_multiple_of(word)) {
             return Err(RamFlashError(NorFlashErrorKind::NotAligned));

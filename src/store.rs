@@ -3,7 +3,7 @@
 //! CRC-32. `save` erases the slot that does not hold the newest valid record and writes the
 //! next sequence number there, the CRC last; `load` takes the newest valid record. A power cut
 //! anywhere in a save leaves the other slot, the last good settings, as it was. On the flash
-//! layer ([`crate::flash`]): embedded-storage's async `NorFlash`, the STM32F4's flash
+//! layer ([`crate::flash`]): embedded-storage's `NorFlash`, the STM32F4's flash
 //! controller on the chip, `RamFlash` in QEMU and in tests (which can fail or tear a write at
 //! any byte).
 //!
@@ -25,7 +25,7 @@
 use core::fmt;
 use core::ops::Range;
 
-use embedded_storage_async::nor_flash::{NorFlash, NorFlashError};
+use embedded_storage::nor_flash::{NorFlash, NorFlashError};
 
 use crate::bytes::{crc32, f32_at, newer, u16_at, u32_at};
 use crate::controller::{Held, Setting, Settings};
@@ -175,14 +175,13 @@ fn slots<F: NorFlash>(range: &Range<u32>) -> Result<[u32; 2], StoreError> {
 /// The valid record in a slot, read into `record`: its sequence number and its blob's
 /// length (any version's, up to `MAX_HELD` settings: its version is `decode`'s to read or
 /// refuse; the blob at `record[8..8 + length]`).
-async fn read_slot<F: NorFlash>(
+fn read_slot<F: NorFlash>(
     flash: &mut F,
     at: u32,
     record: &mut [u8; MAX_RECORD_BYTES],
 ) -> Result<Option<(u32, usize)>, StoreError> {
     flash
         .read(at, record.get_mut(..12).unwrap_or(&mut []))
-        .await
         .map_err(StoreError::flash)?;
     if record.get(..4) != Some(&MAGIC[..]) {
         return Ok(None);
@@ -196,7 +195,7 @@ async fn read_slot<F: NorFlash>(
     let Some(whole) = record.get_mut(..crc_at + 4) else {
         return Ok(None);
     };
-    flash.read(at, whole).await.map_err(StoreError::flash)?;
+    flash.read(at, whole).map_err(StoreError::flash)?;
     let body = record.get(..crc_at).unwrap_or(&[]);
     if crc32(body) != u32_at(record, crc_at) {
         return Ok(None);
@@ -205,7 +204,7 @@ async fn read_slot<F: NorFlash>(
 }
 
 /// The slot of the newest valid record and its sequence number.
-async fn newest<F: NorFlash>(
+fn newest<F: NorFlash>(
     flash: &mut F,
     range: &Range<u32>,
 ) -> Result<Option<(usize, u32)>, StoreError> {
@@ -213,7 +212,7 @@ async fn newest<F: NorFlash>(
     let mut record = [0u8; MAX_RECORD_BYTES];
     let mut best: Option<(usize, u32)> = None;
     for (slot, &at) in starts.iter().enumerate() {
-        if let Some((sequence, _)) = read_slot(flash, at, &mut record).await? {
+        if let Some((sequence, _)) = read_slot(flash, at, &mut record)? {
             if best.is_none_or(|(_, s)| newer(sequence, s)) {
                 best = Some((slot, sequence));
             }
@@ -223,31 +222,28 @@ async fn newest<F: NorFlash>(
 }
 
 /// Save the settings.
-pub async fn save<F: NorFlash>(
+pub fn save<F: NorFlash>(
     flash: F,
     range: Range<u32>,
     settings: &Settings,
 ) -> Result<(), StoreError> {
-    save_blob(flash, range, &encode(settings)).await
+    save_blob(flash, range, &encode(settings))
 }
 
 /// Save a blob as it is (`save`'s work; a test writes another version's blob with it).
-pub async fn save_blob<F: NorFlash>(
+pub fn save_blob<F: NorFlash>(
     mut flash: F,
     range: Range<u32>,
     blob: &[u8; BLOB_BYTES],
 ) -> Result<(), StoreError> {
     let starts = slots::<F>(&range)?;
-    let (slot, sequence) = match newest(&mut flash, &range).await? {
+    let (slot, sequence) = match newest(&mut flash, &range)? {
         Some((slot, sequence)) => (1 - slot, sequence.wrapping_add(1)),
         None => (0, 1),
     };
     let at = starts.get(slot).copied().ok_or(StoreError::Range)?;
     let half = (range.end - range.start) / 2;
-    flash
-        .erase(at, at + half)
-        .await
-        .map_err(StoreError::flash)?;
+    flash.erase(at, at + half).map_err(StoreError::flash)?;
     // The body, then the CRC in a write of its own: a cut anywhere leaves a CRC that does
     // not match (the erased 0xFF…, or a part of it).
     let word = F::WRITE_SIZE.max(1);
@@ -265,23 +261,19 @@ pub async fn save_blob<F: NorFlash>(
     let (Some(head), true) = (record.get(..body_len), body_len + tail_len <= record.len()) else {
         return Err(StoreError::Range);
     };
-    flash.write(at, head).await.map_err(StoreError::flash)?;
+    flash.write(at, head).map_err(StoreError::flash)?;
     for (slot, byte) in record.iter_mut().skip(CRC_AT).zip(crc.to_le_bytes()) {
         *slot = byte;
     }
     let tail = record.get(body_len..body_len + tail_len).unwrap_or(&[]);
     flash
         .write(at + body_len as u32, tail)
-        .await
         .map_err(StoreError::flash)
 }
 
 /// The newest settings saved (`None`: none yet, or none that reads).
-pub async fn load<F: NorFlash>(
-    mut flash: F,
-    range: Range<u32>,
-) -> Result<Option<Held>, StoreError> {
-    let Some((slot, _)) = newest(&mut flash, &range).await? else {
+pub fn load<F: NorFlash>(mut flash: F, range: Range<u32>) -> Result<Option<Held>, StoreError> {
+    let Some((slot, _)) = newest(&mut flash, &range)? else {
         return Ok(None);
     };
     let at = slots::<F>(&range)?
@@ -289,16 +281,15 @@ pub async fn load<F: NorFlash>(
         .copied()
         .ok_or(StoreError::Range)?;
     let mut record = [0u8; MAX_RECORD_BYTES];
-    match read_slot(&mut flash, at, &mut record).await? {
+    match read_slot(&mut flash, at, &mut record)? {
         Some((_, len)) => decode(record.get(8..8 + len).unwrap_or(&[])).map(Some),
         None => Ok(None),
     }
 }
 
 /// Erase both slots (a user's reset of the saved settings).
-pub async fn erase<F: NorFlash>(mut flash: F, range: Range<u32>) -> Result<(), StoreError> {
+pub fn erase<F: NorFlash>(mut flash: F, range: Range<u32>) -> Result<(), StoreError> {
     flash
         .erase(range.start, range.end)
-        .await
         .map_err(StoreError::flash)
 }

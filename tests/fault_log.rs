@@ -8,7 +8,6 @@ use de_resonator::fault_log::{self, Cause, Entry, KEPT};
 use de_resonator::flash::{RamFlash, RAM_PAGE_BYTES};
 use de_resonator::store::StoreError;
 use de_resonator::{FailureMode, Fault};
-use futures::executor::block_on;
 
 /// Two halves of two pages, as the firmware's QEMU stand-in has: 32 entries a half.
 const PAGES: usize = 4;
@@ -35,11 +34,11 @@ fn nth(n: u32) -> Entry {
 fn append(bytes: &mut [u8], entry: &Entry, fail_after: Option<usize>) -> Result<u32, StoreError> {
     let mut flash = RamFlash::new(bytes);
     flash.fail_after = fail_after;
-    block_on(fault_log::append(&mut flash, RANGE, entry, true))
+    fault_log::append(&mut flash, RANGE, entry, true)
 }
 
 fn read(bytes: &mut [u8]) -> Vec<Entry> {
-    block_on(fault_log::read(RamFlash::new(bytes), RANGE))
+    fault_log::read(RamFlash::new(bytes), RANGE)
         .unwrap()
         .to_vec()
 }
@@ -96,7 +95,7 @@ fn bytes_of_append(bytes: &[u8], entry: &Entry) -> usize {
     let budget = usize::MAX / 2;
     let mut flash = RamFlash::new(&mut copy);
     flash.fail_after = Some(budget);
-    block_on(fault_log::append(&mut flash, RANGE, entry, true)).unwrap();
+    fault_log::append(&mut flash, RANGE, entry, true).unwrap();
     budget - flash.fail_after.unwrap()
 }
 
@@ -162,20 +161,14 @@ fn the_boots_prepare_readies_a_log_over_foreign_bytes() {
     for fill in [0x00u8, 0x5A] {
         let mut bytes = vec![fill; PAGES * RAM_PAGE_BYTES];
         let no_erase = |bytes: &mut Vec<u8>, n: u32| {
-            block_on(fault_log::append(
-                RamFlash::new(bytes),
-                RANGE,
-                &nth(n),
-                false,
-            ))
+            fault_log::append(RamFlash::new(bytes), RANGE, &nth(n), false)
         };
         assert_eq!(
             no_erase(&mut bytes, 0),
             Err(StoreError::LogFull),
             "{fill:#x}"
         );
-        let prepare =
-            |bytes: &mut Vec<u8>| block_on(fault_log::prepare(RamFlash::new(bytes), RANGE));
+        let prepare = |bytes: &mut Vec<u8>| fault_log::prepare(RamFlash::new(bytes), RANGE);
         assert_eq!(prepare(&mut bytes), Ok(true), "{fill:#x}");
         assert_eq!(prepare(&mut bytes), Ok(false), "{fill:#x}: once");
         for n in 0..3 {
@@ -191,7 +184,7 @@ fn clear_empties_the_log() {
     for n in 0..3 {
         append(&mut bytes, &nth(n), None).unwrap();
     }
-    block_on(fault_log::clear(RamFlash::new(&mut bytes), RANGE)).unwrap();
+    fault_log::clear(RamFlash::new(&mut bytes), RANGE).unwrap();
     assert_eq!(read(&mut bytes), vec![]);
     assert_eq!(append(&mut bytes, &nth(9), None), Ok(1));
 }
@@ -200,12 +193,7 @@ fn clear_empties_the_log() {
 fn a_range_without_room_for_the_kept_entries_is_refused() {
     let mut bytes = erased();
     let small = 0..(2 * RAM_PAGE_BYTES) as u32;
-    let got = block_on(fault_log::append(
-        RamFlash::new(&mut bytes),
-        small,
-        &nth(0),
-        true,
-    ));
+    let got = fault_log::append(RamFlash::new(&mut bytes), small, &nth(0), true);
     assert_eq!(
         got,
         Err(StoreError::Range),
@@ -220,12 +208,7 @@ fn a_range_without_room_for_the_kept_entries_is_refused() {
 fn appends_that_must_not_erase_and_the_boots_prepare() {
     let mut bytes = erased();
     let append = |bytes: &mut Vec<u8>, n: u32| {
-        block_on(fault_log::append(
-            RamFlash::new(bytes),
-            RANGE,
-            &nth(n),
-            false,
-        ))
+        fault_log::append(RamFlash::new(bytes), RANGE, &nth(n), false)
     };
     for n in 0..2 * PER_HALF as u32 {
         assert_eq!(append(&mut bytes, n), Ok(n + 1), "both halves fill");
@@ -233,7 +216,7 @@ fn appends_that_must_not_erase_and_the_boots_prepare() {
     let before = bytes.clone();
     assert_eq!(append(&mut bytes, 99), Err(StoreError::LogFull));
     assert!(bytes == before, "nothing written");
-    let prepare = |bytes: &mut Vec<u8>| block_on(fault_log::prepare(RamFlash::new(bytes), RANGE));
+    let prepare = |bytes: &mut Vec<u8>| fault_log::prepare(RamFlash::new(bytes), RANGE);
     assert_eq!(prepare(&mut bytes), Ok(true));
     assert_eq!(prepare(&mut bytes), Ok(false), "once");
     let top = 2 * PER_HALF as u32;

@@ -16,7 +16,6 @@ use de_resonator::flash::{RamFlash, RAM_PAGE_BYTES};
 use de_resonator::image::{self, AmplifierSpec, Image, PowerUp, DAC_BITS};
 use de_resonator::store;
 use de_resonator::{Setting, Settings, REFERENCE_DEVICE};
-use futures::executor::block_on;
 
 /// Every setting of the day by its key, each away from its default and from the others.
 const VALUES: [(&str, f32); 21] = [
@@ -107,7 +106,7 @@ fn write_the_golden_files() {
     }
     let mut flash = vec![0xFF; PAGES * RAM_PAGE_BYTES];
     let range = 0..flash.len() as u32;
-    block_on(store::save(RamFlash::new(&mut flash), range, &settings())).unwrap();
+    store::save(RamFlash::new(&mut flash), range, &settings()).unwrap();
     let used = flash.iter().rposition(|b| *b != 0xFF).unwrap() + 1;
     std::fs::write(golden(RECORD), &flash[..used]).unwrap();
     let table = common::made_table(REFERENCE_DEVICE, 0.05, 16);
@@ -132,7 +131,7 @@ fn the_saved_settings_of_2026_12_05_load_with_every_value() {
     let mut flash = vec![0xFF; PAGES * RAM_PAGE_BYTES];
     flash[..record.len()].copy_from_slice(&record);
     let range = 0..flash.len() as u32;
-    let loaded = block_on(store::load(RamFlash::new(&mut flash), range))
+    let loaded = store::load(RamFlash::new(&mut flash), range)
         .unwrap()
         .expect("a record");
     let (settings, new) = loaded.onto(Settings::for_target(0.0));

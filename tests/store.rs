@@ -8,8 +8,7 @@ use de_resonator::controller::Held;
 use de_resonator::flash::{self, RamFlash, RamFlashWords, RAM_PAGE_BYTES};
 use de_resonator::store::{self, StoreError, BLOB_BYTES};
 use de_resonator::{Setting, Settings};
-use embedded_storage_async::nor_flash::ReadNorFlash;
-use futures::executor::block_on;
+use embedded_storage::nor_flash::ReadNorFlash;
 
 /// Two pages, as the firmware's QEMU stand-in has.
 const PAGES: usize = 2;
@@ -40,12 +39,12 @@ fn save(
 ) -> Result<(), StoreError> {
     let mut flash = RamFlash::new(bytes);
     flash.fail_after = fail_after;
-    block_on(store::save(&mut flash, RANGE, settings))
+    store::save(&mut flash, RANGE, settings)
 }
 
 /// The settings saved, onto the defaults (every test's blob holds every setting).
 fn load(bytes: &mut [u8]) -> Result<Option<Settings>, StoreError> {
-    block_on(store::load(RamFlash::new(bytes), RANGE))
+    store::load(RamFlash::new(bytes), RANGE)
         .map(|held| held.map(|h| h.onto(Settings::for_target(0.0)).0))
 }
 
@@ -55,7 +54,7 @@ fn bytes_of_save(bytes: &[u8], settings: &Settings) -> usize {
     let budget = usize::MAX / 2;
     let mut flash = RamFlash::new(&mut copy);
     flash.fail_after = Some(budget);
-    block_on(store::save(&mut flash, RANGE, settings)).unwrap();
+    store::save(&mut flash, RANGE, settings).unwrap();
     budget - flash.fail_after.unwrap()
 }
 
@@ -129,7 +128,7 @@ fn a_blob_of_another_version_is_refused() {
     let mut bytes = erased();
     let mut old = store::encode(&nth(3));
     old[0..2].copy_from_slice(&7u16.to_le_bytes());
-    block_on(store::save_blob(RamFlash::new(&mut bytes), RANGE, &old)).unwrap();
+    store::save_blob(RamFlash::new(&mut bytes), RANGE, &old).unwrap();
     let refused = load(&mut bytes);
     assert_eq!(
         refused,
@@ -203,7 +202,7 @@ fn garbage_holds_no_settings_and_a_save_works_on_it() {
         assert_eq!(load(&mut bytes), Ok(None));
         save(&mut bytes, &nth(5), None).unwrap();
         assert_eq!(load(&mut bytes), Ok(Some(nth(5))));
-        block_on(store::erase(RamFlash::new(&mut bytes), RANGE)).unwrap();
+        store::erase(RamFlash::new(&mut bytes), RANGE).unwrap();
         assert_eq!(load(&mut bytes), Ok(None));
     }
 }
@@ -219,7 +218,7 @@ fn a_range_that_is_not_two_slots_is_refused() {
     ] {
         let mut flash = RamFlash::new(&mut bytes);
         assert_eq!(
-            block_on(store::save(&mut flash, range.clone(), &nth(1))),
+            store::save(&mut flash, range.clone(), &nth(1)),
             Err(StoreError::Range),
             "{range:?}"
         );
@@ -263,9 +262,9 @@ fn saves_stay_inside_their_range() {
     let range = page..5 * page;
     for n in 0..6 {
         let mut flash = RamFlash::new(&mut bytes);
-        block_on(store::save(&mut flash, range.clone(), &nth(n))).unwrap();
+        store::save(&mut flash, range.clone(), &nth(n)).unwrap();
         assert_eq!(
-            block_on(store::load(&mut flash, range.clone())),
+            store::load(&mut flash, range.clone()),
             Ok(Some(Held::all(&nth(n))))
         );
         let outside = bytes[..RAM_PAGE_BYTES]
@@ -278,10 +277,10 @@ fn saves_stay_inside_their_range() {
     }
     let mut flash = RamFlash::new(&mut bytes);
     assert_eq!(
-        block_on(store::save(&mut flash, 4 * page..8 * page, &nth(1))),
+        store::save(&mut flash, 4 * page..8 * page, &nth(1)),
         Err(StoreError::Flash(flash::FlashKind::OutOfBounds))
     );
-    use embedded_storage_async::nor_flash::NorFlashErrorKind as Kind;
+    use embedded_storage::nor_flash::NorFlashErrorKind as Kind;
     assert_eq!(
         flash::FlashKind::from(Kind::NotAligned),
         flash::FlashKind::NotAligned
@@ -301,9 +300,9 @@ fn every_word_size_is_written_whole_and_survives_a_cut() {
         let mut bytes = erased();
         for n in 0..4 {
             let mut flash = RamFlashWords::<WORD>::new(&mut bytes);
-            block_on(store::save(&mut flash, RANGE, &nth(n))).unwrap();
+            store::save(&mut flash, RANGE, &nth(n)).unwrap();
             assert_eq!(
-                block_on(store::load(&mut flash, RANGE)),
+                store::load(&mut flash, RANGE),
                 Ok(Some(Held::all(&nth(n)))),
                 "{WORD}"
             );
@@ -312,9 +311,9 @@ fn every_word_size_is_written_whole_and_survives_a_cut() {
             let mut torn = bytes.clone();
             let mut flash = RamFlashWords::<WORD>::new(&mut torn);
             flash.fail_after = Some(cut);
-            let _ = block_on(store::save(&mut flash, RANGE, &nth(9)));
+            let _ = store::save(&mut flash, RANGE, &nth(9));
             flash.fail_after = None;
-            let read = block_on(store::load(&mut flash, RANGE));
+            let read = store::load(&mut flash, RANGE);
             assert!(
                 read == Ok(Some(Held::all(&nth(3)))) || read == Ok(Some(Held::all(&nth(9)))),
                 "{WORD} cut {cut}"
@@ -334,7 +333,7 @@ fn every_word_size_is_written_whole_and_survives_a_cut() {
     let mut bytes = erased();
     let mut flash = RamFlashWords::<256>::new(&mut bytes);
     assert_eq!(
-        block_on(store::save(&mut flash, RANGE, &nth(1))),
+        store::save(&mut flash, RANGE, &nth(1)),
         Err(StoreError::Range)
     );
 }
@@ -343,17 +342,17 @@ fn every_word_size_is_written_whole_and_survives_a_cut() {
 /// part of a page.
 #[test]
 fn the_ram_flash_refuses_misaligned_writes_and_erases() {
-    use embedded_storage_async::nor_flash::{NorFlash, NorFlashError, NorFlashErrorKind};
+    use embedded_storage::nor_flash::{NorFlash, NorFlashError, NorFlashErrorKind};
     let mut bytes = erased();
     let mut flash = RamFlash::new(&mut bytes);
     let kind = |r: Result<(), flash::RamFlashError>| r.map_err(|e| e.kind());
     let not_aligned = Err(NorFlashErrorKind::NotAligned);
-    assert_eq!(kind(block_on(flash.write(1, &[0; 4]))), not_aligned);
-    assert_eq!(kind(block_on(flash.write(4, &[0; 3]))), not_aligned);
-    assert_eq!(kind(block_on(flash.write(4, &[0; 4]))), Ok(()));
-    assert_eq!(kind(block_on(flash.erase(512, 1024))), not_aligned);
-    assert_eq!(kind(block_on(flash.erase(0, 512))), not_aligned);
-    assert_eq!(kind(block_on(flash.erase(0, 1024))), Ok(()));
+    assert_eq!(kind(flash.write(1, &[0; 4])), not_aligned);
+    assert_eq!(kind(flash.write(4, &[0; 3])), not_aligned);
+    assert_eq!(kind(flash.write(4, &[0; 4])), Ok(()));
+    assert_eq!(kind(flash.erase(512, 1024)), not_aligned);
+    assert_eq!(kind(flash.erase(0, 512)), not_aligned);
+    assert_eq!(kind(flash.erase(0, 1024)), Ok(()));
 }
 
 /// A record as a firmware writes it in the first slot: magic, sequence number, blob, CRC-32

@@ -71,7 +71,7 @@ pub struct SlowRam(pub de_resonator::flash::RamFlash<'static>);
 #[cfg(feature = "qemu")]
 mod slow_ram {
     use de_resonator::flash::RamFlash;
-    use embedded_storage_async::nor_flash::{ErrorType, NorFlash, ReadNorFlash};
+    use embedded_storage::nor_flash::{ErrorType, NorFlash, ReadNorFlash};
 
     use super::SlowRam;
 
@@ -103,8 +103,8 @@ mod slow_ram {
     impl ReadNorFlash for SlowRam {
         const READ_SIZE: usize = <RamFlash<'static> as ReadNorFlash>::READ_SIZE;
 
-        async fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), Self::Error> {
-            self.0.read(offset, bytes).await
+        fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), Self::Error> {
+            self.0.read(offset, bytes)
         }
 
         fn capacity(&self) -> usize {
@@ -116,21 +116,21 @@ mod slow_ram {
         const WRITE_SIZE: usize = <RamFlash<'static> as NorFlash>::WRITE_SIZE;
         const ERASE_SIZE: usize = <RamFlash<'static> as NorFlash>::ERASE_SIZE;
 
-        async fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
-            let done = self.0.erase(from, to).await;
+        fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
+            let done = self.0.erase(from, to);
             stall();
             done
         }
 
-        async fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Self::Error> {
-            self.0.write(offset, bytes).await
+        fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Self::Error> {
+            self.0.write(offset, bytes)
         }
     }
 
-    impl embedded_storage_async::nor_flash::MultiwriteNorFlash for SlowRam {}
+    impl embedded_storage::nor_flash::MultiwriteNorFlash for SlowRam {}
 }
 
-/// The STM32F4's flash controller as embedded-storage's async `NorFlash` (each call blocks
+/// The STM32F4's flash controller as embedded-storage's `NorFlash` (each call blocks
 /// until the controller is done; the HAL's waits on BSY), with what the HAL leaves out: stale
 /// error flags cleared before each operation (one stale PGSERR would fail every later one),
 /// the caches reset after an erase (RM0090 §3.5.2, as ST's HAL does), and each erase through
@@ -141,7 +141,7 @@ pub struct ChipFlash(stm32f4xx_hal::pac::FLASH);
 
 #[cfg(not(feature = "qemu"))]
 mod chip {
-    use embedded_storage_async::nor_flash::{ErrorType, NorFlash, ReadNorFlash};
+    use embedded_storage::nor_flash::{ErrorType, NorFlash, ReadNorFlash};
     use stm32f4xx_hal::flash::{FlashExt, UnlockedFlash};
     use stm32f4xx_hal::pac::FLASH;
 
@@ -184,7 +184,7 @@ mod chip {
     impl ReadNorFlash for ChipFlash {
         const READ_SIZE: usize = 1;
 
-        async fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), Self::Error> {
+        fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), Self::Error> {
             let from = offset as usize;
             let memory = FlashExt::read(&self.0);
             let span = memory
@@ -205,7 +205,7 @@ mod chip {
         const ERASE_SIZE: usize =
             <UnlockedFlash<'static> as embedded_storage::nor_flash::NorFlash>::ERASE_SIZE;
 
-        async fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
+        fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
             clear_flags(&self.0);
             let done = crate::watchdog::through_stall(|| {
                 embedded_storage::nor_flash::NorFlash::erase(&mut self.0.unlocked(), from, to)
@@ -214,11 +214,11 @@ mod chip {
             done
         }
 
-        async fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Self::Error> {
+        fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Self::Error> {
             clear_flags(&self.0);
             embedded_storage::nor_flash::NorFlash::write(&mut self.0.unlocked(), offset, bytes)
         }
     }
 
-    impl embedded_storage_async::nor_flash::MultiwriteNorFlash for ChipFlash {}
+    impl embedded_storage::nor_flash::MultiwriteNorFlash for ChipFlash {}
 }

@@ -1,20 +1,19 @@
 //! The board's keeper on a flash (`Keeper`): the saved settings (`store`) and the fault log
-//! (`fault_log`, through [`FlashLog`]) in their ranges of one flash, each call run to its end
-//! at once. Here, above both, so that neither persistence layer knows the board.
+//! (`fault_log`, through [`FlashLog`]) in their ranges of one flash, each call blocking until
+//! it is done. Here, above both, so that neither persistence layer knows the board.
 
 use core::ops::Range;
 
-use embedded_storage_async::nor_flash::NorFlash;
+use embedded_storage::nor_flash::NorFlash;
 
 use super::{FaultKeeper, Keeper, SettingsKeeper};
 use crate::controller::{Held, Settings};
 use crate::fault_log::{self, Entry};
-use crate::flash::{block_on, FlashKind};
 use crate::store::{load, save, StoreError};
 
 /// A flash and the ranges of it the settings and the fault log use, as the board keeps them
-/// ([`Keeper`]): each call run to its end at once, for a flash that never waits
-/// (RAM, or the STM32F4's flash controller, which blocks in each call).
+/// ([`Keeper`]): each call blocking until it is done (RAM, or the STM32F4's flash
+/// controller, which waits in each call).
 pub struct FlashKeeper<F> {
     pub flash: F,
     pub range: Range<u32>,
@@ -31,11 +30,11 @@ impl<F: NorFlash> SettingsKeeper for FlashKeeper<F> {
     type Error = StoreError;
 
     fn load(&mut self) -> Result<Option<Held>, StoreError> {
-        at_once(|| load(&mut self.flash, self.range.clone()))
+        load(&mut self.flash, self.range.clone())
     }
 
     fn save(&mut self, settings: &Settings) -> Result<(), StoreError> {
-        at_once(|| save(&mut self.flash, self.range.clone(), settings))
+        save(&mut self.flash, self.range.clone(), settings)
     }
 }
 
@@ -72,28 +71,18 @@ impl<F: NorFlash> FaultKeeper for FlashLog<'_, F> {
 
     fn log(&mut self, entry: &Entry) -> Result<u32, StoreError> {
         let (range, may_erase) = (self.range.clone(), self.may_erase);
-        at_once(|| fault_log::append(&mut *self.flash, range, entry, may_erase))
+        fault_log::append(&mut *self.flash, range, entry, may_erase)
     }
 
     fn prepare(&mut self) -> Result<bool, StoreError> {
-        at_once(|| fault_log::prepare(&mut *self.flash, self.range.clone()))
+        fault_log::prepare(&mut *self.flash, self.range.clone())
     }
 
     fn each(&mut self, each: &mut dyn FnMut(Entry)) -> Result<(), StoreError> {
-        at_once(|| fault_log::each(&mut *self.flash, self.range.clone(), each))
+        fault_log::each(&mut *self.flash, self.range.clone(), each)
     }
 
     fn clear(&mut self) -> Result<(), StoreError> {
-        at_once(|| fault_log::clear(&mut *self.flash, self.range.clone()))
+        fault_log::clear(&mut *self.flash, self.range.clone())
     }
-}
-
-/// A flash call run to its end at once; one that still waits is a flash error. Made and
-/// run in a frame of its own: the call's state (its buffers) is not carried, in the frame of
-/// its caller, under what the caller calls next (the boot's checks, RAM's deepest path).
-#[inline(never)]
-fn at_once<T, F: core::future::Future<Output = Result<T, StoreError>>>(
-    call: impl FnOnce() -> F,
-) -> Result<T, StoreError> {
-    block_on(call()).unwrap_or(Err(StoreError::Flash(FlashKind::Other)))
 }
