@@ -46,6 +46,7 @@ pub mod sensor;
 pub mod stand_in;
 pub mod storage;
 pub mod stream;
+pub mod switches;
 pub mod watchdog;
 
 pub use runtime::{exit, stack};

@@ -13,7 +13,8 @@ use crate::store::{load, save, StoreError};
 
 /// A flash and the ranges of it the settings and the fault log use, as the board keeps them
 /// ([`Keeper`]): each call blocking until it is done (RAM, or the STM32F4's flash
-/// controller, which waits in each call).
+/// controller, which waits in each call), in a frame of its own (out of line: its buffers are
+/// not carried, in the caller's frame, under the boot's checks, RAM's deepest path).
 pub struct FlashKeeper<F> {
     pub flash: F,
     pub range: Range<u32>,
@@ -29,10 +30,12 @@ pub struct FlashKeeper<F> {
 impl<F: NorFlash> SettingsKeeper for FlashKeeper<F> {
     type Error = StoreError;
 
+    #[inline(never)]
     fn load(&mut self) -> Result<Option<Held>, StoreError> {
         load(&mut self.flash, self.range.clone())
     }
 
+    #[inline(never)]
     fn save(&mut self, settings: &Settings) -> Result<(), StoreError> {
         save(&mut self.flash, self.range.clone(), settings)
     }
@@ -69,19 +72,23 @@ pub struct FlashLog<'a, F> {
 impl<F: NorFlash> FaultKeeper for FlashLog<'_, F> {
     type Error = StoreError;
 
+    #[inline(never)]
     fn log(&mut self, entry: &Entry) -> Result<u32, StoreError> {
         let (range, may_erase) = (self.range.clone(), self.may_erase);
         fault_log::append(&mut *self.flash, range, entry, may_erase)
     }
 
+    #[inline(never)]
     fn prepare(&mut self) -> Result<bool, StoreError> {
         fault_log::prepare(&mut *self.flash, self.range.clone())
     }
 
+    #[inline(never)]
     fn each(&mut self, each: &mut dyn FnMut(Entry)) -> Result<(), StoreError> {
         fault_log::each(&mut *self.flash, self.range.clone(), each)
     }
 
+    #[inline(never)]
     fn clear(&mut self) -> Result<(), StoreError> {
         fault_log::clear(&mut *self.flash, self.range.clone())
     }

@@ -61,6 +61,7 @@ mod app {
     use de_resonator_firmware::sensor::Sensor;
     use de_resonator_firmware::storage::SettingsFlash;
     use de_resonator_firmware::stream::StreamPort;
+    use de_resonator_firmware::switches::TickSwitches;
     use de_resonator_firmware::watchdog::{self, Dog, Watchdog as _};
     use de_resonator_firmware::{config, stack, storage};
     use embedded_hal_nb::serial::Read as _;
@@ -151,14 +152,8 @@ mod app {
         board: board::Board<'static, FlashKeeper<SettingsFlash>>,
         /// Idle without `wfi` (QEMU runs that measure the tick rate).
         busy_idle: bool,
-        /// QEMU's test of a stuck tick (semihosting argument `tick-hangs`): the tick hangs
-        /// after this many ticks of driving.
-        hang_after_ticks: Option<u32>,
-        /// QEMU's test of a broken DAC bus (semihosting argument `dac-bus-fails`): the bus
-        /// fails from this tick since power-up on (as a scene's `dac_bus_fails_after_seconds`
-        /// breaks `host-sim serve`'s).
-        #[cfg(feature = "qemu")]
-        bus_fails_at_tick: Option<u32>,
+        /// QEMU's test switches in the tick (none on silicon).
+        switches: TickSwitches,
         dog: Dog,
         /// The low-priority tasks' check-ins, counted in ticks (when the dog is fed).
         check_in: CheckIn,
@@ -361,9 +356,7 @@ mod app {
                 tx,
                 board,
                 busy_idle: chip::asked("busy-idle"),
-                hang_after_ticks: chip::asked("tick-hangs").then_some(2 * tick_hz as u32),
-                #[cfg(feature = "qemu")]
-                bus_fails_at_tick: chip::asked("dac-bus-fails").then_some(2 * tick_hz as u32),
+                switches: TickSwitches::asked(tick_hz),
                 dog: Dog::new(chip.iwdg, &chip.dbgmcu),
                 check_in: CheckIn::new(tick_hz),
                 #[cfg(feature = "link")]
@@ -446,29 +439,16 @@ mod app {
     }
 
     /// One controller tick: its code to the DAC, the enable line held, the events logged.
-    #[task(binds = SysTick, priority = 3, shared = [controller, tick_cycles_max, last_tick, output_off, checked_in, block, latest, logged], local = [stage, sensor, reader, dog, check_in, hang_after_ticks, #[cfg(feature = "qemu")] bus_fails_at_tick, to_log, driven_ticks: u32 = 0, #[cfg(feature = "qemu")] power_up_ticks: u32 = 0, ticker: Ticker = Ticker::new(), #[cfg(feature = "link")] to_reply])]
+    #[task(binds = SysTick, priority = 3, shared = [controller, tick_cycles_max, last_tick, output_off, checked_in, block, latest, logged], local = [stage, sensor, reader, dog, check_in, switches, to_log, ticker: Ticker = Ticker::new(), #[cfg(feature = "link")] to_reply])]
     fn tick(mut cx: tick::Context) {
-        #[cfg(feature = "qemu")]
-        {
-            let clock = TickClock {
-                tick: *cx.local.power_up_ticks,
-                micros: chip::qemu_clock::micros(),
-            };
+        let switches = cx.local.switches;
+        if let Some(clock) = switches.start() {
             cx.shared.last_tick.lock(|at| *at = clock);
         }
         let stage = cx.local.stage;
         let sensor = cx.local.sensor;
         let mut block = cx.shared.block.lock(Block::take);
         sensor.fill(&mut block);
-        // QEMU's test switch only: the DAC's bus broken before this tick's frame.
-        #[cfg(feature = "qemu")]
-        {
-            let ticks = cx.local.power_up_ticks;
-            if cx.local.bus_fails_at_tick.is_some_and(|n| *ticks >= n) {
-                chip::break_dac_bus();
-            }
-            *ticks = ticks.wrapping_add(1);
-        }
         // The core's board tick (`count` counts this call): the block through the front end,
         // the controller's output through the stage, a fault's entry.
         let (ticker, reader) = (cx.local.ticker, cx.local.reader);
@@ -489,21 +469,7 @@ mod app {
             }
         });
         let running = ticked.is_some();
-        // QEMU's test switch only: no cost on silicon's tick.
-        #[cfg(feature = "qemu")]
-        if running {
-            *cx.local.driven_ticks += 1;
-            if cx
-                .local
-                .hang_after_ticks
-                .is_some_and(|n| *cx.local.driven_ticks > n)
-            {
-                // QEMU's `tick-hangs`: a stuck tick, for the watchdog to catch.
-                loop {
-                    cortex_m::asm::nop();
-                }
-            }
-        }
+        switches.after(running);
         let checked_in = cx.shared.checked_in.lock(|c| core::mem::replace(c, false));
         let feed = cx.local.check_in.tick(checked_in, running);
         let dog = cx.local.dog;
