@@ -14,6 +14,7 @@ use crate::estimate::ring::{
     RingInput, RingQuality, TrimError, MAX_WINDOW, TIMING_ERROR_TIMES_RESOLUTION,
 };
 use crate::model::device::{Device, DeviceParams};
+use crate::model::statics::Equilibrium;
 use crate::model::swing::{AcDrive, Ramp, Resonance, SwingError};
 use crate::tuning::{TuneError, Tuner};
 
@@ -44,6 +45,40 @@ pub struct TrimJob {
     /// The batch's shear modulus range, Pa (model.md §10): an estimate outside it is said
     /// before any retune is solved from it.
     pub(super) batch_modulus: Option<(f32, f32)>,
+}
+
+/// What a trim's window told of the ring (`TrimJob::time_window`), or a tracked drive's
+/// measurement, which reads no window.
+struct Heard {
+    measured_hz: f32,
+    /// What the timing may be off by, relative, and the resolution that says so.
+    timing_error: f32,
+    resolution: Option<f32>,
+    /// The ring seen against the one the statics gave for this bias, and the share of the
+    /// window it was timed over: the plant's damping and the window's settling, which the
+    /// next pulse's reckoning then takes in.
+    ring_seen: f32,
+    ring_span: f32,
+    /// The ring the window heard, in its input (the AC a trim pauses rings on in it: what
+    /// the drive then starts on).
+    heard_ring: Option<(RingInput, f32)>,
+    /// Its decay: the plant's Q (model.md §7), whatever the device file says.
+    quality: Option<RingQuality>,
+}
+
+impl Heard {
+    /// A frequency measured elsewhere (a tracked drive's), the ring as the last window left it.
+    fn tracked(measured_hz: f32, ring: NextRing) -> Self {
+        Heard {
+            measured_hz,
+            timing_error: 0.0,
+            resolution: None,
+            ring_seen: ring.seen,
+            ring_span: ring.span,
+            heard_ring: None,
+            quality: None,
+        }
+    }
 }
 
 /// A job's result, for `Controller::trim_done`: taken only if the job is still the one
@@ -117,101 +152,23 @@ impl TrimJob {
 
     fn try_solve(&self) -> Result<TrimResult, Fault> {
         let s = self.settings;
-        let window = self.window.get(..self.len).unwrap_or(&self.window);
         // Before a tracked drive, the ring's trim need only bring the resonance within the
         // tracker's reach: the tracker holds the target with the drive on.
         let tolerance = match self.measured_hz {
             Some(_) => s.trim_tolerance.unwrap_or(0.0),
             None => ring_tolerance(&s),
         };
-        // What the timing may be off by, relative,
-        // and the resolution that says so.
-        let mut timing_error = 0.0;
-        let mut resolution = None;
-        // The ring seen against the one the statics gave for this bias: the plant's damping
-        // and the window's settling, which the next pulse's reckoning then takes in.
-        let (mut ring_seen, mut ring_span) = (self.ring.seen, self.ring.span);
-        // The ring the window heard, in its input (the AC a trim pauses rings on in it: what
-        // the drive then starts on).
-        let mut heard_ring = None;
-        // Its decay: the plant's Q (model.md §7), whatever the device file says.
-        let mut quality = None;
-        let measured_hz = match self.measured_hz {
-            Some(hz) => hz,
-            None => {
-                let (stride, _) = s.trim_window();
-                let sample_hz = s.tick_hz / stride as f32;
-                let input = if self.from_charge {
-                    RingInput::Charge
-                } else {
-                    RingInput::Stretch
-                };
-                // A period of the ring the model expects at the bias (the target's if none):
-                // a mismatch of a few percent only scales the ring a little.
-                let expected_hz = model_hz(&self.params, self.bias_volts);
-                let hz = if expected_hz > 0.0 {
-                    expected_hz
-                } else {
-                    s.target_hz
-                };
-                let half = half_samples(&s, hz).min(window.len());
-                // The declared noise, a sample: the sum's steps over a stride of ticks.
-                let per_sample = libm::sqrtf(stride as f32);
-                let floor = declared(self.inputs, input).map_or(0.0, |noise| noise * per_sample);
-                // Too weak a ring is said, not estimated from (a window with neither ring nor
-                // noise has no ring to time: `NoRing`, below).
-                let ring = RingFit::of(window, half, floor);
-                let needed = RingFit::needed(tolerance);
-                let heard = ring.amplitude > 0.0 || ring.noise > 0.0;
-                // The sum's ring as the input's (C, stretch).
-                let to_ring = 1.0 / input.in_window(1.0, hz, s.tick_hz);
-                let refused = |resolution: f32| {
-                    Fault::Trim(TrimError::Unresolvable {
-                        input,
-                        from: NoiseFrom::Window,
-                        resolution,
-                        needed,
-                        ring: ring.amplitude * to_ring,
-                        noise: ring.noise / per_sample,
-                    })
-                };
-                if heard && !(ring.resolution >= needed) {
-                    return Err(refused(ring.resolution));
-                }
-                // Timed where the ring stands out of the noise (`ring_frequency_hz`'s band and
-                // its check of each half period): a ring that fades into the noise before
-                // the window ends is resolved over the share it was timed in.
-                let timing = ring_frequency_hz(
-                    high_passed(window, half),
-                    sample_hz,
-                    ring.band(half),
-                    half as f32,
-                )
-                .map_err(Fault::Trim)?;
-                // And no more than the crossings' own scatter about their line says.
-                let scattered = TIMING_ERROR_TIMES_RESOLUTION / timing.scatter;
-                let timed = (ring.resolution * timing.span).min(scattered);
-                if heard && !(timed >= needed) {
-                    return Err(refused(timed));
-                }
-                let measured_hz = timing.hz;
-                if timed.is_finite() {
-                    timing_error = TIMING_ERROR_TIMES_RESOLUTION / timed;
-                    resolution = Some(timed);
-                }
-                let predicted = self
-                    .ring
-                    .gain
-                    .ring(input, self.bias_volts, s.trim_pulse_volts);
-                let seen = ring.amplitude * to_ring / predicted;
-                if seen > 0.0 && seen.is_finite() {
-                    ring_seen = seen;
-                }
-                heard_ring = Some((input, ring.amplitude * to_ring));
-                quality = Some(RingQuality::of(window, half, floor, sample_hz, timing.hz));
-                ring_span = timing.span;
-                measured_hz
-            }
+        let Heard {
+            measured_hz,
+            timing_error,
+            resolution,
+            ring_seen,
+            ring_span,
+            heard_ring,
+            quality,
+        } = match self.measured_hz {
+            Some(hz) => Heard::tracked(hz, self.ring),
+            None => self.time_window(tolerance)?,
         };
         let shear_modulus = estimate_shear_modulus(&self.params, self.bias_volts, measured_hz)
             .map_err(Fault::Trim)?;
@@ -273,44 +230,7 @@ impl TrimJob {
         let at_cap = tuner.max_bias(margin).map_err(Fault::Tune)?;
         let estimate_volts = at_cap.volts;
         let max_volts = estimate_volts.min(self.cap_volts);
-        let from = self.bias_volts;
-        let squared = from * from;
-        // Tracking's solves take no secant: its two points, apart in time, differ by the
-        // drift too (a plant that stiffened sent the secant, and the bias, the wrong way).
-        let previous = self.previous.filter(|_| self.measured_hz.is_none());
-        let secant = previous.and_then(|(p2, pf)| {
-            let next = squared + (s.target_hz - measured_hz) * (squared - p2) / (measured_hz - pf);
-            // No slope (two equal frequencies): the model decides.
-            if !next.is_finite() {
-                return None;
-            }
-            // A trust region: a drifting plant (creep) makes a poor secant, and a wild step
-            // (past zero volts, or up) is what the model's region cannot vouch for.
-            let step = TRIM_SECANT_STEP * from;
-            let volts = libm::sqrtf(next.max(0.0)).clamp(from - step, from + step);
-            (volts + s.swing_volts() <= max_volts).then_some(volts)
-        });
-        let bias_volts = match secant {
-            Some(volts) => volts,
-            None => match tuner.tune(s.target_hz, margin) {
-                Ok(solved) => solved.volts,
-                // Past the estimate's reach under the margin on the side more bias goes
-                // (f falls with the bias on most devices, rises on some: model.md §5): the
-                // target needs more than the cap (the bias for it at no margin, at least
-                // the limit's), a hold that says so below, not a fault.
-                Err(TuneError::OutOfRange { .. })
-                    if (s.target_hz - at_cap.natural_frequency_hz)
-                        * (at_cap.natural_frequency_hz
-                            - tuner.zero_bias().natural_frequency_hz)
-                        > 0.0 =>
-                {
-                    tuner
-                        .tune(s.target_hz, 0.0)
-                        .map_or(tuner.limit().at.volts, |solved| solved.volts)
-                }
-                Err(error) => return Err(Fault::Tune(error)),
-            },
-        };
+        let bias_volts = self.next_bias(&tuner, measured_hz, (at_cap, max_volts), margin)?;
         // A bias above the estimate's cap is no fault here: the controller takes the lower
         // cap and comes down to it at the slew rate (from where it is, `Plan::start_under`;
         // while tracking, a hold).
@@ -361,6 +281,138 @@ impl TrimJob {
             device,
             predicted,
         })
+    }
+
+    /// The ring in the window timed (model.md §7): its frequency, how well it was timed
+    /// (refused where the window cannot time it to the trim's `tolerance`), how strong it
+    /// rang against the statics' prediction, and its Q.
+    fn time_window(&self, tolerance: f32) -> Result<Heard, Fault> {
+        let s = self.settings;
+        let window = self.window.get(..self.len).unwrap_or(&self.window);
+        let (stride, _) = s.trim_window();
+        let sample_hz = s.tick_hz / stride as f32;
+        let input = if self.from_charge {
+            RingInput::Charge
+        } else {
+            RingInput::Stretch
+        };
+        // A period of the ring the model expects at the bias (the target's if none): a
+        // mismatch of a few percent only scales the ring a little.
+        let expected_hz = model_hz(&self.params, self.bias_volts);
+        let hz = if expected_hz > 0.0 {
+            expected_hz
+        } else {
+            s.target_hz
+        };
+        let half = half_samples(&s, hz).min(window.len());
+        // The declared noise, a sample: the sum's steps over a stride of ticks.
+        let per_sample = libm::sqrtf(stride as f32);
+        let floor = declared(self.inputs, input).map_or(0.0, |noise| noise * per_sample);
+        // Too weak a ring is said, not estimated from (a window with neither ring nor noise
+        // has no ring to time: `NoRing`, below).
+        let ring = RingFit::of(window, half, floor);
+        let needed = RingFit::needed(tolerance);
+        let heard = ring.amplitude > 0.0 || ring.noise > 0.0;
+        // The sum's ring as the input's (C, stretch).
+        let to_ring = 1.0 / input.in_window(1.0, hz, s.tick_hz);
+        let refused = |resolution: f32| {
+            Fault::Trim(TrimError::Unresolvable {
+                input,
+                from: NoiseFrom::Window,
+                resolution,
+                needed,
+                ring: ring.amplitude * to_ring,
+                noise: ring.noise / per_sample,
+            })
+        };
+        if heard && !(ring.resolution >= needed) {
+            return Err(refused(ring.resolution));
+        }
+        // Timed where the ring stands out of the noise (`ring_frequency_hz`'s band and its
+        // check of each half period): a ring that fades into the noise before the window
+        // ends is resolved over the share it was timed in.
+        let timing = ring_frequency_hz(
+            high_passed(window, half),
+            sample_hz,
+            ring.band(half),
+            half as f32,
+        )
+        .map_err(Fault::Trim)?;
+        // And no more than the crossings' own scatter about their line says.
+        let scattered = TIMING_ERROR_TIMES_RESOLUTION / timing.scatter;
+        let timed = (ring.resolution * timing.span).min(scattered);
+        if heard && !(timed >= needed) {
+            return Err(refused(timed));
+        }
+        let mut heard = Heard::tracked(timing.hz, self.ring);
+        if timed.is_finite() {
+            heard.timing_error = TIMING_ERROR_TIMES_RESOLUTION / timed;
+            heard.resolution = Some(timed);
+        }
+        let predicted = self
+            .ring
+            .gain
+            .ring(input, self.bias_volts, s.trim_pulse_volts);
+        let seen = ring.amplitude * to_ring / predicted;
+        if seen > 0.0 && seen.is_finite() {
+            heard.ring_seen = seen;
+        }
+        heard.heard_ring = Some((input, ring.amplitude * to_ring));
+        heard.quality = Some(RingQuality::of(window, half, floor, sample_hz, timing.hz));
+        heard.ring_span = timing.span;
+        Ok(heard)
+    }
+
+    /// The next bias for the target on the estimate `tuner`, from the bias measured at: the
+    /// secant through the last two measurements where it stays within its trust region and
+    /// under `max_volts` with the drive's swing, else the estimate's own solve (`at_cap`: its
+    /// bias at the cap, which says on which side a target out of its reach lies).
+    fn next_bias(
+        &self,
+        tuner: &Tuner<f32>,
+        measured_hz: f32,
+        (at_cap, max_volts): (Equilibrium<f32>, f32),
+        margin: f32,
+    ) -> Result<f32, Fault> {
+        let s = &self.settings;
+        let from = self.bias_volts;
+        let squared = from * from;
+        // Tracking's solves take no secant: its two points, apart in time, differ by the
+        // drift too (a plant that stiffened sent the secant, and the bias, the wrong way).
+        let previous = self.previous.filter(|_| self.measured_hz.is_none());
+        let secant = previous.and_then(|(p2, pf)| {
+            let next = squared + (s.target_hz - measured_hz) * (squared - p2) / (measured_hz - pf);
+            // No slope (two equal frequencies): the model decides.
+            if !next.is_finite() {
+                return None;
+            }
+            // A trust region: a drifting plant (creep) makes a poor secant, and a wild step
+            // (past zero volts, or up) is what the model's region cannot vouch for.
+            let step = TRIM_SECANT_STEP * from;
+            let volts = libm::sqrtf(next.max(0.0)).clamp(from - step, from + step);
+            (volts + s.swing_volts() <= max_volts).then_some(volts)
+        });
+        match secant {
+            Some(volts) => Ok(volts),
+            None => match tuner.tune(s.target_hz, margin) {
+                Ok(solved) => Ok(solved.volts),
+                // Past the estimate's reach under the margin on the side more bias goes
+                // (f falls with the bias on most devices, rises on some: model.md §5): the
+                // target needs more than the cap (the bias for it at no margin, at least
+                // the limit's), a hold that says so, not a fault.
+                Err(TuneError::OutOfRange { .. })
+                    if (s.target_hz - at_cap.natural_frequency_hz)
+                        * (at_cap.natural_frequency_hz
+                            - tuner.zero_bias().natural_frequency_hz)
+                        > 0.0 =>
+                {
+                    Ok(tuner
+                        .tune(s.target_hz, 0.0)
+                        .map_or(tuner.limit().at.volts, |solved| solved.volts))
+                }
+                Err(error) => Err(Fault::Tune(error)),
+            },
+        }
     }
 
     /// The swing of the drive the trim starts at `bias_volts` on the estimate `device` (below
