@@ -57,8 +57,12 @@ fn tree(text: &str, prefix: Vec<String>, out: &mut Vec<Vec<String>>) {
         for (at, c) in group.char_indices() {
             match c {
                 '{' => depth += 1,
+                // (A trailing comma leaves an empty branch: none.)
                 '}' if depth == 0 => {
-                    tree(group[start..at].trim_start(), path.clone(), out);
+                    let branch = group[start..at].trim();
+                    if !branch.is_empty() {
+                        tree(branch, path.clone(), out);
+                    }
                     return;
                 }
                 '}' => depth -= 1,
@@ -90,10 +94,15 @@ fn paths(text: &str, start: &str) -> Vec<Vec<String>> {
 /// it stands for, so that `crate::Device` counts as an import of `model::device`.
 fn root_names(lib: &str) -> BTreeMap<String, Vec<String>> {
     let mut names = BTreeMap::new();
-    for line in lib.lines() {
-        let Some(used) = line.trim().strip_prefix("pub use ") else {
-            continue;
-        };
+    // Code only, each `pub use … ;` read whole (a group spans lines).
+    let code: String = lib
+        .lines()
+        .filter(|l| !l.trim_start().starts_with("//"))
+        .collect::<Vec<_>>()
+        .join(" ");
+    for (at, _) in code.match_indices("pub use ") {
+        let used = &code[at + "pub use ".len()..];
+        let used = &used[..used.find(';').unwrap_or(used.len())];
         let mut found = Vec::new();
         tree(used, Vec::new(), &mut found);
         for path in found {

@@ -8,8 +8,9 @@
 //! for the analog inputs), `storage` (where `save` keeps the settings), `stream` (the telemetry stream's port),
 //! `watchdog` (the
 //! IWDG, or its QEMU stand-in), `link` (the link build's ends of host-sim's link), `runtime`
-//! (exit codes, panic and fault handlers, the stack meter); `reference` and `stand_in` serve
-//! the on-target checks and counts only.
+//! (exit codes, panic and fault handlers, the stack meter), `switches` (QEMU's test switches
+//! in the tick; none on silicon); `reference` and `stand_in` serve the on-target checks and
+//! counts only.
 #![no_std]
 
 use cortex_m as _;

@@ -67,8 +67,9 @@ struct Heard {
 }
 
 impl Heard {
-    /// A frequency measured elsewhere (a tracked drive's), the ring as the last window left it.
-    fn tracked(measured_hz: f32, ring: NextRing) -> Self {
+    /// A frequency measured, nothing more known of the ring than the last window left (a
+    /// tracked drive's, which reads no window; a window's before its ring is weighed).
+    fn measured(measured_hz: f32, ring: NextRing) -> Self {
         Heard {
             measured_hz,
             timing_error: 0.0,
@@ -167,7 +168,7 @@ impl TrimJob {
             heard_ring,
             quality,
         } = match self.measured_hz {
-            Some(hz) => Heard::tracked(hz, self.ring),
+            Some(hz) => Heard::measured(hz, self.ring),
             None => self.time_window(tolerance)?,
         };
         let shear_modulus = estimate_shear_modulus(&self.params, self.bias_volts, measured_hz)
@@ -312,7 +313,7 @@ impl TrimJob {
         // has no ring to time: `NoRing`, below).
         let ring = RingFit::of(window, half, floor);
         let needed = RingFit::needed(tolerance);
-        let heard = ring.amplitude > 0.0 || ring.noise > 0.0;
+        let rang = ring.amplitude > 0.0 || ring.noise > 0.0;
         // The sum's ring as the input's (C, stretch).
         let to_ring = 1.0 / input.in_window(1.0, hz, s.tick_hz);
         let refused = |resolution: f32| {
@@ -325,7 +326,7 @@ impl TrimJob {
                 noise: ring.noise / per_sample,
             })
         };
-        if heard && !(ring.resolution >= needed) {
+        if rang && !(ring.resolution >= needed) {
             return Err(refused(ring.resolution));
         }
         // Timed where the ring stands out of the noise (`ring_frequency_hz`'s band and its
@@ -341,10 +342,10 @@ impl TrimJob {
         // And no more than the crossings' own scatter about their line says.
         let scattered = TIMING_ERROR_TIMES_RESOLUTION / timing.scatter;
         let timed = (ring.resolution * timing.span).min(scattered);
-        if heard && !(timed >= needed) {
+        if rang && !(timed >= needed) {
             return Err(refused(timed));
         }
-        let mut heard = Heard::tracked(timing.hz, self.ring);
+        let mut heard = Heard::measured(timing.hz, self.ring);
         if timed.is_finite() {
             heard.timing_error = TIMING_ERROR_TIMES_RESOLUTION / timed;
             heard.resolution = Some(timed);
