@@ -45,7 +45,7 @@ pub use controller::{
     ReplanJob, Replanned, Setting, Settings, BUS_FAULT_SAID, EVENT_VALUES, FAULT_KEYS, FAULT_SAID,
 };
 #[cfg(feature = "trim")]
-pub use controller::{NextRing, TrimDone, TrimJob, TrimResult};
+pub use controller::{Ceiling, NextRing, TrimDone, TrimJob, TrimResult};
 pub use drive::{Amplifier, CodeError, Dac8551, DacCode, DacError, PowerMode};
 pub use estimate::ring::TrimError;
 pub use image::{AmplifierSpec, Image, ImageError, PowerUp};

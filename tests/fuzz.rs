@@ -30,7 +30,7 @@ use de_resonator::{
     Integrator, Method, Phase, Replanned, Settings, State, Tuner,
 };
 #[cfg(feature = "trim")]
-use de_resonator::{TrimDone, TrimResult};
+use de_resonator::{Ceiling, TrimDone, TrimResult};
 
 /// A value that breaks something: NaN, infinities, zero, negatives, huge and tiny.
 fn wild(rng: &mut Rng) -> f64 {
@@ -463,12 +463,12 @@ fn tampered(rng: &mut Rng, mut done: TrimDone) -> TrimDone {
                 _ => None,
             },
         },
-        (2, _) => TrimResult::AboveCeiling {
+        (2, _) => TrimResult::AboveCeiling(Ceiling {
             measured_hz: 0.0,
             shear_modulus: wild(rng) as f32,
             needed_volts: wild(rng) as f32,
             max_volts: wild(rng) as f32,
-        },
+        }),
         (_, result) => {
             done.job = done.job.wrapping_add(1 + rng.below(3) as u32);
             result

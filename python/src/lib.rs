@@ -12,14 +12,14 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{mpsc, Arc};
 use std::time::Duration;
 
+use de_resonator::image::PowerUp;
 use de_resonator::model::tolerance::{DeviceBox, Spread};
 use de_resonator::{Device, DeviceParams, Field, Limit, Tuner, REFERENCE_DEVICE};
 use host_sim::cmd::curve::{one_curve, Curve};
-use host_sim::cmd::image::{ImageArgs, PowerUpArg};
+use host_sim::cmd::image::ImageSpec;
 use host_sim::cmd::lut::LutFormat;
 use host_sim::cmd::safe::{tune_batch, tune_in_batch, Guaranteed, Region, Tuned};
-use host_sim::cmd::sweep::SweepArgs;
-use host_sim::cmd::{DeviceArgs, DeviceInfo};
+use host_sim::cmd::{sweep, DeviceInfo, DeviceSource};
 use host_sim::{device_file, progress, scene};
 use numpy::ndarray::ArrayD;
 use numpy::{AllowTypeChange, IntoPyArray, PyArrayLikeDyn, PyUntypedArrayMethods};
@@ -231,6 +231,14 @@ impl Device_ {
 
     fn info(&self) -> DeviceInfo {
         DeviceInfo::new(self.source.clone(), &self.params).with_tolerance(&self.batch)
+    }
+
+    /// The device as host-sim's commands take it: its batch, named where it came from.
+    fn as_source(&self) -> DeviceSource {
+        DeviceSource::Given {
+            batch: Box::new(self.batch),
+            name: self.source.clone(),
+        }
     }
 
     /// The margin checked: 0 ≤ margin < 1.
@@ -686,7 +694,7 @@ impl Device_ {
         steps_per_period: f64,
     ) -> PyResult<Bound<'py, PyAny>> {
         let points = count("points", points, usize::MAX)?;
-        let args = SweepArgs {
+        let asked = sweep::Asked {
             bias_volts,
             ac_volts,
             quality_factor,
@@ -695,12 +703,10 @@ impl Device_ {
             points,
             periods,
             steps_per_period,
-            out: std::path::PathBuf::new(),
-            device: DeviceArgs::given(self.batch, self.source.clone()),
         };
-        let (report, _) = stoppable(py, || host_sim::cmd::sweep::measure(&args, || Ok(())))?;
+        let (report, _) = stoppable(py, || sweep::measure(&asked, &self.as_source(), || Ok(())))?;
         let out = result(py, &report)?;
-        let column = |f: &dyn Fn(&host_sim::cmd::sweep::Point) -> f64| {
+        let column = |f: &dyn Fn(&sweep::Point) -> f64| {
             report
                 .points
                 .iter()
@@ -870,8 +876,8 @@ fn image<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let power_up = match power_up {
         None => None,
-        Some("wait") => Some(PowerUpArg::Wait),
-        Some("drive") => Some(PowerUpArg::Drive),
+        Some("wait") => Some(PowerUp::Wait),
+        Some("drive") => Some(PowerUp::Drive),
         Some(other) => {
             return Err(value_error(format!(
                 "power_up `{other}`: `wait` or `drive`"
@@ -884,13 +890,9 @@ fn image<'py>(
             return Err(read_error(path, &e));
         }
     }
-    let args = ImageArgs {
-        out: None,
-        check: None,
+    let spec = ImageSpec {
         scene,
-        device: device.map_or_else(DeviceArgs::default, |d| {
-            DeviceArgs::given(d.batch, d.source.clone())
-        }),
+        device: device.map_or(DeviceSource::Reference, Device_::as_source),
         settings,
         target_hz,
         dac_reference_volts,
@@ -898,13 +900,13 @@ fn image<'py>(
         rail_volts,
         power_up,
     };
-    if args.scene.is_none() {
-        warn(py, &host_sim::cmd::image::amplifier_warnings(&args))?;
+    if spec.scene.is_none() {
+        warn(py, &host_sim::cmd::image::amplifier_warnings(&spec))?;
     }
     let name = out
         .as_ref()
         .map_or("(in memory)".into(), |p| p.display().to_string());
-    let (bytes, report) = stoppable(py, || host_sim::cmd::image::build(&args, name))?;
+    let (bytes, report) = stoppable(py, || host_sim::cmd::image::build(&spec, name))?;
     warn(py, &host_sim::cmd::image::noise_warnings(&report))?;
     if let Some(path) = &out {
         host_sim::cmd::write_path(path, &bytes).map_err(value_error)?;

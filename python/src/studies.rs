@@ -4,7 +4,7 @@
 //! `lyapunov` run the same code); the safe drive map over `study::drive_map` (`drive-map`).
 
 use host_sim::cmd::drive_map as drive_map_cmd;
-use host_sim::cmd::DeviceArgs;
+use host_sim::cmd::DeviceSource;
 use host_sim::engine::solver::Tolerance;
 use host_sim::progress;
 use host_sim::study::drive_map as map;
@@ -404,12 +404,10 @@ pub fn drive_map<'py>(
             drive_map_cmd::MAX_CELLS
         )));
     }
-    let args = device.map_or_else(DeviceArgs::default, |d| {
-        DeviceArgs::given(d.batch, d.source.clone())
-    });
+    let source = device.map_or(DeviceSource::Reference, Device_::as_source);
     let map = stoppable(py, || {
         let (image, batch, _) =
-            drive_map_cmd::board_image(&args, target_hz, settings, quality_factor, gain)?;
+            drive_map_cmd::board_image(&source, target_hz, settings, quality_factor, gain)?;
         let map = map::drive_map(&image, batch.nominal, &amplitudes, &frequencies, periods)?;
         Ok((map, batch.nominal.damping))
     })?;

@@ -50,7 +50,7 @@ pub use fault::{Fault, FaultStage, Figures, FAULT_KEYS};
 pub use plan::{Plan, MAX_PLAN_TICKS};
 pub use settings::{Held, Setting, SettingSet, Settings, F32_GUARD, MAX_TRIMS, TRIM_SECANT_STEP};
 #[cfg(feature = "trim")]
-pub use trim::{NextRing, TrimDone, TrimJob, TrimResult};
+pub use trim::{Ceiling, NextRing, TrimDone, TrimJob, TrimResult};
 pub use watch::{Inputs, AMPLIFIER_TICKS, LEAKAGE_WINDOW_SECONDS};
 
 use crate::acquire::{InputError, InputNoise};

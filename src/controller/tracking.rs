@@ -239,17 +239,7 @@ impl Controller {
                 self.take_estimate();
                 Ok(self.lower_estimate_cap(k, max_volts))
             }
-            TrimResult::AboveCeiling {
-                shear_modulus,
-                needed_volts,
-                max_volts,
-                ..
-            } => Ok(Some(self.hold_below_ceiling(
-                k,
-                shear_modulus,
-                needed_volts,
-                max_volts,
-            ))),
+            TrimResult::AboveCeiling(ceiling) => Ok(Some(self.hold_below_ceiling(k, ceiling))),
             TrimResult::Failed(fault) => Err(fault),
         }
     }

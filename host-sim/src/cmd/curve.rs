@@ -196,7 +196,7 @@ fn values(flag: &str, text: Option<&str>, default: f64) -> Result<Vec<f64>, Stri
 }
 
 pub fn curve(args: &CurveArgs) -> Result<CurveReport, String> {
-    let (batch, device) = args.device.batch()?;
+    let (batch, device) = args.device.source().batch()?;
     let params = batch.nominal;
     let margin = args.margin.margin;
     if !(0.0..1.0).contains(&margin) {

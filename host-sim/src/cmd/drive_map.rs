@@ -10,8 +10,10 @@ use clap::Args;
 use de_resonator::model::tolerance::DeviceBox;
 use serde::Serialize;
 
-use super::image::ImageArgs;
-use super::{prepare_dir, short, sig, write_csv_and_plot, DeviceArgs, DeviceInfo, Report};
+use super::image::ImageSpec;
+use super::{
+    prepare_dir, short, sig, write_csv_and_plot, DeviceArgs, DeviceInfo, DeviceSource, Report,
+};
 use crate::plot::{Mark, Panel, Series, Style, COLOURS, GREY, RED};
 use crate::study::drive_map::{self, Cell, Map};
 
@@ -55,7 +57,7 @@ pub struct DriveMapArgs {
     #[arg(
         long,
         value_name = "G",
-        default_value_t = 4000.0,
+        default_value_t = super::image::DEFAULT_GAIN,
         allow_negative_numbers = true
     )]
     pub gain: f32,
@@ -157,39 +159,40 @@ impl Report for DriveMapReport {
     }
 }
 
-/// The image a board holds (a 2.5 V DAC, the amplifier's `gain`) for `device` tuned to
+/// The image a board holds (the default DAC reference, the amplifier's `gain`) for `device` tuned to
 /// `target_hz` (`None`: the reference job's 44 Hz on the reference device) with `settings`,
 /// the damping of `quality_factor` at that bias in the device file's place if given; the
 /// batch with it, and the device as reports name it.
 pub fn board_image(
-    device: &DeviceArgs,
+    device: &DeviceSource,
     target_hz: Option<f32>,
     settings: Option<PathBuf>,
     quality_factor: Option<f64>,
     gain: f32,
 ) -> Result<(Vec<u8>, DeviceBox, DeviceInfo), String> {
     let (mut batch, info) = device.batch()?;
-    let image_args = |batch: DeviceBox| ImageArgs {
-        out: None,
-        check: None,
-        scene: None,
-        device: DeviceArgs::given(batch, info.source.clone()),
-        settings: settings.clone(),
-        target_hz: target_hz.or_else(|| {
-            (device.device.is_none() && device.given.is_none() && settings.is_none())
-                .then_some(super::image::REFERENCE_TARGET_HZ)
-        }),
-        dac_reference_volts: 2.5,
+    let asked = ImageSpec {
+        device: device.clone(),
+        settings,
+        target_hz,
         gain,
-        rail_volts: None,
-        power_up: None,
+        ..ImageSpec::default()
+    };
+    let target_hz = asked.target_or_reference_hz();
+    let image_spec = |batch: DeviceBox| ImageSpec {
+        device: DeviceSource::Given {
+            batch: Box::new(batch),
+            name: info.source.clone(),
+        },
+        target_hz,
+        ..asked.clone()
     };
     if let Some(q) = quality_factor {
         if !(q.is_finite() && q > 0.0) {
             return Err(format!("quality factor {q}: need Q > 0"));
         }
         // The damping of Q at the bias the board tunes to with the device's own damping.
-        let (image, _) = super::image::build(&image_args(batch), "(in memory)".into())?;
+        let (image, _) = super::image::build(&image_spec(batch), "(in memory)".into())?;
         let (_, stretch, _) = drive_map::operating_point(&image, batch.nominal)?;
         let d = de_resonator::Device::new(batch.nominal).map_err(|e| e.to_string())?;
         let c = batch
@@ -198,13 +201,13 @@ pub fn board_image(
         batch = batch.pinned(de_resonator::Field::Damping, c);
         batch.nominal.damping = c;
     }
-    let (image, _) = super::image::build(&image_args(batch), "(in memory)".into())?;
+    let (image, _) = super::image::build(&image_spec(batch), "(in memory)".into())?;
     Ok((image, batch, info))
 }
 
 pub fn drive_map(args: &DriveMapArgs) -> Result<DriveMapReport, String> {
     let (image, batch, device) = board_image(
-        &args.device,
+        &args.device.source(),
         args.target_hz,
         args.settings.clone(),
         args.quality_factor,

@@ -13,11 +13,15 @@ use de_resonator::table::{self, Table};
 use de_resonator::{Controller, DeviceParams, Field, Setting, Settings};
 use serde::Serialize;
 
-use super::{prepare_file, sig, write_path, DeviceArgs, Report};
+use super::{prepare_file, sig, write_path, DeviceArgs, DeviceSource, Report};
 use crate::lut;
 
 /// The reference job's target (model.md §9, scenes/reference.toml), Hz.
 pub const REFERENCE_TARGET_HZ: f32 = 44.0;
+/// The DAC8551's reference, V: an image's default.
+pub const DEFAULT_DAC_REFERENCE_VOLTS: f32 = 2.5;
+/// The high-voltage amplifier's gain, V/V: an image's default.
+pub const DEFAULT_GAIN: f32 = 4000.0;
 
 #[derive(Args, Debug)]
 pub struct ImageArgs {
@@ -49,7 +53,7 @@ pub struct ImageArgs {
     #[arg(
         long,
         value_name = "V",
-        default_value_t = 2.5,
+        default_value_t = DEFAULT_DAC_REFERENCE_VOLTS,
         allow_negative_numbers = true
     )]
     pub dac_reference_volts: f32,
@@ -57,7 +61,7 @@ pub struct ImageArgs {
     #[arg(
         long,
         value_name = "V/V",
-        default_value_t = 4000.0,
+        default_value_t = DEFAULT_GAIN,
         allow_negative_numbers = true
     )]
     pub gain: f32,
@@ -72,6 +76,69 @@ pub struct ImageArgs {
     /// Default: `wait`; a --scene's image `drive`, as `run` and `serve` boot it.
     #[arg(long, value_name = "WHEN", value_enum)]
     pub power_up: Option<PowerUpArg>,
+}
+
+impl ImageArgs {
+    /// The image the flags ask for.
+    pub fn spec(&self) -> ImageSpec {
+        ImageSpec {
+            scene: self.scene.clone(),
+            device: self.device.source(),
+            settings: self.settings.clone(),
+            target_hz: self.target_hz,
+            dac_reference_volts: self.dac_reference_volts,
+            gain: self.gain,
+            rail_volts: self.rail_volts,
+            power_up: self.power_up.map(PowerUp::from),
+        }
+    }
+}
+
+/// What an image is made of, whoever asks (the CLI's `image`, the Python package's `image`,
+/// `drive-map`'s board): a scene's, or a device's with its settings and amplifier.
+#[derive(Debug, Clone)]
+pub struct ImageSpec {
+    /// A scene whose board's image it is (its device, amplifier, front end and settings).
+    pub scene: Option<PathBuf>,
+    pub device: DeviceSource,
+    /// A settings file (the keys of a scene's [controller] table).
+    pub settings: Option<PathBuf>,
+    /// The target at power-up, Hz, over the settings' (`None` on the reference device without
+    /// settings: the reference job's).
+    pub target_hz: Option<f32>,
+    pub dac_reference_volts: f32,
+    /// V/V.
+    pub gain: f32,
+    /// `None`: the DAC's full scale times the gain.
+    pub rail_volts: Option<f32>,
+    /// `None`: `wait` for a device's image, `drive` for a scene's.
+    pub power_up: Option<PowerUp>,
+}
+
+impl ImageSpec {
+    /// The target asked, or on the reference device without settings the reference job's.
+    pub fn target_or_reference_hz(&self) -> Option<f32> {
+        self.target_hz.or_else(|| {
+            (matches!(self.device, DeviceSource::Reference) && self.settings.is_none())
+                .then_some(REFERENCE_TARGET_HZ)
+        })
+    }
+}
+
+impl Default for ImageSpec {
+    /// The reference device's image, as `image --out FILE` makes it.
+    fn default() -> Self {
+        Self {
+            scene: None,
+            device: DeviceSource::Reference,
+            settings: None,
+            target_hz: None,
+            dac_reference_volts: DEFAULT_DAC_REFERENCE_VOLTS,
+            gain: DEFAULT_GAIN,
+            rail_volts: None,
+            power_up: None,
+        }
+    }
 }
 
 /// `--power-up` (`image`, `serve`): the image's [`PowerUp`].
@@ -343,12 +410,13 @@ pub fn image(args: &ImageArgs) -> Result<ImageReport, String> {
         .as_ref()
         .ok_or("give --out FILE (or --check FILE)")?;
     prepare_file(out)?;
-    if args.scene.is_none() {
-        for warning in amplifier_warnings(args) {
+    let spec = args.spec();
+    if spec.scene.is_none() {
+        for warning in amplifier_warnings(&spec) {
             eprintln!("warning: {warning}");
         }
     }
-    let (bytes, mut report) = build(args, out.display().to_string())?;
+    let (bytes, mut report) = build(&spec, out.display().to_string())?;
     for warning in noise_warnings(&report) {
         eprintln!("warning: {warning}");
     }
@@ -376,7 +444,7 @@ pub fn noise_warnings(report: &ImageReport) -> Vec<String> {
 
 /// What no real amplifier stage has, each with its unit and the range any has: a unit slip
 /// (millivolts typed as volts), warned of as a device file's implausible values are.
-pub fn amplifier_warnings(args: &ImageArgs) -> Vec<String> {
+pub fn amplifier_warnings(spec: &ImageSpec) -> Vec<String> {
     let mut said = Vec::new();
     let mut check = |flag: &str, value: f32, low: f32, high: f32, unit: &str, slip: &str| {
         if value.is_finite() && !(low..=high).contains(&value) {
@@ -387,7 +455,7 @@ pub fn amplifier_warnings(args: &ImageArgs) -> Vec<String> {
     };
     check(
         "--dac-reference-volts",
-        args.dac_reference_volts,
+        spec.dac_reference_volts,
         0.5,
         10.0,
         "V",
@@ -395,13 +463,13 @@ pub fn amplifier_warnings(args: &ImageArgs) -> Vec<String> {
     );
     check(
         "--gain",
-        args.gain,
+        spec.gain,
         1.0,
         1e5,
         "V/V",
         "high-voltage amplifier has",
     );
-    if let Some(rail) = args.rail_volts {
+    if let Some(rail) = spec.rail_volts {
         check(
             "--rail-volts",
             rail,
@@ -414,15 +482,12 @@ pub fn amplifier_warnings(args: &ImageArgs) -> Vec<String> {
     said
 }
 
-/// The image `args` ask for (a scene's, or a device's with its settings and amplifier) and
-/// what it holds, `file` its name in the report; refused (not made) if the firmware's boot
-/// would refuse it.
-pub fn build(args: &ImageArgs, file: String) -> Result<(Vec<u8>, ImageReport), String> {
-    if let Some(path) = &args.scene {
+/// The image `spec` asks for and what it holds, `file` its name in the report; refused (not
+/// made) if the firmware's boot would refuse it.
+pub fn build(spec: &ImageSpec, file: String) -> Result<(Vec<u8>, ImageReport), String> {
+    if let Some(path) = &spec.scene {
         let scene = crate::scene::load(path)?;
-        let bytes = scene
-            .run
-            .image(args.power_up.map_or(PowerUp::Drive, PowerUp::from))?;
+        let bytes = scene.run.image(spec.power_up.unwrap_or(PowerUp::Drive))?;
         let report = describe(&bytes, file)?;
         if let Verdict::Refuses { reason } = &report.verdict {
             return Err(format!(
@@ -432,12 +497,9 @@ pub fn build(args: &ImageArgs, file: String) -> Result<(Vec<u8>, ImageReport), S
         }
         return Ok((bytes, report));
     }
-    let (batch, name) = args.device.batch()?;
-    let target_hz = args.target_hz.or_else(|| {
-        (args.device.device.is_none() && args.device.given.is_none() && args.settings.is_none())
-            .then_some(REFERENCE_TARGET_HZ)
-    });
-    let (settings, front_end) = match &args.settings {
+    let (batch, name) = spec.device.batch()?;
+    let target_hz = spec.target_or_reference_hz();
+    let (settings, front_end) = match &spec.settings {
         Some(path) => crate::settings_file::load(path, target_hz)?,
         None => (
             Settings::for_target(target_hz.ok_or_else(|| {
@@ -446,18 +508,18 @@ pub fn build(args: &ImageArgs, file: String) -> Result<(Vec<u8>, ImageReport), S
             FrontEnd::NONE,
         ),
     };
-    let settings = match args.target_hz {
+    let settings = match spec.target_hz {
         Some(hz) => Settings {
             target_hz: hz,
             ..settings
         },
         None => settings,
     };
-    let full_scale = args.dac_reference_volts * args.gain;
+    let full_scale = spec.dac_reference_volts * spec.gain;
     let amplifier = AmplifierSpec {
-        dac_reference_volts: args.dac_reference_volts,
-        gain: args.gain,
-        rail_volts: args.rail_volts.unwrap_or(full_scale),
+        dac_reference_volts: spec.dac_reference_volts,
+        gain: spec.gain,
+        rail_volts: spec.rail_volts.unwrap_or(full_scale),
         dac_bits: DAC_BITS,
     };
     let bytes = lut::image(
@@ -465,7 +527,7 @@ pub fn build(args: &ImageArgs, file: String) -> Result<(Vec<u8>, ImageReport), S
         &amplifier,
         &front_end,
         &settings,
-        args.power_up.map_or(PowerUp::Wait, PowerUp::from),
+        spec.power_up.unwrap_or(PowerUp::Wait),
     )
     .map_err(|e| format!("{name}: {e}"))?;
     // Checked before writing: an image the firmware would refuse is not made.

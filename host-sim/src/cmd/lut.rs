@@ -107,7 +107,7 @@ impl Report for LutReport {
 }
 
 pub fn lut(args: &LutArgs) -> Result<LutReport, String> {
-    let (batch, name) = args.device.batch()?;
+    let (batch, name) = args.device.source().batch()?;
     let margin = args.margin.margin;
     let csv_named = args
         .out

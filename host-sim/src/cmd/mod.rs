@@ -56,7 +56,7 @@ pub fn prepare_file(path: &Path) -> Result<(), String> {
     }
 }
 
-/// The device a command works on.
+/// The device a command works on, as its flag names it.
 #[derive(Args, Debug, Clone, Default)]
 pub struct DeviceArgs {
     /// Device file (TOML, SI units, flat keys; absent keys take the reference device's values, an
@@ -65,21 +65,31 @@ pub struct DeviceArgs {
     /// Default: the built-in reference device.
     #[arg(long, value_name = "FILE")]
     pub device: Option<PathBuf>,
-    /// A device given as values (the Python package's `Device`, with its tolerances), over
-    /// the file and the reference, with what it is called.
-    #[arg(skip)]
-    pub given: Option<(DeviceBox, String)>,
 }
 
 impl DeviceArgs {
-    /// A device given as values (a batch with its tolerances), called `source`.
-    pub fn given(batch: DeviceBox, source: String) -> Self {
-        Self {
-            device: None,
-            given: Some((batch, source)),
-        }
+    /// The device the flag names.
+    pub fn source(&self) -> DeviceSource {
+        self.device
+            .clone()
+            .map_or(DeviceSource::Reference, DeviceSource::File)
     }
+}
 
+/// Where a device comes from, whoever asks (the CLI's `--device`, the Python package's
+/// `Device`): the built-in reference, a device file, or a batch given as values.
+#[derive(Debug, Clone, Default)]
+pub enum DeviceSource {
+    /// The built-in reference device.
+    #[default]
+    Reference,
+    /// A device file (TOML; its `[tolerance]` table makes it a batch).
+    File(PathBuf),
+    /// A batch given as values, with what it is called (boxed: the batch is large).
+    Given { batch: Box<DeviceBox>, name: String },
+}
+
+impl DeviceSource {
     /// The device's parameters (the reference's without a file) and what it is.
     pub fn params(&self) -> Result<(DeviceParams<f64>, DeviceInfo), String> {
         let (b, info) = self.batch()?;
@@ -87,23 +97,17 @@ impl DeviceArgs {
     }
 
     /// The batch the device file declares with its `[tolerance]` table (model.md §10): the
-    /// nominal device alone without one, and for a device given as values.
+    /// nominal device alone without one; the batch itself when given as values.
     pub fn batch(&self) -> Result<(DeviceBox, DeviceInfo), String> {
-        let (b, source) = match (&self.given, &self.device) {
-            (Some((batch, source)), _) => (*batch, source.clone()),
-            (None, Some(path)) => (device_file::load_box(path)?, path.display().to_string()),
-            (None, None) => (
+        let (b, source) = match self {
+            Self::Given { batch, name } => (**batch, name.clone()),
+            Self::File(path) => (device_file::load_box(path)?, path.display().to_string()),
+            Self::Reference => (
                 DeviceBox::exact(REFERENCE_DEVICE),
                 "reference device (built in)".into(),
             ),
         };
         Ok((b, DeviceInfo::new(source, &b.nominal).with_tolerance(&b)))
-    }
-
-    /// The device validated, with its limit found, and what it is.
-    pub fn tuner(&self) -> Result<(Tuner<f64>, DeviceInfo), String> {
-        let (_, tuner, name) = self.batch_tuner()?;
-        Ok((tuner, name))
     }
 
     /// The batch, its nominal device validated with its limit found, and what it is.

@@ -65,7 +65,7 @@ pub struct DrivenArgs {
 impl DrivenArgs {
     /// The drive on the device, its damping as asked, and the device as the report names it.
     pub fn driven(&self) -> Result<(Driven, DeviceInfo), String> {
-        let (mut params, info) = self.device.params()?;
+        let (mut params, info) = self.device.source().params()?;
         if let Some(c) = self.damping {
             params.damping = c;
         }

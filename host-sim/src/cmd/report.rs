@@ -122,7 +122,7 @@ impl fmt::Display for PrecisionReport {
 impl Report for PrecisionReport {}
 
 pub fn precision(args: &PrecisionArgs) -> Result<PrecisionReport, String> {
-    let (params, name) = args.device.params()?;
+    let (params, name) = args.device.source().params()?;
     // The folder made ready before the work (minutes of it), as every command does.
     prepare_dir(&args.out)?;
     let studies = studies(params).map_err(|e| format!("{name}: {e}"))?;

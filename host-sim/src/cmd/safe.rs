@@ -314,12 +314,12 @@ impl fmt::Display for TuneReport {
 impl Report for TuneReport {}
 
 pub fn safe(args: &SafeArgs) -> Result<Region, String> {
-    let (b, tuner, name) = args.device.batch_tuner()?;
+    let (b, tuner, name) = args.device.source().batch_tuner()?;
     Region::of_batch(name, &tuner, &b, args.margin.margin)
 }
 
 pub fn tune(args: &TuneArgs) -> Result<TuneReport, String> {
-    let (b, tuner, name) = args.device.batch_tuner()?;
+    let (b, tuner, name) = args.device.source().batch_tuner()?;
     tune_batch(name, &tuner, &b, args.target_hz, args.margin.margin)
 }
 

@@ -319,7 +319,7 @@ impl Asked {
 pub const MAX_T_EVAL: usize = 10_000_000;
 
 pub fn simulate(args: &SimulateArgs) -> Result<SimulateReport, String> {
-    let (params, device) = args.device.params()?;
+    let (params, device) = args.device.source().params()?;
     let asked = Asked {
         bias_volts: args.bias_volts,
         ac_volts: args.ac_volts,

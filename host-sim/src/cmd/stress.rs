@@ -87,7 +87,7 @@ impl Report for StressReport {
 }
 
 pub fn stress(args: &StressArgs) -> Result<StressReport, String> {
-    let (params, device) = args.device.params()?;
+    let (params, device) = args.device.source().params()?;
     de_resonator::Device::new(params).map_err(|e| format!("{device}: {e}"))?;
     let (cases, summary) = stiff_cases::run(params);
     Ok(StressReport {

@@ -8,7 +8,9 @@ use clap::Args;
 use de_resonator::{Device, Tuner};
 use serde::Serialize;
 
-use super::{prepare_dir, short, sig, write_csv_and_plot, DeviceArgs, DeviceInfo, Report};
+use super::{
+    prepare_dir, short, sig, write_csv_and_plot, DeviceArgs, DeviceInfo, DeviceSource, Report,
+};
 use crate::plot::{Panel, Series, Style, GREY, RED};
 use crate::study::frequency_response::{self, Sweep};
 
@@ -86,6 +88,42 @@ pub struct SweepArgs {
     pub out: PathBuf,
     #[command(flatten)]
     pub device: DeviceArgs,
+}
+
+impl SweepArgs {
+    /// The sweep the flags ask for.
+    pub fn asked(&self) -> Asked {
+        Asked {
+            bias_volts: self.bias_volts,
+            ac_volts: self.ac_volts,
+            quality_factor: self.quality_factor,
+            from_ratio: self.from_ratio,
+            to_ratio: self.to_ratio,
+            points: self.points,
+            periods: self.periods,
+            steps_per_period: self.steps_per_period,
+        }
+    }
+}
+
+/// What a sweep is asked, whoever asks (the CLI, the Python package): the fields of
+/// `SweepArgs` but the device and the folder, checked by `measure`.
+#[derive(Clone, Copy, Debug)]
+pub struct Asked {
+    /// V; `None`: 0.6 of the device's limit voltage.
+    pub bias_volts: Option<f64>,
+    /// V; `None`: 0.2 of the device's limit voltage.
+    pub ac_volts: Option<f64>,
+    /// 0 keeps the device's damping.
+    pub quality_factor: f64,
+    /// The drive frequencies' range, as multiples of f0.
+    pub from_ratio: f64,
+    pub to_ratio: f64,
+    pub points: usize,
+    /// Each run's length, in periods of f0.
+    pub periods: f64,
+    /// RK4 steps per period of the faster of the drive and f0.
+    pub steps_per_period: f64,
 }
 
 /// One drive frequency: a JSON point and a CSV row alike (the crossing flattened, an empty
@@ -208,7 +246,9 @@ impl Report for SweepReport {
 }
 
 pub fn sweep(args: &SweepArgs) -> Result<SweepReport, String> {
-    let (mut report, panel) = measure(args, || prepare_dir(&args.out))?;
+    let (mut report, panel) = measure(&args.asked(), &args.device.source(), || {
+        prepare_dir(&args.out)
+    })?;
     report.files = write_csv_and_plot(&args.out, "sweep", &report.points, &[panel])?;
     Ok(report)
 }
@@ -216,10 +256,11 @@ pub fn sweep(args: &SweepArgs) -> Result<SweepReport, String> {
 /// The sweep's report (no files) and its plot; `ready` runs once the arguments are checked,
 /// before the work (where the files go, for the CLI).
 pub fn measure(
-    args: &SweepArgs,
+    args: &Asked,
+    device: &DeviceSource,
     ready: impl FnOnce() -> Result<(), String>,
 ) -> Result<(SweepReport, Panel), String> {
-    let (mut params, device) = args.device.params()?;
+    let (mut params, device) = device.params()?;
     let quality = args.quality_factor;
     if !(quality.is_finite() && quality >= 0.0) {
         return Err(format!(

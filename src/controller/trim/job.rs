@@ -120,16 +120,20 @@ pub enum TrimResult {
         /// The drive's swing at the new bias, as the estimate predicts it (`None`: no AC).
         predicted: Option<Predicted>,
     },
-    /// The estimate needs `needed_volts` (bias and AC) above the lower of the cap in force
-    /// and its own cap `max_volts` (which the controller takes as Retune's): hold.
-    AboveCeiling {
-        measured_hz: f32,
-        shear_modulus: f32,
-        needed_volts: f32,
-        max_volts: f32,
-    },
+    /// The estimate needs more than the cap in force: hold.
+    AboveCeiling(Ceiling),
     /// No ring, no estimate, no convergence, or no safe bias: a fault.
     Failed(Fault),
+}
+
+/// A solve whose estimate needs `needed_volts` (bias and AC) above the lower of the cap in
+/// force and its own cap `max_volts` (which the controller takes as `Retune`'s).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ceiling {
+    pub measured_hz: f32,
+    pub shear_modulus: f32,
+    pub needed_volts: f32,
+    pub max_volts: f32,
 }
 
 impl TrimJob {
@@ -237,12 +241,12 @@ impl TrimJob {
         // while tracking, a hold).
         let needed_volts = bias_volts + s.swing_volts();
         if !(needed_volts <= max_volts) {
-            return Ok(TrimResult::AboveCeiling {
+            return Ok(TrimResult::AboveCeiling(Ceiling {
                 measured_hz,
                 shear_modulus,
                 needed_volts,
                 max_volts: estimate_volts,
-            });
+            }));
         }
         // The drive's swing at the new bias on the estimate (model.md §7), from the bias
         // measured at: the ring carried through the ramp and the next pulse's.

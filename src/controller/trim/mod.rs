@@ -15,7 +15,7 @@ use super::{Controller, Event, State};
 use crate::acquire::InputNoise;
 use crate::estimate::ring::{NoiseFrom, RingFit, RingInput, RingQuality, TrimError, MAX_WINDOW};
 use crate::model::device::{Device, DeviceParams};
-pub use job::{TrimDone, TrimJob, TrimResult};
+pub use job::{Ceiling, TrimDone, TrimJob, TrimResult};
 pub use ring::NextRing;
 use ring::{declared, half_samples, outside_batch, predicted};
 pub(super) use ring::{pulse_ring, pulse_ticks, HoldNoise};
@@ -412,16 +412,10 @@ impl Controller {
 
     /// A result that needs more than the cap in force: the estimate's μ and cap taken, the
     /// bias held where it is, and said (`Event::AboveCeiling`).
-    pub(super) fn hold_below_ceiling(
-        &mut self,
-        k: u32,
-        shear_modulus: f32,
-        needed_volts: f32,
-        max_volts: f32,
-    ) -> Event {
-        self.trim.params.shear_modulus = shear_modulus;
-        self.take_estimate_cap(max_volts);
-        self.hold(k, needed_volts)
+    pub(super) fn hold_below_ceiling(&mut self, k: u32, ceiling: Ceiling) -> Event {
+        self.trim.params.shear_modulus = ceiling.shear_modulus;
+        self.take_estimate_cap(ceiling.max_volts);
+        self.hold(k, ceiling.needed_volts)
     }
 
     /// A trim's result whose μ lies outside the batch the table was made for (model.md §10):
@@ -431,7 +425,7 @@ impl Controller {
         let shear_modulus = match *result {
             TrimResult::Converged { shear_modulus, .. }
             | TrimResult::Retune { shear_modulus, .. }
-            | TrimResult::AboveCeiling { shear_modulus, .. } => shear_modulus,
+            | TrimResult::AboveCeiling(Ceiling { shear_modulus, .. }) => shear_modulus,
             TrimResult::Failed(_) => return None,
         };
         outside_batch(self.batch_modulus, shear_modulus).map(Fault::Trim)
@@ -528,17 +522,7 @@ impl Controller {
             }
             // Taken above.
             TrimResult::Retune { .. } => Ok(None),
-            TrimResult::AboveCeiling {
-                shear_modulus,
-                needed_volts,
-                max_volts,
-                ..
-            } => Ok(Some(self.hold_below_ceiling(
-                k,
-                shear_modulus,
-                needed_volts,
-                max_volts,
-            ))),
+            TrimResult::AboveCeiling(ceiling) => Ok(Some(self.hold_below_ceiling(k, ceiling))),
             // A ring too weak to time in the window, on a membrane that may carry a ring of
             // its own (a drive ran since the last plan without AC: paused, or before a new
             // plan's ramp): that ring can meet the pulse's out of phase. Measured again from a

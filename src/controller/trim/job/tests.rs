@@ -65,7 +65,7 @@ fn a_secant_past_the_cap_falls_back_to_the_model() {
     let mut near = job(8500.0, 44.5, Some((8300.0 * 8300.0, 44.55)));
     near.settings.ac_volts = 300.0;
     match near.solve().result {
-        TrimResult::AboveCeiling { needed_volts, .. } => {
+        TrimResult::AboveCeiling(Ceiling { needed_volts, .. }) => {
             assert!(needed_volts > 9361.9 && (needed_volts - 9650.0).abs() > 1.0);
         }
         other => panic!("{other:?}"),
@@ -115,7 +115,7 @@ fn a_target_past_the_estimates_reach_is_a_hold() {
     );
     let needs = tuner.tune(44.0, 0.0).unwrap().volts;
     match job(3000.0, 47.0, None).solve().result {
-        TrimResult::AboveCeiling { needed_volts, .. } => {
+        TrimResult::AboveCeiling(Ceiling { needed_volts, .. }) => {
             let expected = needs + f64::from(Settings::for_target(44.0).swing_volts());
             assert!(
                 (f64::from(needed_volts) / expected - 1.0).abs() < 1e-3,
