@@ -76,7 +76,7 @@ fn job_wanted(_: &Controller) -> bool {
 pub fn run_job(mut with: impl FnMut(&mut dyn FnMut(&mut Controller))) -> bool {
     let mut job = None;
     with(&mut |c| job = c.trim_job());
-    let Some(job) = job else { return false };
+    let Some(job) = &job else { return false };
     let result = job.solve();
     with(&mut |c| c.trim_done(result));
     true

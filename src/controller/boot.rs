@@ -130,6 +130,20 @@ impl Checked {
         controller
     }
 
+    /// `controller` built in `slot`. Not inlined: the controller is built on this frame
+    /// (3.6 KB) before it moves to the slot, and this frame is gone before the checks that
+    /// follow go deep (else it would sit under them, on the firmware's boot and `clear`).
+    #[inline(never)]
+    fn build_in<'s>(
+        &self,
+        slot: &'s mut Option<Controller>,
+        board: (Amplifier, InputNoise),
+        settings: Settings,
+        from_volts: f32,
+    ) -> &'s mut Controller {
+        slot.insert(self.controller(board, settings, from_volts))
+    }
+
     /// The first plan set, the boot so far.
     fn plan(&self, controller: &mut Controller) -> Result<Boot, Fault> {
         Ok(Boot {
@@ -192,7 +206,7 @@ impl Controller {
         (from_volts, carried_ring_stretch): (f32, f32),
     ) -> Result<(&'s mut Self, Boot), Fault> {
         let checked = Checked::new(params, table, &settings)?;
-        let controller = slot.insert(checked.controller(board, settings, from_volts));
+        let controller = checked.build_in(slot, board, settings, from_volts);
         controller.carried_ring_stretch = carried_ring_stretch;
         let boot = checked.plan(controller)?;
         let boot = controller.cross_check(boot, table)?;
