@@ -68,14 +68,16 @@ pub(super) struct TrimState {
 }
 
 impl TrimState {
+    /// A trim at boot. The window is made zero and then NaN in place: a NaN array in the
+    /// literal is built on the stack and copied (2 KB more of the boot's stack).
     pub(super) fn new(params: DeviceParams<f32>, tuned: bool) -> Self {
-        Self {
+        let mut state = Self {
             params,
             tuned,
             count: 0,
             previous: None,
             window_from: 0,
-            window: [f32::NAN; MAX_WINDOW],
+            window: [0.0; MAX_WINDOW],
             sum: 0.0,
             origin: f32::NAN,
             last: f32::NAN,
@@ -89,7 +91,9 @@ impl TrimState {
             tracked_hz: None,
             tracked_quality: f32::NAN,
             ring_quality: None,
-        }
+        };
+        state.window.fill(f32::NAN);
+        state
     }
 
     /// A new job is wanted (a window measured, a tracked frequency to solve at): a result of
