@@ -34,11 +34,11 @@ pub type EnablePin = Pin<'B', 0, Output<PushPull>>;
 #[cfg(not(feature = "qemu"))]
 pub type StageSpi = DacSpi;
 #[cfg(all(feature = "qemu", not(feature = "link")))]
-pub type StageSpi = Breakable<DacSpi>;
+pub type StageSpi = crate::qemu::bus::Breakable<DacSpi>;
 #[cfg(not(feature = "link"))]
 pub type StagePin = EnablePin;
 #[cfg(feature = "link")]
-pub type StageSpi = de_resonator::wire::link::Tap<Breakable<DacSpi>>;
+pub type StageSpi = de_resonator::wire::link::Tap<crate::qemu::bus::Breakable<DacSpi>>;
 #[cfg(feature = "link")]
 pub type StagePin = de_resonator::wire::link::Tap<EnablePin>;
 
@@ -46,51 +46,17 @@ pub type StagePin = de_resonator::wire::link::Tap<EnablePin>;
 pub fn stage_wires(dac: DacSpi, enable: EnablePin) -> (StageSpi, StagePin) {
     #[cfg(feature = "link")]
     {
+        use crate::qemu::bus::Breakable;
         use de_resonator::wire::link::Tap;
         (Tap::new(Breakable(dac)), Tap::new(enable))
     }
     #[cfg(all(feature = "qemu", not(feature = "link")))]
     {
-        (Breakable(dac), enable)
+        (crate::qemu::bus::Breakable(dac), enable)
     }
     #[cfg(not(feature = "qemu"))]
     {
         (dac, enable)
-    }
-}
-
-#[cfg(feature = "qemu")]
-pub use breakable::{break_dac_bus, Breakable};
-
-/// A DAC bus a QEMU test can break (QEMU's SPI never fails): from `break_dac_bus` on, every
-/// transaction fails, as a broken wire's would on silicon, through resets (the record in
-/// `runtime::broken_bus`). Broken by host-sim's link (a scene's failing bus) or by QEMU's
-/// `dac-bus-fails` switch.
-#[cfg(feature = "qemu")]
-mod breakable {
-    use embedded_hal::spi::{Error as _, ErrorKind, ErrorType, Operation, SpiDevice};
-
-    use crate::runtime::broken_bus;
-
-    /// The DAC's bus fails from now on, until power-up.
-    pub fn break_dac_bus() {
-        broken_bus::set();
-    }
-
-    /// The board's DAC bus, failing once broken.
-    pub struct Breakable<S>(pub S);
-
-    impl<S: SpiDevice> ErrorType for Breakable<S> {
-        type Error = ErrorKind;
-    }
-
-    impl<S: SpiDevice> SpiDevice for Breakable<S> {
-        fn transaction(&mut self, operations: &mut [Operation<'_, u8>]) -> Result<(), ErrorKind> {
-            if broken_bus::is_set() {
-                return Err(ErrorKind::Other);
-            }
-            self.0.transaction(operations).map_err(|e| e.kind())
-        }
     }
 }
 
@@ -353,27 +319,5 @@ pub fn asked(word: &str) -> bool {
     {
         let _ = word;
         false
-    }
-}
-
-/// An independent clock of virtual time under QEMU: TIM2 counting microseconds (QEMU's timer
-/// model counts at 1 GHz whatever RCC says; started first thing, its count is right:
-/// QEMU-STM32F405.md §2). Only for the tick-rate test; nothing on silicon uses it.
-#[cfg(feature = "qemu")]
-pub mod qemu_clock {
-    use stm32f4xx_hal::pac::TIM2;
-
-    /// Start TIM2 free-running in microseconds.
-    pub fn start(tim2: &TIM2) {
-        tim2.psc().write(|w| w.psc().set(999));
-        tim2.arr().write(|w| w.arr().set(u32::MAX));
-        tim2.egr().write(|w| w.ug().set_bit());
-        tim2.cr1().modify(|_, w| w.cen().set_bit());
-    }
-
-    /// Microseconds of virtual time since `start`.
-    pub fn micros() -> u32 {
-        // SAFETY: a read of a counter register no one writes after `start`.
-        unsafe { (*TIM2::ptr()).cnt().read().bits() }
     }
 }

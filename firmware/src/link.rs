@@ -86,7 +86,7 @@ mod transport {
                     Err(code) => crate::runtime::exit(code),
                 };
                 if header.flags & BUS_FAILS != 0 {
-                    crate::chip::break_dac_bus();
+                    crate::qemu::bus::break_dac_bus();
                 }
                 let mut count = 0;
                 for (slot, code) in self.codes.iter_mut().zip(link::codes(payload)) {

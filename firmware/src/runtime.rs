@@ -1,6 +1,7 @@
 //! Runtime glue: exit codes, the panic and HardFault handlers, and the stack meter. The
-//! firmware's `unsafe` lives here, in `config` (raw memory the linker names) and in
-//! `watchdog` (the IWDG's window around an erase; QEMU's stand-in clock).
+//! firmware's `unsafe` lives here, in `config` (raw memory the linker names), in `watchdog`
+//! (the IWDG's window around an erase) and in `qemu` (its stand-ins' `.uninit` RAM and
+//! timers).
 
 /// Why the firmware restarted (the core's board reads it at boot), kept across the reset in
 /// `.uninit` RAM with a check word (QEMU has no reset flags; on silicon the same record works).
@@ -49,29 +50,6 @@ pub fn take_reset_cause() -> Option<ResetCause> {
         2 => Some(ResetCause::Watchdog),
         3 => Some(ResetCause::BrownOut),
         _ => None,
-    }
-}
-
-/// QEMU's broken DAC bus (`chip::Breakable`), kept through a reset as a broken wire is: a
-/// word of `.uninit` RAM (zeros at QEMU's power-up; QEMU's `sys_reset` keeps it).
-#[cfg(feature = "qemu")]
-pub mod broken_bus {
-    const BROKEN: u32 = 0xB0_5B_AD_0B;
-
-    #[link_section = ".uninit.BUS_BROKEN"]
-    static mut WORD: core::mem::MaybeUninit<u32> = core::mem::MaybeUninit::uninit();
-
-    /// The bus fails from now on, through resets, until power-up.
-    pub fn set() {
-        // SAFETY: a plain store into RAM only this module touches.
-        unsafe { core::ptr::write_volatile(core::ptr::addr_of_mut!(WORD).cast::<u32>(), BROKEN) }
-    }
-
-    /// Whether it is broken.
-    pub fn is_set() -> bool {
-        // SAFETY: reads RAM only this module touches; any bit pattern is a valid u32, and only
-        // the check word says broken.
-        unsafe { core::ptr::read_volatile(core::ptr::addr_of!(WORD).cast::<u32>()) == BROKEN }
     }
 }
 
@@ -209,30 +187,4 @@ fn brown_out_on() -> bool {
     // SAFETY: a read of FLASH_OPTCR, which the firmware never writes.
     let flash = unsafe { &*stm32f4xx_hal::pac::FLASH::ptr() };
     flash.optcr().read().bor_lev().bits() != 0b11
-}
-
-/// The settings' RAM pages under QEMU (two slots of a page): `storage`'s stand-in for flash.
-pub const SETTINGS_PAGES: usize = 2;
-/// The fault log's RAM pages under QEMU: two halves of two, 32 entries each.
-pub const LOG_PAGES: usize = 4;
-
-/// The RAM pages that a reset keeps (`.uninit`: cortex-m-rt does not zero it; QEMU's
-/// `sys_reset` keeps it): the settings' flash (`SETTINGS_PAGES`) and the fault log's
-/// (`LOG_PAGES`) under QEMU. Given out once.
-#[cfg(feature = "qemu")]
-pub fn storage_ram() -> Option<&'static mut [u8]> {
-    use core::mem::MaybeUninit;
-    use core::sync::atomic::{AtomicBool, Ordering};
-
-    const BYTES: usize = (SETTINGS_PAGES + LOG_PAGES) * de_resonator::flash::RAM_PAGE_BYTES;
-    #[link_section = ".uninit.SETTINGS"]
-    static mut RAM: MaybeUninit<[u8; BYTES]> = MaybeUninit::uninit();
-    static TAKEN: AtomicBool = AtomicBool::new(false);
-    if TAKEN.swap(true, Ordering::AcqRel) {
-        return None;
-    }
-    // SAFETY: given out once (TAKEN), so this is the only reference. The bytes are whatever
-    // the RAM holds (zeros at QEMU's power-up, the last run's after a reset): plain bytes,
-    // which the store checks (magic, CRCs) before it believes any.
-    Some(unsafe { (*core::ptr::addr_of_mut!(RAM)).assume_init_mut() })
 }

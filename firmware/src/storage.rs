@@ -1,8 +1,7 @@
 //! Where `save` keeps the settings and the board its fault log: flash sectors 9 and 10 and
 //! sectors 7 and 8 on the chip (memory.x's SETTINGS and FAULTLOG; the STM32F4 flash controller
-//! through the HAL), `.uninit` RAM pages under QEMU (whose flash controller is not emulated;
-//! `.uninit` survives `SCB::sys_reset`, as flash survives a power cycle). The layouts and the
-//! power-cut safety are the core's `store` and `fault_log`.
+//! through the HAL), `qemu::flash`'s RAM pages under QEMU (whose flash controller is not
+//! emulated). The layouts and the power-cut safety are the core's `store` and `fault_log`.
 //!
 //! An erase stalls the chip for seconds (its code runs from the bank it erases), past the
 //! watchdog: every erase runs through `watchdog::through_stall`, which lengthens the dog's
@@ -11,12 +10,9 @@
 
 use de_resonator::board::FlashKeeper;
 
-#[cfg(feature = "qemu")]
-use crate::runtime::SETTINGS_PAGES;
-
 /// The settings' flash as this build has it.
 #[cfg(feature = "qemu")]
-pub type SettingsFlash = SlowRam;
+pub type SettingsFlash = crate::qemu::flash::SlowRam;
 #[cfg(not(feature = "qemu"))]
 pub type SettingsFlash = ChipFlash;
 
@@ -26,16 +22,7 @@ pub fn open(controller: stm32f4xx_hal::pac::FLASH) -> Option<FlashKeeper<Setting
     #[cfg(feature = "qemu")]
     {
         let _ = controller;
-        let ram = crate::runtime::storage_ram()?;
-        let settings = (SETTINGS_PAGES * de_resonator::flash::RAM_PAGE_BYTES) as u32;
-        let len = ram.len() as u32;
-        Some(FlashKeeper {
-            flash: SlowRam(de_resonator::flash::RamFlash::new(ram)),
-            range: 0..settings,
-            log: Some(settings..len),
-            // As the chip: the stand-in's erase stalls.
-            erase_stalls: true,
-        })
+        crate::qemu::flash::keeper()
     }
     #[cfg(not(feature = "qemu"))]
     {
@@ -59,75 +46,6 @@ pub fn open(controller: stm32f4xx_hal::pac::FLASH) -> Option<FlashKeeper<Setting
             erase_stalls: true,
         })
     }
-}
-
-/// QEMU's flash: the RAM pages, each erase then a stall as long as a chip's sector erase
-/// (`watchdog::SECTOR_ERASE_MS` of QEMU's clock, interrupts masked, as the chip's fetches
-/// stall), through `watchdog::through_stall` as on the chip (not in the link build, whose
-/// tick host-sim paces).
-#[cfg(feature = "qemu")]
-pub struct SlowRam(pub de_resonator::flash::RamFlash<'static>);
-
-#[cfg(feature = "qemu")]
-mod slow_ram {
-    use de_resonator::flash::RamFlash;
-    use embedded_storage::nor_flash::{ErrorType, NorFlash, ReadNorFlash};
-
-    use super::SlowRam;
-
-    /// A chip's sector erase: `SECTOR_ERASE_MS` of QEMU's clock, interrupts masked, through
-    /// the watchdog's lengthened window.
-    #[cfg(not(feature = "link"))]
-    fn stall() {
-        use crate::chip::qemu_clock;
-        use crate::watchdog::{through_stall, SECTOR_ERASE_MS};
-        through_stall(|| {
-            cortex_m::interrupt::free(|_| {
-                let start = qemu_clock::micros();
-                // Few reads of the clock: under -icount each ends QEMU's translated block.
-                while qemu_clock::micros().wrapping_sub(start) < SECTOR_ERASE_MS * 1000 {
-                    cortex_m::asm::delay(100_000);
-                }
-            })
-        });
-    }
-
-    /// The link build's tick is paced by host-sim, not by the chip's clock: no stall.
-    #[cfg(feature = "link")]
-    fn stall() {}
-
-    impl ErrorType for SlowRam {
-        type Error = <RamFlash<'static> as ErrorType>::Error;
-    }
-
-    impl ReadNorFlash for SlowRam {
-        const READ_SIZE: usize = <RamFlash<'static> as ReadNorFlash>::READ_SIZE;
-
-        fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), Self::Error> {
-            self.0.read(offset, bytes)
-        }
-
-        fn capacity(&self) -> usize {
-            self.0.capacity()
-        }
-    }
-
-    impl NorFlash for SlowRam {
-        const WRITE_SIZE: usize = <RamFlash<'static> as NorFlash>::WRITE_SIZE;
-        const ERASE_SIZE: usize = <RamFlash<'static> as NorFlash>::ERASE_SIZE;
-
-        fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
-            let done = self.0.erase(from, to);
-            stall();
-            done
-        }
-
-        fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Self::Error> {
-            self.0.write(offset, bytes)
-        }
-    }
-
-    impl embedded_storage::nor_flash::MultiwriteNorFlash for SlowRam {}
 }
 
 /// The STM32F4's flash controller as embedded-storage's `NorFlash` (each call blocks

@@ -6,33 +6,16 @@
 
 #[cfg(not(feature = "qemu"))]
 use de_resonator::wire::stream::FRAME_BYTES;
+#[cfg(not(feature = "qemu"))]
 use stm32f4xx_hal::pac::USART1;
+#[cfg(not(feature = "qemu"))]
 use stm32f4xx_hal::serial::Tx;
 
 /// The stream port's baud rate: 1 kHz records (66 kB/s, 660 kbaud with 8N1) with room.
 pub const BAUD: u32 = 2_000_000;
 
-/// The port, ready for frames.
 #[cfg(feature = "qemu")]
-pub struct StreamPort {
-    tx: Tx<USART1>,
-}
-
-#[cfg(feature = "qemu")]
-impl StreamPort {
-    pub fn new(tx: Tx<USART1>) -> Self {
-        Self { tx }
-    }
-
-    /// Send a frame; whether it went (always: QEMU's USART is never busy).
-    pub fn send(&mut self, frame: &[u8]) -> bool {
-        use embedded_hal_nb::serial::Write as _;
-        for &byte in frame {
-            let _ = nb::block!(self.tx.write(byte));
-        }
-        true
-    }
-}
+pub use crate::qemu::stream::StreamPort;
 
 #[cfg(not(feature = "qemu"))]
 type Frame = &'static mut [u8; FRAME_BYTES];

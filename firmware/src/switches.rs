@@ -53,13 +53,13 @@ impl TickSwitches {
         {
             let clock = TickClock {
                 tick: self.power_up_ticks,
-                micros: chip::qemu_clock::micros(),
+                micros: crate::qemu::clock::micros(),
             };
             if self
                 .bus_fails_at_tick
                 .is_some_and(|n| self.power_up_ticks >= n)
             {
-                chip::break_dac_bus();
+                crate::qemu::bus::break_dac_bus();
             }
             self.power_up_ticks = self.power_up_ticks.wrapping_add(1);
             Some(clock)

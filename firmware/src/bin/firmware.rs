@@ -48,11 +48,14 @@ mod app {
     #[cfg(not(feature = "link"))]
     use de_resonator::Decimal;
     use de_resonator::{Controller, Dac8551, Event, Inputs, OutputStage};
+    #[cfg(not(feature = "qemu"))]
     use de_resonator_firmware::analog::Acquisition;
     #[cfg(not(feature = "qemu"))]
     use de_resonator_firmware::analog::Parts;
     use de_resonator_firmware::chip::{self, Chip, StagePin, StageSpi};
     use de_resonator_firmware::link::{LinkIn, LinkOut, TickDone, REPLIES};
+    #[cfg(feature = "qemu")]
+    use de_resonator_firmware::qemu::{self, analog::Acquisition, dog::Dog};
     use de_resonator_firmware::runtime::{self, ResetCause};
     #[cfg(feature = "model-sensor")]
     use de_resonator_firmware::sensor::ModelSensor as Sensors;
@@ -62,7 +65,9 @@ mod app {
     use de_resonator_firmware::storage::SettingsFlash;
     use de_resonator_firmware::stream::StreamPort;
     use de_resonator_firmware::switches::TickSwitches;
-    use de_resonator_firmware::watchdog::{self, Dog, Watchdog as _};
+    #[cfg(not(feature = "qemu"))]
+    use de_resonator_firmware::watchdog::Dog;
+    use de_resonator_firmware::watchdog::{self, Watchdog as _};
     use de_resonator_firmware::{config, stack, storage};
     use embedded_hal_nb::serial::Read as _;
     use rtic_sync::channel::{Receiver, Sender, TrySendError};
@@ -188,7 +193,7 @@ mod app {
     #[inline(never)]
     fn bring_up(cx: init::Context) -> (Shared, Local) {
         #[cfg(feature = "qemu")]
-        chip::qemu_clock::start(&cx.device.TIM2);
+        qemu::clock::start(&cx.device.TIM2);
         // The link paces the tick at the simulation's speed, not virtual time's: no stand-in
         // watchdog clock to bite between ticks the host has not sent yet.
         #[cfg(all(feature = "qemu", not(feature = "link")))]
@@ -591,7 +596,7 @@ mod app {
     #[cfg(feature = "qemu")]
     #[task(binds = TIM3, priority = 4)]
     fn dog_clock(_cx: dog_clock::Context) {
-        watchdog::bite_if_starved();
+        qemu::dog::bite_if_starved();
     }
 
     /// The low-priority tasks' check-in: it runs only when none of them holds the priority.
