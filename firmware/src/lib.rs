@@ -8,10 +8,11 @@
 //! keeps the settings and the board its fault log), `stream` (the telemetry stream's port),
 //! `watchdog` (the IWDG), `link` (the link build's ends of host-sim's link), `runtime` (exit
 //! codes, panic and fault handlers, the stack meter). `qemu` holds what stands in for what
-//! QEMU does not emulate (its clock, watchdog, flash, DAC bus fault, analog inputs, stream
-//! DMA), in the QEMU builds only; `sensor` (the analog inputs' stand-ins, nothing on silicon)
-//! and `switches` (QEMU's test switches in the tick, none on silicon) are the two the silicon
-//! build also names. `reference` and `stand_in` serve the on-target checks and counts only.
+//! QEMU does not emulate (a clock, the watchdog, the flash, a DAC bus that can fail, the ADC
+//! and DMA, the stream's DMA), in the QEMU builds only. Compiled in every build but doing
+//! nothing on silicon: `sensor` (the codes QEMU's tick reads in place of the ADC's;
+//! `NoSensor` on silicon), `switches` (QEMU's test switches in the tick) and `link` (the link
+//! build's ends). `reference` and `stand_in` serve the on-target checks and counts only.
 #![no_std]
 
 use cortex_m as _;

@@ -1,7 +1,7 @@
 //! Runtime glue: exit codes, the panic and HardFault handlers, and the stack meter. The
 //! firmware's `unsafe` lives here, in `config` (raw memory the linker names), in `watchdog`
-//! (the IWDG's window around an erase) and in `qemu` (its stand-ins' `.uninit` RAM and
-//! timers).
+//! (the IWDG's window around an erase), in `chip` and `analog` (register writes the HAL
+//! leaves out) and in `qemu` (its stand-ins' `.uninit` RAM and timers).
 
 /// Why the firmware restarted (the core's board reads it at boot), kept across the reset in
 /// `.uninit` RAM with a check word (QEMU has no reset flags; on silicon the same record works).

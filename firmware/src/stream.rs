@@ -1,8 +1,8 @@
 //! The telemetry stream's port: USART1's TX (PA9) at `BAUD`, a line of its own so the command
 //! port stays a line protocol. The records (the core's `wire::stream`) are taken and framed
 //! in the idle loop, outside the tick; a frame goes out on silicon by DMA (DMA2 stream 7,
-//! channel 4) from one of two buffers while the other is filled, and under QEMU (which
-//! emulates no DMA) straight into the data register, which QEMU's USART takes at once.
+//! channel 4) from one of two buffers while the other is filled; under QEMU (which emulates
+//! no DMA) `qemu::stream`'s port writes straight into the data register.
 
 #[cfg(not(feature = "qemu"))]
 use de_resonator::wire::stream::FRAME_BYTES;
@@ -13,9 +13,6 @@ use stm32f4xx_hal::serial::Tx;
 
 /// The stream port's baud rate: 1 kHz records (66 kB/s, 660 kbaud with 8N1) with room.
 pub const BAUD: u32 = 2_000_000;
-
-#[cfg(feature = "qemu")]
-pub use crate::qemu::stream::StreamPort;
 
 #[cfg(not(feature = "qemu"))]
 type Frame = &'static mut [u8; FRAME_BYTES];

@@ -1,6 +1,7 @@
 """lut, sweep, image and check_image: the CLI's files and JSON for the same inputs, and what
 the model says of the response's peak."""
 
+import inspect
 import json
 import subprocess
 
@@ -85,3 +86,36 @@ def test_the_image_is_the_clis_and_its_check_accepts_it(host_sim, tmp_path):
     assert (scene.power_up, made.power_up, dr.image().power_up) == ("drive", "drive", "wait")
     waits = dr.image(scene=ROOT / "scenes" / "reference.toml", power_up="wait")
     assert waits.power_up == "wait" and waits.data != scene.data
+
+
+def cli_defaults(host_sim, command):
+    """`host-sim COMMAND --help`'s defaults, by flag (`--gain` → 4000.0; a path's as text)."""
+    text = subprocess.run([host_sim, command, "--help"], capture_output=True, text=True,
+                          check=True).stdout
+    defaults, flag = {}, None
+    for line in text.splitlines():
+        words = line.split()
+        if words and words[0].startswith("--"):
+            flag = words[0].rstrip(",")
+        elif flag and "[default: " in line:
+            value = line.split("[default: ")[1].split("]")[0]
+            try:
+                defaults[flag] = float(value)
+            except ValueError:
+                defaults[flag] = value
+    return defaults
+
+
+def test_the_keywords_defaults_are_the_clis(host_sim):
+    # One default a value, whichever way it is asked: each keyword's default in the
+    # package's signatures is the flag's in host-sim's --help.
+    for function, command in [(dr.image, "image"), (dr.drive_map, "drive-map"),
+                              (dr.Device.sweep, "sweep")]:
+        flags = cli_defaults(host_sim, command)
+        compared = 0
+        for name, parameter in inspect.signature(function).parameters.items():
+            flag = "--" + name.replace("_", "-")
+            if isinstance(parameter.default, (int, float)) and flag in flags:
+                assert parameter.default == flags[flag], (command, name)
+                compared += 1
+        assert compared >= 2, (command, flags)

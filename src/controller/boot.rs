@@ -62,7 +62,7 @@ impl CapBy {
 }
 
 /// What `from_table` checks before a controller exists (small: the boot builds the controller
-/// once, in place, and never moves it through the stages).
+/// once, in its slot, and never moves it through the stages).
 struct Checked {
     device: Device<f32>,
     /// The table's top, its bias for the target and the cap it gives, V.
@@ -178,9 +178,10 @@ impl Controller {
         Ok((controller, boot))
     }
 
-    /// `start` with the controller built in `slot`, where it stays: no copy of it on the
-    /// stack (the firmware's RAM), on a board whose front end declares `inputs` (the trim's
-    /// ring is weighed against them before any voltage). On a refusal the slot is left empty.
+    /// `start` with the controller built in `slot`, where it stays through every stage (its
+    /// one copy on the stack is in `Checked::build_in`'s frame, gone before the checks), on a
+    /// board whose front end declares `inputs` (the trim's ring is weighed against them
+    /// before any voltage). On a refusal the slot is left empty.
     pub fn start_in(
         slot: &mut Option<Self>,
         params: DeviceParams<f32>,

@@ -54,8 +54,9 @@ mod app {
     use de_resonator_firmware::analog::Parts;
     use de_resonator_firmware::chip::{self, Chip, StagePin, StageSpi};
     use de_resonator_firmware::link::{LinkIn, LinkOut, TickDone, REPLIES};
+    // The stand-ins QEMU's builds take for what it does not emulate (`qemu`), by name.
     #[cfg(feature = "qemu")]
-    use de_resonator_firmware::qemu::{self, analog::Acquisition, dog::Dog};
+    use de_resonator_firmware::qemu::{self, analog::Acquisition, dog::Dog, stream::StreamPort};
     use de_resonator_firmware::runtime::{self, ResetCause};
     #[cfg(feature = "model-sensor")]
     use de_resonator_firmware::sensor::ModelSensor as Sensors;
@@ -63,6 +64,7 @@ mod app {
     use de_resonator_firmware::sensor::NoSensor as Sensors;
     use de_resonator_firmware::sensor::Sensor;
     use de_resonator_firmware::storage::SettingsFlash;
+    #[cfg(not(feature = "qemu"))]
     use de_resonator_firmware::stream::StreamPort;
     use de_resonator_firmware::switches::TickSwitches;
     #[cfg(not(feature = "qemu"))]
@@ -84,7 +86,8 @@ mod app {
     #[shared]
     struct Shared {
         /// `None`: nothing is driven (no usable image, or the boot refused). A static of
-        /// init's, where the boot builds the controller in place (3 KB never on the stack).
+        /// init's, where the boot builds the controller (3.6 KB: not a resource moved out of
+        /// `init`'s frame; its one copy on the stack is the boot's, `Checked::build_in`).
         controller: &'static mut Option<Controller>,
         /// The longest tick so far, core cycles.
         tick_cycles_max: u32,

@@ -1,6 +1,6 @@
 //! What QEMU's netduinoplus2 does not emulate, and what stands in for it in the QEMU builds
-//! (`qemu`): none of it is on silicon, and every module outside this one is the product's
-//! (QEMU-STM32F405.md's limits; docs/firmware.md).
+//! (`qemu`): none of it is on silicon. The codes its tick reads in place of the ADC's are
+//! `sensor`'s, its test switches `switches`' (both nothing on silicon; docs/firmware.md).
 //!
 //! - `clock`: TIM2 counting microseconds of virtual time, the stand-ins' clock.
 //! - `dog`: the watchdog (no IWDG): the feeds' clock readings, checked from TIM3.
