@@ -69,7 +69,7 @@ pub(super) struct TrimState {
 
 impl TrimState {
     /// A trim at boot. The window is made zero and then NaN in place: a NaN array in the
-    /// literal is built on the stack and copied (2 KB more of the boot's stack).
+    /// literal was built on the stack and copied (1.7 KB more of the firmware's boot stack).
     pub(super) fn new(params: DeviceParams<f32>, tuned: bool) -> Self {
         let mut state = Self {
             params,
